@@ -1,0 +1,171 @@
+"""The one definition of the soft-landing dynamics.
+
+Everything else in the toolkit (the OCP, the PMP checks, the hybrid
+simulator's mode matrices, the impedance layer) is derived from
+:func:`robot_rhs` below; do not write the equations anywhere else.
+
+State ``x = [x_b, v_b, x_f, v_f]`` (dimensionless body height, body velocity,
+foot height, foot velocity, measured up from the undisturbed ground surface),
+control ``u`` (actuator force, > 0 pushes body and foot apart), ground reaction
+``f_g`` (upward force on the foot), all in the units of the paper's Section II-C.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+
+from .errors import check_positive
+
+STATE_NAMES: tuple[str, ...] = ("x_b", "v_b", "x_f", "v_f")
+"""Names of the four state components, in order."""
+
+XB, VB, XF, VF = range(4)
+
+
+def robot_rhs(x, u, f_g, r_m):
+    """Time derivative of the state for a given actuator force and ground force.
+
+    Newton's law for the body (mass ``r_m/(1+r_m)``) and the foot (mass
+    ``1/(1+r_m)``) in units of the total mass:
+
+    ``x_b'' = -1 + (1 + r_m)/r_m * u`` and ``x_f'' = -1 + (1 + r_m) (f_g - u)``.
+
+    Parameters
+    ----------
+    x : casadi SX/MX/DM or array of 4
+        State ``[x_b, v_b, x_f, v_f]``.
+    u : scalar expression
+        Actuator force.
+    f_g : scalar expression
+        Ground reaction on the foot (upward positive).
+    r_m : scalar expression or float
+        Mass ratio ``m_b / m_f``.
+
+    Returns
+    -------
+    casadi expression of shape (4, 1)
+    """
+    return ca.vertcat(
+        x[VB],
+        -1 + (1 + r_m) / r_m * u,
+        x[VF],
+        -1 + (1 + r_m) * (f_g - u),
+    )
+
+
+def yielding_ground_force(x):
+    """The one-way plastic spring while the foot moves down: ``f_g = -x_f``."""
+    return -x[XF]
+
+
+def mechanical_energy(x, r_m):
+    """Robot mechanical energy (kinetic + gravitational), in units of ``m_t g x_s``.
+
+    Gravitational energy is measured from heights 0, so differences are what
+    matter; :mod:`softlanding.simulate` reports energies relative to the
+    configuration at impact.
+    """
+    mb, mf = r_m / (1 + r_m), 1 / (1 + r_m)
+    return 0.5 * mb * x[VB] ** 2 + 0.5 * mf * x[VF] ** 2 + mb * x[XB] + mf * x[XF]
+
+
+@lru_cache(maxsize=1)
+def _symbols():
+    x = ca.SX.sym("x", 4)
+    u = ca.SX.sym("u")
+    fg = ca.SX.sym("f_g")
+    r = ca.SX.sym("r_m")
+    return x, u, fg, r
+
+
+@lru_cache(maxsize=1)
+def stance_functions() -> tuple[ca.Function, ca.Function]:
+    """The paper's control-affine yielding-stance dynamics ``x' = f(x) + g(x) u``.
+
+    Returns
+    -------
+    f, g : casadi.Function
+        ``f(x, r_m)`` (4x1) and ``g(x, r_m)`` (4x1), derived from
+        :func:`robot_rhs` with the yielding ground force ``-x_f``.
+    """
+    x, u, _, r = _symbols()
+    xdot = robot_rhs(x, u, yielding_ground_force(x), r)
+    g = ca.jacobian(xdot, u)
+    f = ca.substitute(xdot, u, 0)
+    return (
+        ca.Function("f", [x, r], [f], ["x", "r_m"], ["f"]),
+        ca.Function("g", [x, r], [g], ["x", "r_m"], ["g"]),
+    )
+
+
+def stance_dynamics(x, u, r_m):
+    """``f(x) + g(x) u`` for symbolic or numeric arguments (used by the OCP)."""
+    return robot_rhs(x, u, yielding_ground_force(x), r_m)
+
+
+@lru_cache(maxsize=1)
+def _affine_parts() -> ca.Function:
+    """Jacobians of :func:`robot_rhs` (it is affine in x, u and f_g)."""
+    x, u, fg, r = _symbols()
+    rhs = robot_rhs(x, u, fg, r)
+    c = ca.substitute(rhs, ca.vertcat(x, u, fg), ca.DM.zeros(6))
+    return ca.Function(
+        "affine_parts",
+        [r],
+        [ca.jacobian(rhs, x), ca.jacobian(rhs, u), ca.jacobian(rhs, fg), c,
+         ca.jacobian(yielding_ground_force(x), x)],
+    )
+
+
+@lru_cache(maxsize=64)
+def mode_matrices(r_m: float) -> dict[str, np.ndarray]:
+    """Numeric affine matrices of the three ground modes, read off :func:`robot_rhs`.
+
+    Uses the augmented state ``z = [x_b, v_b, x_f, v_f, 1]`` so each mode is
+    ``z' = A z + B u`` with ``A`` 5x5 (last row zero) and ``B`` of length 5.
+
+    * ``yielding``: ``f_g = -x_f``;
+    * ``flight``:   ``f_g = 0``;
+    * ``static``:   ``f_g`` is the support force that keeps the foot still,
+      ``F_req(z, u) = Fz . z + Fu u``; the foot rows are exactly zero.
+
+    Returns
+    -------
+    dict
+        ``A`` (3, 5, 5) and ``B`` (3, 5) indexed by mode (0 yielding, 1 static,
+        2 flight), ``Fz`` (5,), ``Fu`` (float), and the energy weights ``E``
+        (masses of body and foot, as fractions of the total).
+    """
+    r_m = check_positive("r_m", r_m)
+    Ax, Bu, Bg, c, Cg = (np.array(m, dtype=float) for m in _affine_parts()(r_m))
+    Bu, Bg, c, Cg = Bu.ravel(), Bg.ravel(), c.ravel(), Cg.ravel()
+
+    def aug(A4, c4):
+        A = np.zeros((5, 5))
+        A[:4, :4] = A4
+        A[:4, 4] = c4
+        return A
+
+    A = np.zeros((3, 5, 5))
+    B = np.zeros((3, 5))
+    # yielding: f_g = Cg . x
+    A[0] = aug(Ax + np.outer(Bg, Cg), c)
+    B[0, :4] = Bu
+    # static: choose f_g so that the foot acceleration vanishes
+    Fz = np.zeros(5)
+    Fz[:4] = -Ax[VF] / Bg[VF]
+    Fz[4] = -c[VF] / Bg[VF]
+    Fu = float(-Bu[VF] / Bg[VF])
+    A[1] = aug(Ax + np.outer(Bg, Fz[:4]), c + Bg * Fz[4])
+    B[1, :4] = Bu + Bg * Fu
+    A[1, XF, :] = 0.0  # foot pinned: exact zeros, not rounding residue
+    A[1, VF, :] = 0.0
+    B[1, XF] = B[1, VF] = 0.0
+    # flight: no ground force
+    A[2] = aug(Ax, c)
+    B[2, :4] = Bu
+    mb, mf = r_m / (1 + r_m), 1 / (1 + r_m)
+    return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "E": np.array([mb, mf])}
