@@ -74,8 +74,8 @@ def _expm(M, h):
         for i in range(n):
             for j in range(n):
                 acc = 0.0
-                for l in range(n):
-                    acc += term[i, l] * M[l, j]
+                for m in range(n):
+                    acc += term[i, m] * M[m, j]
                 tmp[i, j] = acc * sc / k
         big = 0.0
         for i in range(n):
@@ -89,8 +89,8 @@ def _expm(M, h):
         for i in range(n):
             for j in range(n):
                 acc = 0.0
-                for l in range(n):
-                    acc += out[i, l] * out[l, j]
+                for m in range(n):
+                    acc += out[i, m] * out[m, j]
                 tmp[i, j] = acc
         out[:, :] = tmp
     return out

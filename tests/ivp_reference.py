@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import math
 
-
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -106,7 +105,7 @@ def landing_depth_ivp(v0, kp, kd, r_m=5.0, s=20.0, umax=math.inf, rigid=False,
                 return y[3]
             ev.direction = 1
         elif mode == "S":
-            def ev(_, y, reg=reg):
+            def ev(_, y, reg=reg, d=d):
                 return support(y, reg) - d
 
             def ev_lift(_, y, reg=reg):
@@ -114,7 +113,7 @@ def landing_depth_ivp(v0, kp, kd, r_m=5.0, s=20.0, umax=math.inf, rigid=False,
             ev.direction, ev_lift.direction, ev_lift.terminal = 1, -1, True
             events.append(ev_lift)
         else:
-            def ev(_, y):
+            def ev(_, y, d=d):
                 # 1e-10 below the crater bottom, so that integrator noise at a
                 # grazing lift-off is not taken for a landing
                 return y[2] + d + 1e-10

@@ -1,0 +1,5 @@
+"""``python -m softlanding``: same as the ``softlanding`` command."""
+
+from .cli import main
+
+raise SystemExit(main())

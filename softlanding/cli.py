@@ -1,0 +1,257 @@
+"""The ``softlanding`` command.
+
+Every sub-command prints a readable table by default and one JSON object with
+``--json``. Bad input ends with a one-line message on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Sequence
+
+from .errors import ParameterError
+
+EXIT_BAD_INPUT = 2
+EXIT_FAILURE = 1
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but usage errors are one line and exit with code 2."""
+
+    def error(self, message: str) -> None:  # noqa: D102
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def _fmt(x) -> str:
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, float):
+        return f"{x:.10g}" if math.isfinite(x) else str(x)
+    return str(x)
+
+
+def _print_table(rows: Sequence[tuple[str, object]]) -> None:
+    w = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:<{w}}  {_fmt(v)}")
+
+
+# ------------------------------------------------------------------- simulate
+def _cmd_simulate(a: argparse.Namespace) -> int:
+    from .scaling import DimensionlessParams
+    from .simulate import Impedance, Rigid, simulate
+
+    p = DimensionlessParams(r_m=a.rm, s=a.s, v0=a.v0, u_max=a.umax)
+    if a.rigid:
+        if a.kp is not None or a.kd is not None:
+            raise ParameterError("rigid", "--rigid takes no --kp/--kd")
+        policy = Rigid()
+    else:
+        if a.kp is None or a.kd is None:
+            raise ParameterError("kp", "give both --kp and --kd, or --rigid")
+        policy = Impedance(a.kp, a.kd, a.umax)
+    res = simulate(p, policy)
+    if a.plot:
+        from .figures import plot_trajectory
+
+        plot_trajectory(res).savefig(a.plot, dpi=130)
+    if a.json:
+        print(json.dumps(res.to_dict()))
+    else:
+        e = res.energy
+        _print_table([
+            ("policy", policy.describe()), ("v0", p.v0), ("r_m", p.r_m), ("s", p.s),
+            ("depth -x_f(T)", res.depth), ("intrusion steps", res.steps),
+            ("feasible (0<=stroke<=s)", res.feasible), ("status", res.status),
+            ("first foot stop tau", res.t_first_stop), ("final rest tau T", res.T),
+            ("peak |u|", res.u_peak), ("stroke min", res.stroke_min),
+            ("stroke max", res.stroke_max), ("E(0)", e.E0), ("E(T)", e.ET),
+            ("ground loss", e.ground), ("actuator loss", e.actuator), ("CoT", e.cot),
+        ])
+        if a.plot:
+            print(f"figure written to {a.plot}")
+    return 0 if res.rest_proven else EXIT_FAILURE
+
+
+# ---------------------------------------------------------------------- scale
+def _cmd_scale(a: argparse.Namespace) -> int:
+    from .scaling import DimensionlessParams, PhysicalParams, paper_rig
+
+    if a.to_si:
+        d = DimensionlessParams(r_m=a.rm, s=a.s, v0=a.v0, u_max=a.umax, k_p=a.kp, k_d=a.kd)
+        ph = d.to_physical(a.mt, a.kg, a.g)
+    else:
+        if a.preset == "paper":
+            ph = paper_rig(v0=a.v0_si if a.v0_si is not None else -1.2,
+                           **({"K_p": a.Kp} if a.Kp is not None else {}),
+                           **({"K_d": a.Kd} if a.Kd is not None else {}))
+        else:
+            missing = [n for n in ("mb", "mf", "kg", "stroke") if getattr(a, n) is None]
+            if missing:
+                raise ParameterError(missing[0], "is required (or use --preset paper)")
+            ph = PhysicalParams(m_b=a.mb, m_f=a.mf, k_g=a.kg, stroke=a.stroke,
+                                v0=0.0 if a.v0_si is None else a.v0_si, u_max=a.umax_si,
+                                K_p=a.Kp, K_d=a.Kd, g=a.g)
+        d = ph.to_dimensionless()
+    scales = {"x_s_m": ph.length_scale, "tau_s_s": ph.time_scale, "u_s_N": ph.force_scale,
+              "v_s_m_per_s": ph.velocity_scale, "E_s_J": ph.energy_scale}
+    out = {"physical": ph.as_dict(), "dimensionless": d.as_dict(), "scales": scales}
+    if a.json:
+        print(json.dumps(out))
+    else:
+        rows = [(f"SI {k}", v) for k, v in ph.as_dict().items() if v is not None]
+        rows += [(f"scale {k}", v) for k, v in scales.items()]
+        rows += [(f"dimensionless {k}", v) for k, v in d.as_dict().items() if v is not None]
+        _print_table(rows)
+    return 0
+
+
+# ----------------------------------------------------------------------- demo
+DEMO_V0 = (0.0, -1.0, -3.0, -5.0, -10.0)
+DEMO_GAINS = (0.5, 0.5)
+
+
+def _cmd_demo(a: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .scaling import DimensionlessParams
+    from .simulate import Impedance, Rigid, simulate
+
+    kp, kd = DEMO_GAINS
+    rows = []
+    for v0 in DEMO_V0:
+        p = DimensionlessParams(r_m=5, s=20, v0=v0)
+        rig = simulate(p, Rigid())
+        imp = simulate(p, Impedance(kp, kd))
+        rows.append({"v0": v0, "rigid_depth": rig.depth,
+                     "rigid_depth_analytic": 1 + math.sqrt(1 + v0 * v0),
+                     "impedance_depth": imp.depth, "impedance_steps": imp.steps,
+                     "impedance_feasible": imp.feasible, "impedance_u_peak": imp.u_peak,
+                     "impedance_cot": imp.energy.cot})
+    stepped = [simulate(DimensionlessParams(r_m=5, s=20, v0=-1.0), Impedance(0.2, k))
+               for k in (0.4, 0.18, 0.0)]
+    if a.out:
+        import matplotlib.pyplot as plt
+
+        from .figures import plot_depth_vs_velocity, plot_stepped_intrusions
+
+        v = np.linspace(-10, 0, 41)
+        fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.2))
+        plot_depth_vs_velocity(v, {
+            "rigid leg": np.array([simulate(DimensionlessParams(v0=x), Rigid()).depth
+                                   for x in v]),
+            f"impedance $k_p$={kp}, $k_d$={kd}": np.array(
+                [simulate(DimensionlessParams(v0=x), Impedance(kp, kd)).depth for x in v]),
+        }, ax=ax1)
+        ax1.set_title("depth against impact velocity ($r_m$=5, $s$=20)", fontsize=9)
+        plot_stepped_intrusions(stepped, ax=ax2)
+        ax2.set_title("stepped intrusions, $v_0$=-1, $k_p$=0.2", fontsize=9)
+        fig.tight_layout()
+        fig.savefig(a.out, dpi=110)
+        plt.close(fig)
+    if a.json:
+        print(json.dumps({"table": rows, "stepped_intrusions": [
+            {"k_d": r.policy.k_d, "steps": r.steps, "depth": r.depth} for r in stepped],
+            "figure": a.out}))
+        return 0
+    print(f"Landings at r_m = 5, s = 20 (dimensionless units); impedance k_p = {kp}, k_d = {kd}")
+    print(f"{'v0':>6} {'rigid depth':>12} {'1+sqrt(1+v0^2)':>15} {'imp. depth':>11} "
+          f"{'steps':>5} {'feasible':>8} {'peak |u|':>9} {'CoT':>7}")
+    for r in rows:
+        print(f"{r['v0']:>6.1f} {r['rigid_depth']:>12.6f} {r['rigid_depth_analytic']:>15.6f} "
+              f"{r['impedance_depth']:>11.6f} {r['impedance_steps']:>5d} "
+              f"{_fmt(r['impedance_feasible']):>8} {r['impedance_u_peak']:>9.4f} "
+              f"{r['impedance_cot']:>7.3f}")
+    print("\nStepped intrusions (paper, Fig. 3a): v0 = -1, k_p = 0.2")
+    for r in stepped:
+        print(f"  k_d = {r.policy.k_d:<5g} -> {r.steps} step(s), depth {r.depth:.6f}")
+    if a.out:
+        print(f"\nfigure written to {a.out}")
+    return 0
+
+
+# ---------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    ap = _Parser(
+        prog="softlanding",
+        description=(
+            "Soft landing of a two-mass legged robot on yielding ground (one-way plastic "
+            "spring), after Lynch, Lynch & Umbanhowar. All quantities are dimensionless "
+            "unless named otherwise: lengths in x_s = m_t g / k_g, time in sqrt(m_t / k_g), "
+            "force in m_t g. Exit codes: 0 ok, 1 run failed (e.g. rest not proven), "
+            "2 bad input."),
+    )
+    sub = ap.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    s = sub.add_parser("simulate", help="simulate one landing exactly (event-driven)",
+                       description="Simulate one landing with a rigid or impedance-controlled "
+                                   "leg. Exact: matrix exponentials and root-found events.")
+    s.add_argument("--v0", type=float, required=True,
+                   help="impact velocity (<= 0, negative = downward)")
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--rigid", action="store_true", help="body and foot locked together")
+    s.add_argument("--kp", type=float, help="impedance stiffness k_p = K_p / k_g (>= 0)")
+    s.add_argument("--kd", type=float, help="impedance damping k_d = K_d / sqrt(m_t k_g) (>= 0)")
+    s.add_argument("--rm", type=float, default=5.0, help="mass ratio m_b / m_f (default 5)")
+    s.add_argument("--s", type=float, default=20.0, help="stroke S / x_s (default 20)")
+    s.add_argument("--umax", type=float, default=None,
+                   help="saturate the impedance force at +-umax (default: no limit)")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--plot", metavar="FILE.png", help="write the trajectory figure")
+    s.set_defaults(func=_cmd_simulate)
+
+    c = sub.add_parser("scale", help="convert a physical robot to dimensionless numbers and back",
+                       description="SI -> dimensionless (default) or dimensionless -> SI "
+                                   "(--to-si). Velocities are negative when moving down.")
+    c.add_argument("--preset", choices=["paper"], help="the paper's rig (m_b 2.5, m_f 0.5 kg, "
+                                                        "k_g 4.4 kN/m)")
+    c.add_argument("--mb", type=float, help="body mass [kg]")
+    c.add_argument("--mf", type=float, help="foot mass [kg]")
+    c.add_argument("--kg", type=float, help="ground stiffness [N/m]")
+    c.add_argument("--stroke", type=float, help="actuator stroke S [m]")
+    c.add_argument("--umax-si", type=float, help="actuator force limit [N]")
+    c.add_argument("--v0-si", type=float, help="impact velocity [m/s] (<= 0)")
+    c.add_argument("--Kp", type=float, help="leg stiffness [N/m]")
+    c.add_argument("--Kd", type=float, help="leg damping [N s/m]")
+    c.add_argument("--g", type=float, default=9.81, help="gravity [m/s^2] (default 9.81)")
+    c.add_argument("--to-si", action="store_true", help="convert dimensionless -> SI")
+    c.add_argument("--mt", type=float, default=3.0, help="total mass for --to-si [kg]")
+    c.add_argument("--rm", type=float, default=5.0, help="mass ratio for --to-si")
+    c.add_argument("--s", type=float, default=20.0, help="stroke for --to-si")
+    c.add_argument("--v0", type=float, default=-1.0, help="impact velocity for --to-si")
+    c.add_argument("--umax", type=float, help="force limit for --to-si")
+    c.add_argument("--kp", type=float, help="stiffness for --to-si")
+    c.add_argument("--kd", type=float, help="damping for --to-si")
+    c.add_argument("--json", action="store_true", help="print one JSON object")
+    c.set_defaults(func=_cmd_scale)
+
+    d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
+                       description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "
+                                   "-5, -10, print a table (with the analytic rigid depth "
+                                   "as a check) and write a figure.")
+    d.add_argument("--out", default="softlanding-demo.png", metavar="FILE.png",
+                   help="figure path (default softlanding-demo.png; '' for none)")
+    d.add_argument("--json", action="store_true", help="print one JSON object")
+    d.set_defaults(func=_cmd_demo)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``softlanding`` console script."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except ParameterError as exc:
+        print(f"softlanding: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except (OSError, ValueError) as exc:
+        print(f"softlanding: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,92 @@
+"""Figures in the style of the paper; one function per figure.
+
+All functions return a :class:`matplotlib.figure.Figure` and never call
+``plt.show()``; save with ``fig.savefig(path)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import matplotlib
+
+matplotlib.use("Agg", force=False)
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .simulate import MODE_NAMES, LandingResult  # noqa: E402
+
+MODE_COLOURS = {"yielding": "#f4cccc", "static": "#d9ead3", "flight": "#cfe2f3"}
+
+
+def _shade_modes(ax, traj) -> None:
+    """Shade the background by ground mode."""
+    m = traj.mode
+    edges = np.flatnonzero(np.diff(m)) + 1
+    starts = np.r_[0, edges]
+    ends = np.r_[edges, len(m) - 1]
+    for a, b in zip(starts, ends, strict=True):
+        ax.axvspan(traj.t[a], traj.t[b], color=MODE_COLOURS[MODE_NAMES[m[a]]], lw=0, zorder=0)
+
+
+def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figure:
+    """Body and foot heights, actuator force and ground mode against time.
+
+    The background colour gives the ground mode (red: yielding, green: static,
+    blue: flight); the dashed line is the crater bottom.
+    """
+    traj = result.trajectory()
+    fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(7.5, 6.0),
+                                   gridspec_kw={"height_ratios": [2, 1]})
+    for ax in (ax1, ax2):
+        _shade_modes(ax, traj)
+    ax1.plot(traj.t, traj.x[:, 0], label=r"body $x_b$", color="C0")
+    ax1.plot(traj.t, traj.x[:, 2], label=r"foot $x_f$", color="C3")
+    crater = -np.maximum.accumulate(np.maximum(-traj.x[:, 2], 0.0))
+    ax1.plot(traj.t, crater, "k--", lw=0.8, label="crater bottom")
+    ax1.axhline(0.0, color="0.4", lw=0.6)
+    ax1.set_ylabel(r"height $x$ [$x_s = m_t g / k_g$]")
+    ax1.legend(loc="best", fontsize=8)
+    ax2.plot(traj.t, traj.u, color="C2")
+    ax2.set_ylabel(r"force $u$ [$m_t g$]")
+    ax2.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
+    handles = [matplotlib.patches.Patch(color=c, label=n) for n, c in MODE_COLOURS.items()]
+    ax2.legend(handles=handles, loc="best", fontsize=8, title="ground mode", title_fontsize=8)
+    p = result.params
+    ax1.set_title(title or (f"{result.policy.describe()}; $v_0$={p.v0:g}, $r_m$={p.r_m:g}, "
+                            f"$s$={p.s:g}: depth {result.depth:.4f}, {result.steps} step(s)"),
+                  fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def _axes(ax, figsize):
+    if ax is None:
+        return plt.subplots(figsize=figsize)
+    return ax.figure, ax
+
+
+def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Figure:
+    """Foot height against time for several landings (the paper's stepped-intrusion figure)."""
+    fig, ax = _axes(ax, (6.5, 4.0))
+    for r in results:
+        tr = r.trajectory()
+        ax.plot(tr.t, tr.x[:, 2], label=f"{r.policy.describe()}: {r.steps} step(s)")
+    ax.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
+    ax.set_ylabel(r"foot height $x_f$ [$m_t g / k_g$]")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return fig
+
+
+def plot_depth_vs_velocity(v0: np.ndarray, curves: dict[str, np.ndarray], ax=None) -> plt.Figure:
+    """Penetration depth against impact velocity for several policies."""
+    fig, ax = _axes(ax, (6.0, 4.0))
+    for label, depth in curves.items():
+        ax.plot(v0, depth, "o-", ms=3, label=label)
+    ax.axhline(1.0, color="0.5", ls=":", lw=1, label="lower bound (weight)")
+    ax.set_xlabel(r"impact velocity $v_0$ [$x_s / \tau_s$]")
+    ax.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    return fig
