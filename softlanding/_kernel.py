@@ -161,7 +161,7 @@ def _propagate(A, z, h):
 
 
 @njit(cache=True)
-def _refine(A, z, c, a, b, ga, gb):
+def _refine(A, z, c, a, b, ga, gb, rtol=2e-15):
     """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
 
     Newton on the exact solution, safeguarded by the bracket, converged to
@@ -182,13 +182,13 @@ def _refine(A, z, c, a, b, ga, gb):
             b = s
         else:
             a = s
-        if b - a <= 2e-15 * max(1.0, abs(b)):
+        if b - a <= rtol * max(1.0, abs(b)):
             break
         dg = _dot(dc, zs)
         sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
         if not (a < sn < b):
             sn = 0.5 * (a + b)
-        if abs(sn - s) <= 1e-15 * max(1.0, abs(s)):
+        if abs(sn - s) <= 0.5 * rtol * max(1.0, abs(s)):
             # converged: step just past the root to close the bracket
             step = 1e-15 * max(1.0, abs(sn))
             sn = sn + step if g <= 0.0 else sn - step
@@ -620,7 +620,7 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                 if (v0_ > 0.0 and v1_ < 0.0) or (v0_ < 0.0 and v1_ > 0.0):
                     sg = 1.0 if v0_ < 0.0 else -1.0
                     fn = sg * dcs
-                    se = _refine(A, z, fn, 0.0, h, sg * v0_, sg * v1_)
+                    se = _refine(A, z, fn, 0.0, h, sg * v0_, sg * v1_, 1e-9)
                     se_v = _dot(cs, _propagate(A, z, se))
                     smin, smax = min(smin, se_v), max(smax, se_v)
                 w0_ = _dot(dcu, z)
@@ -628,7 +628,7 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                 if (w0_ > 0.0 and w1_ < 0.0) or (w0_ < 0.0 and w1_ > 0.0):
                     sg = 1.0 if w0_ < 0.0 else -1.0
                     fn = sg * dcu
-                    se = _refine(A, z, fn, 0.0, h, sg * w0_, sg * w1_)
+                    se = _refine(A, z, fn, 0.0, h, sg * w0_, sg * w1_, 1e-9)
                     ue = _dot(cu, _propagate(A, z, se))
                     umin, umx = min(umin, ue), max(umx, ue)
                 if energy:

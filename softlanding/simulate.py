@@ -315,7 +315,8 @@ def _policy_arrays(policy: Policy, p: DimensionlessParams, mats):
         return rigid_lock_gains(mats), np.inf, empty, empty
     if isinstance(policy, Impedance):
         l0 = p.l0 if policy.l0 is None else policy.l0
-        Kf = np.tile(impedance_gain_vector(policy.k_p, policy.k_d, l0), (3, 1))
+        Kf = np.empty((3, 5))
+        Kf[:] = impedance_gain_vector(policy.k_p, policy.k_d, l0)
         umax = np.inf if policy.u_max is None else policy.u_max
         return Kf, umax, empty, empty
     if isinstance(policy, ForceSchedule):
@@ -364,16 +365,20 @@ def simulate(
     z0 = initial_state(p) if x0 is None else np.asarray(x0, float)
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
-    out = np.zeros(K.N_OUT)
-    nrec = max_segments + 1
-    rec_t = np.full(nrec + 1, np.nan)
-    rec_A = np.zeros((nrec, 5, 5))
-    rec_z = np.zeros((nrec, 5))
-    rec_cu = np.zeros((nrec, 5))
-    rec_mode = np.zeros(nrec, dtype=np.int64)
-    K.simulate_one(mats["A"], mats["B"], mats["Fz"], mats["Fu"], mats["E"], Kf, umax, st, su,
-                   z0, p.s, float(t_max), int(max_segments), bool(energy), out,
-                   rec_t, rec_A, rec_z, rec_cu, rec_mode)
+    nrec = 32  # segment records; grown and re-run in the rare long case
+    while True:
+        out = np.zeros(K.N_OUT)
+        rec_t = np.full(nrec + 1, np.nan)
+        rec_A = np.empty((nrec, 5, 5))
+        rec_z = np.empty((nrec, 5))
+        rec_cu = np.empty((nrec, 5))
+        rec_mode = np.empty(nrec, dtype=np.int64)
+        K.simulate_one(mats["A"], mats["B"], mats["Fz"], mats["Fu"], mats["E"], Kf, umax, st,
+                       su, z0, p.s, float(t_max), int(max_segments), bool(energy), out,
+                       rec_t, rec_A, rec_z, rec_cu, rec_mode)
+        if out[K.O_NSEG] < nrec:
+            break
+        nrec = max_segments + 1
     nseg = int(out[K.O_NSEG])
     segments = {"t": rec_t[: nseg + 1].copy(), "A": rec_A[:nseg].copy(),
                 "z": rec_z[:nseg].copy(), "cu": rec_cu[:nseg].copy(),
@@ -485,7 +490,7 @@ def simulate_batch(
     arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in
                                    (k_p, k_d, v0, r_m, s, np.inf if u_max is None else u_max)))
     shape = arrays[0].shape
-    kp, kd, v, rm, ss, um = (a.ravel() for a in arrays)
+    kp, kd, v, rm, ss, um = (np.array(a.ravel(), dtype=float) for a in arrays)
     _check_array("k_p", kp, check_nonnegative)
     _check_array("k_d", kd, check_nonnegative)
     _check_array("v0", v, check_impact_velocity)
