@@ -19,7 +19,7 @@ Example
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -270,11 +270,17 @@ class LandingResult:
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,
             "n_segments": self.n_segments, "energy": self.energy.as_dict(),
-            "params": self.params.as_dict(), "policy": self.policy.describe(),
+            "params": self.params.as_dict(), "policy": policy_as_dict(self.policy),
         }
         if trajectory:
             d["trajectory"] = self.trajectory().as_dict()
         return _json_clean(d)
+
+
+def policy_as_dict(policy) -> dict[str, Any]:
+    """``{"kind": ..., **fields}`` for JSON output."""
+    kind = {Rigid: "rigid", Impedance: "impedance", ForceSchedule: "schedule"}[type(policy)]
+    return {"kind": kind, **asdict(policy)}
 
 
 def _json_clean(obj):
