@@ -78,12 +78,14 @@ def _expm(M, h):
                     acc += term[i, m] * M[m, j]
                 tmp[i, j] = acc * sc / k
         big = 0.0
+        size = 0.0
         for i in range(n):
             for j in range(n):
                 term[i, j] = tmp[i, j]
                 out[i, j] += tmp[i, j]
                 big = max(big, abs(tmp[i, j]))
-        if big < 1e-18:
+                size = max(size, abs(out[i, j]))
+        if big <= 1e-17 * size:
             break
     for _ in range(sq):
         for i in range(n):
@@ -129,7 +131,7 @@ def _propagate(A, z, h):
         for j in range(5):
             r += abs(A[i, j])
         nrm = max(nrm, r)
-    nsub = max(1, int(math.ceil(nrm * abs(h) / 0.5)))
+    nsub = max(1, int(math.ceil(nrm * abs(h))))
     dt = h / nsub
     x0, x1, x2, x3 = z[0], z[1], z[2], z[3]
     x4 = z[4]
@@ -161,7 +163,31 @@ def _propagate(A, z, h):
 
 
 @njit(cache=True)
-def _refine(A, z, c, a, b, ga, gb, rtol=2e-15):
+def _hermite_root(g0, d0, g1, d1, h):
+    """Root in (0, h) of the cubic Hermite interpolant of g (g0 <= 0 < g1): a
+    starting guess for Newton on the exact solution (error O(h^4))."""
+    c2 = (3.0 * (g1 - g0) / h - 2.0 * d0 - d1) / h
+    c3 = (d0 + d1 - 2.0 * (g1 - g0) / h) / (h * h)
+    lo, hi = 0.0, h
+    s = -g0 * h / (g1 - g0)
+    for _ in range(30):
+        p = g0 + s * (d0 + s * (c2 + s * c3))
+        if p > 0.0:
+            hi = s
+        else:
+            lo = s
+        dp = d0 + s * (2.0 * c2 + 3.0 * s * c3)
+        sn = s - p / dp if dp != 0.0 else 0.5 * (lo + hi)
+        if not (lo < sn < hi):
+            sn = 0.5 * (lo + hi)
+        if abs(sn - s) <= 1e-14 * h:
+            return sn
+        s = sn
+    return s
+
+
+@njit(cache=True)
+def _refine(A, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
     """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
 
     Newton on the exact solution, safeguarded by the bracket, converged to
@@ -174,7 +200,10 @@ def _refine(A, z, c, a, b, ga, gb, rtol=2e-15):
         for i in range(5):
             acc += c[i] * A[i, j]
         dc[j] = acc
-    s = a - ga * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
+    if a < s0 < b:
+        s = s0
+    else:
+        s = a - ga * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
     for _ in range(100):
         zs = _propagate(A, z, s)
         g = _dot(c, zs)
@@ -551,6 +580,16 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                 a2 += cu[i] * A[i, j]
             dcs[j] = a1
             dcu[j] = a2
+        ddcs = np.zeros(5)
+        ddcu = np.zeros(5)
+        for j in range(5):
+            a1 = 0.0
+            a2 = 0.0
+            for i in range(5):
+                a1 += dcs[i] * A[i, j]
+                a2 += dcu[i] * A[i, j]
+            ddcs[j] = a1
+            ddcu[j] = a2
 
         # an event already due at the start of the segment fires at once
         hit = -1
@@ -591,7 +630,8 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                     g0 = _dot(C[k], z)
                     g1 = _dot(C[k], z1e)
                     if g0 <= 0.0 < g1:
-                        sk = _refine(A, z, C[k], 0.0, h, g0, g1)
+                        s0 = _hermite_root(g0, _dot(dC[k], z), g1, _dot(dC[k], z1e), h)
+                        sk = _refine(A, z, C[k], 0.0, h, g0, g1, 2e-15, s0)
                     elif g1 <= 0.0 and _dot(dC[k], z) > 0.0 and _dot(dC[k], z1e) < 0.0:
                         # a maximum inside the step: does it poke above zero?
                         dg0 = _dot(dC[k], z)
@@ -620,7 +660,9 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                 if (v0_ > 0.0 and v1_ < 0.0) or (v0_ < 0.0 and v1_ > 0.0):
                     sg = 1.0 if v0_ < 0.0 else -1.0
                     fn = sg * dcs
-                    se = _refine(A, z, fn, 0.0, h, sg * v0_, sg * v1_, 1e-9)
+                    s0 = _hermite_root(sg * v0_, sg * _dot(ddcs, z), sg * v1_,
+                                       sg * _dot(ddcs, z1), h)
+                    se = _refine(A, z, fn, 0.0, h, sg * v0_, sg * v1_, 1e-9, s0)
                     se_v = _dot(cs, _propagate(A, z, se))
                     smin, smax = min(smin, se_v), max(smax, se_v)
                 w0_ = _dot(dcu, z)
@@ -628,7 +670,9 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                 if (w0_ > 0.0 and w1_ < 0.0) or (w0_ < 0.0 and w1_ > 0.0):
                     sg = 1.0 if w0_ < 0.0 else -1.0
                     fn = sg * dcu
-                    se = _refine(A, z, fn, 0.0, h, sg * w0_, sg * w1_, 1e-9)
+                    s0 = _hermite_root(sg * w0_, sg * _dot(ddcu, z), sg * w1_,
+                                       sg * _dot(ddcu, z1), h)
+                    se = _refine(A, z, fn, 0.0, h, sg * w0_, sg * w1_, 1e-9, s0)
                     ue = _dot(cu, _propagate(A, z, se))
                     umin, umx = min(umin, ue), max(umx, ue)
                 if energy:
