@@ -1,8 +1,26 @@
 """ocp: generic multiple-shooting optimal control on CasADi and Ipopt.
 
-Knows nothing of landing. The transcription, solution and switching-time
-refinement modules are being built (see the project's issue tracker); this
-package exists now so that the installed layout is stable.
+Knows nothing of landing. One file per role:
+
+* :mod:`ocp.problem`       -- states, controls, parameters, dynamics, constraints, cost, T;
+* :mod:`ocp.transcription` -- multiple shooting -> parametric NLP (built once), Ipopt,
+  warm starts and continuation;
+* :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
+* :mod:`ocp.switching`     -- bang-bang structure detection and switching-time
+  refinement to machine precision.
 """
 
-__all__: list[str] = []
+from .errors import InfeasibleError, SolveError
+from .problem import OptimalControlProblem, ProblemDefinitionError
+from .solution import Solution
+from .transcription import MultipleShooting, continuation
+
+__all__ = [
+    "InfeasibleError",
+    "MultipleShooting",
+    "OptimalControlProblem",
+    "ProblemDefinitionError",
+    "Solution",
+    "SolveError",
+    "continuation",
+]
