@@ -252,11 +252,11 @@ def _numeric_flow(pr, u_value, pv):
     f = pr.dynamics_function()
     x = ca.SX.sym("x", pr.nx)
     tau = ca.SX.sym("tau")
-    I = ca.integrator("I", "cvodes", {"x": x, "p": tau, "ode": tau * f(x, u_value, pv)}, 0, 1,
+    integ = ca.integrator("I", "cvodes", {"x": x, "p": tau, "ode": tau * f(x, u_value, pv)}, 0, 1,
                       {"abstol": 1e-13, "reltol": 1e-13})
 
     def flow(x0, t):
-        return np.array(I(x0=x0, p=t)["xf"]).ravel()
+        return np.array(integ(x0=x0, p=t)["xf"]).ravel()
 
     return flow
 

@@ -53,9 +53,9 @@ def cvodes_function(f: ca.Function, L: ca.Function, nx: int, nu: int, np_: int,
     h = ca.SX.sym("h")
     p = ca.SX.sym("p", np_)
     dae = {"x": x, "p": ca.vertcat(u, h, p), "ode": h * f(x, u, p), "quad": h * L(x, u, p)}
-    I = ca.integrator("I", "cvodes", dae, 0.0, 1.0, {"abstol": tol, "reltol": tol})
+    integ = ca.integrator("I", "cvodes", dae, 0.0, 1.0, {"abstol": tol, "reltol": tol})
     xm, um, hm, pm = (ca.MX.sym(n, k) for n, k in (("x", nx), ("u", nu), ("h", 1), ("p", np_)))
-    r = I(x0=xm, p=ca.vertcat(um, hm, pm))
+    r = integ(x0=xm, p=ca.vertcat(um, hm, pm))
     return ca.Function("F", [xm, um, hm, pm], [r["xf"], r["qf"]],
                        ["x", "u", "h", "p"], ["xf", "qf"])
 
