@@ -43,6 +43,7 @@ class Arc:
     kind: str  # "max", "min" or "interior"
     start: float
     end: float
+    active: tuple[str, ...] = ()  # path constraints active at every node of the arc
 
     @property
     def duration(self) -> float:
@@ -69,6 +70,35 @@ class SwitchingStructure:
     @property
     def switch_times(self) -> list[float]:
         return [a.end for a in self.arcs[:-1]]
+
+    def without_trailing_constrained(self) -> SwitchingStructure:
+        """Drop a final interior arc on which a path (state) constraint is active.
+
+        On such an arc the control is whatever keeps the state on its
+        constraint, not a bang; the bang-bang argument does not apply there.
+        Dropping it refines the problem whose final time is the end of the
+        last bang arc, which is the right question when the terminal
+        conditions already account for the constrained tail (as the soft
+        landing's body-arrest condition does).
+        """
+        if len(self.arcs) > 1 and self.arcs[-1].kind == "interior" and self.arcs[-1].active:
+            return SwitchingStructure(self.control, self.arcs[:-1], self.lower, self.upper)
+        return self
+
+
+def _active_path_constraints(sol: Solution, tol: float) -> np.ndarray:
+    """Boolean (N+1, n_path): path constraint i active (at a bound) at node k."""
+    pr = sol.problem
+    if not pr.path:
+        return np.zeros((sol.N + 1, 0), dtype=bool)
+    pv = [sol.params[k] for k in pr.param_names]
+    cols = []
+    for c in pr.path:
+        vals = sol.evaluate(c.expr)
+        lo, hi = (float(v) for v in ca.Function("b", [pr.p], [c.lower, c.upper])(pv))
+        scale = tol * np.maximum(1.0, np.abs(vals))
+        cols.append((np.abs(vals - lo) <= scale) | (np.abs(vals - hi) <= scale))
+    return np.column_stack(cols)
 
 
 def _bounds_at(problem: OptimalControlProblem, name: str, params: dict) -> tuple[float, float]:
@@ -132,6 +162,13 @@ def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
         else:
             merged.append(arc)
     merged[-1].end = sol.T
+    act = _active_path_constraints(sol, tol)
+    for arc in merged:
+        k0 = int(round(arc.start / h)) if h > 0 else 0
+        k1 = max(k0 + 1, int(round(arc.end / h)))
+        nodes = act[k0 + 1:k1] if k1 - k0 > 1 else act[k0:k1]
+        arc.active = tuple(c.name for i, c in enumerate(pr.path)
+                           if nodes.shape[0] and nodes[:, i].all())
     return SwitchingStructure(name, merged, lo, hi)
 
 
@@ -188,6 +225,7 @@ class RefinedSwitching:
     transcribed_objective: float
     lam_g: np.ndarray = field(repr=False, default=None)
     blocks: dict = field(repr=False, default_factory=dict)
+    end_path_violation: float = 0.0
 
     @property
     def switch_times(self) -> list[float]:
@@ -223,7 +261,8 @@ class RefinedSwitching:
                 "T": self.T, "objective": self.objective, "x0": self.x0.tolist(),
                 "xT": self.xT.tolist(), "exact_arcs": self.exact, "status": self.status,
                 "iterations": self.iterations, "solve_time_s": self.solve_time,
-                "transcribed_objective": self.transcribed_objective}
+                "transcribed_objective": self.transcribed_objective,
+                "end_path_violation": self.end_path_violation}
 
 
 def _affine_parts(pr: OptimalControlProblem, u_value: float, pv: np.ndarray,
@@ -353,16 +392,20 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
     bnd = ca.Function("bnd", [pr.p], [ca.vertcat(*[c.lower for c in pr.path] or [ca.SX(0)]),
                                       ca.vertcat(*[c.upper for c in pr.path] or [ca.SX(0)])])
     plo, phi = (np.array(v, dtype=float).ravel() for v in bnd(pv))
+    # Path constraints at the arc junctions and inside the arcs, not at t = 0 and
+    # t = T: there the initial and terminal conditions rule, and a path bound
+    # that duplicates one of them (v(T) <= 0 beside v(T) = 0) would make the
+    # constraint Jacobian rank deficient. End-point values are checked after.
     for k in range(K):
         for j in range(interior_samples + 1):
+            if j == 0 and k == 0:
+                continue
             zj = z if j == 0 else propagate(k, z, tau[k] * j / (interior_samples + 1))
             if H is not None:
                 add("path", H(zj[:nx], values[k], pv), plo, phi)
         z = propagate(k, z, tau[k])
     xT = z[:nx]
     T = ca.sum1(tau)
-    if H is not None:
-        add("path", H(xT, values[-1], pv), plo, phi)
     if pr.initial:
         G0 = ca.Function("G0", [pr.x, pr.p], [ca.vertcat(*[c.expr for c in pr.initial])])
         b0 = ca.Function("b0", [pr.p], [ca.vertcat(*[c.lower for c in pr.initial]),
@@ -397,13 +440,18 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
     wopt = np.array(res["x"]).ravel()
     out_fn = ca.Function("out", [w], [xT, T])
     xT_v, T_v = (np.array(v, dtype=float).ravel() for v in out_fn(wopt))
+    end_violation = 0.0
+    if H is not None:
+        for xe, ue in ((wopt[K:], values[0]), (xT_v, values[-1])):
+            hv = np.array(H(xe, ue, pv), dtype=float).ravel()
+            end_violation = max(end_violation, float(np.max(np.r_[plo - hv, hv - phi, 0.0])))
     result = RefinedSwitching(
         problem=pr, params=dict(sol.params), control=st.control, kinds=kinds, values=values,
         durations=wopt[:K], T=float(T_v[0]), objective=float(res["f"]), x0=wopt[K:],
         xT=xT_v, exact=exact, status=str(stats["return_status"]),
         iterations=int(stats["iter_count"]), solve_time=elapsed,
         transcribed_objective=sol.objective, lam_g=np.array(res["lam_g"]).ravel(),
-        blocks=blocks)
+        blocks=blocks, end_path_violation=end_violation)
     if not stats["success"]:
         cls = InfeasibleError if "Infeasible" in result.status else SolveError
         raise cls(result.status, result, f"switching-time refinement failed: {result.status}")

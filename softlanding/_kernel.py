@@ -491,9 +491,23 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
     codes = np.zeros(4, dtype=np.int64)
     nseg = 0
     done = False
+    shift = 0.0  # in flight, heights are measured from the crater bottom (see below)
     while nseg < max_seg and not done:
         cu = _control_vector(mode, regime, Kf, umax, u_ol)
         A = _closed_loop(A3[mode], B3[mode], cu)
+        if mode == FLIGHT and shift == 0.0 and d > 0.0:
+            # Without ground force the dynamics depend on heights only through the
+            # stroke, so measure heights from the crater bottom: the landing function
+            # x_f + d is then computed without cancellation, which matters at a
+            # grazing landing (its time error is sqrt(rounding of x_f)).
+            invariant = True
+            for i in range(4):
+                if A[i, 0] + A[i, 2] != 0.0:
+                    invariant = False
+            if invariant:
+                shift = d
+                z[0] += shift
+                z[2] += shift
         if nseg < nrec:
             rec_t[nseg] = t
             rec_mode[nseg] = mode
@@ -502,6 +516,8 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
                 rec_cu[nseg, i] = cu[i]
                 for j in range(5):
                     rec_A[nseg, i, j] = A[i, j]
+            rec_z[nseg, 0] -= shift
+            rec_z[nseg, 2] -= shift
         nseg += 1
         u_now = _dot(cu, z)
         umin, umx = min(umin, u_now), max(umx, u_now)
@@ -525,7 +541,7 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
             ne += 2
         else:
             C[ne, 2] = -1.0
-            C[ne, 4] = -d
+            C[ne, 4] = shift - d
             codes[ne] = EV_LAND
             ne += 1
         if not open_loop and umax < inf:
@@ -716,7 +732,9 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
         elif code == EV_LIFT:
             mode = FLIGHT
         elif code == EV_LAND:
+            z[0] -= shift
             z[2] = -d
+            shift = 0.0
             if z[3] < 0.0:
                 mode = YIELDING
             else:
@@ -738,6 +756,8 @@ def simulate_one(A3, B3, Fz, Fu, Ew, Kf, umax, sched_t, sched_u, x0, s_lim, t_ma
             if not open_loop:
                 regime = _classify(mode, z, Kf, umax)
 
+    z[0] -= shift
+    z[2] -= shift
     if status != REST_PROVEN and nseg < nrec:
         rec_t[nseg] = t
     out[O_DEPTH] = max(d, -z[2])  # the foot may still be creeping down if rest is unproven
