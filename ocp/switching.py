@@ -312,8 +312,9 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
     structure : SwitchingStructure, optional
         Default: :func:`detect_arcs` of ``sol``. Must be bang-bang.
     extra_arcs : int
-        Append this many more alternating bang arcs (started short) to test
-        whether more switches improve the objective.
+        Try this many more bang arcs, to test whether more switches improve
+        the objective: pairs are inserted inside the longest arc (which keeps
+        the first and last arcs), an odd one is appended at the end.
     interior_samples : int
         Path constraints are checked at this many points inside each arc.
 
@@ -332,9 +333,16 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
         raise ValueError(f"not bang-bang: arcs {st.kinds}; refinement needs bang arcs only")
     kinds = list(st.kinds)
     durs = [a.duration for a in st.arcs]
-    for _ in range(extra_arcs):
+    for _ in range(extra_arcs // 2):
+        # split the longest arc around a short arc of the other bound
+        i = int(np.argmax(durs))
+        other = "min" if kinds[i] == "max" else "max"
+        d = durs[i]
+        kinds[i:i + 1] = [kinds[i], other, kinds[i]]
+        durs[i:i + 1] = [0.495 * d, 0.01 * d, 0.495 * d]
+    if extra_arcs % 2:
         kinds.append("min" if kinds[-1] == "max" else "max")
-        cut = 0.05 * durs[-1] if len(durs) == len(st.arcs) else 0.5 * durs[-1]
+        cut = 0.01 * durs[-1]
         durs[-1] -= cut
         durs.append(cut)
     values = [st.upper if k == "max" else st.lower for k in kinds]
