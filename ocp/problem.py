@@ -114,7 +114,7 @@ class OptimalControlProblem:
 
         Parameters
         ----------
-        rhs : dict name -> expression, an SX vector in state order, or a
+        rhs : dict name -> expression, a list or SX vector in state order, or a
             ``casadi.Function`` taking (x, u, p) and returning x'.
         """
         if isinstance(rhs, ca.Function):
@@ -125,7 +125,7 @@ class OptimalControlProblem:
                 raise ProblemDefinitionError(f"no dynamics for state(s) {sorted(missing)}")
             self._rhs = {k: ca.SX(rhs[k]) for k in self.state_names}
             return
-        rhs = ca.SX(rhs)
+        rhs = ca.vertcat(*rhs) if isinstance(rhs, list | tuple) else ca.SX(rhs)
         if rhs.numel() != self.nx:
             raise ProblemDefinitionError(f"dynamics has {rhs.numel()} rows for {self.nx} states")
         self._rhs = {k: rhs[i] for i, k in enumerate(self.state_names)}

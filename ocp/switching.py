@@ -122,7 +122,9 @@ def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
     max_transition : int
         Interior runs of at most this many intervals between two *different*
         bang arcs are read as the switch (the control averages both bounds
-        over the interval that contains the switching time).
+        over the interval that contains the switching time); such runs at
+        either end of the horizon, next to a bang arc, are read as that arc
+        (the uniform grid cannot end the arc exactly on a node).
     """
     pr = sol.problem
     name = control or pr.control_names[0]
@@ -137,6 +139,18 @@ def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
             runs[-1][2] = k
         else:
             runs.append([lb, k, k])
+    # An interior run of at most max_transition intervals at either end, next to
+    # a bang arc, is the uniform grid failing to put the end of that arc on a
+    # node: absorb it (the refinement then places the end exactly).
+    for end in (0, -1):
+        nb = 1 if end == 0 else -2
+        if (len(runs) > 1 and runs[end][0] == "interior" and runs[nb][0] != "interior"
+                and runs[end][2] - runs[end][1] + 1 <= max_transition):
+            if end == 0:
+                runs[1][1] = runs[0][1]
+            else:
+                runs[-2][2] = runs[-1][2]
+            del runs[end]
     arcs: list[Arc] = []
     i = 0
     while i < len(runs):

@@ -76,6 +76,82 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
     return 0 if res.rest_proven else EXIT_FAILURE
 
 
+# ---------------------------------------------------------------------- solve
+def _cmd_solve(a: argparse.Namespace) -> int:
+    from .landing import solve_landing
+
+    res = solve_landing(a.v0, a.rm, a.s, a.umax, nodes=a.nodes, refine=not a.no_refine,
+                        extra_arcs=a.extra_arcs)
+    if a.plot:
+        from .figures import plot_bang_bang
+
+        plot_bang_bang(res).savefig(a.plot, dpi=130)
+    ok = res.replay is None or res.replay_difference <= 1e-6 or a.no_refine
+    if a.json:
+        print(json.dumps(_json_safe(res.to_dict())))
+    else:
+        rows = [("depth -x_f(T)" + ("" if a.no_refine else " (refined)"), res.depth),
+                ("depth, transcribed", res.depth_transcribed), ("final time T", res.T),
+                ("arcs", " -> ".join(res.arcs)),
+                ("switch times", ", ".join(f"{t:.12g}" for t in res.switch_times)),
+                ("arrest force u_b", res.u_b), ("arrest condition active", res.arrest_active),
+                ("Ipopt status", res.status), ("Ipopt iterations", res.iterations),
+                ("solve time [s]", res.solve_time_s)]
+        if res.replay is not None:
+            rows += [("simulator replay depth", res.replay.depth),
+                     ("replay difference", res.replay_difference),
+                     ("replay feasible", res.replay.feasible)]
+        _print_table(rows)
+        for n in res.notes:
+            print(f"note: {n}")
+        if a.plot:
+            print(f"figure written to {a.plot}")
+    return 0 if ok else EXIT_FAILURE
+
+
+def _cmd_solve_sweep(a: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .landing import sweep_landing
+
+    v = np.linspace(a.v0_max, a.v0_min, a.n)  # from the easy end: continuation
+    res = sweep_landing(v, a.rm, a.s, a.umax, nodes=a.nodes, progress=not a.json)
+    rigid = [1 + math.sqrt(1 + x * x) for x in v]
+    rows = [{"v0": r.params.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
+             "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
+             "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations}
+            for r, rd in zip(res, rigid, strict=True)]
+    if a.plot:
+        from .figures import plot_depth_vs_velocity
+
+        plot_depth_vs_velocity(v, {"rigid leg": np.array(rigid),
+                                   "bang-bang (refined)": np.array([r.depth for r in res])}
+                               ).savefig(a.plot, dpi=130)
+    if a.json:
+        print(json.dumps(_json_safe({"sweep": rows})))
+        return 0
+    print(f"{'v0':>7} {'depth':>14} {'rigid':>10} {'ratio':>7} {'T':>8}  switch  iters")
+    for r in rows:
+        sw = ",".join(f"{t:.5f}" for t in r["switch_times"])
+        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f} {r['rigid_depth']:>10.6f} "
+              f"{r['ratio_to_rigid']:>7.4f} {r['T']:>8.5f}  {sw}  {r['iterations']}")
+    if a.plot:
+        print(f"figure written to {a.plot}")
+    return 0
+
+
+def _json_safe(obj):
+    if isinstance(obj, dict):
+        return {k: _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if hasattr(obj, "item"):
+        return _json_safe(obj.item())
+    return obj
+
+
 # ---------------------------------------------------------------------- scale
 def _cmd_scale(a: argparse.Namespace) -> int:
     from .scaling import DimensionlessParams, PhysicalParams, paper_rig
@@ -228,6 +304,39 @@ def build_parser() -> argparse.ArgumentParser:
     c.add_argument("--json", action="store_true", help="print one JSON object")
     c.set_defaults(func=_cmd_scale)
 
+    o = sub.add_parser("solve", help="minimum-depth landing by optimal control (bang-bang)",
+                       description="Solve the paper's soft-landing OCP (min -x_f(T), free T, "
+                                   "|u| <= umax, 0 <= stroke <= s, v_f <= 0, v_f(T) = 0, "
+                                   "body-arrest condition) by multiple shooting and Ipopt, "
+                                   "then refine the switching times with exact arcs and "
+                                   "replay the schedule in the exact simulator.")
+    o.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
+    o.add_argument("--rm", type=float, default=5.0, help="mass ratio (default 5)")
+    o.add_argument("--s", type=float, default=20.0, help="stroke (default 20)")
+    o.add_argument("--umax", type=float, default=8.2, help="force limit (default 8.2)")
+    o.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
+    o.add_argument("--no-refine", action="store_true",
+                   help="report the transcribed solution only")
+    o.add_argument("--extra-arcs", type=int, default=0,
+                   help="also try this many more bang arcs (default 0)")
+    o.add_argument("--json", action="store_true", help="print one JSON object")
+    o.add_argument("--plot", metavar="FILE.png", help="write the bang-bang trajectory figure")
+    o.set_defaults(func=_cmd_solve)
+
+    w = sub.add_parser("solve-sweep", help="bang-bang depth against impact velocity",
+                       description="Solve the OCP over v0 from --v0-max down to --v0-min "
+                                   "with continuation (each solve warm-starts the next).")
+    w.add_argument("--v0-min", type=float, default=-10.0, help="default -10")
+    w.add_argument("--v0-max", type=float, default=0.0, help="default 0")
+    w.add_argument("--n", type=int, default=21, help="number of velocities (default 21)")
+    w.add_argument("--rm", type=float, default=5.0)
+    w.add_argument("--s", type=float, default=20.0)
+    w.add_argument("--umax", type=float, default=8.2)
+    w.add_argument("--nodes", type=int, default=100)
+    w.add_argument("--json", action="store_true", help="print one JSON object")
+    w.add_argument("--plot", metavar="FILE.png", help="write depth against v0")
+    w.set_defaults(func=_cmd_solve_sweep)
+
     d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
                        description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "
                                    "-5, -10, print a table (with the analytic rigid depth "
@@ -239,6 +348,18 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _infeasible_error():
+    from .landing import InfeasibleLandingError
+
+    return InfeasibleLandingError
+
+
+def _solve_error():
+    from ocp import SolveError
+
+    return SolveError
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``softlanding`` console script."""
     parser = build_parser()
@@ -248,6 +369,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ParameterError as exc:
         print(f"softlanding: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except _infeasible_error() as exc:
+        print(f"softlanding: infeasible: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except _solve_error() as exc:
+        print(f"softlanding: solver failed: {exc} (Ipopt status {exc.status})", file=sys.stderr)
+        return EXIT_FAILURE
     except (OSError, ValueError) as exc:
         print(f"softlanding: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -90,3 +90,38 @@ def plot_depth_vs_velocity(v0: np.ndarray, curves: dict[str, np.ndarray], ax=Non
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return fig
+
+
+def plot_bang_bang(landing) -> plt.Figure:
+    """The paper's bang-bang trajectory figure: positions, velocities and force against time.
+
+    Uses the refined (exact-arc) solution when there is one; switches are marked.
+    """
+    if landing.refined is not None:
+        t, x, u = landing.refined.sample(800)
+    else:
+        t, x, u = landing.transcribed.sample(800)
+        u = u[:, 0]
+    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7.0, 7.0))
+    a1.plot(t, x[:, 0], label=r"body $x_b$")
+    a1.plot(t, x[:, 2], label=r"foot $x_f$", color="C3")
+    a1.set_ylabel(r"height [$x_s$]")
+    a2.plot(t, x[:, 1], label=r"body $\dot x_b$")
+    a2.plot(t, x[:, 3], label=r"foot $\dot x_f$", color="C3")
+    a2.set_ylabel(r"velocity [$x_s/\tau_s$]")
+    a3.step(t, u, where="post", color="C2")
+    a3.set_ylabel(r"force $u$ [$m_t g$]")
+    a3.set_xlabel(r"time $\tau$ [$\sqrt{m_t/k_g}$]")
+    for ax in (a1, a2, a3):
+        for ts in landing.switch_times:
+            ax.axvline(ts, color="0.3", ls="--", lw=0.8)
+        ax.grid(alpha=0.3)
+    a1.legend(fontsize=8)
+    a2.legend(fontsize=8)
+    p = landing.params
+    sw = ", ".join(f"{ts:.4f}" for ts in landing.switch_times)
+    a1.set_title(f"bang-bang landing, $v_0$={p.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
+                 f"$u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, switch at {sw}",
+                 fontsize=9)
+    fig.tight_layout()
+    return fig

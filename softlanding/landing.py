@@ -46,8 +46,18 @@ class InfeasibleLandingError(ValueError):
     """No landing satisfies the constraints; the message names the condition."""
 
 
-def build_landing_problem() -> OptimalControlProblem:
-    """The soft-landing OCP with parameters ``r_m, s, v0, u_max``."""
+STROKE = "stroke limits 0 <= x_b - x_f <= s"
+DESCENDING = "foot descending v_f <= 0"
+ARREST = "body arrest -x_f(T) >= 1/(1+r_m) + u_b"
+ARREST_FORCE = "arrest force u_b <= u_max"
+DIAGNOSABLE = (ARREST_FORCE, ARREST, STROKE, DESCENDING)
+
+
+def build_landing_problem(omit: tuple[str, ...] = ()) -> OptimalControlProblem:
+    """The soft-landing OCP with parameters ``r_m, s, v0, u_max``.
+
+    ``omit`` drops named conditions (used to diagnose infeasible requests).
+    """
     p = OptimalControlProblem("soft_landing")
     xb, vb, xf, vf = (p.state(n) for n in STATE_NAMES)
     r_m, s, v0, u_max = (p.parameter(n) for n in ("r_m", "s", "v0", "u_max"))
@@ -55,8 +65,10 @@ def build_landing_problem() -> OptimalControlProblem:
     x = ca.vertcat(xb, vb, xf, vf)
     p.set_dynamics(stance_dynamics(x, u, r_m))
     stroke = xb - xf
-    p.path_constraint(stroke, 0, s, name="stroke limits 0 <= x_b - x_f <= s")
-    p.path_constraint(vf, -ca.inf, 0, name="foot descending v_f <= 0")
+    if STROKE not in omit:
+        p.path_constraint(stroke, 0, s, name=STROKE)
+    if DESCENDING not in omit:
+        p.path_constraint(vf, -ca.inf, 0, name=DESCENDING)
     p.initial_constraint(xb - s / 2, 0.0, name="x_b(0) = s/2")
     p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
     p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
@@ -64,19 +76,22 @@ def build_landing_problem() -> OptimalControlProblem:
     p.terminal_constraint(vf, 0.0, name="foot stopped v_f(T) = 0")
     mb = r_m / (1 + r_m)
     # stroke * (-x_f - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0
-    p.terminal_constraint(stroke * (-xf - 1 / (1 + r_m)) - mb * (stroke + vb**2 / 2), 0, ca.inf,
-                          name="body arrest -x_f(T) >= 1/(1+r_m) + u_b")
-    p.terminal_constraint(stroke * u_max - mb * (stroke + vb**2 / 2), 0, ca.inf,
-                          name="arrest force u_b <= u_max")
+    if ARREST not in omit:
+        p.terminal_constraint(stroke * (-xf - 1 / (1 + r_m)) - mb * (stroke + vb**2 / 2), 0,
+                              ca.inf, name=ARREST)
+    if ARREST_FORCE not in omit:
+        p.terminal_constraint(stroke * u_max - mb * (stroke + vb**2 / 2), 0, ca.inf,
+                              name=ARREST_FORCE)
     p.free_final_time(lower=1e-3, upper=T_MAX, guess=1.0)
     p.minimize_terminal(-xf)
     return p
 
 
-@lru_cache(maxsize=8)
-def landing_transcription(nodes: int = 100, substeps: int = 4) -> MultipleShooting:
+@lru_cache(maxsize=16)
+def landing_transcription(nodes: int = 100, substeps: int = 4,
+                          omit: tuple[str, ...] = ()) -> MultipleShooting:
     """The transcribed soft-landing NLP, built once per ``(nodes, substeps)`` and reused."""
-    return MultipleShooting(build_landing_problem(), nodes=nodes, integrator="rk4",
+    return MultipleShooting(build_landing_problem(omit), nodes=nodes, integrator="rk4",
                             substeps=substeps)
 
 
@@ -186,33 +201,27 @@ def rigid_guess(tr: MultipleShooting, p: DimensionlessParams) -> np.ndarray:
     return tr.initial_guess(T=T, x=X, u=U)
 
 
-def _explain_infeasible(err: SolveError, p: DimensionlessParams) -> InfeasibleLandingError:
-    """Name the condition the last iterate violates most."""
-    sol = err.iterate
-    names = []
-    if sol is not None:
-        pr = sol.problem
-        tr = sol.transcription
-        pv = tr.param_vector(sol.params)
-        lbw, ubw, lbg, ubg = (np.array(v).ravel() for v in tr._bounds(pv))
-        g = np.array(ca.Function("g", [tr._nlp["x"], tr._nlp["p"]], [tr._nlp["g"]])(
-            sol.w, pv)).ravel()
-        viol = np.maximum(lbg - g, g - ubg)
-        cons = {"path": pr.path, "terminal": pr.terminal, "initial": pr.initial}
-        worst = []
-        for block, sl in tr.layout.blocks.items():
-            if block == "continuity":
-                continue
-            v = viol[sl]
-            c = cons[block]
-            for i, con in enumerate(c):
-                worst.append((float(np.max(v[i::len(c)])), con.name))
-        worst.sort(reverse=True)
-        names = [n for v, n in worst if v > 1e-6][:2]
-    what = " and ".join(names) if names else "the constraints"
+def _explain_infeasible(err: SolveError, p: DimensionlessParams,
+                        nodes: int) -> InfeasibleLandingError:
+    """Name the condition(s) whose removal makes the request feasible."""
+    params = {"r_m": p.r_m, "s": p.s, "v0": p.v0, "u_max": p.u_max}
+    culprits = []
+    for name in DIAGNOSABLE:
+        tr = landing_transcription(nodes, omit=(name,))
+        try:
+            tr.solve(params, guess=rigid_guess(tr, p))
+            culprits.append(name)
+        except SolveError:
+            continue
+    if culprits:
+        what = " or ".join(culprits)
+        why = f"{what} cannot be met together with the other conditions"
+    else:
+        why = ("the conditions cannot all be met, and dropping any one of them ("
+               + "; ".join(DIAGNOSABLE) + ") does not help either")
     return InfeasibleLandingError(
         f"no landing satisfies the constraints at v0={p.v0:g}, r_m={p.r_m:g}, s={p.s:g}, "
-        f"u_max={p.u_max:g}: {what} cannot be met (Ipopt: {err.status})")
+        f"u_max={p.u_max:g}: {why} (Ipopt: {err.status})")
 
 
 def solve_landing(v0: float, r_m: float = 5.0, s: float = 20.0, u_max: float = 8.2, *,
@@ -241,7 +250,7 @@ def solve_landing(v0: float, r_m: float = 5.0, s: float = 20.0, u_max: float = 8
         else:
             sol = tr.solve(params, guess=rigid_guess(tr, p))
     except InfeasibleError as err:
-        raise _explain_infeasible(err, p) from None
+        raise _explain_infeasible(err, p, nodes) from None
     notes: list[str] = []
     depth_tr = -sol.x[-1, 2]
     refined = None

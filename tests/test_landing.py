@@ -1,0 +1,112 @@
+"""The paper's soft-landing OCP: refinement, simulator replay, the paper's claims."""
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from softlanding import ParameterError
+from softlanding.landing import (
+    InfeasibleLandingError,
+    landing_transcription,
+    solve_landing,
+    sweep_landing,
+)
+
+
+def rigid(v0):
+    return 1 + math.sqrt(1 + v0 * v0)
+
+
+@pytest.mark.parametrize("v0", [0.0, -0.5, -1.0, -3.0, -6.0, -10.0])
+def test_refined_depth_matches_exact_simulator_replay(v0):
+    r = solve_landing(v0)
+    assert r.refined is not None and r.arcs == ["max", "min"]
+    assert r.arrest_active
+    rp = r.replay
+    assert rp.rest_proven and rp.feasible
+    assert abs(rp.depth - r.depth) <= 1e-9
+    # the body ends at rest at the stroke's lower end, inside the stroke
+    t_end = r.schedule().times[-1]  # end of the arrest phase: then the weight is held
+    tail = rp.trajectory(t_end=t_end + 1.0, n=200)
+    assert abs(tail.x[-1, 1]) < 1e-9
+    assert -1e-9 <= tail.stroke[-1] <= 20.0
+    # the transcription is within its discretisation error of the exact answer
+    assert r.depth <= r.depth_transcribed + 1e-12
+    assert abs(r.depth - r.depth_transcribed) < 1e-4
+
+
+@pytest.fixture(scope="module")
+def sweep():
+    v = np.r_[np.linspace(-0.01, -0.2, 3), np.linspace(-0.5, -10.0, 12)]
+    return v, sweep_landing(v)
+
+
+def test_bang_bang_at_most_half_the_rigid_depth(sweep):
+    v, res = sweep
+    for v0, r in zip(v, res, strict=True):
+        if v0 <= -0.2:
+            assert r.depth <= 0.5 * rigid(v0)
+
+
+def test_depth_decreases_toward_one_and_ratio_toward_half(sweep):
+    v, res = sweep
+    depth = np.array([r.depth for r in res])
+    assert np.all(np.diff(depth) > 0)  # deeper as |v0| grows
+    assert 1.0 < depth[0] < 1.002
+    ratio = depth[0] / rigid(v[0])
+    assert abs(ratio - 0.5) < 2e-3
+
+
+def test_resolving_does_not_rebuild_the_nlp():
+    tr = landing_transcription(100)
+    before = tr.n_builds
+    solve_landing(-2.0, replay=False)
+    solve_landing(-4.0, r_m=3.0, s=15.0, u_max=7.0, replay=False)
+    assert landing_transcription(100) is tr
+    assert tr.n_builds == before == 1
+
+
+def test_extra_switches_change_depth_by_less_than_one_percent():
+    base = solve_landing(-3.0, replay=False)
+    more = solve_landing(-3.0, extra_arcs=2, replay=False)
+    assert len(more.refined.kinds) == 4
+    assert abs(more.depth - base.depth) <= 0.01 * base.depth
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"v0": -3.0, "u_max": 0.5}, "body weight"),
+    ({"v0": -10.0, "u_max": 2.0}, "arrest force u_b <= u_max"),
+])
+def test_infeasible_requests_name_the_condition(kwargs, match):
+    with pytest.raises(InfeasibleLandingError, match=match):
+        solve_landing(**kwargs, replay=False)
+
+
+@pytest.mark.parametrize("kwargs,name", [({"v0": 1.0}, "v0"), ({"v0": -1, "u_max": -2}, "u_max"),
+                                         ({"v0": -1, "s": math.nan}, "s")])
+def test_bad_parameters(kwargs, name):
+    with pytest.raises(ParameterError, match=name):
+        solve_landing(**kwargs)
+
+
+def test_cli_solve_json_and_infeasible(tmp_path):
+    png = tmp_path / "bb.png"
+    p = subprocess.run([sys.executable, "-m", "softlanding", "solve", "--v0", "-3", "--json",
+                        "--plot", str(png)], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)
+    for k in ("depth", "depth_transcribed", "T", "switch_times", "arcs", "u_b",
+              "arrest_active", "status", "iterations", "solve_time_s"):
+        assert k in d
+    assert d["arcs"] == ["max", "min"] and len(d["switch_times"]) == 1
+    assert d["replay"]["difference"] <= 1e-9
+    assert png.stat().st_size > 10_000
+    q = subprocess.run([sys.executable, "-m", "softlanding", "solve", "--v0", "-10",
+                        "--umax", "2"], capture_output=True, text=True, timeout=300)
+    assert q.returncode == 2
+    assert "arrest force u_b <= u_max" in q.stderr and "Traceback" not in q.stderr
+    assert q.stderr.count("\n") == 1
