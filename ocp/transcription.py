@@ -84,6 +84,11 @@ class MultipleShooting:
         RK4 steps per interval.
     ipopt_options : dict, optional
         Overrides of :data:`DEFAULT_IPOPT`.
+    expand : bool
+        Expand the NLP to SX scalar graphs (RK4 only): building takes longer
+        (0.4 s instead of 0.02 s for the soft landing at N = 100) but every
+        evaluation is ~5x faster, so re-solves are ~2x faster. Worth it for
+        sweeps and continuation.
 
     Attributes
     ----------
@@ -92,7 +97,8 @@ class MultipleShooting:
     """
 
     def __init__(self, problem: OptimalControlProblem, nodes: int = 50, integrator: str = "rk4",
-                 substeps: int = 4, ipopt_options: dict | None = None) -> None:
+                 substeps: int = 4, ipopt_options: dict | None = None,
+                 expand: bool = False) -> None:
         problem.validate()
         if nodes < 1:
             raise ValueError("nodes must be >= 1")
@@ -103,6 +109,7 @@ class MultipleShooting:
         self.integrator = integrator
         self.substeps = int(substeps)
         self.ipopt_options = {**DEFAULT_IPOPT, **(ipopt_options or {})}
+        self.expand = bool(expand) and integrator == "rk4"
         self.n_builds = 0
         self._solvers: dict[bool, Any] = {}
         self._build()
@@ -118,9 +125,13 @@ class MultipleShooting:
             self.F = cvodes_function(f, L, nx, nu, np_)
         nT = 1 if pr.time_free else 0
         nw = nT + nx * (N + 1) + nu * N
-        w = ca.MX.sym("w", nw)
-        P = ca.MX.sym("p", np_)
-        T = w[0] if pr.time_free else ca.MX(pr.T_bounds[0])
+        # An MX graph that maps the per-interval function (SX inside for RK4) over
+        # the N intervals: derivatives of a map are maps of the small function's
+        # derivatives, so building the Hessian stays cheap.
+        Sym = ca.MX
+        w = Sym.sym("w", nw)
+        P = Sym.sym("p", np_)
+        T = w[0] if pr.time_free else Sym(pr.T_bounds[0])
         X = ca.reshape(w[nT:nT + nx * (N + 1)], nx, N + 1)
         U = ca.reshape(w[nT + nx * (N + 1):], nu, N)
         h = T / N
@@ -183,7 +194,7 @@ class MultipleShooting:
                 ipopt.update(warm_start_init_point="yes", warm_start_bound_push=1e-9,
                              warm_start_mult_bound_push=1e-9, mu_init=1e-6)
             opts = {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
-                    "expand": self.integrator == "rk4"}
+                    "expand": self.expand}
             self._solvers[warm] = ca.nlpsol(f"{self.problem.name}_ms", "ipopt", self._nlp, opts)
         return self._solvers[warm]
 

@@ -90,9 +90,12 @@ def build_landing_problem(omit: tuple[str, ...] = ()) -> OptimalControlProblem:
 @lru_cache(maxsize=16)
 def landing_transcription(nodes: int = 100, substeps: int = 4,
                           omit: tuple[str, ...] = ()) -> MultipleShooting:
-    """The transcribed soft-landing NLP, built once per ``(nodes, substeps)`` and reused."""
+    """The transcribed soft-landing NLP, built once per ``(nodes, substeps)`` and reused.
+
+    Expanded to SX: slower to build once, faster at every re-solve of a sweep.
+    """
     return MultipleShooting(build_landing_problem(omit), nodes=nodes, integrator="rk4",
-                            substeps=substeps)
+                            substeps=substeps, expand=True)
 
 
 def arrest_force(r_m: float, x_T: np.ndarray) -> float:
