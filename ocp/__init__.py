@@ -7,10 +7,13 @@ Knows nothing of landing. One file per role:
   warm starts and continuation;
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.switching`     -- bang-bang structure detection and switching-time
-  refinement to machine precision.
+  refinement to machine precision;
+* :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
+  certificate that proves (or refutes) bang-bang structure.
 """
 
 from .errors import InfeasibleError, SolveError
+from .pmp import PMPCertificate, certify
 from .problem import OptimalControlProblem, ProblemDefinitionError
 from .solution import Solution
 from .transcription import MultipleShooting, continuation
@@ -18,9 +21,11 @@ from .transcription import MultipleShooting, continuation
 __all__ = [
     "InfeasibleError",
     "MultipleShooting",
+    "PMPCertificate",
     "OptimalControlProblem",
     "ProblemDefinitionError",
     "Solution",
     "SolveError",
+    "certify",
     "continuation",
 ]

@@ -152,6 +152,7 @@ class MultipleShooting:
             n += k
 
         zeros = ca.SX.zeros(nx * N)
+        # F(X_k, U_k) - X_{k+1} = 0; see ocp.pmp for what its multipliers mean
         add("continuity", Xn - X[:, 1:], zeros, zeros)
         if pr.path:
             H = ca.Function("H", [xs, us, ps], [ca.vertcat(*[c.expr for c in pr.path])])

@@ -82,13 +82,27 @@ def _cmd_solve(a: argparse.Namespace) -> int:
 
     res = solve_landing(a.v0, a.rm, a.s, a.umax, nodes=a.nodes, refine=not a.no_refine,
                         extra_arcs=a.extra_arcs)
+    cert = None
+    if a.pmp:
+        from ocp import certify
+
+        cert = certify(res.transcribed, res.refined)
     if a.plot:
         from .figures import plot_bang_bang
 
         plot_bang_bang(res).savefig(a.plot, dpi=130)
+        if cert is not None:
+            from ocp.pmp import plot_certificate
+
+            stem, dot, ext = a.plot.rpartition(".")
+            pmp_plot = f"{stem}-pmp.{ext}" if dot else f"{a.plot}-pmp.png"
+            plot_certificate(cert).savefig(pmp_plot, dpi=130)
     ok = res.replay is None or res.replay_difference <= 1e-6 or a.no_refine
     if a.json:
-        print(json.dumps(_json_safe(res.to_dict())))
+        d = res.to_dict()
+        if cert is not None:
+            d["pmp"] = cert.to_dict()
+        print(json.dumps(_json_safe(d)))
     else:
         rows = [("depth -x_f(T)" + ("" if a.no_refine else " (refined)"), res.depth),
                 ("depth, transcribed", res.depth_transcribed), ("final time T", res.T),
@@ -101,11 +115,24 @@ def _cmd_solve(a: argparse.Namespace) -> int:
             rows += [("simulator replay depth", res.replay.depth),
                      ("replay difference", res.replay_difference),
                      ("replay feasible", res.replay.feasible)]
+        if cert is not None:
+            rows += [("PMP verdict", cert.verdict), ("PMP costate source", cert.source),
+                     ("max |H - H_expected| / H_scale", cert.H_max_abs),
+                     ("H variation / H_scale", cert.H_variation),
+                     ("sigma sign agreement", cert.sigma_sign_agreement),
+                     ("switch to sigma-zero gap", cert.switch_sigma_gap),
+                     ("costate estimates gap", cert.costate_estimates_gap),
+                     ("singular intervals", cert.singular_intervals or "none"),
+                     ("state-constrained intervals",
+                      cert.state_constraint_active_intervals or "none")]
         _print_table(rows)
         for n in res.notes:
             print(f"note: {n}")
+        if cert is not None:
+            for r_ in cert.reasons:
+                print(f"PMP: {r_}")
         if a.plot:
-            print(f"figure written to {a.plot}")
+            print(f"figure written to {a.plot}" + (f" and {pmp_plot}" if cert else ""))
     return 0 if ok else EXIT_FAILURE
 
 
@@ -319,8 +346,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="report the transcribed solution only")
     o.add_argument("--extra-arcs", type=int, default=0,
                    help="also try this many more bang arcs (default 0)")
+    o.add_argument("--pmp", action="store_true",
+                   help="check Pontryagin's conditions (costates, H, switching function) "
+                        "and give a bang-bang verdict")
     o.add_argument("--json", action="store_true", help="print one JSON object")
-    o.add_argument("--plot", metavar="FILE.png", help="write the bang-bang trajectory figure")
+    o.add_argument("--plot", metavar="FILE.png",
+                   help="write the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
     o.set_defaults(func=_cmd_solve)
 
     w = sub.add_parser("solve-sweep", help="bang-bang depth against impact velocity",
