@@ -179,6 +179,100 @@ def _json_safe(obj):
     return obj
 
 
+# ------------------------------------------------------------------ impedance
+def _cmd_impedance(a: argparse.Namespace) -> int:
+    from .impedance import optimize_impedance
+
+    o = optimize_impedance(a.v0, a.rm, a.s, objective=a.objective, grid=a.grid, u_max=a.umax)
+    if a.json:
+        print(json.dumps(_json_safe(o.to_dict())))
+        return 0
+    _print_table([
+        ("objective", o.objective), ("v0", o.v0), ("optimal k_p", o.kp), ("optimal k_d", o.kd),
+        (f"{o.objective} at the optimum", o.value), ("depth", o.depth),
+        ("intrusion steps", o.steps), ("peak |u|", o.u_peak), ("stroke min", o.stroke_min),
+        ("stroke max", o.stroke_max), ("CoT (dissipative)", o.cot),
+        ("CoT (lossless)", o.cot_lossless), ("on stroke boundary", o.on_stroke_boundary),
+        ("active constraint", o.active_constraint or "none"),
+        ("best grid point", f"k_p={o.grid_best['kp']:g}, k_d={o.grid_best['kd']:g}, "
+                            f"{o.objective}={o.grid_best['value']:.10g}"),
+        ("landings simulated", o.evaluations)])
+    return 0
+
+
+def _cmd_map(a: argparse.Namespace) -> int:
+    from .impedance import optimize_impedance
+    from .sweeps import depth_map, save_dataset
+
+    ds = depth_map(a.v0, a.rm, a.s, n=a.n, scheduler=a.scheduler)
+    save_dataset(ds, a.out)
+    opt = optimize_impedance(a.v0, a.rm, a.s, grid=a.n)
+    if a.plot:
+        from .figures import plot_depth_map
+
+        plot_depth_map(ds, opt).savefig(a.plot, dpi=130)
+    summary = {"out": a.out, "plot": a.plot, "landings": int(ds.depth.size),
+               "feasible_fraction": float(ds.strictly_feasible.mean()),
+               "optimum": opt.to_dict()}
+    if a.json:
+        print(json.dumps(_json_safe(summary)))
+    else:
+        print(f"{summary['landings']} landings, {summary['feasible_fraction']:.1%} feasible; "
+              f"dataset written to {a.out}")
+        print(f"optimum: k_p = {opt.kp:.8f}, k_d = {opt.kd:.8f}, depth {opt.depth:.10f} "
+              f"({opt.steps} step(s), on stroke boundary: {_fmt(opt.on_stroke_boundary)})")
+        if a.plot:
+            print(f"figure written to {a.plot}")
+    return 0
+
+
+def _cmd_sweep(a: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .sweeps import optimal_impedance_curves, paper_observations, save_dataset
+
+    v0 = np.linspace(a.v0_max, a.v0_min, a.n)
+    if a.objective != "depth":
+        v0 = v0[v0 < 0]
+    curves = optimal_impedance_curves(v0, a.rm or [5.0], a.s or [20.0], objective=a.objective,
+                                      grid=a.grid, scheduler=a.scheduler,
+                                      progress=not a.json)
+    if a.out:
+        save_dataset(curves, a.out)
+    if a.plot:
+        from .figures import plot_optimal_curves
+
+        plot_optimal_curves(curves).savefig(a.plot, dpi=130)
+    r0, s0 = float(curves.r_m[0]), float(curves.s[0])
+    obs = paper_observations(curves, r0, s0)
+    if a.json:
+        c = curves.sel(r_m=r0, s=s0)
+        print(json.dumps(_json_safe({
+            "v0": c.v0.values.tolist(), "kp": c.kp.values.tolist(),
+            "kd": c.kd.values.tolist(), "depth": c.depth.values.tolist(),
+            "u_peak": c.u_peak.values.tolist(), "cot": c.cot.values.tolist(),
+            "on_stroke_boundary": c.on_stroke_boundary.values.tolist(),
+            "observations": obs, "out": a.out})))
+        return 0
+    for r in curves.r_m.values:
+        for s in curves.s.values:
+            c = curves.sel(r_m=r, s=s)
+            print(f"r_m = {r:g}, s = {s:g}, objective {a.objective}")
+            print(f"{'v0':>7} {'k_p*':>11} {'k_d*':>11} {'depth':>11} {'steps':>5} "
+                  f"{'peak|u|':>8} {'CoT':>8} boundary")
+            for i in range(c.v0.size):
+                print(f"{float(c.v0[i]):>7.2f} {float(c.kp[i]):>11.7f} {float(c.kd[i]):>11.7f} "
+                      f"{float(c.depth[i]):>11.7f} {int(c.steps[i]):>5d} "
+                      f"{float(c.u_peak[i]):>8.4f} {float(c.cot[i]):>8.4f} "
+                      f"{_fmt(bool(c.on_stroke_boundary[i]))}")
+    print(f"paper's observations at r_m = {r0:g}, s = {s0:g}: {obs}")
+    if a.out:
+        print(f"dataset written to {a.out}")
+    if a.plot:
+        print(f"figure written to {a.plot}")
+    return 0
+
+
 # ---------------------------------------------------------------------- scale
 def _cmd_scale(a: argparse.Namespace) -> int:
     from .scaling import DimensionlessParams, PhysicalParams, paper_rig
@@ -367,6 +461,54 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--json", action="store_true", help="print one JSON object")
     w.add_argument("--plot", metavar="FILE.png", help="write depth against v0")
     w.set_defaults(func=_cmd_solve_sweep)
+
+    i = sub.add_parser("impedance", help="optimal impedance gains for one impact velocity",
+                       description="Minimise depth (or CoT) over the gains (k_p, k_d) in "
+                                   "[0, 1]^2, excluding landings that leave the stroke: the "
+                                   "paper's grid, then a zooming feasible-grid refinement "
+                                   "(to 1e-8) and a bisection onto the stroke limit.")
+    i.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
+    i.add_argument("--rm", type=float, default=5.0, help="mass ratio (default 5)")
+    i.add_argument("--s", type=float, default=20.0, help="stroke (default 20)")
+    i.add_argument("--umax", type=float, default=None, help="force saturation (default none)")
+    i.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth",
+                   help="depth; CoT with actuator and ground losses; or ground losses only")
+    i.add_argument("--grid", type=int, default=101, help="starting grid per axis (default 101)")
+    i.add_argument("--json", action="store_true", help="print one JSON object")
+    i.set_defaults(func=_cmd_impedance)
+
+    m = sub.add_parser("map", help="the (k_p, k_d) depth map at one impact velocity",
+                       description="Simulate the (k_p, k_d) grid, save every figure of every "
+                                   "landing as a labelled netCDF dataset, and plot depth "
+                                   "normalised by its minimum (infeasible blank, optimum "
+                                   "starred).")
+    m.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
+    m.add_argument("--n", type=int, default=101, help="points per axis (default 101)")
+    m.add_argument("--rm", type=float, default=5.0)
+    m.add_argument("--s", type=float, default=20.0)
+    m.add_argument("--out", required=True, metavar="FILE.nc", help="netCDF dataset to write")
+    m.add_argument("--plot", metavar="FILE.png", help="write the map figure")
+    m.add_argument("--scheduler", metavar="tcp://host:port",
+                   help="run on a Dask cluster instead of the local cores")
+    m.add_argument("--json", action="store_true", help="print one JSON object")
+    m.set_defaults(func=_cmd_map)
+
+    w2 = sub.add_parser("sweep", help="optimal gains against impact velocity (and r_m, s)",
+                        description="Optimal impedance at each v0 from --v0-max to --v0-min, "
+                                    "for every --rm and --s given (repeat the flags for "
+                                    "families), with the paper's observations checked.")
+    w2.add_argument("--v0-min", type=float, default=-10.0)
+    w2.add_argument("--v0-max", type=float, default=0.0)
+    w2.add_argument("--n", type=int, default=21, help="number of v0 values (default 21)")
+    w2.add_argument("--rm", type=float, action="append", help="mass ratio (repeatable)")
+    w2.add_argument("--s", type=float, action="append", help="stroke (repeatable)")
+    w2.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth")
+    w2.add_argument("--grid", type=int, default=101, help="starting grid per axis")
+    w2.add_argument("--out", metavar="FILE.nc", help="netCDF dataset to write")
+    w2.add_argument("--plot", metavar="FILE.png", help="write the curves figure")
+    w2.add_argument("--scheduler", metavar="tcp://host:port", help="Dask scheduler address")
+    w2.add_argument("--json", action="store_true", help="print one JSON object")
+    w2.set_defaults(func=_cmd_sweep)
 
     d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
                        description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "

@@ -125,3 +125,48 @@ def plot_bang_bang(landing) -> plt.Figure:
                  fontsize=9)
     fig.tight_layout()
     return fig
+
+
+def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
+    """The paper's (k_p, k_d) map: depth normalised by its feasible minimum.
+
+    Infeasible gains (the stroke is left) are blank; the optimum is starred.
+    """
+    fig, ax = _axes(ax, (5.8, 4.6))
+    d = ds.depth.where(ds.strictly_feasible)
+    dmin = float(d.min())
+    im = ax.pcolormesh(ds.k_p, ds.k_d, (d / dmin).T, shading="nearest", cmap="viridis")
+    fig.colorbar(im, ax=ax, label=r"$x_f / x_f^*$ (depth / minimum depth)")
+    if optimum is not None:
+        ax.plot(optimum.kp, optimum.kd, "*", color="w", mec="k", ms=16,
+                label=f"optimum ($k_p$={optimum.kp:.4f}, $k_d$={optimum.kd:.4f})")
+        ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel(r"stiffness $k_p = K_p / k_g$")
+    ax.set_ylabel(r"damping $k_d = K_d / \sqrt{m_t k_g}$")
+    ax.set_title(f"$v_0$={float(ds.v0):g}, $r_m$={float(ds.r_m):g}, $s$={float(ds.s):g}; "
+                 f"blank: stroke limit exceeded", fontsize=9)
+    return fig
+
+
+def plot_optimal_curves(curves) -> plt.Figure:
+    """k_p*, k_d* and depth* against |v0| for each (r_m, s) in the dataset."""
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    for r in curves.r_m.values:
+        for s in curves.s.values:
+            c = curves.sel(r_m=r, s=s)
+            speed = np.abs(c.v0.values)
+            lw = 2.5 if (r == 5 and s == 20) else 1.2
+            lab = f"$r_m$={r:g}, $s$={s:g}"
+            axes[0].plot(speed, c.kp, lw=lw, label=lab)
+            axes[1].plot(speed, c.kd, lw=lw, label=lab)
+            axes[2].plot(speed, c.depth, lw=lw, label=lab)
+    for ax, lab in zip(axes, (r"optimal stiffness $k_p^*$", r"optimal damping $k_d^*$",
+                              r"minimum depth $-x_f^*$ [$x_s$]"), strict=True):
+        ax.set_xlabel(r"impact speed $|v_0|$ [$x_s/\tau_s$]")
+        ax.set_ylabel(lab)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(f"optimal impedance (objective: {curves.attrs.get('objective', 'depth')})",
+                 fontsize=10)
+    fig.tight_layout()
+    return fig
