@@ -261,6 +261,9 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
             print(f"{'v0':>7} {'k_p*':>11} {'k_d*':>11} {'depth':>11} {'steps':>5} "
                   f"{'peak|u|':>8} {'CoT':>8} boundary")
             for i in range(c.v0.size):
+                if not bool(c.feasible[i]):
+                    print(f"{float(c.v0[i]):>7.2f}   no gains in [0, 1]^2 keep the stroke")
+                    continue
                 print(f"{float(c.v0[i]):>7.2f} {float(c.kp[i]):>11.7f} {float(c.kd[i]):>11.7f} "
                       f"{float(c.depth[i]):>11.7f} {int(c.steps[i]):>5d} "
                       f"{float(c.u_peak[i]):>8.4f} {float(c.cot[i]):>8.4f} "

@@ -22,8 +22,8 @@ from .impedance import optimize_impedance, strictly_feasible
 from .simulate import BATCH_FIELDS, simulate_batch
 
 MAP_VARIABLES = BATCH_FIELDS + ("cot", "cot_lossless", "strictly_feasible")
-CURVE_VARIABLES = ("kp", "kd", "depth", "steps", "u_peak", "stroke_min", "stroke_max", "cot",
-                   "cot_lossless", "on_stroke_boundary", "value")
+CURVE_VARIABLES = ("feasible", "kp", "kd", "depth", "steps", "u_peak", "stroke_min",
+                   "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "value")
 
 
 def _client(scheduler: str | None):
@@ -118,8 +118,16 @@ def depth_map(v0: float, r_m: float = 5.0, s: float = 20.0, n: int = 101, **kw) 
 
 # ----------------------------------------------------------------- curves
 def _optimum_row(v0, r_m, s, objective, grid):
-    o = optimize_impedance(v0, r_m, s, objective=objective, grid=grid)
-    return {"kp": o.kp, "kd": o.kd, "depth": o.depth, "steps": o.steps, "u_peak": o.u_peak,
+    try:
+        o = optimize_impedance(v0, r_m, s, objective=objective, grid=grid)
+    except ParameterError as exc:
+        if "no feasible gains" not in str(exc):
+            raise
+        # no gains in the box keep the stroke: recorded, not fatal for the sweep
+        row = {k: math.nan for k in CURVE_VARIABLES}
+        row.update(steps=-1, on_stroke_boundary=False, feasible=False)
+        return row
+    return {"feasible": True, "kp": o.kp, "kd": o.kd, "depth": o.depth, "steps": o.steps, "u_peak": o.u_peak,
             "stroke_min": o.stroke_min, "stroke_max": o.stroke_max, "cot": o.cot,
             "cot_lossless": o.cot_lossless, "on_stroke_boundary": o.on_stroke_boundary,
             "value": o.value}
@@ -132,7 +140,8 @@ def optimal_impedance_curves(v0: Sequence[float], r_m: Sequence[float] = (5.0,),
     """Optimal gains against impact velocity, for every (r_m, s) given.
 
     Returns a dataset with dims ``(r_m, s, v0)`` and variables
-    :data:`CURVE_VARIABLES`.
+    :data:`CURVE_VARIABLES`; where no gains in the box keep the stroke,
+    ``feasible`` is False and the figures are NaN.
     """
     v0 = np.atleast_1d(np.asarray(v0, dtype=float))
     r_m = np.atleast_1d(np.asarray(r_m, dtype=float))
@@ -163,6 +172,7 @@ def optimal_impedance_curves(v0: Sequence[float], r_m: Sequence[float] = (5.0,),
 def paper_observations(curves: xr.Dataset, r_m: float = 5.0, s: float = 20.0) -> dict:
     """Check the paper's Section IV claims on one curve; numbers, not adjectives."""
     c = curves.sel(r_m=r_m, s=s)
+    c = c.isel(v0=np.flatnonzero(c.feasible.values.astype(bool)))
     order = np.argsort(np.abs(c.v0.values))
     speed = np.abs(c.v0.values[order])
     kp = c.kp.values[order]
