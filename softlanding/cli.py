@@ -374,6 +374,14 @@ def _cmd_demo(a: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------- parser
+def _model_args(p: argparse.ArgumentParser, umax: float | None, umax_help: str) -> None:
+    """The model parameters shared by the sub-commands, and --json."""
+    p.add_argument("--rm", type=float, default=5.0, help="mass ratio m_b / m_f (default 5)")
+    p.add_argument("--s", type=float, default=20.0, help="stroke S / x_s (default 20)")
+    p.add_argument("--umax", type=float, default=umax, help=umax_help)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(
         prog="softlanding",
@@ -395,11 +403,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--rigid", action="store_true", help="body and foot locked together")
     s.add_argument("--kp", type=float, help="impedance stiffness k_p = K_p / k_g (>= 0)")
     s.add_argument("--kd", type=float, help="impedance damping k_d = K_d / sqrt(m_t k_g) (>= 0)")
-    s.add_argument("--rm", type=float, default=5.0, help="mass ratio m_b / m_f (default 5)")
-    s.add_argument("--s", type=float, default=20.0, help="stroke S / x_s (default 20)")
-    s.add_argument("--umax", type=float, default=None,
-                   help="saturate the impedance force at +-umax (default: no limit)")
-    s.add_argument("--json", action="store_true", help="print one JSON object")
+    _model_args(s, None, "saturate the impedance force at +-umax (default: no limit)")
     s.add_argument("--plot", metavar="FILE.png", help="write the trajectory figure")
     s.set_defaults(func=_cmd_simulate)
 
@@ -435,9 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "then refine the switching times with exact arcs and "
                                    "replay the schedule in the exact simulator.")
     o.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
-    o.add_argument("--rm", type=float, default=5.0, help="mass ratio (default 5)")
-    o.add_argument("--s", type=float, default=20.0, help="stroke (default 20)")
-    o.add_argument("--umax", type=float, default=8.2, help="force limit (default 8.2)")
+    _model_args(o, 8.2, "force limit (default 8.2)")
     o.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
     o.add_argument("--no-refine", action="store_true",
                    help="report the transcribed solution only")
@@ -446,7 +448,6 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument("--pmp", action="store_true",
                    help="check Pontryagin's conditions (costates, H, switching function) "
                         "and give a bang-bang verdict")
-    o.add_argument("--json", action="store_true", help="print one JSON object")
     o.add_argument("--plot", metavar="FILE.png",
                    help="write the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
     o.set_defaults(func=_cmd_solve)
@@ -457,11 +458,8 @@ def build_parser() -> argparse.ArgumentParser:
     w.add_argument("--v0-min", type=float, default=-10.0, help="default -10")
     w.add_argument("--v0-max", type=float, default=0.0, help="default 0")
     w.add_argument("--n", type=int, default=21, help="number of velocities (default 21)")
-    w.add_argument("--rm", type=float, default=5.0)
-    w.add_argument("--s", type=float, default=20.0)
-    w.add_argument("--umax", type=float, default=8.2)
+    _model_args(w, 8.2, "force limit (default 8.2)")
     w.add_argument("--nodes", type=int, default=100)
-    w.add_argument("--json", action="store_true", help="print one JSON object")
     w.add_argument("--plot", metavar="FILE.png", help="write depth against v0")
     w.set_defaults(func=_cmd_solve_sweep)
 
@@ -471,13 +469,10 @@ def build_parser() -> argparse.ArgumentParser:
                                    "paper's grid, then a zooming feasible-grid refinement "
                                    "(to 1e-8) and a bisection onto the stroke limit.")
     i.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
-    i.add_argument("--rm", type=float, default=5.0, help="mass ratio (default 5)")
-    i.add_argument("--s", type=float, default=20.0, help="stroke (default 20)")
-    i.add_argument("--umax", type=float, default=None, help="force saturation (default none)")
+    _model_args(i, None, "force saturation (default none)")
     i.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth",
                    help="depth; CoT with actuator and ground losses; or ground losses only")
     i.add_argument("--grid", type=int, default=101, help="starting grid per axis (default 101)")
-    i.add_argument("--json", action="store_true", help="print one JSON object")
     i.set_defaults(func=_cmd_impedance)
 
     m = sub.add_parser("map", help="the (k_p, k_d) depth map at one impact velocity",

@@ -127,10 +127,9 @@ def _optimum_row(v0, r_m, s, objective, grid):
         row = {k: math.nan for k in CURVE_VARIABLES}
         row.update(steps=-1, on_stroke_boundary=False, feasible=False)
         return row
-    return {"feasible": True, "kp": o.kp, "kd": o.kd, "depth": o.depth, "steps": o.steps, "u_peak": o.u_peak,
-            "stroke_min": o.stroke_min, "stroke_max": o.stroke_max, "cot": o.cot,
-            "cot_lossless": o.cot_lossless, "on_stroke_boundary": o.on_stroke_boundary,
-            "value": o.value}
+    row = {k: getattr(o, k) for k in CURVE_VARIABLES if k != "feasible"}
+    row["feasible"] = True
+    return row
 
 
 def optimal_impedance_curves(v0: Sequence[float], r_m: Sequence[float] = (5.0,),
