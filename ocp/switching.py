@@ -396,9 +396,9 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
     # build the chain of arcs (symbolic), with interior samples for path constraints
     H = (ca.Function("H", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path])])
          if pr.path else None)
+    # with a running cost (or an integrator, which always carries one) the state
+    # is augmented by the cost's quadrature
     z = ca.vertcat(x0, 0) if (has_L or not exact) else x0
-    if not exact and not has_L:
-        z = ca.vertcat(x0, 0)
     g, lbg, ubg, blocks = [], [], [], {}
     n = 0
 
@@ -449,8 +449,6 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
     nlp = {"x": w, "f": J, "g": ca.vertcat(*g)}
     opts = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})}, "print_time": False,
             "error_on_fail": False}
-    if not exact:
-        nlp = {k: v for k, v in nlp.items()}
     solver = ca.nlpsol("refine", "ipopt", nlp, opts)
     lbw = np.r_[np.zeros(K), -np.inf * np.ones(nx)]
     ubw = np.r_[np.full(K, T_max), np.inf * np.ones(nx)]

@@ -12,6 +12,7 @@ import math
 import sys
 from collections.abc import Sequence
 
+from ._jsonutil import json_safe as _json_safe
 from .errors import ParameterError
 
 EXIT_BAD_INPUT = 2
@@ -165,18 +166,6 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     if a.plot:
         print(f"figure written to {a.plot}")
     return 0
-
-
-def _json_safe(obj):
-    if isinstance(obj, dict):
-        return {k: _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if hasattr(obj, "item"):
-        return _json_safe(obj.item())
-    return obj
 
 
 # ------------------------------------------------------------------ impedance

@@ -66,7 +66,7 @@ def mechanical_energy(x, r_m):
 
     Gravitational energy is measured from heights 0, so differences are what
     matter; :mod:`softlanding.simulate` reports energies relative to the
-    configuration at impact.
+    configuration at impact (its kernel reads the mass fractions off this).
     """
     mb, mf = r_m / (1 + r_m), 1 / (1 + r_m)
     return 0.5 * mb * x[VB] ** 2 + 0.5 * mf * x[VF] ** 2 + mb * x[XB] + mf * x[XF]
@@ -112,11 +112,13 @@ def _affine_parts() -> ca.Function:
     x, u, fg, r = _symbols()
     rhs = robot_rhs(x, u, fg, r)
     c = ca.substitute(rhs, ca.vertcat(x, u, fg), ca.DM.zeros(6))
+    E = mechanical_energy(x, r)
     return ca.Function(
         "affine_parts",
         [r],
         [ca.jacobian(rhs, x), ca.jacobian(rhs, u), ca.jacobian(rhs, fg), c,
-         ca.jacobian(yielding_ground_force(x), x)],
+         ca.jacobian(yielding_ground_force(x), x),
+         ca.substitute(ca.gradient(E, x), x, ca.DM.zeros(4))],
     )
 
 
@@ -140,8 +142,8 @@ def mode_matrices(r_m: float) -> dict[str, np.ndarray]:
         (masses of body and foot, as fractions of the total).
     """
     r_m = check_positive("r_m", r_m)
-    Ax, Bu, Bg, c, Cg = (np.array(m, dtype=float) for m in _affine_parts()(r_m))
-    Bu, Bg, c, Cg = Bu.ravel(), Bg.ravel(), c.ravel(), Cg.ravel()
+    Ax, Bu, Bg, c, Cg, dE = (np.array(m, dtype=float) for m in _affine_parts()(r_m))
+    Bu, Bg, c, Cg, dE = Bu.ravel(), Bg.ravel(), c.ravel(), Cg.ravel(), dE.ravel()
 
     def aug(A4, c4):
         A = np.zeros((5, 5))
@@ -167,5 +169,5 @@ def mode_matrices(r_m: float) -> dict[str, np.ndarray]:
     # flight: no ground force
     A[2] = aug(Ax, c)
     B[2, :4] = Bu
-    mb, mf = r_m / (1 + r_m), 1 / (1 + r_m)
-    return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "E": np.array([mb, mf])}
+    # gravitational weights of body and foot = their mass fractions (dE/dx_b, dE/dx_f)
+    return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "E": np.array([dE[XB], dE[XF]])}

@@ -74,14 +74,12 @@ def build_landing_problem(omit: tuple[str, ...] = ()) -> OptimalControlProblem:
     p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
     p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
     p.terminal_constraint(vf, 0.0, name="foot stopped v_f(T) = 0")
-    mb = r_m / (1 + r_m)
     # stroke * (-x_f - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0
+    ub_stroke = arrest_force_times_stroke(x, r_m)
     if ARREST not in omit:
-        p.terminal_constraint(stroke * (-xf - 1 / (1 + r_m)) - mb * (stroke + vb**2 / 2), 0,
-                              ca.inf, name=ARREST)
+        p.terminal_constraint(stroke * (-xf - 1 / (1 + r_m)) - ub_stroke, 0, ca.inf, name=ARREST)
     if ARREST_FORCE not in omit:
-        p.terminal_constraint(stroke * u_max - mb * (stroke + vb**2 / 2), 0, ca.inf,
-                              name=ARREST_FORCE)
+        p.terminal_constraint(stroke * u_max - ub_stroke, 0, ca.inf, name=ARREST_FORCE)
     p.free_final_time(lower=1e-3, upper=T_MAX, guess=1.0)
     p.minimize_terminal(-xf)
     return p
@@ -98,10 +96,15 @@ def landing_transcription(nodes: int = 100, substeps: int = 4,
                             substeps=substeps, expand=True)
 
 
+def arrest_force_times_stroke(x, r_m):
+    """``u_b (x_b - x_f)``, where ``u_b = r_m/(1+r_m) (1 + v_b^2 / (2 (x_b - x_f)))`` is the
+    constant force that stops the body in the remaining stroke (symbolic or numeric)."""
+    return r_m / (1 + r_m) * ((x[0] - x[2]) + x[1] ** 2 / 2)
+
+
 def arrest_force(r_m: float, x_T: np.ndarray) -> float:
     """``u_b``: the constant force that stops the body in the remaining stroke."""
-    stroke = x_T[0] - x_T[2]
-    return r_m / (1 + r_m) * (1 + x_T[1] ** 2 / (2 * stroke))
+    return float(arrest_force_times_stroke(x_T, r_m) / (x_T[0] - x_T[2]))
 
 
 @dataclass

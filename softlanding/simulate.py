@@ -26,6 +26,7 @@ import numpy as np
 import scipy.linalg
 
 from . import _kernel as K
+from ._jsonutil import json_safe
 from .dynamics import VB, VF, mode_matrices
 from .errors import (
     ParameterError,
@@ -274,27 +275,13 @@ class LandingResult:
         }
         if trajectory:
             d["trajectory"] = self.trajectory().as_dict()
-        return _json_clean(d)
+        return json_safe(d)
 
 
 def policy_as_dict(policy) -> dict[str, Any]:
     """``{"kind": ..., **fields}`` for JSON output."""
     kind = {Rigid: "rigid", Impedance: "impedance", ForceSchedule: "schedule"}[type(policy)]
     return {"kind": kind, **asdict(policy)}
-
-
-def _json_clean(obj):
-    if isinstance(obj, dict):
-        return {k: _json_clean(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [_json_clean(v) for v in obj]
-    if isinstance(obj, float | np.floating):
-        return float(obj) if math.isfinite(obj) else None
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    return obj
 
 
 # ----------------------------------------------------------------------- single
