@@ -265,6 +265,51 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_compare(a: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .impedance import optimize_impedance
+    from .landing import sweep_landing
+
+    v = np.linspace(a.v0_max, a.v0_min, a.n)
+    bang = sweep_landing(v, a.rm, a.s, a.umax, progress=not a.json)
+    imp = []
+    it = v
+    if not a.json:
+        from tqdm.auto import tqdm
+
+        it = tqdm(v, desc="optimal impedance", unit="landing problem")
+    for x in it:
+        o = optimize_impedance(float(x), a.rm, a.s, grid=a.grid)
+        imp.append(o)
+    rows = [{"v0": float(x), "rigid": 1 + math.sqrt(1 + x * x), "impedance": o.depth,
+             "impedance_kp": o.kp, "impedance_kd": o.kd, "impedance_u_peak": o.u_peak,
+             "bang_bang": b.depth}
+            for x, o, b in zip(v, imp, bang, strict=True)]
+    if a.plot:
+        from .figures import plot_depth_vs_velocity
+
+        plot_depth_vs_velocity(v, {
+            "rigid leg": np.array([r["rigid"] for r in rows]),
+            "optimal impedance": np.array([r["impedance"] for r in rows]),
+            f"bang-bang, u_max={a.umax:g}": np.array([r["bang_bang"] for r in rows]),
+        }).savefig(a.plot, dpi=130)
+    if a.json:
+        print(json.dumps(_json_safe({"rows": rows, "r_m": a.rm, "s": a.s, "u_max": a.umax})))
+        return 0
+    print(f"Depth -x_f(T) at r_m = {a.rm:g}, s = {a.s:g} (bang-bang with u_max = {a.umax:g})")
+    print(f"{'v0':>7} {'rigid':>10} {'impedance':>11} {'(k_p*, k_d*)':>22} {'bang-bang':>11} "
+          f"{'imp/rigid':>9} {'bb/rigid':>9}")
+    for r in rows:
+        gains = f"({r['impedance_kp']:.4f}, {r['impedance_kd']:.4f})"
+        print(f"{r['v0']:>7.2f} {r['rigid']:>10.5f} {r['impedance']:>11.6f} {gains:>22} "
+              f"{r['bang_bang']:>11.6f} {r['impedance'] / r['rigid']:>9.4f} "
+              f"{r['bang_bang'] / r['rigid']:>9.4f}")
+    if a.plot:
+        print(f"figure written to {a.plot}")
+    return 0
+
+
 # ---------------------------------------------------------------------- scale
 def _cmd_scale(a: argparse.Namespace) -> int:
     from .scaling import DimensionlessParams, PhysicalParams, paper_rig
@@ -496,6 +541,18 @@ def build_parser() -> argparse.ArgumentParser:
     w2.add_argument("--scheduler", metavar="tcp://host:port", help="Dask scheduler address")
     w2.add_argument("--json", action="store_true", help="print one JSON object")
     w2.set_defaults(func=_cmd_sweep)
+
+    cp = sub.add_parser("compare", help="rigid vs optimal impedance vs bang-bang, against v0",
+                        description="The paper's comparison: penetration depth against impact "
+                                    "velocity for a rigid leg (analytic), the depth-optimal "
+                                    "impedance, and optimal bang-bang force control.")
+    cp.add_argument("--v0-min", type=float, default=-10.0)
+    cp.add_argument("--v0-max", type=float, default=0.0)
+    cp.add_argument("--n", type=int, default=11, help="number of velocities (default 11)")
+    _model_args(cp, 8.2, "force limit of the bang-bang controller (default 8.2)")
+    cp.add_argument("--grid", type=int, default=101, help="impedance starting grid per axis")
+    cp.add_argument("--plot", metavar="FILE.png", help="write depth against v0")
+    cp.set_defaults(func=_cmd_compare)
 
     d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
                        description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "

@@ -110,3 +110,18 @@ def test_cli_solve_json_and_infeasible(tmp_path):
     assert q.returncode == 2
     assert "arrest force u_b <= u_max" in q.stderr and "Traceback" not in q.stderr
     assert q.stderr.count("\n") == 1
+
+
+def test_cli_compare_orders_the_three_legs():
+    p = subprocess.run([sys.executable, "-m", "softlanding", "compare", "--n", "3",
+                        "--v0-min", "-8", "--grid", "41", "--json"],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    rows = json.loads(p.stdout)["rows"]
+    assert len(rows) == 3
+    for r in rows:
+        assert r["rigid"] == pytest.approx(rigid(r["v0"]))
+        # bang-bang (|u| <= 8.2) beats the optimal impedance (peak force below 8.2 here),
+        # which beats the rigid leg
+        assert r["bang_bang"] < r["impedance"] < r["rigid"]
+        assert r["impedance_u_peak"] < 8.2
