@@ -40,7 +40,7 @@ import numpy as np
 import scipy.linalg
 
 from .problem import OptimalControlProblem
-from .solution import Solution
+from .solution import Solution, along
 from .switching import RefinedSwitching, _active_path_constraints, _affine_parts, detect_arcs
 
 CERTIFIED = "bang-bang certified"
@@ -272,10 +272,10 @@ def certify(sol: Solution, refined: RefinedSwitching | None = None, *,
         tol_switch = 1.5 * h if tol_switch is None else tol_switch
     min_singular = 2 * h if min_singular is None else min_singular
 
-    H = np.array([float(Hf(xi, ui, li, pv)) for xi, ui, li in zip(x, u, lam, strict=True)])
-    sigma = np.array([float(sigf(xi, ui, li, pv)) for xi, ui, li in zip(x, u, lam, strict=True)])
-    f = pr.dynamics_function()
-    xdot = np.array([np.array(f(xi, ui, pv)).ravel() for xi, ui in zip(x, u, strict=True)])
+    uc = np.asarray(u, dtype=float)[:, None]
+    H = along(Hf, x, uc, lam, pv)[0].ravel()
+    sigma = along(sigf, x, uc, lam, pv)[0].ravel()
+    xdot = along(pr.dynamics_function(), x, uc, pv)[0]
     H_scale = float(np.max(np.sum(np.abs(lam * xdot), axis=1))) or 1.0
     ref_H = H_exp if H_exp is not None else float(np.mean(H))
     H_max_abs = float(np.max(np.abs(H - ref_H))) / H_scale
@@ -361,12 +361,9 @@ def _path_activity(pr, t, x, u, pv, tol) -> np.ndarray:
     fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
                                                  ca.vertcat(*[c.lower for c in pr.path]),
                                                  ca.vertcat(*[c.upper for c in pr.path])])
-    out = np.zeros(len(t), dtype=bool)
-    for i, (xi, ui) in enumerate(zip(x, u, strict=True)):
-        v, lo, hi = (np.array(a, dtype=float).ravel() for a in fn(xi, ui, pv))
-        sc = tol * np.maximum(1.0, np.abs(v))
-        out[i] = bool(np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc)))
-    return out
+    v, lo, hi = along(fn, x, np.asarray(u, dtype=float)[:, None], pv)
+    sc = tol * np.maximum(1.0, np.abs(v))
+    return np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc), axis=1)
 
 
 def _bounds(pr, params) -> tuple[float, float]:

@@ -9,6 +9,20 @@ import casadi as ca
 import numpy as np
 
 
+def along(fn: ca.Function, *args) -> list[np.ndarray]:
+    """Evaluate ``fn`` at n samples in one mapped call.
+
+    Each argument is an (n, k) array of per-sample rows or a single vector
+    broadcast to every sample. Returns one (n, m) array per output.
+    """
+    n = max(np.atleast_2d(a).shape[0] if np.ndim(a) == 2 else 1 for a in args)
+    cols = [np.asarray(a, dtype=float).T if np.ndim(a) == 2 else np.asarray(a, dtype=float)
+            for a in args]
+    out = fn.map(n)(*cols)
+    out = out if isinstance(out, tuple | list) else [out]
+    return [np.array(o, dtype=float).T.reshape(n, -1) for o in out]
+
+
 class Solution:
     """A solved (or failed) multiple-shooting NLP, scipy-``OptimizeResult``-like.
 
@@ -76,24 +90,16 @@ class Solution:
 
         Returns ``t`` (n,), ``x`` (n, nx), ``u`` (n, nu).
         """
+        from .transcription import rk4_function
+
         pr = self.problem
-        f = pr.dynamics_function()
+        F = rk4_function(pr.dynamics_function(), pr.lagrange_function(), pr.nx, pr.nu, pr.np,
+                         substeps)
         pv = np.array([self.params[k] for k in pr.param_names])
         t = np.linspace(0.0, self.T, n)
         h = self.T / self.N
         k = np.minimum((t / h).astype(int), self.N - 1) if h > 0 else np.zeros(n, int)
-        xs = np.empty((n, pr.nx))
-        for i, (ti, ki) in enumerate(zip(t, k, strict=True)):
-            x = self.x[ki].copy()
-            dt = (ti - ki * h) / substeps
-            uk = self.u[ki]
-            for _ in range(substeps):
-                k1 = np.array(f(x, uk, pv)).ravel()
-                k2 = np.array(f(x + dt / 2 * k1, uk, pv)).ravel()
-                k3 = np.array(f(x + dt / 2 * k2, uk, pv)).ravel()
-                k4 = np.array(f(x + dt * k3, uk, pv)).ravel()
-                x = x + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-            xs[i] = x
+        xs, _ = along(F, self.x[k], self.u[k], (t - k * h)[:, None], pv)
         return t, xs, self.u[k]
 
     def evaluate(self, expr: ca.SX) -> np.ndarray:
@@ -101,8 +107,7 @@ class Solution:
         pr = self.problem
         fn = ca.Function("e", [pr.x, pr.u, pr.p], [expr])
         pv = np.array([self.params[k] for k in pr.param_names])
-        ucl = np.vstack([self.u, self.u[-1:]])
-        return np.array([float(fn(x, u, pv)) for x, u in zip(self.x, ucl, strict=True)])
+        return along(fn, self.x, np.vstack([self.u, self.u[-1:]]), pv)[0].ravel()
 
     def to_dict(self) -> dict[str, Any]:
         """Plain, JSON-able dict."""

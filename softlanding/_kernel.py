@@ -163,6 +163,18 @@ def _propagate(A, z, h):
 
 
 @njit(cache=True)
+def _covector_times(c, A):
+    """The row vector ``c A``: the functional of z giving d/dt (c . z) when z' = A z."""
+    out = np.empty(5)
+    for j in range(5):
+        acc = 0.0
+        for i in range(5):
+            acc += c[i] * A[i, j]
+        out[j] = acc
+    return out
+
+
+@njit(cache=True)
 def _hermite_root(g0, d0, g1, d1, h):
     """Root in (0, h) of the cubic Hermite interpolant of g (g0 <= 0 < g1): a
     starting guess for Newton on the exact solution (error O(h^4))."""
@@ -194,12 +206,7 @@ def _refine(A, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
     about 1e-15; the returned time lies on the far side of the crossing (the
     event has happened), so the next segment starts strictly inside its regime.
     """
-    dc = np.empty(5)
-    for j in range(5):
-        acc = 0.0
-        for i in range(5):
-            acc += c[i] * A[i, j]
-        dc[j] = acc
+    dc = _covector_times(c, A)
     if a < s0 < b:
         s = s0
     else:
@@ -226,18 +233,6 @@ def _refine(A, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
                 break
         s = sn
     return b
-
-
-@njit(cache=True)
-def _covector_times(c, A):
-    """The row vector ``c A``: the functional of z giving d/dt (c . z) when z' = A z."""
-    out = np.empty(5)
-    for j in range(5):
-        acc = 0.0
-        for i in range(5):
-            acc += c[i] * A[i, j]
-        out[j] = acc
-    return out
 
 
 @njit(cache=True)

@@ -416,6 +416,13 @@ def _model_args(p: argparse.ArgumentParser, umax: float | None, umax_help: str) 
     p.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def _v0_range_args(p: argparse.ArgumentParser, n: int) -> None:
+    """--v0-min, --v0-max, --n: the impact velocities a sweep visits."""
+    p.add_argument("--v0-min", type=float, default=-10.0, help="default -10")
+    p.add_argument("--v0-max", type=float, default=0.0, help="default 0")
+    p.add_argument("--n", type=int, default=n, help=f"number of velocities (default {n})")
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = _Parser(
         prog="softlanding",
@@ -489,9 +496,7 @@ def build_parser() -> argparse.ArgumentParser:
     w = sub.add_parser("solve-sweep", help="bang-bang depth against impact velocity",
                        description="Solve the OCP over v0 from --v0-max down to --v0-min "
                                    "with continuation (each solve warm-starts the next).")
-    w.add_argument("--v0-min", type=float, default=-10.0, help="default -10")
-    w.add_argument("--v0-max", type=float, default=0.0, help="default 0")
-    w.add_argument("--n", type=int, default=21, help="number of velocities (default 21)")
+    _v0_range_args(w, 21)
     _model_args(w, 8.2, "force limit (default 8.2)")
     w.add_argument("--nodes", type=int, default=100)
     w.add_argument("--plot", metavar="FILE.png", help="write depth against v0")
@@ -529,9 +534,7 @@ def build_parser() -> argparse.ArgumentParser:
                         description="Optimal impedance at each v0 from --v0-max to --v0-min, "
                                     "for every --rm and --s given (repeat the flags for "
                                     "families), with the paper's observations checked.")
-    w2.add_argument("--v0-min", type=float, default=-10.0)
-    w2.add_argument("--v0-max", type=float, default=0.0)
-    w2.add_argument("--n", type=int, default=21, help="number of v0 values (default 21)")
+    _v0_range_args(w2, 21)
     w2.add_argument("--rm", type=float, action="append", help="mass ratio (repeatable)")
     w2.add_argument("--s", type=float, action="append", help="stroke (repeatable)")
     w2.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth")
@@ -546,9 +549,7 @@ def build_parser() -> argparse.ArgumentParser:
                         description="The paper's comparison: penetration depth against impact "
                                     "velocity for a rigid leg (analytic), the depth-optimal "
                                     "impedance, and optimal bang-bang force control.")
-    cp.add_argument("--v0-min", type=float, default=-10.0)
-    cp.add_argument("--v0-max", type=float, default=0.0)
-    cp.add_argument("--n", type=int, default=11, help="number of velocities (default 11)")
+    _v0_range_args(cp, 11)
     _model_args(cp, 8.2, "force limit of the bang-bang controller (default 8.2)")
     cp.add_argument("--grid", type=int, default=101, help="impedance starting grid per axis")
     cp.add_argument("--plot", metavar="FILE.png", help="write depth against v0")

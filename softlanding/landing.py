@@ -35,7 +35,7 @@ from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Soluti
 from ocp.switching import RefinedSwitching, detect_arcs, refine_switching
 
 from .dynamics import STATE_NAMES, stance_dynamics
-from .errors import ParameterError, check_impact_velocity, check_positive
+from .errors import ParameterError
 from .scaling import DimensionlessParams
 from .simulate import ForceSchedule, LandingResult, Rigid, simulate
 
@@ -186,10 +186,11 @@ class BangBangLanding:
 
 
 def _validate(v0, r_m, s, u_max) -> DimensionlessParams:
-    p = DimensionlessParams(r_m=r_m, s=s, v0=check_impact_velocity("v0", v0),
-                            u_max=check_positive("u_max", u_max))
-    weight = r_m / (1 + r_m)
-    if u_max <= weight:
+    p = DimensionlessParams(r_m=r_m, s=s, v0=v0, u_max=u_max)
+    if u_max is None:
+        raise ParameterError("u_max", "the optimal control problem needs a force limit")
+    weight = p.r_m / (1 + p.r_m)
+    if p.u_max <= weight:
         raise InfeasibleLandingError(
             f"u_max = {u_max:g} does not exceed the body weight r_m/(1+r_m) = {weight:.4g}: "
             "the arrest force u_b <= u_max can never hold")

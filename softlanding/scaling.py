@@ -16,7 +16,6 @@ from dataclasses import asdict, dataclass
 
 from .errors import (
     ParameterError,
-    check_finite,
     check_impact_velocity,
     check_nonnegative,
     check_positive,
@@ -225,4 +224,4 @@ def paper_rig(v0: float = -1.2, **overrides: float) -> PhysicalParams:
     return PhysicalParams(**fields)
 
 
-__all__ = ["DimensionlessParams", "PhysicalParams", "paper_rig", "G_EARTH", "check_finite"]
+__all__ = ["DimensionlessParams", "PhysicalParams", "paper_rig", "G_EARTH"]

@@ -21,7 +21,6 @@ from .errors import ParameterError
 from .impedance import optimize_impedance, strictly_feasible
 from .simulate import BATCH_FIELDS, simulate_batch
 
-MAP_VARIABLES = BATCH_FIELDS + ("cot", "cot_lossless", "strictly_feasible")
 CURVE_VARIABLES = ("feasible", "kp", "kd", "depth", "steps", "u_peak", "stroke_min",
                    "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "value")
 
@@ -213,9 +212,3 @@ def load_dataset(path: str | Path) -> xr.Dataset:
         if v.attrs.get("boolean") == 1:
             ds[k] = v.astype(bool)
     return ds
-
-
-def nanmin_feasible(ds: xr.Dataset) -> float:
-    d = ds.depth.where(ds.strictly_feasible)
-    v = float(d.min())
-    return v if math.isfinite(v) else math.nan

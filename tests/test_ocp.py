@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from problems import min_time_double_integrator
 
 from ocp import (
     InfeasibleError,
@@ -14,21 +15,6 @@ from ocp import (
     continuation,
 )
 from ocp.switching import detect_arcs, refine_switching
-
-
-def min_time_double_integrator():
-    p = OptimalControlProblem("min_time")
-    x, v = p.state("x"), p.state("v")
-    p.control("u", lower=-1, upper=1)
-    d = p.parameter("d")
-    p.set_dynamics({"x": v, "v": p.u[0]})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x - d, 0.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.01, upper=100, guess=2)
-    p.minimize_terminal(p.T)
-    return p
 
 
 @pytest.fixture(scope="module")

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 import pytest
+from problems import min_time_double_integrator
 
 from ocp import MultipleShooting, OptimalControlProblem, certify
 from ocp.pmp import CERTIFIED, INCONCLUSIVE, NOT_BANG_BANG, costates_from_multipliers
@@ -15,29 +16,11 @@ from ocp.switching import refine_switching
 from softlanding.landing import solve_landing
 
 
-def double_integrator(mayer: bool):
-    p = OptimalControlProblem()
-    x, v = p.state("x"), p.state("v")
-    u = p.control("u", lower=-1, upper=1)
-    d = p.parameter("d")
-    p.set_dynamics({"x": v, "v": u})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x - d, 0.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.01, upper=100, guess=2)
-    if mayer:
-        p.minimize_terminal(p.T)
-    else:
-        p.minimize_integral(1.0)
-    return p
-
-
 @pytest.mark.parametrize("d", [1.0, 2.5])
 def test_double_integrator_analytic_costates_and_certificate(d):
     # minimum principle, phi = T: H = lam_x v + lam_v u = -1, lam_x = -1/sqrt(d),
     # lam_v = t/sqrt(d) - 1 (zero at the switch t = sqrt(d))
-    sol = MultipleShooting(double_integrator(mayer=True), nodes=40).solve({"d": d})
+    sol = MultipleShooting(min_time_double_integrator(mayer=True), nodes=40).solve({"d": d})
     ref = refine_switching(sol)
     c = certify(sol, ref)
     assert c.verdict == CERTIFIED, c.reasons
@@ -55,7 +38,7 @@ def test_double_integrator_analytic_costates_and_certificate(d):
 
 
 def test_free_time_with_running_cost_has_zero_hamiltonian():
-    sol = MultipleShooting(double_integrator(mayer=False), nodes=40).solve({"d": 1.0})
+    sol = MultipleShooting(min_time_double_integrator(mayer=False), nodes=40).solve({"d": 1.0})
     ref = refine_switching(sol)
     c = certify(sol, ref)
     assert c.verdict == CERTIFIED
