@@ -441,10 +441,10 @@ class BatchResult:
 def _check_array(name, flat, check) -> None:
     bad = ~np.isfinite(flat)
     if bad.any():
-        raise ParameterError(name, f"must be finite, got {flat[bad][0]!r}")
+        raise ParameterError(name, f"must be finite, got {float(flat[bad][0])!r}")
     if flat.size:
-        check(name, flat.min())
-        check(name, flat.max())
+        check(name, float(flat.min()))
+        check(name, float(flat.max()))
 
 
 def simulate_batch(
