@@ -268,24 +268,10 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 def _cmd_compare(a: argparse.Namespace) -> int:
     import numpy as np
 
-    from .impedance import optimize_impedance
-    from .landing import sweep_landing
+    from .comparison import compare_controllers
 
     v = np.linspace(a.v0_max, a.v0_min, a.n)
-    bang = sweep_landing(v, a.rm, a.s, a.umax, progress=not a.json)
-    imp = []
-    it = v
-    if not a.json:
-        from tqdm.auto import tqdm
-
-        it = tqdm(v, desc="optimal impedance", unit="landing problem")
-    for x in it:
-        o = optimize_impedance(float(x), a.rm, a.s, grid=a.grid)
-        imp.append(o)
-    rows = [{"v0": float(x), "rigid": 1 + math.sqrt(1 + x * x), "impedance": o.depth,
-             "impedance_kp": o.kp, "impedance_kd": o.kd, "impedance_u_peak": o.u_peak,
-             "bang_bang": b.depth}
-            for x, o, b in zip(v, imp, bang, strict=True)]
+    rows = compare_controllers(v, a.rm, a.s, a.umax, grid=a.grid, progress=not a.json)
     if a.plot:
         from .figures import plot_depth_vs_velocity
 

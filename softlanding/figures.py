@@ -6,6 +6,7 @@ All functions return a :class:`matplotlib.figure.Figure` and never call
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import matplotlib
@@ -95,34 +96,56 @@ def plot_depth_vs_velocity(v0: np.ndarray, curves: dict[str, np.ndarray], ax=Non
 def plot_bang_bang(landing) -> plt.Figure:
     """The paper's bang-bang trajectory figure: positions, velocities and force against time.
 
-    Uses the refined (exact-arc) solution when there is one; switches are marked.
+    Left: the foot's motion, from the refined (exact-arc) solution when there is
+    one, switches dashed and the foot's stop dash-dotted. Right (when the
+    landing was replayed): the whole landing in the exact simulator, through
+    the arrest force until the body stops, then the body's weight.
     """
     if landing.refined is not None:
         t, x, u = landing.refined.sample(800)
     else:
         t, x, u = landing.transcribed.sample(800)
         u = u[:, 0]
-    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7.0, 7.0))
-    a1.plot(t, x[:, 0], label=r"body $x_b$")
-    a1.plot(t, x[:, 2], label=r"foot $x_f$", color="C3")
-    a1.set_ylabel(r"height [$x_s$]")
-    a2.plot(t, x[:, 1], label=r"body $\dot x_b$")
-    a2.plot(t, x[:, 3], label=r"foot $\dot x_f$", color="C3")
-    a2.set_ylabel(r"velocity [$x_s/\tau_s$]")
-    a3.step(t, u, where="post", color="C2")
-    a3.set_ylabel(r"force $u$ [$m_t g$]")
-    a3.set_xlabel(r"time $\tau$ [$\sqrt{m_t/k_g}$]")
-    for ax in (a1, a2, a3):
-        for ts in landing.switch_times:
-            ax.axvline(ts, color="0.3", ls="--", lw=0.8)
-        ax.grid(alpha=0.3)
-    a1.legend(fontsize=8)
-    a2.legend(fontsize=8)
+    ncol = 1 if landing.replay is None else 2
+    fig, axes = plt.subplots(3, ncol, sharex="col", figsize=(6.5 + 4.5 * (ncol - 1), 7.0),
+                             squeeze=False, gridspec_kw={"width_ratios": [1.3, 1][:ncol]})
+    cols = [(t, x, u, "post")]
+    if ncol == 2:
+        t_rest = landing.schedule().times[-1]
+        tr = landing.replay.trajectory(t_end=1.1 * t_rest)
+        cols.append((tr.t, tr.x, tr.u, None))
+    for j, (tt, xx, uu, where) in enumerate(cols):
+        a1, a2, a3 = axes[:, j]
+        a1.plot(tt, xx[:, 0], label=r"body $x_b$")
+        a1.plot(tt, xx[:, 2], label=r"foot $x_f$", color="C3")
+        a2.plot(tt, xx[:, 1], label=r"body $\dot x_b$")
+        a2.plot(tt, xx[:, 3], label=r"foot $\dot x_f$", color="C3")
+        if where:
+            a3.step(tt, uu, where=where, color="C2")
+        else:
+            a3.plot(tt, uu, color="C2")
+        a3.set_xlabel(r"time $\tau$ [$\sqrt{m_t/k_g}$]")
+        for ax in (a1, a2, a3):
+            for ts in landing.switch_times:
+                ax.axvline(ts, color="0.3", ls="--", lw=0.8)
+            ax.axvline(landing.T, color="0.5", ls="-.", lw=0.8)
+            if j == 1:
+                ax.axvline(t_rest, color="0.5", ls=":", lw=1.0)
+            ax.grid(alpha=0.3)
+    axes[0, 0].set_ylabel(r"height [$x_s$]")
+    axes[1, 0].set_ylabel(r"velocity [$x_s/\tau_s$]")
+    axes[2, 0].set_ylabel(r"force $u$ [$m_t g$]")
+    axes[0, 0].legend(fontsize=8)
+    axes[1, 0].legend(fontsize=8)
+    axes[0, 0].set_title("stance: until the foot stops", fontsize=9)
+    if ncol == 2:
+        axes[0, 1].set_title(f"whole landing (exact simulator): body stops at {t_rest:.3f}",
+                             fontsize=9)
     p = landing.params
     sw = ", ".join(f"{ts:.4f}" for ts in landing.switch_times)
-    a1.set_title(f"bang-bang landing, $v_0$={p.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
-                 f"$u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, switch at {sw}",
-                 fontsize=9)
+    fig.suptitle(f"bang-bang landing, $v_0$={p.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
+                 f"$u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, switch at {sw}, "
+                 f"foot stops at {landing.T:.4f}", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -168,5 +191,250 @@ def plot_optimal_curves(curves) -> plt.Figure:
     axes[0].legend(fontsize=8)
     fig.suptitle(f"optimal impedance (objective: {curves.attrs.get('objective', 'depth')})",
                  fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+# ------------------------------------------------------------ reproduction set
+#: One colour per controller, in every comparison figure.
+CONTROLLER_COLOURS = {"rigid": "0.35", "impedance": "C0", "bang-bang": "C3",
+                      "min-CoT impedance": "C2"}
+STEP_COLOURS = ["#deebf7", "#9ecae1", "#4292c6", "#08519c", "#08306b"]
+
+
+def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt.Figure:
+    """The paper's Fig. 3: (a) stepped trajectories, (b) step-count regions for several v0."""
+    fig = plt.figure(figsize=(14, 6.2))
+    sub = fig.subfigures(1, 2, width_ratios=[1, 1.5])
+    ax = sub[0].subplots()
+    for r, c in zip(results, ("C0", "C1", "C3"), strict=False):
+        tr = r.trajectory(t_end=max(x.T for x in results) * 1.2)
+        ax.plot(tr.t, tr.x[:, 2], color=c,
+                label=f"$k_d$={r.policy.k_d:g}: {r.steps} step(s), depth {r.depth:.3f}")
+    ax.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
+    ax.set_ylabel(r"foot height $x_f$ [$x_s = m_t g / k_g$]")
+    p = results[0].params
+    ax.set_title(f"(a) $v_0$={p.v0:g}, $k_p$={results[0].policy.k_p:g}, $r_m$={p.r_m:g}, "
+                 f"$s$={p.s:g}", fontsize=10)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.grid(alpha=0.3)
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    n = len(maps)
+    cols = 3 if n > 4 else 2
+    rows = -(-n // cols)
+    axes = sub[1].subplots(rows, cols, sharex=True, sharey=True, squeeze=False)
+    cmap = ListedColormap(STEP_COLOURS)
+    norm = BoundaryNorm([0.5, 1.5, 2.5, 3.5, 4.5, 5.5], cmap.N)
+    for a, ds in zip(axes.flat, maps, strict=False):
+        im = a.pcolormesh(ds.k_p, ds.k_d, np.clip(ds.steps.values, 1, 5).T, shading="nearest",
+                          cmap=cmap, norm=norm, rasterized=True)
+        a.contour(ds.k_p, ds.k_d, ds.strictly_feasible.values.T.astype(float), levels=[0.5],
+                  colors="k", linewidths=1.0)
+        a.set_title(f"$v_0$ = {float(ds.v0):g}", fontsize=9)
+    for a in axes.flat[n:]:
+        a.set_visible(False)
+    for a in axes[-1]:
+        a.set_xlabel(r"stiffness $k_p$")
+    for a in axes[:, 0]:
+        a.set_ylabel(r"damping $k_d$")
+    cb = sub[1].colorbar(im, ax=axes.ravel().tolist(), ticks=[1, 2, 3, 4, 5], shrink=0.9)
+    cb.ax.set_yticklabels(["1", "2", "3", "4", "5+"])
+    cb.set_label("intrusion steps")
+    sub[1].suptitle("(b) intrusion steps over the gains (black line: stroke limit; "
+                    "gains below-left leave the stroke)", fontsize=10)
+    return fig
+
+
+def plot_depth_maps(maps, optima) -> plt.Figure:
+    """The paper's Fig. 4: x_f/x_f* over (k_p, k_d) for several v0, optimum starred."""
+    n = len(maps)
+    cols = 2 if n <= 4 else 3
+    rows = -(-n // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.2 * rows), squeeze=False)
+    for ax, ds, opt in zip(axes.flat, maps, optima, strict=False):
+        d = ds.depth.where(ds.strictly_feasible)
+        dmin = opt.depth if opt is not None else float(d.min())
+        im = ax.pcolormesh(ds.k_p, ds.k_d, (d / dmin).T, shading="nearest", cmap="viridis",
+                           vmin=1.0, rasterized=True)
+        fig.colorbar(im, ax=ax, label=r"$x_f / x_f^*$")
+        if opt is not None:
+            ax.plot(opt.kp, opt.kd, "*", color="w", mec="k", ms=15,
+                    label=f"$k_p^*$={opt.kp:.4f}, $k_d^*$={opt.kd:.4f}")
+            ax.legend(loc="upper right", fontsize=8)
+        ax.set_title(f"$v_0$ = {float(ds.v0):g}" + (f": $x_f^*$ = {opt.depth:.4f}"
+                                                     if opt is not None else ""), fontsize=10)
+        ax.set_xlabel(r"stiffness $k_p$")
+        ax.set_ylabel(r"damping $k_d$")
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    fig.suptitle(f"Normalised depth, $r_m$={float(maps[0].r_m):g}, $s$={float(maps[0].s):g} "
+                 "(blank: stroke limit exceeded; $\\star$: optimum)", fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def plot_gain_families(curves) -> plt.Figure:
+    """The paper's Fig. 5: k_p*(v0) and k_d*(v0); colour = r_m, line style = s, thick = (5, 20)."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.4))
+    styles = ["--", "-", ":", "-."]
+    for ir, r in enumerate(curves.r_m.values):
+        for js, s in enumerate(curves.s.values):
+            c = curves.sel(r_m=r, s=s)
+            speed = np.abs(c.v0.values)
+            thick = r == 5 and s == 20
+            kw = dict(color=f"C{ir}", ls=styles[js % len(styles)], lw=3.0 if thick else 1.3,
+                      label=f"$r_m$={r:g}, $s$={s:g}")
+            axes[0].plot(speed, c.kp, **kw)
+            axes[1].plot(speed, c.kd, **kw)
+    axes[0].set_ylabel(r"optimal stiffness $k_p^*$")
+    axes[1].set_ylabel(r"optimal damping $k_d^*$")
+    for ax in axes:
+        ax.set_xlabel(r"impact speed $|v_0|$ [$x_s/\tau_s$]")
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=7, ncol=3, loc="upper left")
+    fig.suptitle("Depth-optimal impedance against impact speed (thick: $r_m$=5, $s$=20; "
+                 "colour: $r_m$; line style: $s$; gaps: no feasible gains in $[0,1]^2$)",
+                 fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_controller_comparison(cmp: dict[str, np.ndarray], u_max: float) -> plt.Figure:
+    """The paper's Fig. 6: depth against v0 for rigid, optimal impedance and bang-bang."""
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    v = cmp["v0"]
+    ax.plot(v, cmp["rigid"], "o-", ms=3, color=CONTROLLER_COLOURS["rigid"], label="rigid leg")
+    ax.plot(v, cmp["impedance"], "s-", ms=3, color=CONTROLLER_COLOURS["impedance"],
+            label="optimal impedance")
+    ax.plot(v, cmp["bang_bang"], "^-", ms=3, color=CONTROLLER_COLOURS["bang-bang"],
+            label=f"bang-bang force control ($u_{{max}}$={u_max:g})")
+    ax.axhline(1.0, color="0.5", ls=":", lw=1, label="lower bound $-x_f$ = 1")
+    ax.set_xlabel(r"impact velocity $v_0$ [$x_s/\tau_s$]")
+    ax.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.set_title("Depth against impact velocity, $r_m$=5, $s$=20", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_experiment_curves(ds, si=None) -> plt.Figure:
+    """The paper's Fig. 7b (simulated curves): depth against k_d for each k_p and v0.
+
+    ``ds`` has dims ``(k_p, v0, k_d)`` (from :func:`softlanding.sweeps.impedance_dataset`).
+    Dotted where the landing leaves the stroke. With ``si`` (a
+    :class:`~softlanding.scaling.PhysicalParams`) the axes are in SI units.
+    """
+    kps = ds.k_p.values
+    fig, axes = plt.subplots(1, len(kps), figsize=(4.4 * len(kps), 4.0), sharey=True)
+    axes = np.atleast_1d(axes)
+    for ax, kp in zip(axes, kps, strict=True):
+        for iv, v in enumerate(ds.v0.values):
+            c = ds.sel(k_p=kp, v0=v)
+            kd = c.k_d.values
+            depth = c.depth.values
+            ok = c.strictly_feasible.values
+            if si is None:
+                x, y = kd, depth
+                lab = f"$v_0$ = {v:g}"
+            else:
+                x = kd * math.sqrt(si.m_t * si.k_g)
+                y = depth * si.length_scale * 1e3
+                lab = f"$V_0$ = {abs(v) * si.velocity_scale:.2f} m/s"
+            ax.plot(x, np.where(ok, y, np.nan), color=f"C{iv}", label=lab)
+            ax.plot(x, np.where(ok, np.nan, y), color=f"C{iv}", ls=":", lw=1)
+            if ok.any():
+                k = int(np.nanargmin(np.where(ok, depth, np.nan)))
+                ax.plot(x[k], y[k], "o", color=f"C{iv}", ms=5)
+        if si is None:
+            ax.set_title(f"$k_p$ = {kp:g}", fontsize=10)
+            ax.set_xlabel(r"damping $k_d$")
+        else:
+            ax.set_title(f"$K_p$ = {kp * si.k_g:.0f} N/m ($k_p$ = {kp:g})", fontsize=10)
+            ax.set_xlabel(r"damping $K_d$ [N s/m]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]" if si is None
+                       else "penetration depth [mm]")
+    axes[0].legend(fontsize=8)
+    where = ("" if si is None else
+             f"; $m_b$={si.m_b:g} kg, $m_f$={si.m_f:g} kg, $k_g$={si.k_g / 1e3:g} kN/m")
+    fig.suptitle(f"Simulated depth against damping ($r_m$={float(ds.r_m):g}, "
+                 f"$s$={float(ds.s):g}{where}); dotted: stroke limit exceeded, "
+                 "dot: best damping", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def plot_cot_comparison(v0: np.ndarray, data: dict[str, np.ndarray]) -> plt.Figure:
+    """The paper's Fig. 9: minimum-CoT vs minimum-depth impedance, (a) depth, (b) CoT."""
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
+    c = CONTROLLER_COLOURS
+    a1.plot(v0, data["rigid_depth"], "o-", ms=3, color=c["rigid"], label="rigid leg")
+    a1.plot(v0, data["depth_opt_depth"], "s-", ms=3, color=c["impedance"],
+            label="min-depth impedance")
+    a1.plot(v0, data["cot_opt_depth"], "^-", ms=3, color=c["min-CoT impedance"],
+            label="min-CoT impedance (dissipative)")
+    a1.plot(v0, data["cot_lossless_opt_depth"], "v--", ms=3, color="C4",
+            label="min-CoT impedance (lossless)")
+    a1.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")
+    a1.set_title("(a) depth", fontsize=10)
+    a2.plot(v0, data["rigid_cot"], "o-", ms=3, color=c["rigid"], label="rigid leg")
+    a2.plot(v0, data["depth_opt_cot"], "s-", ms=3, color=c["impedance"],
+            label="min-depth impedance, dissipative")
+    a2.plot(v0, data["depth_opt_cot_lossless"], "s--", ms=3, color=c["impedance"],
+            mfc="none", label="min-depth impedance, lossless")
+    a2.plot(v0, data["cot_opt_cot"], "^-", ms=3, color=c["min-CoT impedance"],
+            label="min-CoT impedance, dissipative")
+    a2.set_ylabel(r"CoT $= (E(0) - E(T)) / E(0)$")
+    a2.set_yscale("log")
+    a2.set_title("(b) cost of transport", fontsize=10)
+    for ax in (a1, a2):
+        ax.set_xlabel(r"impact velocity $v_0$ [$x_s/\tau_s$]")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=8)
+    fig.suptitle("Minimum-CoT against minimum-depth impedance ($r_m$=5, $s$=20); lossless: "
+                 r"$E_{act}$ = 0, CoT = $E_{gnd}/E(0)$", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+ROBUSTNESS_TITLES = {"k_g": r"ground stiffness: true $k_g$ / nominal",
+                     "r_m": r"mass ratio: true $r_m$ / nominal ($m_t$ fixed)",
+                     "v0": r"impact velocity: true $v_0$ / nominal",
+                     "switch": r"switch instant: actual / nominal"}
+
+
+def plot_robustness(ds) -> plt.Figure:
+    """Regret (depth / redesigned depth) against the model error, per parameter.
+
+    Filled markers keep the stroke; crosses leave it (at any time).
+    """
+    params = list(ds.parameter.values)
+    fig, axes = plt.subplots(1, len(params), figsize=(4.0 * len(params), 4.0), sharey=True)
+    for ax, par in zip(axes, params, strict=True):
+        for ctrl in ds.controller.values:
+            for im, m in enumerate(ds.margin.values):
+                d = ds.sel(controller=ctrl, margin=m, parameter=par)
+                y = d.depth_ratio.values
+                if not np.isfinite(y).any():
+                    continue
+                f = d.factor.values
+                kept = d.stroke_kept.values
+                col = CONTROLLER_COLOURS[str(ctrl)]
+                ls = "-" if im == 0 else "--"
+                lab = f"{ctrl}" + (f", {m:.0%} stroke margin" if m > 0 else "")
+                ax.plot(f, y, ls, color=col, lw=1.5 if im == 0 else 1.0, label=lab)
+                ax.plot(f[kept], y[kept], "o", color=col, ms=4, mfc=col if im == 0 else "w")
+                ax.plot(f[~kept], y[~kept], "x", color=col, ms=7, mew=1.5)
+        ax.axvline(1.0, color="0.6", lw=0.8)
+        ax.set_xlabel(ROBUSTNESS_TITLES.get(str(par), str(par)), fontsize=9)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("depth / depth of the redesigned controller")
+    axes[0].legend(fontsize=7, loc="upper center")
+    a = ds.attrs
+    fig.suptitle(f"Nominal controllers on a perturbed model ($v_0$={a['v0']:g}, "
+                 f"$r_m$={a['r_m']:g}, $s$={a['s']:g}, bang-bang $u_{{max}}$={a['u_max']:g}); "
+                 "x: stroke limit left", fontsize=10)
     fig.tight_layout()
     return fig

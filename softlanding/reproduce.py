@@ -1,0 +1,436 @@
+"""Reproduce the paper end to end: every figure, the headline numbers, a robustness study.
+
+:func:`reproduce` writes, into one folder, each figure of the paper as PNG and
+PDF, ``summary.json`` (every headline number, machine-readable), ``summary.md``
+(the same as tables, with the paper's values beside ours where it gives them)
+and the computed datasets as netCDF under ``data/``. ``quick=True`` uses
+coarser grids and fewer impact velocities (about a minute on 2 cores); the
+numbers it reports are still exact for the grids it uses, and each of them is
+what the public API returns for the same arguments (the test suite checks).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ._jsonutil import json_safe
+
+#: Impact velocities of the paper's experiments: up to v0 = -4.8 (1.2 m/s), here in thirds.
+EXPERIMENT_V0 = (-1.6, -3.2, -4.8)
+EXPERIMENT_KP = (0.2, 0.5, 0.9)
+STEP_MAP_V0 = (-0.5, -1.0, -2.0, -4.0, -6.0, -10.0)
+DEPTH_MAP_V0 = (-1.0, -3.0, -5.0, -10.0)
+FAMILIES = ((2.0, 5.0, 10.0), (10.0, 20.0, 40.0))
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Grid sizes of one reproduction run."""
+
+    quick: bool
+    map_n: int
+    optimizer_grid: int
+    curve_v0: tuple[float, ...]
+    compare_v0: tuple[float, ...]
+    cot_v0: tuple[float, ...]
+    experiment_kd_n: int
+    robustness_n: int
+
+    @classmethod
+    def make(cls, quick: bool) -> Settings:
+        if quick:
+            return cls(True, 41, 41, _grid(0.0, -10.0, 6), _grid(0.0, -10.0, 6),
+                       _grid(-1.0, -10.0, 5), 51, 5)
+        return cls(False, 101, 101, _grid(0.0, -10.0, 41), _grid(0.0, -10.0, 21),
+                   _grid(-0.5, -10.0, 20), 251, 13)
+
+
+def _grid(a: float, b: float, n: int) -> tuple[float, ...]:
+    return tuple(float(x) for x in np.round(np.linspace(a, b, n), 12))
+
+
+def _save(fig, out: Path, stem: str, files: list[str]) -> None:
+    import matplotlib.pyplot as plt
+
+    for ext in ("png", "pdf"):
+        path = out / f"{stem}.{ext}"
+        fig.savefig(path, dpi=130, bbox_inches="tight")
+        files.append(path.name)
+    plt.close(fig)
+
+
+# ------------------------------------------------------------------ sections
+def bang_bang_example(out: Path, files: list[str]) -> dict:
+    """[fig:ex_bb_traj] the optimal landing at v0 = -3, with its PMP certificate."""
+    from ocp import certify
+
+    from .figures import plot_bang_bang
+    from .landing import solve_landing
+
+    res = solve_landing(-3.0, 5.0, 20.0, 8.2)
+    cert = certify(res.transcribed, res.refined)
+    _save(plot_bang_bang(res), out, "fig_bang_bang_trajectory", files)
+    return {"v0": -3.0, "r_m": 5.0, "s": 20.0, "u_max": 8.2, "depth": res.depth,
+            "T": res.T, "body_stops_at": res.schedule().times[-1], "arcs": res.arcs,
+            "switch_times": res.switch_times, "u_b": res.u_b,
+            "arrest_active": res.arrest_active, "replay_difference": res.replay_difference,
+            "pmp_verdict": cert.verdict, "pmp_H_max_abs": cert.H_max_abs,
+            "pmp_switch_sigma_gap": cert.switch_sigma_gap}
+
+
+def stepped_intrusions(out: Path, files: list[str], st: Settings) -> tuple[dict, list]:
+    """[fig:multi_intrusion_regions] three stepped trajectories and step-count maps."""
+    from .figures import plot_stepped_intrusion_figure
+    from .scaling import DimensionlessParams
+    from .simulate import Impedance, simulate
+    from .sweeps import depth_map
+
+    runs = [simulate(DimensionlessParams(r_m=5.0, s=20.0, v0=-1.0), Impedance(0.2, kd))
+            for kd in (0.4, 0.18, 0.0)]
+    maps = [depth_map(v, 5.0, 20.0, n=st.map_n, energy=False) for v in STEP_MAP_V0]
+    _save(plot_stepped_intrusion_figure(runs, maps), out, "fig_stepped_intrusions", files)
+    regions = []
+    for ds in maps:
+        steps = ds.steps.values
+        feas = ds.strictly_feasible.values
+        rest = ds.status.values == 0
+        regions.append({"v0": float(ds.v0), "multi_step_fraction": float((steps > 1).mean()),
+                        "multi_step_feasible_fraction": float(((steps > 1) & feas).mean()),
+                        "max_steps_rest_proven": int(steps[rest].max()),
+                        "rest_unproven_fraction": float((~rest).mean())})
+    return ({"trajectories": [{"k_p": 0.2, "k_d": r.policy.k_d, "v0": -1.0, "steps": r.steps,
+                               "depth": r.depth} for r in runs],
+             "paper_steps": [1, 2, 3], "regions": regions}, maps)
+
+
+def depth_maps(out: Path, files: list[str], st: Settings) -> list[dict]:
+    """[fig:Kp_Kd_grid] normalised depth maps with the optimum starred."""
+    from .figures import plot_depth_maps
+    from .impedance import optimize_impedance
+    from .sweeps import depth_map
+
+    maps = [depth_map(v, 5.0, 20.0, n=st.map_n, energy=False) for v in DEPTH_MAP_V0]
+    optima = [optimize_impedance(v, 5.0, 20.0, grid=st.optimizer_grid) for v in DEPTH_MAP_V0]
+    _save(plot_depth_maps(maps, optima), out, "fig_depth_maps", files)
+    return [{"v0": o.v0, "k_p": o.kp, "k_d": o.kd, "depth": o.depth, "steps": o.steps,
+             "on_stroke_boundary": o.on_stroke_boundary, "active_constraint": o.active_constraint,
+             "grid_best": o.grid_best} for o in optima]
+
+
+def optimal_gains(out: Path, files: list[str], st: Settings, progress: bool) -> tuple[dict, object]:
+    """[fig:opt_imp_vary_rm_S] optimal gains against v0 for a family of (r_m, s)."""
+    from .figures import plot_gain_families
+    from .sweeps import optimal_impedance_curves, paper_observations, save_dataset
+
+    curves = optimal_impedance_curves(st.curve_v0, *FAMILIES, grid=st.optimizer_grid,
+                                      progress=progress)
+    (out / "data").mkdir(exist_ok=True)
+    save_dataset(curves, out / "data" / "optimal_gains.nc")
+    files.append("data/optimal_gains.nc")
+    _save(plot_gain_families(curves), out, "fig_optimal_gains", files)
+    nominal = curves.sel(r_m=5.0, s=20.0)
+    infeasible = [{"r_m": float(r), "s": float(s), "v0": float(v)}
+                  for r in curves.r_m.values for s in curves.s.values for v in curves.v0.values
+                  if not bool(curves.feasible.sel(r_m=r, s=s, v0=v))]
+    return ({"observations_r5_s20": paper_observations(curves, 5.0, 20.0),
+             "curve_r5_s20": [{"v0": float(v), "k_p": float(nominal.kp.sel(v0=v)),
+                               "k_d": float(nominal.kd.sel(v0=v)),
+                               "depth": float(nominal.depth.sel(v0=v))}
+                              for v in nominal.v0.values],
+             "no_feasible_gains": infeasible}, curves)
+
+
+def comparison(out: Path, files: list[str], st: Settings, progress: bool) -> dict:
+    """[fig:imp_vs_bb_vs_rigid] rigid vs optimal impedance vs bang-bang."""
+    from .comparison import compare_controllers, comparison_arrays
+    from .figures import plot_controller_comparison
+
+    rows = compare_controllers(st.compare_v0, 5.0, 20.0, 8.2, grid=st.optimizer_grid,
+                               progress=progress)
+    cols = comparison_arrays(rows)
+    _save(plot_controller_comparison(cols, 8.2), out, "fig_depth_vs_velocity", files)
+    moving = cols["v0"] < 0
+    fastest = int(np.argmin(cols["v0"]))
+    return {"rows": rows, "u_max": 8.2,
+            "bang_bang_over_rigid": [float(x) for x in _range(cols["bang_bang"] / cols["rigid"])],
+            "impedance_over_rigid": [float(x) for x in _range(cols["impedance"] / cols["rigid"])],
+            "bang_bang_below_impedance_everywhere": bool(np.all(
+                cols["bang_bang"][moving] < cols["impedance"][moving])),
+            "impedance_u_peak_at_fastest": float(cols["impedance_u_peak"][fastest]),
+            "fastest_v0": float(cols["v0"][fastest]), "paper_u_max": 8.2}
+
+
+def _range(x: np.ndarray) -> tuple[float, float]:
+    return float(np.min(x)), float(np.max(x))
+
+
+def experiment(out: Path, files: list[str], st: Settings) -> list[dict]:
+    """[fig:nd_exp_results] simulated depth against k_d, dimensionless and for the paper's rig."""
+    from .figures import plot_experiment_curves
+    from .scaling import paper_rig
+    from .sweeps import impedance_dataset
+
+    kd = np.round(np.linspace(0.0, 2.5, st.experiment_kd_n), 12)
+    ds = impedance_dataset(EXPERIMENT_KP, kd, EXPERIMENT_V0, 5.0, 20.0, energy=False)
+    ds = ds.squeeze(("r_m", "s")).transpose("k_p", "v0", "k_d")
+    _save(plot_experiment_curves(ds), out, "fig_experiment", files)
+    rig = paper_rig()
+    _save(plot_experiment_curves(ds, si=rig), out, "fig_experiment_si", files)
+    rows = []
+    for kp in EXPERIMENT_KP:
+        for v in EXPERIMENT_V0:
+            c = ds.sel(k_p=kp, v0=v)
+            ok = c.strictly_feasible.values
+            d = np.where(ok, c.depth.values, np.nan)
+            best = int(np.nanargmin(d)) if ok.any() else None
+            rows.append({
+                "k_p": kp, "v0": v, "speed_m_per_s": abs(v) * rig.velocity_scale,
+                "feasible_fraction": float(ok.mean()),
+                "best_k_d": None if best is None else float(kd[best]),
+                "best_depth": None if best is None else float(d[best]),
+                "best_depth_mm": None if best is None else float(d[best] * rig.length_scale * 1e3),
+                "depth_at_k_d_0": float(c.depth.values[0])})
+    return rows
+
+
+def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool) -> list[dict]:
+    """[fig:CoT_opt_imp] minimum-CoT against minimum-depth impedance."""
+    from .comparison import rigid_depth
+    from .figures import plot_cot_comparison
+    from .impedance import optimize_impedance
+    from .scaling import DimensionlessParams
+    from .simulate import Rigid, simulate
+
+    it = st.cot_v0
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(it, desc="CoT optima", unit="v0")
+    rows = []
+    for v in it:
+        dep = optimize_impedance(v, 5.0, 20.0, grid=st.optimizer_grid)
+        cot = optimize_impedance(v, 5.0, 20.0, objective="cot", grid=st.optimizer_grid)
+        los = optimize_impedance(v, 5.0, 20.0, objective="cot-lossless",
+                                 grid=st.optimizer_grid)
+        rig = simulate(DimensionlessParams(r_m=5.0, s=20.0, v0=v), Rigid())
+        rows.append({"v0": v, "rigid_depth": rigid_depth(v), "rigid_cot": rig.energy.cot,
+                     "depth_opt_kp": dep.kp, "depth_opt_kd": dep.kd,
+                     "depth_opt_depth": dep.depth, "depth_opt_cot": dep.cot,
+                     "depth_opt_cot_lossless": dep.cot_lossless,
+                     "cot_opt_kp": cot.kp, "cot_opt_kd": cot.kd, "cot_opt_depth": cot.depth,
+                     "cot_opt_cot": cot.cot, "cot_lossless_opt_kp": los.kp,
+                     "cot_lossless_opt_kd": los.kd, "cot_lossless_opt_depth": los.depth,
+                     "cot_lossless_opt_cot_lossless": los.cot_lossless})
+    cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    _save(plot_cot_comparison(cols["v0"], cols), out, "fig_cot", files)
+    return rows
+
+
+def robustness(out: Path, files: list[str], st: Settings, progress: bool) -> dict:
+    """Nominal bang-bang and impedance replayed on a perturbed model (+-30 %)."""
+    from .figures import plot_robustness
+    from .robustness import robustness_study, robustness_table
+    from .sweeps import save_dataset
+
+    ds = robustness_study(-3.0, 5.0, 20.0, 8.2, spread=0.3, n=st.robustness_n,
+                          grid=st.optimizer_grid, progress=progress)
+    save_dataset(ds, out / "data" / "robustness.nc")
+    files.append("data/robustness.nc")
+    _save(plot_robustness(ds), out, "fig_robustness", files)
+    return {"v0": -3.0, "spread": 0.3, "factors": [float(f) for f in ds.factor.values],
+            "table": robustness_table(ds),
+            "depth_ratio": {f"{c}|{m:g}|{p}": [float(x) for x in
+                                              ds.depth_ratio.sel(controller=c, margin=m,
+                                                                 parameter=p).values]
+                            for c in ds.controller.values for m in ds.margin.values
+                            for p in ds.parameter.values}}
+
+
+# ------------------------------------------------------------------ driver
+SECTIONS = ("bang-bang example", "stepped intrusions", "depth maps", "optimal gains",
+            "comparison", "experiment", "cost of transport", "robustness")
+
+
+def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True,
+              log: Callable[[str], None] | None = print) -> dict:
+    """Regenerate every figure of the paper, the summary files and the robustness study.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+        Folder to write into (created if missing).
+    quick : bool
+        Coarser grids and fewer impact velocities (about a minute on 2 cores).
+    progress : bool
+        Progress bars for the long sweeps.
+    log : callable or None
+        Receives one line per finished section (None: silent).
+
+    Returns
+    -------
+    dict
+        The contents of ``summary.json``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "data").mkdir(exist_ok=True)
+    st = Settings.make(quick)
+    files: list[str] = []
+    summary: dict = {}
+    timings: dict[str, float] = {}
+    t_all = time.perf_counter()
+
+    def run(i: int, key: str, fn, *args):
+        t0 = time.perf_counter()
+        result = fn(*args)
+        timings[key] = time.perf_counter() - t0
+        if log is not None:
+            log(f"[{i}/{len(SECTIONS)}] {SECTIONS[i - 1]:<20} {timings[key]:6.1f} s")
+        return result
+
+    summary["bang_bang_example"] = run(1, "bang_bang_example", bang_bang_example, out, files)
+    summary["stepped_intrusions"], _ = run(2, "stepped_intrusions", stepped_intrusions, out,
+                                           files, st)
+    summary["depth_maps"] = run(3, "depth_maps", depth_maps, out, files, st)
+    summary["optimal_gains"], _ = run(4, "optimal_gains", optimal_gains, out, files, st,
+                                      progress)
+    summary["comparison"] = run(5, "comparison", comparison, out, files, st, progress)
+    summary["experiment"] = run(6, "experiment", experiment, out, files, st)
+    summary["cost_of_transport"] = run(7, "cost_of_transport", cost_of_transport, out, files,
+                                       st, progress)
+    summary["robustness"] = run(8, "robustness", robustness, out, files, st, progress)
+    from . import __version__
+
+    summary["meta"] = {"quick": quick, "elapsed_s": time.perf_counter() - t_all,
+                       "section_s": timings, "version": __version__,
+                       "settings": {k: v for k, v in st.__dict__.items()},
+                       "units": "dimensionless (x_s = m_t g / k_g, tau_s = sqrt(m_t / k_g), "
+                                "force m_t g) unless a key says otherwise"}
+    files += ["summary.json", "summary.md"]
+    summary["files"] = files
+    (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=1))
+    (out / "summary.md").write_text(summary_markdown(summary))
+    return summary
+
+
+# ------------------------------------------------------------------ summary.md
+def _f(x, nd: int = 4) -> str:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return "n/a" if x is None or math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, int):
+        return str(x)
+    return f"{x:.{nd}f}"
+
+
+def _table(header: list[str], rows: list[list]) -> str:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def summary_markdown(s: dict) -> str:
+    """The summary as Markdown tables (paper values beside ours where it gives them)."""
+    m = s["meta"]
+    bb = s["bang_bang_example"]
+    si = s["stepped_intrusions"]
+    cmp = s["comparison"]
+    obs = s["optimal_gains"]["observations_r5_s20"]
+    out = [f"# Soft landing: reproduction of the paper ({'quick' if m['quick'] else 'full'} run)",
+           "", f"Computed in {m['elapsed_s']:.1f} s by softlanding {m['version']}. Units are the "
+           "paper's dimensionless ones unless stated. Figures: PNG and PDF beside this file.", ""]
+    out += ["## Bang-bang landing (fig_bang_bang_trajectory)", "",
+            _table(["quantity", "ours", "paper"], [
+                ["depth -x_f(T)", _f(bb["depth"], 9), "-"],
+                ["arcs", " -> ".join(bb["arcs"]), "max -> min"],
+                ["switch time", ", ".join(_f(t, 6) for t in bb["switch_times"]), "-"],
+                ["foot stops at T", _f(bb["T"], 6), "about 0.5 (caption: the stomp)"],
+                ["body stops at", _f(bb["body_stops_at"], 6), "-"],
+                ["arrest force u_b", _f(bb["u_b"], 6), "-"],
+                ["simulator replay difference", f"{bb['replay_difference']:.1e}", "-"],
+                ["PMP verdict", bb["pmp_verdict"], "-"],
+                ["max abs H (scaled)", f"{bb['pmp_H_max_abs']:.1e}", "-"]]), ""]
+    out += ["## Stepped intrusions (fig_stepped_intrusions)", "",
+            _table(["k_d", "steps (ours)", "steps (paper)", "depth"],
+                   [[_f(t["k_d"], 2), t["steps"], p, _f(t["depth"], 6)]
+                    for t, p in zip(si["trajectories"], si["paper_steps"], strict=True)]), "",
+            _table(["v0", "multi-step share of the gain square", "... and within the stroke",
+                    "most steps (rest proven)", "rest unproven (k_p = 0 creep, k_d = 0 hops)"],
+                   [[_f(r["v0"], 1), _f(r["multi_step_fraction"], 3),
+                     _f(r["multi_step_feasible_fraction"], 3), r["max_steps_rest_proven"],
+                     _f(r["rest_unproven_fraction"], 3)] for r in si["regions"]]), "",
+            "The paper describes the multi-step regions as emerging, morphing and vanishing as "
+            "v0 grows; here they grow with |v0| over the whole range.", ""]
+    out += ["## Optimal impedance on the maps (fig_depth_maps)", "",
+            _table(["v0", "k_p*", "k_d*", "depth*", "steps", "active limit"],
+                   [[_f(r["v0"], 1), _f(r["k_p"], 6), _f(r["k_d"], 6), _f(r["depth"], 6),
+                     r["steps"], r["active_constraint"] or "none"] for r in s["depth_maps"]]),
+            "", "The paper: every optimum lies on the stroke-limit boundary.", ""]
+    out += ["## Optimal gains against v0 (fig_optimal_gains)", "",
+            _table(["claim (paper, r_m = 5, s = 20)", "ours"], [
+                ["k_p* increases with |v0|", _f(obs["kp_increasing_with_speed"])],
+                ["k_d* first decreases, then increases", _f(
+                    obs["kd_first_decreasing_then_increasing"])],
+                ["critical |v0| between 2 and 6",
+                 f"{_f(obs['critical_speed_between_2_and_6'])} "
+                 f"(minimum at |v0| = {obs['kd_min_at_speed']:g})"],
+                ["all optima on the stroke limit", _f(obs["all_on_stroke_boundary"])],
+                ["peak force at the fastest v0 (paper: 8.2)", _f(obs["u_peak_at_fastest"], 3)]]),
+            ""]
+    nf = s["optimal_gains"]["no_feasible_gains"]
+    if nf:
+        out += ["No gains in [0, 1]^2 keep the stroke at: " + ", ".join(
+            f"(r_m={r['r_m']:g}, s={r['s']:g}, v0={r['v0']:g})" for r in nf) + ".", ""]
+    out += ["## Rigid vs optimal impedance vs bang-bang (fig_depth_vs_velocity)", "",
+            _table(["v0", "rigid", "impedance", "(k_p*, k_d*)", "bang-bang", "imp/rigid",
+                    "bb/rigid"],
+                   [[_f(r["v0"], 2), _f(r["rigid"], 5), _f(r["impedance"], 5),
+                     f"({r['impedance_kp']:.4f}, {r['impedance_kd']:.4f})", _f(r["bang_bang"], 5),
+                     _f(r["impedance"] / r["rigid"], 4), _f(r["bang_bang"] / r["rigid"], 4)]
+                    for r in cmp["rows"]]), "",
+            f"Bang-bang / rigid: {cmp['bang_bang_over_rigid'][0]:.4f} to "
+            f"{cmp['bang_bang_over_rigid'][1]:.4f} (paper: at most 1/2). Impedance / rigid: "
+            f"{cmp['impedance_over_rigid'][0]:.4f} to {cmp['impedance_over_rigid'][1]:.4f}. "
+            f"Bang-bang below impedance at every v0 < 0: "
+            f"{_f(cmp['bang_bang_below_impedance_everywhere'])}. Peak force of the optimal "
+            f"impedance at v0 = {cmp['fastest_v0']:g}: {cmp['impedance_u_peak_at_fastest']:.3f} "
+            f"(the paper takes u_max = 8.2 from it).", ""]
+    out += ["## Experiment curves (fig_experiment, fig_experiment_si)", "",
+            "The paper does not list its impact velocities (up to v0 = -4.8); we use "
+            + ", ".join(f"{v:g}" for v in EXPERIMENT_V0) + ".", "",
+            _table(["k_p", "v0", "speed [m/s], paper rig", "best k_d", "depth there",
+                    "depth [mm]", "depth at k_d = 0", "gains kept in stroke"],
+                   [[r["k_p"], r["v0"], _f(r["speed_m_per_s"], 3), _f(r["best_k_d"], 3),
+                     _f(r["best_depth"], 4), _f(r["best_depth_mm"], 2),
+                     _f(r["depth_at_k_d_0"], 4), _f(r["feasible_fraction"], 3)]
+                    for r in s["experiment"]]), ""]
+    out += ["## Minimum CoT against minimum depth (fig_cot)", "",
+            _table(["v0", "rigid CoT", "min-depth: depth", "CoT", "lossless CoT",
+                    "min-CoT: (k_p, k_d)", "depth", "CoT"],
+                   [[_f(r["v0"], 2), _f(r["rigid_cot"], 3), _f(r["depth_opt_depth"], 4),
+                     _f(r["depth_opt_cot"], 3), _f(r["depth_opt_cot_lossless"], 3),
+                     f"({r['cot_opt_kp']:.3f}, {r['cot_opt_kd']:.3f})", _f(r["cot_opt_depth"], 4),
+                     _f(r["cot_opt_cot"], 3)] for r in s["cost_of_transport"]]), ""]
+    rb = s["robustness"]
+    out += ["## Robustness (fig_robustness)", "",
+            f"Nominal controllers designed at v0 = {rb['v0']:g}, r_m = 5, s = 20 (bang-bang "
+            f"u_max = 8.2), replayed unchanged in SI units when the true value differs by up to "
+            f"+-{rb['spread']:.0%} ({len(rb['factors'])} factors). Regret = depth / depth of "
+            "the same kind of controller designed for the true model. A margin m designs for "
+            "the stroke (1 - m) s.", "",
+            _table(["controller", "margin", "error in", "nominal depth", "worst regret",
+                    "stroke left", "body never stops", "largest finite excursion [stroke]"],
+                   [[r["controller"], f"{r['margin']:.0%}", r["parameter"],
+                     _f(r["nominal_depth"], 4), _f(r["worst_depth_ratio"], 4),
+                     f"{r['violations']}/{r['cases']}", r["body_never_stops"],
+                     _f(r["largest_violation"], 4)] for r in rb["table"]]), ""]
+    out += ["## Files", "", ", ".join(s["files"]), ""]
+    return "\n".join(out)
