@@ -273,13 +273,11 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     v = np.linspace(a.v0_max, a.v0_min, a.n)
     rows = compare_controllers(v, a.rm, a.s, a.umax, grid=a.grid, progress=not a.json)
     if a.plot:
-        from .figures import plot_depth_vs_velocity
+        from .comparison import comparison_arrays
+        from .figures import plot_controller_comparison
 
-        plot_depth_vs_velocity(v, {
-            "rigid leg": np.array([r["rigid"] for r in rows]),
-            "optimal impedance": np.array([r["impedance"] for r in rows]),
-            f"bang-bang, u_max={a.umax:g}": np.array([r["bang_bang"] for r in rows]),
-        }).savefig(a.plot, dpi=130)
+        plot_controller_comparison(comparison_arrays(rows), a.umax, a.rm, a.s).savefig(
+            a.plot, dpi=130)
     if a.json:
         print(json.dumps(_json_safe({"rows": rows, "r_m": a.rm, "s": a.s, "u_max": a.umax})))
         return 0

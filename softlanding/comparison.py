@@ -7,7 +7,8 @@ One function, :func:`compare_controllers`, used by ``softlanding compare``,
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -21,8 +22,8 @@ def rigid_depth(v0: float) -> float:
 
 
 def compare_controllers(v0: Sequence[float], r_m: float = 5.0, s: float = 20.0,
-                        u_max: float = 8.2, *, grid: int = 101,
-                        progress: bool = False) -> list[dict]:
+                        u_max: float = 8.2, *, grid: int = 101, progress: bool = False,
+                        impedance_optimum: Callable[[float], Any] | None = None) -> list[dict]:
     """Depth of the three controllers at each impact velocity.
 
     Parameters
@@ -39,6 +40,9 @@ def compare_controllers(v0: Sequence[float], r_m: float = 5.0, s: float = 20.0,
         Starting grid of the impedance optimisation.
     progress : bool
         Progress bars.
+    impedance_optimum : callable, optional
+        ``v0 -> optimum`` (with ``depth, kp, kd, u_peak``) to reuse optima already
+        computed; default :func:`~softlanding.impedance.optimize_impedance`.
 
     Returns
     -------
@@ -54,7 +58,8 @@ def compare_controllers(v0: Sequence[float], r_m: float = 5.0, s: float = 20.0,
         from tqdm.auto import tqdm
 
         it = tqdm(v, desc="optimal impedance", unit="landing problem")
-    imp = [optimize_impedance(x, r_m, s, grid=grid) for x in it]
+    opt = impedance_optimum or (lambda x: optimize_impedance(x, r_m, s, grid=grid))
+    imp = [opt(x) for x in it]
     return [{"v0": x, "rigid": rigid_depth(x), "impedance": o.depth, "impedance_kp": o.kp,
              "impedance_kd": o.kd, "impedance_u_peak": o.u_peak, "bang_bang": b.depth,
              "bang_bang_switch": b.switch_times[0] if b.switch_times else math.nan,

@@ -80,12 +80,15 @@ def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Fi
     return fig
 
 
-def plot_depth_vs_velocity(v0: np.ndarray, curves: dict[str, np.ndarray], ax=None) -> plt.Figure:
-    """Penetration depth against impact velocity for several policies."""
-    fig, ax = _axes(ax, (6.0, 4.0))
-    for label, depth in curves.items():
-        ax.plot(v0, depth, "o-", ms=3, label=label)
-    ax.axhline(1.0, color="0.5", ls=":", lw=1, label="lower bound (weight)")
+def plot_depth_vs_velocity(v0: np.ndarray, curves: dict[str, np.ndarray], ax=None,
+                           colours: dict[str, str] | None = None) -> plt.Figure:
+    """Penetration depth against impact velocity for several policies (label -> depths)."""
+    fig, ax = _axes(ax, (6.4, 4.4))
+    markers = "os^vD"
+    for i, (label, depth) in enumerate(curves.items()):
+        ax.plot(v0, depth, marker=markers[i % len(markers)], ms=3, label=label,
+                color=(colours or {}).get(label))
+    ax.axhline(1.0, color="0.5", ls=":", lw=1, label="lower bound $-x_f$ = 1")
     ax.set_xlabel(r"impact velocity $v_0$ [$x_s / \tau_s$]")
     ax.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")
     ax.legend(fontsize=8)
@@ -300,21 +303,21 @@ def plot_gain_families(curves) -> plt.Figure:
     return fig
 
 
-def plot_controller_comparison(cmp: dict[str, np.ndarray], u_max: float) -> plt.Figure:
-    """The paper's Fig. 6: depth against v0 for rigid, optimal impedance and bang-bang."""
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    v = cmp["v0"]
-    ax.plot(v, cmp["rigid"], "o-", ms=3, color=CONTROLLER_COLOURS["rigid"], label="rigid leg")
-    ax.plot(v, cmp["impedance"], "s-", ms=3, color=CONTROLLER_COLOURS["impedance"],
-            label="optimal impedance")
-    ax.plot(v, cmp["bang_bang"], "^-", ms=3, color=CONTROLLER_COLOURS["bang-bang"],
-            label=f"bang-bang force control ($u_{{max}}$={u_max:g})")
-    ax.axhline(1.0, color="0.5", ls=":", lw=1, label="lower bound $-x_f$ = 1")
-    ax.set_xlabel(r"impact velocity $v_0$ [$x_s/\tau_s$]")
-    ax.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    ax.set_title("Depth against impact velocity, $r_m$=5, $s$=20", fontsize=10)
+def plot_controller_comparison(cmp: dict[str, np.ndarray], u_max: float,
+                               r_m: float = 5.0, s: float = 20.0) -> plt.Figure:
+    """The paper's Fig. 6: depth against v0 for rigid, optimal impedance and bang-bang.
+
+    ``cmp`` holds the columns of :func:`softlanding.comparison.compare_controllers`.
+    """
+    bb = f"bang-bang force control ($u_{{max}}$={u_max:g})"
+    fig = plot_depth_vs_velocity(
+        cmp["v0"], {"rigid leg": cmp["rigid"], "optimal impedance": cmp["impedance"],
+                    bb: cmp["bang_bang"]},
+        colours={"rigid leg": CONTROLLER_COLOURS["rigid"],
+                 "optimal impedance": CONTROLLER_COLOURS["impedance"],
+                 bb: CONTROLLER_COLOURS["bang-bang"]})
+    fig.axes[0].set_title(f"Depth against impact velocity, $r_m$={r_m:g}, $s$={s:g}",
+                          fontsize=10)
     fig.tight_layout()
     return fig
 

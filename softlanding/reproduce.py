@@ -17,6 +17,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -85,7 +86,7 @@ def bang_bang_example(out: Path, files: list[str]) -> dict:
             "pmp_switch_sigma_gap": cert.switch_sigma_gap}
 
 
-def stepped_intrusions(out: Path, files: list[str], st: Settings) -> tuple[dict, list]:
+def stepped_intrusions(out: Path, files: list[str], st: Settings) -> dict:
     """[fig:multi_intrusion_regions] three stepped trajectories and step-count maps."""
     from .figures import plot_stepped_intrusion_figure
     from .scaling import DimensionlessParams
@@ -105,9 +106,9 @@ def stepped_intrusions(out: Path, files: list[str], st: Settings) -> tuple[dict,
                         "multi_step_feasible_fraction": float(((steps > 1) & feas).mean()),
                         "max_steps_rest_proven": int(steps[rest].max()),
                         "rest_unproven_fraction": float((~rest).mean())})
-    return ({"trajectories": [{"k_p": 0.2, "k_d": r.policy.k_d, "v0": -1.0, "steps": r.steps,
-                               "depth": r.depth} for r in runs],
-             "paper_steps": [1, 2, 3], "regions": regions}, maps)
+    return {"trajectories": [{"k_p": 0.2, "k_d": r.policy.k_d, "v0": -1.0, "steps": r.steps,
+                              "depth": r.depth} for r in runs],
+            "paper_steps": [1, 2, 3], "regions": regions}
 
 
 def depth_maps(out: Path, files: list[str], st: Settings) -> list[dict]:
@@ -124,7 +125,8 @@ def depth_maps(out: Path, files: list[str], st: Settings) -> list[dict]:
              "grid_best": o.grid_best} for o in optima]
 
 
-def optimal_gains(out: Path, files: list[str], st: Settings, progress: bool) -> tuple[dict, object]:
+def optimal_gains(out: Path, files: list[str], st: Settings,
+                  progress: bool) -> tuple[dict, Callable[[float], Any]]:
     """[fig:opt_imp_vary_rm_S] optimal gains against v0 for a family of (r_m, s)."""
     from .figures import plot_gain_families
     from .sweeps import optimal_impedance_curves, paper_observations, save_dataset
@@ -144,16 +146,37 @@ def optimal_gains(out: Path, files: list[str], st: Settings, progress: bool) -> 
                                "k_d": float(nominal.kd.sel(v0=v)),
                                "depth": float(nominal.depth.sel(v0=v))}
                               for v in nominal.v0.values],
-             "no_feasible_gains": infeasible}, curves)
+             "no_feasible_gains": infeasible}, _optimum_lookup(nominal, st.optimizer_grid))
 
 
-def comparison(out: Path, files: list[str], st: Settings, progress: bool) -> dict:
+def _optimum_lookup(nominal, grid: int) -> Callable[[float], Any]:
+    """``v0 -> depth-optimal impedance`` at r_m = 5, s = 20, reusing the curves' optima
+    (the same :func:`optimize_impedance` call) and computing the others."""
+    from types import SimpleNamespace
+
+    from .impedance import optimize_impedance
+
+    index = {float(v): i for i, v in enumerate(nominal.v0.values)}
+
+    def get(v0: float):
+        i = index.get(float(v0))
+        if i is None or not bool(nominal.feasible[i]):
+            return optimize_impedance(v0, 5.0, 20.0, grid=grid)
+        row = nominal.isel(v0=i)
+        return SimpleNamespace(**{k: float(row[k]) for k in
+                                  ("kp", "kd", "depth", "u_peak", "cot", "cot_lossless")})
+
+    return get
+
+
+def comparison(out: Path, files: list[str], st: Settings, progress: bool,
+               depth_optimum: Callable[[float], Any]) -> dict:
     """[fig:imp_vs_bb_vs_rigid] rigid vs optimal impedance vs bang-bang."""
     from .comparison import compare_controllers, comparison_arrays
     from .figures import plot_controller_comparison
 
     rows = compare_controllers(st.compare_v0, 5.0, 20.0, 8.2, grid=st.optimizer_grid,
-                               progress=progress)
+                               progress=progress, impedance_optimum=depth_optimum)
     cols = comparison_arrays(rows)
     _save(plot_controller_comparison(cols, 8.2), out, "fig_depth_vs_velocity", files)
     moving = cols["v0"] < 0
@@ -200,7 +223,8 @@ def experiment(out: Path, files: list[str], st: Settings) -> list[dict]:
     return rows
 
 
-def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool) -> list[dict]:
+def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool,
+                      depth_optimum: Callable[[float], Any]) -> list[dict]:
     """[fig:CoT_opt_imp] minimum-CoT against minimum-depth impedance."""
     from .comparison import rigid_depth
     from .figures import plot_cot_comparison
@@ -215,7 +239,7 @@ def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool)
         it = tqdm(it, desc="CoT optima", unit="v0")
     rows = []
     for v in it:
-        dep = optimize_impedance(v, 5.0, 20.0, grid=st.optimizer_grid)
+        dep = depth_optimum(v)
         cot = optimize_impedance(v, 5.0, 20.0, objective="cot", grid=st.optimizer_grid)
         los = optimize_impedance(v, 5.0, 20.0, objective="cot-lossless",
                                  grid=st.optimizer_grid)
@@ -296,15 +320,16 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         return result
 
     summary["bang_bang_example"] = run(1, "bang_bang_example", bang_bang_example, out, files)
-    summary["stepped_intrusions"], _ = run(2, "stepped_intrusions", stepped_intrusions, out,
-                                           files, st)
+    summary["stepped_intrusions"] = run(2, "stepped_intrusions", stepped_intrusions, out,
+                                        files, st)
     summary["depth_maps"] = run(3, "depth_maps", depth_maps, out, files, st)
-    summary["optimal_gains"], _ = run(4, "optimal_gains", optimal_gains, out, files, st,
-                                      progress)
-    summary["comparison"] = run(5, "comparison", comparison, out, files, st, progress)
+    summary["optimal_gains"], depth_optimum = run(4, "optimal_gains", optimal_gains, out, files,
+                                                  st, progress)
+    summary["comparison"] = run(5, "comparison", comparison, out, files, st, progress,
+                                depth_optimum)
     summary["experiment"] = run(6, "experiment", experiment, out, files, st)
     summary["cost_of_transport"] = run(7, "cost_of_transport", cost_of_transport, out, files,
-                                       st, progress)
+                                       st, progress, depth_optimum)
     summary["robustness"] = run(8, "robustness", robustness, out, files, st, progress)
     from . import __version__
 
