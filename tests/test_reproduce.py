@@ -134,3 +134,13 @@ def test_open_loop_body_motion_ignores_the_ground():
         assert np.isfinite(res.stroke_max) and res.rest_proven
     res, _ = replay(nominal, sched, "v0", 1.1)
     assert not np.isfinite(res.stroke_min) or not np.isfinite(res.stroke_max)
+
+
+def test_a_stroke_margin_is_centred_on_the_true_stroke():
+    """Designed for 0.9 s and run on s, the impedance landing keeps 0.05 s free at the end
+    it was designed to touch (the design landing, shifted by the centred margin)."""
+    nominal = DimensionlessParams(r_m=5.0, s=20.0, v0=-3.0)
+    pol, depth, _ = design(-3.0, margin=0.1, grid=41, controllers=("impedance",))["impedance"]
+    res, lr = replay(nominal, pol, "v0", 1.0)
+    assert lr == 1.0 and res.depth == pytest.approx(depth, rel=1e-12)
+    assert res.stroke_min == pytest.approx(0.05 * 20.0, abs=1e-6)
