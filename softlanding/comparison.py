@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ._progress import progress as show_progress
 from .impedance import optimize_impedance
 from .landing import sweep_landing
 
@@ -53,13 +54,8 @@ def compare_controllers(v0: Sequence[float], r_m: float = 5.0, s: float = 20.0,
     """
     v = [float(x) for x in v0]
     bang = sweep_landing(v, r_m, s, u_max, progress=progress)
-    it = v
-    if progress:
-        from tqdm.auto import tqdm
-
-        it = tqdm(v, desc="optimal impedance", unit="landing problem")
     opt = impedance_optimum or (lambda x: optimize_impedance(x, r_m, s, grid=grid))
-    imp = [opt(x) for x in it]
+    imp = [opt(x) for x in show_progress(v, progress, "optimal impedance", "landing problem")]
     return [{"v0": x, "rigid": rigid_depth(x), "impedance": o.depth, "impedance_kp": o.kp,
              "impedance_kd": o.kd, "impedance_u_peak": o.u_peak, "bang_bang": b.depth,
              "bang_bang_switch": b.switch_times[0] if b.switch_times else math.nan,

@@ -68,13 +68,16 @@ def _axes(ax, figsize):
 
 
 def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Figure:
-    """Foot height against time for several landings (the paper's stepped-intrusion figure)."""
+    """Foot height against time for several landings (the paper's stepped-intrusion figure),
+    all drawn to the same time (1.2 x the latest foot stop)."""
     fig, ax = _axes(ax, (6.5, 4.0))
+    t_end = 1.2 * max(r.T for r in results)
     for r in results:
-        tr = r.trajectory()
-        ax.plot(tr.t, tr.x[:, 2], label=f"{r.policy.describe()}: {r.steps} step(s)")
+        tr = r.trajectory(t_end=t_end)
+        ax.plot(tr.t, tr.x[:, 2],
+                label=f"{r.policy.describe()}: {r.steps} step(s), depth {r.depth:.3f}")
     ax.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
-    ax.set_ylabel(r"foot height $x_f$ [$m_t g / k_g$]")
+    ax.set_ylabel(r"foot height $x_f$ [$x_s = m_t g / k_g$]")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return fig
@@ -160,8 +163,9 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
     """
     fig, ax = _axes(ax, (5.8, 4.6))
     d = ds.depth.where(ds.strictly_feasible)
-    dmin = float(d.min())
-    im = ax.pcolormesh(ds.k_p, ds.k_d, (d / dmin).T, shading="nearest", cmap="viridis")
+    dmin = optimum.depth if optimum is not None else float(d.min())
+    im = ax.pcolormesh(ds.k_p, ds.k_d, (d / dmin).T, shading="nearest", cmap="viridis",
+                       vmin=1.0, rasterized=True)
     fig.colorbar(im, ax=ax, label=r"$x_f / x_f^*$ (depth / minimum depth)")
     if optimum is not None:
         ax.plot(optimum.kp, optimum.kd, "*", color="w", mec="k", ms=16,
@@ -210,17 +214,9 @@ def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt
     fig = plt.figure(figsize=(14, 6.2))
     sub = fig.subfigures(1, 2, width_ratios=[1, 1.5])
     ax = sub[0].subplots()
-    for r, c in zip(results, ("C0", "C1", "C3"), strict=False):
-        tr = r.trajectory(t_end=max(x.T for x in results) * 1.2)
-        ax.plot(tr.t, tr.x[:, 2], color=c,
-                label=f"$k_d$={r.policy.k_d:g}: {r.steps} step(s), depth {r.depth:.3f}")
-    ax.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
-    ax.set_ylabel(r"foot height $x_f$ [$x_s = m_t g / k_g$]")
+    plot_stepped_intrusions(results, ax=ax)
     p = results[0].params
-    ax.set_title(f"(a) $v_0$={p.v0:g}, $k_p$={results[0].policy.k_p:g}, $r_m$={p.r_m:g}, "
-                 f"$s$={p.s:g}", fontsize=10)
-    ax.legend(fontsize=8, loc="upper right")
-    ax.grid(alpha=0.3)
+    ax.set_title(f"(a) $v_0$={p.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}", fontsize=10)
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     n = len(maps)
@@ -250,25 +246,16 @@ def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt
 
 
 def plot_depth_maps(maps, optima) -> plt.Figure:
-    """The paper's Fig. 4: x_f/x_f* over (k_p, k_d) for several v0, optimum starred."""
+    """The paper's Fig. 4: x_f/x_f* over (k_p, k_d) for several v0, optimum starred
+    (one :func:`plot_depth_map` panel per v0)."""
     n = len(maps)
     cols = 2 if n <= 4 else 3
     rows = -(-n // cols)
     fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.2 * rows), squeeze=False)
     for ax, ds, opt in zip(axes.flat, maps, optima, strict=False):
-        d = ds.depth.where(ds.strictly_feasible)
-        dmin = opt.depth if opt is not None else float(d.min())
-        im = ax.pcolormesh(ds.k_p, ds.k_d, (d / dmin).T, shading="nearest", cmap="viridis",
-                           vmin=1.0, rasterized=True)
-        fig.colorbar(im, ax=ax, label=r"$x_f / x_f^*$")
-        if opt is not None:
-            ax.plot(opt.kp, opt.kd, "*", color="w", mec="k", ms=15,
-                    label=f"$k_p^*$={opt.kp:.4f}, $k_d^*$={opt.kd:.4f}")
-            ax.legend(loc="upper right", fontsize=8)
+        plot_depth_map(ds, opt, ax=ax)
         ax.set_title(f"$v_0$ = {float(ds.v0):g}" + (f": $x_f^*$ = {opt.depth:.4f}"
                                                      if opt is not None else ""), fontsize=10)
-        ax.set_xlabel(r"stiffness $k_p$")
-        ax.set_ylabel(r"damping $k_d$")
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     fig.suptitle(f"Normalised depth, $r_m$={float(maps[0].r_m):g}, $s$={float(maps[0].s):g} "

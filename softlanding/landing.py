@@ -34,6 +34,7 @@ import numpy as np
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
 from ocp.switching import RefinedSwitching, detect_arcs, refine_switching
 
+from ._progress import progress as show_progress
 from .dynamics import STATE_NAMES, stance_dynamics
 from .errors import ParameterError
 from .scaling import DimensionlessParams
@@ -304,11 +305,7 @@ def sweep_landing(v0_values, r_m: float = 5.0, s: float = 20.0, u_max: float = 8
 
     The values are solved in the given order; start from the easy end.
     """
-    it = list(v0_values)
-    if progress:
-        from tqdm.auto import tqdm
-
-        it = tqdm(it, desc="bang-bang sweep", unit="solve")
+    it = show_progress(list(v0_values), progress, "bang-bang sweep", "solve")
     out: list[BangBangLanding] = []
     prev = None
     for v in it:

@@ -86,16 +86,25 @@ def bang_bang_example(out: Path, files: list[str]) -> dict:
             "pmp_switch_sigma_gap": cert.switch_sigma_gap}
 
 
-def stepped_intrusions(out: Path, files: list[str], st: Settings) -> dict:
+def _maps(v0s, st: Settings, cache: dict) -> list:
+    """Depth maps at r_m = 5, s = 20, each v0 simulated once per run."""
+    from .sweeps import depth_map
+
+    for v in v0s:
+        if v not in cache:
+            cache[v] = depth_map(v, 5.0, 20.0, n=st.map_n, energy=False)
+    return [cache[v] for v in v0s]
+
+
+def stepped_intrusions(out: Path, files: list[str], st: Settings, cache: dict) -> dict:
     """[fig:multi_intrusion_regions] three stepped trajectories and step-count maps."""
     from .figures import plot_stepped_intrusion_figure
     from .scaling import DimensionlessParams
     from .simulate import Impedance, simulate
-    from .sweeps import depth_map
 
     runs = [simulate(DimensionlessParams(r_m=5.0, s=20.0, v0=-1.0), Impedance(0.2, kd))
             for kd in (0.4, 0.18, 0.0)]
-    maps = [depth_map(v, 5.0, 20.0, n=st.map_n, energy=False) for v in STEP_MAP_V0]
+    maps = _maps(STEP_MAP_V0, st, cache)
     _save(plot_stepped_intrusion_figure(runs, maps), out, "fig_stepped_intrusions", files)
     regions = []
     for ds in maps:
@@ -111,13 +120,12 @@ def stepped_intrusions(out: Path, files: list[str], st: Settings) -> dict:
             "paper_steps": [1, 2, 3], "regions": regions}
 
 
-def depth_maps(out: Path, files: list[str], st: Settings) -> list[dict]:
+def depth_maps(out: Path, files: list[str], st: Settings, cache: dict) -> list[dict]:
     """[fig:Kp_Kd_grid] normalised depth maps with the optimum starred."""
     from .figures import plot_depth_maps
     from .impedance import optimize_impedance
-    from .sweeps import depth_map
 
-    maps = [depth_map(v, 5.0, 20.0, n=st.map_n, energy=False) for v in DEPTH_MAP_V0]
+    maps = _maps(DEPTH_MAP_V0, st, cache)
     optima = [optimize_impedance(v, 5.0, 20.0, grid=st.optimizer_grid) for v in DEPTH_MAP_V0]
     _save(plot_depth_maps(maps, optima), out, "fig_depth_maps", files)
     return [{"v0": o.v0, "k_p": o.kp, "k_d": o.kd, "depth": o.depth, "steps": o.steps,
@@ -226,19 +234,15 @@ def experiment(out: Path, files: list[str], st: Settings) -> list[dict]:
 def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool,
                       depth_optimum: Callable[[float], Any]) -> list[dict]:
     """[fig:CoT_opt_imp] minimum-CoT against minimum-depth impedance."""
+    from ._progress import progress as show_progress
     from .comparison import rigid_depth
     from .figures import plot_cot_comparison
     from .impedance import optimize_impedance
     from .scaling import DimensionlessParams
     from .simulate import Rigid, simulate
 
-    it = st.cot_v0
-    if progress:
-        from tqdm.auto import tqdm
-
-        it = tqdm(it, desc="CoT optima", unit="v0")
     rows = []
-    for v in it:
+    for v in show_progress(st.cot_v0, progress, "CoT optima", "v0"):
         dep = depth_optimum(v)
         cot = optimize_impedance(v, 5.0, 20.0, objective="cot", grid=st.optimizer_grid)
         los = optimize_impedance(v, 5.0, 20.0, objective="cot-lossless",
@@ -320,9 +324,10 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         return result
 
     summary["bang_bang_example"] = run(1, "bang_bang_example", bang_bang_example, out, files)
+    maps: dict = {}
     summary["stepped_intrusions"] = run(2, "stepped_intrusions", stepped_intrusions, out,
-                                        files, st)
-    summary["depth_maps"] = run(3, "depth_maps", depth_maps, out, files, st)
+                                        files, st, maps)
+    summary["depth_maps"] = run(3, "depth_maps", depth_maps, out, files, st, maps)
     summary["optimal_gains"], depth_optimum = run(4, "optimal_gains", optimal_gains, out, files,
                                                   st, progress)
     summary["comparison"] = run(5, "comparison", comparison, out, files, st, progress,

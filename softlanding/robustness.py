@@ -36,6 +36,7 @@ import numpy as np
 import xarray as xr
 
 from ._kernel import FEAS_TOL
+from ._progress import progress as show_progress
 from .errors import ParameterError, check_positive
 from .scaling import DimensionlessParams
 from .simulate import ForceSchedule, Impedance, LandingResult, simulate
@@ -189,12 +190,8 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
     proven = np.zeros(shape, dtype=bool)
     nominal_depth = np.full(shape[:2], np.nan)
     tasks = [(j, m, k, par) for j, m in enumerate(margins) for k, par in enumerate(PARAMETERS)]
-    if progress:
-        from tqdm.auto import tqdm
-
-        tasks = tqdm(tasks, desc="robustness", unit="study")
     designs = {}
-    for j, m, k, par in tasks:
+    for j, m, k, par in show_progress(tasks, progress, "robustness", "study"):
         if m not in designs:
             designs[m] = design(v0, r_m, s, u_max, margin=m, grid=grid)
             for i, name in enumerate(CONTROLLERS):

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from ._progress import progress as show_progress
 from .errors import ParameterError
 from .impedance import optimize_impedance, strictly_feasible
 from .simulate import BATCH_FIELDS, simulate_batch
@@ -147,12 +148,8 @@ def optimal_impedance_curves(v0: Sequence[float], r_m: Sequence[float] = (5.0,),
     tasks = [(float(v), float(r), float(ss)) for r in r_m for ss in s for v in v0]
     client = _client(scheduler)
     if client is None:
-        it = tasks
-        if progress:
-            from tqdm.auto import tqdm
-
-            it = tqdm(tasks, desc="optimal gains", unit="landing problem")
-        rows = [_optimum_row(v, r, ss, objective, grid) for v, r, ss in it]
+        rows = [_optimum_row(v, r, ss, objective, grid) for v, r, ss in
+                show_progress(tasks, progress, "optimal gains", "landing problem")]
     else:
         futures = client.map(_optimum_row, *zip(*tasks, strict=True),
                              [objective] * len(tasks), [grid] * len(tasks), pure=False)
