@@ -305,7 +305,10 @@ def sweep_landing(v0_values, r_m: float = 5.0, s: float = 20.0, u_max: float = 8
 
     The values are solved in the given order; start from the easy end.
     """
-    it = show_progress(list(v0_values), progress, "bang-bang sweep", "solve")
+    v0_values = list(v0_values)
+    for v in v0_values:  # bad input fails before any work (and any progress bar)
+        _validate(v, r_m, s, u_max)
+    it = show_progress(v0_values, progress, "bang-bang sweep", "solve")
     out: list[BangBangLanding] = []
     prev = None
     for v in it:

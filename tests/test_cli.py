@@ -46,6 +46,9 @@ def test_simulate_rigid_table():
     ["scale", "--mb", "-2.5", "--mf", "0.5", "--kg", "4400", "--stroke", "0.1"],
     ["scale", "--mb", "2.5", "--mf", "0.5", "--kg", "0", "--stroke", "0.1"],
     ["scale", "--mb", "2.5", "--mf", "0.5", "--kg", "4400", "--stroke", "0.1", "--v0-si", "1"],
+    ["compare", "--n", "3", "--umax", "0.5"],
+    ["solve-sweep", "--n", "3", "--rm", "nan"],
+    ["reproduce", "--quick"],
 ])
 def test_bad_input_one_line_exit_2(args):
     p = run(*args)
