@@ -787,3 +787,71 @@ def simulate_batch(A3s, B3s, Fzs, Fus, Ews, ridx, Kfs, umaxs, x0s, s_lims, t_max
         simulate_one(A3s[r], B3s[r], Fzs[r], Fus[r], Ews[r], Kfs[i], umaxs[i], empty_t,
                      empty_t, x0s[i], s_lims[i], t_max, max_seg, energy, out[i], rt, rA, rz,
                      rc, rm)
+
+
+# ------------------------------------------------------------ Python entry points
+STATUS_NAMES = {
+    REST_PROVEN: "rest proven",
+    HORIZON: "horizon reached before rest could be proven",
+    TOO_MANY_SEGMENTS: "segment limit reached before rest could be proven",
+}
+"""Human-readable name of each status code of ``out[O_STATUS]``."""
+
+
+def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy):
+    """One landing; returns the output row (layout ``O_*``) and the segment records.
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`softlanding.dynamics.mode_matrices` of the robot and ground.
+    Kf : (3, 5) array
+        Feedback ``u = Kf[mode] . z`` per ground mode (ignored when open loop).
+    umax : float
+        Force limit (``inf`` for none).
+    sched_t, sched_u : arrays (m,), (m + 1,)
+        Open-loop schedule; empty ``sched_u`` means feedback.
+    x0 : (4,) array
+        Initial state.
+    s_lim, t_max, max_seg, energy
+        Stroke, horizon, segment limit, whether to compute the energy ledger.
+
+    Returns
+    -------
+    out : (N_OUT,) array
+    segments : dict
+        ``t`` (n+1,), ``A`` (n, 5, 5), ``z`` (n, 5), ``cu`` (n, 5), ``mode`` (n,):
+        segment start times (and the end time), closed-loop matrices, start
+        states, control functionals and ground modes.
+    """
+    nrec = 32  # segment records; grown and re-run in the rare long case
+    while True:
+        out = np.zeros(N_OUT)
+        rec_t = np.full(nrec + 1, np.nan)
+        rec_A = np.empty((nrec, 5, 5))
+        rec_z = np.empty((nrec, 5))
+        rec_cu = np.empty((nrec, 5))
+        rec_mode = np.empty(nrec, dtype=np.int64)
+        simulate_one(mats["A"], mats["B"], mats["Fz"], mats["Fu"], mats["E"], Kf, umax, sched_t,
+                     sched_u, x0, s_lim, t_max, max_seg, energy, out, rec_t, rec_A, rec_z,
+                     rec_cu, rec_mode)
+        if out[O_NSEG] < nrec:
+            break
+        nrec = max_seg + 1
+    n = int(out[O_NSEG])
+    return out, {"t": rec_t[: n + 1].copy(), "A": rec_A[:n].copy(), "z": rec_z[:n].copy(),
+                 "cu": rec_cu[:n].copy(), "mode": rec_mode[:n].copy()}
+
+
+def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out):
+    """Feedback landings in parallel; row ``i`` uses ``mats_list[ridx[i]]``.
+
+    ``Kf`` (n, 3, 5), ``umax`` (n,), ``x0`` (n, 4), ``s_lim`` (n,); fills ``out`` (n, N_OUT).
+    """
+    A3s = np.stack([m["A"] for m in mats_list])
+    B3s = np.stack([m["B"] for m in mats_list])
+    Fzs = np.stack([m["Fz"] for m in mats_list])
+    Fus = np.array([m["Fu"] for m in mats_list])
+    Ews = np.stack([m["E"] for m in mats_list])
+    simulate_batch(A3s, B3s, Fzs, Fus, Ews, np.asarray(ridx, dtype=np.int64), Kf, umax, x0,
+                   s_lim, float(t_max), int(max_seg), bool(energy), out)

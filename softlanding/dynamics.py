@@ -18,6 +18,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import check_positive
+from .ground import LINEAR_GROUND, Ground
 
 STATE_NAMES: tuple[str, ...] = ("x_b", "v_b", "x_f", "v_f")
 """Names of the four state components, in order."""
@@ -56,9 +57,9 @@ def robot_rhs(x, u, f_g, r_m):
     )
 
 
-def yielding_ground_force(x):
-    """The one-way plastic spring while the foot moves down: ``f_g = -x_f``."""
-    return -x[XF]
+def yielding_ground_force(x, ground: Ground = LINEAR_GROUND):
+    """Upward ground force on a yielding foot, from the ground model: ``f(-x_f, v_f)``."""
+    return ground.yield_force(-x[XF], x[VF])
 
 
 def mechanical_energy(x, r_m):
@@ -66,7 +67,7 @@ def mechanical_energy(x, r_m):
 
     Gravitational energy is measured from heights 0, so differences are what
     matter; :mod:`softlanding.simulate` reports energies relative to the
-    configuration at impact (its kernel reads the mass fractions off this).
+    configuration at impact (its kernel reads this quadratic form off here).
     """
     mb, mf = r_m / (1 + r_m), 1 / (1 + r_m)
     return 0.5 * mb * x[VB] ** 2 + 0.5 * mf * x[VF] ** 2 + mb * x[XB] + mf * x[XF]
@@ -81,18 +82,18 @@ def _symbols():
     return x, u, fg, r
 
 
-@lru_cache(maxsize=1)
-def stance_functions() -> tuple[ca.Function, ca.Function]:
+@lru_cache(maxsize=16)
+def stance_functions(ground: Ground = LINEAR_GROUND) -> tuple[ca.Function, ca.Function]:
     """The paper's control-affine yielding-stance dynamics ``x' = f(x) + g(x) u``.
 
     Returns
     -------
     f, g : casadi.Function
         ``f(x, r_m)`` (4x1) and ``g(x, r_m)`` (4x1), derived from
-        :func:`robot_rhs` with the yielding ground force ``-x_f``.
+        :func:`robot_rhs` with the ground model's yielding force.
     """
     x, u, _, r = _symbols()
-    xdot = robot_rhs(x, u, yielding_ground_force(x), r)
+    xdot = robot_rhs(x, u, yielding_ground_force(x, ground), r)
     g = ca.jacobian(xdot, u)
     f = ca.substitute(xdot, u, 0)
     return (
@@ -101,48 +102,65 @@ def stance_functions() -> tuple[ca.Function, ca.Function]:
     )
 
 
-def stance_dynamics(x, u, r_m):
+def stance_dynamics(x, u, r_m, ground: Ground = LINEAR_GROUND):
     """``f(x) + g(x) u`` for symbolic or numeric arguments (used by the OCP)."""
-    return robot_rhs(x, u, yielding_ground_force(x), r_m)
+    return robot_rhs(x, u, yielding_ground_force(x, ground), r_m)
 
 
-@lru_cache(maxsize=1)
-def _affine_parts() -> ca.Function:
-    """Jacobians of :func:`robot_rhs` (it is affine in x, u and f_g)."""
+@lru_cache(maxsize=16)
+def _affine_parts(ground: Ground) -> ca.Function:
+    """Jacobians of :func:`robot_rhs` (affine in x, u and f_g), of the ground law, and the
+    energy's quadratic form (all exact: every one of them is at most quadratic)."""
     x, u, fg, r = _symbols()
     rhs = robot_rhs(x, u, fg, r)
     c = ca.substitute(rhs, ca.vertcat(x, u, fg), ca.DM.zeros(6))
+    force = yielding_ground_force(x, ground)
     E = mechanical_energy(x, r)
+    zero = ca.DM.zeros(4)
+    depth = ca.SX.sym("d")
     return ca.Function(
         "affine_parts",
         [r],
         [ca.jacobian(rhs, x), ca.jacobian(rhs, u), ca.jacobian(rhs, fg), c,
-         ca.jacobian(yielding_ground_force(x), x),
-         ca.substitute(ca.gradient(E, x), x, ca.DM.zeros(4))],
+         ca.substitute(ca.jacobian(force, x), x, zero), ca.substitute(force, x, zero),
+         ca.hessian(E, x)[0], ca.substitute(ca.gradient(E, x), x, zero),
+         ca.substitute(ca.jacobian(ground.yield_force(depth, 0.0), depth), depth, 0.0)],
     )
 
 
 @lru_cache(maxsize=64)
-def mode_matrices(r_m: float) -> dict[str, np.ndarray]:
+def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.ndarray]:
     """Numeric affine matrices of the three ground modes, read off :func:`robot_rhs`.
 
     Uses the augmented state ``z = [x_b, v_b, x_f, v_f, 1]`` so each mode is
     ``z' = A z + B u`` with ``A`` 5x5 (last row zero) and ``B`` of length 5.
 
-    * ``yielding``: ``f_g = -x_f``;
+    * ``yielding``: ``f_g`` = the ground model's yielding force (affine in x);
     * ``flight``:   ``f_g = 0``;
     * ``static``:   ``f_g`` is the support force that keeps the foot still,
       ``F_req(z, u) = Fz . z + Fu u``; the foot rows are exactly zero.
+
+    Parameters
+    ----------
+    r_m : float
+        Mass ratio (> 0).
+    ground : Ground
+        Must be affine (``ground.is_affine``).
 
     Returns
     -------
     dict
         ``A`` (3, 5, 5) and ``B`` (3, 5) indexed by mode (0 yielding, 1 static,
-        2 flight), ``Fz`` (5,), ``Fu`` (float), and the energy weights ``E``
-        (masses of body and foot, as fractions of the total).
+        2 flight), ``Fz`` (5,), ``Fu`` (float); the mechanical energy as the
+        quadratic form ``E(z) = z . EQ z / 2 + Ec . z`` (``EQ`` (5, 5), ``Ec`` (5,));
+        and ``Wg``, the ground work ``Wg d^2`` done by a foot that dug to depth
+        ``d`` (``Wg = f'(d) / 2`` for the affine ground law ``f``).
     """
     r_m = check_positive("r_m", r_m)
-    Ax, Bu, Bg, c, Cg, dE = (np.array(m, dtype=float) for m in _affine_parts()(r_m))
+    if not ground.is_affine:
+        raise ValueError(f"the {ground.name} ground is not affine: no mode matrices")
+    parts = [np.array(m, dtype=float) for m in _affine_parts(ground)(r_m)]
+    Ax, Bu, Bg, c, Cg, cg, Hq, dE, kg = parts
     Bu, Bg, c, Cg, dE = Bu.ravel(), Bg.ravel(), c.ravel(), Cg.ravel(), dE.ravel()
 
     def aug(A4, c4):
@@ -153,8 +171,8 @@ def mode_matrices(r_m: float) -> dict[str, np.ndarray]:
 
     A = np.zeros((3, 5, 5))
     B = np.zeros((3, 5))
-    # yielding: f_g = Cg . x
-    A[0] = aug(Ax + np.outer(Bg, Cg), c)
+    # yielding: f_g = Cg . x + cg
+    A[0] = aug(Ax + np.outer(Bg, Cg), c + Bg * cg.item())
     B[0, :4] = Bu
     # static: choose f_g so that the foot acceleration vanishes
     Fz = np.zeros(5)
@@ -169,5 +187,10 @@ def mode_matrices(r_m: float) -> dict[str, np.ndarray]:
     # flight: no ground force
     A[2] = aug(Ax, c)
     B[2, :4] = Bu
-    # gravitational weights of body and foot = their mass fractions (dE/dx_b, dE/dx_f)
-    return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "E": np.array([dE[XB], dE[XF]])}
+    EQ = np.zeros((5, 5))
+    EQ[:4, :4] = Hq
+    Ec = np.zeros(5)
+    Ec[:4] = dE
+    return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "EQ": EQ, "Ec": Ec, "Wg": 0.5 * kg.item(),
+            # gravitational weights of body and foot (dE/dx_b, dE/dx_f): the mass fractions
+            "E": np.array([dE[XB], dE[XF]])}

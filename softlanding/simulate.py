@@ -358,24 +358,8 @@ def simulate(
     z0 = initial_state(p) if x0 is None else np.asarray(x0, float)
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
-    nrec = 32  # segment records; grown and re-run in the rare long case
-    while True:
-        out = np.zeros(K.N_OUT)
-        rec_t = np.full(nrec + 1, np.nan)
-        rec_A = np.empty((nrec, 5, 5))
-        rec_z = np.empty((nrec, 5))
-        rec_cu = np.empty((nrec, 5))
-        rec_mode = np.empty(nrec, dtype=np.int64)
-        K.simulate_one(mats["A"], mats["B"], mats["Fz"], mats["Fu"], mats["E"], Kf, umax, st,
-                       su, z0, p.s, float(t_max), int(max_segments), bool(energy), out,
-                       rec_t, rec_A, rec_z, rec_cu, rec_mode)
-        if out[K.O_NSEG] < nrec:
-            break
-        nrec = max_segments + 1
-    nseg = int(out[K.O_NSEG])
-    segments = {"t": rec_t[: nseg + 1].copy(), "A": rec_A[:nseg].copy(),
-                "z": rec_z[:nseg].copy(), "cu": rec_cu[:nseg].copy(),
-                "mode": rec_mode[:nseg].copy()}
+    out, segments = K.run_landing(mats, Kf, umax, st, su, z0, p.s, float(t_max),
+                                  int(max_segments), bool(energy))
     return _result_from_row(out, p, policy, segments)
 
 
@@ -494,11 +478,6 @@ def simulate_batch(
     n = kp.size
     uniq, ridx = np.unique(rm, return_inverse=True)
     mats = [mode_matrices(float(r)) for r in uniq]
-    A3s = np.stack([m["A"] for m in mats])
-    B3s = np.stack([m["B"] for m in mats])
-    Fzs = np.stack([m["Fz"] for m in mats])
-    Fus = np.array([m["Fu"] for m in mats])
-    Ews = np.stack([m["E"] for m in mats])
     l0 = 0.5 * ss
     Kf = np.empty((n, 3, 5))
     Kf[:, :, 0], Kf[:, :, 1] = -kp[:, None], -kd[:, None]
@@ -515,9 +494,8 @@ def simulate_batch(
         bar = tqdm(total=n, unit="landing", desc="simulating")
     for a in range(0, n, chunk_size):
         b = min(n, a + chunk_size)
-        K.simulate_batch(A3s, B3s, Fzs, Fus, Ews, ridx[a:b].astype(np.int64), Kf[a:b], um[a:b],
-                         x0[a:b], ss[a:b], float(t_max), int(max_segments), bool(energy),
-                         out[a:b])
+        K.run_batch(mats, ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b], t_max, max_segments,
+                    energy, out[a:b])
         if bar is not None:
             bar.update(b - a)
     if bar is not None:
