@@ -13,17 +13,26 @@ from typing import Any
 import numpy as np
 
 from ._progress import progress as show_progress
+from .ground import LINEAR_GROUND, Ground, LinearGround
 from .impedance import optimize_impedance
 from .landing import sweep_landing
+from .model import PAPER_ROBOT, Impact, Robot
 
 
 def rigid_depth(v0: float) -> float:
-    """Depth of a rigid leg, ``1 + sqrt(1 + v0^2)`` (one mass on the one-way spring)."""
+    """Depth of a rigid leg, ``1 + sqrt(1 + v0^2)`` (one mass on the paper's spring).
+
+    Parameters
+    ----------
+    v0 : float
+        Impact velocity.
+    """
     return 1.0 + math.sqrt(1.0 + v0 * v0)
 
 
-def compare_controllers(v0: Sequence[float], r_m: float = 5.0, s: float = 20.0,
-                        u_max: float = 8.2, *, grid: int = 101, progress: bool = False,
+def compare_controllers(v0: Sequence[float], robot: Robot = PAPER_ROBOT,
+                        ground: Ground = LINEAR_GROUND, *, grid: int = 101,
+                        saturate_impedance: bool = False, progress: bool | None = False,
                         impedance_optimum: Callable[[float], Any] | None = None) -> list[dict]:
     """Depth of the three controllers at each impact velocity.
 
@@ -32,37 +41,53 @@ def compare_controllers(v0: Sequence[float], r_m: float = 5.0, s: float = 20.0,
     v0 : sequence of float
         Impact velocities, solved in the order given (bang-bang by continuation:
         start from the easy end, near 0).
-    r_m, s : float
-        Mass ratio and stroke.
-    u_max : float
-        Force bound of the bang-bang controller (the impedance is unsaturated,
-        as in the paper).
+    robot : Robot
+        The robot; its force limit bounds the bang-bang force.
+    ground : Ground
+        Ground model (the rigid column is the paper's spring's formula, so it is
+        only given for the linear ground).
     grid : int
         Starting grid of the impedance optimisation.
-    progress : bool
+    saturate_impedance : bool
+        Also limit the impedance's force to ``u_max``. The paper does not (it takes
+        ``u_max`` from the optimal impedance's peak force), and neither does the default.
+    progress : bool, optional
         Progress bars.
     impedance_optimum : callable, optional
-        ``v0 -> optimum`` (with ``depth, kp, kd, u_peak``) to reuse optima already
+        ``v0 -> optimum`` (with ``depth, k_p, k_d, u_peak``) to reuse optima already
         computed; default :func:`~softlanding.impedance.optimize_impedance`.
 
     Returns
     -------
     list of dict
-        Per ``v0``: ``rigid``, ``impedance`` (depth-optimal gains ``impedance_kp``,
-        ``impedance_kd``, peak force ``impedance_u_peak``), ``bang_bang`` (refined
+        Per ``v0``: ``rigid``, ``impedance`` (depth-optimal gains ``impedance_k_p``,
+        ``impedance_k_d``, peak force ``impedance_u_peak``), ``bang_bang`` (refined
         depth, ``bang_bang_switch``, ``bang_bang_T``), all depths in ``x_s``.
     """
-    v = [float(x) for x in v0]
-    bang = sweep_landing(v, r_m, s, u_max, progress=progress)
-    opt = impedance_optimum or (lambda x: optimize_impedance(x, r_m, s, grid=grid))
-    imp = [opt(x) for x in show_progress(v, progress, "optimal impedance", "landing problem")]
-    return [{"v0": x, "rigid": rigid_depth(x), "impedance": o.depth, "impedance_kp": o.kp,
-             "impedance_kd": o.kd, "impedance_u_peak": o.u_peak, "bang_bang": b.depth,
+    impacts = [Impact.of(x) for x in v0]
+    bang = sweep_landing([i.v0 for i in impacts], robot, ground, progress=progress)
+    imp_robot = robot if saturate_impedance else robot.without_force_limit()
+    opt = impedance_optimum or (lambda x: optimize_impedance(x, imp_robot, ground, grid=grid))
+    imp = [opt(i.v0) for i in show_progress(impacts, progress, "optimal impedance",
+                                            "landing problem")]
+    linear = isinstance(ground, LinearGround)
+    return [{"v0": i.v0, "rigid": rigid_depth(i.v0) if linear else math.nan,
+             "impedance": o.depth, "impedance_k_p": o.k_p, "impedance_k_d": o.k_d,
+             "impedance_u_peak": o.u_peak, "bang_bang": b.depth,
              "bang_bang_switch": b.switch_times[0] if b.switch_times else math.nan,
              "bang_bang_T": b.T}
-            for x, o, b in zip(v, imp, bang, strict=True)]
+            for i, o, b in zip(impacts, imp, bang, strict=True)]
 
 
 def comparison_arrays(rows: list[dict]) -> dict[str, np.ndarray]:
-    """Columns of :func:`compare_controllers` rows as arrays."""
+    """Columns of :func:`compare_controllers` rows as arrays.
+
+    Parameters
+    ----------
+    rows : list of dict
+        From :func:`compare_controllers`.
+    """
     return {k: np.array([r[k] for r in rows]) for k in rows[0]}
+
+
+__all__ = ["compare_controllers", "comparison_arrays", "rigid_depth"]

@@ -6,16 +6,14 @@ All functions return a :class:`matplotlib.figure.Figure` and never call
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
-import matplotlib
+import matplotlib.patches
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg", force=False)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .simulate import MODE_NAMES, LandingResult  # noqa: E402
+from .model import PAPER_ROBOT, Robot
+from .simulate import LandingResult
 
 MODE_COLOURS = {"yielding": "#f4cccc", "static": "#d9ead3", "flight": "#cfe2f3"}
 
@@ -23,11 +21,11 @@ MODE_COLOURS = {"yielding": "#f4cccc", "static": "#d9ead3", "flight": "#cfe2f3"}
 def _shade_modes(ax, traj) -> None:
     """Shade the background by ground mode."""
     m = traj.mode
-    edges = np.flatnonzero(np.diff(m)) + 1
+    edges = np.flatnonzero(m[1:] != m[:-1]) + 1
     starts = np.r_[0, edges]
     ends = np.r_[edges, len(m) - 1]
     for a, b in zip(starts, ends, strict=True):
-        ax.axvspan(traj.t[a], traj.t[b], color=MODE_COLOURS[MODE_NAMES[m[a]]], lw=0, zorder=0)
+        ax.axvspan(traj.t[a], traj.t[b], color=MODE_COLOURS[m[a]], lw=0, zorder=0)
 
 
 def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figure:
@@ -48,14 +46,15 @@ def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figu
     ax1.axhline(0.0, color="0.4", lw=0.6)
     ax1.set_ylabel(r"height $x$ [$x_s = m_t g / k_g$]")
     ax1.legend(loc="best", fontsize=8)
-    ax2.plot(traj.t, traj.u, color="C2")
+    ax2.plot(traj.t, traj.u[:, 0], color="C2")
     ax2.set_ylabel(r"force $u$ [$m_t g$]")
     ax2.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
     handles = [matplotlib.patches.Patch(color=c, label=n) for n, c in MODE_COLOURS.items()]
     ax2.legend(handles=handles, loc="best", fontsize=8, title="ground mode", title_fontsize=8)
-    p = result.params
-    ax1.set_title(title or (f"{result.policy.describe()}; $v_0$={p.v0:g}, $r_m$={p.r_m:g}, "
-                            f"$s$={p.s:g}: depth {result.depth:.4f}, {result.steps} step(s)"),
+    r = result.robot
+    ax1.set_title(title or (f"{result.controller.describe()}; $v_0$={result.impact.v0:g}, "
+                            f"$r_m$={r.r_m:g}, $s$={r.s:g}: depth {result.depth:.4f}, "
+                            f"{result.steps} step(s)"),
                   fontsize=9)
     fig.tight_layout()
     return fig
@@ -75,7 +74,7 @@ def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Fi
     for r in results:
         tr = r.trajectory(t_end=t_end)
         ax.plot(tr.t, tr.x[:, 2],
-                label=f"{r.policy.describe()}: {r.steps} step(s), depth {r.depth:.3f}")
+                label=f"{r.controller.describe()}: {r.steps} step(s), depth {r.depth:.3f}")
     ax.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")
     ax.set_ylabel(r"foot height $x_f$ [$x_s = m_t g / k_g$]")
     ax.legend(fontsize=8)
@@ -110,8 +109,8 @@ def plot_bang_bang(landing) -> plt.Figure:
     if landing.refined is not None:
         t, x, u = landing.refined.sample(800)
     else:
-        t, x, u = landing.transcribed.sample(800)
-        u = u[:, 0]
+        t, x, uu = landing.transcribed.sample(800)
+        u = uu[:, 0]
     ncol = 1 if landing.replay is None else 2
     fig, axes = plt.subplots(3, ncol, sharex="col", figsize=(6.5 + 4.5 * (ncol - 1), 7.0),
                              squeeze=False, gridspec_kw={"width_ratios": [1.3, 1][:ncol]})
@@ -119,7 +118,7 @@ def plot_bang_bang(landing) -> plt.Figure:
     if ncol == 2:
         t_rest = landing.schedule().times[-1]
         tr = landing.replay.trajectory(t_end=1.1 * t_rest)
-        cols.append((tr.t, tr.x, tr.u, None))
+        cols.append((tr.t, tr.x, tr.u[:, 0], None))
     for j, (tt, xx, uu, where) in enumerate(cols):
         a1, a2, a3 = axes[:, j]
         a1.plot(tt, xx[:, 0], label=r"body $x_b$")
@@ -147,10 +146,11 @@ def plot_bang_bang(landing) -> plt.Figure:
     if ncol == 2:
         axes[0, 1].set_title(f"whole landing (exact simulator): body stops at {t_rest:.3f}",
                              fontsize=9)
-    p = landing.params
+    p = landing.robot
     sw = ", ".join(f"{ts:.4f}" for ts in landing.switch_times)
-    fig.suptitle(f"bang-bang landing, $v_0$={p.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
-                 f"$u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, switch at {sw}, "
+    fig.suptitle(f"bang-bang landing, $v_0$={landing.impact.v0:g}, $r_m$={p.r_m:g}, "
+                 f"$s$={p.s:g}, $u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, "
+                 f"switch at {sw}, "
                  f"foot stops at {landing.T:.4f}", fontsize=10)
     fig.tight_layout()
     return fig
@@ -168,8 +168,8 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
                        vmin=1.0, rasterized=True)
     fig.colorbar(im, ax=ax, label=r"$x_f / x_f^*$ (depth / minimum depth)")
     if optimum is not None:
-        ax.plot(optimum.kp, optimum.kd, "*", color="w", mec="k", ms=16,
-                label=f"optimum ($k_p$={optimum.kp:.4f}, $k_d$={optimum.kd:.4f})")
+        ax.plot(optimum.k_p, optimum.k_d, "*", color="w", mec="k", ms=16,
+                label=f"optimum ($k_p$={optimum.k_p:.4f}, $k_d$={optimum.k_d:.4f})")
         ax.legend(loc="upper right", fontsize=8)
     ax.set_xlabel(r"stiffness $k_p = K_p / k_g$")
     ax.set_ylabel(r"damping $k_d = K_d / \sqrt{m_t k_g}$")
@@ -187,8 +187,8 @@ def plot_optimal_curves(curves) -> plt.Figure:
             speed = np.abs(c.v0.values)
             lw = 2.5 if (r == 5 and s == 20) else 1.2
             lab = f"$r_m$={r:g}, $s$={s:g}"
-            axes[0].plot(speed, c.kp, lw=lw, label=lab)
-            axes[1].plot(speed, c.kd, lw=lw, label=lab)
+            axes[0].plot(speed, c.k_p, lw=lw, label=lab)
+            axes[1].plot(speed, c.k_d, lw=lw, label=lab)
             axes[2].plot(speed, c.depth, lw=lw, label=lab)
     for ax, lab in zip(axes, (r"optimal stiffness $k_p^*$", r"optimal damping $k_d^*$",
                               r"minimum depth $-x_f^*$ [$x_s$]"), strict=True):
@@ -215,8 +215,9 @@ def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt
     sub = fig.subfigures(1, 2, width_ratios=[1, 1.5])
     ax = sub[0].subplots()
     plot_stepped_intrusions(results, ax=ax)
-    p = results[0].params
-    ax.set_title(f"(a) $v_0$={p.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}", fontsize=10)
+    p = results[0].robot
+    ax.set_title(f"(a) $v_0$={results[0].impact.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}",
+                 fontsize=10)
     from matplotlib.colors import BoundaryNorm, ListedColormap
 
     n = len(maps)
@@ -272,11 +273,11 @@ def plot_gain_families(curves) -> plt.Figure:
         for js, s in enumerate(curves.s.values):
             c = curves.sel(r_m=r, s=s)
             speed = np.abs(c.v0.values)
-            thick = r == 5 and s == 20
+            thick = r == PAPER_ROBOT.r_m and s == PAPER_ROBOT.s
             kw = dict(color=f"C{ir}", ls=styles[js % len(styles)], lw=3.0 if thick else 1.3,
                       label=f"$r_m$={r:g}, $s$={s:g}")
-            axes[0].plot(speed, c.kp, **kw)
-            axes[1].plot(speed, c.kd, **kw)
+            axes[0].plot(speed, c.k_p, **kw)
+            axes[1].plot(speed, c.k_d, **kw)
     axes[0].set_ylabel(r"optimal stiffness $k_p^*$")
     axes[1].set_ylabel(r"optimal damping $k_d^*$")
     for ax in axes:
@@ -290,12 +291,18 @@ def plot_gain_families(curves) -> plt.Figure:
     return fig
 
 
-def plot_controller_comparison(cmp: dict[str, np.ndarray], u_max: float,
-                               r_m: float = 5.0, s: float = 20.0) -> plt.Figure:
+def plot_controller_comparison(cmp: dict[str, np.ndarray],
+                               robot: Robot = PAPER_ROBOT) -> plt.Figure:
     """The paper's Fig. 6: depth against v0 for rigid, optimal impedance and bang-bang.
 
-    ``cmp`` holds the columns of :func:`softlanding.comparison.compare_controllers`.
+    Parameters
+    ----------
+    cmp : dict
+        The columns of :func:`softlanding.comparison.compare_controllers`.
+    robot : Robot
+        The robot compared (its force limit bounds the bang-bang force).
     """
+    r_m, s, u_max = robot.r_m, robot.s, robot.u_max
     bb = f"bang-bang force control ($u_{{max}}$={u_max:g})"
     fig = plot_depth_vs_velocity(
         cmp["v0"], {"rigid leg": cmp["rigid"], "optimal impedance": cmp["impedance"],
@@ -315,7 +322,15 @@ def plot_experiment_curves(ds, si=None) -> plt.Figure:
     ``ds`` has dims ``(k_p, v0, k_d)`` (from :func:`softlanding.sweeps.impedance_dataset`).
     Dotted where the landing leaves the stroke. With ``si`` (a
     :class:`~softlanding.scaling.PhysicalParams`) the axes are in SI units.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        Landings with dims ``(k_p, v0, k_d)``.
+    si : PhysicalParams, optional
+        A physical robot: axes in mm, N s/m and m/s.
     """
+    units = None if si is None else si.units
     kps = ds.k_p.values
     fig, axes = plt.subplots(1, len(kps), figsize=(4.4 * len(kps), 4.0), sharey=True)
     axes = np.atleast_1d(axes)
@@ -329,9 +344,9 @@ def plot_experiment_curves(ds, si=None) -> plt.Figure:
                 x, y = kd, depth
                 lab = f"$v_0$ = {v:g}"
             else:
-                x = kd * math.sqrt(si.m_t * si.k_g)
-                y = depth * si.length_scale * 1e3
-                lab = f"$V_0$ = {abs(v) * si.velocity_scale:.2f} m/s"
+                x = kd * units.damping
+                y = depth * units.length * 1e3
+                lab = f"$V_0$ = {abs(v) * units.velocity:.2f} m/s"
             ax.plot(x, np.where(ok, y, np.nan), color=f"C{iv}", label=lab)
             ax.plot(x, np.where(ok, np.nan, y), color=f"C{iv}", ls=":", lw=1)
             if ok.any():

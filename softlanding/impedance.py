@@ -19,59 +19,66 @@ feasible.
 
 from __future__ import annotations
 
-import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from .errors import ParameterError, check_impact_velocity, check_positive
-from .scaling import DimensionlessParams
-from .simulate import Impedance, simulate, simulate_batch
+from ._jsonutil import json_safe
+from .controllers import Impedance
+from .errors import ParameterError, check_count
+from .ground import LINEAR_GROUND, Ground
+from .model import PAPER_IMPEDANCE_ROBOT, Impact, Robot
+from .simulate import BatchResult, simulate, simulate_batch
 
 OBJECTIVES = ("depth", "cot", "cot-lossless")
 GAIN_RANGE = (0.0, 1.0)
+MAX_GRID = 2001
+"""Largest starting grid per axis (4 million landings)."""
 
 
-def _objective_values(b, objective: str) -> np.ndarray:
+def _objective_values(b: BatchResult, objective: str) -> np.ndarray:
     if objective == "depth":
         v = b.depth
     elif objective == "cot":
         v = b.cot
-    elif objective == "cot-lossless":
-        v = b.cot_lossless
     else:
-        raise ParameterError("objective", f"must be one of {OBJECTIVES}, got {objective!r}")
-    return np.where(strictly_feasible(b) & np.isfinite(v), v, np.inf)
-
-
-def stroke_margin(b) -> np.ndarray:
-    """Distance to the nearer stroke limit (negative when a limit is crossed)."""
-    s = b.inputs["s"]
-    return np.minimum(b.stroke_min, s - b.stroke_max)
-
-
-def strictly_feasible(b) -> np.ndarray:
-    """Rest proven and the stroke limits kept exactly (the simulator's ``feasible``
-    allows 1e-9 s of rounding at a limit; an optimiser would exploit that)."""
-    return (b.status == 0) & (stroke_margin(b) >= 0.0)
+        v = b.cot_lossless
+    return np.where(b.strictly_feasible & np.isfinite(v), v, np.inf)
 
 
 @dataclass
 class ImpedanceOptimum:
     """Optimal impedance gains and the landing they give.
 
-    ``on_stroke_boundary`` is true when the stroke margin at the optimum is
-    below 1e-6 (the paper finds all depth optima there); ``active_constraint``
-    names the limit. ``grid_best`` is the best point of the starting grid.
+    Parameters
+    ----------
+    objective : str
+        ``"depth"``, ``"cot"`` or ``"cot-lossless"``.
+    robot, impact, ground
+        The problem solved.
+    k_p, k_d : float
+        Optimal gains.
+    value : float
+        Objective at the optimum.
+    depth, steps, u_peak, stroke_min, stroke_max, cot, cot_lossless
+        The optimal landing's figures (see :class:`~softlanding.simulate.LandingResult`).
+    on_stroke_boundary : bool
+        The stroke margin at the optimum is below 1e-6 (the paper finds all depth
+        optima there).
+    active_constraint : str or None
+        Which stroke limit, when on the boundary.
+    grid_best : dict
+        ``k_p, k_d, value`` of the best point of the starting grid.
+    evaluations : int
+        Landings simulated.
     """
 
     objective: str
-    v0: float
-    r_m: float
-    s: float
-    kp: float
-    kd: float
+    robot: Robot
+    impact: Impact
+    k_p: float
+    k_d: float
     value: float
     depth: float
     steps: int
@@ -82,113 +89,153 @@ class ImpedanceOptimum:
     cot_lossless: float
     on_stroke_boundary: bool
     active_constraint: str | None
-    grid_best: dict
+    grid_best: dict[str, float]
     evaluations: int
+    ground: Ground = field(default=LINEAR_GROUND)
+
+    @property
+    def v0(self) -> float:
+        """The impact velocity."""
+        return self.impact.v0
+
+    @property
+    def controller(self) -> Impedance:
+        """The optimal impedance."""
+        return Impedance(self.k_p, self.k_d)
 
     def to_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        return {k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-                for k, v in d.items()}
+        """JSON-able dict (non-finite numbers become None)."""
+        d = {k: getattr(self, k) for k in (
+            "objective", "v0", "k_p", "k_d", "value", "depth", "steps", "u_peak", "stroke_min",
+            "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "active_constraint",
+            "grid_best", "evaluations")}
+        d.update(robot=self.robot.to_dict(), ground=self.ground.to_dict())
+        return json_safe(d)
 
 
-def _check(v0, r_m, s, objective):
-    check_impact_velocity("v0", v0)
-    check_positive("r_m", r_m)
-    check_positive("s", s)
+def _check(impact: Impact, objective: str, grid: int) -> None:
     if objective not in OBJECTIVES:
-        raise ParameterError("objective", f"must be one of {OBJECTIVES}, got {objective!r}")
-    if objective != "depth" and v0 == 0.0:
+        raise ParameterError("objective", f"must be one of {', '.join(OBJECTIVES)}, "
+                                          f"got {objective!r}")
+    if objective != "depth" and impact.v0 == 0.0:
         raise ParameterError("v0", "CoT is undefined at v0 = 0 (no impact energy)")
+    check_count("grid", grid, 2, MAX_GRID)
 
 
-def optimize_impedance(v0: float, r_m: float = 5.0, s: float = 20.0, *,
-                       objective: str = "depth", grid: int = 101,
-                       kp_range: tuple[float, float] = GAIN_RANGE,
+def _zoom(batch, best: tuple[float, float, float], h: tuple[float, float], kp_range,
+          kd_range, tol: float, n: int = 21) -> tuple[tuple[float, float, float], int]:
+    """Zooming feasible grid around the incumbent until the spacing is below ``tol``."""
+    evals = 0
+    while max(h) > tol:
+        cp = np.clip(np.linspace(best[0] - h[0], best[0] + h[0], n), *kp_range)
+        cd = np.clip(np.linspace(best[1] - h[1], best[1] + h[1], n), *kd_range)
+        J = batch(cp[:, None], cd[None, :])
+        evals += J.size
+        a, c = np.unravel_index(np.argmin(J), J.shape)
+        if J[a, c] < best[2]:
+            best = (float(cp[a]), float(cd[c]), float(J[a, c]))
+        h = (2 * h[0] / (n - 1), 2 * h[1] / (n - 1))
+    return best, evals
+
+
+def _onto_boundary(batch, best: tuple[float, float, float],
+                   tol: float) -> tuple[tuple[float, float, float], int]:
+    """A boundary optimum: bisect ``k_p`` onto the stroke limit (feasible side) to 1e-12."""
+    kp_s, kd_s, val = best
+    probe = batch(np.array([kp_s - 2 * tol, kp_s]), kd_s)
+    evals = 2
+    if not (np.isinf(probe[0]) and np.isfinite(probe[1])):
+        return best, evals
+    lo, hi = kp_s - 2 * tol, kp_s
+    while hi - lo > 1e-12:
+        mids = np.linspace(lo, hi, 34)[1:-1]
+        feas = np.isfinite(batch(mids, kd_s))
+        evals += mids.size
+        if feas.any():
+            k = int(np.argmax(feas))
+            hi = mids[k]
+            lo = mids[k - 1] if k > 0 else lo
+        else:
+            lo = mids[-1]
+    v_hi = float(batch(np.array([hi]), kd_s)[0])
+    return ((hi, kd_s, v_hi) if v_hi <= val else best), evals + 1
+
+
+def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_ROBOT,
+                       ground: Ground = LINEAR_GROUND, *, objective: str = "depth",
+                       grid: int = 101, kp_range: tuple[float, float] = GAIN_RANGE,
                        kd_range: tuple[float, float] = GAIN_RANGE,
-                       u_max: float | None = None, tol: float = 1e-8) -> ImpedanceOptimum:
+                       tol: float = 1e-8) -> ImpedanceOptimum:
     """Minimise depth (or CoT) over the gains, subject to the stroke limits.
 
     Parameters
     ----------
-    v0, r_m, s : float
-        Impact velocity and model parameters.
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot (its force limit saturates the impedance; the paper's study has none).
+    ground : Ground
+        Ground model.
     objective : {"depth", "cot", "cot-lossless"}
         ``cot`` counts ground and actuator losses, ``cot-lossless`` the ground only.
     grid : int
         Points per axis of the starting grid (the paper: 101, steps of 0.01).
     kp_range, kd_range : (float, float)
         Gain box searched.
-    u_max : float, optional
-        Saturate the force.
     tol : float
         Final grid spacing of the refinement.
+
+    Returns
+    -------
+    ImpedanceOptimum
 
     Raises
     ------
     ParameterError
         Bad parameters, or no feasible gains in the box.
     """
-    _check(v0, r_m, s, objective)
+    impact = Impact.of(impact)
+    _check(impact, objective, grid)
     energy = objective != "depth"
+
+    def batch(kp, kd) -> np.ndarray:
+        b = simulate_batch(robot, impact.v0, kp, kd, ground, energy=energy)
+        return _objective_values(b, objective)
+
     kp = np.linspace(*kp_range, grid)
     kd = np.linspace(*kd_range, grid)
-    b = simulate_batch(kp[:, None], kd[None, :], v0, r_m, s, u_max, energy=energy)
-    J = _objective_values(b, objective)
+    J = batch(kp[:, None], kd[None, :])
     evals = J.size
     if not np.isfinite(J).any():
         raise ParameterError("k_p", "no feasible gains in the box: every landing leaves the "
-                                    "stroke limits")
+                                    "stroke limits or never comes to rest")
     i, j = np.unravel_index(np.argmin(J), J.shape)
     best = (float(kp[i]), float(kd[j]), float(J[i, j]))
-    grid_best = {"kp": best[0], "kd": best[1], "value": best[2]}
-    h = (kp[1] - kp[0], kd[1] - kd[0])
-    n = 21
-    while max(h) > tol:
-        cp = np.clip(np.linspace(best[0] - h[0], best[0] + h[0], n), *kp_range)
-        cd = np.clip(np.linspace(best[1] - h[1], best[1] + h[1], n), *kd_range)
-        b = simulate_batch(cp[:, None], cd[None, :], v0, r_m, s, u_max, energy=energy)
-        Jz = _objective_values(b, objective)
-        evals += Jz.size
-        a, c = np.unravel_index(np.argmin(Jz), Jz.shape)
-        if Jz[a, c] < best[2]:
-            best = (float(cp[a]), float(cd[c]), float(Jz[a, c]))
-        h = (2 * h[0] / (n - 1), 2 * h[1] / (n - 1))
+    grid_best = {"k_p": best[0], "k_d": best[1], "value": best[2]}
+    best, n1 = _zoom(batch, best, (kp[1] - kp[0], kd[1] - kd[0]), kp_range, kd_range, tol)
+    best, n2 = _onto_boundary(batch, best, tol)
+    return _optimum(objective, robot, impact, ground, best, grid_best, evals + n1 + n2)
+
+
+def _optimum(objective, robot, impact, ground, best, grid_best, evals) -> ImpedanceOptimum:
+    """Re-simulate the optimum (never report infeasible gains) and describe it."""
     kp_s, kd_s, val = best
-    # a boundary optimum: bisect k_p onto the stroke limit (feasible side)
-    probe = simulate_batch([kp_s - 2 * tol, kp_s], kd_s, v0, r_m, s, u_max, energy=energy)
-    evals += 2
-    pf = strictly_feasible(probe)
-    if not pf[0] and pf[1]:
-        lo, hi = kp_s - 2 * tol, kp_s
-        while hi - lo > 1e-12:
-            mids = np.linspace(lo, hi, 34)[1:-1]
-            pb = simulate_batch(mids, kd_s, v0, r_m, s, u_max, energy=energy)
-            evals += mids.size
-            feas = strictly_feasible(pb)
-            if feas.any():
-                k = int(np.argmax(feas))
-                hi = mids[k]
-                lo = mids[k - 1] if k > 0 else lo
-            else:
-                lo = mids[-1]
-        fin = simulate_batch([hi], kd_s, v0, r_m, s, u_max, energy=energy)
-        v_hi = float(_objective_values(fin, objective)[0])
-        if v_hi <= val:
-            kp_s, val = hi, v_hi
-    p = DimensionlessParams(r_m=r_m, s=s, v0=v0)
-    res = simulate(p, Impedance(kp_s, kd_s, u_max))
-    if not (res.rest_proven and res.stroke_min >= 0 and res.stroke_max <= s):
-        # never report infeasible gains
+    res = simulate(robot, impact, Impedance(kp_s, kd_s), ground)
+    if not (res.rest_proven and res.stroke_min >= 0 and res.stroke_max <= robot.s):
         raise RuntimeError("refined gains are infeasible on re-simulation; please report")
-    margin = min(res.stroke_min, s - res.stroke_max)
+    margin = min(res.stroke_min, robot.s - res.stroke_max)
     on_boundary = margin <= 1e-6
     active = None
     if on_boundary:
-        active = ("stroke lower limit x_b - x_f >= 0" if res.stroke_min <= s - res.stroke_max
+        active = ("stroke lower limit x_b - x_f >= 0"
+                  if res.stroke_min <= robot.s - res.stroke_max
                   else "stroke upper limit x_b - x_f <= s")
     return ImpedanceOptimum(
-        objective=objective, v0=v0, r_m=r_m, s=s, kp=kp_s, kd=kd_s, value=val,
-        depth=res.depth, steps=res.steps, u_peak=res.u_peak, stroke_min=res.stroke_min,
-        stroke_max=res.stroke_max, cot=res.energy.cot, cot_lossless=res.energy.cot_lossless,
-        on_stroke_boundary=on_boundary, active_constraint=active, grid_best=grid_best,
-        evaluations=evals)
+        objective=objective, robot=robot, impact=impact, ground=ground, k_p=kp_s, k_d=kd_s,
+        value=val, depth=res.depth, steps=res.steps, u_peak=res.u_peak,
+        stroke_min=res.stroke_min, stroke_max=res.stroke_max, cot=res.energy.cot,
+        cot_lossless=res.energy.cot_lossless, on_stroke_boundary=on_boundary,
+        active_constraint=active, grid_best=grid_best, evaluations=evals)
+
+
+__all__ = ["GAIN_RANGE", "ImpedanceOptimum", "OBJECTIVES", "optimize_impedance"]

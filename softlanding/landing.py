@@ -34,17 +34,18 @@ import numpy as np
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
 from ocp.switching import RefinedSwitching, detect_arcs, refine_switching
 
+from ._jsonutil import json_safe
 from ._progress import progress as show_progress
+from .controllers import ForceSchedule, Rigid
 from .dynamics import STATE_NAMES, stance_dynamics
-from .errors import ParameterError
-from .scaling import DimensionlessParams
-from .simulate import ForceSchedule, LandingResult, Rigid, simulate
+from .errors import InfeasibleLandingError, ParameterError, check_count
+from .ground import LINEAR_GROUND, Ground
+from .model import PAPER_ROBOT, Impact, Robot
+from .simulate import LandingResult, simulate
 
 T_MAX = 30.0
-
-
-class InfeasibleLandingError(ValueError):
-    """No landing satisfies the constraints; the message names the condition."""
+MAX_NODES = 5000
+"""Largest transcription (the NLP grows linearly; 5000 nodes take about a minute)."""
 
 
 STROKE = "stroke limits 0 <= x_b - x_f <= s"
@@ -54,23 +55,33 @@ ARREST_FORCE = "arrest force u_b <= u_max"
 DIAGNOSABLE = (ARREST_FORCE, ARREST, STROKE, DESCENDING)
 
 
-def build_landing_problem(omit: tuple[str, ...] = ()) -> OptimalControlProblem:
-    """The soft-landing OCP with parameters ``r_m, s, v0, u_max``.
+PARAMETERS = ("r_m", "s", "v0", "u_max", "l0")
+"""The landing OCP's parameters, in order."""
 
-    ``omit`` drops named conditions (used to diagnose infeasible requests).
+
+def build_landing_problem(omit: tuple[str, ...] = (),
+                          ground: Ground = LINEAR_GROUND) -> OptimalControlProblem:
+    """The soft-landing OCP with parameters ``r_m, s, v0, u_max, l0``.
+
+    Parameters
+    ----------
+    omit : tuple of str
+        Named conditions to drop (used to diagnose infeasible requests).
+    ground : Ground
+        Ground model of the yielding stance.
     """
     p = OptimalControlProblem("soft_landing")
     xb, vb, xf, vf = (p.state(n) for n in STATE_NAMES)
-    r_m, s, v0, u_max = (p.parameter(n) for n in ("r_m", "s", "v0", "u_max"))
+    r_m, s, v0, u_max, l0 = (p.parameter(n) for n in PARAMETERS)
     u = p.control("u", lower=-u_max, upper=u_max)
     x = ca.vertcat(xb, vb, xf, vf)
-    p.set_dynamics(stance_dynamics(x, u, r_m))
+    p.set_dynamics(stance_dynamics(x, u, r_m, ground))
     stroke = xb - xf
     if STROKE not in omit:
         p.path_constraint(stroke, 0, s, name=STROKE)
     if DESCENDING not in omit:
         p.path_constraint(vf, -ca.inf, 0, name=DESCENDING)
-    p.initial_constraint(xb - s / 2, 0.0, name="x_b(0) = s/2")
+    p.initial_constraint(xb - l0, 0.0, name="x_b(0) = l0")
     p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
     p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
     p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
@@ -87,24 +98,51 @@ def build_landing_problem(omit: tuple[str, ...] = ()) -> OptimalControlProblem:
 
 
 @lru_cache(maxsize=16)
-def landing_transcription(nodes: int = 100, substeps: int = 4,
-                          omit: tuple[str, ...] = ()) -> MultipleShooting:
-    """The transcribed soft-landing NLP, built once per ``(nodes, substeps)`` and reused.
+def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, ...] = (),
+                          ground: Ground = LINEAR_GROUND) -> MultipleShooting:
+    """The transcribed soft-landing NLP, built once per arguments and reused.
 
     Expanded to SX: slower to build once, faster at every re-solve of a sweep.
+
+    Parameters
+    ----------
+    nodes : int
+        Shooting intervals.
+    substeps : int
+        RK4 steps per interval.
+    omit : tuple of str
+        Conditions dropped (diagnosis of infeasible requests).
+    ground : Ground
+        Ground model.
     """
-    return MultipleShooting(build_landing_problem(omit), nodes=nodes, integrator="rk4",
+    return MultipleShooting(build_landing_problem(omit, ground), nodes=nodes, integrator="rk4",
                             substeps=substeps, expand=True)
 
 
 def arrest_force_times_stroke(x, r_m):
     """``u_b (x_b - x_f)``, where ``u_b = r_m/(1+r_m) (1 + v_b^2 / (2 (x_b - x_f)))`` is the
-    constant force that stops the body in the remaining stroke (symbolic or numeric)."""
+    constant force that stops the body in the remaining stroke (symbolic or numeric).
+
+    Parameters
+    ----------
+    x : array or casadi expression of 4
+        State at the foot's stop.
+    r_m : float or expression
+        Mass ratio.
+    """
     return r_m / (1 + r_m) * ((x[0] - x[2]) + x[1] ** 2 / 2)
 
 
 def arrest_force(r_m: float, x_T: np.ndarray) -> float:
-    """``u_b``: the constant force that stops the body in the remaining stroke."""
+    """``u_b``: the constant force that stops the body in the remaining stroke.
+
+    Parameters
+    ----------
+    r_m : float
+        Mass ratio.
+    x_T : array of 4
+        State at the foot's stop.
+    """
     return float(arrest_force_times_stroke(x_T, r_m) / (x_T[0] - x_T[2]))
 
 
@@ -114,6 +152,8 @@ class BangBangLanding:
 
     Attributes
     ----------
+    robot, impact, ground
+        The problem solved.
     depth : float
         ``-x_f(T)``, refined (exact arcs) unless refinement was off or failed.
     depth_transcribed : float
@@ -129,7 +169,9 @@ class BangBangLanding:
         The refined schedule replayed in the exact simulator.
     """
 
-    params: DimensionlessParams
+    robot: Robot
+    impact: Impact
+    ground: Ground
     depth: float
     depth_transcribed: float
     T: float
@@ -147,11 +189,12 @@ class BangBangLanding:
 
     @property
     def replay_difference(self) -> float:
+        """``|replay depth - depth|`` (NaN without a replay)."""
         return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
 
     def schedule(self) -> ForceSchedule:
         """Open-loop force: the bang arcs, then ``u_b`` until the body stops, then its weight."""
-        r_m = self.params.r_m
+        r_m = self.robot.r_m
         if self.refined is not None:
             durs = [d for d in self.refined.durations if d > 1e-14]
             vals = [v for v, d in zip(self.refined.values, self.refined.durations, strict=True)
@@ -171,11 +214,13 @@ class BangBangLanding:
         return ForceSchedule.from_arcs(durs, vals)
 
     def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict: the figures, the refined arcs and the replay."""
         d = {"depth": self.depth, "depth_transcribed": self.depth_transcribed, "T": self.T,
              "switch_times": self.switch_times, "arcs": self.arcs, "u_b": self.u_b,
              "arrest_active": self.arrest_active, "status": self.status,
              "iterations": self.iterations, "solve_time_s": self.solve_time_s,
-             "params": self.params.as_dict(), "notes": self.notes}
+             "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
+             "ground": self.ground.to_dict(), "notes": self.notes}
         if self.refined is not None:
             d["refined"] = self.refined.to_dict()
         if self.replay is not None:
@@ -183,41 +228,55 @@ class BangBangLanding:
                            "feasible": self.replay.feasible, "status": self.replay.status,
                            "stroke_min": self.replay.stroke_min,
                            "stroke_max": self.replay.stroke_max}
-        return d
+        return json_safe(d)
 
 
-def _validate(v0, r_m, s, u_max) -> DimensionlessParams:
-    p = DimensionlessParams(r_m=r_m, s=s, v0=v0, u_max=u_max)
-    if u_max is None:
+def _validate(robot: Robot) -> float:
+    """The force limit of a landing problem (raises when none can work)."""
+    if robot.u_max is None:
         raise ParameterError("u_max", "the optimal control problem needs a force limit")
-    weight = p.r_m / (1 + p.r_m)
-    if p.u_max <= weight:
+    if robot.u_max <= robot.body_mass:
         raise InfeasibleLandingError(
-            f"u_max = {u_max:g} does not exceed the body weight r_m/(1+r_m) = {weight:.4g}: "
-            "the arrest force u_b <= u_max can never hold")
-    return p
+            f"u_max = {robot.u_max:g} does not exceed the body weight r_m/(1+r_m) = "
+            f"{robot.body_mass:.4g}: the arrest force u_b <= u_max can never hold")
+    return robot.u_max
 
 
-def rigid_guess(tr: MultipleShooting, p: DimensionlessParams) -> np.ndarray:
-    """Initial guess: the rigid-leg landing up to the foot's first stop (nearly feasible)."""
-    res = simulate(p, Rigid())
+def _ocp_params(robot: Robot, impact: Impact) -> dict[str, float]:
+    return {"r_m": robot.r_m, "s": robot.s, "v0": impact.v0, "u_max": _validate(robot),
+            "l0": robot.rest_length}
+
+
+def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
+                ground: Ground = LINEAR_GROUND) -> np.ndarray:
+    """Initial guess: the rigid-leg landing up to the foot's first stop (nearly feasible).
+
+    Parameters
+    ----------
+    tr : MultipleShooting
+        The transcription the guess is for.
+    robot, impact, ground
+        The problem (the lock is simulated without force limit).
+    """
+    res = simulate(robot.without_force_limit(), impact, Rigid(), ground)
     T = res.t_first_stop if math.isfinite(res.t_first_stop) else 1.0
     traj = res.trajectory(t_end=T, n=tr.N + 1)
     t = np.linspace(0, T, tr.N + 1)
     X = np.column_stack([np.interp(t, traj.t, traj.x[:, i]) for i in range(4)])
-    U = np.clip(np.interp(t[:-1], traj.t, traj.u), -p.u_max, p.u_max)[:, None]
+    u_max = _validate(robot)
+    U = np.clip(np.interp(t[:-1], traj.t, traj.u[:, 0]), -u_max, u_max)[:, None]
     return tr.initial_guess(T=T, x=X, u=U)
 
 
-def _explain_infeasible(err: SolveError, p: DimensionlessParams,
+def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: Ground,
                         nodes: int) -> InfeasibleLandingError:
     """Name the condition(s) whose removal makes the request feasible."""
-    params = {"r_m": p.r_m, "s": p.s, "v0": p.v0, "u_max": p.u_max}
+    params = _ocp_params(robot, impact)
     culprits = []
     for name in DIAGNOSABLE:
-        tr = landing_transcription(nodes, omit=(name,))
+        tr = landing_transcription(nodes, omit=(name,), ground=ground)
         try:
-            tr.solve(params, guess=rigid_guess(tr, p))
+            tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
             culprits.append(name)
         except SolveError:
             continue
@@ -228,14 +287,75 @@ def _explain_infeasible(err: SolveError, p: DimensionlessParams,
         why = ("the conditions cannot all be met, and dropping any one of them ("
                + "; ".join(DIAGNOSABLE) + ") does not help either")
     return InfeasibleLandingError(
-        f"no landing satisfies the constraints at v0={p.v0:g}, r_m={p.r_m:g}, s={p.s:g}, "
-        f"u_max={p.u_max:g}: {why} (Ipopt: {err.status})")
+        f"no landing satisfies the constraints at v0={impact.v0:g}, r_m={robot.r_m:g}, "
+        f"s={robot.s:g}, u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
 
 
-def solve_landing(v0: float, r_m: float = 5.0, s: float = 20.0, u_max: float = 8.2, *,
-                  nodes: int = 100, refine: bool = True, extra_arcs: int = 0,
-                  warm_start: Solution | None = None, replay: bool = True) -> BangBangLanding:
+def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Ground,
+                 nodes: int, warm_start: Solution | None) -> Solution:
+    """The transcribed solve (warm-started if possible); infeasibility is explained."""
+    params = _ocp_params(robot, impact)
+    try:
+        if warm_start is not None:
+            try:
+                return tr.solve(params, warm_start=warm_start)
+            except SolveError:
+                pass
+        return tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
+    except InfeasibleError as err:
+        raise _explain_infeasible(err, robot, impact, ground, nodes) from None
+
+
+def _refined(sol: Solution, extra_arcs: int,
+             notes: list[str]) -> tuple[RefinedSwitching | None, Any]:
+    """Detect the bang-bang structure and refine it (None when not bang-bang or failed)."""
+    st = detect_arcs(sol)
+    trimmed = st.without_trailing_constrained()
+    if trimmed is not st and trimmed.bang_bang:
+        notes.append(
+            f"dropped the final {st.arcs[-1].duration:.4g}-long arc on which "
+            f"{' and '.join(st.arcs[-1].active)} is active: the foot has already stopped "
+            "and the force holds the crater's yield load, which is the body-arrest phase")
+        st = trimmed
+    if not st.bang_bang:
+        notes.append(f"structure {st.kinds} is not bang-bang; not refined")
+        return None, st
+    try:
+        return refine_switching(sol, st, extra_arcs=extra_arcs), st
+    except SolveError as err:
+        notes.append(f"switching-time refinement failed ({err.status}); "
+                     "reporting the transcribed solution")
+        return None, st
+
+
+def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                  ground: Ground = LINEAR_GROUND, *, nodes: int = 100, refine: bool = True,
+                  extra_arcs: int = 0, warm_start: Solution | None = None,
+                  replay: bool = True) -> BangBangLanding:
     """Solve the soft-landing OCP; refine the switching times; replay in the simulator.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot; its force limit ``u_max`` bounds the control (required).
+    ground : Ground
+        Ground model.
+    nodes : int
+        Shooting intervals.
+    refine : bool
+        Refine the switching times with exact arcs.
+    extra_arcs : int
+        Also try this many more bang arcs (>= 0).
+    warm_start : Solution, optional
+        A neighbouring solution (continuation).
+    replay : bool
+        Replay the schedule in the exact simulator.
+
+    Returns
+    -------
+    BangBangLanding
 
     Raises
     ------
@@ -246,78 +366,71 @@ def solve_landing(v0: float, r_m: float = 5.0, s: float = 20.0, u_max: float = 8
     ocp.SolveError
         Ipopt failed otherwise (status attached).
     """
-    p = _validate(v0, r_m, s, u_max)
-    tr = landing_transcription(nodes)
-    params = {"r_m": p.r_m, "s": p.s, "v0": p.v0, "u_max": p.u_max}
-    try:
-        if warm_start is not None:
-            try:
-                sol = tr.solve(params, warm_start=warm_start)
-            except SolveError:
-                sol = tr.solve(params, guess=rigid_guess(tr, p))
-        else:
-            sol = tr.solve(params, guess=rigid_guess(tr, p))
-    except InfeasibleError as err:
-        raise _explain_infeasible(err, p, nodes) from None
+    impact = Impact.of(impact)
+    _validate(robot)
+    nodes = check_count("nodes", nodes, 2, MAX_NODES)
+    extra_arcs = check_count("extra_arcs", extra_arcs, 0, 20)
+    tr = landing_transcription(nodes, ground=ground)
+    sol = _transcribed(tr, robot, impact, ground, nodes, warm_start)
     notes: list[str] = []
-    depth_tr = -sol.x[-1, 2]
-    refined = None
-    xT = sol.x[-1]
-    if refine:
-        st = detect_arcs(sol)
-        trimmed = st.without_trailing_constrained()
-        if trimmed is not st and trimmed.bang_bang:
-            notes.append(
-                f"dropped the final {st.arcs[-1].duration:.4g}-long arc on which "
-                f"{' and '.join(st.arcs[-1].active)} is active: the foot has already stopped "
-                "and the force holds the crater's yield load, which is the body-arrest phase")
-            st = trimmed
-        if st.bang_bang:
-            try:
-                refined = refine_switching(sol, st, extra_arcs=extra_arcs)
-                xT = refined.xT
-            except SolveError as err:
-                notes.append(f"switching-time refinement failed ({err.status}); "
-                             "reporting the transcribed solution")
-        else:
-            notes.append(f"structure {st.kinds} is not bang-bang; not refined")
+    refined, st = _refined(sol, extra_arcs, notes) if refine else (None, None)
+    xT = refined.xT if refined is not None else sol.x[-1]
+    structure = st if st is not None else detect_arcs(sol)
     depth = -xT[2]
-    u_b = arrest_force(p.r_m, xT)
-    gap = depth - 1 / (1 + p.r_m) - u_b
+    u_b = arrest_force(robot.r_m, xT)
+    gap = depth - robot.foot_mass - u_b
     out = BangBangLanding(
-        params=p, depth=float(depth), depth_transcribed=float(depth_tr),
+        robot=robot, impact=impact, ground=ground, depth=float(depth),
+        depth_transcribed=float(-sol.x[-1, 2]),
         T=float(refined.T if refined is not None else sol.T),
-        arcs=list(refined.kinds if refined is not None else detect_arcs(sol).kinds),
+        arcs=list(refined.kinds if refined is not None else structure.kinds),
         switch_times=[float(t) for t in (refined.switch_times if refined is not None
-                                         else detect_arcs(sol).switch_times)],
+                                         else structure.switch_times)],
         u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
         status=sol.status, iterations=sol.iterations, solve_time_s=sol.solve_time,
         refined=refined, transcribed=sol, notes=notes)
     if replay:
-        out.replay = simulate(DimensionlessParams(r_m=p.r_m, s=p.s, v0=p.v0), out.schedule())
+        out.replay = simulate(robot, impact, out.schedule(), ground)
     return out
 
 
-def sweep_landing(v0_values, r_m: float = 5.0, s: float = 20.0, u_max: float = 8.2, *,
-                  nodes: int = 100, refine: bool = True, progress: bool = False,
+def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR_GROUND, *,
+                  nodes: int = 100, refine: bool = True, progress: bool | None = False,
                   replay: bool = False) -> list[BangBangLanding]:
     """Bang-bang depth over impact velocities, by continuation (each solve warm-starts the next).
 
     The values are solved in the given order; start from the easy end.
+
+    Parameters
+    ----------
+    v0_values : sequence of float
+        Impact velocities.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    nodes : int
+        Shooting intervals.
+    refine : bool
+        Refine the switching times.
+    progress : bool, optional
+        Progress bar.
+    replay : bool
+        Replay each schedule in the exact simulator.
     """
-    v0_values = list(v0_values)
-    for v in v0_values:  # bad input fails before any work (and any progress bar)
-        _validate(v, r_m, s, u_max)
-    it = show_progress(v0_values, progress, "bang-bang sweep", "solve")
+    impacts = [Impact.of(v) for v in v0_values]  # bad input fails before any work
+    _validate(robot)
+    it = show_progress(impacts, progress, "bang-bang sweep", "solve")
     out: list[BangBangLanding] = []
     prev = None
-    for v in it:
-        res = solve_landing(v, r_m, s, u_max, nodes=nodes, refine=refine, warm_start=prev,
+    for imp in it:
+        res = solve_landing(imp, robot, ground, nodes=nodes, refine=refine, warm_start=prev,
                             replay=replay)
         out.append(res)
         prev = res.transcribed
     return out
 
 
-__all__ = ["BangBangLanding", "InfeasibleLandingError", "ParameterError",
-           "build_landing_problem", "landing_transcription", "solve_landing", "sweep_landing"]
+__all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",
+           "arrest_force", "build_landing_problem", "landing_transcription", "solve_landing",
+           "sweep_landing"]

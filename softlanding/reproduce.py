@@ -22,6 +22,10 @@ from typing import Any
 import numpy as np
 
 from ._jsonutil import json_safe
+from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact
+
+BANG_BANG_V0 = -3.0
+"""Impact velocity of the paper's bang-bang example figure."""
 
 #: Impact velocities of the paper's experiments: up to v0 = -4.8 (1.2 m/s), here in thirds.
 EXPERIMENT_V0 = (-1.6, -3.2, -4.8)
@@ -75,10 +79,10 @@ def bang_bang_example(out: Path, files: list[str]) -> dict:
     from .figures import plot_bang_bang
     from .landing import solve_landing
 
-    res = solve_landing(-3.0, 5.0, 20.0, 8.2)
+    res = solve_landing(BANG_BANG_V0, PAPER_ROBOT)
     cert = certify(res.transcribed, res.refined)
     _save(plot_bang_bang(res), out, "fig_bang_bang_trajectory", files)
-    return {"v0": -3.0, "r_m": 5.0, "s": 20.0, "u_max": 8.2, "depth": res.depth,
+    return {"v0": BANG_BANG_V0, **PAPER_ROBOT.to_dict(), "depth": res.depth,
             "T": res.T, "body_stops_at": res.schedule().times[-1], "arcs": res.arcs,
             "switch_times": res.switch_times, "u_b": res.u_b,
             "arrest_active": res.arrest_active, "replay_difference": res.replay_difference,
@@ -87,22 +91,22 @@ def bang_bang_example(out: Path, files: list[str]) -> dict:
 
 
 def _maps(v0s, st: Settings, cache: dict) -> list:
-    """Depth maps at r_m = 5, s = 20, each v0 simulated once per run."""
+    """Depth maps of the paper's robot, each v0 simulated once per run."""
     from .sweeps import depth_map
 
     for v in v0s:
         if v not in cache:
-            cache[v] = depth_map(v, 5.0, 20.0, n=st.map_n, energy=False)
+            cache[v] = depth_map(v, PAPER_IMPEDANCE_ROBOT, n=st.map_n, energy=False)
     return [cache[v] for v in v0s]
 
 
 def stepped_intrusions(out: Path, files: list[str], st: Settings, cache: dict) -> dict:
     """[fig:multi_intrusion_regions] three stepped trajectories and step-count maps."""
+    from .controllers import Impedance
     from .figures import plot_stepped_intrusion_figure
-    from .scaling import DimensionlessParams
-    from .simulate import Impedance, simulate
+    from .simulate import simulate
 
-    runs = [simulate(DimensionlessParams(r_m=5.0, s=20.0, v0=-1.0), Impedance(0.2, kd))
+    runs = [simulate(PAPER_IMPEDANCE_ROBOT, Impact(-1.0), Impedance(0.2, kd))
             for kd in (0.4, 0.18, 0.0)]
     maps = _maps(STEP_MAP_V0, st, cache)
     _save(plot_stepped_intrusion_figure(runs, maps), out, "fig_stepped_intrusions", files)
@@ -115,7 +119,7 @@ def stepped_intrusions(out: Path, files: list[str], st: Settings, cache: dict) -
                         "multi_step_feasible_fraction": float(((steps > 1) & feas).mean()),
                         "max_steps_rest_proven": int(steps[rest].max()),
                         "rest_unproven_fraction": float((~rest).mean())})
-    return {"trajectories": [{"k_p": 0.2, "k_d": r.policy.k_d, "v0": -1.0, "steps": r.steps,
+    return {"trajectories": [{"k_p": 0.2, "k_d": r.controller.k_d, "v0": -1.0, "steps": r.steps,
                               "depth": r.depth} for r in runs],
             "paper_steps": [1, 2, 3], "regions": regions}
 
@@ -126,9 +130,10 @@ def depth_maps(out: Path, files: list[str], st: Settings, cache: dict) -> list[d
     from .impedance import optimize_impedance
 
     maps = _maps(DEPTH_MAP_V0, st, cache)
-    optima = [optimize_impedance(v, 5.0, 20.0, grid=st.optimizer_grid) for v in DEPTH_MAP_V0]
+    optima = [optimize_impedance(v, PAPER_IMPEDANCE_ROBOT, grid=st.optimizer_grid)
+              for v in DEPTH_MAP_V0]
     _save(plot_depth_maps(maps, optima), out, "fig_depth_maps", files)
-    return [{"v0": o.v0, "k_p": o.kp, "k_d": o.kd, "depth": o.depth, "steps": o.steps,
+    return [{"v0": o.v0, "k_p": o.k_p, "k_d": o.k_d, "depth": o.depth, "steps": o.steps,
              "on_stroke_boundary": o.on_stroke_boundary, "active_constraint": o.active_constraint,
              "grid_best": o.grid_best} for o in optima]
 
@@ -139,26 +144,26 @@ def optimal_gains(out: Path, files: list[str], st: Settings,
     from .figures import plot_gain_families
     from .sweeps import optimal_impedance_curves, paper_observations, save_dataset
 
-    curves = optimal_impedance_curves(st.curve_v0, *FAMILIES, grid=st.optimizer_grid,
-                                      progress=progress)
+    curves = optimal_impedance_curves(st.curve_v0, PAPER_IMPEDANCE_ROBOT, r_m=FAMILIES[0],
+                                      s=FAMILIES[1], grid=st.optimizer_grid, progress=progress)
     (out / "data").mkdir(exist_ok=True)
     save_dataset(curves, out / "data" / "optimal_gains.nc")
     files.append("data/optimal_gains.nc")
     _save(plot_gain_families(curves), out, "fig_optimal_gains", files)
-    nominal = curves.sel(r_m=5.0, s=20.0)
+    nominal = curves.sel(r_m=PAPER_ROBOT.r_m, s=PAPER_ROBOT.s)
     infeasible = [{"r_m": float(r), "s": float(s), "v0": float(v)}
                   for r in curves.r_m.values for s in curves.s.values for v in curves.v0.values
                   if not bool(curves.feasible.sel(r_m=r, s=s, v0=v))]
-    return ({"observations_r5_s20": paper_observations(curves, 5.0, 20.0),
-             "curve_r5_s20": [{"v0": float(v), "k_p": float(nominal.kp.sel(v0=v)),
-                               "k_d": float(nominal.kd.sel(v0=v)),
+    return ({"observations_r5_s20": paper_observations(curves, PAPER_IMPEDANCE_ROBOT),
+             "curve_r5_s20": [{"v0": float(v), "k_p": float(nominal.k_p.sel(v0=v)),
+                               "k_d": float(nominal.k_d.sel(v0=v)),
                                "depth": float(nominal.depth.sel(v0=v))}
                               for v in nominal.v0.values],
              "no_feasible_gains": infeasible}, _optimum_lookup(nominal, st.optimizer_grid))
 
 
 def _optimum_lookup(nominal, grid: int) -> Callable[[float], Any]:
-    """``v0 -> depth-optimal impedance`` at r_m = 5, s = 20, reusing the curves' optima
+    """``v0 -> depth-optimal impedance`` of the paper's robot, reusing the curves' optima
     (the same :func:`optimize_impedance` call) and computing the others."""
     from types import SimpleNamespace
 
@@ -169,10 +174,10 @@ def _optimum_lookup(nominal, grid: int) -> Callable[[float], Any]:
     def get(v0: float):
         i = index.get(float(v0))
         if i is None or not bool(nominal.feasible[i]):
-            return optimize_impedance(v0, 5.0, 20.0, grid=grid)
+            return optimize_impedance(v0, PAPER_IMPEDANCE_ROBOT, grid=grid)
         row = nominal.isel(v0=i)
         return SimpleNamespace(**{k: float(row[k]) for k in
-                                  ("kp", "kd", "depth", "u_peak", "cot", "cot_lossless")})
+                                  ("k_p", "k_d", "depth", "u_peak", "cot", "cot_lossless")})
 
     return get
 
@@ -183,19 +188,19 @@ def comparison(out: Path, files: list[str], st: Settings, progress: bool,
     from .comparison import compare_controllers, comparison_arrays
     from .figures import plot_controller_comparison
 
-    rows = compare_controllers(st.compare_v0, 5.0, 20.0, 8.2, grid=st.optimizer_grid,
+    rows = compare_controllers(st.compare_v0, PAPER_ROBOT, grid=st.optimizer_grid,
                                progress=progress, impedance_optimum=depth_optimum)
     cols = comparison_arrays(rows)
-    _save(plot_controller_comparison(cols, 8.2), out, "fig_depth_vs_velocity", files)
+    _save(plot_controller_comparison(cols, PAPER_ROBOT), out, "fig_depth_vs_velocity", files)
     moving = cols["v0"] < 0
     fastest = int(np.argmin(cols["v0"]))
-    return {"rows": rows, "u_max": 8.2,
+    return {"rows": rows, "u_max": PAPER_ROBOT.u_max,
             "bang_bang_over_rigid": [float(x) for x in _range(cols["bang_bang"] / cols["rigid"])],
             "impedance_over_rigid": [float(x) for x in _range(cols["impedance"] / cols["rigid"])],
             "bang_bang_below_impedance_everywhere": bool(np.all(
                 cols["bang_bang"][moving] < cols["impedance"][moving])),
             "impedance_u_peak_at_fastest": float(cols["impedance_u_peak"][fastest]),
-            "fastest_v0": float(cols["v0"][fastest]), "paper_u_max": 8.2}
+            "fastest_v0": float(cols["v0"][fastest]), "paper_u_max": PAPER_ROBOT.u_max}
 
 
 def _range(x: np.ndarray) -> tuple[float, float]:
@@ -209,11 +214,12 @@ def experiment(out: Path, files: list[str], st: Settings) -> list[dict]:
     from .sweeps import impedance_dataset
 
     kd = np.round(np.linspace(0.0, 2.5, st.experiment_kd_n), 12)
-    ds = impedance_dataset(EXPERIMENT_KP, kd, EXPERIMENT_V0, 5.0, 20.0, energy=False)
+    ds = impedance_dataset(EXPERIMENT_V0, EXPERIMENT_KP, kd, PAPER_IMPEDANCE_ROBOT, energy=False)
     ds = ds.squeeze(("r_m", "s")).transpose("k_p", "v0", "k_d")
     _save(plot_experiment_curves(ds), out, "fig_experiment", files)
     rig = paper_rig()
     _save(plot_experiment_curves(ds, si=rig), out, "fig_experiment_si", files)
+    units = rig.units
     rows = []
     for kp in EXPERIMENT_KP:
         for v in EXPERIMENT_V0:
@@ -222,11 +228,11 @@ def experiment(out: Path, files: list[str], st: Settings) -> list[dict]:
             d = np.where(ok, c.depth.values, np.nan)
             best = int(np.nanargmin(d)) if ok.any() else None
             rows.append({
-                "k_p": kp, "v0": v, "speed_m_per_s": abs(v) * rig.velocity_scale,
+                "k_p": kp, "v0": v, "speed_m_per_s": abs(v) * units.velocity,
                 "feasible_fraction": float(ok.mean()),
                 "best_k_d": None if best is None else float(kd[best]),
                 "best_depth": None if best is None else float(d[best]),
-                "best_depth_mm": None if best is None else float(d[best] * rig.length_scale * 1e3),
+                "best_depth_mm": None if best is None else float(d[best] * units.length * 1e3),
                 "depth_at_k_d_0": float(c.depth.values[0])})
     return rows
 
@@ -236,25 +242,25 @@ def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool,
     """[fig:CoT_opt_imp] minimum-CoT against minimum-depth impedance."""
     from ._progress import progress as show_progress
     from .comparison import rigid_depth
+    from .controllers import Rigid
     from .figures import plot_cot_comparison
     from .impedance import optimize_impedance
-    from .scaling import DimensionlessParams
-    from .simulate import Rigid, simulate
+    from .simulate import simulate
 
+    robot = PAPER_IMPEDANCE_ROBOT
     rows = []
     for v in show_progress(st.cot_v0, progress, "CoT optima", "v0"):
         dep = depth_optimum(v)
-        cot = optimize_impedance(v, 5.0, 20.0, objective="cot", grid=st.optimizer_grid)
-        los = optimize_impedance(v, 5.0, 20.0, objective="cot-lossless",
-                                 grid=st.optimizer_grid)
-        rig = simulate(DimensionlessParams(r_m=5.0, s=20.0, v0=v), Rigid())
+        cot = optimize_impedance(v, robot, objective="cot", grid=st.optimizer_grid)
+        los = optimize_impedance(v, robot, objective="cot-lossless", grid=st.optimizer_grid)
+        rig = simulate(robot, Impact(v), Rigid())
         rows.append({"v0": v, "rigid_depth": rigid_depth(v), "rigid_cot": rig.energy.cot,
-                     "depth_opt_kp": dep.kp, "depth_opt_kd": dep.kd,
+                     "depth_opt_k_p": dep.k_p, "depth_opt_k_d": dep.k_d,
                      "depth_opt_depth": dep.depth, "depth_opt_cot": dep.cot,
                      "depth_opt_cot_lossless": dep.cot_lossless,
-                     "cot_opt_kp": cot.kp, "cot_opt_kd": cot.kd, "cot_opt_depth": cot.depth,
-                     "cot_opt_cot": cot.cot, "cot_lossless_opt_kp": los.kp,
-                     "cot_lossless_opt_kd": los.kd, "cot_lossless_opt_depth": los.depth,
+                     "cot_opt_k_p": cot.k_p, "cot_opt_k_d": cot.k_d, "cot_opt_depth": cot.depth,
+                     "cot_opt_cot": cot.cot, "cot_lossless_opt_k_p": los.k_p,
+                     "cot_lossless_opt_k_d": los.k_d, "cot_lossless_opt_depth": los.depth,
                      "cot_lossless_opt_cot_lossless": los.cot_lossless})
     cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     _save(plot_cot_comparison(cols["v0"], cols), out, "fig_cot", files)
@@ -267,12 +273,12 @@ def robustness(out: Path, files: list[str], st: Settings, progress: bool) -> dic
     from .robustness import robustness_study, robustness_table
     from .sweeps import save_dataset
 
-    ds = robustness_study(-3.0, 5.0, 20.0, 8.2, spread=0.3, n=st.robustness_n,
+    ds = robustness_study(BANG_BANG_V0, PAPER_ROBOT, spread=0.3, n=st.robustness_n,
                           grid=st.optimizer_grid, progress=progress)
     save_dataset(ds, out / "data" / "robustness.nc")
     files.append("data/robustness.nc")
     _save(plot_robustness(ds), out, "fig_robustness", files)
-    return {"v0": -3.0, "spread": 0.3, "factors": [float(f) for f in ds.factor.values],
+    return {"v0": BANG_BANG_V0, "spread": 0.3, "factors": [float(f) for f in ds.factor.values],
             "table": robustness_table(ds),
             "depth_ratio": {f"{c}|{m:g}|{p}": [float(x) for x in
                                               ds.depth_ratio.sel(controller=c, margin=m,
@@ -423,7 +429,8 @@ def summary_markdown(s: dict) -> str:
             _table(["v0", "rigid", "impedance", "(k_p*, k_d*)", "bang-bang", "imp/rigid",
                     "bb/rigid"],
                    [[_f(r["v0"], 2), _f(r["rigid"], 5), _f(r["impedance"], 5),
-                     f"({r['impedance_kp']:.4f}, {r['impedance_kd']:.4f})", _f(r["bang_bang"], 5),
+                     f"({r['impedance_k_p']:.4f}, {r['impedance_k_d']:.4f})",
+                     _f(r["bang_bang"], 5),
                      _f(r["impedance"] / r["rigid"], 4), _f(r["bang_bang"] / r["rigid"], 4)]
                     for r in cmp["rows"]]), "",
             f"Bang-bang / rigid: {cmp['bang_bang_over_rigid'][0]:.4f} to "
@@ -447,7 +454,8 @@ def summary_markdown(s: dict) -> str:
                     "min-CoT: (k_p, k_d)", "depth", "CoT"],
                    [[_f(r["v0"], 2), _f(r["rigid_cot"], 3), _f(r["depth_opt_depth"], 4),
                      _f(r["depth_opt_cot"], 3), _f(r["depth_opt_cot_lossless"], 3),
-                     f"({r['cot_opt_kp']:.3f}, {r['cot_opt_kd']:.3f})", _f(r["cot_opt_depth"], 4),
+                     f"({r['cot_opt_k_p']:.3f}, {r['cot_opt_k_d']:.3f})",
+                     _f(r["cot_opt_depth"], 4),
                      _f(r["cot_opt_cot"], 3)] for r in s["cost_of_transport"]]), ""]
     rb = s["robustness"]
     out += ["## Robustness (fig_robustness)", "",

@@ -15,7 +15,7 @@ and ground that differ from the nominal:
 seconds, N/m and N s/m, while the dimensionless numbers (which are scaled by
 ``k_g`` and the masses) change. A stiffer ground makes the same schedule last
 longer in ground time units and the same leg relatively softer. The conversion
-goes through :class:`~softlanding.scaling.PhysicalParams`, the same one the CLI
+goes through the value objects' ``to_si`` / ``from_si``, the same ones the CLI
 uses, so there is one definition of the scaling.
 
 The bang-bang schedule is replayed whole, as the optimiser defines it: the bang
@@ -30,30 +30,32 @@ same kind of controller designed for the true model (the *regret*).
 
 from __future__ import annotations
 
-from dataclasses import replace
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from ._kernel import FEAS_TOL
 from ._progress import progress as show_progress
-from .errors import ParameterError, check_positive
-from .scaling import DimensionlessParams
-from .simulate import ForceSchedule, Impedance, LandingResult, simulate
+from .controllers import Controller, ForceSchedule, Impedance
+from .errors import ParameterError, check, check_count
+from .model import PAPER_ROBOT, Impact, Robot, Units
+from .simulate import LandingResult, simulate
 
 PARAMETERS = ("k_g", "r_m", "v0", "switch")
 CONTROLLERS = ("bang-bang", "impedance")
-_PHYS = {"m_t": 1.0, "k_g": 1.0}  # any nominal robot: the results are scale-free
+NOMINAL_UNITS = Units(m_t=1.0, k_g=1.0)
+"""Any nominal robot will do: the results are scale-free."""
 
 
-def true_model(nominal: DimensionlessParams, parameter: str,
-               factor: float) -> tuple[DimensionlessParams, float, float]:
-    """The perturbed robot in its own dimensionless units, with the nominal's SI gains.
+def true_model(robot: Robot, impact: Impact, parameter: str,
+               factor: float) -> tuple[Robot, Impact, Units]:
+    """The perturbed robot and impact in their own dimensionless units.
 
     Parameters
     ----------
-    nominal : DimensionlessParams
-        The design model; its ``k_p, k_d`` (if given) are held in N/m and N s/m.
+    robot, impact : Robot, Impact
+        The design model, in :data:`NOMINAL_UNITS`.
     parameter : {"k_g", "r_m", "v0", "switch"}
         What differs; ``"switch"`` leaves the model nominal.
     factor : float
@@ -61,85 +63,136 @@ def true_model(nominal: DimensionlessParams, parameter: str,
 
     Returns
     -------
-    (params, length_ratio, time_ratio)
-        The true dimensionless parameters (gains converted), the true length
-        unit over the nominal one, and the true time unit over the nominal one.
+    (robot, impact, units)
+        The true model and its units (the nominal robot's SI numbers, with the
+        one perturbed, converted back).
     """
-    check_positive("factor", factor)
+    factor = check("factor", factor)
     if parameter not in PARAMETERS:
-        raise ParameterError("parameter", f"must be one of {PARAMETERS}, got {parameter!r}")
-    nom = nominal.to_physical(**_PHYS)
-    ph = nom
+        raise ParameterError("parameter", f"must be one of {', '.join(PARAMETERS)}, "
+                                          f"got {parameter!r}")
+    si = robot.to_si(NOMINAL_UNITS)
+    m_t, k_g, V0 = NOMINAL_UNITS.m_t, NOMINAL_UNITS.k_g, impact.to_si(NOMINAL_UNITS)["V0"]
+    m_b, m_f = si["m_b"], si["m_f"]
     if parameter == "k_g":
-        ph = replace(nom, k_g=nom.k_g * factor)
+        k_g *= factor
     elif parameter == "r_m":
-        r = nominal.r_m * factor
-        ph = replace(nom, m_b=nom.m_t * r / (1 + r), m_f=nom.m_t / (1 + r))
+        r = robot.r_m * factor
+        m_b, m_f = m_t * r / (1 + r), m_t / (1 + r)
     elif parameter == "v0":
-        ph = replace(nom, v0=nom.v0 * factor)
-    return (ph.to_dimensionless(), ph.length_scale / nom.length_scale,
-            ph.time_scale / nom.time_scale)
+        V0 *= factor
+    true, units = Robot.from_si(m_b, m_f, si["stroke"], k_g, U_max=si["U_max"],  # type: ignore[arg-type]
+                                rest_length=si["rest_length"], g=NOMINAL_UNITS.g)
+    return true, Impact.from_si(V0, units), units
 
 
-def _shift_switch(times: np.ndarray, factor: float) -> np.ndarray:
-    t = times.copy()
+def transfer(controller: Controller, units: Units, true_units: Units) -> Controller:
+    """The same controller, unchanged in SI units, in the true model's units.
+
+    Parameters
+    ----------
+    controller : Impedance or ForceSchedule
+        Designed in ``units``.
+    units, true_units : Units
+        The design model's and the true model's scales.
+    """
+    if isinstance(controller, Impedance):
+        si = controller.to_si(units)
+        return Impedance.from_si(si["K_p"], si["K_d"], true_units, si["rest_length"])
+    if isinstance(controller, ForceSchedule):
+        si = controller.to_si(units)
+        return ForceSchedule.from_si(si["times_s"], si["forces_N"], true_units)
+    return controller
+
+
+def _shift_switch(schedule: ForceSchedule, factor: float) -> ForceSchedule:
+    t = list(schedule.times)
     t[0] *= factor
     if len(t) > 1 and t[0] >= t[1]:
         raise ParameterError("factor", "moves the switch past the next switching instant")
-    return t
+    return ForceSchedule(tuple(t), schedule.values)
 
 
-def replay(nominal: DimensionlessParams, policy: Impedance | ForceSchedule, parameter: str,
-           factor: float) -> tuple[LandingResult, float]:
+def replay(robot: Robot, impact: Impact, controller: Impedance | ForceSchedule,
+           parameter: str, factor: float) -> tuple[LandingResult, float]:
     """Replay a nominal controller, unchanged in SI units, on the perturbed model.
 
-    Returns the landing (in the true model's units) and the factor that turns
-    its lengths into nominal units.
+    Parameters
+    ----------
+    robot, impact : Robot, Impact
+        The nominal model.
+    controller : Impedance or ForceSchedule
+        The nominal controller.
+    parameter : {"k_g", "r_m", "v0", "switch"}
+        What differs.
+    factor : float
+        True value / nominal value.
+
+    Returns
+    -------
+    (LandingResult, float)
+        The landing (in the true model's units) and the factor that turns its
+        lengths into nominal units.
     """
-    if isinstance(policy, Impedance):
-        if parameter == "switch":
-            raise ParameterError("parameter", "an impedance has no switch to move")
-        true, lr, _ = true_model(replace(nominal, k_p=policy.k_p, k_d=policy.k_d),
-                                 parameter, factor)
-        return simulate(true, Impedance(true.k_p, true.k_d, policy.u_max)), lr
-    times = np.asarray(policy.times, float)
     if parameter == "switch":
-        times = _shift_switch(times, factor)
-        factor = 1.0
-    true, lr, tr = true_model(nominal, parameter, factor)
-    # the total mass never changes, so forces (units of m_t g) keep their values
-    return simulate(true, ForceSchedule(tuple(times / tr), policy.values)), lr
+        if not isinstance(controller, ForceSchedule):
+            raise ParameterError("parameter", "an impedance has no switch to move")
+        return simulate(robot, impact, _shift_switch(controller, factor)), 1.0
+    true, true_impact, units = true_model(robot, impact, parameter, factor)
+    res = simulate(true, true_impact, transfer(controller, NOMINAL_UNITS, units))
+    return res, units.length / NOMINAL_UNITS.length
 
 
-def design(v0: float, r_m: float = 5.0, s: float = 20.0, u_max: float = 8.2, margin: float = 0.0,
+def design(impact: Impact | float, robot: Robot = PAPER_ROBOT, margin: float = 0.0,
            grid: int = 101, controllers: tuple[str, ...] = CONTROLLERS,
-           warm_start=None) -> dict[str, tuple[Impedance | ForceSchedule, float, object]]:
+           warm_start: Any = None) -> dict[str, tuple[Controller, float, Any]]:
     """Depth-optimal controllers designed for the stroke ``(1 - margin) s``.
 
-    The design stroke is centred on the true one (the leg starts at ``s/2`` in
-    both), so a margin leaves ``margin * s / 2`` free at each end and the landing
-    on the true stroke is the design landing. Returns ``{name: (policy, depth,
-    solution)}``; ``solution`` warm-starts the next bang-bang design.
+    The design stroke is centred on the true one (the leg starts at the middle
+    in both), so a margin leaves ``margin * s / 2`` free at each end and the
+    landing on the true stroke is the design landing.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot (its force limit bounds the bang-bang force; the impedance is
+        unsaturated, as in the paper's comparison).
+    margin : float
+        Stroke safety margin, in [0, 1).
+    grid : int
+        Starting grid of the impedance optimisation.
+    controllers : tuple of str
+        Which to design.
+    warm_start : ocp.Solution, optional
+        Warm start of the bang-bang design.
+
+    Returns
+    -------
+    dict
+        ``{name: (controller, depth, solution)}``; ``solution`` warm-starts the
+        next bang-bang design.
     """
     from .impedance import optimize_impedance
     from .landing import solve_landing
 
     if not 0.0 <= margin < 1.0:
         raise ParameterError("margin", f"must be in [0, 1), got {margin}")
-    s_d = (1.0 - margin) * s
-    out = {}
+    designed = robot.replace(s=(1.0 - margin) * robot.s, l0=None)
+    out: dict[str, tuple[Controller, float, Any]] = {}
     if "bang-bang" in controllers:
-        bb = solve_landing(v0, r_m, s_d, u_max, replay=False, warm_start=warm_start)
+        bb = solve_landing(impact, designed, replay=False, warm_start=warm_start)
         out["bang-bang"] = (bb.schedule(), bb.depth, bb.transcribed)
     if "impedance" in controllers:
-        imp = optimize_impedance(v0, r_m, s_d, grid=grid)
-        out["impedance"] = (Impedance(imp.kp, imp.kd), imp.depth, None)
+        imp = optimize_impedance(impact, designed.without_force_limit(), grid=grid)
+        out["impedance"] = (Impedance(imp.k_p, imp.k_d), imp.depth, None)
     return out
 
 
-def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max: float = 8.2,
-                     *, spread: float = 0.3, n: int = 13, margins: tuple[float, ...] = (0.0, 0.1),
-                     grid: int = 101, progress: bool = False) -> xr.Dataset:
+def robustness_study(impact: Impact | float = -3.0, robot: Robot = PAPER_ROBOT, *,
+                     spread: float = 0.3, n: int = 13, margins: tuple[float, ...] = (0.0, 0.1),
+                     grid: int = 101, progress: bool | None = False) -> xr.Dataset:
     """Depth penalty and stroke violations of the nominal controllers under model error.
 
     Each nominal controller is replayed on the perturbed model and compared with
@@ -150,8 +203,10 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
 
     Parameters
     ----------
-    v0, r_m, s, u_max : float
-        Nominal model (``u_max`` bounds the bang-bang force; the impedance is
+    impact : Impact or float
+        Nominal impact velocity.
+    robot : Robot
+        Nominal robot (its ``u_max`` bounds the bang-bang force; the impedance is
         unsaturated, as in the paper's comparison).
     spread : float
         Largest relative error: factors run over ``1 +- spread``.
@@ -162,7 +217,7 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
         remedy for optima that sit on the stroke limit).
     grid : int
         Starting grid of the impedance optimisation.
-    progress : bool
+    progress : bool, optional
         Show a progress bar.
 
     Returns
@@ -177,11 +232,12 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
         ``nominal_depth`` (dims ``controller, margin``, units of ``x_s``).
         Entries that do not apply (moving an impedance's switch) are NaN.
     """
+    impact = Impact.of(impact)
     if not 0.0 < spread < 1.0:
         raise ParameterError("spread", f"must be in (0, 1), got {spread}")
-    if n < 3 or n % 2 == 0:
-        raise ParameterError("n", f"must be odd and >= 3 (so 1 is a factor), got {n}")
-    nominal = DimensionlessParams(r_m=r_m, s=s, v0=v0)
+    n = check_count("n", n, 3, 1001)
+    if n % 2 == 0:
+        raise ParameterError("n", f"must be odd (so 1 is a factor), got {n}")
     factors = np.linspace(1.0 - spread, 1.0 + spread, n)
     factors[n // 2] = 1.0
     shape = (len(CONTROLLERS), len(margins), len(PARAMETERS), n)
@@ -190,10 +246,10 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
     proven = np.zeros(shape, dtype=bool)
     nominal_depth = np.full(shape[:2], np.nan)
     tasks = [(j, m, k, par) for j, m in enumerate(margins) for k, par in enumerate(PARAMETERS)]
-    designs = {}
+    designs: dict[float, dict] = {}
     for j, m, k, par in show_progress(tasks, progress, "robustness", "study"):
         if m not in designs:
-            designs[m] = design(v0, r_m, s, u_max, margin=m, grid=grid)
+            designs[m] = design(impact, robot, margin=m, grid=grid)
             for i, name in enumerate(CONTROLLERS):
                 nominal_depth[i, j] = designs[m][name][1]
         warm = designs[m]["bang-bang"][2]
@@ -201,17 +257,18 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
             if par == "switch":
                 oracle = {name: designs[m][name][1] for name in CONTROLLERS}
             else:
-                true, _, _ = true_model(nominal, par, float(f))
-                redesign = design(true.v0, true.r_m, true.s, u_max, margin=m, grid=grid,
-                                  warm_start=warm)
+                true, true_impact, _ = true_model(robot, impact, par, float(f))
+                redesign = design(true_impact, true, margin=m, grid=grid, warm_start=warm)
                 warm = redesign["bang-bang"][2]
                 oracle = {name: redesign[name][1] for name in CONTROLLERS}
             for i, name in enumerate(CONTROLLERS):
                 pol = designs[m][name][0]
                 if par == "switch" and isinstance(pol, Impedance):
                     continue
-                res, lr = replay(nominal, pol, par, float(f))
-                s_true = res.params.s
+                # the impedance is unsaturated, as designed (the paper's comparison)
+                rob = robot if name == "bang-bang" else robot.without_force_limit()
+                res, lr = replay(rob, impact, pol, par, float(f))
+                s_true = res.robot.s
                 # an open-loop body that is not stopped drifts for ever: its
                 # exact stroke range is unbounded (inf)
                 over = max(0.0, -res.stroke_min, res.stroke_max - s_true) / s_true
@@ -227,13 +284,20 @@ def robustness_study(v0: float = -3.0, r_m: float = 5.0, s: float = 20.0, u_max:
          "nominal_depth": (dims[:2], nominal_depth)},
         coords={"controller": list(CONTROLLERS), "margin": np.asarray(margins, float),
                 "parameter": list(PARAMETERS), "factor": factors})
-    ds.attrs.update(v0=v0, r_m=r_m, s=s, u_max=u_max, spread=spread,
+    ds.attrs.update(v0=impact.v0, r_m=robot.r_m, s=robot.s,
+                    u_max=-1.0 if robot.u_max is None else robot.u_max, spread=spread,
                     title="nominal controllers replayed on a perturbed model")
     return ds
 
 
 def robustness_table(ds: xr.Dataset) -> list[dict]:
-    """One row per (controller, margin, parameter): regret range and stroke violations."""
+    """One row per (controller, margin, parameter): regret range and stroke violations.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        From :func:`robustness_study`.
+    """
     rows = []
     for c in ds.controller.values:
         for m in ds.margin.values:
@@ -255,3 +319,7 @@ def robustness_table(ds: xr.Dataset) -> list[dict]:
                     "violating_factors": [round(float(x), 6) for x in d.factor.values[viol]],
                 })
     return rows
+
+
+__all__ = ["CONTROLLERS", "PARAMETERS", "design", "replay", "robustness_study",
+           "robustness_table", "transfer", "true_model"]

@@ -1,4 +1,4 @@
-"""SI <-> dimensionless parameters of the soft-landing model.
+"""A physical robot in SI units, and the paper's experimental rig.
 
 The paper (Lynch, Lynch & Umbanhowar, "The Soft Landing Problem") scales
 lengths by ``x_s = m_t g / k_g`` (the depth at which the ground carries the
@@ -7,98 +7,36 @@ robot's weight), time by ``tau_s = sqrt(m_t / k_g)`` and force by
 only the mass ratio ``r_m = m_b / m_f``, the stroke ``s = S / x_s``, the force
 limit ``u_max = U_max / u_s`` and the impact velocity ``v0 = V0 tau_s / x_s``;
 impedance gains scale as ``k_p = K_p / k_g`` and ``k_d = K_d / sqrt(m_t k_g)``.
+
+The conversions themselves live on the value objects (``to_si`` /
+``from_si`` of :class:`~softlanding.model.Robot`, :class:`~softlanding.model.Impact`
+and the controllers); :class:`PhysicalParams` is the flat SI description a
+user types (the ``scale`` command), converted through them.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
+from typing import Any, NamedTuple
 
-from .errors import (
-    ParameterError,
-    check_impact_velocity,
-    check_nonnegative,
-    check_positive,
-)
-
-G_EARTH = 9.81
-"""Gravity used by the paper, m/s^2."""
+from .controllers import Controller, Impedance
+from .errors import ParameterError, check, check_optional
+from .ground import LINEAR_GROUND, Ground
+from .model import G_EARTH, PAPER_ROBOT, Impact, Robot, Units
 
 
-def _opt(check, name: str, value: float | None) -> float | None:
-    return None if value is None else check(name, value)
+class Scenario(NamedTuple):
+    """A robot, an impact, a controller and a ground: ``simulate(*scenario)`` runs it."""
 
-
-@dataclass(frozen=True)
-class DimensionlessParams:
-    """Dimensionless soft-landing parameters (the paper's Section II-C).
-
-    Parameters
-    ----------
-    r_m : float
-        Mass ratio body/foot, ``m_b / m_f`` (> 0).
-    s : float
-        Actuator stroke ``S / x_s`` (> 0); the leg length obeys ``0 <= x_b - x_f <= s``.
-    v0 : float
-        Impact velocity ``V0 tau_s / x_s`` (<= 0, negative = moving down).
-    u_max : float or None
-        Actuator force limit ``U_max / (m_t g)`` (> 0), or None for unlimited.
-    k_p, k_d : float or None
-        Impedance stiffness ``K_p / k_g`` and damping ``K_d / sqrt(m_t k_g)`` (>= 0).
-
-    Raises
-    ------
-    ParameterError
-        If a value is non-finite or out of range; the message names it.
-    """
-
-    r_m: float = 5.0
-    s: float = 20.0
-    v0: float = -1.0
-    u_max: float | None = None
-    k_p: float | None = None
-    k_d: float | None = None
-
-    def __post_init__(self) -> None:
-        set_ = object.__setattr__
-        set_(self, "r_m", check_positive("r_m", self.r_m))
-        set_(self, "s", check_positive("s", self.s))
-        set_(self, "v0", check_impact_velocity("v0", self.v0))
-        set_(self, "u_max", _opt(check_positive, "u_max", self.u_max))
-        set_(self, "k_p", _opt(check_nonnegative, "k_p", self.k_p))
-        set_(self, "k_d", _opt(check_nonnegative, "k_d", self.k_d))
-
-    @property
-    def l0(self) -> float:
-        """Rest length of the rendered spring and initial leg length, ``s / 2``."""
-        return 0.5 * self.s
-
-    def to_physical(self, m_t: float, k_g: float, g: float = G_EARTH) -> PhysicalParams:
-        """Return the SI robot with total mass ``m_t`` [kg] on ground of stiffness ``k_g`` [N/m]."""
-        m_t = check_positive("m_t", m_t)
-        k_g = check_positive("k_g", k_g)
-        g = check_positive("g", g)
-        x_s, tau_s, u_s = m_t * g / k_g, math.sqrt(m_t / k_g), m_t * g
-        m_f = m_t / (1.0 + self.r_m)
-        return PhysicalParams(
-            m_b=m_t - m_f,
-            m_f=m_f,
-            k_g=k_g,
-            stroke=self.s * x_s,
-            v0=self.v0 * x_s / tau_s,
-            u_max=None if self.u_max is None else self.u_max * u_s,
-            K_p=None if self.k_p is None else self.k_p * k_g,
-            K_d=None if self.k_d is None else self.k_d * math.sqrt(m_t * k_g),
-            g=g,
-        )
-
-    def as_dict(self) -> dict:
-        return asdict(self)
+    robot: Robot
+    impact: Impact
+    controller: Controller | None = None
+    ground: Ground = LINEAR_GROUND
 
 
 @dataclass(frozen=True)
 class PhysicalParams:
-    """A physical robot and ground in SI units.
+    """A physical robot, ground and impact in SI units.
 
     Parameters
     ----------
@@ -116,6 +54,8 @@ class PhysicalParams:
         Rendered leg stiffness [N/m] and damping [N s/m] (>= 0), or None.
     g : float
         Gravity [m/s^2].
+    rest_length : float or None
+        Leg length at impact [m]; None: half the stroke.
     """
 
     m_b: float
@@ -127,15 +67,18 @@ class PhysicalParams:
     K_p: float | None = None
     K_d: float | None = None
     g: float = G_EARTH
+    rest_length: float | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         for name in ("m_b", "m_f", "k_g", "stroke", "g"):
-            set_(self, name, check_positive(name, getattr(self, name)))
-        set_(self, "v0", check_impact_velocity("v0", self.v0))
-        set_(self, "u_max", _opt(check_positive, "u_max", self.u_max))
-        set_(self, "K_p", _opt(check_nonnegative, "K_p", self.K_p))
-        set_(self, "K_d", _opt(check_nonnegative, "K_d", self.K_d))
+            set_(self, name, check(name, getattr(self, name)))
+        set_(self, "v0", check("v0", self.v0))
+        for name in ("u_max", "K_p", "K_d", "rest_length"):
+            set_(self, name, check_optional(name, getattr(self, name)))
+        if (self.K_p is None) != (self.K_d is None):
+            raise ParameterError("K_d" if self.K_d is None else "K_p",
+                                 "give both K_p and K_d, or neither")
 
     @property
     def m_t(self) -> float:
@@ -143,43 +86,44 @@ class PhysicalParams:
         return self.m_b + self.m_f
 
     @property
-    def length_scale(self) -> float:
-        """``x_s = m_t g / k_g`` [m]: the depth at which the ground carries the weight."""
-        return self.m_t * self.g / self.k_g
+    def units(self) -> Units:
+        """The paper's scales of this robot."""
+        return Units(self.m_t, self.k_g, self.g)
 
-    @property
-    def time_scale(self) -> float:
-        """``tau_s = sqrt(m_t / k_g)`` [s]."""
-        return math.sqrt(self.m_t / self.k_g)
+    def to_dimensionless(self) -> Scenario:
+        """The robot, impact and (if gains are given) impedance in the paper's units."""
+        robot, units = Robot.from_si(self.m_b, self.m_f, self.stroke, self.k_g, U_max=self.u_max,
+                                     rest_length=self.rest_length, g=self.g)
+        controller = None
+        if self.K_p is not None and self.K_d is not None:
+            controller = Impedance.from_si(self.K_p, self.K_d, units)
+        return Scenario(robot, Impact.from_si(self.v0, units), controller)
 
-    @property
-    def force_scale(self) -> float:
-        """``u_s = m_t g`` [N]."""
-        return self.m_t * self.g
+    @classmethod
+    def from_dimensionless(cls, robot: Robot, impact: Impact, units: Units,
+                           controller: Impedance | None = None) -> PhysicalParams:
+        """The SI robot of a dimensionless one with total mass and ground stiffness ``units``.
 
-    @property
-    def velocity_scale(self) -> float:
-        """``x_s / tau_s`` [m/s]."""
-        return self.length_scale / self.time_scale
+        Parameters
+        ----------
+        robot : Robot
+        impact : Impact
+        units : Units
+            Total mass, ground stiffness and gravity.
+        controller : Impedance, optional
+            Its gains are converted too.
+        """
+        r = robot.to_si(units)
+        gains: dict[str, Any] = {}
+        if controller is not None:
+            si = controller.to_si(units)
+            gains = {"K_p": si["K_p"], "K_d": si["K_d"]}
+        return cls(m_b=r["m_b"], m_f=r["m_f"], k_g=units.k_g, stroke=r["stroke"],
+                   v0=impact.to_si(units)["V0"], u_max=r["U_max"], g=units.g,
+                   rest_length=None if robot.l0 is None else r["rest_length"], **gains)
 
-    @property
-    def energy_scale(self) -> float:
-        """``u_s x_s`` [J]: the unit of the dimensionless energies."""
-        return self.force_scale * self.length_scale
-
-    def to_dimensionless(self) -> DimensionlessParams:
-        """Scale to the paper's dimensionless parameters."""
-        x_s, tau_s, u_s = self.length_scale, self.time_scale, self.force_scale
-        return DimensionlessParams(
-            r_m=self.m_b / self.m_f,
-            s=self.stroke / x_s,
-            v0=self.v0 * tau_s / x_s,
-            u_max=None if self.u_max is None else self.u_max / u_s,
-            k_p=None if self.K_p is None else self.K_p / self.k_g,
-            k_d=None if self.K_d is None else self.K_d / math.sqrt(self.m_t * self.k_g),
-        )
-
-    def as_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
+        """All fields."""
         return asdict(self)
 
 
@@ -190,7 +134,7 @@ def paper_rig(v0: float = -1.2, **overrides: float) -> PhysicalParams:
     ``k_g = 4.4 kN/m`` (130 mm acrylic foot in poppy seeds), ``g = 9.81``.
     Impact speeds up to 1.2 m/s.
 
-    Left open by the paper, and chosen here:
+    Left open by the paper, and chosen here from :data:`~softlanding.model.PAPER_ROBOT`:
 
     * **stroke S** -- the paper uses ``s = 20`` "approximately describing" the
       rig (a LinMot PS01-23x160H, nominally 160 mm of travel). We set
@@ -211,17 +155,15 @@ def paper_rig(v0: float = -1.2, **overrides: float) -> PhysicalParams:
     **overrides
         Any :class:`PhysicalParams` field to replace.
     """
-    m_b, m_f, k_g, g = 2.5, 0.5, 4400.0, G_EARTH
-    x_s = (m_b + m_f) * g / k_g
-    fields = dict(
-        m_b=m_b, m_f=m_f, k_g=k_g, stroke=20.0 * x_s, v0=v0,
-        u_max=8.2 * (m_b + m_f) * g, g=g,
-    )
-    unknown = set(overrides) - set(fields) - {"K_p", "K_d"}
+    units = Units(m_t=3.0, k_g=4400.0, g=G_EARTH)
+    fields: dict[str, Any] = PhysicalParams.from_dimensionless(
+        PAPER_ROBOT, Impact(0.0), units).to_dict()
+    fields["v0"] = v0
+    unknown = set(overrides) - set(fields)
     if unknown:
         raise ParameterError(sorted(unknown)[0], "is not a PhysicalParams field")
     fields.update(overrides)
     return PhysicalParams(**fields)
 
 
-__all__ = ["DimensionlessParams", "PhysicalParams", "paper_rig", "G_EARTH"]
+__all__ = ["G_EARTH", "PhysicalParams", "Scenario", "paper_rig"]

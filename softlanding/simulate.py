@@ -10,8 +10,8 @@ switches) is located as a root of the exact solution; see :mod:`._kernel`.
 
 Example
 -------
->>> from softlanding import DimensionlessParams, Impedance, simulate
->>> res = simulate(DimensionlessParams(r_m=5, s=20, v0=-1), Impedance(0.2, 0.18))
+>>> from softlanding import Impact, Impedance, Robot, simulate
+>>> res = simulate(Robot(r_m=5, s=20), Impact(-1), Impedance(0.2, 0.18))
 >>> res.steps
 2
 """
@@ -19,123 +19,26 @@ Example
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import scipy.linalg
 
+from ocp.trajectory import Trajectory
+
 from . import _kernel as K
 from ._jsonutil import json_safe
-from .dynamics import VB, VF, mode_matrices
-from .errors import (
-    ParameterError,
-    check_finite,
-    check_impact_velocity,
-    check_nonnegative,
-    check_positive,
-)
-from .scaling import DimensionlessParams, PhysicalParams
+from .controllers import Controller, ForceSchedule, Impedance, Rigid
+from .dynamics import STATE_NAMES, mode_matrices
+from .errors import ParameterError, check
+from .ground import LINEAR_GROUND, Ground
+from .model import Impact, Robot
 
 MODE_NAMES = ("yielding", "static", "flight")
-STATUS_NAMES = {
-    K.REST_PROVEN: "rest proven",
-    K.HORIZON: "horizon reached before rest could be proven",
-    K.TOO_MANY_SEGMENTS: "segment limit reached before rest could be proven",
-}
+STATUS_NAMES = K.STATUS_NAMES
 DEFAULT_T_MAX = 1.0e4
 DEFAULT_MAX_SEGMENTS = 500
-
-
-# --------------------------------------------------------------------- policies
-@dataclass(frozen=True)
-class Rigid:
-    """Body and foot locked together: the actuator supplies whatever force keeps
-    the stroke constant (derived per ground mode from the dynamics)."""
-
-    def describe(self) -> str:
-        return "rigid leg"
-
-
-@dataclass(frozen=True)
-class Impedance:
-    """Rendered spring-damper ``u = -k_p (x_b - x_f - l0) - k_d (v_b - v_f)``.
-
-    Parameters
-    ----------
-    k_p, k_d : float
-        Dimensionless stiffness and damping (>= 0).
-    u_max : float or None
-        Saturate the force at ``+-u_max`` (None: unlimited).
-    l0 : float or None
-        Rest length; None means the paper's ``s / 2``.
-    """
-
-    k_p: float
-    k_d: float
-    u_max: float | None = None
-    l0: float | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "k_p", check_nonnegative("k_p", self.k_p))
-        object.__setattr__(self, "k_d", check_nonnegative("k_d", self.k_d))
-        if self.u_max is not None:
-            object.__setattr__(self, "u_max", check_positive("u_max", self.u_max))
-        if self.l0 is not None:
-            object.__setattr__(self, "l0", check_finite("l0", self.l0))
-
-    def describe(self) -> str:
-        sat = "" if self.u_max is None else f", |u| <= {self.u_max:g}"
-        return f"impedance k_p={self.k_p:g}, k_d={self.k_d:g}{sat}"
-
-
-@dataclass(frozen=True)
-class ForceSchedule:
-    """Open-loop piecewise-constant force: ``u = values[i]`` on ``[times[i-1], times[i])``.
-
-    ``times`` are the switching instants (strictly increasing, > 0); ``values``
-    has one more entry than ``times`` and its last value is held forever.
-    """
-
-    times: tuple[float, ...]
-    values: tuple[float, ...]
-
-    def __post_init__(self) -> None:
-        t = tuple(check_finite("times", v) for v in self.times)
-        u = tuple(check_finite("values", v) for v in self.values)
-        if len(u) != len(t) + 1:
-            raise ParameterError("values", "needs exactly one more entry than times")
-        if any(b <= a for a, b in zip((0.0,) + t, t, strict=False)):
-            raise ParameterError("times", "must be strictly increasing and > 0")
-        object.__setattr__(self, "times", t)
-        object.__setattr__(self, "values", u)
-
-    @classmethod
-    def from_arcs(cls, durations, values) -> ForceSchedule:
-        """Schedule from arc durations and the force on each arc (and after)."""
-        d = [check_positive("durations", v) for v in durations]
-        return cls(tuple(np.cumsum(d)), tuple(values))
-
-    def describe(self) -> str:
-        return f"open-loop schedule with {len(self.times)} switches"
-
-
-Policy = Rigid | Impedance | ForceSchedule
-
-
-def impedance_gain_vector(k_p: float, k_d: float, l0: float) -> np.ndarray:
-    """``u = K . [x_b, v_b, x_f, v_f, 1]`` for the impedance law."""
-    return np.array([-k_p, -k_d, k_p, k_d, k_p * l0])
-
-
-def rigid_lock_gains(mats: dict[str, np.ndarray]) -> np.ndarray:
-    """Per-mode feedback that keeps ``v_b' = v_f'`` (the locked leg), from the mode matrices."""
-    R = np.zeros(5)
-    R[VB], R[VF] = 1.0, -1.0
-    Kf = np.empty((3, 5))
-    for m in range(3):
-        Kf[m] = -(R @ mats["A"][m]) / (R @ mats["B"][m])
-    return Kf
 
 
 # ---------------------------------------------------------------------- results
@@ -143,14 +46,22 @@ def rigid_lock_gains(mats: dict[str, np.ndarray]) -> np.ndarray:
 class EnergyLedger:
     """Energies in units of ``m_t g x_s``, potential energy measured from the impact pose.
 
-    ``E0 - ET = ground + actuator`` where ``ground = x_f(T)^2 / 2`` is the work
-    done on the plastic ground and ``actuator = -int_0^T u (v_b - v_f) dtau`` is the
-    energy taken out of the robot by the actuator (the paper writes its
-    magnitude; with ``u > 0`` pushing the masses apart the balance needs the
-    minus sign). ``E0 = v0^2 / 2`` is the impact kinetic energy, so
-    ``cot = (E0 - ET) / E0`` is 1 for a perfectly inelastic impact and exceeds
-    1 by the work of gravity during the sinking; ``cot_lossless`` counts the
-    ground loss only (actuator rendering without loss). Both are NaN at ``v0 = 0``.
+    ``E0 - ET = ground + actuator`` where ``ground`` is the work done on the
+    plastic ground (``x_f(T)^2 / 2`` for the paper's spring) and
+    ``actuator = -int_0^T u (v_b - v_f) dtau`` is the energy taken out of the
+    robot by the actuator (the paper writes its magnitude; with ``u > 0``
+    pushing the masses apart the balance needs the minus sign). ``E0 = v0^2 / 2``
+    is the impact kinetic energy, so ``cot = (E0 - ET) / E0`` is 1 for a
+    perfectly inelastic impact and exceeds 1 by the work of gravity during the
+    sinking; ``cot_lossless`` counts the ground loss only (actuator rendering
+    without loss). Both are NaN at ``v0 = 0``.
+
+    Parameters
+    ----------
+    E0, ET : float
+        Mechanical energy at impact and at rest.
+    ground, actuator : float
+        Work done on the ground and taken out by the actuator.
     """
 
     E0: float
@@ -160,10 +71,12 @@ class EnergyLedger:
 
     @property
     def cot(self) -> float:
+        """``(E0 - ET) / E0`` (NaN at ``v0 = 0``)."""
         return (self.E0 - self.ET) / self.E0 if self.E0 > 0 else math.nan
 
     @property
     def cot_lossless(self) -> float:
+        """``ground / E0`` (NaN at ``v0 = 0``)."""
         return self.ground / self.E0 if self.E0 > 0 else math.nan
 
     @property
@@ -171,28 +84,15 @@ class EnergyLedger:
         """``(E0 - ET) - (ground + actuator)``: zero up to rounding."""
         return (self.E0 - self.ET) - (self.ground + self.actuator)
 
-    def as_dict(self) -> dict[str, float]:
+    def to_dict(self) -> dict[str, float]:
+        """Every figure, the two CoTs included."""
         return {"E0": self.E0, "ET": self.ET, "ground": self.ground,
                 "actuator": self.actuator, "cot": self.cot, "cot_lossless": self.cot_lossless}
 
 
-@dataclass
-class Trajectory:
-    """Dense samples of an exact trajectory: ``t`` (n,), ``x`` (n, 4), ``u`` (n,), ``mode`` (n,)."""
-
-    t: np.ndarray
-    x: np.ndarray
-    u: np.ndarray
-    mode: np.ndarray
-
-    @property
-    def stroke(self) -> np.ndarray:
-        return self.x[:, 0] - self.x[:, 2]
-
-    def as_dict(self) -> dict[str, list]:
-        return {"t": self.t.tolist(), "x_b": self.x[:, 0].tolist(), "v_b": self.x[:, 1].tolist(),
-                "x_f": self.x[:, 2].tolist(), "v_f": self.x[:, 3].tolist(),
-                "u": self.u.tolist(), "mode": [MODE_NAMES[m] for m in self.mode]}
+def stroke(traj: Trajectory) -> np.ndarray:
+    """Leg length ``x_b - x_f`` along a trajectory of the landing model."""
+    return traj.state("x_b") - traj.state("x_f")
 
 
 @dataclass
@@ -219,6 +119,10 @@ class LandingResult:
     status : str
         ``"rest proven"`` or why not.
     energy : EnergyLedger
+    n_segments : int
+        Hybrid segments simulated.
+    robot, impact, controller, ground
+        What was simulated.
     """
 
     depth: float
@@ -232,18 +136,32 @@ class LandingResult:
     status: str
     energy: EnergyLedger
     n_segments: int
-    params: DimensionlessParams
-    policy: Any
-    _segments: dict[str, np.ndarray] = field(default=None, repr=False)
+    robot: Robot
+    impact: Impact
+    controller: Controller
+    ground: Ground = LINEAR_GROUND
+    _segments: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
     def rest_proven(self) -> bool:
+        """The foot's final rest is proven (no further event can happen)."""
         return self.status == STATUS_NAMES[K.REST_PROVEN]
 
     def trajectory(self, t_end: float | None = None, n: int = 2000) -> Trajectory:
         """Sample the exact solution on ``n`` points of ``[0, t_end]`` plus every event time.
 
-        ``t_end`` defaults to 1.3 T (showing the body settle after the foot stops).
+        Parameters
+        ----------
+        t_end : float, optional
+            End of the samples; defaults to 1.3 T (showing the body settle after
+            the foot stops).
+        n : int
+            Number of evenly spaced samples (event times are added).
+
+        Returns
+        -------
+        Trajectory
+            States ``x_b, v_b, x_f, v_f``, control ``u`` and the ground mode of each sample.
         """
         seg = self._segments
         ts = seg["t"]
@@ -261,71 +179,37 @@ class LandingResult:
             x[i] = zk[:4]
             u[i] = seg["cu"][k] @ zk
             mode[i] = seg["mode"][k]
-        return Trajectory(grid, x, u, mode)
+        return Trajectory(grid, x, u[:, None], STATE_NAMES, ("u",),
+                          mode=np.array(MODE_NAMES)[mode])
 
     def to_dict(self, trajectory: bool = False) -> dict[str, Any]:
-        """Plain JSON-able dict (non-finite numbers become None)."""
+        """Plain JSON-able dict (non-finite numbers become None).
+
+        Parameters
+        ----------
+        trajectory : bool
+            Include the sampled trajectory.
+        """
         d = {
             "depth": self.depth, "steps": self.steps, "feasible": self.feasible,
             "u_peak": self.u_peak, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,
-            "n_segments": self.n_segments, "energy": self.energy.as_dict(),
-            "params": self.params.as_dict(), "policy": policy_as_dict(self.policy),
+            "n_segments": self.n_segments, "energy": self.energy.to_dict(),
+            "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
+            "ground": self.ground.to_dict(), "controller": self.controller.to_dict(),
         }
         if trajectory:
-            d["trajectory"] = self.trajectory().as_dict()
+            d["trajectory"] = self.trajectory().to_dict()
         return json_safe(d)
 
 
-def policy_as_dict(policy) -> dict[str, Any]:
-    """``{"kind": ..., **fields}`` for JSON output."""
-    kind = {Rigid: "rigid", Impedance: "impedance", ForceSchedule: "schedule"}[type(policy)]
-    return {"kind": kind, **asdict(policy)}
-
-
 # ----------------------------------------------------------------------- single
-def _as_dimensionless(params) -> DimensionlessParams:
-    if isinstance(params, PhysicalParams):
-        return params.to_dimensionless()
-    if isinstance(params, DimensionlessParams):
-        return params
-    raise TypeError("params must be DimensionlessParams or PhysicalParams")
-
-
-def default_policy(p: DimensionlessParams) -> Policy:
-    """Impedance from the parameters' gains when both are given, else the rigid leg."""
-    if p.k_p is not None and p.k_d is not None:
-        return Impedance(p.k_p, p.k_d, p.u_max)
-    if (p.k_p is None) != (p.k_d is None):
-        raise ParameterError("k_d" if p.k_d is None else "k_p", "give both k_p and k_d, or neither")
-    return Rigid()
-
-
-def _policy_arrays(policy: Policy, p: DimensionlessParams, mats):
-    empty = np.zeros(0)
-    if isinstance(policy, Rigid):
-        return rigid_lock_gains(mats), np.inf, empty, empty
-    if isinstance(policy, Impedance):
-        l0 = p.l0 if policy.l0 is None else policy.l0
-        Kf = np.empty((3, 5))
-        Kf[:] = impedance_gain_vector(policy.k_p, policy.k_d, l0)
-        umax = np.inf if policy.u_max is None else policy.u_max
-        return Kf, umax, empty, empty
-    if isinstance(policy, ForceSchedule):
-        return (np.zeros((3, 5)), np.inf, np.asarray(policy.times, float),
-                np.asarray(policy.values, float))
-    raise TypeError(f"unknown policy {policy!r}")
-
-
-def initial_state(p: DimensionlessParams) -> np.ndarray:
-    """The paper's impact state ``[l0, v0, 0, v0]``."""
-    return np.array([p.l0, p.v0, 0.0, p.v0])
-
-
 def simulate(
-    params: DimensionlessParams | PhysicalParams,
-    policy: Policy | None = None,
+    robot: Robot,
+    impact: Impact | float,
+    controller: Controller | None = None,
+    ground: Ground = LINEAR_GROUND,
     *,
     x0: np.ndarray | None = None,
     energy: bool = True,
@@ -336,51 +220,46 @@ def simulate(
 
     Parameters
     ----------
-    params : DimensionlessParams or PhysicalParams
-        Robot, ground and impact velocity (SI parameters are scaled first).
-    policy : Rigid, Impedance or ForceSchedule, optional
-        Defaults to :func:`default_policy`.
+    robot : Robot
+        Mass ratio, stroke, force limit (saturates every controller) and rest length.
+    impact : Impact or float
+        Impact velocity (a bare number is read as ``Impact(v0)``).
+    controller : Rigid, Impedance or ForceSchedule, optional
+        Default: the rigid leg.
+    ground : Ground
+        Ground model (must be affine for this exact simulator).
     x0 : array of 4, optional
-        Initial state; defaults to the paper's ``[s/2, v0, 0, v0]``.
+        Initial state; defaults to the impact state ``[l0, v0, 0, v0]``.
     energy : bool
         Compute the energy ledger (exact Gramian quadrature; ~2x cost).
-    t_max, max_segments : float, int
-        Give up proving rest after this time or this many hybrid segments.
+    t_max : float
+        Give up proving rest after this time.
+    max_segments : int
+        Give up proving rest after this many hybrid segments.
 
     Returns
     -------
     LandingResult
     """
-    p = _as_dimensionless(params)
-    policy = default_policy(p) if policy is None else policy
-    mats = mode_matrices(p.r_m)
-    Kf, umax, st, su = _policy_arrays(policy, p, mats)
-    z0 = initial_state(p) if x0 is None else np.asarray(x0, float)
+    impact = Impact.of(impact)
+    controller = Rigid() if controller is None else controller
+    mats = mode_matrices(robot.r_m, ground)
+    Kf, st, su = controller.kernel_arrays(mats, robot)
+    umax = math.inf if robot.u_max is None else robot.u_max
+    z0 = impact.initial_state(robot) if x0 is None else np.asarray(x0, float)
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
-    out, segments = K.run_landing(mats, Kf, umax, st, su, z0, p.s, float(t_max),
-                                  int(max_segments), bool(energy))
-    return _result_from_row(out, p, policy, segments)
-
-
-def _result_from_row(out, p, policy, segments=None) -> LandingResult:
+    out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
+                                  check("t_max", t_max), int(max_segments), bool(energy))
     return LandingResult(
-        depth=float(out[K.O_DEPTH]),
-        steps=int(out[K.O_STEPS]),
-        feasible=bool(out[K.O_FEAS]),
-        u_peak=float(out[K.O_UPEAK]),
-        stroke_min=float(out[K.O_SMIN]),
-        stroke_max=float(out[K.O_SMAX]),
-        t_first_stop=float(out[K.O_TSTOP]),
-        T=float(out[K.O_T]),
-        status=STATUS_NAMES[int(out[K.O_STATUS])],
-        energy=EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]),
-                            float(out[K.O_EGND]), float(out[K.O_EACT])),
-        n_segments=int(out[K.O_NSEG]),
-        params=p,
-        policy=policy,
-        _segments=segments,
-    )
+        depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
+        u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),
+        stroke_max=float(out[K.O_SMAX]), t_first_stop=float(out[K.O_TSTOP]),
+        T=float(out[K.O_T]), status=STATUS_NAMES[int(out[K.O_STATUS])],
+        energy=EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
+                            float(out[K.O_EACT])),
+        n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
+        ground=ground, _segments=segments)
 
 
 # ------------------------------------------------------------------------ batch
@@ -396,11 +275,22 @@ BATCH_FIELDS = tuple(_FIELD_COL)
 class BatchResult:
     """Arrays of per-landing figures, all of the broadcast input shape.
 
-    Fields are those of :data:`BATCH_FIELDS`; ``feasible`` is boolean, ``steps``
-    and ``status`` are integers (0 = rest proven). ``cot`` and
-    ``cot_lossless`` are derived (NaN where energy was not computed).
+    Fields are those of :data:`BATCH_FIELDS` (read as attributes); ``feasible``
+    is boolean, ``steps`` and ``status`` are integers (0 = rest proven).
+    ``cot`` and ``cot_lossless`` are derived (NaN where energy was not computed).
+
+    Parameters
+    ----------
+    robot : Robot
+    ground : Ground
+    inputs : dict
+        ``v0``, ``k_p``, ``k_d`` broadcast to the output shape.
+    data : dict
+        One array per field.
     """
 
+    robot: Robot
+    ground: Ground
     inputs: dict[str, np.ndarray]
     data: dict[str, np.ndarray]
 
@@ -412,32 +302,35 @@ class BatchResult:
 
     @property
     def cot(self) -> np.ndarray:
+        """``(E0 - ET) / E0`` per landing."""
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(self.data["E0"] > 0,
                             (self.data["E0"] - self.data["ET"]) / self.data["E0"], np.nan)
 
     @property
     def cot_lossless(self) -> np.ndarray:
+        """``ground / E0`` per landing."""
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(self.data["E0"] > 0, self.data["ground"] / self.data["E0"], np.nan)
 
+    @property
+    def stroke_margin(self) -> np.ndarray:
+        """Distance to the nearer stroke limit (negative when a limit is crossed)."""
+        return np.minimum(self.data["stroke_min"], self.robot.s - self.data["stroke_max"])
 
-def _check_array(name, flat, check) -> None:
-    bad = ~np.isfinite(flat)
-    if bad.any():
-        raise ParameterError(name, f"must be finite, got {float(flat[bad][0])!r}")
-    if flat.size:
-        check(name, float(flat.min()))
-        check(name, float(flat.max()))
+    @property
+    def strictly_feasible(self) -> np.ndarray:
+        """Rest proven and the stroke limits kept exactly (``feasible`` allows 1e-9 s of
+        rounding at a limit; an optimiser would exploit that)."""
+        return (self.data["status"] == K.REST_PROVEN) & (self.stroke_margin >= 0.0)
 
 
 def simulate_batch(
+    robot: Robot,
+    v0,
     k_p,
     k_d,
-    v0,
-    r_m=5.0,
-    s=20.0,
-    u_max=None,
+    ground: Ground = LINEAR_GROUND,
     *,
     energy: bool = False,
     progress: bool | None = None,
@@ -445,61 +338,57 @@ def simulate_batch(
     t_max: float = DEFAULT_T_MAX,
     max_segments: int = DEFAULT_MAX_SEGMENTS,
 ) -> BatchResult:
-    """Simulate many impedance-controlled landings in parallel (all cores).
+    """Simulate many impedance-controlled landings of one robot in parallel (all cores).
 
     Parameters
     ----------
-    k_p, k_d, v0, r_m, s : array_like
-        Broadcast against each other; ``l0 = s/2`` and the paper's initial state.
-    u_max : array_like or None
-        Force saturation (None: unlimited).
+    robot : Robot
+        The robot (its force limit saturates every landing; its rest length is
+        the impact leg length and the springs' rest length).
+    v0, k_p, k_d : array_like
+        Impact velocities and gains, broadcast against each other.
+    ground : Ground
+        Ground model (affine).
     energy : bool
         Also compute the energy ledger.
     progress : bool or None
         Show a tqdm progress bar; None shows one for more than 50,000 landings.
     chunk_size : int
         Landings per parallel call (the progress bar's granularity).
+    t_max : float
+        Give up proving rest after this time.
+    max_segments : int
+        Give up proving rest after this many hybrid segments.
 
     Returns
     -------
     BatchResult
     """
-    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in
-                                   (k_p, k_d, v0, r_m, s, np.inf if u_max is None else u_max)))
+    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d)))
     shape = arrays[0].shape
-    kp, kd, v, rm, ss, um = (np.array(a.ravel(), dtype=float) for a in arrays)
-    _check_array("k_p", kp, check_nonnegative)
-    _check_array("k_d", kd, check_nonnegative)
-    _check_array("v0", v, check_impact_velocity)
-    _check_array("r_m", rm, check_positive)
-    _check_array("s", ss, check_positive)
-    if u_max is not None:
-        _check_array("u_max", um, check_positive)
+    v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))
+                 for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
     n = kp.size
-    uniq, ridx = np.unique(rm, return_inverse=True)
-    mats = [mode_matrices(float(r)) for r in uniq]
-    l0 = 0.5 * ss
+    mats = mode_matrices(robot.r_m, ground)
+    l0 = robot.rest_length
     Kf = np.empty((n, 3, 5))
     Kf[:, :, 0], Kf[:, :, 1] = -kp[:, None], -kd[:, None]
     Kf[:, :, 2], Kf[:, :, 3] = kp[:, None], kd[:, None]
     Kf[:, :, 4] = (kp * l0)[:, None]
-    x0 = np.stack([l0, v, np.zeros(n), v], axis=1)
+    x0 = np.stack([np.full(n, l0), v, np.zeros(n), v], axis=1)
+    um = np.full(n, math.inf if robot.u_max is None else robot.u_max)
+    ss = np.full(n, robot.s)
     out = np.zeros((n, K.N_OUT))
-    if progress is None:
-        progress = n > 50_000
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
+    ridx = np.zeros(n, dtype=np.int64)
+    from ._progress import progress_bar
 
-        bar = tqdm(total=n, unit="landing", desc="simulating")
-    for a in range(0, n, chunk_size):
-        b = min(n, a + chunk_size)
-        K.run_batch(mats, ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b], t_max, max_segments,
-                    energy, out[a:b])
-        if bar is not None:
+    with progress_bar(n if progress or (progress is None and n > 50_000) else 0,
+                      "simulating", "landing") as bar:
+        for a in range(0, n, chunk_size):
+            b = min(n, a + chunk_size)
+            K.run_batch([mats], ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b],
+                        check("t_max", t_max), max_segments, energy, out[a:b])
             bar.update(b - a)
-    if bar is not None:
-        bar.close()
     data = {}
     for name, col in _FIELD_COL.items():
         v_ = out[:, col].reshape(shape)
@@ -508,6 +397,10 @@ def simulate_batch(
         elif name in ("steps", "status"):
             v_ = v_.astype(np.int64)
         data[name] = v_
-    inputs = {"k_p": arrays[0], "k_d": arrays[1], "v0": arrays[2], "r_m": arrays[3],
-              "s": arrays[4], "u_max": arrays[5]}
-    return BatchResult(inputs, data)
+    inputs = {"v0": arrays[0], "k_p": arrays[1], "k_d": arrays[2]}
+    return BatchResult(robot, ground, inputs, data)
+
+
+__all__ = ["BATCH_FIELDS", "BatchResult", "EnergyLedger", "ForceSchedule", "Impedance",
+           "LandingResult", "MODE_NAMES", "Rigid", "STATUS_NAMES", "simulate", "simulate_batch",
+           "stroke"]

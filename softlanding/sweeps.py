@@ -13,17 +13,22 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import xarray as xr
 
 from ._progress import progress as show_progress
-from .errors import ParameterError
-from .impedance import optimize_impedance, strictly_feasible
+from .errors import ParameterError, check_count
+from .ground import LINEAR_GROUND, Ground
+from .impedance import MAX_GRID, optimize_impedance
+from .model import PAPER_IMPEDANCE_ROBOT, Impact, Robot
 from .simulate import BATCH_FIELDS, simulate_batch
 
-CURVE_VARIABLES = ("feasible", "kp", "kd", "depth", "steps", "u_peak", "stroke_min",
+CURVE_VARIABLES = ("feasible", "k_p", "k_d", "depth", "steps", "u_peak", "stroke_min",
                    "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "value")
+MAX_LANDINGS = 50_000_000
+"""Largest dataset (about 6 GiB of results); larger requests are refused up front."""
 
 
 def _client(scheduler: str | None):
@@ -40,27 +45,41 @@ def _client(scheduler: str | None):
         raise ParameterError("scheduler", f"cannot reach {scheduler}: {exc}") from None
 
 
-def _batch_chunk(kp, kd, v0, r_m, s, u_max, energy, progress=False):
+def _batch_chunk(robot: Robot, ground: Ground, v0, kp, kd, energy: bool,
+                 progress: bool | None = False) -> dict[str, np.ndarray]:
     """Run one chunk (a top-level function, so Dask can ship it to workers)."""
-    b = simulate_batch(kp, kd, v0, r_m, s, u_max, energy=energy, progress=progress)
+    b = simulate_batch(robot, v0, kp, kd, ground, energy=energy, progress=progress)
     out = {k: b.data[k] for k in BATCH_FIELDS}
     out["cot"] = b.cot
     out["cot_lossless"] = b.cot_lossless
-    out["strictly_feasible"] = strictly_feasible(b)
+    out["strictly_feasible"] = b.strictly_feasible
     return out
 
 
-def impedance_dataset(k_p, k_d, v0, r_m=5.0, s=20.0, u_max: float | None = None, *,
-                      energy: bool = True, scheduler: str | None = None,
-                      progress: bool | None = None, chunks: int = 32) -> xr.Dataset:
+def _family(robot: Robot, r_m, s) -> tuple[np.ndarray, np.ndarray, list[Robot]]:
+    """The robots of a (r_m, s) family (the robot's own values when not given)."""
+    rr = np.atleast_1d(np.asarray(robot.r_m if r_m is None else r_m, dtype=float))
+    ss = np.atleast_1d(np.asarray(robot.s if s is None else s, dtype=float))
+    return rr, ss, [robot.replace(r_m=float(a), s=float(b)) for a in rr for b in ss]
+
+
+def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
+                      ground: Ground = LINEAR_GROUND, *, r_m=None, s=None, energy: bool = True,
+                      scheduler: str | None = None, progress: bool | None = None,
+                      chunks: int = 32) -> xr.Dataset:
     """Landings on the outer product of the given coordinates, as a labelled dataset.
 
     Parameters
     ----------
-    k_p, k_d, v0, r_m, s : float or 1-D array
-        Coordinates (each becomes a dimension, scalars of length 1).
-    u_max : float, optional
-        Force saturation for every landing.
+    v0, k_p, k_d : float or 1-D array
+        Coordinates (each becomes a dimension; scalars have length 1).
+    robot : Robot
+        The robot (its force limit saturates every landing).
+    ground : Ground
+        Ground model.
+    r_m, s : float or 1-D array, optional
+        A family of robots: these mass ratios and strokes replace the robot's
+        (dimensions ``r_m`` and ``s`` are always present).
     energy : bool
         Compute the energy ledger (CoT).
     scheduler : str, optional
@@ -68,36 +87,57 @@ def impedance_dataset(k_p, k_d, v0, r_m=5.0, s=20.0, u_max: float | None = None,
     progress : bool, optional
         Progress bar (default: for more than 50,000 landings).
     chunks : int
-        Number of chunks sent to a Dask cluster.
+        Number of chunks per robot sent to a Dask cluster.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(k_p, k_d, v0, r_m, s)``; every figure of every landing.
     """
     coords = {name: np.atleast_1d(np.asarray(v, dtype=float))
-              for name, v in (("k_p", k_p), ("k_d", k_d), ("v0", v0), ("r_m", r_m), ("s", s))}
+              for name, v in (("k_p", k_p), ("k_d", k_d), ("v0", v0))}
+    rr, ss, robots = _family(robot, r_m, s)
+    size = math.prod(c.size for c in coords.values()) * len(robots)
+    if size > MAX_LANDINGS:
+        raise ParameterError("grid", f"{size:,} landings requested; the limit is "
+                                     f"{MAX_LANDINGS:,} (about 6 GiB of results)")
     grids = np.meshgrid(*coords.values(), indexing="ij")
-    shape = grids[0].shape
-    flat = [g.ravel() for g in grids]
+    kp, kd, v = (g.ravel() for g in grids)
     client = _client(scheduler)
     if client is None:
-        res = _batch_chunk(*flat, u_max, energy, progress)
+        parts = [_batch_chunk(r, ground, v, kp, kd, energy, progress) for r in robots]
     else:
-        pieces = [np.array_split(f, min(chunks, f.size)) for f in flat]
-        futures = client.map(_batch_chunk, *pieces,
-                             *[[x] * len(pieces[0]) for x in (u_max, energy)], pure=False)
-        if progress or (progress is None and flat[0].size > 50_000):
-            from distributed import progress as dprogress
-
-            dprogress(futures)
-        parts = client.gather(futures)
-        res = {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
-        client.close()
-    dims = tuple(coords)
-    ds = xr.Dataset({k: (dims, np.asarray(v).reshape(shape)) for k, v in res.items()},
-                    coords=coords)
+        parts = _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress)
+    shape = grids[0].shape + (len(rr), len(ss))
+    data = {k: (("k_p", "k_d", "v0", "r_m", "s"),
+                np.stack([p[k].reshape(grids[0].shape) for p in parts], axis=-1).reshape(shape))
+            for k in parts[0]}
+    ds = xr.Dataset(data, coords={**coords, "r_m": rr, "s": ss})
     ds.attrs.update(title="soft landing, impedance control (exact simulation)",
-                    u_max=-1.0 if u_max is None else float(u_max),
-                    note="u_max = -1 means unlimited; feasible allows 1e-9 s rounding at a "
-                         "stroke limit, strictly_feasible none")
+                    u_max=-1.0 if robot.u_max is None else float(robot.u_max),
+                    l0=-1.0 if robot.l0 is None else float(robot.l0), ground=ground.name,
+                    note="u_max = -1 means unlimited, l0 = -1 means s/2; feasible allows "
+                         "1e-9 s rounding at a stroke limit, strictly_feasible none")
     _describe(ds)
     return ds
+
+
+def _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress) -> list[dict]:
+    """Map the chunks of every robot over a Dask cluster; one result dict per robot."""
+    n = min(chunks, kp.size)
+    pieces = [np.array_split(a, n) for a in (v, kp, kd)]
+    futures = [client.map(_batch_chunk, [r] * n, [ground] * n, *pieces, [energy] * n,
+                          pure=False) for r in robots]
+    if progress or (progress is None and kp.size * len(robots) > 50_000):
+        from distributed import progress as dprogress
+
+        dprogress([f for fs in futures for f in fs])
+    out = []
+    for fs in futures:
+        got = client.gather(fs)
+        out.append({k: np.concatenate([g[k] for g in got]) for k in got[0]})
+    client.close()
+    return out
 
 
 def _describe(ds: xr.Dataset) -> None:
@@ -110,21 +150,39 @@ def _describe(ds: xr.Dataset) -> None:
             ds[k].attrs["units"] = u
 
 
-def depth_map(v0: float, r_m: float = 5.0, s: float = 20.0, n: int = 101, **kw) -> xr.Dataset:
-    """The paper's (k_p, k_d) map at one impact velocity (gains in [0, 1])."""
+def depth_map(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_ROBOT,
+              ground: Ground = LINEAR_GROUND, n: int = 101, **kw: Any) -> xr.Dataset:
+    """The paper's (k_p, k_d) map at one impact velocity (gains in [0, 1]).
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot.
+    ground : Ground
+        Ground model.
+    n : int
+        Points per axis.
+    **kw
+        Passed to :func:`impedance_dataset` (``energy``, ``scheduler``, ``progress``).
+    """
+    impact = Impact.of(impact)
+    check_count("n", n, 2, MAX_GRID)
     g = np.round(np.linspace(0.0, 1.0, n), 12)
-    return impedance_dataset(g, g, v0, r_m, s, **kw).squeeze(("v0", "r_m", "s"))
+    return impedance_dataset(impact.v0, g, g, robot, ground, **kw).squeeze(("v0", "r_m", "s"))
 
 
 # ----------------------------------------------------------------- curves
-def _optimum_row(v0, r_m, s, objective, grid):
+def _optimum_row(v0: float, robot: Robot, ground: Ground, objective: str,
+                 grid: int) -> dict[str, Any]:
     try:
-        o = optimize_impedance(v0, r_m, s, objective=objective, grid=grid)
+        o = optimize_impedance(v0, robot, ground, objective=objective, grid=grid)
     except ParameterError as exc:
         if "no feasible gains" not in str(exc):
             raise
         # no gains in the box keep the stroke: recorded, not fatal for the sweep
-        row = {k: math.nan for k in CURVE_VARIABLES}
+        row: dict[str, Any] = {k: math.nan for k in CURVE_VARIABLES}
         row.update(steps=-1, on_stroke_boundary=False, feasible=False)
         return row
     row = {k: getattr(o, k) for k in CURVE_VARIABLES if k != "feasible"}
@@ -132,46 +190,78 @@ def _optimum_row(v0, r_m, s, objective, grid):
     return row
 
 
-def optimal_impedance_curves(v0: Sequence[float], r_m: Sequence[float] = (5.0,),
-                             s: Sequence[float] = (20.0,), *, objective: str = "depth",
-                             grid: int = 101, scheduler: str | None = None,
-                             progress: bool = True) -> xr.Dataset:
-    """Optimal gains against impact velocity, for every (r_m, s) given.
+def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE_ROBOT,
+                             ground: Ground = LINEAR_GROUND, *, r_m=None, s=None,
+                             objective: str = "depth", grid: int = 101,
+                             scheduler: str | None = None,
+                             progress: bool | None = True) -> xr.Dataset:
+    """Optimal gains against impact velocity, for the robot or a family of robots.
 
-    Returns a dataset with dims ``(r_m, s, v0)`` and variables
-    :data:`CURVE_VARIABLES`; where no gains in the box keep the stroke,
-    ``feasible`` is False and the figures are NaN.
+    Parameters
+    ----------
+    v0 : sequence of float
+        Impact velocities.
+    robot : Robot
+        The robot (or the template of the family).
+    ground : Ground
+        Ground model.
+    r_m, s : sequence of float, optional
+        A family: every combination of these mass ratios and strokes.
+    objective : {"depth", "cot", "cot-lossless"}
+        What the gains minimise.
+    grid : int
+        Starting grid of each optimisation.
+    scheduler : str, optional
+        Dask scheduler address (one task per problem).
+    progress : bool, optional
+        Progress bar.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dims ``(r_m, s, v0)``, variables :data:`CURVE_VARIABLES`; where no gains in
+        the box keep the stroke, ``feasible`` is False and the figures are NaN.
     """
     v0 = np.atleast_1d(np.asarray(v0, dtype=float))
-    r_m = np.atleast_1d(np.asarray(r_m, dtype=float))
-    s = np.atleast_1d(np.asarray(s, dtype=float))
-    tasks = [(float(v), float(r), float(ss)) for r in r_m for ss in s for v in v0]
+    for v in v0:  # bad input fails before any work (and any progress bar)
+        Impact(float(v))
+    check_count("grid", grid, 2, MAX_GRID)
+    rr, ss, robots = _family(robot, r_m, s)
+    tasks = [(float(v), r) for r in robots for v in v0]
     client = _client(scheduler)
     if client is None:
-        rows = [_optimum_row(v, r, ss, objective, grid) for v, r, ss in
+        rows = [_optimum_row(v, r, ground, objective, grid) for v, r in
                 show_progress(tasks, progress, "optimal gains", "landing problem")]
     else:
-        futures = client.map(_optimum_row, *zip(*tasks, strict=True),
+        futures = client.map(_optimum_row, *zip(*tasks, strict=True), [ground] * len(tasks),
                              [objective] * len(tasks), [grid] * len(tasks), pure=False)
         rows = client.gather(futures)
         client.close()
-    shape = (len(r_m), len(s), len(v0))
+    shape = (len(rr), len(ss), len(v0))
     data = {k: (("r_m", "s", "v0"), np.array([row[k] for row in rows]).reshape(shape))
             for k in CURVE_VARIABLES}
-    ds = xr.Dataset(data, coords={"r_m": r_m, "s": s, "v0": v0})
-    ds.attrs.update(objective=objective, grid=grid,
+    ds = xr.Dataset(data, coords={"r_m": rr, "s": ss, "v0": v0})
+    ds.attrs.update(objective=objective, grid=grid, ground=ground.name,
                     title=f"optimal impedance (objective: {objective})")
     return ds
 
 
-def paper_observations(curves: xr.Dataset, r_m: float = 5.0, s: float = 20.0) -> dict:
-    """Check the paper's Section IV claims on one curve; numbers, not adjectives."""
-    c = curves.sel(r_m=r_m, s=s)
+def paper_observations(curves: xr.Dataset, robot: Robot = PAPER_IMPEDANCE_ROBOT) -> dict:
+    """Check the paper's Section IV claims on one curve; numbers, not adjectives.
+
+    Parameters
+    ----------
+    curves : xarray.Dataset
+        From :func:`optimal_impedance_curves`.
+    robot : Robot
+        Which curve (its ``r_m`` and ``s``).
+    """
+    c = curves.sel(r_m=robot.r_m, s=robot.s)
     c = c.isel(v0=np.flatnonzero(c.feasible.values.astype(bool)))
     order = np.argsort(np.abs(c.v0.values))
     speed = np.abs(c.v0.values[order])
-    kp = c.kp.values[order]
-    kd = c.kd.values[order]
+    kp = c.k_p.values[order]
+    kd = c.k_d.values[order]
     dkp = np.diff(kp)
     i_min = int(np.argmin(kd))
     return {
@@ -191,7 +281,15 @@ def paper_observations(curves: xr.Dataset, r_m: float = 5.0, s: float = 20.0) ->
 
 # --------------------------------------------------------------- netCDF I/O
 def save_dataset(ds: xr.Dataset, path: str | Path) -> None:
-    """Write netCDF (v3, through scipy: no extra dependency); booleans as int8."""
+    """Write netCDF (v3, through scipy: no extra dependency); booleans as int8.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        What to write.
+    path : str or Path
+        Where.
+    """
     out = ds.copy()
     for k, v in out.data_vars.items():
         if v.dtype == bool:
@@ -203,7 +301,13 @@ def save_dataset(ds: xr.Dataset, path: str | Path) -> None:
 
 
 def load_dataset(path: str | Path) -> xr.Dataset:
-    """Read a dataset written by :func:`save_dataset` (booleans restored)."""
+    """Read a dataset written by :func:`save_dataset` (booleans restored).
+
+    Parameters
+    ----------
+    path : str or Path
+        The netCDF file.
+    """
     ds = xr.load_dataset(path, engine="scipy")
     for k, v in ds.data_vars.items():
         if v.attrs.get("boolean") == 1:

@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from softlanding import DimensionlessParams, Impedance, simulate
+from softlanding import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Impedance, Robot, simulate
 from softlanding.cli import main
 from softlanding.impedance import optimize_impedance
 from softlanding.landing import solve_landing
-from softlanding.robustness import design, replay
+from softlanding.robustness import NOMINAL_UNITS, design, replay, transfer
 
 FIGURES = ("fig_bang_bang_trajectory", "fig_stepped_intrusions", "fig_depth_maps",
            "fig_optimal_gains", "fig_depth_vs_velocity", "fig_experiment",
@@ -41,7 +41,7 @@ def test_every_file_written_and_non_empty(run):
 
 def test_bang_bang_numbers_match_the_api(run):
     bb = run[1]["bang_bang_example"]
-    direct = solve_landing(-3.0, 5.0, 20.0, 8.2)
+    direct = solve_landing(-3.0, PAPER_ROBOT)
     assert bb["depth"] == pytest.approx(direct.depth, rel=1e-10)
     assert bb["switch_times"] == pytest.approx(direct.switch_times, rel=1e-9)
     assert bb["arcs"] == ["max", "min"]
@@ -53,7 +53,7 @@ def test_stepped_intrusions_match_the_simulator(run):
     si = run[1]["stepped_intrusions"]
     assert [t["steps"] for t in si["trajectories"]] == si["paper_steps"] == [1, 2, 3]
     for t in si["trajectories"]:
-        r = simulate(DimensionlessParams(v0=-1.0), Impedance(0.2, t["k_d"]))
+        r = simulate(PAPER_IMPEDANCE_ROBOT, Impact(-1.0), Impedance(0.2, t["k_d"]))
         assert t["depth"] == r.depth
 
 
@@ -61,8 +61,8 @@ def test_optima_and_comparison_match_the_api(run):
     s = run[1]
     grid = s["meta"]["settings"]["optimizer_grid"]
     row = next(r for r in s["depth_maps"] if r["v0"] == -3.0)
-    o = optimize_impedance(-3.0, 5.0, 20.0, grid=grid)
-    assert (row["k_p"], row["k_d"], row["depth"]) == (o.kp, o.kd, o.depth)
+    o = optimize_impedance(-3.0, PAPER_IMPEDANCE_ROBOT, grid=grid)
+    assert (row["k_p"], row["k_d"], row["depth"]) == (o.k_p, o.k_d, o.depth)
     assert row["on_stroke_boundary"]
     fastest = min(s["comparison"]["rows"], key=lambda r: r["v0"])
     assert fastest["rigid"] == pytest.approx(1 + math.sqrt(1 + fastest["v0"] ** 2), rel=1e-15)
@@ -76,11 +76,11 @@ def test_experiment_and_cot_rows_match_the_api(run):
     s = run[1]
     grid = s["meta"]["settings"]["optimizer_grid"]
     e = next(r for r in s["experiment"] if r["k_p"] == 0.5 and r["v0"] == -3.2)
-    r = simulate(DimensionlessParams(v0=-3.2), Impedance(0.5, e["best_k_d"]))
+    r = simulate(PAPER_IMPEDANCE_ROBOT, Impact(-3.2), Impedance(0.5, e["best_k_d"]))
     assert e["best_depth"] == pytest.approx(r.depth, rel=1e-12)
     c = s["cost_of_transport"][-1]
     o = optimize_impedance(c["v0"], objective="cot", grid=grid)
-    assert (c["cot_opt_kp"], c["cot_opt_kd"], c["cot_opt_cot"]) == (o.kp, o.kd, o.cot)
+    assert (c["cot_opt_k_p"], c["cot_opt_k_d"], c["cot_opt_cot"]) == (o.k_p, o.k_d, o.cot)
     # lossless CoT = depth^2 / v0^2 is increasing in depth: same optimum as min-depth
     assert c["cot_lossless_opt_depth"] == pytest.approx(c["depth_opt_depth"], rel=1e-9)
 
@@ -89,10 +89,9 @@ def test_robustness_entry_matches_a_direct_replay(run):
     rb = run[1]["robustness"]
     f = rb["factors"][-1]
     ratios = rb["depth_ratio"]["impedance|0|v0"]
-    nominal = DimensionlessParams(r_m=5.0, s=20.0, v0=-3.0)
     grid = run[1]["meta"]["settings"]["optimizer_grid"]
     pol = design(-3.0, grid=grid, controllers=("impedance",))["impedance"][0]
-    res, _ = replay(nominal, pol, "v0", f)
+    res, _ = replay(PAPER_IMPEDANCE_ROBOT, Impact(-3.0), pol, "v0", f)
     redesigned = optimize_impedance(-3.0 * f, grid=grid).depth
     assert ratios[-1] == pytest.approx(res.depth / redesigned, rel=1e-12)
     assert all(x is None for x in rb["depth_ratio"]["impedance|0|switch"])  # NaN in JSON
@@ -112,35 +111,49 @@ def test_ground_stiffness_error_scales_as_derived_by_hand():
     from softlanding.robustness import true_model
 
     c = 1.3
-    nominal = DimensionlessParams(r_m=5.0, s=20.0, v0=-3.0, k_p=0.2, k_d=0.3)
-    true, lr, tr = true_model(nominal, "k_g", c)
+    robot, impact = Robot(r_m=5.0, s=20.0), Impact(-3.0)
+    true_robot, true_impact, units = true_model(robot, impact, "k_g", c)
+    true = transfer(Impedance(0.2, 0.3), NOMINAL_UNITS, units)
+    lr, tr = units.length / NOMINAL_UNITS.length, units.time / NOMINAL_UNITS.time
     assert true.k_p == pytest.approx(0.2 / c, rel=1e-14)
     assert true.k_d == pytest.approx(0.3 / math.sqrt(c), rel=1e-14)
-    assert true.s == pytest.approx(20.0 * c, rel=1e-14)
-    assert true.v0 == pytest.approx(-3.0 * math.sqrt(c), rel=1e-14)
+    assert true_robot.s == pytest.approx(20.0 * c, rel=1e-14)
+    assert true_impact.v0 == pytest.approx(-3.0 * math.sqrt(c), rel=1e-14)
     assert (lr, tr) == pytest.approx((1 / c, 1 / math.sqrt(c)), rel=1e-14)
     # and the mass ratio changes at fixed total mass: scales unchanged
-    true, lr, tr = true_model(nominal, "r_m", 0.8)
-    assert true.r_m == pytest.approx(4.0) and (lr, tr) == pytest.approx((1.0, 1.0))
+    true_robot, _, units = true_model(robot, impact, "r_m", 0.8)
+    lr, tr = units.length / NOMINAL_UNITS.length, units.time / NOMINAL_UNITS.time
+    assert true_robot.r_m == pytest.approx(4.0) and (lr, tr) == pytest.approx((1.0, 1.0))
 
 
 def test_open_loop_body_motion_ignores_the_ground():
     """The body's motion under a force schedule does not depend on k_g, so the bang-bang
     body still stops on a stiffer or softer ground, but not with a wrong impact velocity."""
-    nominal = DimensionlessParams(r_m=5.0, s=20.0, v0=-3.0)
     sched = solve_landing(-3.0, replay=False).schedule()
     for f in (0.7, 1.3):
-        res, _ = replay(nominal, sched, "k_g", f)
+        res, _ = replay(PAPER_ROBOT, Impact(-3.0), sched, "k_g", f)
         assert np.isfinite(res.stroke_max) and res.rest_proven
-    res, _ = replay(nominal, sched, "v0", 1.1)
+    res, _ = replay(PAPER_ROBOT, Impact(-3.0), sched, "v0", 1.1)
     assert not np.isfinite(res.stroke_min) or not np.isfinite(res.stroke_max)
 
 
 def test_a_stroke_margin_is_centred_on_the_true_stroke():
     """Designed for 0.9 s and run on s, the impedance landing keeps 0.05 s free at the end
     it was designed to touch (the design landing, shifted by the centred margin)."""
-    nominal = DimensionlessParams(r_m=5.0, s=20.0, v0=-3.0)
     pol, depth, _ = design(-3.0, margin=0.1, grid=41, controllers=("impedance",))["impedance"]
-    res, lr = replay(nominal, pol, "v0", 1.0)
+    res, lr = replay(PAPER_IMPEDANCE_ROBOT, Impact(-3.0), pol, "v0", 1.0)
     assert lr == 1.0 and res.depth == pytest.approx(depth, rel=1e-12)
     assert res.stroke_min == pytest.approx(0.05 * 20.0, abs=1e-6)
+
+
+@pytest.mark.parametrize("parameter", ["k_g", "r_m", "v0"])
+def test_a_rest_length_survives_the_replay_unchanged_in_si(parameter):
+    """An impedance with its own rest length, replayed with no model error (factor 1), is the
+    same landing: the rest length goes through the SI conversion (it used to be dropped)."""
+    robot, impact = PAPER_IMPEDANCE_ROBOT, Impact(-3.0)
+    imp = Impedance(0.3, 0.4, l0=6.0)
+    direct = simulate(robot, impact, imp)
+    res, lr = replay(robot, impact, imp, parameter, 1.0)
+    assert lr == pytest.approx(1.0, rel=1e-15)
+    assert res.depth == pytest.approx(direct.depth, rel=1e-12)
+    assert res.stroke_min == pytest.approx(direct.stroke_min, rel=1e-9)

@@ -8,20 +8,28 @@ import scipy.linalg
 from ivp_reference import landing_depth_ivp
 
 from softlanding import (
-    DimensionlessParams,
     ForceSchedule,
+    Impact,
     Impedance,
     ParameterError,
     Rigid,
+    Robot,
     paper_rig,
     simulate,
     simulate_batch,
 )
+from softlanding.simulate import stroke
+
+R = Robot(r_m=5, s=20)  # the paper's robot without force limit
+
+
+def robot(u_max=None, r_m=5.0):
+    return Robot(r_m=r_m, s=20, u_max=None if u_max is None or math.isinf(u_max) else u_max)
 
 
 @pytest.mark.parametrize("v0", [0.0, -0.3, -1.0, -3.0, -7.5, -10.0])
 def test_rigid_leg_depth_and_stop_time_are_analytic(v0):
-    r = simulate(DimensionlessParams(r_m=5, s=20, v0=v0), Rigid())
+    r = simulate(R, Impact(v0), Rigid())
     assert r.rest_proven and r.steps == 1 and r.feasible
     assert r.depth == pytest.approx(1 + math.sqrt(1 + v0 * v0), abs=1e-10)
     # x = -1 + cos t + v0 sin t stops when tan t = v0, t in (pi/2, pi]
@@ -32,7 +40,7 @@ def test_rigid_leg_depth_and_stop_time_are_analytic(v0):
 
 @pytest.mark.parametrize("kd,steps", [(0.4, 1), (0.18, 2), (0.0, 3)])
 def test_paper_stepped_intrusions(kd, steps):
-    r = simulate(DimensionlessParams(r_m=5, s=20, v0=-1.0), Impedance(0.2, kd))
+    r = simulate(R, Impact(-1.0), Impedance(0.2, kd))
     assert r.rest_proven
     assert r.steps == steps
 
@@ -43,7 +51,7 @@ CASES = [(0.2, 0.4, -1.0, None), (0.5, 0.5, -10.0, None), (0.2, 0.0, -1.0, None)
 
 @pytest.mark.parametrize("kp,kd,v0,umax", CASES)
 def test_energy_ledger_closes(kp, kd, v0, umax):
-    r = simulate(DimensionlessParams(r_m=5, s=20, v0=v0), Impedance(kp, kd, umax))
+    r = simulate(robot(umax), Impact(v0), Impedance(kp, kd))
     e = r.energy
     assert r.rest_proven
     assert e.ground == pytest.approx(0.5 * r.depth**2, rel=1e-15)
@@ -52,7 +60,7 @@ def test_energy_ledger_closes(kp, kd, v0, umax):
 
 
 def test_energy_ledger_rigid_leg_has_no_actuator_loss():
-    r = simulate(DimensionlessParams(v0=-3.0), Rigid())
+    r = simulate(R, Impact(-3.0), Rigid())
     # the lock force does no work (no relative motion): all energy goes into the ground
     assert abs(r.energy.actuator) < 1e-12
     assert r.energy.E0 - r.energy.ET == pytest.approx(r.energy.ground, rel=1e-12)
@@ -61,8 +69,8 @@ def test_energy_ledger_rigid_leg_has_no_actuator_loss():
 def test_same_landing_in_si_and_dimensionless_units():
     ph = paper_rig(v0=-0.9, K_p=0.3 * 4400.0, K_d=0.25 * math.sqrt(3.0 * 4400.0))
     d = ph.to_dimensionless()
-    r_si = simulate(ph)
-    r_nd = simulate(DimensionlessParams(r_m=5, s=20, v0=d.v0), Impedance(0.3, 0.25))
+    r_si = simulate(*d)
+    r_nd = simulate(R, Impact(d.impact.v0), Impedance(0.3, 0.25))
     assert r_si.depth == pytest.approx(r_nd.depth, rel=1e-12)
     assert r_si.steps == r_nd.steps
 
@@ -80,8 +88,7 @@ def _sample_cases(n=14, seed=7):
 
 @pytest.mark.parametrize("kp,kd,v0,umax", _sample_cases())
 def test_agrees_with_solve_ivp(kp, kd, v0, umax):
-    r = simulate(DimensionlessParams(v0=v0),
-                 Impedance(kp, kd, None if math.isinf(umax) else umax), energy=False)
+    r = simulate(robot(umax), Impact(v0), Impedance(kp, kd), energy=False)
     ref = landing_depth_ivp(v0, kp, kd, umax=umax)
     assert r.rest_proven
     assert r.steps == ref["steps"]
@@ -91,10 +98,10 @@ def test_agrees_with_solve_ivp(kp, kd, v0, umax):
 
 @pytest.mark.parametrize("kp,kd,v0,umax", CASES)
 def test_stroke_and_force_extrema_bound_dense_samples(kp, kd, v0, umax):
-    r = simulate(DimensionlessParams(v0=v0), Impedance(kp, kd, umax))
+    r = simulate(robot(umax), Impact(v0), Impedance(kp, kd))
     # two body periods past the final foot stop: the tail's extremes count too
     tr = r.trajectory(t_end=r.T + 30.0, n=6000)
-    st = tr.stroke
+    st = stroke(tr)
     # exact extrema enclose every sample and are attained (to sampling resolution)
     assert r.stroke_min <= st.min() + 1e-12 and r.stroke_max >= st.max() - 1e-12
     assert np.abs(tr.u).max() <= r.u_peak + 1e-12
@@ -106,7 +113,7 @@ def test_stroke_and_force_extrema_bound_dense_samples(kp, kd, v0, umax):
 
 def test_open_loop_zero_force_is_a_lone_foot_and_a_falling_body():
     r_m, v0 = 5.0, -2.0
-    r = simulate(DimensionlessParams(r_m=r_m, v0=v0), ForceSchedule((), (0.0,)))
+    r = simulate(robot(r_m=r_m), Impact(v0), ForceSchedule((), (0.0,)))
     mf = 1 / (1 + r_m)
     assert r.depth == pytest.approx(mf + math.sqrt(mf**2 + v0**2 * mf), abs=1e-12)
     assert r.rest_proven
@@ -116,7 +123,7 @@ def test_open_loop_zero_force_is_a_lone_foot_and_a_falling_body():
 
 def test_open_loop_switch_matches_matrix_exponential_composition():
     r_m, v0, t1, u1, u2 = 5.0, -3.0, 0.4, 2.0, -1.5
-    r = simulate(DimensionlessParams(r_m=r_m, v0=v0), ForceSchedule((t1,), (u1, u2)))
+    r = simulate(robot(r_m=r_m), Impact(v0), ForceSchedule((t1,), (u1, u2)))
     # yielding foot written out independently: x'' = -1 - (1+r)(x + u)
     w2 = 1 + r_m
 
@@ -132,7 +139,7 @@ def test_open_loop_switch_matches_matrix_exponential_composition():
 
 def test_rest_not_proven_is_reported():
     # no spring: the body sinks onto the foot, which creeps toward depth 1 forever
-    r = simulate(DimensionlessParams(v0=-1.0), Impedance(0.0, 0.07), t_max=200.0)
+    r = simulate(R, Impact(-1.0), Impedance(0.0, 0.07), t_max=200.0)
     assert not r.rest_proven
     assert "horizon" in r.status
     assert not r.feasible
@@ -142,9 +149,9 @@ def test_batch_matches_single_runs():
     kp = np.array([0.2, 0.2, 0.5, 0.9, 0.05])
     kd = np.array([0.4, 0.0, 0.5, 0.1, 0.3])
     v0 = np.array([-1.0, -1.0, -10.0, -3.0, -0.5])
-    b = simulate_batch(kp, kd, v0, energy=True)
+    b = simulate_batch(R, v0, kp, kd, energy=True)
     for i in range(len(kp)):
-        r = simulate(DimensionlessParams(v0=v0[i]), Impedance(kp[i], kd[i]))
+        r = simulate(R, Impact(v0[i]), Impedance(kp[i], kd[i]))
         assert b.depth[i] == r.depth
         assert b.steps[i] == r.steps
         assert b.feasible[i] == r.feasible
@@ -153,19 +160,19 @@ def test_batch_matches_single_runs():
 
 
 def test_batch_broadcasts_and_validates():
-    b = simulate_batch(np.linspace(0.1, 1, 4)[:, None], np.linspace(0.1, 1, 3)[None, :], -2.0)
+    b = simulate_batch(R, -2.0, np.linspace(0.1, 1, 4)[:, None], np.linspace(0.1, 1, 3)[None, :])
     assert b.depth.shape == (4, 3)
     with pytest.raises(ParameterError, match="k_d"):
-        simulate_batch(0.2, [-0.1, 0.2], -1.0)
+        simulate_batch(R, -1.0, 0.2, [-0.1, 0.2])
     with pytest.raises(ParameterError, match="v0"):
-        simulate_batch(0.2, 0.2, [0.1])
+        simulate_batch(R, [0.1], 0.2, 0.2)
     with pytest.raises(ParameterError, match="r_m"):
-        simulate_batch(0.2, 0.2, -1.0, r_m=np.nan)
+        simulate_batch(Robot(r_m=np.nan, s=20), -1.0, 0.2, 0.2)
 
 
 @pytest.mark.parametrize("bad", [
     lambda: Impedance(-0.1, 0.2), lambda: Impedance(0.1, math.nan),
-    lambda: Impedance(0.1, 0.1, u_max=0.0), lambda: ForceSchedule((1.0, 0.5), (0, 1, 2)),
+    lambda: Robot(r_m=5, s=20, u_max=0.0), lambda: ForceSchedule((1.0, 0.5), (0, 1, 2)),
     lambda: ForceSchedule((1.0,), (0.0,)),
 ])
 def test_policy_bad_input(bad):
