@@ -233,13 +233,8 @@ def robustness_study(impact: Impact | float = -3.0, robot: Robot = PAPER_ROBOT, 
         Entries that do not apply (moving an impedance's switch) are NaN.
     """
     impact = Impact.of(impact)
-    if not 0.0 < spread < 1.0:
-        raise ParameterError("spread", f"must be in (0, 1), got {spread}")
-    n = check_count("n", n, 3, 1001)
-    if n % 2 == 0:
-        raise ParameterError("n", f"must be odd (so 1 is a factor), got {n}")
-    factors = np.linspace(1.0 - spread, 1.0 + spread, n)
-    factors[n // 2] = 1.0
+    factors = _factors(spread, n)
+    n = factors.size
     shape = (len(CONTROLLERS), len(margins), len(PARAMETERS), n)
     var = {k: np.full(shape, np.nan) for k in ("depth_ratio", "depth_change", "violation")}
     kept = np.zeros(shape, dtype=bool)
@@ -254,24 +249,12 @@ def robustness_study(impact: Impact | float = -3.0, robot: Robot = PAPER_ROBOT, 
                 nominal_depth[i, j] = designs[m][name][1]
         warm = designs[m]["bang-bang"][2]
         for q, f in enumerate(factors):
-            if par == "switch":
-                oracle = {name: designs[m][name][1] for name in CONTROLLERS}
-            else:
-                true, true_impact, _ = true_model(robot, impact, par, float(f))
-                redesign = design(true_impact, true, margin=m, grid=grid, warm_start=warm)
-                warm = redesign["bang-bang"][2]
-                oracle = {name: redesign[name][1] for name in CONTROLLERS}
+            oracle, warm = _redesigned(robot, impact, par, float(f), m, grid, designs[m], warm)
             for i, name in enumerate(CONTROLLERS):
-                pol = designs[m][name][0]
-                if par == "switch" and isinstance(pol, Impedance):
+                cell = _replayed(robot, impact, designs[m][name][0], name, par, float(f))
+                if cell is None:
                     continue
-                # the impedance is unsaturated, as designed (the paper's comparison)
-                rob = robot if name == "bang-bang" else robot.without_force_limit()
-                res, lr = replay(rob, impact, pol, par, float(f))
-                s_true = res.robot.s
-                # an open-loop body that is not stopped drifts for ever: its
-                # exact stroke range is unbounded (inf)
-                over = max(0.0, -res.stroke_min, res.stroke_max - s_true) / s_true
+                res, lr, over = cell
                 var["depth_ratio"][i, j, k, q] = res.depth / oracle[name]
                 var["depth_change"][i, j, k, q] = res.depth * lr / nominal_depth[i, j]
                 var["violation"][i, j, k, q] = over
@@ -288,6 +271,43 @@ def robustness_study(impact: Impact | float = -3.0, robot: Robot = PAPER_ROBOT, 
                     u_max=-1.0 if robot.u_max is None else robot.u_max, spread=spread,
                     title="nominal controllers replayed on a perturbed model")
     return ds
+
+
+def _factors(spread: float, n: int) -> np.ndarray:
+    """``n`` factors over ``1 +- spread``, 1 exactly in the middle."""
+    if not 0.0 < spread < 1.0:
+        raise ParameterError("spread", f"must be in (0, 1), got {spread}")
+    n = check_count("n", n, 3, 1001)
+    if n % 2 == 0:
+        raise ParameterError("n", f"must be odd (so 1 is a factor), got {n}")
+    factors = np.linspace(1.0 - spread, 1.0 + spread, n)
+    factors[n // 2] = 1.0
+    return factors
+
+
+def _redesigned(robot: Robot, impact: Impact, par: str, f: float, margin: float, grid: int,
+                nominal: dict, warm: Any) -> tuple[dict[str, float], Any]:
+    """Depth of each kind of controller designed for the true model (the regret's oracle)."""
+    if par == "switch":
+        return {name: nominal[name][1] for name in CONTROLLERS}, warm
+    true, true_impact, _ = true_model(robot, impact, par, f)
+    redesign = design(true_impact, true, margin=margin, grid=grid, warm_start=warm)
+    return {name: redesign[name][1] for name in CONTROLLERS}, redesign["bang-bang"][2]
+
+
+def _replayed(robot: Robot, impact: Impact, controller: Controller, name: str, par: str,
+              f: float) -> tuple[LandingResult, float, float] | None:
+    """The nominal controller on the true model: landing, length ratio, stroke excursion."""
+    if par == "switch" and isinstance(controller, Impedance):
+        return None
+    # the impedance is unsaturated, as designed (the paper's comparison)
+    rob = robot if name == "bang-bang" else robot.without_force_limit()
+    res, lr = replay(rob, impact, controller, par, f)  # type: ignore[arg-type]
+    s_true = res.robot.s
+    # an open-loop body that is not stopped drifts for ever: its exact stroke range is
+    # unbounded (inf)
+    over = max(0.0, -res.stroke_min, res.stroke_max - s_true) / s_true
+    return res, lr, over
 
 
 def robustness_table(ds: xr.Dataset) -> list[dict]:
