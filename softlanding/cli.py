@@ -191,9 +191,10 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     v = _v0_grid(a)
     res = sweep_landing(v, _robot(a), nodes=a.nodes, progress=not a.json)
     rigid = [rigid_depth(x) for x in v]
-    rows = [{"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
-             "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
-             "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations}
+    rows: list[dict[str, Any]] = [
+        {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
+         "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
+         "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations}
             for r, rd in zip(res, rigid, strict=True)]
     written = None
     if a.plot:
@@ -302,9 +303,9 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
     obs = paper_observations(curves, robot)
     if a.json:
         c = curves.sel(r_m=robot.r_m, s=robot.s)
-        _print_json({name: c[name].values.tolist() for name in
-                     ("v0", "k_p", "k_d", "depth", "u_peak", "cot", "on_stroke_boundary")}
-                    | {"observations": obs, "out": a.out})
+        d: dict[str, Any] = {name: c[name].values.tolist() for name in (
+            "v0", "k_p", "k_d", "depth", "u_peak", "cot", "on_stroke_boundary")}
+        _print_json({**d, "observations": obs, "out": a.out})
         return EXIT_OK
     _print_curves(curves, a.objective)
     print(f"paper's observations at r_m = {robot.r_m:g}, s = {robot.s:g}: {obs}")
@@ -390,9 +391,9 @@ def _cmd_scale(a: argparse.Namespace) -> int:
             raise ParameterError(wrong[0], "is a dimensionless input; use it with --to-si")
         ph = _scale_from_si(a)
     robot, impact, controller, _ = ph.to_dimensionless()
-    dimensionless = {**robot.to_dict(), **impact.to_dict(),
-                     **({} if controller is None else {"k_p": controller.k_p,
-                                                        "k_d": controller.k_d})}
+    gain_dict = {} if controller is None else {k: v for k, v in controller.to_dict().items()
+                                               if k in ("k_p", "k_d")}
+    dimensionless = {**robot.to_dict(), **impact.to_dict(), **gain_dict}
     out = {"physical": ph.to_dict(), "dimensionless": dimensionless,
            "scales": ph.units.to_dict()}
     if a.json:
@@ -407,15 +408,23 @@ def _cmd_scale(a: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------- demo
 def _cmd_demo(a: argparse.Namespace) -> int:
-    from .demo import DEMO_GAINS, demo_table, plot_demo, stepped_intrusions
+    from .demo import (
+        DEMO_GAINS,
+        STEPPED_KD,
+        STEPPED_KP,
+        STEPPED_V0,
+        demo_table,
+        plot_demo,
+        stepped_intrusions,
+    )
 
     rows = demo_table()
     stepped = stepped_intrusions()
     written = _savefig(plot_demo(stepped=stepped), a.out) if a.out else None
     if a.json:
         _print_json({"table": rows, "stepped_intrusions": [
-            {"k_d": r.controller.k_d, "steps": r.steps, "depth": r.depth} for r in stepped],
-            "figure": written})
+            {"k_d": kd, "steps": s.steps, "depth": s.depth}
+            for kd, s in zip(STEPPED_KD, stepped, strict=True)], "figure": written})
         return EXIT_OK
     print(f"Landings at r_m = {PAPER_ROBOT.r_m:g}, s = {PAPER_ROBOT.s:g} (dimensionless units); "
           f"impedance k_p = {DEMO_GAINS.k_p:g}, k_d = {DEMO_GAINS.k_d:g}")
@@ -426,10 +435,9 @@ def _cmd_demo(a: argparse.Namespace) -> int:
               f"{r['impedance_depth']:>11.6f} {r['impedance_steps']:>5d} "
               f"{_fmt(r['impedance_feasible']):>8} {r['impedance_u_peak']:>9.4f} "
               f"{r['impedance_cot']:>7.3f}")
-    print(f"\nStepped intrusions (paper, Fig. 3a): v0 = {stepped[0].impact.v0:g}, "
-          f"k_p = {stepped[0].controller.k_p:g}")
-    for r in stepped:
-        print(f"  k_d = {r.controller.k_d:<5g} -> {r.steps} step(s), depth {r.depth:.6f}")
+    print(f"\nStepped intrusions (paper, Fig. 3a): v0 = {STEPPED_V0:g}, k_p = {STEPPED_KP:g}")
+    for kd, s in zip(STEPPED_KD, stepped, strict=True):
+        print(f"  k_d = {kd:<5g} -> {s.steps} step(s), depth {s.depth:.6f}")
     if written:
         print(f"\nfigure written to {written}")
     return EXIT_OK

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from .model import PAPER_ROBOT
 
-Handlers = dict[str, Callable[[argparse.Namespace], int]]
+Handlers = Mapping[str, Callable[[argparse.Namespace], int]]
 
 DESCRIPTION = (
     "Soft landing of a two-mass legged robot on yielding ground (one-way plastic spring), "

@@ -7,6 +7,7 @@ All functions return a :class:`matplotlib.figure.Figure` and never call
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import matplotlib.patches
 import matplotlib.pyplot as plt
@@ -114,7 +115,7 @@ def plot_bang_bang(landing) -> plt.Figure:
     ncol = 1 if landing.replay is None else 2
     fig, axes = plt.subplots(3, ncol, sharex="col", figsize=(6.5 + 4.5 * (ncol - 1), 7.0),
                              squeeze=False, gridspec_kw={"width_ratios": [1.3, 1][:ncol]})
-    cols = [(t, x, u, "post")]
+    cols: list[tuple[Any, Any, Any, str | None]] = [(t, x, u, "post")]
     if ncol == 2:
         t_rest = landing.schedule().times[-1]
         tr = landing.replay.trajectory(t_end=1.1 * t_rest)
@@ -212,7 +213,7 @@ STEP_COLOURS = ["#deebf7", "#9ecae1", "#4292c6", "#08519c", "#08306b"]
 def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt.Figure:
     """The paper's Fig. 3: (a) stepped trajectories, (b) step-count regions for several v0."""
     fig = plt.figure(figsize=(14, 6.2))
-    sub = fig.subfigures(1, 2, width_ratios=[1, 1.5])
+    sub: Any = fig.subfigures(1, 2, width_ratios=[1, 1.5])
     ax = sub[0].subplots()
     plot_stepped_intrusions(results, ax=ax)
     p = results[0].robot
@@ -344,6 +345,7 @@ def plot_experiment_curves(ds, si=None) -> plt.Figure:
                 x, y = kd, depth
                 lab = f"$v_0$ = {v:g}"
             else:
+                assert units is not None
                 x = kd * units.damping
                 y = depth * units.length * 1e3
                 lab = f"$V_0$ = {abs(v) * units.velocity:.2f} m/s"

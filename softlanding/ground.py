@@ -24,7 +24,9 @@ from typing import Any, Protocol, runtime_checkable
 class Ground(Protocol):
     """What the toolkit needs of a ground model."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """Short name (``"linear"``, ``"drag"``, ...)."""
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
         """Upward force on the foot while it yields (moves down) at ``depth`` >= 0."""
@@ -35,6 +37,9 @@ class Ground(Protocol):
 
     def to_dict(self) -> dict[str, Any]:
         """``{"model": name, **parameters}`` for JSON output."""
+
+    def __hash__(self) -> int:
+        """Ground models are frozen values (mode matrices are cached per model)."""
 
 
 @dataclass(frozen=True)

@@ -119,7 +119,8 @@ def stepped_intrusions(out: Path, files: list[str], st: Settings, cache: dict) -
                         "multi_step_feasible_fraction": float(((steps > 1) & feas).mean()),
                         "max_steps_rest_proven": int(steps[rest].max()),
                         "rest_unproven_fraction": float((~rest).mean())})
-    return {"trajectories": [{"k_p": 0.2, "k_d": r.controller.k_d, "v0": -1.0, "steps": r.steps,
+    return {"trajectories": [{"k_p": 0.2, "k_d": r.controller.to_dict()["k_d"], "v0": -1.0,
+                              "steps": r.steps,
                               "depth": r.depth} for r in runs],
             "paper_steps": [1, 2, 3], "regions": regions}
 

@@ -113,7 +113,7 @@ class PhysicalParams:
         controller : Impedance, optional
             Its gains are converted too.
         """
-        r = robot.to_si(units)
+        r: dict[str, Any] = robot.to_si(units)
         gains: dict[str, Any] = {}
         if controller is not None:
             si = controller.to_si(units)

@@ -222,12 +222,12 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
         Dims ``(r_m, s, v0)``, variables :data:`CURVE_VARIABLES`; where no gains in
         the box keep the stroke, ``feasible`` is False and the figures are NaN.
     """
-    v0 = np.atleast_1d(np.asarray(v0, dtype=float))
-    for v in v0:  # bad input fails before any work (and any progress bar)
+    v0s = np.atleast_1d(np.asarray(v0, dtype=float))
+    for v in v0s:  # bad input fails before any work (and any progress bar)
         Impact(float(v))
     check_count("grid", grid, 2, MAX_GRID)
     rr, ss, robots = _family(robot, r_m, s)
-    tasks = [(float(v), r) for r in robots for v in v0]
+    tasks = [(float(v), r) for r in robots for v in v0s]
     client = _client(scheduler)
     if client is None:
         rows = [_optimum_row(v, r, ground, objective, grid) for v, r in
@@ -237,10 +237,10 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
                              [objective] * len(tasks), [grid] * len(tasks), pure=False)
         rows = client.gather(futures)
         client.close()
-    shape = (len(rr), len(ss), len(v0))
+    shape = (len(rr), len(ss), len(v0s))
     data = {k: (("r_m", "s", "v0"), np.array([row[k] for row in rows]).reshape(shape))
             for k in CURVE_VARIABLES}
-    ds = xr.Dataset(data, coords={"r_m": rr, "s": ss, "v0": v0})
+    ds = xr.Dataset(data, coords={"r_m": rr, "s": ss, "v0": v0s})
     ds.attrs.update(objective=objective, grid=grid, ground=ground.name,
                     title=f"optimal impedance (objective: {objective})")
     return ds
