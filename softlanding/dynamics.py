@@ -17,7 +17,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from .errors import check_positive
+from .errors import check
 from .ground import LINEAR_GROUND, Ground
 
 STATE_NAMES: tuple[str, ...] = ("x_b", "v_b", "x_f", "v_f")
@@ -58,7 +58,15 @@ def robot_rhs(x, u, f_g, r_m):
 
 
 def yielding_ground_force(x, ground: Ground = LINEAR_GROUND):
-    """Upward ground force on a yielding foot, from the ground model: ``f(-x_f, v_f)``."""
+    """Upward ground force on a yielding foot, from the ground model: ``f(-x_f, v_f)``.
+
+    Parameters
+    ----------
+    x : casadi expression or array of 4
+        State ``[x_b, v_b, x_f, v_f]``.
+    ground : Ground
+        Ground model.
+    """
     return ground.yield_force(-x[XF], x[VF])
 
 
@@ -68,6 +76,13 @@ def mechanical_energy(x, r_m):
     Gravitational energy is measured from heights 0, so differences are what
     matter; :mod:`softlanding.simulate` reports energies relative to the
     configuration at impact (its kernel reads this quadratic form off here).
+
+    Parameters
+    ----------
+    x : casadi expression or array of 4
+        State ``[x_b, v_b, x_f, v_f]``.
+    r_m : float or expression
+        Mass ratio.
     """
     mb, mf = r_m / (1 + r_m), 1 / (1 + r_m)
     return 0.5 * mb * x[VB] ** 2 + 0.5 * mf * x[VF] ** 2 + mb * x[XB] + mf * x[XF]
@@ -86,6 +101,11 @@ def _symbols():
 def stance_functions(ground: Ground = LINEAR_GROUND) -> tuple[ca.Function, ca.Function]:
     """The paper's control-affine yielding-stance dynamics ``x' = f(x) + g(x) u``.
 
+    Parameters
+    ----------
+    ground : Ground
+        Ground model of the yielding stance.
+
     Returns
     -------
     f, g : casadi.Function
@@ -103,7 +123,19 @@ def stance_functions(ground: Ground = LINEAR_GROUND) -> tuple[ca.Function, ca.Fu
 
 
 def stance_dynamics(x, u, r_m, ground: Ground = LINEAR_GROUND):
-    """``f(x) + g(x) u`` for symbolic or numeric arguments (used by the OCP)."""
+    """``f(x) + g(x) u`` for symbolic or numeric arguments (used by the OCP).
+
+    Parameters
+    ----------
+    x : casadi expression or array of 4
+        State.
+    u : scalar expression
+        Actuator force.
+    r_m : float or expression
+        Mass ratio.
+    ground : Ground
+        Ground model of the yielding stance.
+    """
     return robot_rhs(x, u, yielding_ground_force(x, ground), r_m)
 
 
@@ -156,7 +188,7 @@ def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.nd
         and ``Wg``, the ground work ``Wg d^2`` done by a foot that dug to depth
         ``d`` (``Wg = f'(d) / 2`` for the affine ground law ``f``).
     """
-    r_m = check_positive("r_m", r_m)
+    r_m = check("r_m", r_m)
     if not ground.is_affine:
         raise ValueError(f"the {ground.name} ground is not affine: no mode matrices")
     parts = [np.array(m, dtype=float) for m in _affine_parts(ground)(r_m)]

@@ -60,7 +60,13 @@ class RestNotProvenError(SoftlandingError):
 
 
 def plain(value: Any) -> str:
-    """A number as a user typed it (no numpy repr such as ``np.float64(nan)``)."""
+    """A number as a user typed it (no numpy repr such as ``np.float64(nan)``).
+
+    Parameters
+    ----------
+    value : Any
+        Usually a number (Python or numpy).
+    """
     if isinstance(value, bool | str) or value is None:
         return repr(value)
     try:
@@ -135,12 +141,29 @@ def check(name: str, value: Any, rule: Rule | None = None) -> Any:
 
 
 def check_optional(name: str, value: float | None) -> float | None:
-    """:func:`check` unless ``value`` is None (e.g. an unlimited force)."""
+    """:func:`check` unless ``value`` is None (e.g. an unlimited force).
+
+    Parameters
+    ----------
+    name : str
+        The field's name.
+    value : float or None
+        What the user gave.
+    """
     return None if value is None else check(name, value)
 
 
 def check_count(name: str, value: Any, lower: int = 1, upper: int | None = None) -> int:
     """An integer size the user typed, within ``[lower, upper]``.
+
+    Parameters
+    ----------
+    name : str
+        The option's name.
+    value : Any
+        What the user gave (``2.5`` is refused, ``2.0`` accepted).
+    lower, upper : int
+        Inclusive bounds (``upper`` None: no bound).
 
     Raises
     ------
@@ -158,24 +181,3 @@ def check_count(name: str, value: Any, lower: int = 1, upper: int | None = None)
     if upper is not None and n > upper:
         raise ParameterError(name, f"must be <= {upper}, got {n}")
     return n
-
-
-# kept for the callers written before FIELDS (same rules)
-def check_finite(name: str, value: float) -> float:
-    """Finite number."""
-    return check(name, value, FINITE)
-
-
-def check_positive(name: str, value: float) -> float:
-    """Finite and strictly positive."""
-    return check(name, value, POSITIVE)
-
-
-def check_nonnegative(name: str, value: float) -> float:
-    """Finite and >= 0."""
-    return check(name, value, NONNEGATIVE)
-
-
-def check_impact_velocity(name: str, value: float) -> float:
-    """Finite and <= 0 (heights are measured upward, so a landing has v0 <= 0)."""
-    return check(name, value, IMPACT)

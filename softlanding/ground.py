@@ -17,7 +17,7 @@ flight lands again at the crater bottom.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 
 @runtime_checkable
@@ -52,10 +52,18 @@ class LinearGround:
     foot that dug to depth ``d`` is ``d^2 / 2``.
     """
 
-    name: str = "linear"
+    name: ClassVar[str] = "linear"
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
-        """``f_g = d`` (independent of the foot's velocity)."""
+        """``f_g = d`` (independent of the foot's velocity).
+
+        Parameters
+        ----------
+        depth : float or expression
+            ``-x_f`` (>= 0).
+        v_f : float or expression
+            The foot's velocity (unused).
+        """
         return depth
 
     @property

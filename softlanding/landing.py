@@ -160,13 +160,28 @@ class BangBangLanding:
         From the N-node transcription.
     T : float
         Final time (foot stops).
-    arcs, switch_times : bang arcs (``"max"``/``"min"``) and the times between them.
+    arcs : list of str
+        Bang arcs (``"max"``/``"min"``).
+    switch_times : list of float
+        The times between them.
     u_b : float
         Body-arrest force at T.
     arrest_active : bool
         Whether ``-x_f(T) = 1/(1+r_m) + u_b`` holds (to 1e-8).
+    status : str
+        Ipopt's status of the transcribed solve.
+    iterations : int
+        Ipopt's iterations.
+    solve_time_s : float
+        Wall time of the transcribed solve.
+    refined : RefinedSwitching or None
+        The switching-time refinement (exact arcs).
+    transcribed : ocp.Solution
+        The transcribed solution (a warm start for the next solve).
     replay : LandingResult or None
         The refined schedule replayed in the exact simulator.
+    notes : list of str
+        What was dropped or failed on the way.
     """
 
     robot: Robot

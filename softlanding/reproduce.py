@@ -37,7 +37,21 @@ FAMILIES = ((2.0, 5.0, 10.0), (10.0, 20.0, 40.0))
 
 @dataclass(frozen=True)
 class Settings:
-    """Grid sizes of one reproduction run."""
+    """Grid sizes of one reproduction run.
+
+    Parameters
+    ----------
+    quick : bool
+        The quick run.
+    map_n, optimizer_grid : int
+        Points per axis of the depth maps and of the optimiser's starting grid.
+    curve_v0, compare_v0, cot_v0 : tuple of float
+        Impact velocities of the optimal-gain curves, the comparison and the CoT study.
+    experiment_kd_n : int
+        Damping values of the experiment curves.
+    robustness_n : int
+        Factors of the robustness study.
+    """
 
     quick: bool
     map_n: int
@@ -355,3 +369,6 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
     (out / "summary.json").write_text(json.dumps(json_safe(summary), indent=1))
     (out / "summary.md").write_text(summary_markdown(summary))
     return summary
+
+
+__all__ = ["EXPERIMENT_KP", "EXPERIMENT_V0", "SECTIONS", "Settings", "reproduce"]

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from ocp.trajectory import Trajectory
 
@@ -31,7 +30,7 @@ from . import _kernel as K
 from ._jsonutil import json_safe
 from .controllers import Controller, ForceSchedule, Impedance, Rigid
 from .dynamics import STATE_NAMES, mode_matrices
-from .errors import ParameterError, check
+from .errors import ParameterError, RestNotProvenError, check
 from .ground import LINEAR_GROUND, Ground
 from .model import Impact, Robot
 
@@ -91,7 +90,13 @@ class EnergyLedger:
 
 
 def stroke(traj: Trajectory) -> np.ndarray:
-    """Leg length ``x_b - x_f`` along a trajectory of the landing model."""
+    """Leg length ``x_b - x_f`` along a trajectory of the landing model.
+
+    Parameters
+    ----------
+    traj : Trajectory
+        With states ``x_b`` and ``x_f``.
+    """
     return traj.state("x_b") - traj.state("x_f")
 
 
@@ -150,11 +155,14 @@ class LandingResult:
     def trajectory(self, t_end: float | None = None, n: int = 2000) -> Trajectory:
         """Sample the exact solution on ``n`` points of ``[0, t_end]`` plus every event time.
 
+        The samples use the simulator's own propagator, so they are exact to rounding
+        (a pinned foot has exactly zero velocity).
+
         Parameters
         ----------
         t_end : float, optional
             End of the samples; defaults to 1.3 T (showing the body settle after
-            the foot stops).
+            the foot stops), or to the end of the simulation when rest is not proven.
         n : int
             Number of evenly spaced samples (event times are added).
 
@@ -162,20 +170,31 @@ class LandingResult:
         -------
         Trajectory
             States ``x_b, v_b, x_f, v_f``, control ``u`` and the ground mode of each sample.
+
+        Raises
+        ------
+        RestNotProvenError
+            If ``t_end`` lies beyond the simulated time of a landing whose rest is not
+            proven (nothing is known there).
         """
         seg = self._segments
         ts = seg["t"]
         nseg = len(ts) - 1
-        if t_end is None:
-            T = self.T if math.isfinite(self.T) else ts[-1]
-            t_end = max(1.3 * T, T + 2.0, ts[-1])
+        if not self.rest_proven:
+            if t_end is not None and t_end > ts[-1]:
+                raise RestNotProvenError(
+                    f"the landing was simulated up to t = {ts[-1]:.6g} without proving rest "
+                    f"({self.status}); there are no samples up to {t_end:g}")
+            t_end = ts[-1] if t_end is None else t_end
+        elif t_end is None:
+            t_end = max(1.3 * self.T, self.T + 2.0, ts[-1])
         grid = np.union1d(np.linspace(0.0, t_end, n), ts[(ts >= 0) & (ts <= t_end)])
         x = np.empty((len(grid), 4))
         u = np.empty(len(grid))
         mode = np.empty(len(grid), dtype=int)
         idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
         for i, (tt, k) in enumerate(zip(grid, idx, strict=True)):
-            zk = scipy.linalg.expm(seg["A"][k] * (tt - ts[k])) @ seg["z"][k]
+            zk = K._propagate(seg["A"][k], seg["z"][k], tt - ts[k])
             x[i] = zk[:4]
             u[i] = seg["cu"][k] @ zk
             mode[i] = seg["mode"][k]
