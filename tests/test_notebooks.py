@@ -9,14 +9,25 @@ from nbclient import NotebookClient
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
 
 
+def _plots(source: str) -> bool:
+    """A cell that draws: calls a plot_* function or pyplot, ending with a bare expression."""
+    return "plot" in source or "plt." in source
+
+
+@pytest.mark.notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_executes(path, tmp_path):
+def test_notebook_executes_and_shows_its_figures(path, tmp_path):
     nb = nbformat.read(path, as_version=4)
     NotebookClient(nb, timeout=600, kernel_name="python3",
                    resources={"metadata": {"path": str(tmp_path)}}).execute()
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
-              if o.get("output_type") == "error"]
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    errors = [o for c in code for o in c.get("outputs", []) if o.get("output_type") == "error"]
     assert not errors
+    drawing = [c for c in code if _plots(c.source) and "import" not in c.source]
+    assert drawing
+    for c in drawing:  # inline figures: the library must not switch the backend away
+        pngs = [o for o in c.outputs if "image/png" in o.get("data", {})]
+        assert pngs, f"no figure shown by the cell:\n{c.source[:200]}"
 
 
 def test_there_is_a_notebook():
