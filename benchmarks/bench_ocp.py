@@ -61,11 +61,11 @@ def rockit_problem(N: int):
 
 
 def guess_arrays(v0: float, N: int):
+    from softlanding import PAPER_ROBOT, Impact
     from softlanding.landing import landing_transcription, rigid_guess
-    from softlanding.scaling import DimensionlessParams
 
     tr = landing_transcription(N)
-    w = rigid_guess(tr, DimensionlessParams(r_m=5, s=20, v0=v0, u_max=8.2))
+    w = rigid_guess(tr, PAPER_ROBOT, Impact(v0))
     T = w[0]
     X = w[tr.layout.iX].reshape(N + 1, 4)
     U = w[tr.layout.iU]
@@ -83,9 +83,11 @@ def main() -> None:
 
     # ---------------------------------------------------------------- toolkit
     from ocp import MultipleShooting
+    from softlanding import PAPER_ROBOT
     from softlanding.landing import build_landing_problem, solve_landing
 
-    par = {"r_m": 5.0, "s": 20.0, "u_max": 8.2}
+    par = {"r_m": PAPER_ROBOT.r_m, "s": PAPER_ROBOT.s, "u_max": PAPER_ROBOT.u_max,
+           "l0": PAPER_ROBOT.rest_length}
     t = time.perf_counter()
     tr = MultipleShooting(build_landing_problem(), nodes=N, substeps=4, ipopt_options=IPOPT,
                           expand=True)

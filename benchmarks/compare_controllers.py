@@ -18,6 +18,7 @@ import time
 
 import numpy as np
 
+from softlanding import PAPER_ROBOT, Robot
 from softlanding.comparison import compare_controllers, comparison_arrays
 
 
@@ -25,14 +26,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=11, help="number of impact velocities")
     ap.add_argument("--grid", type=int, default=101, help="impedance starting grid per axis")
-    ap.add_argument("--rm", type=float, default=5.0)
-    ap.add_argument("--s", type=float, default=20.0)
-    ap.add_argument("--umax", type=float, default=8.2)
+    ap.add_argument("--rm", type=float, default=PAPER_ROBOT.r_m)
+    ap.add_argument("--s", type=float, default=PAPER_ROBOT.s)
+    ap.add_argument("--umax", type=float, default=PAPER_ROBOT.u_max)
     a = ap.parse_args()
 
     v0 = np.linspace(0.0, -10.0, a.n)
     t0 = time.perf_counter()
-    rows = compare_controllers(v0, a.rm, a.s, a.umax, grid=a.grid)
+    rows = compare_controllers(v0, Robot(r_m=a.rm, s=a.s, u_max=a.umax), grid=a.grid)
     elapsed = time.perf_counter() - t0
     c = comparison_arrays(rows)
     print(f"Depth -x_f(T), r_m = {a.rm:g}, s = {a.s:g}; bang-bang u_max = {a.umax:g}; "
@@ -41,7 +42,7 @@ def main() -> None:
           f"{'bang-bang':>10} {'switch':>7} {'imp/rigid':>9} {'bb/rigid':>8} {'bb/imp':>7}")
     for r in rows:
         print(f"{r['v0']:>7.2f} {r['rigid']:>9.5f} {r['impedance']:>10.6f} "
-              f"{r['impedance_kp']:>7.4f} {r['impedance_kd']:>7.4f} "
+              f"{r['impedance_k_p']:>7.4f} {r['impedance_k_d']:>7.4f} "
               f"{r['impedance_u_peak']:>7.3f} {r['bang_bang']:>10.6f} "
               f"{r['bang_bang_switch']:>7.4f} {r['impedance'] / r['rigid']:>9.4f} "
               f"{r['bang_bang'] / r['rigid']:>8.4f} {r['bang_bang'] / r['impedance']:>7.4f}")
