@@ -60,13 +60,22 @@ def _robot(a: argparse.Namespace) -> Robot:
     return Robot(r_m=a.rm, s=a.s, u_max=a.umax, l0=a.l0)
 
 
-def _savefig(fig: Any, path: str) -> str:
-    """Save (PNG unless the name says otherwise) and return the path actually written."""
-    import matplotlib.pyplot as plt
+def _target(a: argparse.Namespace, option: str = "plot") -> Any:
+    """The figure or data file an option names, checked before any work (None if not given)."""
+    from ._files import output_path
 
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path if "." in path.rsplit("/", 1)[-1] else path + ".png"
+    value = getattr(a, option, None)
+    if value is None:
+        return None
+    suffix = ".png" if option == "plot" or a.command == "demo" else None
+    return output_path(value, option, a.force, suffix)
+
+
+def _savefig(fig: Any, path: Any) -> str:
+    """Write the figure atomically; the path actually written."""
+    from ._files import save_figure
+
+    return str(save_figure(fig, path))
 
 
 # ------------------------------------------------------------------- simulate
@@ -79,12 +88,13 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
     if not a.rigid and (a.kp is None or a.kd is None):
         raise ParameterError("kp", "give both --kp and --kd, or --rigid")
     controller = Rigid() if a.rigid else Impedance(a.kp, a.kd)
+    plot = _target(a)
     res = simulate(_robot(a), Impact(a.v0), controller)
     written = None
-    if a.plot:
+    if plot:
         from .figures import plot_trajectory
 
-        written = _savefig(plot_trajectory(res), a.plot)
+        written = _savefig(plot_trajectory(res), plot)
     if a.json:
         _print_json(res.to_dict())
     else:
@@ -131,8 +141,13 @@ def _solve_rows(res: Any, cert: Any, refined: bool) -> list[tuple[str, object]]:
 
 
 def _cmd_solve(a: argparse.Namespace) -> int:
+    from ._files import output_path
     from .landing import solve_landing
 
+    plot = _target(a)
+    pmp_plot = None
+    if plot is not None and a.pmp:
+        pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
     res = solve_landing(Impact(a.v0), _robot(a), nodes=a.nodes, refine=not a.no_refine,
                         extra_arcs=a.extra_arcs)
     cert = None
@@ -141,16 +156,14 @@ def _cmd_solve(a: argparse.Namespace) -> int:
 
         cert = certify(res.transcribed, res.refined)
     written = []
-    if a.plot:
+    if plot:
         from .figures import plot_bang_bang
 
-        written.append(_savefig(plot_bang_bang(res), a.plot))
+        written.append(_savefig(plot_bang_bang(res), plot))
         if cert is not None:
             from ocp.pmp import plot_certificate
 
-            stem, dot, ext = a.plot.rpartition(".")
-            written.append(_savefig(plot_certificate(cert),
-                                    f"{stem}-pmp.{ext}" if dot else f"{a.plot}-pmp.png"))
+            written.append(_savefig(plot_certificate(cert), pmp_plot))
     ok = res.replay is None or res.replay_difference <= 1e-6 or a.no_refine
     if a.json:
         d = res.to_dict()
@@ -189,6 +202,7 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     from .landing import sweep_landing
 
     v = _v0_grid(a)
+    plot = _target(a)
     res = sweep_landing(v, _robot(a), nodes=a.nodes, progress=not a.json)
     rigid = [rigid_depth(x) for x in v]
     rows: list[dict[str, Any]] = [
@@ -197,12 +211,12 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
          "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations}
             for r, rd in zip(res, rigid, strict=True)]
     written = None
-    if a.plot:
+    if plot:
         from .figures import plot_depth_vs_velocity
 
         written = _savefig(plot_depth_vs_velocity(
             v, {"rigid leg": np.array(rigid),
-                "bang-bang (refined)": np.array([r.depth for r in res])}), a.plot)
+                "bang-bang (refined)": np.array([r.depth for r in res])}), plot)
     if a.json:
         _print_json({"sweep": rows})
         return EXIT_OK
@@ -239,26 +253,29 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
 
 
 def _cmd_map(a: argparse.Namespace) -> int:
+    from ._files import atomic
     from .impedance import optimize_impedance
     from .sweeps import depth_map, save_dataset
 
     robot, impact = _robot(a), Impact(a.v0)
+    out, plot = _target(a, "out"), _target(a)
     ds = depth_map(impact, robot, n=a.n, scheduler=a.scheduler)
-    save_dataset(ds, a.out)
     opt = optimize_impedance(impact, robot, grid=a.n)
+    with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
+        save_dataset(ds, tmp)
     written = None
-    if a.plot:
+    if plot:
         from .figures import plot_depth_map
 
-        written = _savefig(plot_depth_map(ds, opt), a.plot)
-    summary = {"out": a.out, "plot": written, "landings": int(ds.depth.size),
+        written = _savefig(plot_depth_map(ds, opt), plot)
+    summary = {"out": str(out), "plot": written, "landings": int(ds.depth.size),
                "feasible_fraction": float(ds.strictly_feasible.mean()),
                "optimum": opt.to_dict()}
     if a.json:
         _print_json(summary)
     else:
         print(f"{summary['landings']} landings, {summary['feasible_fraction']:.1%} feasible; "
-              f"dataset written to {a.out}")
+              f"dataset written to {out}")
         print(f"optimum: k_p = {opt.k_p:.8f}, k_d = {opt.k_d:.8f}, depth {opt.depth:.10f} "
               f"({opt.steps} step(s), on stroke boundary: {_fmt(opt.on_stroke_boundary)})")
         if written:
@@ -289,17 +306,21 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
     v0 = _v0_grid(a)
     if a.objective != "depth":
         v0 = v0[v0 < 0]
+    from ._files import atomic
+
     robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
                   u_max=a.umax)
+    out, plot = _target(a, "out"), _target(a)
     curves = optimal_impedance_curves(v0, robot, r_m=a.rm, s=a.s, objective=a.objective,
                                       grid=a.grid, scheduler=a.scheduler, progress=not a.json)
-    if a.out:
-        save_dataset(curves, a.out)
+    if out:
+        with atomic(out) as tmp:
+            save_dataset(curves, tmp)
     written = None
-    if a.plot:
+    if plot:
         from .figures import plot_optimal_curves
 
-        written = _savefig(plot_optimal_curves(curves), a.plot)
+        written = _savefig(plot_optimal_curves(curves), plot)
     obs = paper_observations(curves, robot)
     if a.json:
         c = curves.sel(r_m=robot.r_m, s=robot.s)
@@ -320,13 +341,14 @@ def _cmd_compare(a: argparse.Namespace) -> int:
     from .comparison import compare_controllers
 
     robot = _robot(a)
-    rows = compare_controllers(_v0_grid(a), robot, grid=a.grid, progress=not a.json)
+    v0, plot = _v0_grid(a), _target(a)
+    rows = compare_controllers(v0, robot, grid=a.grid, progress=not a.json)
     written = None
-    if a.plot:
+    if plot:
         from .comparison import comparison_arrays
         from .figures import plot_controller_comparison
 
-        written = _savefig(plot_controller_comparison(comparison_arrays(rows), robot), a.plot)
+        written = _savefig(plot_controller_comparison(comparison_arrays(rows), robot), plot)
     if a.json:
         _print_json({"rows": rows, "robot": robot.to_dict()})
         return EXIT_OK
@@ -418,9 +440,10 @@ def _cmd_demo(a: argparse.Namespace) -> int:
         stepped_intrusions,
     )
 
+    out = _target(a, "out") if a.out else None
     rows = demo_table()
     stepped = stepped_intrusions()
-    written = _savefig(plot_demo(stepped=stepped), a.out) if a.out else None
+    written = _savefig(plot_demo(stepped=stepped), out) if out else None
     if a.json:
         _print_json({"table": rows, "stepped_intrusions": [
             {"k_d": kd, "steps": s.steps, "depth": s.depth}
@@ -445,13 +468,10 @@ def _cmd_demo(a: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------- reproduce
 def _cmd_reproduce(a: argparse.Namespace) -> int:
-    from pathlib import Path
-
+    from ._files import output_folder
     from .reproduce import reproduce
 
-    out = Path(a.out)
-    if out.exists() and not out.is_dir():
-        raise ParameterError("out", f"{out} exists and is not a folder")
+    out = output_folder(a.out, "out", a.force)
     if not a.json:
         print(f"Reproducing the paper into {out} ({'quick' if a.quick else 'full'} run)")
     s = reproduce(out, quick=a.quick, progress=not a.json, log=None if a.json else print)

@@ -6,6 +6,7 @@ import argparse
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from .errors import LIMITS
 from .model import PAPER_ROBOT
 
 Handlers = Mapping[str, Callable[[argparse.Namespace], int]]
@@ -29,12 +30,17 @@ def _version() -> str:
         return __version__
 
 
+def _range(name: str) -> str:
+    lo, hi = LIMITS[name]
+    return f"{lo:g} to {hi:g}"
+
+
 def _model_args(p: argparse.ArgumentParser, umax: float | None, umax_help: str) -> None:
     """The robot's parameters shared by the sub-commands, and --json."""
     p.add_argument("--rm", type=float, default=PAPER_ROBOT.r_m,
-                   help=f"mass ratio m_b / m_f (default {PAPER_ROBOT.r_m:g})")
+                   help=f"mass ratio m_b / m_f, {_range('r_m')} (default {PAPER_ROBOT.r_m:g})")
     p.add_argument("--s", type=float, default=PAPER_ROBOT.s,
-                   help=f"stroke S / x_s (default {PAPER_ROBOT.s:g})")
+                   help=f"stroke S / x_s, {_range('s')} (default {PAPER_ROBOT.s:g})")
     p.add_argument("--umax", type=float, default=umax, help=umax_help)
     p.add_argument("--l0", type=float, default=None,
                    help="leg length at impact and impedance rest length (default s/2)")
@@ -50,6 +56,13 @@ def _v0_range_args(p: argparse.ArgumentParser, n: int) -> None:
 
 def _plot_arg(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--plot", metavar="FILE.png", help=f"write {what}")
+    _force_arg(p)
+
+
+def _force_arg(p: argparse.ArgumentParser) -> None:
+    if not any("--force" in a.option_strings for a in p._actions):
+        p.add_argument("--force", action="store_true",
+                       help="overwrite existing output files (default: refuse)")
 
 
 def _simulate(sub: Any) -> argparse.ArgumentParser:
@@ -58,10 +71,12 @@ def _simulate(sub: Any) -> argparse.ArgumentParser:
                                    "leg. Exact: matrix exponentials and root-found events. "
                                    "Choose --rigid, or --kp and --kd.")
     s.add_argument("--v0", type=float, required=True,
-                   help="impact velocity (<= 0, negative = downward)")
+                   help=f"impact velocity, {_range('v0')} (negative = downward)")
     s.add_argument("--rigid", action="store_true", help="body and foot locked together")
-    s.add_argument("--kp", type=float, help="impedance stiffness k_p = K_p / k_g (>= 0)")
-    s.add_argument("--kd", type=float, help="impedance damping k_d = K_d / sqrt(m_t k_g) (>= 0)")
+    s.add_argument("--kp", type=float,
+                   help=f"impedance stiffness k_p = K_p / k_g, {_range('gain')}")
+    s.add_argument("--kd", type=float,
+                   help=f"impedance damping k_d = K_d / sqrt(m_t k_g), {_range('gain')}")
     _model_args(s, None, "actuator force limit, saturating the leg (default: no limit)")
     _plot_arg(s, "the trajectory figure (heights, force, ground mode)")
     return s
@@ -195,6 +210,7 @@ def _demo(sub: Any) -> argparse.ArgumentParser:
     d.add_argument("--out", default="softlanding-demo.png", metavar="FILE.png",
                    help="figure path (default softlanding-demo.png; '' for none)")
     d.add_argument("--json", action="store_true", help="print one JSON object")
+    _force_arg(d)
     return d
 
 
@@ -206,7 +222,10 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
                                    "impedance controllers under +-30 % model error. The full "
                                    "run takes several minutes on 2 cores; --quick (coarser "
                                    "grids, fewer velocities) about one.")
-    r.add_argument("--out", required=True, metavar="DIR", help="folder to write (created)")
+    r.add_argument("--out", required=True, metavar="DIR",
+                   help="folder to write: new or empty, or with --force an existing one whose "
+                        "files of the same names are replaced")
+    _force_arg(r)
     r.add_argument("--quick", action="store_true", help="coarser grids, about a minute")
     r.add_argument("--json", action="store_true", help="print summary.json's contents")
     return r

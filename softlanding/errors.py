@@ -51,7 +51,7 @@ class ParameterError(SoftlandingError, ValueError):
 class InfeasibleLandingError(SoftlandingError, ValueError):
     """A well-posed landing problem has no solution; the message names the condition."""
 
-    exit_code = 2
+    exit_code = 1
     label = "infeasible"
 
 
@@ -73,9 +73,9 @@ def plain(value: Any) -> str:
         x = float(value)
     except (TypeError, ValueError):
         return repr(value)
-    if x.is_integer() and abs(x) < 1e16:
-        return str(int(x)) if not isinstance(value, float | np.floating) else f"{x:g}"
-    return f"{x:.17g}" if math.isfinite(x) else str(x)
+    if math.isfinite(x) and x.is_integer() and abs(x) < 1e16:
+        return str(int(x))
+    return repr(x)  # the shortest string that reads back as x: 0.5, 1e+300, nan
 
 
 # ----------------------------------------------------------------- the rules
@@ -84,18 +84,37 @@ Rule = tuple[Callable[[np.ndarray], np.ndarray], str]
 POSITIVE: Rule = (lambda x: x > 0.0, "must be > 0")
 NONNEGATIVE: Rule = (lambda x: x >= 0.0, "must be >= 0")
 FINITE: Rule = (lambda x: np.isfinite(x), "must be finite")
-IMPACT: Rule = (lambda x: x <= 0.0,
-                "must be <= 0 (negative = moving down onto the ground)")
+
+
+def within(lo: float, hi: float, open_lo: bool = False, why: str = "") -> Rule:
+    """A rule ``lo <(=) x <= hi``, with the reason for the range in its message."""
+    left = "(" if open_lo else "["
+    msg = f"must be in {left}{lo:g}, {hi:g}]" + (f" ({why})" if why else "")
+    if open_lo:
+        return (lambda x: (x > lo) & (x <= hi), msg)
+    return (lambda x: (x >= lo) & (x <= hi), msg)
+
+
+#: What the model and double precision can serve: beyond these, event times and depths lose
+#: their meaning (a body 1000 times lighter than its foot is not a legged robot, and an impact
+#: at 1000 velocity units buries the robot a thousand times its weight depth).
+LIMITS = {"r_m": (1e-3, 1e3), "s": (1e-3, 1e4), "u_max": (0.0, 1e4), "v0": (-1e3, 0.0),
+          "gain": (0.0, 1e6)}
 
 FIELDS: dict[str, Rule] = {
     # dimensionless model
-    "r_m": POSITIVE, "s": POSITIVE, "u_max": POSITIVE, "l0": NONNEGATIVE,
-    "v0": IMPACT, "k_p": NONNEGATIVE, "k_d": NONNEGATIVE,
+    "r_m": within(*LIMITS["r_m"], why="mass ratio m_b / m_f"),
+    "s": within(*LIMITS["s"], why="stroke S / x_s"),
+    "u_max": within(*LIMITS["u_max"], open_lo=True, why="force limit / (m_t g)"),
+    "l0": NONNEGATIVE,
+    "v0": within(*LIMITS["v0"], why="negative = moving down onto the ground"),
+    "k_p": within(*LIMITS["gain"], why="stiffness K_p / k_g"),
+    "k_d": within(*LIMITS["gain"], why="damping K_d / sqrt(m_t k_g)"),
     "times": FINITE, "values": FINITE, "durations": POSITIVE,
-    # SI
+    # SI (their dimensionless images are checked against the limits above)
     "m_b": POSITIVE, "m_f": POSITIVE, "m_t": POSITIVE, "k_g": POSITIVE, "stroke": POSITIVE,
-    "g": POSITIVE, "U_max": POSITIVE, "V0": IMPACT, "K_p": NONNEGATIVE, "K_d": NONNEGATIVE,
-    "rest_length": NONNEGATIVE,
+    "g": POSITIVE, "U_max": POSITIVE, "V0": (lambda x: x <= 0.0, "must be <= 0 (downward)"),
+    "K_p": NONNEGATIVE, "K_d": NONNEGATIVE, "rest_length": NONNEGATIVE,
     # run settings
     "t_max": POSITIVE, "factor": POSITIVE,
 }

@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ._files import atomic_folder
 from ._jsonutil import json_safe
 from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact
 from .summary import summary_markdown
@@ -314,7 +315,8 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
     Parameters
     ----------
     out_dir : str or Path
-        Folder to write into (created if missing).
+        Folder to write into (created if missing; files of the same names are replaced,
+        and only once the whole run has succeeded).
     quick : bool
         Coarser grids and fewer impact velocities (about a minute on 2 cores).
     progress : bool
@@ -327,10 +329,19 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
     dict
         The contents of ``summary.json``.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "data").mkdir(exist_ok=True)
-    st = Settings.make(quick)
+    final = Path(out_dir)
+    if not final.parent.is_dir():
+        final.parent.mkdir(parents=True)
+    # written into a temporary folder and moved into place at the end: an interrupted or
+    # failed run leaves nothing half-written in out_dir
+    with atomic_folder(final) as out:
+        (out / "data").mkdir()
+        summary = _run_sections(out, Settings.make(quick), progress, log)
+    return summary
+
+
+def _run_sections(out: Path, st: Settings, progress: bool,
+                  log: Callable[[str], None] | None) -> dict:
     files: list[str] = []
     summary: dict = {}
     timings: dict[str, float] = {}
@@ -359,7 +370,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
     summary["robustness"] = run(8, "robustness", robustness, out, files, st, progress)
     from . import __version__
 
-    summary["meta"] = {"quick": quick, "elapsed_s": time.perf_counter() - t_all,
+    summary["meta"] = {"quick": st.quick, "elapsed_s": time.perf_counter() - t_all,
                        "section_s": timings, "version": __version__,
                        "settings": {k: v for k, v in st.__dict__.items()},
                        "units": "dimensionless (x_s = m_t g / k_g, tau_s = sqrt(m_t / k_g), "

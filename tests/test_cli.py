@@ -58,7 +58,6 @@ def test_negative_numbers_in_scientific_notation_are_values(cli):
     ["scale", "--mb", "2.5", "--mf", "0.5", "--kg", "4400", "--stroke", "0.1", "--v0-si", "1"],
     ["scale", "--to-si", "--mb", "10"],
     ["scale", "--to-si", "--rm", "5"],
-    ["compare", "--n", "3", "--umax", "0.5"],
     ["solve-sweep", "--n", "3", "--rm", "nan"],
     ["solve", "--v0", "-3", "--extra-arcs", "-1"],
     ["solve", "--v0", "-3", "--nodes", "10000000"],
@@ -75,6 +74,18 @@ def test_bad_input_one_line_exit_2(args, cli):
     assert "Traceback" not in err
     assert err.startswith("softlanding")
     assert "np.float64" not in err
+
+
+@pytest.mark.parametrize("args,match", [
+    (["compare", "--n", "3", "--umax", "0.5"], "body weight"),
+    (["solve", "--v0", "-10", "--umax", "2"], "arrest force u_b <= u_max"),
+])
+def test_infeasible_request_one_line_exit_1(args, match, cli):
+    """Well-posed but infeasible: exit 1, not the bad-input code 2."""
+    code, _, err = cli(*args)
+    assert code == 1
+    assert err.startswith("softlanding: infeasible:") and match in err
+    assert err.count("\n") == 1 and "Traceback" not in err
 
 
 def test_an_internal_error_is_reported_as_a_bug(cli, monkeypatch):
@@ -154,3 +165,49 @@ def test_smoke_console_script_runs_a_landing():
 def test_smoke_bad_input_from_a_real_process():
     p = run("simulate", "--v0", "0.5", "--rigid")
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr
+
+
+# ------------------------------------------------------------------- files
+def test_existing_files_are_not_overwritten_without_force(tmp_path, cli):
+    png = tmp_path / "t.png"
+    png.write_bytes(b"mine")
+    code, _, err = cli("simulate", "--v0", "-1", "--rigid", "--plot", png)
+    assert code == 2 and "--force" in err and err.count("\n") == 1
+    assert png.read_bytes() == b"mine"
+    code, out, _ = cli("simulate", "--v0", "-1", "--rigid", "--plot", png, "--force")
+    assert code == 0 and png.read_bytes()[:4] == b"\x89PNG"
+    assert f"figure written to {png}" in out
+
+
+def test_the_path_actually_written_is_reported(tmp_path, cli):
+    code, out, _ = cli("simulate", "--v0", "-1", "--rigid", "--plot", tmp_path / "fig")
+    assert code == 0
+    assert (tmp_path / "fig.png").exists() and f"figure written to {tmp_path / 'fig.png'}" in out
+
+
+@pytest.mark.parametrize("args", [
+    ["reproduce", "--out", ""], ["demo", "--out", "/nonexistent/x.png"],
+    ["simulate", "--v0", "-1", "--rigid", "--plot", "."]])
+def test_unusable_output_paths_are_refused_before_any_work(args, cli):
+    code, _, err = cli(*args)
+    assert code == 2 and err.count("\n") == 1
+
+
+def test_reproduce_refuses_a_non_empty_folder(tmp_path, cli):
+    (tmp_path / "summary.md").write_text("my notes")
+    code, _, err = cli("reproduce", "--out", tmp_path, "--quick")
+    assert code == 2 and "not empty" in err
+    assert (tmp_path / "summary.md").read_text() == "my notes"
+
+
+def test_a_failed_run_leaves_no_file_behind(tmp_path, cli, monkeypatch):
+    import softlanding.impedance as imp
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(imp, "optimize_impedance", boom)
+    code, _, err = cli("map", "--v0", "-2", "--n", "11", "--out", tmp_path / "m.nc",
+                       "--plot", tmp_path / "m.png")
+    assert code == 130 and err.strip() == "softlanding: interrupted"
+    assert list(tmp_path.iterdir()) == []  # no dataset, no figure, no temporary file
