@@ -164,21 +164,22 @@ def _cmd_solve(a: argparse.Namespace) -> int:
             from ocp.pmp import plot_certificate
 
             written.append(_savefig(plot_certificate(cert), pmp_plot))
-    ok = res.replay is None or res.replay_difference <= 1e-6 or a.no_refine
+    unverified = res.unverified_reasons(cert)
     if a.json:
         d = res.to_dict()
         if cert is not None:
             d["pmp"] = cert.to_dict()
-        _print_json(d)
+        _print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
-        _print_table(_solve_rows(res, cert, not a.no_refine))
+        _print_table([("verified", "yes" if not unverified else
+                       "NO: " + "; ".join(unverified))] + _solve_rows(res, cert, res.refined is not None))
         for n in res.notes:
             print(f"note: {n}")
         for r_ in (cert.reasons if cert is not None else []):
             print(f"PMP: {r_}")
         if written:
             print(f"figure written to {' and '.join(written)}")
-    return EXIT_OK if ok else EXIT_FAILURE
+    return EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
 
 
 def _v0_grid(a: argparse.Namespace) -> Any:
@@ -208,8 +209,11 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     rows: list[dict[str, Any]] = [
         {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
          "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
-         "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations}
-            for r, rd in zip(res, rigid, strict=True)]
+         "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations,
+         "unverified_reasons": r.unverified_reasons()}
+        for r, rd in zip(res, rigid, strict=True)]
+    unverified = [r for r in rows if r["unverified_reasons"]]
+    code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
     written = None
     if plot:
         from .figures import plot_depth_vs_velocity
@@ -218,8 +222,11 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
             v, {"rigid leg": np.array(rigid),
                 "bang-bang (refined)": np.array([r.depth for r in res])}), plot)
     if a.json:
-        _print_json({"sweep": rows})
-        return EXIT_OK
+        _print_json({"verified": not unverified, "sweep": rows})
+        return code
+    if unverified:
+        print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
+            f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
     print(f"{'v0':>7} {'depth':>14} {'rigid':>10} {'ratio':>7} {'T':>8}  switch  iters")
     for r in rows:
         sw = ",".join(f"{t:.5f}" for t in r["switch_times"])
@@ -227,7 +234,7 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
               f"{r['ratio_to_rigid']:>7.4f} {r['T']:>8.5f}  {sw}  {r['iterations']}")
     if written:
         print(f"figure written to {written}")
-    return EXIT_OK
+    return code
 
 
 # ------------------------------------------------------------------ impedance

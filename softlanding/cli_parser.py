@@ -59,6 +59,12 @@ def _plot_arg(p: argparse.ArgumentParser, what: str) -> None:
     _force_arg(p)
 
 
+def _accept_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--accept-unverified", action="store_true",
+                   help="exit 0 even when a check fails (refinement, exact replay, PMP "
+                        "certificate); the output still says 'verified: no' and why")
+
+
 def _force_arg(p: argparse.ArgumentParser) -> None:
     if not any("--force" in a.option_strings for a in p._actions):
         p.add_argument("--force", action="store_true",
@@ -125,6 +131,7 @@ def _solve(sub: Any) -> argparse.ArgumentParser:
                    help="check Pontryagin's conditions (costates, H, switching function) "
                         "and give a bang-bang verdict")
     _plot_arg(o, "the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
+    _accept_arg(o)
     return o
 
 
@@ -136,6 +143,7 @@ def _solve_sweep(sub: Any) -> argparse.ArgumentParser:
     _model_args(w, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
     w.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
     _plot_arg(w, "depth against v0")
+    _accept_arg(w)
     return w
 
 

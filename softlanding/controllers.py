@@ -188,7 +188,7 @@ class ForceSchedule:
             If a value exceeds the robot's force limit.
         """
         v = np.asarray(self.values, float)
-        if robot.u_max is not None and np.abs(v).max() > robot.u_max * (1 + 1e-9):
+        if robot.u_max is not None and np.abs(v).max() > robot.u_max * (1 + 1e-6):
             raise ParameterError("values", f"a scheduled force ({np.abs(v).max():g}) exceeds "
                                            f"the robot's force limit u_max = {robot.u_max:g}")
         return np.zeros((3, 5)), np.asarray(self.times, float), v

@@ -201,6 +201,39 @@ class BangBangLanding:
     transcribed: Solution
     replay: LandingResult | None = None
     notes: list[str] = field(default_factory=list)
+    refine_requested: bool = True
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why this result cannot be taken as proven (empty: every check passed).
+
+        The checks: the switching times were refined (when asked), the schedule
+        replayed in the exact simulator comes to rest inside the stroke with the
+        same depth (1e-9 refined, 1e-6 transcribed), and the PMP certificate, when
+        given, certifies it.
+
+        Parameters
+        ----------
+        certificate : ocp.PMPCertificate, optional
+            The certificate of this solution.
+        """
+        out = []
+        if self.refine_requested and self.refined is None:
+            out.append("switching times not refined (" + "; ".join(self.notes) + ")")
+        if self.replay is not None:
+            rp = self.replay
+            if not rp.rest_proven:
+                out.append(f"the exact-simulator replay does not come to rest ({rp.status})")
+            elif not rp.feasible:
+                out.append(f"the exact-simulator replay leaves the stroke [0, {self.robot.s:g}] "
+                           f"(leg length from {rp.stroke_min:.6g} to {rp.stroke_max:.6g})")
+            tol = (1e-9 if self.refined is not None else 1e-6) * max(1.0, self.depth)
+            if not self.replay_difference <= tol:
+                out.append(f"the replay's depth differs by {self.replay_difference:.2e} "
+                           f"(> {tol:.0e})")
+        if certificate is not None and not certificate.certified:
+            why = f": {certificate.reasons[0]}" if certificate.reasons else ""
+            out.append(f"PMP certificate {certificate.verdict}{why}")
+        return out
 
     @property
     def replay_difference(self) -> float:
@@ -403,7 +436,7 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                                          else structure.switch_times)],
         u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
         status=sol.status, iterations=sol.iterations, solve_time_s=sol.solve_time,
-        refined=refined, transcribed=sol, notes=notes)
+        refined=refined, transcribed=sol, notes=notes, refine_requested=refine)
     if replay:
         out.replay = simulate(robot, impact, out.schedule(), ground)
     return out

@@ -121,3 +121,23 @@ def test_cli_compare_orders_the_three_legs(cli):
         # which beats the rigid leg
         assert r["bang_bang"] < r["impedance"] < r["rigid"]
         assert r["impedance_u_peak"] < 8.2
+
+
+def test_an_unverified_result_is_not_a_plain_success(cli, monkeypatch):
+    """A refinement that fails leaves the transcribed answer: JSON says verified false with
+    the reason, the table says so first, and the exit code is 1 unless accepted."""
+    import softlanding.landing as landing
+    from ocp import SolveError
+
+    def fails(*a, **k):
+        raise SolveError("Search_Direction_Becomes_Too_Small")
+
+    monkeypatch.setattr(landing, "refine_switching", fails)
+    code, out, _ = cli("solve", "--v0", "-3", "--json")
+    d = json.loads(out)
+    assert code == 1 and d["verified"] is False
+    assert any("not refined" in r for r in d["unverified_reasons"])
+    code, out, _ = cli("solve", "--v0", "-3", "--accept-unverified")
+    assert code == 0 and out.splitlines()[0].startswith("verified") and "NO:" in out.splitlines()[0]
+    code, out, _ = cli("solve-sweep", "--n", "2", "--v0-min", "-2", "--json")
+    assert code == 1 and json.loads(out)["verified"] is False
