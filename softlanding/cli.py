@@ -171,8 +171,8 @@ def _cmd_solve(a: argparse.Namespace) -> int:
             d["pmp"] = cert.to_dict()
         _print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
-        _print_table([("verified", "yes" if not unverified else
-                       "NO: " + "; ".join(unverified))] + _solve_rows(res, cert, res.refined is not None))
+        status = "yes" if not unverified else "NO: " + "; ".join(unverified)
+        _print_table([("verified", status)] + _solve_rows(res, cert, res.refined is not None))
         for n in res.notes:
             print(f"note: {n}")
         for r_ in (cert.reasons if cert is not None else []):
