@@ -282,6 +282,41 @@ def simulate(
 
 
 # ------------------------------------------------------------------------ batch
+BYTES_PER_LANDING = 8 * (K.N_OUT + 15 + 4 + 3) + 64
+"""Memory a batched landing takes: its output row, feedback, start state, inputs, labels."""
+SECONDS_PER_LANDING = 60e-6
+"""Typical CPU time per landing (paper grid, measured), for the estimate in messages."""
+
+
+def check_batch_size(n: int, option: str = "grid") -> None:
+    """Refuse a batch that would not fit in memory, before anything is allocated.
+
+    Parameters
+    ----------
+    n : int
+        Number of landings.
+    option : str
+        The user's option that set the size (named in the message).
+
+    Raises
+    ------
+    ParameterError
+        With the estimated memory and time.
+    """
+    import os
+
+    need = n * BYTES_PER_LANDING
+    try:
+        avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        avail = 8 * 2**30
+    if need > 0.5 * avail:
+        raise ParameterError(option, f"{n:,} landings need about {need / 2**30:.1f} GiB of "
+                                     f"memory ({avail / 2**30:.1f} GiB free) and about "
+                                     f"{n * SECONDS_PER_LANDING / 3600:.1f} CPU hours; "
+                                     "ask for fewer")
+
+
 _FIELD_COL = {
     "depth": K.O_DEPTH, "steps": K.O_STEPS, "t_first_stop": K.O_TSTOP, "T": K.O_T,
     "u_peak": K.O_UPEAK, "stroke_min": K.O_SMIN, "stroke_max": K.O_SMAX, "feasible": K.O_FEAS,
@@ -388,6 +423,7 @@ def simulate_batch(
     v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))
                  for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
     n = kp.size
+    check_batch_size(n)
     mats = mode_matrices(robot.r_m, ground)
     l0 = robot.rest_length
     Kf = np.empty((n, 3, 5))

@@ -23,10 +23,12 @@ from .errors import ParameterError, check_count
 from .ground import LINEAR_GROUND, Ground
 from .impedance import MAX_GRID, optimize_impedance
 from .model import PAPER_IMPEDANCE_ROBOT, Impact, Robot
-from .simulate import BATCH_FIELDS, simulate_batch
+from .simulate import BATCH_FIELDS, check_batch_size, simulate_batch
 
 CURVE_VARIABLES = ("feasible", "k_p", "k_d", "depth", "steps", "u_peak", "stroke_min",
                    "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "value")
+WORKER_TIMEOUT_S = 30.0
+"""How long a Dask scheduler may go without a worker before the run gives up."""
 MAX_LANDINGS = 50_000_000
 """Largest dataset (about 6 GiB of results); larger requests are refused up front."""
 
@@ -40,9 +42,17 @@ def _client(scheduler: str | None):
         raise ParameterError("scheduler", "needs dask.distributed: pip install "
                                           "'softlanding[dask]'") from None
     try:
-        return Client(scheduler, timeout="10s")
+        client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise ParameterError("scheduler", f"cannot reach {scheduler}: {exc}") from None
+    try:
+        client.wait_for_workers(1, timeout=WORKER_TIMEOUT_S)
+    except TimeoutError:
+        client.close()
+        raise ParameterError("scheduler", f"no worker joined {scheduler} within "
+                                          f"{WORKER_TIMEOUT_S:g} s; start one with "
+                                          f"'dask worker {scheduler}'") from None
+    return client
 
 
 def _batch_chunk(robot: Robot, ground: Ground, v0, kp, kd, energy: bool,
@@ -101,6 +111,7 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
     if size > MAX_LANDINGS:
         raise ParameterError("grid", f"{size:,} landings requested; the limit is "
                                      f"{MAX_LANDINGS:,} (about 6 GiB of results)")
+    check_batch_size(2 * size)  # the results, and the dataset built from them
     grids = np.meshgrid(*coords.values(), indexing="ij")
     kp, kd, v = (g.ravel() for g in grids)
     client = _client(scheduler)
@@ -122,22 +133,26 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
     return ds
 
 
+def _gather(client, futures: list, progress: bool | None, desc: str, unit: str) -> list:
+    """Results of the futures in order, with a progress bar as they complete."""
+    from distributed import as_completed
+
+    for _ in show_progress(as_completed(futures), progress, desc, unit):
+        pass
+    return client.gather(futures)
+
+
 def _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress) -> list[dict]:
     """Map the chunks of every robot over a Dask cluster; one result dict per robot."""
     n = min(chunks, kp.size)
     pieces = [np.array_split(a, n) for a in (v, kp, kd)]
-    futures = [client.map(_batch_chunk, [r] * n, [ground] * n, *pieces, [energy] * n,
-                          pure=False) for r in robots]
-    if progress or (progress is None and kp.size * len(robots) > 50_000):
-        from distributed import progress as dprogress
-
-        dprogress([f for fs in futures for f in fs])
-    out = []
-    for fs in futures:
-        got = client.gather(fs)
-        out.append({k: np.concatenate([g[k] for g in got]) for k in got[0]})
+    futures = [f for r in robots for f in client.map(
+        _batch_chunk, [r] * n, [ground] * n, *pieces, [energy] * n, pure=False)]
+    show = progress or (progress is None and kp.size * len(robots) > 50_000)
+    got = _gather(client, futures, show, "simulating (Dask)", "chunk")
     client.close()
-    return out
+    return [{k: np.concatenate([g[k] for g in got[i * n:(i + 1) * n]]) for k in got[0]}
+            for i in range(len(robots))]
 
 
 def _describe(ds: xr.Dataset) -> None:
@@ -235,7 +250,7 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
     else:
         futures = client.map(_optimum_row, *zip(*tasks, strict=True), [ground] * len(tasks),
                              [objective] * len(tasks), [grid] * len(tasks), pure=False)
-        rows = client.gather(futures)
+        rows = _gather(client, futures, progress, "optimal gains (Dask)", "landing problem")
         client.close()
     shape = (len(rr), len(ss), len(v0s))
     data = {k: (("r_m", "s", "v0"), np.array([row[k] for row in rows]).reshape(shape))

@@ -91,6 +91,19 @@ def test_dask_path_returns_the_same_dataset():
     xr.testing.assert_identical(remote, local)
 
 
+@pytest.mark.dask
+def test_a_scheduler_without_workers_times_out_with_a_message(monkeypatch):
+    import distributed
+
+    import softlanding.sweeps as sw
+
+    monkeypatch.setattr(sw, "WORKER_TIMEOUT_S", 1.0)
+    with distributed.LocalCluster(n_workers=0, host="127.0.0.1", processes=True,
+                                  dashboard_address=None) as cluster:
+        with pytest.raises(ParameterError, match="no worker joined"):
+            impedance_dataset(-1.0, 0.2, 0.2, scheduler=cluster.scheduler_address)
+
+
 def test_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(ParameterError, match="scheduler"):
         impedance_dataset(-1.0, 0.2, 0.2, scheduler="tcp://127.0.0.1:9")
