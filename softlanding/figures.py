@@ -143,6 +143,13 @@ def plot_bang_bang(landing) -> plt.Figure:
     axes[2, 0].set_ylabel(r"force $u$ [$m_t g$]")
     axes[0, 0].legend(fontsize=8)
     axes[1, 0].legend(fontsize=8)
+    from matplotlib.lines import Line2D
+
+    events = [Line2D([], [], color="0.3", ls="--", lw=0.8, label="switch of u"),
+              Line2D([], [], color="0.5", ls="-.", lw=0.8, label="foot stops (T)")]
+    if ncol == 2:
+        events.append(Line2D([], [], color="0.5", ls=":", lw=1.0, label="body stops"))
+    axes[2, ncol - 1].legend(handles=events, fontsize=8, loc="best")
     axes[0, 0].set_title("stance: until the foot stops", fontsize=9)
     if ncol == 2:
         axes[0, 1].set_title(f"whole landing (exact simulator): body stops at {t_rest:.3f}",
@@ -169,9 +176,10 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
                        vmin=1.0, rasterized=True)
     fig.colorbar(im, ax=ax, label=r"$x_f / x_f^*$ (depth / minimum depth)")
     if optimum is not None:
-        ax.plot(optimum.k_p, optimum.k_d, "*", color="w", mec="k", ms=16,
-                label=f"optimum ($k_p$={optimum.k_p:.4f}, $k_d$={optimum.k_d:.4f})")
-        ax.legend(loc="upper right", fontsize=8)
+        ax.plot(optimum.k_p, optimum.k_d, "*", color="w", mec="k", ms=16)
+        # said below the axes, where it covers no data
+        ax.annotate(f"$\\star$ optimum: $k_p$={optimum.k_p:.4f}, $k_d$={optimum.k_d:.4f}",
+                    xy=(0.0, -0.2), xycoords="axes fraction", fontsize=8, va="top")
     ax.set_xlabel(r"stiffness $k_p = K_p / k_g$")
     ax.set_ylabel(r"damping $k_d = K_d / \sqrt{m_t k_g}$")
     ax.set_title(f"$v_0$={float(ds.v0):g}, $r_m$={float(ds.r_m):g}, $s$={float(ds.s):g}; "
@@ -228,8 +236,13 @@ def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt
     cmap = ListedColormap(STEP_COLOURS)
     norm = BoundaryNorm([0.5, 1.5, 2.5, 3.5, 4.5, 5.5], cmap.N)
     for a, ds in zip(axes.flat, maps, strict=False):
-        im = a.pcolormesh(ds.k_p, ds.k_d, np.clip(ds.steps.values, 1, 5).T, shading="nearest",
-                          cmap=cmap, norm=norm, rasterized=True)
+        proven = ds.status.values == 0
+        steps = np.where(proven, np.clip(ds.steps.values, 1, 5), np.nan)
+        im = a.pcolormesh(ds.k_p, ds.k_d, steps.T, shading="nearest", cmap=cmap, norm=norm,
+                          rasterized=True)
+        if not proven.all():  # rest not proven: a step count would be meaningless
+            a.pcolormesh(ds.k_p, ds.k_d, np.where(proven, np.nan, 1.0).T, shading="nearest",
+                         cmap=ListedColormap(["#f4a582"]), rasterized=True)
         a.contour(ds.k_p, ds.k_d, ds.strictly_feasible.values.T.astype(float), levels=[0.5],
                   colors="k", linewidths=1.0)
         a.set_title(f"$v_0$ = {float(ds.v0):g}", fontsize=9)
@@ -241,9 +254,12 @@ def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt
         a.set_ylabel(r"damping $k_d$")
     cb = sub[1].colorbar(im, ax=axes.ravel().tolist(), ticks=[1, 2, 3, 4, 5], shrink=0.9)
     cb.ax.set_yticklabels(["1", "2", "3", "4", "5+"])
-    cb.set_label("intrusion steps")
-    sub[1].suptitle("(b) intrusion steps over the gains (black line: stroke limit; "
-                    "gains below-left leave the stroke)", fontsize=10)
+    cb.set_label("intrusion steps (rest proven)")
+    axes.flat[0].legend(handles=[matplotlib.patches.Patch(color="#f4a582",
+                                                          label="rest not proven")],
+                        fontsize=7, loc="upper right")
+    sub[1].suptitle("(b) intrusion steps over the gains\n(black line: stroke limit; "
+                    "gains below-left leave the stroke)", fontsize=10, y=0.99)
     return fig
 
 
@@ -266,6 +282,15 @@ def plot_depth_maps(maps, optima) -> plt.Figure:
     return fig
 
 
+def _on_box_edge(c, lo: float = 0.0, hi: float = 1.0, tol: float = 1e-9) -> np.ndarray:
+    """Optima whose gains sit on the edge of the searched box (the box, not the stroke,
+    binds there: a larger box might give a better optimum)."""
+    kp, kd = c.k_p.values, c.k_d.values
+    with np.errstate(invalid="ignore"):
+        return ((np.abs(kp - lo) <= tol) | (np.abs(kp - hi) <= tol)
+                | (np.abs(kd - lo) <= tol) | (np.abs(kd - hi) <= tol))
+
+
 def plot_gain_families(curves) -> plt.Figure:
     """The paper's Fig. 5: k_p*(v0) and k_d*(v0); colour = r_m, line style = s, thick = (5, 20)."""
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.4))
@@ -279,12 +304,20 @@ def plot_gain_families(curves) -> plt.Figure:
                       label=f"$r_m$={r:g}, $s$={s:g}")
             axes[0].plot(speed, c.k_p, **kw)
             axes[1].plot(speed, c.k_d, **kw)
+            edge = _on_box_edge(c)
+            for ax, var in ((axes[0], c.k_p), (axes[1], c.k_d)):
+                ax.plot(speed[edge], var.values[edge], "s", mfc="none", color=f"C{ir}", ms=7)
     axes[0].set_ylabel(r"optimal stiffness $k_p^*$")
     axes[1].set_ylabel(r"optimal damping $k_d^*$")
     for ax in axes:
         ax.set_xlabel(r"impact speed $|v_0|$ [$x_s/\tau_s$]")
         ax.grid(alpha=0.3)
-    axes[1].legend(fontsize=7, ncol=3, loc="upper left")
+    from matplotlib.lines import Line2D
+
+    handles, labels = axes[1].get_legend_handles_labels()
+    handles.append(Line2D([], [], ls="", marker="s", mfc="none", color="0.3"))
+    labels.append("optimum on the edge of the gain box $[0,1]^2$")
+    axes[1].legend(handles, labels, fontsize=7, ncol=3, loc="upper left")
     fig.suptitle("Depth-optimal impedance against impact speed (thick: $r_m$=5, $s$=20; "
                  "colour: $r_m$; line style: $s$; gaps: no feasible gains in $[0,1]^2$)",
                  fontsize=10)
@@ -351,6 +384,9 @@ def plot_experiment_curves(ds, si=None) -> plt.Figure:
                 lab = f"$V_0$ = {abs(v) * units.velocity:.2f} m/s"
             ax.plot(x, np.where(ok, y, np.nan), color=f"C{iv}", label=lab)
             ax.plot(x, np.where(ok, np.nan, y), color=f"C{iv}", ls=":", lw=1)
+            # an isolated point (k_d = 0) draws no line: mark where rest is not proven
+            unproven = c.status.values != 0
+            ax.plot(x[unproven], y[unproven], "x", color=f"C{iv}", ms=6)
             if ok.any():
                 k = int(np.nanargmin(np.where(ok, depth, np.nan)))
                 ax.plot(x[k], y[k], "o", color=f"C{iv}", ms=5)
@@ -368,7 +404,8 @@ def plot_experiment_curves(ds, si=None) -> plt.Figure:
              f"; $m_b$={si.m_b:g} kg, $m_f$={si.m_f:g} kg, $k_g$={si.k_g / 1e3:g} kN/m")
     fig.suptitle(f"Simulated depth against damping ($r_m$={float(ds.r_m):g}, "
                  f"$s$={float(ds.s):g}{where}); dotted: stroke limit exceeded, "
-                 "dot: best damping", fontsize=10)
+                 "x: rest not proven (k_d = 0: the leg keeps hopping), dot: best damping",
+                 fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -429,11 +466,16 @@ def plot_robustness(ds) -> plt.Figure:
                 f = d.factor.values
                 kept = d.stroke_kept.values
                 col = CONTROLLER_COLOURS[str(ctrl)]
-                ls = "-" if im == 0 else "--"
-                lab = f"{ctrl}" + (f", {m:.0%} stroke margin" if m > 0 else "")
-                ax.plot(f, y, ls, color=col, lw=1.5 if im == 0 else 1.0, label=lab)
-                ax.plot(f[kept], y[kept], "o", color=col, ms=4, mfc=col if im == 0 else "w")
-                ax.plot(f[~kept], y[~kept], "x", color=col, ms=7, mew=1.5)
+                lab = f"{ctrl}" + (f", {m:.0%} stroke margin" if m > 0 else ", no margin")
+                # the margin curves often coincide with the no-margin ones: draw them on top,
+                # dashed over a wide translucent band, so both stay visible
+                if im == 0:
+                    ax.plot(f, y, "-", color=col, lw=4, alpha=0.35, label=lab, zorder=2)
+                else:
+                    ax.plot(f, y, "--", color=col, lw=1.2, label=lab, zorder=3)
+                ax.plot(f[kept], y[kept], "o", color=col, ms=4, mfc=col if im == 0 else "w",
+                        zorder=4)
+                ax.plot(f[~kept], y[~kept], "x", color=col, ms=7, mew=1.5, zorder=4)
         ax.axvline(1.0, color="0.6", lw=0.8)
         ax.set_xlabel(ROBUSTNESS_TITLES.get(str(par), str(par)), fontsize=9)
         ax.grid(alpha=0.3)
@@ -442,6 +484,6 @@ def plot_robustness(ds) -> plt.Figure:
     a = ds.attrs
     fig.suptitle(f"Nominal controllers on a perturbed model ($v_0$={a['v0']:g}, "
                  f"$r_m$={a['r_m']:g}, $s$={a['s']:g}, bang-bang $u_{{max}}$={a['u_max']:g}); "
-                 "x: stroke limit left", fontsize=10)
+                 "o: stays within the stroke limits, x: leaves them", fontsize=10)
     fig.tight_layout()
     return fig

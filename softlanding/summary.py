@@ -146,7 +146,8 @@ def _robustness(s: dict) -> list[str]:
             "the same kind of controller designed for the true model. A margin m designs for "
             "the stroke (1 - m) s.", "",
             _table(["controller", "margin", "error in", "nominal depth", "worst regret",
-                    "stroke left", "body never stops", "largest finite excursion [stroke]"],
+                    "left the stroke limits", "body never stops",
+                    "largest finite excursion [stroke]"],
                    [[r["controller"], f"{r['margin']:.0%}", r["parameter"],
                      _f(r["nominal_depth"], 4), _f(r["worst_depth_ratio"], 4),
                      f"{r['violations']}/{r['cases']}", r["body_never_stops"],
