@@ -87,7 +87,17 @@ FINITE: Rule = (lambda x: np.isfinite(x), "must be finite")
 
 
 def within(lo: float, hi: float, open_lo: bool = False, why: str = "") -> Rule:
-    """A rule ``lo <(=) x <= hi``, with the reason for the range in its message."""
+    """A rule ``lo <(=) x <= hi``, with the reason for the range in its message.
+
+    Parameters
+    ----------
+    lo, hi : float
+        The range.
+    open_lo : bool
+        Exclude ``lo``.
+    why : str
+        What the number is, for the message.
+    """
     left = "(" if open_lo else "["
     msg = f"must be in {left}{lo:g}, {hi:g}]" + (f" ({why})" if why else "")
     if open_lo:
