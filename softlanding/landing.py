@@ -182,6 +182,8 @@ class BangBangLanding:
         The refined schedule replayed in the exact simulator.
     notes : list of str
         What was dropped or failed on the way.
+    refine_requested : bool
+        Whether the switching times were to be refined.
     """
 
     robot: Robot
