@@ -41,7 +41,20 @@ import scipy.linalg
 
 from .problem import OptimalControlProblem
 from .solution import Solution, along
-from .switching import RefinedSwitching, _active_path_constraints, _affine_parts, detect_arcs
+from .switching import RefinedSwitching, detect_arcs
+from .switching import active_path_constraints as _active_path_constraints
+
+
+def _affine_parts(pr, u_value, pv, with_quadrature):
+    z = pr.x
+    Jf = ca.Function('J', [z, pr.u, pr.p], [ca.jacobian(pr.rhs, z), pr.rhs])
+    n = z.numel()
+    A, b = (np.array(v, dtype=float) for v in Jf(np.zeros(n), u_value, pv))
+    M = np.zeros((n + 1, n + 1))
+    M[:n, :n] = A
+    M[:n, n] = b.ravel()
+    return M
+
 
 CERTIFIED = "bang-bang certified"
 NOT_BANG_BANG = "not bang-bang"
@@ -367,9 +380,9 @@ def _path_activity(pr, t, x, u, pv, tol) -> np.ndarray:
 
 
 def _bounds(pr, params) -> tuple[float, float]:
-    from .switching import _bounds_at
+    from .switching import control_bounds_at
 
-    return _bounds_at(pr, pr.control_names[0], params)
+    return control_bounds_at(pr, pr.control_names[0], params)
 
 
 def plot_certificate(cert: PMPCertificate, title: str | None = None):
