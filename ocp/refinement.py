@@ -351,6 +351,18 @@ class SwitchingNLP:
                 bad.append(k)
         return not bad, worst, bad
 
+    def row_times(self, w: np.ndarray) -> np.ndarray:
+        """Time of every constraint row at the solution ``w`` (samples, junctions, ends)."""
+        edges = np.r_[0.0, np.cumsum(w[:self.K])]
+        out = np.empty(self.n_g)
+        for r, (k, j) in enumerate(self.row_where):
+            if j < 0:
+                out[r] = edges[k + 1]
+            else:
+                stride = max(1, self.substeps[k] // max(1, self.samples + 1))
+                out[r] = edges[k] + w[k] * j * stride / self.substeps[k]
+        return out
+
     def sample_interval(self, k: int, z0: np.ndarray, tau: float, pv: np.ndarray,
                         points: int) -> np.ndarray:
         """States at ``points + 1`` equally spaced times of interval k, (points+1, nz)."""

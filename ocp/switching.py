@@ -45,7 +45,7 @@ from .arcs import (
     path_activity,
 )
 from .errors import InfeasibleError, SolveError
-from .flows import Mode
+from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
 from .problem import OptimalControlProblem
 from .refinement import (
     DEFAULT_TOL,
@@ -54,6 +54,7 @@ from .refinement import (
     arc_dynamics,
     clear_cache,
     required_substeps,
+    rk8_of,
     switching_nlp,
 )
 from .solution import Solution, along
@@ -186,32 +187,73 @@ class RefinedSwitching:
         return out
 
     # --------------------------------------------------------------- samples
-    def _grid(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    @property
+    def interval_modes(self) -> tuple[tuple[Mode, ...], ...]:
+        """Per interval, each control's mode, read off :attr:`values` where they are bang
+        values (so a copy with edited ``values`` describes what its values say)."""
+        out = []
+        for k, modes in enumerate(self.modes):
+            vals = self.values[k] if len(self.controls) > 1 else (self.values[k],)
+            ms = []
+            for name, m, v in zip(self.controls, modes, vals, strict=True):
+                lo, hi = control_bounds_at(self.problem, name, self.params)
+                if m.kind != "boundary" and np.isfinite(v):
+                    m = Mode("max") if abs(v - hi) <= abs(v - lo) else Mode("min")
+                ms.append(m)
+            out.append(tuple(ms))
+        return tuple(out)
+
+    def _steps(self, k: int) -> int:
+        """RK8 steps of interval k (the refinement's), for non-affine arcs."""
+        if self.nlp is not None and k < len(self.nlp.substeps):
+            return int(self.nlp.substeps[k])
+        return 64
+
+    def _flow(self, k: int, modes: tuple[Mode, ...], z: np.ndarray, tau: float,
+              points: int) -> np.ndarray:
+        d = arc_dynamics(self.problem, modes)
+        if d.exact:
+            A, b = d.affine_numeric(self.pv)
+            return numeric_affine_flow(A, b, z, tau, points)
+        per = max(1, -(-self._steps(k) // points))
+        return numeric_rk8_flow(rk8_of(d), z, tau, per * points, self.pv)[::per]
+
+    def junctions(self) -> np.ndarray:
+        """States (with the running cost's quadrature, if any) at the interval ends, (K+1, nz),
+        propagated from :attr:`x0` over :attr:`durations`."""
+        z = np.r_[self.x0, 0.0] if has_running_cost(self.problem) else self.x0.copy()
+        out = [z]
+        for k, modes in enumerate(self.interval_modes):
+            z = self._flow(k, modes, z, float(self.durations[k]), 1)[-1]
+            out.append(z)
+        return np.array(out)
+
+    def samples(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Times, states, controls and interval index, sampled arc by arc (exact arcs exact).
 
         Junction times appear twice: the end of one interval and the start of the next.
         """
         pr = self.problem
         ts, xs, us, ks = [], [], [], []
-        z = np.r_[self.x0, 0.0] if self.nlp is not None and self.nlp.has_quad else self.x0.copy()
+        z = np.r_[self.x0, 0.0] if has_running_cost(pr) else self.x0.copy()
         start = 0.0
-        for k, tau in enumerate(self.durations):
-            pts = max(2, int(math.ceil(n * tau / max(self.T, 1e-300))))
-            Z = (self.nlp.sample_interval(k, z, float(tau), self.pv, pts) if self.nlp is not None
-                 else np.tile(z, (pts + 1, 1)))
-            d = arc_dynamics(pr, self.modes[k])
-            U = along(d.u_fn, Z[:, :pr.nx], self.pv)[0]
-            ts.append(start + np.linspace(0.0, float(tau), pts + 1))
+        T = float(np.sum(self.durations))
+        for k, modes in enumerate(self.interval_modes):
+            tau = float(self.durations[k])
+            pts = max(2, int(math.ceil(n * tau / max(T, 1e-300))))
+            Z = self._flow(k, modes, z, tau, pts)
+            U = along(arc_dynamics(pr, modes).u_fn, Z[:, :pr.nx], self.pv)[0]
+            ts.append(start + np.linspace(0.0, tau, pts + 1))
             xs.append(Z[:, :pr.nx])
             us.append(U)
             ks.append(np.full(pts + 1, k))
             z = Z[-1]
-            start += float(tau)
+            start += tau
         return np.concatenate(ts), np.vstack(xs), np.vstack(us), np.concatenate(ks)
 
     def trajectory(self, n: int = 1000) -> Trajectory:
         """The refined trajectory on about ``n`` points (mode = arc kind per sample)."""
-        t, x, u, k = self._grid(n)
+        t, x, u, k = self.samples(n)
         labels = ["/".join(m.label() for m in modes) for modes in self.modes]
         pr = self.problem
         return Trajectory(t, x, u, pr.state_names, pr.control_names,
@@ -219,7 +261,7 @@ class RefinedSwitching:
 
     def sample(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``t, x, u`` on about ``n`` points (``u`` 1-D for a single control)."""
-        t, x, u, _ = self._grid(n)
+        t, x, u, _ = self.samples(n)
         return t, x, (u[:, 0] if u.shape[1] == 1 else u)
 
     def control_at(self, t: np.ndarray) -> np.ndarray:
@@ -231,7 +273,7 @@ class RefinedSwitching:
     def path_violation(self, n: int = 4000) -> float:
         """Largest violation of any path constraint or control bound on about ``n`` points."""
         pr = self.problem
-        t, x, u, _ = self._grid(n)
+        t, x, u, _ = self.samples(n)
         viol = 0.0
         cons = [(c.expr, c.lower, c.upper) for c in pr.path]
         cons += [(pr.u[j], *pr.control_bounds[nm]) for j, nm in enumerate(pr.control_names)]
