@@ -198,7 +198,7 @@ def _sweep(ref, first: int, points: int, factor: int) -> AdjointSweep:
         tau = float(ref.durations[k])
         ja = _joint(pr, modes[k])
         q = max(8, int(np.ceil(points * tau / max(T, 1e-300))))
-        n = 0 if ja.exact else factor * ref._steps(k)
+        n = 0 if ja.exact else factor * max(ref._steps(k), q)
         Y = ja.backward(y, tau, pv, q, n) if tau > 0 else np.tile(y, (2, 1))
         xs = Y[:, :pr.nx]
         err_x = max(err_x, float(np.max(np.abs(xs[0] - Z[k][:pr.nx]))
