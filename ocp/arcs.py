@@ -438,9 +438,9 @@ def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
     lo, hi = control_bounds_at(pr, name, sol.params)
     u = sol.control(name)
     h = sol.T / sol.N
-    lab = np.where(np.abs(u - hi) <= tol * max(1.0, abs(hi)), "max",
-                   np.where(np.abs(u - lo) <= tol * max(1.0, abs(lo)), "min",
-                            "interior")).tolist()
+    at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
+    at_lo = np.isfinite(lo) & (np.abs(u - lo) <= tol * max(1.0, abs(lo)))
+    lab = np.where(at_hi, "max", np.where(at_lo, "min", "interior")).tolist()
     _boundary_labels(sol, lab, tol, max_gap, min_boundary_nodes)
     runs = _runs(lab)
     _absorb_end_transitions(runs, max_transition)

@@ -39,34 +39,53 @@ _FN_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 @dataclass
 class PMPFunctions:
-    """``H``, ``sigma`` (nu,), ``H_x`` (nx,) as functions of ``(x, u, lam, p)``."""
+    """``H``, ``sigma = dH/du`` (nu,), ``H_x`` (nx,) as functions of ``(x, u, lam, p)``.
+
+    ``linear`` says whether H is linear in u (then sigma is the switching function
+    and does not depend on u); otherwise H is quadratic in u with Hessian ``Huu(x, p)``
+    (a running cost such as ``u^2 / 2``), and sigma is evaluated at the actual control.
+    """
 
     H: ca.Function
     sigma: ca.Function
     Hx: ca.Function
+    linear: bool
+    Huu: ca.Function
+    sigma_terms: ca.Function
+    """``|dL/du_j| + sum_i |lam_i g_ij|``: the size of the terms sigma_j is made of."""
 
 
 def pmp_functions(pr: OptimalControlProblem) -> PMPFunctions:
     """Hamiltonian, switching functions and ``H_x`` of a control-affine problem (cached).
 
+    The running cost may be quadratic in u (H convex in u is checked by the
+    certificate along the samples): the minimum condition is then the KKT
+    condition of ``min_u H`` over the bounds, checked with ``sigma = dH/du``.
+
     Raises
     ------
     ValueError
-        If the dynamics or the running cost are not affine in the controls
-        (then H is not linear in u and there is no switching function).
+        If the dynamics are not affine in the controls, or the running cost is
+        neither affine nor quadratic in them.
     """
     if pr in _FN_CACHE:
         return _FN_CACHE[pr]
     if not pr.is_control_affine():
         raise ValueError("the dynamics are not control-affine: H is not linear in u")
-    if ca.depends_on(ca.jacobian(pr.lagrange, pr.u), pr.u):
-        raise ValueError("the running cost is not affine in u: H is not linear in u")
+    Luu = ca.hessian(pr.lagrange, pr.u)[0]
+    if ca.depends_on(Luu, pr.u):
+        raise ValueError("the running cost is neither affine nor quadratic in u")
     lam = ca.SX.sym("lam", pr.nx)
     H = pr.lagrange + ca.dot(lam, pr.rhs)
     args = [pr.x, pr.u, lam, pr.p]
     out = PMPFunctions(ca.Function("H", args, [H]),
                        ca.Function("sigma", args, [ca.jacobian(H, pr.u).T]),
-                       ca.Function("Hx", args, [ca.gradient(H, pr.x)]))
+                       ca.Function("Hx", args, [ca.gradient(H, pr.x)]),
+                       not ca.depends_on(ca.jacobian(pr.lagrange, pr.u), pr.u),
+                       ca.Function("Huu", [pr.x, pr.p], [ca.densify(Luu)]),
+                       ca.Function("terms", args, [
+                           ca.fabs(ca.jacobian(pr.lagrange, pr.u)).T
+                           + ca.mtimes(ca.fabs(ca.jacobian(pr.rhs, pr.u)).T, ca.fabs(lam))]))
     _FN_CACHE[pr] = out
     return out
 

@@ -29,13 +29,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import casadi as ca
 import numpy as np
 import scipy.linalg
-from scipy.integrate._ivp import dop853_coefficients as _dop
-
 from .problem import Constraint, OptimalControlProblem
 
 TAYLOR_ORDER = 18
@@ -44,9 +43,17 @@ TAYLOR_ORDER = 18
 THETA_MAX = 1.0
 """Largest ``||A||_1 tau / m`` an exact sub-step may have (accuracy to rounding)."""
 
-_RK_A = np.asarray(_dop.A[:_dop.N_STAGES, :_dop.N_STAGES], dtype=float)
-_RK_B = np.asarray(_dop.B, dtype=float)
 RK_ORDER = 8
+
+
+@lru_cache(maxsize=1)
+def rk8_tableau() -> tuple[np.ndarray, np.ndarray]:
+    """``A`` (12, 12) and ``b`` (12,) of the explicit 8th-order Dormand-Prince method
+    (read from scipy's DOP853; imported on first use, scipy.integrate is slow to import)."""
+    from scipy.integrate._ivp import dop853_coefficients as dop
+
+    n = dop.N_STAGES
+    return np.asarray(dop.A[:n, :n], dtype=float), np.asarray(dop.B, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -286,15 +293,16 @@ def numeric_affine_flow(A: np.ndarray, b: np.ndarray, z0: np.ndarray, tau: float
 # ------------------------------------------------------------------- RK8 flows
 def rk8_step(f: ca.Function, z: Any, h: Any, p: Any) -> Any:
     """One step of the explicit 8th-order Dormand-Prince tableau (12 stages)."""
+    A, B = rk8_tableau()
     k: list[Any] = []
-    for i in range(_RK_A.shape[0]):
+    for i in range(A.shape[0]):
         zi = z
         for j in range(i):
-            if _RK_A[i, j] != 0.0:
-                zi = zi + h * float(_RK_A[i, j]) * k[j]
+            if A[i, j] != 0.0:
+                zi = zi + h * float(A[i, j]) * k[j]
         k.append(f(zi, p))
     out = z
-    for i, bi in enumerate(_RK_B):
+    for i, bi in enumerate(B):
         if bi != 0.0:
             out = out + h * float(bi) * k[i]
     return out

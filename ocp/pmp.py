@@ -256,6 +256,7 @@ class _Figures:
     gap: dict[str, float]
     singular: list[tuple[float, float]]
     zeros: dict[str, np.ndarray]
+    linear: bool = True
 
 
 def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarray,
@@ -270,8 +271,14 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
     """
     pv = np.array([params[k] for k in pr.param_names], dtype=float)
     fns = pmp_functions(pr)
+    if not fns.linear:
+        Huu = along(fns.Huu, x, pv)[0].reshape(len(x), pr.nu, pr.nu)
+        if np.min(np.linalg.eigvalsh(Huu), initial=0.0) < -1e-12 * max(1.0, np.max(np.abs(Huu))):
+            raise ValueError("H is not convex in u along the solution: the minimum condition "
+                             "cannot be checked through dH/du")
     H = along(fns.H, x, u, lam, pv)[0].ravel()
     sigma = along(fns.sigma, x, u, lam, pv)[0]
+    terms = along(fns.sigma_terms, x, u, lam, pv)[0]
     xdot = along(pr.dynamics_function(), x, u, pv)[0]
     H_scale = float(np.max(np.sum(np.abs(lam * xdot), axis=1), initial=0.0)) or 1.0
     judged = ~skip
@@ -284,22 +291,24 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
     for j, name in enumerate(pr.control_names):
         lo, hi = control_bounds_at(pr, name, params)
         s = sigma[:, j]
-        s_scale = float(np.max(np.abs(s[judged]), initial=0.0)) or 1.0
+        s_scale = float(np.max(np.r_[np.abs(s[judged]), terms[judged, j]], initial=0.0)) or 1.0
         band = max(tol_sigma * s_scale, float(sigma_floor[j]))
         clear = (np.abs(s) > band) & judged
         inside = None
         if u_tol > 1e-6:  # a transcription: its controls reach their bounds to Ipopt's tol
-            inside = (u[:, j] > lo + u_tol * (hi - lo)) & (u[:, j] < hi - u_tol * (hi - lo))
+            room = u_tol * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
+            inside = (u[:, j] > lo + room) & (u[:, j] < hi - room)
         singular += _singular_runs(t, s, ~clear & judged, band, min_singular, inside)
         want = np.where(s < 0, hi, lo)
-        agree = np.abs(u[:, j] - want) <= u_tol * max(1.0, hi - lo)
+        agree = np.isfinite(want) & (np.abs(u[:, j] - want) <= u_tol * max(1.0, hi - lo))
         agreement[name] = float(np.sum(dt[clear & agree]) / max(np.sum(dt[clear]), 1e-300)) \
             if clear.any() else 1.0
         zc = sign_changes(t, s, 1e-14 * s_scale)
         zeros[name] = zc
         gap[name] = max((switch_gap(t, s, zc, ts) for ts in switches.get(name, [])),
                         default=0.0)
-    return _Figures(H, sigma, H_scale, H_max_abs, H_var, agreement, gap, singular, zeros)
+    return _Figures(H, sigma, H_scale, H_max_abs, H_var, agreement, gap, singular, zeros,
+                    fns.linear)
 
 
 @dataclass
@@ -337,8 +346,9 @@ def _judge(fig: _Figures, tol: _Tolerances, err: dict[str, float],
               f"a switch of {name} is {g:.2e} away from the nearest sign change of its sigma")
     if fig.singular:
         spans = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in fig.singular)
-        definite.append(f"sigma vanishes on {len(fig.singular)} interval(s) ({spans}): "
-                        "a singular arc")
+        what = ("a singular arc" if fig.linear else
+                "an interior arc (u minimises H inside its bounds)")
+        definite.append(f"sigma vanishes on {len(fig.singular)} interval(s) ({spans}): {what}")
     return definite, uncertain
 
 
@@ -351,9 +361,11 @@ def _verdict(definite: list[str], uncertain: list[str], active: list[tuple[float
         return INCONCLUSIVE, reasons
     if active or checked_from > 0:
         spans = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in active) or "isolated points"
+        where = (f"checked on [{checked_from:.6g}, {T:.6g}] only" if checked_from > 0
+                 else "excluded from the checks")
         return INCONCLUSIVE, reasons + [
             f"state constraint active on {spans}: the bang-bang argument does not apply there "
-            f"(checked on [{checked_from:.6g}, {T:.6g}] only)"]
+            f"({where})"]
     return CERTIFIED, reasons
 
 
@@ -527,6 +539,25 @@ def _transcription_samples(sol: Solution) -> tuple[np.ndarray, np.ndarray, np.nd
     return t, sol.x[1:], u, lam
 
 
+def _constrained_transcription(sol: Solution) -> list[tuple[float, float]]:
+    """Intervals where a path constraint is active in a transcription: nodes at a limit
+    (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
+    finds (which bridge the zig-zag of a transcription along a constraint)."""
+    h = sol.T / sol.N
+    act = active_path_constraints(sol, 1e-6)
+    act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, bool)
+    spans = intervals_of(sol.t, act_nodes, h - 1e-12)
+    for name in sol.problem.control_names:
+        spans += [(a.start, a.end) for a in detect_arcs(sol, name).arcs if a.kind == "boundary"]
+    merged: list[tuple[float, float]] = []
+    for a, b in sorted(spans):
+        if merged and a <= merged[-1][1] + 1e-12:
+            merged[-1] = (merged[-1][0], max(b, merged[-1][1]))
+        else:
+            merged.append((float(a), float(b)))
+    return merged
+
+
 def _transcription_figures(sol: Solution, tol: _Tolerances) -> tuple[_Figures, float | None,
                                                                      list, np.ndarray]:
     pr = sol.problem
@@ -536,10 +567,7 @@ def _transcription_figures(sol: Solution, tol: _Tolerances) -> tuple[_Figures, f
     if pr.time_free:
         nu = sol.multipliers.get("terminal", np.zeros(0))
         _, H_exp = terminal_costate(pr, sol.x[-1], sol.T, pv, nu)
-    h = sol.T / sol.N
-    act = active_path_constraints(sol, 1e-6)
-    act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, bool)
-    active = intervals_of(sol.t, act_nodes, h - 1e-12)
+    active = _constrained_transcription(sol)
     constrained = np.zeros(len(t), dtype=bool)
     for a, b in active:
         constrained |= (t >= a) & (t <= b)
@@ -596,8 +624,9 @@ def _persistent(coarse: _Figures, fine: _Figures, tol: _Tolerances,
     for a, b in coarse.singular:
         overlap = sum(max(0.0, min(b, d) - max(a, c)) for c, d in fine.singular)
         if overlap >= 0.75 * (b - a):  # a grid artefact halves with the grid
+            what = "a singular arc" if coarse.linear else "an interior arc"
             out.append(f"sigma vanishes on [{a:.4g}, {b:.4g}], and still on a grid twice as "
-                       "fine: a singular arc")
+                       f"fine: {what}")
     return out
 
 
