@@ -27,9 +27,8 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
-import scipy.linalg
 
-from .flows import ArcDynamics, Mode, is_affine, rk8_step_function
+from .flows import ArcDynamics, Mode, expm, is_affine, rk8_step_function
 from .problem import OptimalControlProblem
 from .refinement import arc_dynamics
 from .solution import Solution, along
@@ -138,7 +137,7 @@ class _JointArc:
             M = np.zeros((n + 1, n + 1))
             M[:n, :n] = A
             M[:n, n] = b.ravel()
-            E = scipy.linalg.expm(-M * (tau / points))
+            E = expm(-M * (tau / points))
             out = np.empty((points + 1, n))
             z = np.r_[y_end, 1.0]
             out[-1] = y_end

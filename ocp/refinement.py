@@ -293,6 +293,9 @@ class SwitchingNLP:
         if not out["success"] and out["status"] in NEAR_CONVERGED and \
                 out["primal"] <= KKT_PRIMAL and out["dual"] <= KKT_DUAL:
             out["success"] = True  # stalled at rounding level: a KKT point to our tolerance
+        if out["success"]:
+            self.last = {"w": out["w"], "lam_g": out["lam_g"], "lam_x": out["lam_x"],
+                         "pv": np.array(pv, dtype=float)}
         return out
 
     def kkt(self, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray,
@@ -320,9 +323,109 @@ class SwitchingNLP:
         return (np.array(xT, dtype=float).ravel(), float(T), float(J),
                 np.array(Z, dtype=float).T)
 
-    def newton(self, pv: np.ndarray, w0: np.ndarray) -> dict[str, Any] | None:
-        """Fast path (not yet available): None means "use Ipopt"."""
+    def active_set(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """Active rows and variable bounds of the last Ipopt solution, with their sides.
+
+        Returns ``(rows, row_side, cols, col_side)``; side -1 lower, +1 upper, 0 equality.
+        A constraint is active when its multiplier exceeds ``1e-9`` of the largest one.
+        """
+        last = getattr(self, "last", None)
+        if last is None:
+            return None
+        b = self.bounds(last["pv"])
+        lam_g, lam_x = last["lam_g"], last["lam_x"]
+        big = max(1.0, float(np.max(np.abs(np.r_[lam_g, lam_x]), initial=0.0)))
+        eq = b["lbg"] == b["ubg"]
+        act_g = eq | (np.abs(lam_g) > 1e-9 * big)
+        act_x = np.abs(lam_x) > 1e-9 * big
+        rows = np.flatnonzero(act_g)
+        cols = np.flatnonzero(act_x)
+        return (rows, np.where(eq[rows], 0, np.sign(lam_g[rows])).astype(int), cols,
+                np.sign(lam_x[cols]).astype(int))
+
+    def newton(self, pv: np.ndarray, w0: np.ndarray, max_iter: int = 12) -> dict[str, Any] | None:
+        """Re-solve by Newton's method on the last solution's active set, if it is square.
+
+        The active constraints (and active variable bounds) of the last Ipopt
+        solution are solved as equations at the new parameters ``pv`` from the
+        last solution; the result is accepted only if every other constraint
+        holds (to ``KKT_PRIMAL``), the multipliers from ``J_A^T mu = -grad J``
+        have the signs their sides demand, and the step converged. Returns
+        None when any of this fails (the caller then runs Ipopt).
+        """
+        act = self.active_set()
+        if act is None:
+            return None
+        rows, side, cols, cside = act
+        if len(rows) + len(cols) != self.n_w:
+            return None
+        t0 = time.perf_counter()
+        b = self.bounds(pv)
+        target = np.where(side > 0, b["ubg"][rows], b["lbg"][rows])
+        for start in (w0, self.last["w"]):
+            w = np.array(start, dtype=float)
+            w[cols] = np.where(cside > 0, b["ubx"][cols], b["lbx"][cols])
+            it = self._newton_iterate(w, pv, rows, target, cols, max_iter)
+            if it:
+                out = self._newton_result(w, pv, rows, side, cols, cside, it,
+                                          time.perf_counter() - t0)
+                if out is not None:
+                    return out
         return None
+
+    def _newton_iterate(self, w: np.ndarray, pv: np.ndarray, rows: np.ndarray,
+                        target: np.ndarray, cols: np.ndarray, max_iter: int) -> int:
+        """Newton steps on ``g_rows(w) = target`` (in place); iterations used, 0 on failure.
+
+        Converged when the residual is at rounding level: below 1e-14 relative,
+        or below 1e-12 once a step no longer changes w beyond 1e-14 relative.
+        """
+        free = np.setdiff1d(np.arange(self.n_w), cols)
+        for it in range(1, max_iter + 1):
+            g, Jg, _ = (np.array(ca.DM(v), dtype=float) for v in self.kkt_fn(w, pv))
+            r = g.ravel()[rows] - target
+            res = float(np.max(np.abs(r) / np.maximum(1.0, np.abs(target)), initial=0.0))
+            if not np.isfinite(res):
+                return 0
+            if res <= 1e-14:
+                return it
+            try:
+                step = np.linalg.solve(Jg[np.ix_(rows, free)], r)
+            except np.linalg.LinAlgError:
+                return 0
+            w[free] -= step
+            if res <= 1e-12 and np.max(np.abs(step) / np.maximum(1.0, np.abs(w[free]))) <= 1e-14:
+                return it
+        return 0
+
+    def _newton_result(self, w: np.ndarray, pv: np.ndarray, rows: np.ndarray, side: np.ndarray,
+                       cols: np.ndarray, cside: np.ndarray, it: int,
+                       elapsed: float) -> dict[str, Any] | None:
+        """Multipliers and the acceptance checks of :meth:`newton`."""
+        g, Jg, gJ = (np.array(ca.DM(v), dtype=float) for v in self.kkt_fn(w, pv))
+        g, gJ = g.ravel(), gJ.ravel()
+        b = self.bounds(pv)
+        sc = np.maximum(1.0, np.abs(g))
+        if np.any((b["lbg"] - g) / sc > KKT_PRIMAL) or np.any((g - b["ubg"]) / sc > KKT_PRIMAL):
+            return None
+        A = np.vstack([Jg[rows], np.eye(self.n_w)[cols]])
+        try:
+            mu = np.linalg.solve(A.T, -gJ)
+        except np.linalg.LinAlgError:
+            return None
+        sides = np.r_[side, cside]
+        scale = max(1.0, float(np.max(np.abs(mu))))
+        if np.any((sides != 0) & (sides * mu < -1e-9 * scale)):
+            return None  # a multiplier with the wrong sign: the active set changed
+        lam_g = np.zeros(self.n_g)
+        lam_g[rows] = mu[:len(rows)]
+        lam_x = np.zeros(self.n_w)
+        lam_x[cols] = mu[len(rows):]
+        primal, dual = self.kkt(w, lam_g, lam_x, pv)
+        self.n_solves += 1
+        return {"w": w, "f": float(self.out_fn(w, pv)[2]), "lam_g": lam_g, "lam_x": lam_x,
+                "status": "Solve_Succeeded", "success": True, "iterations": it,
+                "time": elapsed, "path": "newton", "primal": primal, "dual": dual}
 
     # ----------------------------------------------------------- verification
     def accuracy(self, w: np.ndarray, pv: np.ndarray, tol: float) -> tuple[bool, float,
