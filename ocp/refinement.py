@@ -408,6 +408,8 @@ class SwitchingNLP:
         sc = np.maximum(1.0, np.abs(g))
         if np.any((b["lbg"] - g) / sc > KKT_PRIMAL) or np.any((g - b["ubg"]) / sc > KKT_PRIMAL):
             return None
+        if np.any(w < b["lbx"]) or np.any(w > b["ubx"]):
+            return None  # e.g. a negative duration: the structure no longer fits
         A = np.vstack([Jg[rows], np.eye(self.n_w)[cols]])
         try:
             mu = np.linalg.solve(A.T, -gJ)
