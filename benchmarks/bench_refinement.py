@@ -83,7 +83,7 @@ def landing(args, old_sw, old_pmp) -> None:
     print(f"{'':28}{'first call':>22}{'re-solves, median':>24}")
     print(f"{'':28}{'CPU [ms]':>11}{'wall [ms]':>11}{'CPU [ms]':>12}{'wall [ms]':>12}")
     names = {"old": f"refine, baseline {args.baseline}", "ipopt": "refine, now (Ipopt)",
-             "newton": "refine, now (fast path)", "cert_old": f"certify, baseline",
+             "newton": "refine, now (fast path)", "cert_old": "certify, baseline",
              "cert_new": "certify, now"}
     for k, lab in names.items():
         first, rest = rows[k][0], rows[k][1:]

@@ -20,6 +20,7 @@ between consecutive switch events of any control.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any, Protocol, cast
 
 import casadi as ca
 import numpy as np
@@ -29,6 +30,39 @@ from .problem import OptimalControlProblem
 from .solution import Solution
 
 BANG = ("max", "min")
+
+
+class TranscribedSolution(Protocol):
+    """What this package reads of an :class:`ocp.Solution` (which sets these attributes
+    dynamically, so type checkers cannot see them on the class)."""
+
+    problem: OptimalControlProblem
+    transcription: Any
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    T: float
+    N: int
+    params: dict[str, float]
+    multipliers: dict[str, np.ndarray]
+    objective: float
+
+    def control(self, name: str) -> np.ndarray:
+        """The column of control ``name``."""
+        ...
+
+    def evaluate(self, expr: ca.SX) -> np.ndarray:
+        """An expression of (x, u, p) at every node."""
+        ...
+
+
+SolutionLike = Solution | TranscribedSolution
+"""A transcribed solution, as passed in (``Solution``) or as read (the protocol)."""
+
+
+def transcribed(sol: SolutionLike) -> TranscribedSolution:
+    """``sol`` typed by :class:`TranscribedSolution` (no conversion)."""
+    return cast(TranscribedSolution, sol)
 
 
 @dataclass
@@ -200,7 +234,7 @@ class ArcStructure:
             if not events or t - events[-1] > merge_tol * max(T, 1.0):
                 events.append(t)
         edges = [0.0, *events, T]
-        intervals = []
+        intervals: list[Interval] = []
         for a, b in zip(edges[:-1], edges[1:], strict=True):
             mid = 0.5 * (a + b)
             modes = tuple(_arc_at(s, mid).mode for s in structures)
@@ -247,7 +281,7 @@ def control_bounds_at(problem: OptimalControlProblem, name: str,
     return a, b
 
 
-def path_activity(sol: Solution, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Which path constraints sit at which limit at every node.
 
     Returns
@@ -255,14 +289,15 @@ def path_activity(sol: Solution, tol: float) -> tuple[np.ndarray, np.ndarray]:
     at_lower, at_upper : bool arrays (N+1, n_path)
         Within ``tol * max(1, |value|)`` of the lower (upper) limit.
     """
-    pr = sol.problem
-    n = sol.N + 1
+    tsol = transcribed(sol)
+    pr = tsol.problem
+    n = tsol.N + 1
     if not pr.path:
         return np.zeros((n, 0), dtype=bool), np.zeros((n, 0), dtype=bool)
-    pv = [sol.params[k] for k in pr.param_names]
+    pv = [tsol.params[k] for k in pr.param_names]
     lows, ups = [], []
     for c in pr.path:
-        vals = sol.evaluate(c.expr)
+        vals = tsol.evaluate(c.expr)
         lo, hi = (float(v) for v in ca.Function("b", [pr.p], [c.lower, c.upper])(pv))
         scale = tol * np.maximum(1.0, np.abs(vals))
         lows.append(np.abs(vals - lo) <= scale)
@@ -270,9 +305,10 @@ def path_activity(sol: Solution, tol: float) -> tuple[np.ndarray, np.ndarray]:
     return np.column_stack(lows), np.column_stack(ups)
 
 
-def active_path_constraints(sol: Solution, tol: float) -> np.ndarray:
+def active_path_constraints(sol: SolutionLike, tol: float) -> np.ndarray:
     """Boolean (N+1, n_path): path constraint i active (at a limit) at node k."""
-    lo, up = path_activity(sol, tol)
+    tsol = transcribed(sol)
+    lo, up = path_activity(tsol, tol)
     return lo | up
 
 
@@ -299,7 +335,7 @@ def _clusters(active: np.ndarray, max_gap: int) -> list[tuple[int, int, int]]:
     return out
 
 
-def _boundary_labels(sol: Solution, lab: list[str], tol: float, max_gap: int,
+def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_gap: int,
                      min_nodes: int) -> None:
     """Relabel as ``"boundary:<i>:<side>"`` the intervals between the first and the last
     node of every cluster of at least ``min_nodes`` nodes where path constraint i sits at
@@ -331,7 +367,7 @@ def _absorb_end_transitions(runs: list[list], max_transition: int) -> None:
             del runs[end]
 
 
-def _arcs_from_runs(sol: Solution, runs: list[list], u: np.ndarray, h: float, lo: float,
+def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h: float, lo: float,
                     hi: float, max_transition: int) -> list[Arc]:
     names = [c.name for c in sol.problem.path]
     arcs: list[Arc] = []
@@ -394,7 +430,7 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
         arcs.append(Arc(other, arcs[-1].end, (b + 1) * h))
 
 
-def _label_active(sol: Solution, arcs: list[Arc], h: float, tol: float) -> None:
+def _label_active(sol: TranscribedSolution, arcs: list[Arc], h: float, tol: float) -> None:
     """Fill ``active``: the path constraints active at every node inside each arc."""
     pr = sol.problem
     act = active_path_constraints(sol, tol)
@@ -408,7 +444,7 @@ def _label_active(sol: Solution, arcs: list[Arc], h: float, tol: float) -> None:
             arc.active = (arc.constraint, *arc.active)
 
 
-def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
+def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4,
                 max_transition: int = 1, max_gap: int = 1,
                 min_boundary_nodes: int = 3) -> SwitchingStructure:
     """Bang, boundary and interior arcs of one control of a transcribed solution.
@@ -433,29 +469,31 @@ def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
         ``max_gap`` nodes (a transcription zig-zags along a constraint of
         relative degree two), unless the control sits at one bound throughout.
     """
-    pr = sol.problem
+    tsol = transcribed(sol)
+    pr = tsol.problem
     name = control or pr.control_names[0]
-    lo, hi = control_bounds_at(pr, name, sol.params)
-    u = sol.control(name)
-    h = sol.T / sol.N
+    lo, hi = control_bounds_at(pr, name, tsol.params)
+    u = tsol.control(name)
+    h = tsol.T / tsol.N
     at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
     at_lo = np.isfinite(lo) & (np.abs(u - lo) <= tol * max(1.0, abs(lo)))
     lab = np.where(at_hi, "max", np.where(at_lo, "min", "interior")).tolist()
-    _boundary_labels(sol, lab, tol, max_gap, min_boundary_nodes)
+    _boundary_labels(tsol, lab, tol, max_gap, min_boundary_nodes)
     runs = _runs(lab)
     _absorb_end_transitions(runs, max_transition)
-    arcs = _arcs_from_runs(sol, runs, u, h, lo, hi, max_transition)
-    arcs[-1].end = sol.T
-    _label_active(sol, arcs, h, tol)
+    arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, max_transition)
+    arcs[-1].end = tsol.T
+    _label_active(tsol, arcs, h, tol)
     return SwitchingStructure(name, arcs, lo, hi)
 
 
-def detect_structure(sol: Solution, tol: float = 1e-4, max_transition: int = 1,
+def detect_structure(sol: SolutionLike, tol: float = 1e-4, max_transition: int = 1,
                      merge_tol: float = 1e-12) -> ArcStructure:
     """Arcs of every control (:func:`detect_arcs`) merged into one :class:`ArcStructure`.
 
     ``intervals`` is empty when some control has an interior (singular or
     free) arc.
     """
-    per = [detect_arcs(sol, name, tol, max_transition) for name in sol.problem.control_names]
+    tsol = transcribed(sol)
+    per = [detect_arcs(tsol, name, tol, max_transition) for name in tsol.problem.control_names]
     return ArcStructure.from_controls(per, merge_tol)

@@ -28,10 +28,11 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from .arcs import SolutionLike, transcribed
 from .flows import ArcDynamics, Mode, expm, is_affine, rk8_step_function
 from .problem import OptimalControlProblem
 from .refinement import arc_dynamics
-from .solution import Solution, along
+from .solution import along
 
 _FN_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -89,9 +90,10 @@ def pmp_functions(pr: OptimalControlProblem) -> PMPFunctions:
     return out
 
 
-def costates_from_multipliers(sol: Solution) -> tuple[np.ndarray, np.ndarray]:
+def costates_from_multipliers(sol: SolutionLike) -> tuple[np.ndarray, np.ndarray]:
     """Node times ``t_1..t_N`` and costates ``lambda(t_{k+1}) = mu_k`` (see module doc)."""
-    return sol.t[1:], sol.multipliers["continuity"].copy()
+    tsol = transcribed(sol)
+    return tsol.t[1:], tsol.multipliers["continuity"].copy()
 
 
 def terminal_costate(pr: OptimalControlProblem, xT: np.ndarray, T: float, pv: np.ndarray,

@@ -34,6 +34,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
 from .problem import Constraint, OptimalControlProblem
 
 TAYLOR_ORDER = 18
@@ -186,7 +187,7 @@ class ArcDynamics:
     def _boundary_laws(self, rhs: ca.SX, fixed: list, values: list) -> dict[str, ca.SX]:
         """Solve ``d^r c / dt^r = 0`` of every held constraint for its boundary control."""
         pr = self.problem
-        x, p = pr.x, pr.p
+        x = pr.x
         bnames = [n for n, m in zip(pr.control_names, self.modes, strict=True)
                   if m.kind == "boundary"]
         if not bnames:

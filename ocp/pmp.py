@@ -40,7 +40,14 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .arcs import active_path_constraints, control_bounds_at, detect_arcs
+from .arcs import (
+    SolutionLike,
+    TranscribedSolution,
+    active_path_constraints,
+    control_bounds_at,
+    detect_arcs,
+    transcribed,
+)
 from .costates import (
     adjoint_along_refined,
     adjoint_sweep,
@@ -152,7 +159,7 @@ class PMPCertificate:
 # ------------------------------------------------------------------ helpers
 def intervals_of(t: np.ndarray, mask: np.ndarray, min_len: float) -> list[tuple[float, float]]:
     """Maximal runs of ``mask`` as ``(t_first, t_last)``, at least ``min_len`` long."""
-    out = []
+    out: list[tuple[float, float]] = []
     k, n = 0, len(mask)
     while k < n:
         if mask[k]:
@@ -221,7 +228,7 @@ def _singular_runs(t: np.ndarray, s: np.ndarray, unclear: np.ndarray, band: floa
     a run also needs the control inside its bounds on half of it: a short bang
     arc whose sigma is small but of one sign is not singular.
     """
-    out = []
+    out: list[tuple[float, float]] = []
     idx = np.flatnonzero(unclear)
     if not len(idx):
         return out
@@ -370,7 +377,7 @@ def _verdict(definite: list[str], uncertain: list[str], active: list[tuple[float
 
 
 # ------------------------------------------------------------- certificates
-def certify(sol: Solution, refined: RefinedSwitching | None = None, *,
+def certify(sol: SolutionLike, refined: RefinedSwitching | None = None, *,
             tol_H: float | None = None, tol_sigma: float | None = None,
             tol_switch: float | None = None, min_singular: float | None = None,
             n: int = 2000, verify: bool = True) -> PMPCertificate:
@@ -401,19 +408,20 @@ def certify(sol: Solution, refined: RefinedSwitching | None = None, *,
         fine (a new transcription, solved from this one); without it such a
         result is only "inconclusive".
     """
+    tsol = transcribed(sol)
     t0 = time.process_time()
-    pr = sol.problem
+    pr = tsol.problem
     pmp_functions(pr)  # raises early on problems that are not control-affine
-    h = sol.T / sol.N
+    h = tsol.T / tsol.N
     tol = _Tolerances(H=tol_H if tol_H is not None else (1e-6 if refined else 1e-2),
                       sigma=tol_sigma if tol_sigma is not None else (1e-6 if refined else 1e-2),
                       switch=math.nan, singular=2 * h if min_singular is None else min_singular)
     if refined is not None:
         tol.switch = 1e-6 * refined.T if tol_switch is None else tol_switch
-        cert = _certify_refined(sol, refined, tol, n)
+        cert = _certify_refined(tsol, refined, tol, n)
     else:
         tol.switch = 1.5 * h if tol_switch is None else tol_switch
-        cert = _certify_transcription(sol, tol, verify, tol_switch is None)
+        cert = _certify_transcription(tsol, tol, verify, tol_switch is None)
     cert.elapsed = time.process_time() - t0
     return cert
 
@@ -460,7 +468,7 @@ def _constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[floa
     return merged, last
 
 
-def _certify_refined(sol: Solution, ref: RefinedSwitching, tol: _Tolerances,
+def _certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: _Tolerances,
                      n: int) -> PMPCertificate:
     pr = ref.problem
     active, last = _constrained_refined(ref, n)
@@ -500,7 +508,7 @@ def _certify_refined(sol: Solution, ref: RefinedSwitching, tol: _Tolerances,
                         sw.t[keep], sw.lam[keep], sw.u[keep], err, last)
 
 
-def _costate_gap(sol: Solution, ref: RefinedSwitching, t: np.ndarray, lam: np.ndarray,
+def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray, lam: np.ndarray,
                  start: float) -> float:
     """Largest difference between the multiplier and the adjoint costates, relative."""
     t_tr, lam_tr = costates_from_multipliers(sol)
@@ -531,7 +539,7 @@ def _certificate(verdict: str, reasons: list[str], H_exp: float | None, fig: _Fi
         checked_from, per)
 
 
-def _transcription_samples(sol: Solution) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+def _transcription_samples(sol: TranscribedSolution) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                     np.ndarray]:
     """Node times t_1..t_N, states, the control after each node, multiplier costates."""
     t, lam = costates_from_multipliers(sol)
@@ -539,14 +547,14 @@ def _transcription_samples(sol: Solution) -> tuple[np.ndarray, np.ndarray, np.nd
     return t, sol.x[1:], u, lam
 
 
-def _constrained_transcription(sol: Solution) -> list[tuple[float, float]]:
+def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, float]]:
     """Intervals where a path constraint is active in a transcription: nodes at a limit
     (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
     finds (which bridge the zig-zag of a transcription along a constraint)."""
     h = sol.T / sol.N
     act = active_path_constraints(sol, 1e-6)
-    act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, bool)
-    spans = intervals_of(sol.t, act_nodes, h - 1e-12)
+    act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, dtype=bool)
+    spans = intervals_of(sol.t, np.asarray(act_nodes), h - 1e-12)
     for name in sol.problem.control_names:
         spans += [(a.start, a.end) for a in detect_arcs(sol, name).arcs if a.kind == "boundary"]
     merged: list[tuple[float, float]] = []
@@ -558,8 +566,8 @@ def _constrained_transcription(sol: Solution) -> list[tuple[float, float]]:
     return merged
 
 
-def _transcription_figures(sol: Solution, tol: _Tolerances) -> tuple[_Figures, float | None,
-                                                                     list, np.ndarray]:
+def _transcription_figures(sol: TranscribedSolution, tol: _Tolerances
+                           ) -> tuple[_Figures, float | None, list, np.ndarray]:
     pr = sol.problem
     pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
     t, x, u, lam = _transcription_samples(sol)
@@ -581,25 +589,26 @@ def _transcription_figures(sol: Solution, tol: _Tolerances) -> tuple[_Figures, f
     return fig, H_exp, active, t
 
 
-def finer_transcription(sol: Solution, factor: int = 2) -> Solution | None:
+def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
     """Re-solve ``sol``'s problem on a grid ``factor`` times finer, started from ``sol``.
 
     Returns None when the transcription cannot be rebuilt or the solve fails.
     """
+    tsol = transcribed(sol)
     from .transcription import MultipleShooting
 
-    tr = getattr(sol, "transcription", None)
+    tr = getattr(tsol, "transcription", None)
     if not isinstance(tr, MultipleShooting):
         return None
     try:
-        N = factor * sol.N
-        fine = MultipleShooting(sol.problem, nodes=N, integrator=tr.integrator,
+        N = factor * tsol.N
+        fine = MultipleShooting(tsol.problem, nodes=N, integrator=tr.integrator,
                                 substeps=tr.substeps, ipopt_options=tr.ipopt_options)
         s = np.linspace(0.0, 1.0, N + 1)
-        X = np.column_stack([np.interp(s, sol.t / sol.T, sol.x[:, i])
-                             for i in range(sol.problem.nx)])
-        U = sol.u[np.minimum((s[:-1] * sol.N + 1e-9).astype(int), sol.N - 1)]
-        return fine.solve(sol.params, guess=fine.initial_guess(T=sol.T, x=X, u=U))
+        X = np.column_stack([np.interp(s, tsol.t / tsol.T, tsol.x[:, i])
+                             for i in range(tsol.problem.nx)])
+        U = tsol.u[np.minimum((s[:-1] * tsol.N + 1e-9).astype(int), tsol.N - 1)]
+        return fine.solve(tsol.params, guess=fine.initial_guess(T=tsol.T, x=X, u=U))
     except Exception:  # any failure: the refutation stays unverified
         return None
 
@@ -630,7 +639,7 @@ def _persistent(coarse: _Figures, fine: _Figures, tol: _Tolerances,
     return out
 
 
-def _certify_transcription(sol: Solution, tol: _Tolerances, verify: bool,
+def _certify_transcription(sol: TranscribedSolution, tol: _Tolerances, verify: bool,
                            default_switch: bool) -> PMPCertificate:
     fig, H_exp, active, t = _transcription_figures(sol, tol)
     definite, uncertain = _judge(fig, tol, {}, H_exp is not None)
@@ -641,12 +650,13 @@ def _certify_transcription(sol: Solution, tol: _Tolerances, verify: bool,
         verdict, reasons = _verdict([], uncertain, active, 0.0, sol.T)
         return _certificate(verdict, reasons, H_exp, fig, active, math.nan, src, t, lam, u,
                             {}, 0.0)
-    fine = finer_transcription(sol) if verify else None
-    if fine is None:
+    found = finer_transcription(sol) if verify else None
+    if found is None:
         why = "not re-checked" if not verify else "the finer grid could not be solved"
         return _certificate(INCONCLUSIVE, [*definite, f"unverified on a finer grid ({why}): "
                                            "the transcription's own error may cause it"],
                             H_exp, fig, active, math.nan, src, t, lam, u, {}, 0.0)
+    fine = transcribed(found)
     tol_f = _Tolerances(tol.H, tol.sigma, tol.switch / 2 if default_switch else tol.switch,
                         tol.singular / 2)
     fig2, H2, active2, t2 = _transcription_figures(fine, tol_f)

@@ -155,8 +155,8 @@ class SwitchingNLP:
         self.K = len(self.modes)
         self.has_quad = has_running_cost(problem)
         self._build()
-        opts = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})}, "print_time": False,
-                "error_on_fail": False}
+        opts: dict[str, Any] = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})},
+                                "print_time": False, "error_on_fail": False}
         self.solver = ca.nlpsol("refine", "ipopt", self._nlp, opts)
         self.build_time = time.perf_counter() - t0
         self.n_solves = 0
@@ -229,7 +229,7 @@ class SwitchingNLP:
     def _law_bounds(self, G: _Blocks, k: int, d: ArcDynamics, z: ca.SX, p: ca.SX,
                     j: int) -> None:
         pr = self.problem
-        for what, e, lo, hi in d.law_bounds:
+        for _, e, lo, hi in d.law_bounds:
             G.add("law", ca.substitute(e, pr.x, z[:pr.nx]), lo, hi, (k, j))
 
     def _finish(self, G: _Blocks, p: ca.SX, tau: ca.SX, x0: ca.SX, z: ca.SX,
@@ -284,7 +284,7 @@ class SwitchingNLP:
         elapsed = time.perf_counter() - t0
         st = self.solver.stats()
         self.n_solves += 1
-        out = {"w": np.array(res["x"], dtype=float).ravel(), "f": float(res["f"]),
+        out: dict[str, Any] = {"w": np.array(res["x"], dtype=float).ravel(), "f": float(res["f"]),
                "lam_g": np.array(res["lam_g"], dtype=float).ravel(),
                "lam_x": np.array(res["lam_x"], dtype=float).ravel(),
                "status": str(st["return_status"]), "success": bool(st["success"]),

@@ -37,12 +37,15 @@ from .arcs import (
     Arc,
     ArcStructure,
     Interval,
+    SolutionLike,
     SwitchingStructure,
+    TranscribedSolution,
     active_path_constraints,
     control_bounds_at,
     detect_arcs,
     detect_structure,
     path_activity,
+    transcribed,
 )
 from .errors import InfeasibleError, SolveError
 from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
@@ -57,7 +60,7 @@ from .refinement import (
     rk8_of,
     switching_nlp,
 )
-from .solution import Solution, along
+from .solution import along
 from .trajectory import Trajectory
 
 __all__ = [
@@ -256,7 +259,7 @@ class RefinedSwitching:
         t, x, u, k = self.samples(n)
         labels = ["/".join(m.label() for m in modes) for modes in self.modes]
         pr = self.problem
-        return Trajectory(t, x, u, pr.state_names, pr.control_names,
+        return Trajectory(t, x, u, tuple(pr.state_names), tuple(pr.control_names),
                           mode=np.array([labels[i] for i in k]))
 
     def sample(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -306,7 +309,7 @@ class RefinedSwitching:
 
 
 # ------------------------------------------------------------------ refine
-def _as_structure(sol: Solution, structure: Any) -> ArcStructure:
+def _as_structure(sol: TranscribedSolution, structure: Any) -> ArcStructure:
     if structure is None:
         structure = detect_structure(sol)
     if isinstance(structure, SwitchingStructure):
@@ -339,7 +342,7 @@ def _insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
         durs.append(cut)
 
 
-def refine_switching(sol: Solution, structure: SwitchingStructure | ArcStructure | None = None,
+def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStructure | None = None,
                      extra_arcs: int = 0, interior_samples: int = 16,
                      ipopt_options: dict | None = None, *, tol: float = DEFAULT_TOL,
                      params: dict[str, float] | None = None, fast: bool = True,
@@ -383,10 +386,12 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | ArcStructure
     SolveError, InfeasibleError
         If Ipopt fails, or the integration accuracy cannot be reached.
     """
-    st = _as_structure(sol, structure)
-    params = dict(sol.params if params is None else params)
-    opts = {"transcribed_objective": float(sol.objective), "interior_samples": interior_samples,
-            "ipopt_options": ipopt_options, "tol": tol, "fast": fast}
+    tsol = transcribed(sol)
+    st = _as_structure(tsol, structure)
+    params = dict(tsol.params if params is None else params)
+    opts: dict[str, Any] = {"transcribed_objective": float(tsol.objective),
+                            "interior_samples": interior_samples,
+                            "ipopt_options": ipopt_options, "tol": tol, "fast": fast}
 
     def attempt(s: ArcStructure) -> RefinedSwitching:
         modes, durs = list(s.modes), list(s.durations)
@@ -394,15 +399,15 @@ def refine_switching(sol: Solution, structure: SwitchingStructure | ArcStructure
             if len(s.controls) != 1:
                 raise ValueError("extra_arcs supports single-control problems")
             _insert_extra_arcs(modes, durs, extra_arcs)
-        return refine_structure(sol.problem, tuple(modes), np.asarray(durs, dtype=float),
-                                np.asarray(sol.x[0], dtype=float), params, **opts)
+        return refine_structure(tsol.problem, tuple(modes), np.asarray(durs, dtype=float),
+                                np.asarray(tsol.x[0], dtype=float), params, **opts)
 
     try:
         return attempt(st)
     except SolveError as err:
         if repair_length is None and not repair:
             raise
-        short = (2.5 * sol.T / sol.N) if repair_length is None else repair_length
+        short = (2.5 * tsol.T / tsol.N) if repair_length is None else repair_length
         return _repair(st, attempt, err, short)
 
 
@@ -464,12 +469,11 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
     need = required_substeps(problem, modes, pv, durations, x0, interior_samples, tol)
     w0 = np.r_[durations, x0]
     notes: list[str] = []
-    warm = None
+    warm: tuple[np.ndarray, np.ndarray] | tuple[None, None] = (None, None)
     for _ in range(max_rebuilds + 1):
         nlp = switching_nlp(problem, modes, need, interior_samples, ipopt_options)
-        res = nlp.newton(pv, w0) if fast else None
-        if res is None:
-            res = nlp.solve(pv, w0, *(warm or (None, None)))
+        fast_res = nlp.newton(pv, w0) if fast else None
+        res = fast_res if fast_res is not None else nlp.solve(pv, w0, *warm)
         ok, err, bad = nlp.accuracy(res["w"], pv, tol)
         if ok or not res["success"]:
             break
