@@ -273,7 +273,20 @@ def _arc_at(s: SwitchingStructure, t: float) -> Arc:
 
 def control_bounds_at(problem: OptimalControlProblem, name: str,
                       params: dict[str, float]) -> tuple[float, float]:
-    """Numeric ``(lower, upper)`` bounds of control ``name`` at parameter values ``params``."""
+    """Numeric ``(lower, upper)`` bounds of control ``name`` at parameter values ``params``.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    name : str
+        A control's name.
+    params : dict
+        A value for every parameter of the problem.
+
+    Returns
+    -------
+    (float, float)
+    """
     lo, hi = problem.control_bounds[name]
     f = ca.Function("b", [problem.p], [lo, hi])
     pv = [params[k] for k in problem.param_names]
@@ -283,6 +296,13 @@ def control_bounds_at(problem: OptimalControlProblem, name: str,
 
 def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Which path constraints sit at which limit at every node.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed solution.
+    tol : float
+        Relative distance to a limit that counts as at it.
 
     Returns
     -------
@@ -306,7 +326,19 @@ def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray
 
 
 def active_path_constraints(sol: SolutionLike, tol: float) -> np.ndarray:
-    """Boolean (N+1, n_path): path constraint i active (at a limit) at node k."""
+    """Which path constraints are active (at either limit) at every node.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed solution.
+    tol : float
+        As in :func:`path_activity`.
+
+    Returns
+    -------
+    ndarray of bool (N+1, n_path)
+    """
     tsol = transcribed(sol)
     lo, up = path_activity(tsol, tol)
     return lo | up
@@ -488,12 +520,32 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
 
 
 def detect_structure(sol: SolutionLike, tol: float = 1e-4, max_transition: int = 1,
+                     max_gap: int = 1, min_boundary_nodes: int = 3,
                      merge_tol: float = 1e-12) -> ArcStructure:
     """Arcs of every control (:func:`detect_arcs`) merged into one :class:`ArcStructure`.
 
-    ``intervals`` is empty when some control has an interior (singular or
-    free) arc.
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed solution.
+    tol : float
+        As in :func:`detect_arcs`.
+    max_transition : int
+        As in :func:`detect_arcs`.
+    max_gap : int
+        As in :func:`detect_arcs`.
+    min_boundary_nodes : int
+        As in :func:`detect_arcs`.
+    merge_tol : float
+        Switch events of different controls closer than ``merge_tol * T`` are one event.
+
+    Returns
+    -------
+    ArcStructure
+        ``intervals`` is empty when some control has an interior (singular or
+        free) arc.
     """
     tsol = transcribed(sol)
-    per = [detect_arcs(tsol, name, tol, max_transition) for name in tsol.problem.control_names]
+    per = [detect_arcs(tsol, name, tol, max_transition, max_gap, min_boundary_nodes)
+           for name in tsol.problem.control_names]
     return ArcStructure.from_controls(per, merge_tol)

@@ -98,8 +98,26 @@ def costates_from_multipliers(sol: SolutionLike) -> tuple[np.ndarray, np.ndarray
 
 def terminal_costate(pr: OptimalControlProblem, xT: np.ndarray, T: float, pv: np.ndarray,
                      nu: np.ndarray) -> tuple[np.ndarray, float]:
-    """``lambda(T) = grad_x(phi + nu^T G_T)`` and ``-d(phi + nu^T G_T)/dT``, the value of
-    H that a free final time demands."""
+    """The transversality conditions.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    xT : ndarray
+        Final state.
+    T : float
+        Final time.
+    pv : ndarray
+        Parameter values.
+    nu : ndarray
+        Multipliers of the terminal constraints (CasADi's signs).
+
+    Returns
+    -------
+    (ndarray, float)
+        ``lambda(T) = grad_x(phi + nu^T G_T)`` and ``-d(phi + nu^T G_T)/dT``, the
+        value of H that a free final time demands.
+    """
     G = ca.vertcat(*[c.expr for c in pr.terminal]) if pr.terminal else ca.SX(0, 1)
     nu_s = ca.SX.sym("nu", G.numel())
     aug = pr.mayer + (ca.dot(nu_s, G) if G.numel() else 0)
@@ -236,12 +254,25 @@ def _sweep(ref, first: int, points: int, factor: int) -> AdjointSweep:
 
 
 def adjoint_sweep(ref, t_start: float = 0.0, points: int = 2000) -> AdjointSweep:
-    """Costates along a :class:`~ocp.switching.RefinedSwitching`, from ``T`` back to the
-    start of the interval containing ``t_start``, with the error measured.
+    """Costates along a refined solution, with the error measured.
 
     The sweep runs with twice and four times the refinement's RK8 steps on
-    non-affine arcs; the finer run is returned, and the difference of the two
-    (an over-estimate of the finer run's error) is ``error_lam``.
+    non-affine arcs (exact arcs once); the finer run is returned, and the
+    difference of the two (an over-estimate of the finer run's error) is
+    ``error_lam``.
+
+    Parameters
+    ----------
+    ref : RefinedSwitching
+    t_start : float
+        The sweep runs from ``T`` back to the start of the interval containing
+        ``t_start`` (before it a state constraint may make the costate jump).
+    points : int
+        About how many samples over the whole horizon.
+
+    Returns
+    -------
+    AdjointSweep
     """
     edges = np.r_[0.0, np.cumsum(ref.durations)]
     first = int(np.clip(np.searchsorted(edges, t_start, side="right") - 1, 0,
@@ -259,8 +290,20 @@ def adjoint_sweep(ref, t_start: float = 0.0, points: int = 2000) -> AdjointSweep
 def adjoint_along_refined(ref, n: int = 2000):
     """Costate by backward integration of the adjoint along the refined arcs.
 
-    Returns ``t`` (m,), ``x`` (m, nx), ``u`` (m,) (single control) or (m, nu),
-    ``lam`` (m, nx) and ``H_expected`` (see :func:`adjoint_sweep`).
+    Kept for compatibility: the sweep covers the whole horizon, which is right
+    only when no state constraint is active (see :func:`adjoint_sweep`).
+
+    Parameters
+    ----------
+    ref : RefinedSwitching
+    n : int
+        About how many samples.
+
+    Returns
+    -------
+    t, x, u, lam, H_expected
+        ``t`` (m,), ``x`` (m, nx), ``u`` (m,) (single control) or (m, nu),
+        ``lam`` (m, nx), and the value H must have (None for fixed T).
     """
     s = adjoint_sweep(ref, 0.0, n)
     u = s.u[:, 0] if s.u.shape[1] == 1 else s.u

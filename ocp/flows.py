@@ -91,7 +91,17 @@ class Mode:
 
 
 def path_constraint(pr: OptimalControlProblem, name: str) -> Constraint:
-    """The path constraint called ``name``."""
+    """The path constraint called ``name``.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    name : str
+
+    Returns
+    -------
+    Constraint
+    """
     for c in pr.path:
         if c.name == name:
             return c
@@ -104,12 +114,35 @@ def has_running_cost(pr: OptimalControlProblem) -> bool:
 
 
 def is_affine(expr: ca.SX, z: ca.SX) -> bool:
-    """True when ``expr`` is affine in ``z``."""
+    """True when ``expr`` is affine in ``z``.
+
+    Parameters
+    ----------
+    expr, z : SX
+
+    Returns
+    -------
+    bool
+    """
     return not ca.depends_on(ca.jacobian(expr, z), z)
 
 
 def lie_derivative(expr: ca.SX, x: ca.SX, rhs: ca.SX) -> ca.SX:
-    """Time derivative ``d expr / dt = grad_x(expr) . rhs`` of an expression of (x, p)."""
+    """Time derivative ``d expr / dt = grad_x(expr) . rhs`` of an expression of (x, p).
+
+    Parameters
+    ----------
+    expr : SX
+        An expression of the state ``x`` (and parameters).
+    x : SX
+        The state symbols.
+    rhs : SX
+        ``x'`` as an expression.
+
+    Returns
+    -------
+    SX
+    """
     return ca.jtimes(expr, x, rhs)
 
 
@@ -254,6 +287,15 @@ def expm_taylor(X: ca.SX, order: int = TAYLOR_ORDER) -> ca.SX:
 
     Accurate to rounding while ``||X|| <= 1``; callers split long arcs into
     sub-steps rather than squaring.
+
+    Parameters
+    ----------
+    X : SX (n, n)
+    order : int
+
+    Returns
+    -------
+    SX (n, n)
     """
     n = X.shape[0]
     eye = ca.SX.eye(n)
@@ -286,18 +328,25 @@ def expm(M: np.ndarray) -> np.ndarray:
     return E
 
 
-def exact_substeps(dyn: ArcDynamics, pv: np.ndarray, tau: float, minimum: int,
-                   theta: float = 0.5) -> int:
-    """Sub-steps ``m >= minimum`` with ``||A|| tau / m <= theta``."""
-    return max(int(minimum), math.ceil(dyn.norm_A(pv) * max(tau, 0.0) / theta))
-
-
 def numeric_affine_flow(A: np.ndarray, b: np.ndarray, z0: np.ndarray, tau: float,
                         m: int) -> np.ndarray:
     """States at ``m + 1`` equally spaced times of ``z' = A z + b`` on ``[0, tau]`` (exact).
 
-    Returns an (m+1, nz) array; the step map is :func:`expm` of the
-    augmented matrix.
+    Parameters
+    ----------
+    A : ndarray (nz, nz)
+    b : ndarray (nz,)
+    z0 : ndarray (nz,)
+        State at the start.
+    tau : float
+        Duration.
+    m : int
+        Number of equal steps; the step map is :func:`expm` of the augmented
+        matrix ``[[A, b], [0, 0]] tau / m``.
+
+    Returns
+    -------
+    ndarray (m+1, nz)
     """
     n = len(z0)
     M = np.zeros((n + 1, n + 1))
@@ -315,7 +364,23 @@ def numeric_affine_flow(A: np.ndarray, b: np.ndarray, z0: np.ndarray, tau: float
 
 # ------------------------------------------------------------------- RK8 flows
 def rk8_step(f: ca.Function, z: Any, h: Any, p: Any) -> Any:
-    """One step of the explicit 8th-order Dormand-Prince tableau (12 stages)."""
+    """One step of the explicit 8th-order Dormand-Prince tableau (12 stages).
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``(z, p) -> z'``.
+    z : SX, MX or DM
+        State at the start of the step.
+    h : scalar expression
+        Step (negative to integrate backward).
+    p : SX, MX or DM
+        Parameters passed to ``f``.
+
+    Returns
+    -------
+    The state after the step, of the type of ``z``.
+    """
     A, B = rk8_tableau()
     k: list[Any] = []
     for i in range(A.shape[0]):
@@ -332,7 +397,19 @@ def rk8_step(f: ca.Function, z: Any, h: Any, p: Any) -> Any:
 
 
 def rk8_step_function(f: ca.Function, nz: int, np_: int) -> ca.Function:
-    """``(z, h, p) -> z_next`` by one RK8 step of ``z' = f(z, p)``, as an SX function."""
+    """``(z, h, p) -> z_next`` by one RK8 step of ``z' = f(z, p)``, as an SX function.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        ``(z, p) -> z'``.
+    nz, np_ : int
+        Sizes of ``z`` and ``p``.
+
+    Returns
+    -------
+    casadi.Function
+    """
     z = ca.SX.sym("z", nz)
     h = ca.SX.sym("h")
     p = ca.SX.sym("p", np_)
@@ -341,7 +418,24 @@ def rk8_step_function(f: ca.Function, nz: int, np_: int) -> ca.Function:
 
 def numeric_rk8_flow(step: ca.Function, z0: np.ndarray, tau: float, n: int,
                      pv: np.ndarray) -> np.ndarray:
-    """States at the ``n + 1`` step points of ``n`` RK8 steps over ``[0, tau]``; (n+1, nz)."""
+    """States at the ``n + 1`` step points of ``n`` RK8 steps over ``[0, tau]``.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        From :func:`rk8_step_function`.
+    z0 : ndarray (nz,)
+    tau : float
+        Duration (negative: backward).
+    n : int
+        Number of steps.
+    pv : ndarray
+        Parameter values.
+
+    Returns
+    -------
+    ndarray (n+1, nz)
+    """
     acc = step.mapaccum(n)
     Z = np.array(acc(z0, tau / n, pv), dtype=float)
     return np.vstack([np.asarray(z0, dtype=float)[None, :], Z.T])
@@ -352,8 +446,27 @@ def rk8_steps_for(step: ca.Function, z0: np.ndarray, tau: float, pv: np.ndarray,
     """Smallest power-of-two multiple of ``minimum`` RK8 steps meeting ``tol``, by halving.
 
     The error of ``n`` steps is estimated as ``|z_n - z_2n| / max(1, |z|)``
-    (``z_2n`` is ~256 times more accurate). Returns ``(n, error estimate)``;
-    ``n = maximum`` with a larger error when the tolerance cannot be met.
+    (``z_2n`` is ~256 times more accurate).
+
+    Parameters
+    ----------
+    step : casadi.Function
+        From :func:`rk8_step_function`.
+    z0 : ndarray (nz,)
+    tau : float
+        Duration.
+    pv : ndarray
+        Parameter values.
+    tol : float
+        Required relative accuracy of the end state.
+    minimum, maximum : int
+        Fewest and most steps to try.
+
+    Returns
+    -------
+    (int, float)
+        The step count and its error estimate; ``maximum`` steps with a larger
+        error when the tolerance cannot be met.
     """
     n = max(1, int(minimum))
     zn = numeric_rk8_flow(step, z0, tau, n, pv)[-1]

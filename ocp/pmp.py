@@ -158,7 +158,19 @@ class PMPCertificate:
 
 # ------------------------------------------------------------------ helpers
 def intervals_of(t: np.ndarray, mask: np.ndarray, min_len: float) -> list[tuple[float, float]]:
-    """Maximal runs of ``mask`` as ``(t_first, t_last)``, at least ``min_len`` long."""
+    """Maximal runs of ``mask`` as ``(t_first, t_last)``, at least ``min_len`` long.
+
+    Parameters
+    ----------
+    t : ndarray (m,)
+        Sample times.
+    mask : ndarray of bool (m,)
+    min_len : float
+
+    Returns
+    -------
+    list of (float, float)
+    """
     out: list[tuple[float, float]] = []
     k, n = 0, len(mask)
     while k < n:
@@ -175,8 +187,19 @@ def intervals_of(t: np.ndarray, mask: np.ndarray, min_len: float) -> list[tuple[
 
 
 def sign_changes(t: np.ndarray, s: np.ndarray, tiny: float) -> np.ndarray:
-    """Times where s changes sign, skipping samples with ``|s| <= tiny`` (a crossing
-    may land exactly on a sample), by linear interpolation."""
+    """Times where ``s`` changes sign, by linear interpolation.
+
+    Parameters
+    ----------
+    t, s : ndarray (m,)
+        Sample times and values.
+    tiny : float
+        Samples with ``|s| <= tiny`` are skipped (a crossing may land on a sample).
+
+    Returns
+    -------
+    ndarray
+    """
     nz = np.flatnonzero(np.abs(s) > tiny)
     a, b = nz[:-1], nz[1:]
     ch = np.sign(s[a]) != np.sign(s[b])
@@ -190,7 +213,21 @@ def switch_gap(t: np.ndarray, s: np.ndarray, zeros: np.ndarray, ts: float) -> fl
     When ``ts`` is a sample time (a refined junction) and ``s`` changes sign
     across it, the gap is ``|s(ts)| / |s'|`` (``s'`` from the neighbouring
     samples): exact to rounding, unlike an interpolated zero. Otherwise it is
-    the distance to the nearest interpolated sign change (``zeros``).
+    the distance to the nearest interpolated sign change.
+
+    Parameters
+    ----------
+    t, s : ndarray (m,)
+        Sample times and switching-function values.
+    zeros : ndarray
+        Its interpolated sign changes (:func:`sign_changes`).
+    ts : float
+        The switch time.
+
+    Returns
+    -------
+    float
+        ``inf`` when there is no sign change at all.
     """
     span = max(float(t[-1] - t[0]), 1.0) if len(t) else 1.0
     at = np.flatnonzero(np.abs(t - ts) <= 1e-12 * span)
@@ -204,7 +241,21 @@ def switch_gap(t: np.ndarray, s: np.ndarray, zeros: np.ndarray, ts: float) -> fl
 
 def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
                         pv: np.ndarray, tol: float) -> np.ndarray:
-    """Boolean (m,): some path constraint within ``tol * max(1, |value|)`` of a limit."""
+    """Where some path constraint is within ``tol * max(1, |value|)`` of a limit.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    x, u : ndarray (m, nx), (m, nu)
+        States and controls at the samples.
+    pv : ndarray
+        Parameter values.
+    tol : float
+
+    Returns
+    -------
+    ndarray of bool (m,)
+    """
     if not pr.path:
         return np.zeros(len(x), dtype=bool)
     fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
@@ -269,12 +320,15 @@ class _Figures:
 def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarray,
              u: np.ndarray, lam: np.ndarray, H_exp: float | None, skip: np.ndarray,
              switches: dict[str, list[float]], tol_sigma: float, sigma_floor: np.ndarray,
-             u_tol: float, min_singular: float) -> _Figures:
+             u_tol: float, min_singular: float, interior_check: bool = False) -> _Figures:
     """Evaluate H and sigma and the sign, switch and singularity checks.
 
     ``skip`` marks samples not judged (constrained, or unresolved by the grid);
     ``sigma_floor`` (nu,) is the absolute size below which sigma counts as zero
-    besides ``tol_sigma`` times its scale (the numerical error band).
+    besides ``tol_sigma`` times its scale (the numerical error band); a control
+    within ``u_tol`` of a bound (relative to the range) sits at it;
+    ``interior_check`` (a transcription) counts a run of small sigma as
+    singular only where the control is inside its bounds.
     """
     pv = np.array([params[k] for k in pr.param_names], dtype=float)
     fns = pmp_functions(pr)
@@ -302,7 +356,7 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
         band = max(tol_sigma * s_scale, float(sigma_floor[j]))
         clear = (np.abs(s) > band) & judged
         inside = None
-        if u_tol > 1e-6:  # a transcription: its controls reach their bounds to Ipopt's tol
+        if interior_check:  # a transcription: a singular arc has its control inside
             room = u_tol * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
             inside = (u[:, j] > lo + room) & (u[:, j] < hi - room)
         singular += _singular_runs(t, s, ~clear & judged, band, min_singular, inside)
@@ -585,14 +639,24 @@ def _transcription_figures(sol: TranscribedSolution, tol: _Tolerances
         switches[name] = [a.end for a, b in zip(st.arcs[:-1], st.arcs[1:], strict=True)
                           if a.kind in ("max", "min") and b.kind in ("max", "min")]
     fig = _figures(pr, sol.params, t, x, u, lam, H_exp, constrained, switches, tol.sigma,
-                   np.zeros(pr.nu), 1e-3, tol.singular)
+                   np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
     return fig, H_exp, active, t
 
 
 def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
     """Re-solve ``sol``'s problem on a grid ``factor`` times finer, started from ``sol``.
 
-    Returns None when the transcription cannot be rebuilt or the solve fails.
+    Parameters
+    ----------
+    sol : Solution
+        A multiple-shooting solution.
+    factor : int
+        How many times more nodes.
+
+    Returns
+    -------
+    Solution or None
+        None when the transcription cannot be rebuilt or the solve fails.
     """
     tsol = transcribed(sol)
     from .transcription import MultipleShooting
@@ -679,7 +743,17 @@ def _certify_transcription(sol: TranscribedSolution, tol: _Tolerances, verify: b
 
 
 def plot_certificate(cert: PMPCertificate, title: str | None = None):
-    """H, sigma and u against time on three axes; returns the figure."""
+    """H, sigma and u against time on three axes, state-constrained spans shaded.
+
+    Parameters
+    ----------
+    cert : PMPCertificate
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
 
     fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7, 6.5))

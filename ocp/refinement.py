@@ -77,7 +77,18 @@ _NLP_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def arc_dynamics(problem: OptimalControlProblem, modes: tuple[Mode, ...]) -> ArcDynamics:
-    """The :class:`~ocp.flows.ArcDynamics` of ``modes``, built once per problem and cached."""
+    """The :class:`~ocp.flows.ArcDynamics` of ``modes``, built once per problem and cached.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of Mode
+        One per control.
+
+    Returns
+    -------
+    ArcDynamics
+    """
     per = _DYN_CACHE.setdefault(problem, {})
     if modes not in per:
         per[modes] = ArcDynamics(problem, modes)
@@ -275,7 +286,26 @@ class SwitchingNLP:
 
     def solve(self, pv: np.ndarray, w0: np.ndarray, lam_g0: np.ndarray | None = None,
               lam_x0: np.ndarray | None = None) -> dict[str, Any]:
-        """Solve by Ipopt from ``w0 = [durations, x0]``; returns Ipopt's result and stats."""
+        """Solve by Ipopt.
+
+        Parameters
+        ----------
+        pv : ndarray
+            Parameter values.
+        w0 : ndarray
+            Starting point ``[durations, x0]``.
+        lam_g0, lam_x0 : ndarray, optional
+            Starting multipliers (a warm start).
+
+        Returns
+        -------
+        dict
+            ``w``, ``f``, ``lam_g``, ``lam_x``, ``status``, ``success``,
+            ``iterations``, ``time``, ``path`` (``"ipopt"``), ``primal`` and
+            ``dual`` (the KKT residuals of :meth:`kkt`). A stall at rounding
+            level (:data:`NEAR_CONVERGED`) counts as success when the KKT
+            residuals are below :data:`KKT_PRIMAL` and :data:`KKT_DUAL`.
+        """
         args: dict[str, Any] = {"p": pv, "x0": w0, **self.bounds(pv)}
         if lam_g0 is not None:
             args.update(lam_g0=lam_g0, lam_x0=lam_x0)
@@ -302,8 +332,18 @@ class SwitchingNLP:
             pv: np.ndarray) -> tuple[float, float]:
         """Primal violation and dual residual of a KKT point, each relative.
 
-        Primal: largest bound or constraint violation over ``max(1, |g|)``.
-        Dual: ``||grad J + Jg^T lam_g + lam_x||_inf`` over ``max(1, ||grad J||_inf)``.
+        Parameters
+        ----------
+        w, lam_g, lam_x : ndarray
+            Primal point and multipliers (CasADi's signs).
+        pv : ndarray
+            Parameter values.
+
+        Returns
+        -------
+        (float, float)
+            Largest bound or constraint violation over ``max(1, |g|)``, and
+            ``||grad J + Jg^T lam_g + lam_x||_inf`` over ``max(1, ||grad J||_inf)``.
         """
         b = self.bounds(pv)
         g, Jg, gJ = self.kkt_fn(w, pv)
@@ -318,7 +358,21 @@ class SwitchingNLP:
 
     def outputs(self, w: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, float, float,
                                                              np.ndarray]:
-        """``xT``, ``T``, the objective and the junction states (K+1, nz) at ``w``."""
+        """Final state, final time, objective and junction states at a point.
+
+        Parameters
+        ----------
+        w : ndarray
+            ``[durations, x0]``.
+        pv : ndarray
+            Parameter values.
+
+        Returns
+        -------
+        xT : ndarray (nx,)
+        T, J : float
+        Z : ndarray (K+1, nz)
+        """
         xT, T, J, Z = self.out_fn(w, pv)
         return (np.array(xT, dtype=float).ravel(), float(T), float(J),
                 np.array(Z, dtype=float).T)
@@ -347,11 +401,26 @@ class SwitchingNLP:
         """Re-solve by Newton's method on the last solution's active set, if it is square.
 
         The active constraints (and active variable bounds) of the last Ipopt
-        solution are solved as equations at the new parameters ``pv`` from the
-        last solution; the result is accepted only if every other constraint
-        holds (to ``KKT_PRIMAL``), the multipliers from ``J_A^T mu = -grad J``
-        have the signs their sides demand, and the step converged. Returns
-        None when any of this fails (the caller then runs Ipopt).
+        solution are solved as equations at the new parameters, from ``w0``
+        and then from the last solution; the result is accepted only if every
+        other constraint and every bound holds (to :data:`KKT_PRIMAL`), the
+        multipliers from ``J_A^T mu = -grad J`` have the signs their sides
+        demand, and the iteration converged to rounding level.
+
+        Parameters
+        ----------
+        pv : ndarray
+            New parameter values.
+        w0 : ndarray
+            Starting point ``[durations, x0]``.
+        max_iter : int
+            Newton steps allowed per start.
+
+        Returns
+        -------
+        dict or None
+            As :meth:`solve` (``path = "newton"``), or None when the active set
+            is not square or any check fails (the caller then runs Ipopt).
         """
         act = self.active_set()
         if act is None:
@@ -436,8 +505,21 @@ class SwitchingNLP:
 
         Exact intervals need ``||A|| tau / m <= THETA_MAX``; RK8 intervals are
         integrated with ``n`` and ``2 n`` steps from the same start state and
-        must agree to ``tol`` (relative). Returns ``(ok, worst RK8 error
-        estimate, intervals that fail)``.
+        must agree to ``tol`` (relative).
+
+        Parameters
+        ----------
+        w : ndarray
+            ``[durations, x0]``.
+        pv : ndarray
+            Parameter values.
+        tol : float
+            Required relative accuracy of the RK8 intervals' end states.
+
+        Returns
+        -------
+        (bool, float, list of int)
+            All good; the worst RK8 error estimate; the intervals that fail.
         """
         _, _, _, Z = self.outputs(w, pv)
         bad, worst = [], 0.0
@@ -470,7 +552,25 @@ class SwitchingNLP:
 
     def sample_interval(self, k: int, z0: np.ndarray, tau: float, pv: np.ndarray,
                         points: int) -> np.ndarray:
-        """States at ``points + 1`` equally spaced times of interval k, (points+1, nz)."""
+        """States at ``points + 1`` equally spaced times of interval k.
+
+        Parameters
+        ----------
+        k : int
+            Interval index.
+        z0 : ndarray (nz,)
+            State (and cost quadrature) at the interval's start.
+        tau : float
+            Its duration.
+        pv : ndarray
+            Parameter values.
+        points : int
+            Number of equal steps to report.
+
+        Returns
+        -------
+        ndarray (points+1, nz)
+        """
         d = self.dyns[k]
         if d.exact:
             A, b = d.affine_numeric(pv)
@@ -492,8 +592,30 @@ def _entry_owners(d: ArcDynamics) -> list[str]:
 def required_substeps(problem: OptimalControlProblem, modes: Modes, pv: np.ndarray,
                       durations: np.ndarray, x0: np.ndarray, samples: int, tol: float,
                       theta: float = 0.5) -> tuple[int, ...]:
-    """Sub-steps per interval for a guess: ``||A|| tau / m <= theta`` on exact intervals,
-    RK8 steps meeting ``tol`` by halving on the others (the guess is propagated)."""
+    """Sub-steps per interval for a guess.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one mode per control.
+    pv : ndarray
+        Parameter values.
+    durations : ndarray
+        Guessed interval lengths.
+    x0 : ndarray
+        Guessed initial state (propagated through the intervals).
+    samples : int
+        At least ``samples + 1`` sub-steps on exact intervals.
+    tol : float
+        Accuracy the RK8 intervals must meet (by halving).
+    theta : float
+        Exact intervals get ``||A|| tau / m <= theta``.
+
+    Returns
+    -------
+    tuple of int
+    """
     out = []
     z = np.r_[x0, 0.0] if has_running_cost(problem) else np.asarray(x0, dtype=float)
     for k, m in enumerate(modes):
@@ -517,8 +639,23 @@ def switching_nlp(problem: OptimalControlProblem, modes: Modes, substeps: tuple[
 
     The cache is keyed on the problem object (weakly), the modes, the samples
     and the Ipopt options; among the NLPs built for that key, the first whose
-    every interval has at least the requested sub-steps is reused, else a new
-    one is built with ``substeps``.
+    every interval has at least the requested sub-steps (and at most four
+    times as many) is reused, else a new one is built with ``substeps``.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+    substeps : tuple of int
+        Sub-steps needed per interval (:func:`required_substeps`).
+    samples : int
+        Path-constraint samples per interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`REFINE_IPOPT`.
+
+    Returns
+    -------
+    SwitchingNLP
     """
     key = (tuple(modes), int(samples), _freeze(ipopt_options))
     built = _NLP_CACHE.setdefault(problem, {}).setdefault(key, [])

@@ -461,8 +461,40 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
     """Refine a given interval structure from a guess of durations and initial state.
 
     The workhorse of :func:`refine_switching`, usable without a transcription
-    (e.g. to re-solve a known structure for new parameter values). Arguments
-    as there; ``modes`` has one tuple of :class:`Mode` per interval.
+    (e.g. to re-solve a known structure for new parameter values).
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one :class:`Mode` per control.
+    durations : ndarray
+        Guessed interval lengths (at least 1e-6 each is used).
+    x0 : ndarray
+        Guessed initial state.
+    params : dict
+        A value for every parameter.
+    transcribed_objective : float
+        Recorded in the result (NaN when there is no transcription).
+    interior_samples : int
+        Path constraints are imposed at about this many points inside each interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`REFINE_IPOPT`.
+    tol : float
+        Relative accuracy required of the RK8 intervals' end states.
+    fast : bool
+        Try the Newton fast path first (see :meth:`SwitchingNLP.newton`).
+    max_rebuilds : int
+        How often the step counts may be doubled to meet ``tol``.
+
+    Returns
+    -------
+    RefinedSwitching
+
+    Raises
+    ------
+    SolveError, InfeasibleError
+        If Ipopt fails, or the accuracy is not reached after ``max_rebuilds``.
     """
     pv = np.array([float(params[k]) for k in problem.param_names])
     durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)

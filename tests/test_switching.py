@@ -340,3 +340,40 @@ def test_boundary_mode_needs_a_constraint():
 
 def test_rayleigh_problem_is_state_nonlinear():
     assert not rayleigh().is_affine_in_state()
+
+
+def test_public_docstrings_match_signatures():
+    import importlib
+    import inspect
+    import re
+
+    def documented(doc):
+        m = re.search(r"Parameters\n-+\n(.*?)(\n\n[A-Z][a-z]+\n-+\n|\Z)", doc, re.S)
+        if not m:
+            return None
+        names = []
+        for line in m.group(1).split("\n"):
+            mm = re.match(r"^([A-Za-z_][\w, *]*?)\s*:", line)
+            if mm:
+                names += [n.strip() for n in mm.group(1).split(",")]
+        return names
+
+    checked = 0
+    for mn in ("ocp.arcs", "ocp.flows", "ocp.refinement", "ocp.switching", "ocp.costates",
+               "ocp.pmp"):
+        mod = importlib.import_module(mn)
+        for name, obj in vars(mod).items():
+            if name.startswith("_") or getattr(obj, "__module__", None) != mn:
+                continue
+            funcs = [obj] if inspect.isfunction(obj) else [
+                v for k, v in vars(obj).items() if inspect.isfunction(v) and not k.startswith("_")
+            ] if inspect.isclass(obj) else []
+            for f in funcs:
+                params = [p for p in inspect.signature(f).parameters if p != "self"]
+                doc = inspect.getdoc(f) or ""
+                assert doc, f"{mn}.{f.__qualname__} has no docstring"
+                names = documented(doc)
+                if len(params) >= 2:
+                    assert names == params, f"{mn}.{f.__qualname__}: {names} != {params}"
+                    checked += 1
+    assert checked > 30
