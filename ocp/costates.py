@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import weakref
 from dataclasses import dataclass, field
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -33,6 +34,7 @@ from .flows import ArcDynamics, Mode, expm, is_affine, rk8_step_function
 from .problem import OptimalControlProblem
 from .refinement import arc_dynamics
 from .solution import along
+from .switching import RefinedSwitching
 
 _FN_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -220,7 +222,7 @@ class AdjointSweep:
     coarse: AdjointSweep | None = field(default=None, repr=False)
 
 
-def _sweep(ref, first: int, points: int, factor: int) -> AdjointSweep:
+def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> AdjointSweep:
     """One backward sweep over intervals ``first..K-1`` with ``factor`` x the refinement's steps."""
     pr = ref.problem
     pv = ref.pv
@@ -253,7 +255,7 @@ def _sweep(ref, first: int, points: int, factor: int) -> AdjointSweep:
                         H_exp if pr.time_free else None, float(edges[first]), 0.0, err_x, steps)
 
 
-def adjoint_sweep(ref, t_start: float = 0.0, points: int = 2000) -> AdjointSweep:
+def adjoint_sweep(ref: RefinedSwitching, t_start: float = 0.0, points: int = 2000) -> AdjointSweep:
     """Costates along a refined solution, with the error measured.
 
     The sweep runs with twice and four times the refinement's RK8 steps on
@@ -287,7 +289,7 @@ def adjoint_sweep(ref, t_start: float = 0.0, points: int = 2000) -> AdjointSweep
     return fine
 
 
-def adjoint_along_refined(ref, n: int = 2000):
+def adjoint_along_refined(ref: RefinedSwitching, n: int = 2000) -> tuple[Any, ...]:
     """Costate by backward integration of the adjoint along the refined arcs.
 
     Kept for compatibility: the sweep covers the whole horizon, which is right

@@ -33,6 +33,27 @@ def solve_rayleigh(nodes: int = 100):
     return ms.solve({}, guess=ms.initial_guess(T=3.7, x=lambda s: [-5 * (1 - s), 0.0], u=[0.0]))
 
 
+def van_der_pol() -> OptimalControlProblem:
+    """Time-optimal van der Pol oscillator: ``x1' = x2, x2' = -x1 + (1 - x1^2) x2 + u``,
+    ``|u| <= 1``, from (1, 1) to the origin: bang-bang ``-1, 1``, nonlinear in the state."""
+    p = OptimalControlProblem("van_der_pol")
+    x1, x2 = p.state("x1"), p.state("x2")
+    u = p.control("u", lower=-1, upper=1)
+    p.set_dynamics([x2, -x1 + (1 - x1**2) * x2 + u])
+    p.initial_constraint(x1, 1.0)
+    p.initial_constraint(x2, 1.0)
+    p.terminal_constraint(x1, 0.0)
+    p.terminal_constraint(x2, 0.0)
+    p.free_final_time(0.1, 20, 3.0)
+    p.minimize_terminal(p.T)
+    return p
+
+
+def solve_van_der_pol(nodes: int = 100):
+    ms = MultipleShooting(van_der_pol(), nodes=nodes)
+    return ms.solve({}, guess=ms.initial_guess(T=2.0, x=lambda s: [1 - s, 1 - s], u=[-1.0]))
+
+
 def two_masses() -> OptimalControlProblem:
     """Two masses joined by a spring, each pushed by its own force ``|u_i| <= 1``.
 

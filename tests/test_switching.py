@@ -18,6 +18,7 @@ from switching_problems import (
     solve_bryson_denham,
     solve_rayleigh,
     solve_two_masses,
+    solve_van_der_pol,
     speed_limited,
 )
 
@@ -120,6 +121,33 @@ def test_own_numerical_error_gives_inconclusive_not_refutation(ray):
     c = certify(sol, rough, tol_H=1e-14)
     assert c.verdict == INCONCLUSIVE
     assert any("numerical error" in s for s in c.reasons)
+
+
+def test_van_der_pol_time_optimal_against_pmp_shooting():
+    sol = solve_van_der_pol()
+    r = refine_switching(sol)
+    assert r.kinds == ["min", "max"] and not r.exact
+
+    def rhs(t, y, u):
+        x1, x2, l1, l2 = y
+        return [x2, -x1 + (1 - x1**2) * x2 + u, l2 * (1 + 2 * x1 * x2),
+                -(l1 + l2 * (1 - x1**2))]
+
+    def residual(z):
+        l1, l2, t1, T = z
+        y = solve_ivp(rhs, (0, t1), [1.0, 1.0, l1, l2], args=(-1.0,), **IVP).y[:, -1]
+        sig = y[3]
+        y = solve_ivp(rhs, (t1, T), y, args=(1.0,), **IVP).y[:, -1]
+        return [y[0], y[1], sig, l1 * 1.0 + l2 * -2.0 + 1.0]  # H(0) = -1
+
+    c = certify(sol, r)
+    z, _, ok, msg = fsolve(residual, [*c.lam[0], r.switch_times[0], r.T], xtol=1e-14,
+                           full_output=True)
+    assert ok in (1, 3), msg
+    assert np.max(np.abs(residual(z))) <= 1e-11
+    assert r.switch_times[0] == pytest.approx(z[2], abs=1e-9)
+    assert r.T == pytest.approx(z[3], abs=1e-9)
+    assert c.verdict == CERTIFIED, c.reasons
 
 
 # ------------------------------------------------------------- two controls
