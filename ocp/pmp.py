@@ -1,51 +1,72 @@
-"""Pontryagin certificate: costates, Hamiltonian and switching function.
+"""Pontryagin certificate: Hamiltonian, switching functions, verdict with measured accuracy.
 
-Conventions (stated once, used everywhere here)
------------------------------------------------
-We use the *minimum* principle: ``H = L + lambda^T (f(x) + g(x) u)``, and the
-optimal control minimises H. For a control-affine problem the switching
-function is ``sigma = lambda^T g(x)`` (plus ``dL/du`` if L were affine in u), so
-``u = upper`` where ``sigma < 0`` and ``u = lower`` where ``sigma > 0``. The
-paper writes the maximum principle; its costate is ``-lambda``.
+Conventions (stated once, used everywhere here): the *minimum* principle,
+``H = L + lambda^T (f(x) + g(x) u)``, and the optimal control minimises H.
+For a control-affine problem the switching function of control j is
+``sigma_j = dL/du_j + lambda^T g_j(x)``: ``u_j = upper`` where ``sigma_j < 0``
+and ``u_j = lower`` where ``sigma_j > 0``. The paper writes the maximum
+principle; its costate is ``-lambda``.
 
-Costates, two independent ways:
-
-1. **From the transcription's multipliers.** CasADi's NLP Lagrangian is
-   ``J + lam_g^T g + lam_x^T w``; the continuity constraint of interval k is
-   ``F(X_k, U_k) - X_{k+1} = 0`` with multiplier ``mu_k``. Stationarity in
-   ``X_{k+1}`` gives the discrete adjoint ``mu_k = F_x^T mu_{k+1}`` and, at the
-   last node, ``mu_{N-1} = grad phi + G_T^T nu``. Hence
-   ``lambda(t_{k+1}) = mu_k`` (accurate to the discretisation order).
-2. **By integrating the adjoint** ``lambda' = -H_x`` backward along the
-   (refined, exact) trajectory from the transversality condition
-   ``lambda(T) = grad_x (phi + nu^T G_T)``, with ``nu`` the terminal-constraint
-   multipliers of the refinement NLP. For dynamics affine in the state each
-   arc is exact (matrix exponential).
+Costates come from :mod:`ocp.costates`: the transcription's continuity
+multipliers, or the adjoint integrated backward jointly with the state along
+the refined arcs (exact on affine arcs; RK8 at two step counts otherwise, so
+the certificate knows its own numerical error).
 
 For an autonomous problem H is constant; with free final time it equals
 ``-d(phi + nu^T G_T)/dT`` (0 when the terminal cost and constraints do not
 involve T; -1 for minimum time posed as ``phi = T``). ``H_max_abs`` and
 ``H_variation`` are normalised by ``H_scale = max_t sum_i |lambda_i xdot_i|``
 (the size of the terms that must cancel).
+
+The verdict is ``"bang-bang certified"``, ``"not bang-bang"`` or
+``"inconclusive"``. A check fails only by more than its tolerance *and* more
+than ten times the certificate's own estimated numerical error; a violation
+inside that error band gives "inconclusive", never a refutation. From a
+transcription alone, whose costates carry the grid's error, a would-be
+refutation is re-checked on a grid twice as fine and reported only if it
+persists there. Where a state constraint is active (a boundary arc, or a
+constraint touching its limit) the unconstrained costate does not hold
+before it: the checks then cover the part after the last constrained time,
+and the verdict is at best "inconclusive: state constraint active on ...".
 """
 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.linalg
 
+from .arcs import (
+    SolutionLike,
+    TranscribedSolution,
+    active_path_constraints,
+    control_bounds_at,
+    detect_arcs,
+    transcribed,
+)
+from .costates import (
+    adjoint_along_refined,
+    adjoint_sweep,
+    costates_from_multipliers,
+    pmp_functions,
+    terminal_costate,
+)
 from .problem import OptimalControlProblem
 from .solution import Solution, along
-from .switching import RefinedSwitching, _active_path_constraints, _affine_parts, detect_arcs
+from .switching import RefinedSwitching
 
 CERTIFIED = "bang-bang certified"
 NOT_BANG_BANG = "not bang-bang"
 INCONCLUSIVE = "inconclusive"
+ERROR_MARGIN = 10.0
+"""A violation within this factor of the estimated numerical error is not a refutation."""
+
+__all__ = ["CERTIFIED", "INCONCLUSIVE", "NOT_BANG_BANG", "PMPCertificate",
+           "adjoint_along_refined", "certify", "costates_from_multipliers", "plot_certificate"]
 
 
 @dataclass
@@ -57,22 +78,34 @@ class PMPCertificate:
     verdict : str
         ``"bang-bang certified"``, ``"not bang-bang"`` or ``"inconclusive"``.
     reasons : list of str
-        Why (every failed or unverifiable check).
+        Why (every failed, uncertain or unverifiable check).
     H_expected : float or None
         The constant H must equal (None when T is fixed: any constant).
     H_max_abs, H_variation : float
         ``max |H - H_expected|`` (or ``max |H - mean H|`` when fixed T) and
         ``max H - min H``, both divided by ``H_scale``.
     sigma_sign_agreement : float
-        Fraction of the time where ``|sigma|`` is clearly non-zero on which u
-        sits at the bound selected by ``sign(sigma)``.
+        Fraction of the time where some ``|sigma_j|`` is clearly non-zero on
+        which ``u_j`` sits at the bound its sign selects (worst control).
     switch_sigma_gap : float
-        Largest time between a switch of u and the nearest sign change of sigma.
+        Largest time between a switch of some control and the nearest sign
+        change of its switching function.
     singular_intervals, state_constraint_active_intervals : list of (t0, t1)
     costate_estimates_gap : float
-        Largest difference between the two costate estimates at the nodes,
-        relative to the largest costate (NaN without a refined solution).
-    t, lam, H, sigma, u : arrays for plotting.
+        Largest difference between the two costate estimates on the checked
+        part, relative to the largest costate (NaN without a refined solution).
+    source : str
+        Where the costates came from.
+    numerical_error : dict
+        The certificate's own error estimates, on the scales of the figures
+        they affect: ``H``, ``sigma``, ``switch``, ``costate``, ``state``.
+    checked_from : float
+        Start of the checked part of the horizon (after the last constrained time).
+    per_control : dict
+        Per control: ``sigma_sign_agreement`` and ``switch_sigma_gap``.
+    elapsed : float
+        Seconds the certificate took.
+    t, lam, H, sigma, u : arrays for plotting (``sigma``/``u`` 1-D for one control).
     """
 
     verdict: str
@@ -87,18 +120,24 @@ class PMPCertificate:
     state_constraint_active_intervals: list[tuple[float, float]]
     costate_estimates_gap: float
     source: str
-    t: np.ndarray = field(repr=False, default=None)
-    lam: np.ndarray = field(repr=False, default=None)
-    H: np.ndarray = field(repr=False, default=None)
-    sigma: np.ndarray = field(repr=False, default=None)
-    u: np.ndarray = field(repr=False, default=None)
+    t: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    lam: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    H: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    sigma: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    u: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    numerical_error: dict[str, float] = field(default_factory=dict)
+    checked_from: float = 0.0
+    per_control: dict[str, dict[str, float]] = field(default_factory=dict)
+    elapsed: float = 0.0
 
     @property
     def certified(self) -> bool:
+        """True when the verdict is "bang-bang certified"."""
         return self.verdict == CERTIFIED
 
     def to_dict(self) -> dict[str, Any]:
-        def f(x):
+        """Plain JSON-able dict (non-finite numbers become None)."""
+        def f(x: Any) -> float | None:
             return float(x) if x is not None and math.isfinite(x) else None
 
         return {"verdict": self.verdict, "reasons": self.reasons,
@@ -109,47 +148,31 @@ class PMPCertificate:
                 "singular_intervals": [list(map(float, i)) for i in self.singular_intervals],
                 "state_constraint_active_intervals": [
                     list(map(float, i)) for i in self.state_constraint_active_intervals],
-                "costate_estimates_gap": f(self.costate_estimates_gap), "source": self.source}
+                "costate_estimates_gap": f(self.costate_estimates_gap), "source": self.source,
+                "numerical_error": {k: f(v) for k, v in self.numerical_error.items()},
+                "checked_from": float(self.checked_from),
+                "per_control": {c: {k: f(v) for k, v in d.items()}
+                                for c, d in self.per_control.items()},
+                "elapsed_s": float(self.elapsed)}
 
 
-# ------------------------------------------------------------------ pieces
-def _functions(pr: OptimalControlProblem):
-    if pr.nu != 1:
-        raise ValueError("the PMP certificate supports problems with one control")
-    if not pr.is_control_affine():
-        raise ValueError("the dynamics are not control-affine: H is not linear in u")
-    lam = ca.SX.sym("lam", pr.nx)
-    g = ca.jacobian(pr.rhs, pr.u)
-    if ca.depends_on(ca.jacobian(pr.lagrange, pr.u), pr.u):
-        raise ValueError("the running cost is not affine in u: H is not linear in u")
-    H = pr.lagrange + ca.dot(lam, pr.rhs)
-    sigma = ca.jacobian(H, pr.u)
-    Hx = ca.jacobian(H, pr.x).T
-    args = [pr.x, pr.u, lam, pr.p]
-    return (ca.Function("H", args, [H]), ca.Function("sigma", args, [sigma]),
-            ca.Function("Hx", args, [Hx]), ca.Function("g", [pr.x, pr.p], [g]))
+# ------------------------------------------------------------------ helpers
+def intervals_of(t: np.ndarray, mask: np.ndarray, min_len: float) -> list[tuple[float, float]]:
+    """Maximal runs of ``mask`` as ``(t_first, t_last)``, at least ``min_len`` long.
 
+    Parameters
+    ----------
+    t : ndarray (m,)
+        Sample times.
+    mask : ndarray of bool (m,)
+    min_len : float
 
-def costates_from_multipliers(sol: Solution) -> tuple[np.ndarray, np.ndarray]:
-    """Node times ``t_1..t_N`` and costates ``lambda(t_{k+1}) = mu_k`` (see module doc)."""
-    return sol.t[1:], sol.multipliers["continuity"].copy()
-
-
-def _terminal_costate(pr: OptimalControlProblem, xT, T, pv, nu) -> tuple[np.ndarray, float]:
-    """``lambda(T) = grad_x(phi + nu^T G_T)`` and the H value free T demands."""
-    G = ca.vertcat(*[c.expr for c in pr.terminal]) if pr.terminal else ca.SX(0, 1)
-    nu_s = ca.SX.sym("nu", G.numel())
-    aug = pr.mayer + (ca.dot(nu_s, G) if G.numel() else 0)
-    fn = ca.Function("tc", [pr.x, pr.T, pr.p, nu_s],
-                     [ca.gradient(aug, pr.x), ca.gradient(aug, pr.T)])
-    lamT, dT = fn(xT, T, pv, nu if len(nu) else np.zeros(0))
-    return np.array(lamT, dtype=float).ravel(), -float(dT)
-
-
-def _intervals(t: np.ndarray, mask: np.ndarray, min_len: float) -> list[tuple[float, float]]:
-    out = []
-    k = 0
-    n = len(mask)
+    Returns
+    -------
+    list of (float, float)
+    """
+    out: list[tuple[float, float]] = []
+    k, n = 0, len(mask)
     while k < n:
         if mask[k]:
             j = k
@@ -163,9 +186,20 @@ def _intervals(t: np.ndarray, mask: np.ndarray, min_len: float) -> list[tuple[fl
     return out
 
 
-def _sign_changes(t: np.ndarray, s: np.ndarray, tiny: float) -> np.ndarray:
-    """Times where s changes sign, skipping samples with ``|s| <= tiny``
-    (a crossing may land exactly on a sample), by linear interpolation."""
+def sign_changes(t: np.ndarray, s: np.ndarray, tiny: float) -> np.ndarray:
+    """Times where ``s`` changes sign, by linear interpolation.
+
+    Parameters
+    ----------
+    t, s : ndarray (m,)
+        Sample times and values.
+    tiny : float
+        Samples with ``|s| <= tiny`` are skipped (a crossing may land on a sample).
+
+    Returns
+    -------
+    ndarray
+    """
     nz = np.flatnonzero(np.abs(s) > tiny)
     a, b = nz[:-1], nz[1:]
     ch = np.sign(s[a]) != np.sign(s[b])
@@ -173,220 +207,568 @@ def _sign_changes(t: np.ndarray, s: np.ndarray, tiny: float) -> np.ndarray:
     return t[a] - s[a] * (t[b] - t[a]) / (s[b] - s[a])
 
 
-# --------------------------------------------------------------- certificate
-def adjoint_along_refined(ref: RefinedSwitching, n: int = 2000):
-    """Costate by backward integration of the adjoint along the refined arcs.
+def switch_gap(t: np.ndarray, s: np.ndarray, zeros: np.ndarray, ts: float) -> float:
+    """Time between a switch at ``ts`` and the zero of the switching function ``s``.
 
-    Returns ``t`` (m,), ``x`` (m, nx), ``u`` (m,), ``lam`` (m, nx), ``H_expected``.
+    When ``ts`` is a sample time (a refined junction) and ``s`` changes sign
+    across it, the gap is ``|s(ts)| / |s'|`` (``s'`` from the neighbouring
+    samples): exact to rounding, unlike an interpolated zero. Otherwise it is
+    the distance to the nearest interpolated sign change.
+
+    Parameters
+    ----------
+    t, s : ndarray (m,)
+        Sample times and switching-function values.
+    zeros : ndarray
+        Its interpolated sign changes (:func:`sign_changes`).
+    ts : float
+        The switch time.
+
+    Returns
+    -------
+    float
+        ``inf`` when there is no sign change at all.
     """
-    pr = ref.problem
-    pv = np.array([ref.params[k] for k in pr.param_names])
-    t, x, u = ref.sample(n)
-    nu = np.zeros(0)
-    if "terminal" in ref.blocks:
-        nu = np.concatenate([ref.lam_g[s] for s in ref.blocks["terminal"]])
-    lamT, H_exp = _terminal_costate(pr, ref.xT, ref.T, pv, nu)
-    if not pr.time_free:
-        H_exp = None
-    _, _, Hx, _ = _functions(pr)
-    edges = np.r_[0.0, np.cumsum(ref.durations)]
-    lam = np.empty_like(x)
-    has_L = not (isinstance(pr.lagrange, ca.SX) and pr.lagrange.is_zero())
-    exact = pr.is_affine_in_state() and not has_L
-    lam_end = lamT
-    for k in range(len(ref.durations) - 1, -1, -1):
-        a, b = edges[k], edges[k + 1]
-        sel = (t >= a) & (t <= b) if k == 0 else (t > a) & (t <= b)
-        if exact:
-            M = _affine_parts(pr, ref.values[k], pv, False)
-            A = M[:-1, :-1]
-            for i in np.flatnonzero(sel):
-                lam[i] = scipy.linalg.expm(A.T * (b - t[i])) @ lam_end
-            lam_end = scipy.linalg.expm(A.T * (b - a)) @ lam_end
+    span = max(float(t[-1] - t[0]), 1.0) if len(t) else 1.0
+    at = np.flatnonzero(np.abs(t - ts) <= 1e-12 * span)
+    if len(at):
+        i0, i1 = int(at[0]), int(at[-1])
+        if i0 > 0 and i1 + 1 < len(t) and np.sign(s[i0 - 1]) != np.sign(s[i1 + 1]):
+            slope = abs(s[i1 + 1] - s[i0 - 1]) / max(float(t[i1 + 1] - t[i0 - 1]), 1e-300)
+            return float(np.max(np.abs(s[at]))) / max(slope, 1e-300)
+    return float(np.min(np.abs(zeros - ts))) if len(zeros) else math.inf
+
+
+def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
+                        pv: np.ndarray, tol: float) -> np.ndarray:
+    """Where some path constraint is within ``tol * max(1, |value|)`` of a limit.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    x, u : ndarray (m, nx), (m, nu)
+        States and controls at the samples.
+    pv : ndarray
+        Parameter values.
+    tol : float
+
+    Returns
+    -------
+    ndarray of bool (m,)
+    """
+    if not pr.path:
+        return np.zeros(len(x), dtype=bool)
+    fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
+                                                 ca.vertcat(*[c.lower for c in pr.path]),
+                                                 ca.vertcat(*[c.upper for c in pr.path])])
+    v, lo, hi = along(fn, x, u, pv)
+    sc = tol * np.maximum(1.0, np.abs(v))
+    return np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc), axis=1)
+
+
+def _singular_runs(t: np.ndarray, s: np.ndarray, unclear: np.ndarray, band: float,
+                   min_len: float, interior: np.ndarray | None) -> list[tuple[float, float]]:
+    """Runs where ``|s| <= band`` at least ``min_len`` long that are not a transversal
+    zero crossing.
+
+    A crossing with slope ``s'`` spends ``band / |s'|`` on each side of its zero
+    inside the band, whatever the grid: a run that changes sign across it and
+    is no longer than twice what the local slopes on both sides predict (plus
+    two sample spacings) is a switch, not a singular arc. With ``interior``
+    (samples where the control is strictly inside its bounds; a transcription),
+    a run also needs the control inside its bounds on half of it: a short bang
+    arc whose sigma is small but of one sign is not singular.
+    """
+    out: list[tuple[float, float]] = []
+    idx = np.flatnonzero(unclear)
+    if not len(idx):
+        return out
+    splits = np.flatnonzero(np.diff(idx) > 1) + 1
+    for run in np.split(idx, splits):
+        a, b = int(run[0]), int(run[-1])
+        if t[b] - t[a] < min_len:
+            continue
+        if a >= 2 and b + 2 < len(t) and np.sign(s[a - 1]) != np.sign(s[b + 1]):
+            sl = abs(s[a - 1] - s[a - 2]) / max(t[a - 1] - t[a - 2], 1e-300)
+            sr = abs(s[b + 2] - s[b + 1]) / max(t[b + 2] - t[b + 1], 1e-300)
+            spacing = max(t[a] - t[a - 1], t[b + 1] - t[b])
+            if t[b] - t[a] <= 2 * (band / max(sl, 1e-300) + band / max(sr, 1e-300)) \
+                    + 2 * spacing:
+                continue
+        if interior is not None and np.mean(interior[a:b + 1]) < 0.5:
+            continue
+        out.append((float(t[a]), float(t[b])))
+    return out
+
+
+@dataclass
+class _Figures:
+    """H, sigma and the checks on one set of samples."""
+
+    H: np.ndarray
+    sigma: np.ndarray
+    H_scale: float
+    H_max_abs: float
+    H_var: float
+    agreement: dict[str, float]
+    gap: dict[str, float]
+    singular: list[tuple[float, float]]
+    zeros: dict[str, np.ndarray]
+    linear: bool = True
+
+
+def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarray,
+             u: np.ndarray, lam: np.ndarray, H_exp: float | None, skip: np.ndarray,
+             switches: dict[str, list[float]], tol_sigma: float, sigma_floor: np.ndarray,
+             u_tol: float, min_singular: float, interior_check: bool = False) -> _Figures:
+    """Evaluate H and sigma and the sign, switch and singularity checks.
+
+    ``skip`` marks samples not judged (constrained, or unresolved by the grid);
+    ``sigma_floor`` (nu,) is the absolute size below which sigma counts as zero
+    besides ``tol_sigma`` times its scale (the numerical error band); a control
+    within ``u_tol`` of a bound (relative to the range) sits at it;
+    ``interior_check`` (a transcription) counts a run of small sigma as
+    singular only where the control is inside its bounds.
+    """
+    pv = np.array([params[k] for k in pr.param_names], dtype=float)
+    fns = pmp_functions(pr)
+    if not fns.linear:
+        Huu = along(fns.Huu, x, pv)[0].reshape(len(x), pr.nu, pr.nu)
+        if np.min(np.linalg.eigvalsh(Huu), initial=0.0) < -1e-12 * max(1.0, np.max(np.abs(Huu))):
+            raise ValueError("H is not convex in u along the solution: the minimum condition "
+                             "cannot be checked through dH/du")
+    H = along(fns.H, x, u, lam, pv)[0].ravel()
+    sigma = along(fns.sigma, x, u, lam, pv)[0]
+    terms = along(fns.sigma_terms, x, u, lam, pv)[0]
+    xdot = along(pr.dynamics_function(), x, u, pv)[0]
+    H_scale = float(np.max(np.sum(np.abs(lam * xdot), axis=1), initial=0.0)) or 1.0
+    judged = ~skip
+    ref_H = H_exp if H_exp is not None else float(np.mean(H[judged])) if judged.any() else 0.0
+    H_max_abs = float(np.max(np.abs(H[judged] - ref_H), initial=0.0)) / H_scale
+    H_var = float(np.ptp(H[judged])) / H_scale if judged.any() else 0.0
+    dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
+    agreement, gap, zeros = {}, {}, {}
+    singular: list[tuple[float, float]] = []
+    for j, name in enumerate(pr.control_names):
+        lo, hi = control_bounds_at(pr, name, params)
+        s = sigma[:, j]
+        s_scale = float(np.max(np.r_[np.abs(s[judged]), terms[judged, j]], initial=0.0)) or 1.0
+        band = max(tol_sigma * s_scale, float(sigma_floor[j]))
+        clear = (np.abs(s) > band) & judged
+        inside = None
+        if interior_check:  # a transcription: a singular arc has its control inside
+            room = u_tol * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
+            inside = (u[:, j] > lo + room) & (u[:, j] < hi - room)
+        singular += _singular_runs(t, s, ~clear & judged, band, min_singular, inside)
+        want = np.where(s < 0, hi, lo)
+        agree = np.isfinite(want) & (np.abs(u[:, j] - want) <= u_tol * max(1.0, hi - lo))
+        agreement[name] = float(np.sum(dt[clear & agree]) / max(np.sum(dt[clear]), 1e-300)) \
+            if clear.any() else 1.0
+        zc = sign_changes(t, s, 1e-14 * s_scale)
+        zeros[name] = zc
+        gap[name] = max((switch_gap(t, s, zc, ts) for ts in switches.get(name, [])),
+                        default=0.0)
+    return _Figures(H, sigma, H_scale, H_max_abs, H_var, agreement, gap, singular, zeros,
+                    fns.linear)
+
+
+@dataclass
+class _Tolerances:
+    H: float
+    sigma: float
+    switch: float
+    singular: float
+
+
+def _judge(fig: _Figures, tol: _Tolerances, err: dict[str, float],
+           expected_H: bool) -> tuple[list[str], list[str]]:
+    """Reasons for definite failures and for failures inside the error band."""
+    definite: list[str] = []
+    uncertain: list[str] = []
+
+    def check(value: float, limit: float, error: float, text: str) -> None:
+        if value <= limit:
+            return
+        if value <= ERROR_MARGIN * error:
+            uncertain.append(f"{text}, but that is within {ERROR_MARGIN:g}x the certificate's "
+                             f"own numerical error ({error:.1e}): cannot decide")
         else:
-            from scipy.integrate import solve_ivp
+            definite.append(text)
 
-            ts = t[(t >= a) & (t <= b)]
-            xs = x[(t >= a) & (t <= b)]
+    what = "its free-T value" if expected_H else "a constant"
+    check(fig.H_max_abs, tol.H, err.get("H", 0.0),
+          f"H deviates from {what} by {fig.H_max_abs:.2e} of its scale (> {tol.H:g})")
+    for name, frac in fig.agreement.items():
+        if frac < 0.99:
+            definite.append(f"{name} sits at the bound selected by sign(sigma) only "
+                            f"{frac:.1%} of the time")
+    for name, g in fig.gap.items():
+        check(g, tol.switch, err.get("switch", 0.0),
+              f"a switch of {name} is {g:.2e} away from the nearest sign change of its sigma")
+    if fig.singular:
+        spans = ", ".join(f"[{a:.4g}, {b:.4g}]" for a, b in fig.singular)
+        what = ("a singular arc" if fig.linear else
+                "an interior arc (u minimises H inside its bounds)")
+        definite.append(f"sigma vanishes on {len(fig.singular)} interval(s) ({spans}): {what}")
+    return definite, uncertain
 
-            def rhs(tt, ll, ts=ts, xs=xs, uk=ref.values[k]):
-                xx = np.array([np.interp(tt, ts, xs[:, j]) for j in range(pr.nx)])
-                return -np.array(Hx(xx, uk, ll, pv)).ravel()
 
-            if b > a:
-                r = solve_ivp(rhs, (b, a), lam_end, rtol=1e-11, atol=1e-13, dense_output=True,
-                              method="DOP853")
-                for i in np.flatnonzero(sel):
-                    lam[i] = r.sol(t[i])
-                lam_end = r.y[:, -1]
-    return t, x, u, lam, H_exp
+def _verdict(definite: list[str], uncertain: list[str], active: list[tuple[float, float]],
+             checked_from: float, T: float) -> tuple[str, list[str]]:
+    reasons = definite + uncertain
+    if definite:
+        return NOT_BANG_BANG, reasons
+    if uncertain:
+        return INCONCLUSIVE, reasons
+    if active or checked_from > 0:
+        spans = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in active) or "isolated points"
+        where = (f"checked on [{checked_from:.6g}, {T:.6g}] only" if checked_from > 0
+                 else "excluded from the checks")
+        return INCONCLUSIVE, reasons + [
+            f"state constraint active on {spans}: the bang-bang argument does not apply there "
+            f"({where})"]
+    return CERTIFIED, reasons
 
 
-def certify(sol: Solution, refined: RefinedSwitching | None = None, *,
+# ------------------------------------------------------------- certificates
+def certify(sol: SolutionLike, refined: RefinedSwitching | None = None, *,
             tol_H: float | None = None, tol_sigma: float | None = None,
             tol_switch: float | None = None, min_singular: float | None = None,
-            n: int = 2000) -> PMPCertificate:
+            n: int = 2000, verify: bool = True) -> PMPCertificate:
     """Check Pontryagin's conditions for bang-bang structure.
 
     Parameters
     ----------
     sol : Solution
-        The transcribed solution (its multipliers give the first costate estimate,
-        and its nodes the state-constraint activity).
+        The transcribed solution (its multipliers give the first costate
+        estimate, and its nodes the state-constraint activity).
     refined : RefinedSwitching, optional
-        The refined solution; when given, H and sigma are evaluated on it with the
-        adjoint-integrated costate (exact arcs), and the two estimates compared.
+        The refined solution; when given, H and sigma are evaluated on it with
+        the adjoint-integrated costate, and the two estimates compared.
     tol_H : float, optional
         Allowed ``H_max_abs`` (relative to ``H_scale``): default 1e-6 on a
-        refined solution, 1e-2 on the transcription alone (its costates carry
-        the grid error).
+        refined solution, 1e-2 on the transcription alone.
     tol_sigma : float, optional
-        ``|sigma| <= tol_sigma * max|sigma|`` counts as zero: default 1e-6
+        ``|sigma_j| <= tol_sigma * max|sigma_j|`` counts as zero: default 1e-6
         refined, 1e-2 transcribed.
     tol_switch : float, optional
         Allowed switch/sign-change gap (default: 1e-6 T refined, 1.5 h otherwise).
     min_singular : float, optional
         Shortest interval of ``sigma ~ 0`` reported as singular (default 2 h).
+    n : int
+        About how many samples along a refined solution.
+    verify : bool
+        Transcription alone: re-check a would-be refutation on a grid twice as
+        fine (a new transcription, solved from this one); without it such a
+        result is only "inconclusive".
     """
-    pr = sol.problem
-    Hf, sigf, _, _ = _functions(pr)
-    pv = np.array([sol.params[k] for k in pr.param_names])
+    tsol = transcribed(sol)
+    t0 = time.process_time()
+    pr = tsol.problem
+    pmp_functions(pr)  # raises early on problems that are not control-affine
+    h = tsol.T / tsol.N
+    tol = _Tolerances(H=tol_H if tol_H is not None else (1e-6 if refined else 1e-2),
+                      sigma=tol_sigma if tol_sigma is not None else (1e-6 if refined else 1e-2),
+                      switch=math.nan, singular=2 * h if min_singular is None else min_singular)
+    if refined is not None:
+        tol.switch = 1e-6 * refined.T if tol_switch is None else tol_switch
+        cert = _certify_refined(tsol, refined, tol, n)
+    else:
+        tol.switch = 1.5 * h if tol_switch is None else tol_switch
+        cert = _certify_transcription(tsol, tol, verify, tol_switch is None)
+    cert.elapsed = time.process_time() - t0
+    return cert
+
+
+def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[float]]:
+    """Switch times of every control after ``after``, ignoring zero-length intervals."""
+    edges = np.r_[0.0, np.cumsum(ref.durations)]
+    tiny = 1e-10 * max(edges[-1], 1.0)
+    out: dict[str, list[float]] = {}
+    im = ref.interval_modes
+    for j, name in enumerate(ref.controls):
+        modes = [(im[k][j], edges[k + 1]) for k in range(len(ref.durations))
+                 if ref.durations[k] > tiny]
+        out[name] = [float(e) for (m, e), (m2, _) in zip(modes[:-1], modes[1:], strict=True)
+                     if m != m2 and e > after + tiny]
+    return out
+
+
+def _constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[float, float]],
+                                                                 float]:
+    """State-constrained intervals of a refined solution, and the last time the costate
+    may jump (end of a boundary arc, or a path constraint binding at a sample)."""
+    edges = np.r_[0.0, np.cumsum(ref.durations)]
+    T = float(edges[-1])
+    tiny = 1e-10 * max(T, 1.0)
+    bnd = [(float(edges[k]), float(edges[k + 1])) for k, ms in enumerate(ref.interval_modes)
+           if any(m.kind == "boundary" for m in ms) and ref.durations[k] > tiny]
+    last = max((b for _, b in bnd), default=0.0)
+    t, x, u, _ = ref.samples(n)
+    act = path_activity_along(ref.problem, x, u, ref.pv, 1e-7) & (t > tiny) & (t < T - tiny)
+    dense = intervals_of(t, act, 2 * T / max(len(t), 1))
+    if ref.nlp is not None and "path" in ref.blocks and len(ref.lam_g):
+        rows = ref.blocks["path"]
+        lam = np.abs(ref.lam_g[rows])
+        binding = lam > 1e-8 * max(1.0, float(np.max(np.abs(ref.lam_g))))
+        if binding.any():
+            last = max(last, float(np.max(ref.nlp.row_times(ref.w)[rows][binding])))
+    merged: list[tuple[float, float]] = []
+    for a, b in sorted(bnd + dense):
+        if merged and a <= merged[-1][1] + tiny:
+            merged[-1] = (merged[-1][0], max(b, merged[-1][1]))
+        else:
+            merged.append((a, b))
+    return merged, last
+
+
+def _certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: _Tolerances,
+                     n: int) -> PMPCertificate:
+    pr = ref.problem
+    active, last = _constrained_refined(ref, n)
+    sw = adjoint_sweep(ref, last, n)
+    T = float(np.sum(ref.durations))
+    tiny = 1e-10 * max(T, 1.0)
+    keep = (sw.t >= last - tiny) & (ref.durations[sw.interval] > tiny)
+    switches = _effective_switches(ref, last)
+    floor = np.zeros(pr.nu)
+    args = (switches, tol.sigma)
+    fig = _figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
+                   sw.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
+                   tol.singular)
+    base = (ref.integration_error or 0.0) + sw.error_x
+    err = {"H": base, "sigma": 0.0, "switch": 0.0, "costate": sw.error_lam, "state": sw.error_x}
+    if sw.coarse is not None:
+        c = sw.coarse
+        cf = _figures(pr, ref.params, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
+                      c.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
+                      tol.singular)
+        err["H"] += float(np.max(np.abs(fig.H - cf.H), initial=0.0)) / fig.H_scale
+        dsig = np.max(np.abs(fig.sigma - cf.sigma), axis=0, initial=0.0)
+        err["sigma"] = float(np.max(dsig / np.maximum(np.max(np.abs(fig.sigma), axis=0), 1e-300)))
+        err["switch"] = max((abs(fig.gap[k] - cf.gap[k]) for k in fig.gap
+                             if math.isfinite(fig.gap[k]) and math.isfinite(cf.gap[k])),
+                            default=0.0)
+        # samples inside the numerical error band of sigma are not judged
+        fig = _figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
+                       sw.H_expected, np.zeros(int(keep.sum()), bool), *args,
+                       ERROR_MARGIN * dsig, 1e-9, tol.singular)
+    definite, uncertain = _judge(fig, tol, err, sw.H_expected is not None)
+    verdict, reasons = _verdict(definite, uncertain, active, last, T)
+    gap_lam = _costate_gap(sol, ref, sw.t[keep], sw.lam[keep], last)
+    src = "refined (adjoint integrated with the state along the refined arcs: " + (
+        "exact arcs)" if ref.exact else f"RK8, error measured {sw.error_lam:.1e})")
+    return _certificate(verdict, reasons, sw.H_expected, fig, active, gap_lam, src,
+                        sw.t[keep], sw.lam[keep], sw.u[keep], err, last)
+
+
+def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray, lam: np.ndarray,
+                 start: float) -> float:
+    """Largest difference between the multiplier and the adjoint costates, relative."""
+    t_tr, lam_tr = costates_from_multipliers(sol)
     h = sol.T / sol.N
-    reasons: list[str] = []
-    exact = refined is not None
-    tol_H = (1e-6 if exact else 1e-2) if tol_H is None else tol_H
-    tol_sigma = (1e-6 if exact else 1e-2) if tol_sigma is None else tol_sigma
-    if refined is not None:
-        t, x, u, lam, H_exp = adjoint_along_refined(refined, n)
-        source = "refined (adjoint integrated along exact arcs)"
-        tol_switch = 1e-6 * refined.T if tol_switch is None else tol_switch
-    else:
-        t, lam = costates_from_multipliers(sol)
-        x = sol.x[1:]
-        u = np.r_[sol.u[1:, 0], sol.u[-1, 0]]
-        H_exp = None
-        if pr.time_free:
-            nu = sol.multipliers.get("terminal", np.zeros(0))
-            _, H_exp = _terminal_costate(pr, sol.x[-1], sol.T, pv, nu)
-        source = "transcription (costates from continuity multipliers)"
-        tol_switch = 1.5 * h if tol_switch is None else tol_switch
-    min_singular = 2 * h if min_singular is None else min_singular
+    # common horizon, without the transcription's last interval (where its final
+    # time, and any constrained tail, differ from the refined ones)
+    sel = (t_tr <= min(float(np.sum(ref.durations)), sol.T) - h) & (t_tr >= start + h)
+    if not sel.any() or len(t) < 2:
+        return math.nan
+    order = np.argsort(t, kind="stable")
+    lam_i = np.column_stack([np.interp(t_tr[sel], t[order], lam[order, j])
+                             for j in range(lam.shape[1])])
+    return float(np.max(np.abs(lam_i - lam_tr[sel])) / max(np.max(np.abs(lam)), 1e-300))
 
-    uc = np.asarray(u, dtype=float)[:, None]
-    H = along(Hf, x, uc, lam, pv)[0].ravel()
-    sigma = along(sigf, x, uc, lam, pv)[0].ravel()
-    xdot = along(pr.dynamics_function(), x, uc, pv)[0]
-    H_scale = float(np.max(np.sum(np.abs(lam * xdot), axis=1))) or 1.0
-    ref_H = H_exp if H_exp is not None else float(np.mean(H))
-    H_max_abs = float(np.max(np.abs(H - ref_H))) / H_scale
-    H_var = float(np.ptp(H)) / H_scale
-    if H_max_abs > tol_H:
-        what = "its free-T value" if H_exp is not None else "a constant"
-        reasons.append(f"H deviates from {what} by {H_max_abs:.2e} of its scale (> {tol_H:g})")
 
-    if refined is not None:
-        act_t = _path_activity(pr, t, x, u, pv, 1e-7)
-        active = _intervals(t, act_t, 1e-12)
-        min_len = 2 * (t[-1] - t[0]) / len(t)
-    else:
-        act = _active_path_constraints(sol, 1e-6)
-        act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, bool)
-        active = _intervals(sol.t, act_nodes, 1e-12)
-        act_t = act_nodes[1:]
-        min_len = h - 1e-12
-    # a constraint touching at a point (v_f(T) = 0 at the end) is not a constrained arc
-    active = [(a, b) for a, b in active if b - a >= min_len]
+def _certificate(verdict: str, reasons: list[str], H_exp: float | None, fig: _Figures,
+                 active: list[tuple[float, float]], gap_lam: float, source: str,
+                 t: np.ndarray, lam: np.ndarray, u: np.ndarray, err: dict[str, float],
+                 checked_from: float) -> PMPCertificate:
+    single = u.ndim == 2 and u.shape[1] == 1
+    per = {k: {"sigma_sign_agreement": fig.agreement[k], "switch_sigma_gap": fig.gap[k]}
+           for k in fig.agreement}
+    return PMPCertificate(
+        verdict, reasons, H_exp, fig.H_max_abs, fig.H_var, fig.H_scale,
+        min(fig.agreement.values(), default=1.0), max(fig.gap.values(), default=0.0),
+        fig.singular, active, gap_lam, source, t, lam, fig.H,
+        fig.sigma[:, 0] if single else fig.sigma, u[:, 0] if single else u, err,
+        checked_from, per)
 
+
+def _transcription_samples(sol: TranscribedSolution) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                    np.ndarray]:
+    """Node times t_1..t_N, states, the control after each node, multiplier costates."""
+    t, lam = costates_from_multipliers(sol)
+    u = np.vstack([sol.u[1:], sol.u[-1:]])
+    return t, sol.x[1:], u, lam
+
+
+def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, float]]:
+    """Intervals where a path constraint is active in a transcription: nodes at a limit
+    (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
+    finds (which bridge the zig-zag of a transcription along a constraint)."""
+    h = sol.T / sol.N
+    act = active_path_constraints(sol, 1e-6)
+    act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, dtype=bool)
+    spans = intervals_of(sol.t, np.asarray(act_nodes), h - 1e-12)
+    for name in sol.problem.control_names:
+        spans += [(a.start, a.end) for a in detect_arcs(sol, name).arcs if a.kind == "boundary"]
+    merged: list[tuple[float, float]] = []
+    for a, b in sorted(spans):
+        if merged and a <= merged[-1][1] + 1e-12:
+            merged[-1] = (merged[-1][0], max(b, merged[-1][1]))
+        else:
+            merged.append((float(a), float(b)))
+    return merged
+
+
+def _transcription_figures(sol: TranscribedSolution, tol: _Tolerances
+                           ) -> tuple[_Figures, float | None, list, np.ndarray]:
+    pr = sol.problem
+    pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
+    t, x, u, lam = _transcription_samples(sol)
+    H_exp = None
+    if pr.time_free:
+        nu = sol.multipliers.get("terminal", np.zeros(0))
+        _, H_exp = terminal_costate(pr, sol.x[-1], sol.T, pv, nu)
+    active = _constrained_transcription(sol)
     constrained = np.zeros(len(t), dtype=bool)
-    for a_, b_ in active:
-        constrained |= (t >= a_) & (t <= b_)
-
-    # sign agreement: u = upper where sigma < 0, lower where sigma > 0
-    lo, hi = _bounds(pr, sol.params)
-    s_scale = float(np.max(np.abs(sigma))) or 1.0
-    # on a state-constrained arc sigma may vanish and u be interior: judged apart
-    clear = (np.abs(sigma) > tol_sigma * s_scale) & ~constrained
-    want = np.where(sigma < 0, hi, lo)
-    # the transcription reaches its bounds only to Ipopt's tolerance
-    agree = np.abs(u - want) <= (1e-9 if exact else 1e-3) * max(1.0, hi - lo)
-    dt = np.gradient(t)
-    frac = float(np.sum(dt[clear & agree]) / max(np.sum(dt[clear]), 1e-300))
-    if frac < 0.99:
-        reasons.append(f"u sits at the bound selected by sign(sigma) only {frac:.1%} of the time")
-
-    # switches of u against sign changes of sigma
-    if refined is not None:
-        sw = np.asarray(refined.switch_times)
-    else:
-        sw = np.asarray(detect_arcs(sol).switch_times)
-    zc = _sign_changes(t, sigma, 1e-14 * s_scale)
-    gap = 0.0
-    for ts in sw:
-        gap = max(gap, float(np.min(np.abs(zc - ts))) if len(zc) else math.inf)
-    if gap > tol_switch:
-        reasons.append(f"a switch of u is {gap:.2e} away from the nearest sign change of sigma")
-
-    singular = _intervals(t, ~clear & ~constrained, min_singular)
-    if singular:
-        reasons.append(f"sigma vanishes on {len(singular)} interval(s): a singular arc")
-
-    gap_lam = math.nan
-    if refined is not None:
-        t_tr, lam_tr = costates_from_multipliers(sol)
-        # common horizon, without the transcription's last interval (where its
-        # final time, and any constrained tail, differ from the refined ones)
-        keep = t_tr <= min(refined.T, sol.T) - h
-        lam_i = np.column_stack([np.interp(t_tr[keep], t, lam[:, j]) for j in range(pr.nx)])
-        gap_lam = float(np.max(np.abs(lam_i - lam_tr[keep]))
-                        / max(np.max(np.abs(lam)), 1e-300))
-
-    if singular:
-        verdict = NOT_BANG_BANG
-    elif frac < 0.99 or gap > tol_switch or H_max_abs > tol_H:
-        verdict = NOT_BANG_BANG
-    elif active:
-        verdict = INCONCLUSIVE
-        reasons.append(f"state constraint active on {len(active)} interval(s): the bang-bang "
-                       "argument does not apply there")
-    else:
-        verdict = CERTIFIED
-    return PMPCertificate(verdict, reasons, H_exp, H_max_abs, H_var, H_scale, frac, gap,
-                          singular, active, gap_lam, source, t, lam, H, sigma, u)
+    for a, b in active:
+        constrained |= (t >= a) & (t <= b)
+    switches = {}
+    for name in pr.control_names:
+        st = detect_arcs(sol, name)
+        switches[name] = [a.end for a, b in zip(st.arcs[:-1], st.arcs[1:], strict=True)
+                          if a.kind in ("max", "min") and b.kind in ("max", "min")]
+    fig = _figures(pr, sol.params, t, x, u, lam, H_exp, constrained, switches, tol.sigma,
+                   np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
+    return fig, H_exp, active, t
 
 
-def _path_activity(pr, t, x, u, pv, tol) -> np.ndarray:
-    """Boolean (len(t),): some path constraint is at a bound at that sample."""
-    if not pr.path:
-        return np.zeros(len(t), dtype=bool)
-    fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
-                                                 ca.vertcat(*[c.lower for c in pr.path]),
-                                                 ca.vertcat(*[c.upper for c in pr.path])])
-    v, lo, hi = along(fn, x, np.asarray(u, dtype=float)[:, None], pv)
-    sc = tol * np.maximum(1.0, np.abs(v))
-    return np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc), axis=1)
+def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
+    """Re-solve ``sol``'s problem on a grid ``factor`` times finer, started from ``sol``.
+
+    Parameters
+    ----------
+    sol : Solution
+        A multiple-shooting solution.
+    factor : int
+        How many times more nodes.
+
+    Returns
+    -------
+    Solution or None
+        None when the transcription cannot be rebuilt or the solve fails.
+    """
+    tsol = transcribed(sol)
+    from .transcription import MultipleShooting
+
+    tr = getattr(tsol, "transcription", None)
+    if not isinstance(tr, MultipleShooting):
+        return None
+    try:
+        N = factor * tsol.N
+        fine = MultipleShooting(tsol.problem, nodes=N, integrator=tr.integrator,
+                                substeps=tr.substeps, ipopt_options=tr.ipopt_options)
+        s = np.linspace(0.0, 1.0, N + 1)
+        X = np.column_stack([np.interp(s, tsol.t / tsol.T, tsol.x[:, i])
+                             for i in range(tsol.problem.nx)])
+        U = tsol.u[np.minimum((s[:-1] * tsol.N + 1e-9).astype(int), tsol.N - 1)]
+        return fine.solve(tsol.params, guess=fine.initial_guess(T=tsol.T, x=X, u=U))
+    except Exception:  # any failure: the refutation stays unverified
+        return None
 
 
-def _bounds(pr, params) -> tuple[float, float]:
-    from .switching import _bounds_at
+def _persistent(coarse: _Figures, fine: _Figures, tol: _Tolerances,
+                tol_fine: _Tolerances) -> list[str]:
+    """The violations of ``coarse`` that a grid twice as fine does not shrink."""
+    out = []
+    if coarse.H_max_abs > tol.H and fine.H_max_abs > max(tol_fine.H, 0.75 * coarse.H_max_abs):
+        out.append(f"H deviates by {coarse.H_max_abs:.2e} of its scale, and by "
+                   f"{fine.H_max_abs:.2e} on a grid twice as fine")
+    for k, frac in coarse.agreement.items():
+        f2 = fine.agreement.get(k, 1.0)
+        if frac < 0.99 and f2 < 0.99 and 1 - f2 > 0.75 * (1 - frac):
+            out.append(f"{k} sits at the bound sign(sigma) selects only {frac:.1%} of the time "
+                       f"({f2:.1%} on a grid twice as fine)")
+    for k, g in coarse.gap.items():
+        g2 = fine.gap.get(k, 0.0)
+        if g > tol.switch and g2 > max(tol_fine.switch, 0.75 * g):
+            out.append(f"a switch of {k} is {g:.2e} from a sign change of its sigma "
+                       f"({g2:.2e} on a grid twice as fine)")
+    for a, b in coarse.singular:
+        overlap = sum(max(0.0, min(b, d) - max(a, c)) for c, d in fine.singular)
+        if overlap >= 0.75 * (b - a):  # a grid artefact halves with the grid
+            what = "a singular arc" if coarse.linear else "an interior arc"
+            out.append(f"sigma vanishes on [{a:.4g}, {b:.4g}], and still on a grid twice as "
+                       f"fine: {what}")
+    return out
 
-    return _bounds_at(pr, pr.control_names[0], params)
+
+def _certify_transcription(sol: TranscribedSolution, tol: _Tolerances, verify: bool,
+                           default_switch: bool) -> PMPCertificate:
+    fig, H_exp, active, t = _transcription_figures(sol, tol)
+    definite, uncertain = _judge(fig, tol, {}, H_exp is not None)
+    src = "transcription (costates from continuity multipliers)"
+    lam = costates_from_multipliers(sol)[1]
+    u = np.vstack([sol.u[1:], sol.u[-1:]])
+    if not definite:
+        verdict, reasons = _verdict([], uncertain, active, 0.0, sol.T)
+        return _certificate(verdict, reasons, H_exp, fig, active, math.nan, src, t, lam, u,
+                            {}, 0.0)
+    found = finer_transcription(sol) if verify else None
+    if found is None:
+        why = "not re-checked" if not verify else "the finer grid could not be solved"
+        return _certificate(INCONCLUSIVE, [*definite, f"unverified on a finer grid ({why}): "
+                                           "the transcription's own error may cause it"],
+                            H_exp, fig, active, math.nan, src, t, lam, u, {}, 0.0)
+    fine = transcribed(found)
+    tol_f = _Tolerances(tol.H, tol.sigma, tol.switch / 2 if default_switch else tol.switch,
+                        tol.singular / 2)
+    fig2, H2, active2, t2 = _transcription_figures(fine, tol_f)
+    persistent = _persistent(fig, fig2, tol, tol_f)
+    src2 = f"{src}; re-checked on {fine.N} nodes"
+    lam2 = costates_from_multipliers(fine)[1]
+    u2 = np.vstack([fine.u[1:], fine.u[-1:]])
+    if persistent:
+        return _certificate(NOT_BANG_BANG, persistent, H_exp, fig, active, math.nan, src2, t,
+                            lam, u, {}, 0.0)
+    d2, u2_reasons = _judge(fig2, tol_f, {}, H2 is not None)
+    note = [f"on {sol.N} nodes: {r}; it shrinks on {fine.N} nodes (the grid's error)"
+            for r in definite]
+    if d2:
+        return _certificate(INCONCLUSIVE, note + d2, H2, fig2, active2, math.nan, src2, t2,
+                            lam2, u2, {}, 0.0)
+    verdict, reasons = _verdict([], u2_reasons, active2, 0.0, fine.T)
+    return _certificate(verdict, note + reasons, H2, fig2, active2, math.nan, src2, t2, lam2,
+                        u2, {}, 0.0)
 
 
 def plot_certificate(cert: PMPCertificate, title: str | None = None):
-    """H, sigma and u against time on three axes."""
+    """H, sigma and u against time on three axes, state-constrained spans shaded.
+
+    Parameters
+    ----------
+    cert : PMPCertificate
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     import matplotlib.pyplot as plt
 
     fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(7, 6.5))
     a1.plot(cert.t, cert.H / cert.H_scale)
     a1.set_ylabel(r"$H / H_{scale}$")
-    a2.plot(cert.t, cert.sigma, color="C1")
+    a2.plot(cert.t, cert.sigma)
     a2.axhline(0, color="0.4", lw=0.7)
     a2.set_ylabel(r"switching function $\sigma = \lambda^T g$")
-    a3.step(cert.t, cert.u, where="post", color="C2")
+    a3.step(cert.t, cert.u, where="post")
     a3.set_ylabel("control $u$")
     a3.set_xlabel(r"time $\tau$")
     for a in (a1, a2, a3):
         a.grid(alpha=0.3)
+        for lo, hi in cert.state_constraint_active_intervals:
+            a.axvspan(lo, hi, color="0.85", lw=0)
     a1.set_title(title or f"PMP certificate: {cert.verdict} "
                  f"(max|H| {cert.H_max_abs:.1e}, switch gap {cert.switch_sigma_gap:.1e})",
                  fontsize=9)

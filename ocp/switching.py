@@ -1,210 +1,74 @@
-"""Bang-bang structure detection and switching-time refinement to machine precision.
+"""Bang-bang and boundary-arc structure, and switching times refined to machine precision.
 
-From a transcribed solution, :func:`detect_arcs` labels each shooting interval
-by where its control sits (upper bound, lower bound, or interior) and merges
-them into arcs; an interval where the control is between two different bang
-arcs is read as the switch, whose time is estimated from the interval average.
+The pieces live in three modules; this one is the entry point:
 
-:func:`refine_switching` then solves a second, small NLP whose unknowns are
-the arc durations (and the initial state), with the control fixed at its bound
-on each arc. When the dynamics are affine in the state for fixed control (the
-soft-landing model is), each arc is integrated *exactly*: its flow is
-``expm(A tau)`` of a constant augmented matrix, written as a CasADi expression
-in the duration (Taylor series of degree 18 after scaling, then squaring), so
-Ipopt gets exact derivatives of exact arcs. Otherwise each arc is integrated by
-CVODES at tolerance 1e-13. Path constraints are imposed at the arc ends and at
-``interior_samples`` points inside each arc.
+* :mod:`ocp.arcs` -- :func:`detect_arcs` (one control) and :func:`detect_structure`
+  (every control, switch events merged) read the arc structure off a
+  transcribed solution: bang arcs ``"max"``/``"min"``, boundary arcs (a path
+  constraint held at a limit) and interior arcs;
+* :mod:`ocp.flows` -- the closed-loop dynamics of an arc (boundary control
+  laws from the constraint's derivatives along the dynamics), exact
+  matrix-exponential and fixed-step 8th-order Runge-Kutta flows;
+* :mod:`ocp.refinement` -- the switching-time NLP, built once per problem and
+  structure and reused for every parameter value.
+
+:func:`refine_switching` solves that NLP from a transcribed solution and
+returns a :class:`RefinedSwitching`. Example (minimum-time double integrator)::
+
+    sol = MultipleShooting(p, nodes=40).solve({"d": 2.0})
+    r = refine_switching(sol)           # kinds ['max', 'min'], T = 2 sqrt(2) to 1e-15
+    traj = r.trajectory(n=500)          # ocp.trajectory.Trajectory, mode = arc kind
+
+Several controls: each control has its own arcs; the unknowns are the
+durations of the intervals between consecutive switch events of any control
+(``r.kinds`` then lists one kind per control and interval).
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.linalg
 
+from .arcs import (
+    Arc,
+    ArcStructure,
+    Interval,
+    SolutionLike,
+    SwitchingStructure,
+    TranscribedSolution,
+    active_path_constraints,
+    control_bounds_at,
+    detect_arcs,
+    detect_structure,
+    path_activity,
+    transcribed,
+)
 from .errors import InfeasibleError, SolveError
+from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
 from .problem import OptimalControlProblem
-from .solution import Solution
+from .refinement import (
+    DEFAULT_TOL,
+    REFINE_IPOPT,
+    SwitchingNLP,
+    arc_dynamics,
+    clear_cache,
+    required_substeps,
+    rk8_of,
+    switching_nlp,
+)
+from .solution import along
+from .trajectory import Trajectory
 
-REFINE_IPOPT = {"tol": 1e-14, "acceptable_tol": 1e-12, "constr_viol_tol": 1e-13,
-                "max_iter": 500, "print_level": 0, "sb": "yes", "bound_relax_factor": 0.0,
-                "nlp_scaling_method": "none"}
-
-
-@dataclass
-class Arc:
-    """A maximal interval where the control sits at one bound (or strictly inside)."""
-
-    kind: str  # "max", "min" or "interior"
-    start: float
-    end: float
-    active: tuple[str, ...] = ()  # path constraints active at every node of the arc
-
-    @property
-    def duration(self) -> float:
-        return self.end - self.start
-
-
-@dataclass
-class SwitchingStructure:
-    """Arcs of one control, and whether they are all bang arcs."""
-
-    control: str
-    arcs: list[Arc]
-    lower: float
-    upper: float
-
-    @property
-    def kinds(self) -> list[str]:
-        return [a.kind for a in self.arcs]
-
-    @property
-    def bang_bang(self) -> bool:
-        return all(a.kind != "interior" for a in self.arcs)
-
-    @property
-    def switch_times(self) -> list[float]:
-        return [a.end for a in self.arcs[:-1]]
-
-    def without_trailing_constrained(self) -> SwitchingStructure:
-        """Drop a final interior arc on which a path (state) constraint is active.
-
-        On such an arc the control is whatever keeps the state on its
-        constraint, not a bang; the bang-bang argument does not apply there.
-        Dropping it refines the problem whose final time is the end of the
-        last bang arc, which is the right question when the terminal
-        conditions already account for the constrained tail (as the soft
-        landing's body-arrest condition does).
-        """
-        if len(self.arcs) > 1 and self.arcs[-1].kind == "interior" and self.arcs[-1].active:
-            return SwitchingStructure(self.control, self.arcs[:-1], self.lower, self.upper)
-        return self
-
-
-def _active_path_constraints(sol: Solution, tol: float) -> np.ndarray:
-    """Boolean (N+1, n_path): path constraint i active (at a bound) at node k."""
-    pr = sol.problem
-    if not pr.path:
-        return np.zeros((sol.N + 1, 0), dtype=bool)
-    pv = [sol.params[k] for k in pr.param_names]
-    cols = []
-    for c in pr.path:
-        vals = sol.evaluate(c.expr)
-        lo, hi = (float(v) for v in ca.Function("b", [pr.p], [c.lower, c.upper])(pv))
-        scale = tol * np.maximum(1.0, np.abs(vals))
-        cols.append((np.abs(vals - lo) <= scale) | (np.abs(vals - hi) <= scale))
-    return np.column_stack(cols)
-
-
-def _bounds_at(problem: OptimalControlProblem, name: str, params: dict) -> tuple[float, float]:
-    lo, hi = problem.control_bounds[name]
-    f = ca.Function("b", [problem.p], [lo, hi])
-    pv = [params[k] for k in problem.param_names]
-    return tuple(float(v) for v in f(pv))
-
-
-def detect_arcs(sol: Solution, control: str | None = None, tol: float = 1e-4,
-                max_transition: int = 1) -> SwitchingStructure:
-    """Bang and interior arcs of a transcribed solution.
-
-    Parameters
-    ----------
-    sol : Solution
-    control : str, optional
-        Which control (default: the only one).
-    tol : float
-        An interval is at a bound when within ``tol * max(1, |bound|)`` of it.
-    max_transition : int
-        Interior runs of at most this many intervals between two *different*
-        bang arcs are read as the switch (the control averages both bounds
-        over the interval that contains the switching time); such runs at
-        either end of the horizon, next to a bang arc, are read as that arc
-        (the uniform grid cannot end the arc exactly on a node).
-    """
-    pr = sol.problem
-    name = control or pr.control_names[0]
-    lo, hi = _bounds_at(pr, name, sol.params)
-    u = sol.control(name)
-    h = sol.T / sol.N
-    lab = np.where(np.abs(u - hi) <= tol * max(1.0, abs(hi)), "max",
-                   np.where(np.abs(u - lo) <= tol * max(1.0, abs(lo)), "min", "interior"))
-    runs: list[list] = []  # [kind, first interval, last interval]
-    for k, lb in enumerate(lab.tolist()):
-        if runs and runs[-1][0] == lb:
-            runs[-1][2] = k
-        else:
-            runs.append([lb, k, k])
-    # An interior run of at most max_transition intervals at either end, next to
-    # a bang arc, is the uniform grid failing to put the end of that arc on a
-    # node: absorb it (the refinement then places the end exactly).
-    for end in (0, -1):
-        nb = 1 if end == 0 else -2
-        if (len(runs) > 1 and runs[end][0] == "interior" and runs[nb][0] != "interior"
-                and runs[end][2] - runs[end][1] + 1 <= max_transition):
-            if end == 0:
-                runs[1][1] = runs[0][1]
-            else:
-                runs[-2][2] = runs[-1][2]
-            del runs[end]
-    arcs: list[Arc] = []
-    i = 0
-    while i < len(runs):
-        kind, a, b = runs[i]
-        start = a * h if not arcs else arcs[-1].end
-        if (kind == "interior" and 0 < i < len(runs) - 1 and b - a + 1 <= max_transition
-                and runs[i - 1][0] != "interior" and runs[i + 1][0] != "interior"
-                and runs[i - 1][0] != runs[i + 1][0]):
-            # the switch lies inside: split by the average force
-            ua = hi if runs[i - 1][0] == "max" else lo
-            ub = hi if runs[i + 1][0] == "max" else lo
-            theta = float(np.clip((np.mean(u[a:b + 1]) - ub) / (ua - ub), 0.0, 1.0))
-            arcs[-1].end = (a + theta * (b - a + 1)) * h
-            i += 1
-            continue
-        arcs.append(Arc(kind, start, (b + 1) * h))
-        i += 1
-    # merge neighbours of the same kind (after absorbing transitions)
-    merged: list[Arc] = []
-    for arc in arcs:
-        if merged and merged[-1].kind == arc.kind:
-            merged[-1].end = arc.end
-        else:
-            merged.append(arc)
-    merged[-1].end = sol.T
-    act = _active_path_constraints(sol, tol)
-    for arc in merged:
-        k0 = int(round(arc.start / h)) if h > 0 else 0
-        k1 = max(k0 + 1, int(round(arc.end / h)))
-        nodes = act[k0 + 1:k1] if k1 - k0 > 1 else act[k0:k1]
-        arc.active = tuple(c.name for i, c in enumerate(pr.path)
-                           if nodes.shape[0] and nodes[:, i].all())
-    return SwitchingStructure(name, merged, lo, hi)
-
-
-# ---------------------------------------------------------------- exact arcs
-def _expm_symbolic(M: np.ndarray, tau: ca.SX, tau_max: float, order: int = 18) -> ca.SX:
-    """``expm(M tau)`` as an SX expression in the scalar ``tau`` (0 <= tau <= tau_max).
-
-    Scaling and squaring: ``2^-s M tau`` has norm <= 1/2 on the whole range,
-    where a degree-18 Taylor polynomial is accurate to 1e-22 relative.
-    """
-    nrm = float(np.abs(M).sum(axis=1).max()) * max(tau_max, 1e-12)
-    s = max(0, math.ceil(math.log2(max(nrm, 1e-300) / 0.5)))
-    X = ca.SX(ca.DM(M)) * (tau / 2.0**s)
-    n = M.shape[0]
-    E = ca.SX.eye(n)
-    term = ca.SX.eye(n)
-    for k in range(1, order + 1):
-        term = ca.mtimes(term, X) / k
-        E = E + term
-    for _ in range(s):
-        E = ca.mtimes(E, E)
-    return E
+__all__ = [
+    "Arc", "ArcStructure", "DEFAULT_TOL", "Interval", "Mode", "REFINE_IPOPT", "RefinedSwitching",
+    "SwitchingNLP", "SwitchingStructure", "active_path_constraints", "clear_cache",
+    "control_bounds_at", "detect_arcs", "detect_structure", "path_activity", "refine_switching",
+    "refine_structure",
+]
 
 
 @dataclass
@@ -213,20 +77,41 @@ class RefinedSwitching:
 
     Attributes
     ----------
-    kinds : list of "max"/"min" per arc; ``values`` the control on each arc.
-    durations, switch_times : arc lengths and the times between arcs.
-    T, objective : final time and refined objective.
-    x0, xT : initial and final states.
-    exact : True when arcs were integrated by the matrix exponential.
-    status, iterations, solve_time : Ipopt's figures.
-    transcribed_objective : the objective of the solution it started from.
+    kinds : list
+        Per interval: the arc kind (``"max"``, ``"min"``, ``"boundary"``) for a
+        single-control problem, a tuple of kinds (one per control) otherwise.
+    values : list
+        Per interval: the control value (a tuple for several controls); NaN
+        where the control follows a boundary law (see :attr:`control_laws`).
+    modes : tuple of tuple of Mode
+        Per interval, each control's :class:`~ocp.flows.Mode` (with the held constraint).
+    durations : ndarray
+        Interval lengths; ``switch_times`` are the times between them.
+    T, objective : float
+        Final time and refined objective.
+    x0, xT : ndarray
+        Initial and final states.
+    exact : bool
+        Every interval integrated by the matrix exponential (affine arcs).
+    integration_error : float
+        Largest relative end-state error of the RK8 intervals, estimated by
+        halving at the solution (0 when every interval is exact).
+    status, iterations, solve_time : Ipopt's figures (or the Newton fast path's).
+    path : str
+        ``"ipopt"`` or ``"newton"`` (the fast path): what produced the result.
+    transcribed_objective : float
+        The objective of the solution it started from.
+    terminal_multipliers : ndarray
+        Multipliers of the terminal constraints (CasADi sign: ``J + nu^T G``).
+    notes : list of str
+        E.g. intervals that shrank to zero length, rebuilds for accuracy.
     """
 
     problem: OptimalControlProblem
     params: dict
     control: str
-    kinds: list[str]
-    values: list[float]
+    kinds: list
+    values: list
     durations: np.ndarray
     T: float
     objective: float
@@ -237,242 +122,440 @@ class RefinedSwitching:
     iterations: int
     solve_time: float
     transcribed_objective: float
-    lam_g: np.ndarray = field(repr=False, default=None)
+    lam_g: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     blocks: dict = field(repr=False, default_factory=dict)
     end_path_violation: float = 0.0
+    modes: tuple = field(repr=False, default=())
+    controls: tuple[str, ...] = ()
+    integration_error: float = 0.0
+    path: str = "ipopt"
+    notes: list[str] = field(default_factory=list)
+    build_time: float = 0.0
+    nlp: SwitchingNLP | None = field(repr=False, default=None)
+    w: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    lam_x: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
 
+    # ------------------------------------------------------------- structure
     @property
     def switch_times(self) -> list[float]:
-        return list(np.cumsum(self.durations)[:-1])
+        """Times between consecutive intervals (switch events of any control)."""
+        return [float(t) for t in np.cumsum(self.durations)[:-1]]
 
-    def control_at(self, t: np.ndarray) -> np.ndarray:
-        edges = np.cumsum(self.durations)
-        idx = np.minimum(np.searchsorted(edges, t, side="right"), len(self.values) - 1)
-        return np.asarray(self.values)[idx]
+    @property
+    def pv(self) -> np.ndarray:
+        """Parameter vector in the problem's order."""
+        return np.array([self.params[k] for k in self.problem.param_names], dtype=float)
+
+    @property
+    def terminal_multipliers(self) -> np.ndarray:
+        """Multipliers of the terminal constraints."""
+        idx = self.blocks.get("terminal", np.zeros(0, dtype=int))
+        return self.lam_g[np.asarray(idx, dtype=int)] if len(self.lam_g) else np.zeros(0)
+
+    def switch_times_of(self, control: str) -> list[float]:
+        """Switch times of one control (its own arc boundaries)."""
+        j = self.controls.index(control)
+        edges = np.cumsum(self.durations)[:-1]
+        return [float(edges[k]) for k in range(len(self.modes) - 1)
+                if self.modes[k][j] != self.modes[k + 1][j]]
+
+    @property
+    def control_laws(self) -> list[dict[str, Any] | None]:
+        """Per interval: None on bang intervals, else the boundary control law.
+
+        Each entry has ``controls`` (names), ``constraints`` (held, with side and
+        relative degree), ``expression`` (CasADi text of ``u(x, p)``) and, when
+        the law is affine in the state, ``gain`` K and ``offset`` k0 with
+        ``u = K x + k0`` at this solution's parameters (a replay can use them).
+        """
+        out: list[dict[str, Any] | None] = []
+        for modes in self.modes:
+            if all(m.kind != "boundary" for m in modes):
+                out.append(None)
+                continue
+            d = arc_dynamics(self.problem, modes)
+            aff = d.control_law_affine(self.pv)
+            names = [c for c, m in zip(self.controls, modes, strict=True) if m.kind == "boundary"]
+            idx = [self.controls.index(c) for c in names]
+            entry: dict[str, Any] = {
+                "controls": names,
+                "constraints": [{"name": m.constraint, "side": m.side,
+                                 "relative_degree": d.orders[m.constraint]}
+                                for m in modes if m.constraint is not None],
+                "expression": [str(d.u[i]) for i in idx]}
+            if aff is not None:
+                entry["gain"] = aff[0][idx].tolist()
+                entry["offset"] = aff[1][idx].tolist()
+            out.append(entry)
+        return out
+
+    # --------------------------------------------------------------- samples
+    @property
+    def interval_modes(self) -> tuple[tuple[Mode, ...], ...]:
+        """Per interval, each control's mode, read off :attr:`values` where they are bang
+        values (so a copy with edited ``values`` describes what its values say)."""
+        out = []
+        for k, modes in enumerate(self.modes):
+            vals = self.values[k] if len(self.controls) > 1 else (self.values[k],)
+            ms = []
+            for name, m, v in zip(self.controls, modes, vals, strict=True):
+                lo, hi = control_bounds_at(self.problem, name, self.params)
+                if m.kind != "boundary" and np.isfinite(v):
+                    m = Mode("max") if abs(v - hi) <= abs(v - lo) else Mode("min")
+                ms.append(m)
+            out.append(tuple(ms))
+        return tuple(out)
+
+    def _steps(self, k: int) -> int:
+        """RK8 steps of interval k (the refinement's), for non-affine arcs."""
+        if self.nlp is not None and k < len(self.nlp.substeps):
+            return int(self.nlp.substeps[k])
+        return 64
+
+    def _flow(self, k: int, modes: tuple[Mode, ...], z: np.ndarray, tau: float,
+              points: int) -> np.ndarray:
+        d = arc_dynamics(self.problem, modes)
+        if d.exact:
+            A, b = d.affine_numeric(self.pv)
+            return numeric_affine_flow(A, b, z, tau, points)
+        per = max(1, -(-self._steps(k) // points))
+        return numeric_rk8_flow(rk8_of(d), z, tau, per * points, self.pv)[::per]
+
+    def junctions(self) -> np.ndarray:
+        """States (with the running cost's quadrature, if any) at the interval ends, (K+1, nz),
+        propagated from :attr:`x0` over :attr:`durations`."""
+        z = np.r_[self.x0, 0.0] if has_running_cost(self.problem) else self.x0.copy()
+        out = [z]
+        for k, modes in enumerate(self.interval_modes):
+            z = self._flow(k, modes, z, float(self.durations[k]), 1)[-1]
+            out.append(z)
+        return np.array(out)
+
+    def samples(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Times, states, controls and interval index, sampled arc by arc (exact arcs exact).
+
+        Junction times appear twice: the end of one interval and the start of the next.
+        """
+        pr = self.problem
+        ts, xs, us, ks = [], [], [], []
+        z = np.r_[self.x0, 0.0] if has_running_cost(pr) else self.x0.copy()
+        start = 0.0
+        T = float(np.sum(self.durations))
+        for k, modes in enumerate(self.interval_modes):
+            tau = float(self.durations[k])
+            pts = max(2, int(math.ceil(n * tau / max(T, 1e-300))))
+            Z = self._flow(k, modes, z, tau, pts)
+            U = along(arc_dynamics(pr, modes).u_fn, Z[:, :pr.nx], self.pv)[0]
+            ts.append(start + np.linspace(0.0, tau, pts + 1))
+            xs.append(Z[:, :pr.nx])
+            us.append(U)
+            ks.append(np.full(pts + 1, k))
+            z = Z[-1]
+            start += tau
+        return np.concatenate(ts), np.vstack(xs), np.vstack(us), np.concatenate(ks)
+
+    def trajectory(self, n: int = 1000) -> Trajectory:
+        """The refined trajectory on about ``n`` points (mode = arc kind per sample)."""
+        t, x, u, k = self.samples(n)
+        labels = ["/".join(m.label() for m in modes) for modes in self.modes]
+        pr = self.problem
+        return Trajectory(t, x, u, tuple(pr.state_names), tuple(pr.control_names),
+                          mode=np.array([labels[i] for i in k]))
 
     def sample(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Trajectory on ``n`` points plus the switching instants (exact for affine arcs)."""
-        pr = self.problem
-        pv = np.array([self.params[k] for k in pr.param_names])
-        t = np.union1d(np.linspace(0, self.T, n), np.r_[0.0, np.cumsum(self.durations)])
-        xs = np.empty((len(t), pr.nx))
-        start = 0.0
-        x = self.x0.copy()
-        k = 0
+        """``t, x, u`` on about ``n`` points (``u`` 1-D for a single control)."""
+        t, x, u, _ = self.samples(n)
+        return t, x, (u[:, 0] if u.shape[1] == 1 else u)
+
+    def control_at(self, t: np.ndarray) -> np.ndarray:
+        """Bang values at times ``t`` (NaN on boundary intervals, whose control depends on x)."""
         edges = np.cumsum(self.durations)
-        flows = [_numeric_flow(pr, v, pv) for v in self.values]
-        for i, ti in enumerate(t):
-            while k < len(edges) - 1 and ti > edges[k]:
-                x = flows[k](x, edges[k] - start)
-                start = edges[k]
-                k += 1
-            xs[i] = flows[k](x, ti - start)
-        return t, xs, self.control_at(t)
+        idx = np.minimum(np.searchsorted(edges, t, side="right"), len(self.values) - 1)
+        return np.asarray(self.values, dtype=float)[idx]
+
+    def path_violation(self, n: int = 4000) -> float:
+        """Largest violation of any path constraint or control bound on about ``n`` points."""
+        pr = self.problem
+        t, x, u, _ = self.samples(n)
+        viol = 0.0
+        cons = [(c.expr, c.lower, c.upper) for c in pr.path]
+        cons += [(pr.u[j], *pr.control_bounds[nm]) for j, nm in enumerate(pr.control_names)]
+        for e, lo, hi in cons:
+            fn = ca.Function("c", [pr.x, pr.u, pr.p], [e, lo, hi])
+            v, a, b = along(fn, x, u, self.pv)
+            scale = np.maximum(1.0, np.abs(v))
+            viol = max(viol, float(np.max(np.r_[(a - v) / scale, (v - b) / scale, [[0.0]]])))
+        return viol
 
     def to_dict(self) -> dict[str, Any]:
-        return {"arcs": self.kinds, "values": list(map(float, self.values)),
+        """Plain JSON-able dict."""
+        def clean(v: Any) -> Any:
+            if isinstance(v, tuple | list):
+                return [clean(x) for x in v]
+            return float(v) if isinstance(v, float | np.floating) and math.isfinite(v) else (
+                None if isinstance(v, float | np.floating) else v)
+
+        return {"arcs": clean(self.kinds), "values": clean(self.values),
                 "durations": self.durations.tolist(), "switch_times": self.switch_times,
                 "T": self.T, "objective": self.objective, "x0": self.x0.tolist(),
                 "xT": self.xT.tolist(), "exact_arcs": self.exact, "status": self.status,
                 "iterations": self.iterations, "solve_time_s": self.solve_time,
                 "transcribed_objective": self.transcribed_objective,
-                "end_path_violation": self.end_path_violation}
+                "end_path_violation": self.end_path_violation,
+                "controls": list(self.controls),
+                "modes": [[m.label() for m in ms] for ms in self.modes],
+                "control_laws": self.control_laws, "integration_error": self.integration_error,
+                "path": self.path, "notes": self.notes}
 
 
-def _affine_parts(pr: OptimalControlProblem, u_value: float, pv: np.ndarray,
-                  with_quadrature: bool) -> np.ndarray:
-    """Augmented matrix ``[[A, b], [0, 0]]`` of ``x' = A x + b`` at constant control."""
-    z = ca.vertcat(pr.x, ca.SX.sym("q")) if with_quadrature else pr.x
-    rhs = ca.vertcat(pr.rhs, pr.lagrange) if with_quadrature else pr.rhs
-    Jf = ca.Function("J", [z, pr.u, pr.p], [ca.jacobian(rhs, z), rhs])
-    n = z.numel()
-    A, b = (np.array(v, dtype=float) for v in Jf(np.zeros(n), u_value, pv))
-    M = np.zeros((n + 1, n + 1))
-    M[:n, :n] = A
-    M[:n, n] = b.ravel()
-    return M
+# ------------------------------------------------------------------ refine
+def _as_structure(sol: TranscribedSolution, structure: Any) -> ArcStructure:
+    if structure is None:
+        structure = detect_structure(sol)
+    if isinstance(structure, SwitchingStructure):
+        if sol.problem.nu != 1:
+            raise ValueError("a SwitchingStructure describes one control; pass an ArcStructure "
+                             "(detect_structure) for a problem with several controls")
+        structure = ArcStructure.from_controls([structure])
+    if not structure.refinable:
+        kinds = {s.control: s.kinds for s in structure.per_control}
+        raise ValueError(f"not bang-bang: arcs {kinds}; refinement needs bang and boundary "
+                         "arcs only (an interior arc is singular or free)")
+    return structure
 
 
-def _numeric_flow(pr, u_value, pv):
-    if pr.is_affine_in_state():
-        M = _affine_parts(pr, u_value, pv, False)
-
-        def flow(x, tau):
-            z = np.r_[x, 1.0]
-            return (scipy.linalg.expm(M * tau) @ z)[:-1]
-
-        return flow
-    f = pr.dynamics_function()
-    x = ca.SX.sym("x", pr.nx)
-    tau = ca.SX.sym("tau")
-    integ = ca.integrator("I", "cvodes", {"x": x, "p": tau, "ode": tau * f(x, u_value, pv)}, 0, 1,
-                      {"abstol": 1e-13, "reltol": 1e-13})
-
-    def flow(x0, t):
-        return np.array(integ(x0=x0, p=t)["xf"]).ravel()
-
-    return flow
+def _insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
+    """Insert ``extra_arcs`` bang arcs (single control): pairs inside the longest bang arc,
+    an odd one at the end."""
+    flip = {"max": Mode("min"), "min": Mode("max")}
+    for _ in range(extra_arcs // 2):
+        bang = [k for k, m in enumerate(modes) if m[0].kind in flip]
+        i = max(bang, key=lambda k: durs[k])
+        d = durs[i]
+        modes[i:i + 1] = [modes[i], (flip[modes[i][0].kind],), modes[i]]
+        durs[i:i + 1] = [0.495 * d, 0.01 * d, 0.495 * d]
+    if extra_arcs % 2:
+        last = [k for k, m in enumerate(modes) if m[0].kind in flip][-1]
+        modes.append((flip[modes[last][0].kind],))
+        cut = 0.01 * durs[-1]
+        durs[-1] -= cut
+        durs.append(cut)
 
 
-def refine_switching(sol: Solution, structure: SwitchingStructure | None = None,
+def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStructure | None = None,
                      extra_arcs: int = 0, interior_samples: int = 16,
-                     ipopt_options: dict | None = None) -> RefinedSwitching:
-    """Re-solve with the arc durations as unknowns and the control at its bounds.
+                     ipopt_options: dict | None = None, *, tol: float = DEFAULT_TOL,
+                     params: dict[str, float] | None = None, fast: bool = True,
+                     repair: bool = True,
+                     repair_length: float | None = None) -> RefinedSwitching:
+    """Re-solve with the interval durations as unknowns and the controls on their arcs.
 
     Parameters
     ----------
     sol : Solution
         A transcribed solution (parameters, bounds and starting guess).
-    structure : SwitchingStructure, optional
-        Default: :func:`detect_arcs` of ``sol``. Must be bang-bang.
+    structure : SwitchingStructure or ArcStructure, optional
+        Default: :func:`detect_structure` of ``sol``. Bang and boundary arcs only.
     extra_arcs : int
-        Try this many more bang arcs, to test whether more switches improve
-        the objective: pairs are inserted inside the longest arc (which keeps
-        the first and last arcs), an odd one is appended at the end.
+        Single control only: try this many more bang arcs, to test whether more
+        switches improve the objective (pairs are inserted inside the longest
+        bang arc, an odd one is appended at the end).
     interior_samples : int
-        Path constraints are checked at this many points inside each arc.
+        Path constraints are imposed at about this many points inside each interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`REFINE_IPOPT`.
+    tol : float
+        Relative accuracy required of the non-affine (RK8) intervals' end states,
+        verified by halving at the solution (more steps and a re-solve if not met).
+    params : dict, optional
+        Parameter values (default: ``sol.params``).
+    fast : bool
+        Try the Newton fast path first when the cached NLP was solved before
+        with a square active set (falls back to Ipopt if a check fails).
+    repair : bool
+        If the detected structure fails, retry without each arc shorter than
+        ``repair_length`` (default 2.5 shooting intervals) in turn, keeping the
+        best success (a note says which arc was dropped).
+    repair_length : float, optional
+        See ``repair``.
 
     Raises
     ------
     ValueError
-        If the structure has interior (non-bang) arcs.
+        If the structure has interior (singular or free) arcs.
     SolveError, InfeasibleError
-        If Ipopt fails.
+        If Ipopt fails, or the integration accuracy cannot be reached.
     """
-    pr = sol.problem
-    if pr.nu != 1:
-        raise ValueError("switching-time refinement supports problems with one control")
-    st = structure or detect_arcs(sol)
-    if not st.bang_bang:
-        raise ValueError(f"not bang-bang: arcs {st.kinds}; refinement needs bang arcs only")
-    kinds = list(st.kinds)
-    durs = [a.duration for a in st.arcs]
-    for _ in range(extra_arcs // 2):
-        # split the longest arc around a short arc of the other bound
-        i = int(np.argmax(durs))
-        other = "min" if kinds[i] == "max" else "max"
-        d = durs[i]
-        kinds[i:i + 1] = [kinds[i], other, kinds[i]]
-        durs[i:i + 1] = [0.495 * d, 0.01 * d, 0.495 * d]
-    if extra_arcs % 2:
-        kinds.append("min" if kinds[-1] == "max" else "max")
-        cut = 0.01 * durs[-1]
-        durs[-1] -= cut
-        durs.append(cut)
-    values = [st.upper if k == "max" else st.lower for k in kinds]
-    K = len(kinds)
-    pv = np.array([sol.params[k] for k in pr.param_names])
-    nx = pr.nx
-    has_L = not (isinstance(pr.lagrange, ca.SX) and pr.lagrange.is_zero())
-    exact = pr.is_affine_in_state() and (
-        not has_L or not ca.depends_on(ca.jacobian(pr.lagrange, pr.x), pr.x))
+    tsol = transcribed(sol)
+    st = _as_structure(tsol, structure)
+    params = dict(tsol.params if params is None else params)
+    opts: dict[str, Any] = {"transcribed_objective": float(tsol.objective),
+                            "interior_samples": interior_samples,
+                            "ipopt_options": ipopt_options, "tol": tol, "fast": fast}
 
-    tau = ca.SX.sym("tau", K)
-    x0 = ca.SX.sym("x0", nx)
-    T_max = pr.T_bounds[1] if pr.time_free else pr.T_bounds[0]
-    if exact:
-        flows = []
-        for v in values:
-            M = _affine_parts(pr, v, pv, has_L)
-            flows.append(M)
+    def attempt(s: ArcStructure) -> RefinedSwitching:
+        modes, durs = list(s.modes), list(s.durations)
+        if extra_arcs:
+            if len(s.controls) != 1:
+                raise ValueError("extra_arcs supports single-control problems")
+            _insert_extra_arcs(modes, durs, extra_arcs)
+        return refine_structure(tsol.problem, tuple(modes), np.asarray(durs, dtype=float),
+                                np.asarray(tsol.x[0], dtype=float), params, **opts)
 
-        def propagate(k, z, t):
-            E = _expm_symbolic(flows[k], t, T_max)
-            return ca.mtimes(E, ca.vertcat(z, 1))[:-1]
+    try:
+        return attempt(st)
+    except SolveError as err:
+        if repair_length is None and not repair:
+            raise
+        short = (2.5 * tsol.T / tsol.N) if repair_length is None else repair_length
+        return _repair(st, attempt, err, short)
+
+
+def _without_arc(st: ArcStructure, j: int, i: int) -> ArcStructure:
+    """The structure with arc i of control j removed (its time given to its neighbours)."""
+    per = list(st.per_control)
+    arcs = [Arc(a.kind, a.start, a.end, a.active, a.constraint, a.side) for a in per[j].arcs]
+    gone = arcs.pop(i)
+    if 0 < i < len(arcs) and arcs[i - 1].mode == arcs[i].mode:
+        arcs[i - 1].end = arcs[i].end
+        del arcs[i]
+    elif i > 0:
+        mid = 0.5 * (gone.start + gone.end)
+        arcs[i - 1].end = mid if i < len(arcs) else gone.end
+        if i < len(arcs):
+            arcs[i].start = mid
     else:
-        f = pr.dynamics_function()
-        L = pr.lagrange_function()
-        Ifs = []
-        for v in values:
-            xx = ca.SX.sym("x", nx + 1)
-            tt = ca.SX.sym("t")
-            ode = tt * ca.vertcat(f(xx[:nx], v, pv), L(xx[:nx], v, pv))
-            Ifs.append(ca.integrator("I", "cvodes", {"x": xx, "p": tt, "ode": ode}, 0, 1,
-                                     {"abstol": 1e-13, "reltol": 1e-13}))
+        arcs[0].start = gone.start
+    per[j] = SwitchingStructure(per[j].control, arcs, per[j].lower, per[j].upper)
+    return ArcStructure.from_controls(per)
 
-        def propagate(k, z, t):
-            return Ifs[k](x0=z, p=t)["xf"]
 
-    # build the chain of arcs (symbolic), with interior samples for path constraints
-    H = (ca.Function("H", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path])])
-         if pr.path else None)
-    # with a running cost (or an integrator, which always carries one) the state
-    # is augmented by the cost's quadrature
-    z = ca.vertcat(x0, 0) if (has_L or not exact) else x0
-    g, lbg, ubg, blocks = [], [], [], {}
-    n = 0
-
-    def add(name, expr, lo, hi):
-        nonlocal n
-        expr = ca.vec(ca.SX(expr)) if not isinstance(expr, ca.MX) else ca.vec(expr)
-        g.append(expr)
-        lbg.append(np.ravel(lo))
-        ubg.append(np.ravel(hi))
-        blocks.setdefault(name, []).append(slice(n, n + expr.numel()))
-        n += expr.numel()
-
-    bnd = ca.Function("bnd", [pr.p], [ca.vertcat(*[c.lower for c in pr.path] or [ca.SX(0)]),
-                                      ca.vertcat(*[c.upper for c in pr.path] or [ca.SX(0)])])
-    plo, phi = (np.array(v, dtype=float).ravel() for v in bnd(pv))
-    # Path constraints at the arc junctions and inside the arcs, not at t = 0 and
-    # t = T: there the initial and terminal conditions rule, and a path bound
-    # that duplicates one of them (v(T) <= 0 beside v(T) = 0) would make the
-    # constraint Jacobian rank deficient. End-point values are checked after.
-    for k in range(K):
-        for j in range(interior_samples + 1):
-            if j == 0 and k == 0:
+def _repair(st: ArcStructure, attempt: Any, err: SolveError, short: float) -> RefinedSwitching:
+    """Retry without one short arc at a time (a grid artefact, e.g. the zig-zag of the
+    transcription next to a boundary arc); keep the best success, else re-raise ``err``."""
+    best: RefinedSwitching | None = None
+    tried = []
+    for j, s in enumerate(st.per_control):
+        for i, a in enumerate(s.arcs):
+            if a.duration > short or len(s.arcs) < 2:
                 continue
-            zj = z if j == 0 else propagate(k, z, tau[k] * j / (interior_samples + 1))
-            if H is not None:
-                add("path", H(zj[:nx], values[k], pv), plo, phi)
-        z = propagate(k, z, tau[k])
-    xT = z[:nx]
-    T = ca.sum1(tau)
-    if pr.initial:
-        G0 = ca.Function("G0", [pr.x, pr.p], [ca.vertcat(*[c.expr for c in pr.initial])])
-        b0 = ca.Function("b0", [pr.p], [ca.vertcat(*[c.lower for c in pr.initial]),
-                                        ca.vertcat(*[c.upper for c in pr.initial])])
-        lo, hi = (np.array(v, dtype=float).ravel() for v in b0(pv))
-        add("initial", G0(x0, pv), lo, hi)
-    if pr.terminal:
-        GT = ca.Function("GT", [pr.x, pr.T, pr.p],
-                         [ca.vertcat(*[c.expr for c in pr.terminal])])
-        bT = ca.Function("bT", [pr.p], [ca.vertcat(*[c.lower for c in pr.terminal]),
-                                        ca.vertcat(*[c.upper for c in pr.terminal])])
-        lo, hi = (np.array(v, dtype=float).ravel() for v in bT(pv))
-        add("terminal", GT(xT, T, pv), lo, hi)
-    if not pr.time_free:
-        add("final_time", T, pr.T_bounds[0], pr.T_bounds[0])
-    mayer = ca.Function("phi", [pr.x, pr.T, pr.p], [pr.mayer])
-    J = mayer(xT, T, pv) + (z[nx] if z.numel() > nx else 0)
-    w = ca.vertcat(tau, x0)
-    nlp = {"x": w, "f": J, "g": ca.vertcat(*g)}
-    opts = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})}, "print_time": False,
-            "error_on_fail": False}
-    solver = ca.nlpsol("refine", "ipopt", nlp, opts)
-    lbw = np.r_[np.zeros(K), -np.inf * np.ones(nx)]
-    ubw = np.r_[np.full(K, T_max), np.inf * np.ones(nx)]
-    w0 = np.r_[np.maximum(durs, 1e-6), sol.x[0]]
-    t0 = time.perf_counter()
-    res = solver(x0=w0, lbx=lbw, ubx=ubw, lbg=np.concatenate(lbg), ubg=np.concatenate(ubg))
-    elapsed = time.perf_counter() - t0
-    stats = solver.stats()
-    wopt = np.array(res["x"]).ravel()
-    out_fn = ca.Function("out", [w], [xT, T])
-    xT_v, T_v = (np.array(v, dtype=float).ravel() for v in out_fn(wopt))
-    end_violation = 0.0
-    if H is not None:
-        for xe, ue in ((wopt[K:], values[0]), (xT_v, values[-1])):
-            hv = np.array(H(xe, ue, pv), dtype=float).ravel()
-            end_violation = max(end_violation, float(np.max(np.r_[plo - hv, hv - phi, 0.0])))
-    result = RefinedSwitching(
-        problem=pr, params=dict(sol.params), control=st.control, kinds=kinds, values=values,
-        durations=wopt[:K], T=float(T_v[0]), objective=float(res["f"]), x0=wopt[K:],
-        xT=xT_v, exact=exact, status=str(stats["return_status"]),
-        iterations=int(stats["iter_count"]), solve_time=elapsed,
-        transcribed_objective=sol.objective, lam_g=np.array(res["lam_g"]).ravel(),
-        blocks=blocks, end_path_violation=end_violation)
-    if not stats["success"]:
-        cls = InfeasibleError if "Infeasible" in result.status else SolveError
-        raise cls(result.status, result, f"switching-time refinement failed: {result.status}")
-    return result
+            tried.append(f"{s.control} arc {i} ({a.kind}, {a.duration:.3g} long)")
+            try:
+                r = attempt(_without_arc(st, j, i))
+            except SolveError:
+                continue
+            if best is None or r.objective < best.objective:
+                best = r
+                best.notes.append(f"the detected structure failed ({err.status}); refined "
+                                  f"without {tried[-1]}, a transcription artefact")
+    if best is None:
+        raise err
+    return best
+
+
+def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np.ndarray,
+                     x0: np.ndarray, params: dict[str, float], *,
+                     transcribed_objective: float = math.nan, interior_samples: int = 16,
+                     ipopt_options: dict | None = None, tol: float = DEFAULT_TOL,
+                     fast: bool = True, max_rebuilds: int = 4) -> RefinedSwitching:
+    """Refine a given interval structure from a guess of durations and initial state.
+
+    The workhorse of :func:`refine_switching`, usable without a transcription
+    (e.g. to re-solve a known structure for new parameter values).
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one :class:`Mode` per control.
+    durations : ndarray
+        Guessed interval lengths (at least 1e-6 each is used).
+    x0 : ndarray
+        Guessed initial state.
+    params : dict
+        A value for every parameter.
+    transcribed_objective : float
+        Recorded in the result (NaN when there is no transcription).
+    interior_samples : int
+        Path constraints are imposed at about this many points inside each interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`REFINE_IPOPT`.
+    tol : float
+        Relative accuracy required of the RK8 intervals' end states.
+    fast : bool
+        Try the Newton fast path first (see :meth:`SwitchingNLP.newton`).
+    max_rebuilds : int
+        How often the step counts may be doubled to meet ``tol``.
+
+    Returns
+    -------
+    RefinedSwitching
+
+    Raises
+    ------
+    SolveError, InfeasibleError
+        If Ipopt fails, or the accuracy is not reached after ``max_rebuilds``.
+    """
+    pv = np.array([float(params[k]) for k in problem.param_names])
+    durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)
+    need = required_substeps(problem, modes, pv, durations, x0, interior_samples, tol)
+    w0 = np.r_[durations, x0]
+    notes: list[str] = []
+    warm: tuple[np.ndarray, np.ndarray] | tuple[None, None] = (None, None)
+    for _ in range(max_rebuilds + 1):
+        nlp = switching_nlp(problem, modes, need, interior_samples, ipopt_options)
+        fast_res = nlp.newton(pv, w0) if fast else None
+        res = fast_res if fast_res is not None else nlp.solve(pv, w0, *warm)
+        ok, err, bad = nlp.accuracy(res["w"], pv, tol)
+        if ok or not res["success"]:
+            break
+        notes.append(f"interval(s) {bad} needed more RK8 steps than {nlp.substeps} "
+                     f"(error {err:.1e} > {tol:g}); re-solved")
+        need = tuple(2 * n if k in bad else n for k, n in enumerate(nlp.substeps))
+        w0, warm = res["w"], (res["lam_g"], res["lam_x"])
+    out = _result(problem, nlp, res, pv, params, transcribed_objective, err, notes)
+    if not res["success"]:
+        cls = InfeasibleError if "Infeasible" in out.status else SolveError
+        raise cls(out.status, out, f"switching-time refinement failed: {out.status}")
+    if not ok:
+        raise SolveError("Integration_Accuracy_Not_Reached", out,
+                         f"switching-time refinement: RK8 error {err:.1e} above tol {tol:g} "
+                         f"after {max_rebuilds} rebuilds")
+    return out
+
+
+def _result(pr: OptimalControlProblem, nlp: SwitchingNLP, res: dict, pv: np.ndarray,
+            params: dict, transcribed_objective: float, err: float,
+            notes: list[str]) -> RefinedSwitching:
+    w = res["w"]
+    K = nlp.K
+    xT, T, J, _ = nlp.outputs(w, pv)
+    single = pr.nu == 1
+    values, kinds = [], []
+    for modes in nlp.modes:
+        vals = []
+        for name, m in zip(pr.control_names, modes, strict=True):
+            lo, hi = control_bounds_at(pr, name, params)
+            vals.append(hi if m.kind == "max" else lo if m.kind == "min" else math.nan)
+        values.append(vals[0] if single else tuple(vals))
+        kinds.append(modes[0].kind if single else tuple(m.kind for m in modes))
+    tiny = [k for k in range(K) if w[k] <= 1e-10 * max(T, 1.0)]
+    if tiny:
+        notes = [*notes, f"interval(s) {tiny} shrank to zero length: those arcs are not needed"]
+    end_viol = 0.0
+    if pr.path:
+        fn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
+                                                   ca.vertcat(*[c.lower for c in pr.path]),
+                                                   ca.vertcat(*[c.upper for c in pr.path])])
+        for xe, dyn in ((w[K:], nlp.dyns[0]), (xT, nlp.dyns[-1])):
+            ue = np.array(dyn.u_fn(xe, pv), dtype=float).ravel()
+            hv, lo_, hi_ = (np.array(v, dtype=float).ravel() for v in fn(xe, ue, pv))
+            end_viol = max(end_viol, float(np.max(np.r_[lo_ - hv, hv - hi_, 0.0])))
+    return RefinedSwitching(
+        problem=pr, params=dict(params), control=pr.control_names[0], kinds=kinds,
+        values=values, durations=w[:K].copy(), T=T, objective=J, x0=w[K:].copy(), xT=xT,
+        exact=all(nlp.exact), status=res["status"], iterations=res["iterations"],
+        solve_time=res["time"], transcribed_objective=transcribed_objective,
+        lam_g=res["lam_g"], blocks=nlp.blocks, end_path_violation=end_viol, modes=nlp.modes,
+        controls=tuple(pr.control_names), integration_error=err, path=res["path"],
+        notes=list(notes), build_time=nlp.build_time, nlp=nlp, w=w, lam_x=res["lam_x"])

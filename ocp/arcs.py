@@ -1,0 +1,551 @@
+"""Arc structure of a transcribed solution: bang, boundary and interior arcs per control.
+
+:func:`detect_arcs` labels each shooting interval of one control by where the
+control sits (upper bound ``"max"``, lower bound ``"min"``, or strictly
+inside) and merges them into arcs. An interior run of at most
+``max_transition`` intervals between two different bang arcs is the switch
+(its time is estimated from the interval's average control). A longer
+interior run on which a path constraint is active at every node is a
+**boundary arc** (``"boundary"``, with the constraint and the limit it sits
+at): there the control is whatever keeps the state on the constraint. Any
+other interior run stays ``"interior"`` (a singular or free arc: not
+refinable by switching times).
+
+:func:`detect_structure` does this for every control and merges the switch
+events of all controls into one list of intervals (an :class:`ArcStructure`),
+which is what the refinement's unknowns are: the durations of the intervals
+between consecutive switch events of any control.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Protocol, cast
+
+import casadi as ca
+import numpy as np
+
+from .flows import Mode
+from .problem import OptimalControlProblem
+from .solution import Solution
+
+BANG = ("max", "min")
+
+
+class TranscribedSolution(Protocol):
+    """What this package reads of an :class:`ocp.Solution` (which sets these attributes
+    dynamically, so type checkers cannot see them on the class)."""
+
+    problem: OptimalControlProblem
+    transcription: Any
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    T: float
+    N: int
+    params: dict[str, float]
+    multipliers: dict[str, np.ndarray]
+    objective: float
+
+    def control(self, name: str) -> np.ndarray:
+        """The column of control ``name``."""
+        ...
+
+    def evaluate(self, expr: ca.SX) -> np.ndarray:
+        """An expression of (x, u, p) at every node."""
+        ...
+
+
+SolutionLike = Solution | TranscribedSolution
+"""A transcribed solution, as passed in (``Solution``) or as read (the protocol)."""
+
+
+def transcribed(sol: SolutionLike) -> TranscribedSolution:
+    """``sol`` typed by :class:`TranscribedSolution` (no conversion)."""
+    return cast(TranscribedSolution, sol)
+
+
+@dataclass
+class Arc:
+    """A maximal interval where one control sits at a bound, on a constraint, or inside.
+
+    Attributes
+    ----------
+    kind : {"max", "min", "boundary", "interior"}
+    start, end : float
+    active : tuple of str
+        Path constraints active at every node of the arc.
+    constraint, side : str or None
+        On a boundary arc, the constraint held and its limit (``"lower"``/``"upper"``).
+    """
+
+    kind: str
+    start: float
+    end: float
+    active: tuple[str, ...] = ()
+    constraint: str | None = None
+    side: str | None = None
+
+    @property
+    def duration(self) -> float:
+        """``end - start``."""
+        return self.end - self.start
+
+    def mode_key(self) -> tuple[str, str | None, str | None]:
+        """``(kind, constraint, side)``: arcs with equal keys merge."""
+        return (self.kind, self.constraint, self.side)
+
+    @property
+    def mode(self) -> Mode:
+        """The arc as a refinement :class:`~ocp.flows.Mode` (bang or boundary arcs only)."""
+        if self.kind == "interior":
+            raise ValueError("an interior (singular or free) arc has no refinement mode")
+        return Mode(self.kind, self.constraint, self.side)
+
+
+@dataclass
+class SwitchingStructure:
+    """Arcs of one control, and whether they are all bang arcs."""
+
+    control: str
+    arcs: list[Arc]
+    lower: float
+    upper: float
+
+    @property
+    def kinds(self) -> list[str]:
+        """The arcs' kinds in order."""
+        return [a.kind for a in self.arcs]
+
+    @property
+    def bang_bang(self) -> bool:
+        """Every arc at a bound (no boundary and no interior arc)."""
+        return all(a.kind in BANG for a in self.arcs)
+
+    @property
+    def refinable(self) -> bool:
+        """Every arc is a bang or a boundary arc: switching-time refinement applies."""
+        return all(a.kind != "interior" for a in self.arcs)
+
+    @property
+    def switch_times(self) -> list[float]:
+        """Times between consecutive arcs."""
+        return [a.end for a in self.arcs[:-1]]
+
+    def without_trailing_constrained(self) -> SwitchingStructure:
+        """Drop a final non-bang arc on which a path (state) constraint is active.
+
+        On such an arc the control is whatever keeps the state on its
+        constraint, not a bang. Dropping it refines the problem whose final
+        time is the end of the last bang arc, which is the right question when
+        the terminal conditions already account for the constrained tail (as
+        the soft landing's body-arrest condition does).
+        """
+        last = self.arcs[-1]
+        if len(self.arcs) > 1 and last.kind not in BANG and last.active:
+            return SwitchingStructure(self.control, self.arcs[:-1], self.lower, self.upper)
+        return self
+
+
+@dataclass
+class Interval:
+    """An interval between consecutive switch events of any control, with each control's mode."""
+
+    start: float
+    end: float
+    modes: tuple[Mode, ...]
+
+    @property
+    def duration(self) -> float:
+        """``end - start``."""
+        return self.end - self.start
+
+
+@dataclass
+class ArcStructure:
+    """The arc structure of every control, merged into intervals.
+
+    Attributes
+    ----------
+    controls : tuple of str
+    per_control : tuple of SwitchingStructure
+        One per control.
+    intervals : list of Interval
+        Between consecutive switch events of any control; the refinement's unknowns
+        are their durations.
+    """
+
+    controls: tuple[str, ...]
+    per_control: tuple[SwitchingStructure, ...]
+    intervals: list[Interval] = field(default_factory=list)
+
+    @property
+    def modes(self) -> tuple[tuple[Mode, ...], ...]:
+        """Per interval, the mode of every control."""
+        return tuple(iv.modes for iv in self.intervals)
+
+    @property
+    def kinds(self) -> list[tuple[str, ...]]:
+        """Per interval, the kind of every control."""
+        return [tuple(m.kind for m in iv.modes) for iv in self.intervals]
+
+    @property
+    def durations(self) -> list[float]:
+        """Interval lengths."""
+        return [iv.duration for iv in self.intervals]
+
+    @property
+    def switch_times(self) -> list[float]:
+        """Switch events of any control, in order."""
+        return [iv.end for iv in self.intervals[:-1]]
+
+    @property
+    def bang_bang(self) -> bool:
+        """Every control bang-bang."""
+        return all(s.bang_bang for s in self.per_control)
+
+    @property
+    def refinable(self) -> bool:
+        """Every arc of every control is a bang or boundary arc."""
+        return all(s.refinable for s in self.per_control)
+
+    @property
+    def T(self) -> float:
+        """End of the last interval."""
+        return self.intervals[-1].end if self.intervals else 0.0
+
+    @classmethod
+    def from_controls(cls, structures: list[SwitchingStructure] | tuple[SwitchingStructure, ...],
+                      merge_tol: float = 1e-12) -> ArcStructure:
+        """Merge per-control arcs into intervals between the switch events of all controls.
+
+        Events of different controls closer than ``merge_tol * T`` are one event.
+        When some control has an interior (singular or free) arc there are no
+        intervals (``refinable`` is False).
+        """
+        structures = tuple(structures)
+        names = tuple(s.control for s in structures)
+        if not all(s.refinable for s in structures):
+            return cls(names, structures, [])  # interior arcs: no refinement intervals
+        T = max(s.arcs[-1].end for s in structures)
+        ev = sorted({t for s in structures for t in s.switch_times})
+        events: list[float] = []
+        for t in ev:
+            if not events or t - events[-1] > merge_tol * max(T, 1.0):
+                events.append(t)
+        edges = [0.0, *events, T]
+        intervals: list[Interval] = []
+        for a, b in zip(edges[:-1], edges[1:], strict=True):
+            mid = 0.5 * (a + b)
+            modes = tuple(_arc_at(s, mid).mode for s in structures)
+            if intervals and intervals[-1].modes == modes:
+                intervals[-1].end = b
+            else:
+                intervals.append(Interval(a, b, modes))
+        return cls(names, structures, intervals)
+
+    @classmethod
+    def from_modes(cls, controls: tuple[str, ...], modes: list[tuple[Mode, ...]],
+                   durations: list[float]) -> ArcStructure:
+        """A structure given directly by interval modes and durations (a guess)."""
+        edges = np.r_[0.0, np.cumsum(durations)]
+        intervals = [Interval(float(edges[k]), float(edges[k + 1]), tuple(m))
+                     for k, m in enumerate(modes)]
+        per = []
+        for j, name in enumerate(controls):
+            arcs: list[Arc] = []
+            for iv in intervals:
+                m = iv.modes[j]
+                if arcs and arcs[-1].mode == m:
+                    arcs[-1].end = iv.end
+                else:
+                    arcs.append(Arc(m.kind, iv.start, iv.end, (), m.constraint, m.side))
+            per.append(SwitchingStructure(name, arcs, np.nan, np.nan))
+        return cls(tuple(controls), tuple(per), intervals)
+
+
+def _arc_at(s: SwitchingStructure, t: float) -> Arc:
+    for a in s.arcs:
+        if t <= a.end:
+            return a
+    return s.arcs[-1]
+
+
+def control_bounds_at(problem: OptimalControlProblem, name: str,
+                      params: dict[str, float]) -> tuple[float, float]:
+    """Numeric ``(lower, upper)`` bounds of control ``name`` at parameter values ``params``.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    name : str
+        A control's name.
+    params : dict
+        A value for every parameter of the problem.
+
+    Returns
+    -------
+    (float, float)
+    """
+    lo, hi = problem.control_bounds[name]
+    f = ca.Function("b", [problem.p], [lo, hi])
+    pv = [params[k] for k in problem.param_names]
+    a, b = (float(v) for v in f(pv))
+    return a, b
+
+
+def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Which path constraints sit at which limit at every node.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed solution.
+    tol : float
+        Relative distance to a limit that counts as at it.
+
+    Returns
+    -------
+    at_lower, at_upper : bool arrays (N+1, n_path)
+        Within ``tol * max(1, |value|)`` of the lower (upper) limit.
+    """
+    tsol = transcribed(sol)
+    pr = tsol.problem
+    n = tsol.N + 1
+    if not pr.path:
+        return np.zeros((n, 0), dtype=bool), np.zeros((n, 0), dtype=bool)
+    pv = [tsol.params[k] for k in pr.param_names]
+    lows, ups = [], []
+    for c in pr.path:
+        vals = tsol.evaluate(c.expr)
+        lo, hi = (float(v) for v in ca.Function("b", [pr.p], [c.lower, c.upper])(pv))
+        scale = tol * np.maximum(1.0, np.abs(vals))
+        lows.append(np.abs(vals - lo) <= scale)
+        ups.append(np.abs(vals - hi) <= scale)
+    return np.column_stack(lows), np.column_stack(ups)
+
+
+def active_path_constraints(sol: SolutionLike, tol: float) -> np.ndarray:
+    """Which path constraints are active (at either limit) at every node.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed solution.
+    tol : float
+        As in :func:`path_activity`.
+
+    Returns
+    -------
+    ndarray of bool (N+1, n_path)
+    """
+    tsol = transcribed(sol)
+    lo, up = path_activity(tsol, tol)
+    return lo | up
+
+
+def _runs(labels: list[str]) -> list[list]:
+    runs: list[list] = []  # [label, first interval, last interval]
+    for k, lb in enumerate(labels):
+        if runs and runs[-1][0] == lb:
+            runs[-1][2] = k
+        else:
+            runs.append([lb, k, k])
+    return runs
+
+
+def _clusters(active: np.ndarray, max_gap: int) -> list[tuple[int, int, int]]:
+    """``(first node, last node, active count)`` of groups of active nodes whose
+    gaps are at most ``max_gap`` inactive nodes."""
+    idx = np.flatnonzero(active)
+    out: list[tuple[int, int, int]] = []
+    for k in idx.tolist():
+        if out and k - out[-1][1] <= max_gap + 1:
+            out[-1] = (out[-1][0], k, out[-1][2] + 1)
+        else:
+            out.append((k, k, 1))
+    return out
+
+
+def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_gap: int,
+                     min_nodes: int) -> None:
+    """Relabel as ``"boundary:<i>:<side>"`` the intervals between the first and the last
+    node of every cluster of at least ``min_nodes`` nodes where path constraint i sits at
+    one limit (gaps of ``max_gap`` nodes allowed: a transcription zig-zags along a
+    constraint of relative degree two), unless the control sits at one bound throughout."""
+    at_lo, at_up = path_activity(sol, tol)
+    for i in range(at_lo.shape[1]):
+        for side, act in (("lower", at_lo[:, i]), ("upper", at_up[:, i])):
+            for a, b, count in _clusters(act, max_gap):
+                span = lab[a:b]
+                if count < min_nodes or b - a < 2 or any(x.startswith("boundary") for x in span):
+                    continue
+                if len(set(span)) == 1 and span[0] in BANG:
+                    continue  # a bang arc along the constraint
+                lab[a:b] = [f"boundary:{i}:{side}"] * (b - a)
+
+
+def _absorb_end_transitions(runs: list[list], max_transition: int) -> None:
+    """A short interior run at either end next to another arc is that arc (the grid
+    cannot end the arc exactly on a node)."""
+    for end in (0, -1):
+        nb = 1 if end == 0 else -2
+        if (len(runs) > 1 and runs[end][0] == "interior" and runs[nb][0] != "interior"
+                and runs[end][2] - runs[end][1] + 1 <= max_transition):
+            if end == 0:
+                runs[1][1] = runs[0][1]
+            else:
+                runs[-2][2] = runs[-1][2]
+            del runs[end]
+
+
+def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h: float, lo: float,
+                    hi: float, max_transition: int) -> list[Arc]:
+    names = [c.name for c in sol.problem.path]
+    arcs: list[Arc] = []
+    for i, (label, a, b) in enumerate(runs):
+        start = a * h if not arcs else arcs[-1].end
+        if (label == "interior" and 0 < i < len(runs) - 1 and b - a + 1 <= max_transition
+                and runs[i - 1][0] != "interior" and runs[i + 1][0] != "interior"
+                and runs[i - 1][0] != runs[i + 1][0]):
+            # the switch lies inside: split by the average control
+            _split_transition(arcs, runs, i, u, h, lo, hi)
+            continue
+        if label.startswith("boundary"):
+            _, ci, side = label.split(":")
+            arcs.append(Arc("boundary", start, (b + 1) * h, (), names[int(ci)], side))
+        else:
+            arcs.append(Arc(label, start, (b + 1) * h))
+    merged: list[Arc] = []
+    for arc in arcs:
+        if merged and merged[-1].mode_key() == arc.mode_key():
+            merged[-1].end = arc.end
+        else:
+            merged.append(arc)
+    return merged
+
+
+def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, h: float,
+                      lo: float, hi: float) -> None:
+    """Place the switch inside transition run i (its previous arc is ``arcs[-1]``).
+
+    Between two bang arcs the switch splits the interval by its average control.
+    Between a boundary and a bang arc, an average outside the range of the
+    boundary control (the mean of its two nearest intervals) and the bang value
+    means a short arc of the opposite bang lies inside: it is inserted, next
+    to the boundary arc, with the length that reproduces the average.
+    """
+    prev, nxt = runs[i - 1], runs[i + 1]
+    _, a, b = runs[i]
+    n = b - a + 1
+    avg = float(np.mean(u[a:b + 1]))
+    val = {"max": hi, "min": lo}
+    if prev[0] in BANG and nxt[0] in BANG:
+        ua, ub = val[prev[0]], val[nxt[0]]
+        theta = float(np.clip((avg - ub) / (ua - ub), 0.0, 1.0))
+        arcs[-1].end = (a + theta * n) * h
+        return
+    bang, bnd = (nxt, prev) if nxt[0] in BANG else (prev, nxt)
+    ub = float(np.mean(u[bnd[2] - 1:bnd[2] + 1] if bnd is prev else u[bnd[1]:bnd[1] + 2]))
+    v = val.get(bang[0], ub)
+    margin = 0.05 * (hi - lo)
+    if bang[0] not in BANG or min(ub, v) - margin <= avg <= max(ub, v) + margin:
+        arcs[-1].end = (a + 0.5 * n) * h
+        return
+    other = "min" if bang[0] == "max" else "max"
+    theta = float(np.clip((v - avg) / (v - val[other]), 0.05, 0.95))
+    if bnd is prev:  # boundary, other, bang
+        arcs[-1].end = a * h
+        arcs.append(Arc(other, a * h, (a + theta * n) * h))
+    else:  # bang, other, boundary
+        arcs[-1].end = (a + (1 - theta) * n) * h
+        arcs.append(Arc(other, arcs[-1].end, (b + 1) * h))
+
+
+def _label_active(sol: TranscribedSolution, arcs: list[Arc], h: float, tol: float) -> None:
+    """Fill ``active``: the path constraints active at every node inside each arc."""
+    pr = sol.problem
+    act = active_path_constraints(sol, tol)
+    for arc in arcs:
+        k0 = int(round(arc.start / h)) if h > 0 else 0
+        k1 = max(k0 + 1, int(round(arc.end / h)))
+        nodes = act[k0 + 1:k1] if k1 - k0 > 1 else act[k0:k1]
+        arc.active = tuple(c.name for i, c in enumerate(pr.path)
+                           if nodes.shape[0] and nodes[:, i].all())
+        if arc.constraint is not None and arc.constraint not in arc.active:
+            arc.active = (arc.constraint, *arc.active)
+
+
+def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4,
+                max_transition: int = 1, max_gap: int = 1,
+                min_boundary_nodes: int = 3) -> SwitchingStructure:
+    """Bang, boundary and interior arcs of one control of a transcribed solution.
+
+    Parameters
+    ----------
+    sol : Solution
+    control : str, optional
+        Which control (default: the first).
+    tol : float
+        An interval is at a bound when within ``tol * max(1, |bound|)`` of it;
+        a path constraint is active at a node when within ``tol * max(1, |value|)``
+        of a limit.
+    max_transition : int
+        Interior runs of at most this many intervals between two different
+        arcs are read as the switch (the control averages both bounds over the
+        interval that contains the switching time); such runs at either end of
+        the horizon are read as the neighbouring arc.
+    max_gap, min_boundary_nodes : int
+        A boundary arc spans a group of at least ``min_boundary_nodes`` nodes at
+        which one path constraint sits at one limit, with gaps of at most
+        ``max_gap`` nodes (a transcription zig-zags along a constraint of
+        relative degree two), unless the control sits at one bound throughout.
+    """
+    tsol = transcribed(sol)
+    pr = tsol.problem
+    name = control or pr.control_names[0]
+    lo, hi = control_bounds_at(pr, name, tsol.params)
+    u = tsol.control(name)
+    h = tsol.T / tsol.N
+    at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
+    at_lo = np.isfinite(lo) & (np.abs(u - lo) <= tol * max(1.0, abs(lo)))
+    lab = np.where(at_hi, "max", np.where(at_lo, "min", "interior")).tolist()
+    _boundary_labels(tsol, lab, tol, max_gap, min_boundary_nodes)
+    runs = _runs(lab)
+    _absorb_end_transitions(runs, max_transition)
+    arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, max_transition)
+    arcs[-1].end = tsol.T
+    _label_active(tsol, arcs, h, tol)
+    return SwitchingStructure(name, arcs, lo, hi)
+
+
+def detect_structure(sol: SolutionLike, tol: float = 1e-4, max_transition: int = 1,
+                     max_gap: int = 1, min_boundary_nodes: int = 3,
+                     merge_tol: float = 1e-12) -> ArcStructure:
+    """Arcs of every control (:func:`detect_arcs`) merged into one :class:`ArcStructure`.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed solution.
+    tol : float
+        As in :func:`detect_arcs`.
+    max_transition : int
+        As in :func:`detect_arcs`.
+    max_gap : int
+        As in :func:`detect_arcs`.
+    min_boundary_nodes : int
+        As in :func:`detect_arcs`.
+    merge_tol : float
+        Switch events of different controls closer than ``merge_tol * T`` are one event.
+
+    Returns
+    -------
+    ArcStructure
+        ``intervals`` is empty when some control has an interior (singular or
+        free) arc.
+    """
+    tsol = transcribed(sol)
+    per = [detect_arcs(tsol, name, tol, max_transition, max_gap, min_boundary_nodes)
+           for name in tsol.problem.control_names]
+    return ArcStructure.from_controls(per, merge_tol)
