@@ -19,6 +19,7 @@ from scipy.integrate import solve_ivp
 
 from ocp.pmp import CERTIFIED, INCONCLUSIVE, certify
 from ocp.switching import detect_arcs, refine_switching
+from softlanding import Robot
 from softlanding.landing import STROKE, arrest_force, solve_landing
 
 R_M, U_MAX = 5.0, 8.2
@@ -54,7 +55,7 @@ def replay(ref, s):
 
 @pytest.mark.parametrize("s,v0", CASES)
 def test_short_stroke_landing_refines_with_boundary_arcs(s, v0):
-    tr = solve_landing(v0, R_M, s, U_MAX, refine=False, replay=False)
+    tr = solve_landing(v0, Robot(r_m=R_M, s=s, u_max=U_MAX), refine=False, replay=False)
     sol = tr.transcribed
     st = detect_arcs(sol).without_trailing_constrained()
     assert st.refinable, st.kinds
@@ -95,7 +96,7 @@ def test_short_stroke_landing_refines_with_boundary_arcs(s, v0):
 def test_short_stroke_refined_depth_is_the_limit_of_finer_transcriptions():
     depths = []
     for nodes in (100, 200, 400):
-        sol = solve_landing(-10.0, R_M, 0.5, U_MAX, nodes=nodes, refine=False,
+        sol = solve_landing(-10.0, Robot(r_m=R_M, s=0.5, u_max=U_MAX), nodes=nodes, refine=False,
                             replay=False).transcribed
         ref = refine_switching(sol, detect_arcs(sol).without_trailing_constrained())
         depths.append((-sol.x[-1, 2], -ref.xT[2]))
