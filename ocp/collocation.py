@@ -17,6 +17,7 @@ interval function is mapped over the N intervals.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -195,7 +196,7 @@ class CollocationPhase(PhaseDiscretization):
                    t0: float, T: float) -> np.ndarray:
         x_mesh, _ = sample(t0 + (T - t0) * self.tau)
         x_c, u_c = sample(t0 + (T - t0) * self.tau_c)
-        parts = [[T]] if self.nT else []
+        parts: list[Any] = [[T]] if self.nT else []
         parts += [x_mesh.ravel(), u_c.ravel()]
         parts += [[t0]] if self.nt0 else []
         parts += [x_c.ravel()]

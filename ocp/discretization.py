@@ -122,7 +122,7 @@ class PhaseDiscretization:
             if tm.T_free else ([], [], [])
         t0 = ([ca.SX(tm.t0_bounds[0])], [ca.SX(tm.t0_bounds[1])], [ca.SX(tm.t0_guess)]) \
             if tm.t0_free else ([], [], [])
-        return T + t0  # type: ignore[return-value]
+        return T + t0
 
     def _unpack_times(self, wb: np.ndarray, it0: int) -> tuple[float, float]:
         tm = self.times

@@ -29,6 +29,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from numpy import ndarray
 
 from .errors import ProblemDefinitionError
 from .problem import INF, Bound, OptimalControlProblem, Shared
@@ -185,7 +186,7 @@ class MultiPhaseProblem:
     def v(self) -> ca.SX:
         return self._shared.v
 
-    def param_vector(self, params: Mapping[str, float]) -> np.ndarray:
+    def param_vector(self, params: Mapping[str, float]) -> ndarray:
         """Parameter values in declaration order, checked (see
         :meth:`OptimalControlProblem.param_vector`)."""
         return self._anchor.param_vector(params)

@@ -24,8 +24,7 @@ import numpy as np
 from .compiled import CompiledPhase
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
 from .errors import InfeasibleError, ProblemDefinitionError, SolveError
-from .guess import control_guess, diagnose_nonfinite, raise_if_nonfinite, state_ends, \
-    variable_guess
+from .guess import control_guess, diagnose_nonfinite, raise_if_nonfinite, state_ends, variable_guess
 from .multiphase import MultiPhaseProblem, as_multiphase
 from .problem import OptimalControlProblem
 from .solution import Solution
@@ -201,10 +200,11 @@ class Transcription:
             if warm:
                 ipopt.update(warm_start_init_point="yes", warm_start_bound_push=1e-9,
                              warm_start_mult_bound_push=1e-9, mu_init=1e-6)
-            opts = {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
-                    "expand": self.expand}
+            opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False,
+                                    "error_on_fail": False, "expand": self.expand}
             name = f"{self.multiphase.name}_{self.method}"
-            self._solvers[warm] = ca.nlpsol(name, "ipopt", self._nlp, opts)
+            nlp: Any = self._nlp
+            self._solvers[warm] = ca.nlpsol(name, "ipopt", nlp, opts)
         return self._solvers[warm]
 
     # ------------------------------------------------------------------ solve

@@ -42,6 +42,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from numpy import ndarray
 
 from .errors import ProblemDefinitionError
 from .symbols import (
@@ -290,11 +291,12 @@ class OptimalControlProblem:
                 raise ProblemDefinitionError(f"no dynamics for state(s) {sorted(missing)}")
             exprs = {k: to_sx(rhs[k], f"dynamics of {k!r}") for k in self.state_names}
         else:
-            vec = ca.vertcat(*rhs) if isinstance(rhs, list | tuple) else to_sx(rhs, "dynamics")
+            vec = (ca.vertcat(*[to_sx(r, "dynamics") for r in rhs])
+                   if isinstance(rhs, list | tuple) else to_sx(rhs, "dynamics"))
             if vec.numel() != self.nx:
                 raise ProblemDefinitionError(
                     f"dynamics has {vec.numel()} rows for {self.nx} states")
-            exprs = {k: vec[i] for i, k in enumerate(self.state_names)}
+            exprs = {k: ca.SX(vec[i]) for i, k in enumerate(self.state_names)}
         for k, e in exprs.items():
             if e.numel() != 1:
                 raise ProblemDefinitionError(f"dynamics of {k!r} must be a scalar")
@@ -643,7 +645,7 @@ class OptimalControlProblem:
         """All terminal constraints stacked (bare symbols = values at ``T``)."""
         return _stack(self.terminal)
 
-    def param_vector(self, params: Mapping[str, float]) -> np.ndarray:
+    def param_vector(self, params: Mapping[str, float]) -> ndarray:
         """The parameter values in declaration order, checked.
 
         Raises

@@ -11,6 +11,7 @@ stays cheap and no Python loop runs per interval.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -62,7 +63,8 @@ class ShootingPhase(PhaseDiscretization):
         self.iX = slice(self.nT, self.nT + nx * (N + 1))
         self.iU = slice(self.iX.stop, self.iX.stop + nu * N)
         self.it0 = self.iU.stop
-        self._samplers: dict[int, ca.Function] = {}
+        self._samplers: dict[tuple[int, int], ca.Function] = {}
+        self._rk: dict[int, ca.Function] = {}
 
     def size(self) -> int:
         return self.it0 + self.nt0
@@ -123,18 +125,21 @@ class ShootingPhase(PhaseDiscretization):
         return PhaseData(t0, T, mesh, X, U, np.vstack([U, U[-1:]]), mesh,
                          np.r_[pv, vv, t0, T])
 
-    def sampler(self, substeps: int) -> ca.Function:
-        """RK4 re-integration from a node (cached per ``substeps``)."""
-        if substeps not in self._samplers:
-            self._samplers[substeps] = rk4_interval(self.cp.ode, substeps)
-        return self._samplers[substeps]
+    def sampler(self, substeps: int, n: int) -> ca.Function:
+        """RK4 re-integration from a node, mapped over ``n`` samples (cached)."""
+        key = (substeps, n)
+        if key not in self._samplers:
+            if substeps not in self._rk:
+                self._rk[substeps] = rk4_interval(self.cp.ode, substeps)
+            self._samplers[key] = self._rk[substeps].map(n)
+        return self._samplers[key]
 
     def sample(self, data: PhaseData, t: np.ndarray,
                substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, dtype=float)
         k = segment_index(data.mesh, t)
         n = t.size
-        xs = self.sampler(substeps).map(n)(data.x[k].T, data.u[k].T, data.mesh[k][None, :],
+        xs = self.sampler(substeps, n)(data.x[k].T, data.u[k].T, data.mesh[k][None, :],
                                            (t - data.mesh[k])[None, :], data.s)[0]
         return np.array(xs, dtype=float).T.reshape(n, -1), data.u[k]
 
@@ -143,7 +148,7 @@ class ShootingPhase(PhaseDiscretization):
         mesh = t0 + (T - t0) * np.linspace(0.0, 1.0, self.N + 1)
         x, _ = sample(mesh)
         _, u = sample((mesh[:-1] + mesh[1:]) / 2)
-        parts = [[T]] if self.nT else []
+        parts: list[Any] = [[T]] if self.nT else []
         parts += [x.ravel(), u.ravel()]
         parts += [[t0]] if self.nt0 else []
         return np.concatenate([np.asarray(p, dtype=float) for p in parts])

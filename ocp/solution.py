@@ -60,6 +60,21 @@ class Solution:
         :meth:`trajectory`.
     """
 
+    phases: list[Solution]
+    problem: Any
+    transcription: Any
+    objective: float
+    status: str
+    success: bool
+    params: dict[str, float]
+    variables: dict[str, float]
+    path_violation: float
+    verified: bool | None
+    violations: dict[str, tuple[float, float]]
+    mesh_history: list[Any]
+    mesh_error: float
+    mesh_converged: bool
+
     def __init__(self, **kw: Any) -> None:
         self.__dict__.update(kw)
 
@@ -149,7 +164,7 @@ class Solution:
         if not self.is_multiphase:
             t, x, u = self.sample(max(int(n), 2))
             pr = self.problem
-            return Trajectory(t, x, u, pr.state_names, pr.control_names)
+            return Trajectory(t, x, u, tuple(pr.state_names), tuple(pr.control_names))
         return _join_phases(self.phases, n)
 
     def evaluate(self, expr: ca.SX) -> np.ndarray:
@@ -231,5 +246,6 @@ def _join_phases(phases: list[Solution], n: int) -> Trajectory:
         xs.append(X)
         us.append(U)
         idx.append(np.full(k, i))
-    return Trajectory(np.concatenate(ts), np.vstack(xs), np.vstack(us), snames, cnames,
+    return Trajectory(np.concatenate(ts), np.vstack(xs), np.vstack(us), tuple(snames),
+                      tuple(cnames),
                       phase=np.concatenate(idx))

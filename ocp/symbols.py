@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -31,7 +32,7 @@ def to_sx(value: object, what: str) -> ca.SX:
         raise ProblemDefinitionError(f"{what}: MX expressions are not supported; use the "
                                      "problem's SX symbols")
     try:
-        return ca.SX(value)
+        return ca.SX(value)  # type: ignore[call-overload]
     except (NotImplementedError, TypeError, RuntimeError) as err:
         raise ProblemDefinitionError(f"{what}: {value!r} is not a number or expression") from err
 
@@ -85,9 +86,12 @@ def finite_number(value: object, what: str) -> float:
 
 def positive_int(value: object, what: str, minimum: int = 1) -> int:
     """``value`` as an int >= ``minimum``; rejects floats (even 2.0) and bools."""
-    if isinstance(value, bool) or not hasattr(value, "__index__"):
+    if isinstance(value, bool):
         raise ProblemDefinitionError(f"{what} must be an integer, got {value!r}")
-    v = int(value.__index__())  # type: ignore[union-attr]
+    try:
+        v = operator.index(value)  # type: ignore[arg-type]
+    except TypeError:
+        raise ProblemDefinitionError(f"{what} must be an integer, got {value!r}") from None
     if v < minimum:
         raise ProblemDefinitionError(f"{what} must be >= {minimum}, got {v}")
     return v

@@ -25,6 +25,30 @@ from .errors import PathViolationError, PathViolationWarning
 VERIFY_MODES = ("warn", "raise", "off")
 
 
+def _phase_excess(ph: Any, params: dict[str, float],
+                  per_interval: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """Relative excess (rows, points) of one phase's checked rows, the times, the rows."""
+    disc = ph.discretization
+    cp = disc.cp
+    rows = [i for i in range(cp.ncheck)
+            if disc.method == "multiple_shooting" or cp.check_u_free[i]]
+    t = disc.check_points(ph.data, per_interval)
+    if not rows:
+        return np.zeros((0, t.size)), t, rows
+    x, u = disc.sample(ph.data, t)
+    vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
+                    dtype=float)[rows]
+    b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
+    lo = np.array(b[6], dtype=float).ravel()[rows, None]
+    hi = np.array(b[7], dtype=float).ravel()[rows, None]
+    with np.errstate(invalid="ignore"):
+        excess = np.maximum(np.maximum(lo - vals, vals - hi), 0.0)
+        scale = np.maximum(1.0, np.where(vals < lo, np.abs(lo), np.abs(hi)))
+        rel = np.where(np.isfinite(vals), excess / np.where(np.isfinite(scale), scale, 1),
+                       np.inf)
+    return rel, t, rows
+
+
 def path_excess(sol: Any, per_interval: int = 10) -> dict[str, tuple[float, float]]:
     """Largest relative violation of each path constraint and state bound on a fine grid.
 
@@ -44,30 +68,24 @@ def path_excess(sol: Any, per_interval: int = 10) -> dict[str, tuple[float, floa
     """
     out: dict[str, tuple[float, float]] = {}
     for ph in sol.phases:
-        disc = ph.discretization
-        cp = disc.cp
-        rows = [i for i in range(cp.ncheck)
-                if disc.method == "multiple_shooting" or cp.check_u_free[i]]
-        if not rows:
-            continue
-        t = disc.check_points(ph.data, per_interval)
-        x, u = disc.sample(ph.data, t)
-        vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
-                        dtype=float)[rows]
-        b = cp.bounds(np.array([sol.params[k] for k in cp.phase.param_names]))
-        lo = np.array(b[6], dtype=float).ravel()[rows, None]
-        hi = np.array(b[7], dtype=float).ravel()[rows, None]
-        with np.errstate(invalid="ignore"):
-            excess = np.maximum(np.maximum(lo - vals, vals - hi), 0.0)
-            scale = np.maximum(1.0, np.where(vals < lo, np.abs(lo), np.abs(hi)))
-            rel = np.where(np.isfinite(vals), excess / np.where(np.isfinite(scale), scale, 1),
-                           np.inf)
+        rel, t, rows = _phase_excess(ph, sol.params, per_interval)
         prefix = f"{ph.problem.name}: " if sol.is_multiphase else ""
         for r, i in enumerate(rows):
             j = int(np.argmax(rel[r]))
             if rel[r, j] > 0:
-                out[prefix + cp.check_names[i]] = (float(rel[r, j]), float(t[j]))
+                out[prefix + ph.discretization.cp.check_names[i]] = (float(rel[r, j]),
+                                                                     float(t[j]))
     return out
+
+
+def interval_excess(ph: Any, params: dict[str, float], per_interval: int = 10) -> np.ndarray:
+    """Largest relative path violation inside each mesh interval of one phase, shape (N,)."""
+    rel, t, _ = _phase_excess(ph, params, per_interval)
+    n = t.size - 1
+    worst = rel.max(axis=0) if rel.size else np.zeros(t.size)
+    inner = worst[:n].reshape(-1, per_interval).max(axis=1)
+    inner[-1] = max(inner[-1], worst[-1])
+    return inner
 
 
 def verify(sol: Any, mode: str, tol: float, per_interval: int) -> None:
