@@ -29,6 +29,7 @@ from .multiphase import MultiPhaseProblem, as_multiphase
 from .problem import OptimalControlProblem
 from .solution import Solution
 from .symbols import positive_int
+from .trajectory import Trajectory
 from .verify import VERIFY_MODES, verify
 
 DEFAULT_IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0, "sb": "yes",
@@ -222,15 +223,43 @@ class Transcription:
             w0 = np.array(self._guess(pv), dtype=float).ravel()
         return w0 if params is not None else np.nan_to_num(w0, posinf=0.0, neginf=0.0)
 
-    def guess_from(self, sol: Solution) -> np.ndarray:
-        """A decision vector for this transcription from a solution of another one
-        (another grid or method) of the same problem, by sampling its trajectory."""
+    def guess_from(self, sol: Solution | Trajectory) -> np.ndarray:
+        """A decision vector for this transcription from a solution of another
+        transcription (another grid or method) of the same problem, or from a
+        :class:`ocp.Trajectory` (states and controls by name, interpolated
+        linearly; a multi-phase problem needs its ``phase`` column)."""
+        if isinstance(sol, Trajectory):
+            return self._guess_from_trajectory(sol)
         if len(sol.phases) != len(self.phases):
             raise ValueError(f"the solution has {len(sol.phases)} phases, this problem "
                              f"{len(self.phases)}")
         parts = [d.guess_from(ps.at, ps.t0, ps.T) for d, ps in zip(self.phases, sol.phases,
                                                                    strict=True)]
         parts.append(np.array([sol.variables[k] for k in self.multiphase.var_names]))
+        return np.concatenate(parts)
+
+    def _guess_from_trajectory(self, traj: Trajectory) -> np.ndarray:
+        w0 = self.default_guess()
+        parts = []
+        for i, (disc, ph) in enumerate(zip(self.phases, self.multiphase.phases, strict=True)):
+            rows = np.ones(len(traj), bool) if traj.phase is None else traj.phase == i
+            if len(self.phases) > 1 and traj.phase is None:
+                raise ValueError("a guess trajectory for a multi-phase problem needs a "
+                                 "phase column")
+            t = traj.t[rows]
+            missing = [n for n in ph.state_names + ph.control_names
+                       if n not in traj.state_names + traj.control_names]
+            if missing:
+                raise ValueError(f"the guess trajectory lacks {missing}")
+
+            def sample(tq: np.ndarray, t=t, rows=rows, ph=ph) -> tuple[np.ndarray, np.ndarray]:
+                col = [np.interp(tq, t, traj[n][rows]) for n in ph.state_names]
+                ucol = [np.interp(tq, t, traj[n][rows]) for n in ph.control_names]
+                x = np.column_stack(col)
+                return x, (np.column_stack(ucol) if ucol else np.zeros((tq.size, 0)))
+
+            parts.append(disc.guess_from(sample, float(t[0]), float(t[-1])))
+        parts.append(w0[self.iV])
         return np.concatenate(parts)
 
     def _start(self, pv: np.ndarray, params: dict[str, float], guess: Any,
@@ -242,6 +271,8 @@ class Transcription:
             return {"x0": self.guess_from(warm_start)}
         if isinstance(guess, Solution):
             return {"x0": guess.w if guess.transcription is self else self.guess_from(guess)}
+        if isinstance(guess, Trajectory):
+            return {"x0": self.guess_from(guess)}
         if guess is not None:
             x0 = np.asarray(guess, dtype=float).ravel()
             if x0.shape != (self.n_w,):
@@ -280,9 +311,10 @@ class Transcription:
         ----------
         params : dict
             A value for every declared parameter (none needed if there are none).
-        guess : Solution or decision vector, optional
+        guess : Solution, Trajectory or decision vector, optional
             Primal starting point (cold start); a solution of another
-            transcription (grid, method) is resampled. Default: the default guess.
+            transcription (grid, method) or a trajectory is resampled.
+            Default: the default guess (see :mod:`ocp.guess`).
         warm_start : Solution, optional
             Start from this solution's primal and dual values (Ipopt warm start).
 

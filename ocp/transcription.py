@@ -231,7 +231,10 @@ class Collocation(Transcription):
             if emax <= tol or rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
                 break
             tr = tr.with_mesh(new, verify="off")
-            sol = tr.solve(params, guess=sol)
+            try:
+                sol = tr.solve(params, guess=sol)
+            except SolveError:  # the previous mesh's solution may mislead: start afresh
+                sol = tr.solve(params, guess=guess)
         tr.verify = self.verify
         sol.mesh_history, sol.mesh_error, sol.mesh_converged = history, emax, emax <= tol
         verify(sol, self.verify, self.verify_tol, self.verify_points)
