@@ -70,7 +70,8 @@ def bryson_denham_phases(ell: float = 1 / 9) -> MultiPhaseProblem:
     mp = MultiPhaseProblem("bryson_denham_3phase")
     a, b, c = mp.phase("rise"), mp.phase("boundary"), mp.phase("fall")
     for ph in (a, c):
-        x, v = ph.state("x", upper=ell), ph.state("v")
+        ph.state("x", upper=ell)
+        v = ph.state("v")
         u = ph.control("u")
         ph.set_dynamics({"x": v, "v": u})
         ph.minimize_integral(u**2 / 2)
@@ -111,7 +112,8 @@ def brachistochrone() -> OptimalControlProblem:
 def brachistochrone_exact() -> float:
     """The cycloid through both points: (phi - sin phi) / (1 - cos phi) = dx / dy."""
     g, dx, dy = 9.80665, 10.0, 5.0
-    phi = brentq(lambda f: (f - math.sin(f)) / (1 - math.cos(f)) - dx / dy, 1e-3, 2 * math.pi - 1e-3)
+    phi = brentq(lambda f: (f - math.sin(f)) / (1 - math.cos(f)) - dx / dy, 1e-3,
+                 2 * math.pi - 1e-3)
     r = dy / (1 - math.cos(phi))
     return phi * math.sqrt(r / g)
 
