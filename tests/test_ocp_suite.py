@@ -10,7 +10,7 @@ tolerance is 1e-7 on the states, Ipopt's bound relaxation is 1e-8).
 
 import math
 import warnings
-from functools import lru_cache
+from functools import cache
 
 import pytest
 from ocp_suite import PROBLEMS
@@ -20,7 +20,7 @@ from ocp import Collocation, MultipleShooting, PathViolationWarning
 BY_NAME = {p.name: p for p in PROBLEMS}
 
 
-@lru_cache(maxsize=None)
+@cache
 def refined(name: str):
     sp = BY_NAME[name]
     tr = Collocation(sp.build(), intervals=sp.intervals, degree=sp.degree)
