@@ -35,7 +35,8 @@ def _phase_excess(ph: Any, params: dict[str, float],
     t = disc.check_points(ph.data, per_interval)
     if not rows:
         return np.zeros((0, t.size)), t, rows
-    x, u = disc.sample(ph.data, t)
+    # re-integrate with the transcription's own RK4 step count (multiple shooting)
+    x, u = disc.sample(ph.data, t, getattr(disc, "M", 8))
     vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
                     dtype=float)[rows]
     b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
