@@ -37,7 +37,13 @@ from .multiphase import PhaseTimes
 
 
 def radau_points(d: int) -> np.ndarray:
-    """The ``d`` Legendre-Gauss-Radau points in (0, 1], the last being 1."""
+    """The ``d`` Legendre-Gauss-Radau points in (0, 1], the last being 1.
+
+    Parameters
+    ----------
+    d : int
+        Number of points (the degree).
+    """
     return np.array(ca.collocation_points(d, "radau"), dtype=float)
 
 
@@ -47,6 +53,11 @@ def collocation_matrices(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     ``C[r, j]`` is the derivative at ``c_j`` of the Lagrange polynomial of node
     ``r`` on ``[0, c_1..c_d]``; ``D[r]`` its value at 1; ``B[j]`` the integral
     over [0, 1] of the Lagrange polynomial of ``c_j`` on ``c_1..c_d``.
+
+    Parameters
+    ----------
+    c : ndarray
+        The collocation points in (0, 1].
     """
     nodes = np.r_[0.0, c]
     d = c.size
@@ -123,9 +134,11 @@ class CollocationPhase(PhaseDiscretization):
                            ["xk", "Z", "U", "t", "h", "s"], ["defect", "xend", "q", "path"])
 
     def size(self) -> int:
+        """See :meth:`ocp.discretization.PhaseDiscretization.size`."""
         return self.iZ.stop
 
     def layout(self, offset: int) -> PhaseLayout:
+        """See :meth:`ocp.discretization.PhaseDiscretization.layout`."""
         return PhaseLayout(offset if self.nT else None,
                            slice(offset + self.iX.start, offset + self.iX.stop),
                            slice(offset + self.iU.start, offset + self.iU.stop),
@@ -134,6 +147,7 @@ class CollocationPhase(PhaseDiscretization):
 
     def build(self, wb: ca.MX, P: ca.MX, V: ca.MX, ends: tuple[ca.SX, ca.SX],
               ug: ca.SX) -> PhaseNLP:
+        """See :meth:`ocp.discretization.PhaseDiscretization.build`."""
         cp, N, d, nx, nu = self.cp, self.N, self.d, self.cp.nx, self.cp.nu
         t0, T = self._times(wb, self.it0)
         X = ca.reshape(wb[self.iX], nx, N + 1)
@@ -161,6 +175,7 @@ class CollocationPhase(PhaseDiscretization):
                         ca.sum2(Q[0, :]), cons, lbw, ubw, w0)
 
     def unpack(self, wb: np.ndarray, pv: np.ndarray, vv: np.ndarray) -> PhaseData:
+        """See :meth:`ocp.discretization.PhaseDiscretization.unpack`."""
         nx, nu, N, d = self.cp.nx, self.cp.nu, self.N, self.d
         t0, T = self._unpack_times(wb, self.it0)
         X = wb[self.iX].reshape(N + 1, nx)
@@ -174,7 +189,17 @@ class CollocationPhase(PhaseDiscretization):
 
     def local(self, data: PhaseData, k: np.ndarray,
               theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """States and controls on interval ``k`` at local fractions ``theta`` in [0, 1]."""
+        """States and controls on interval ``k`` at local fractions ``theta`` in [0, 1].
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        k : ndarray of int
+            Interval of each sample.
+        theta : ndarray
+            Local fraction of each sample.
+        """
         N, d = self.N, self.d
         Zf = np.concatenate([data.raw["X"][:N, None, :],
                              data.raw["Z"].reshape(N, d, -1)], axis=1)[k]
@@ -186,6 +211,7 @@ class CollocationPhase(PhaseDiscretization):
 
     def sample(self, data: PhaseData, t: np.ndarray,
                substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """See :meth:`ocp.discretization.PhaseDiscretization.sample`."""
         t = np.asarray(t, dtype=float)
         k = segment_index(data.mesh, t)
         h = np.diff(data.mesh)[k]
@@ -194,6 +220,7 @@ class CollocationPhase(PhaseDiscretization):
 
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
                    t0: float, T: float) -> np.ndarray:
+        """See :meth:`ocp.discretization.PhaseDiscretization.guess_from`."""
         x_mesh, _ = sample(t0 + (T - t0) * self.tau)
         x_c, u_c = sample(t0 + (T - t0) * self.tau_c)
         parts: list[Any] = [[T]] if self.nT else []
@@ -203,6 +230,7 @@ class CollocationPhase(PhaseDiscretization):
         return np.concatenate([np.asarray(p, dtype=float) for p in parts])
 
     def multipliers(self, lam: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """See :meth:`ocp.discretization.PhaseDiscretization.multipliers`."""
         out = dict(lam)
         shapes = {"continuity": (self.N, self.cp.nx),
                   "collocation": (self.N * self.d, self.cp.nx),

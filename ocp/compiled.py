@@ -76,4 +76,5 @@ class CompiledPhase:
 
     @property
     def ncheck(self) -> int:
+        """Number of rows of ``check``."""
         return self.check.size1_out(0)

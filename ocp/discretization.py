@@ -68,7 +68,15 @@ class PhaseData:
 
 
 def lagrange_basis(nodes: np.ndarray, theta: np.ndarray) -> np.ndarray:
-    """Lagrange basis polynomials on ``nodes`` evaluated at ``theta``: shape (len(theta), n)."""
+    """Lagrange basis polynomials on ``nodes`` evaluated at ``theta``: shape (len(theta), n).
+
+    Parameters
+    ----------
+    nodes : ndarray
+        Interpolation nodes.
+    theta : ndarray
+        Evaluation points.
+    """
     nodes = np.asarray(nodes, dtype=float)
     theta = np.asarray(theta, dtype=float)
     out = np.ones((theta.size, nodes.size))
@@ -100,12 +108,19 @@ class PhaseDiscretization:
         self._check_maps: dict[int, ca.Function] = {}
 
     def check_map(self, n: int) -> ca.Function:
-        """The phase's check function mapped over ``n`` points (cached)."""
+        """The phase's check function mapped over ``n`` points (cached).
+
+        Parameters
+        ----------
+        n : int
+            Number of points.
+        """
         if n not in self._check_maps:
             self._check_maps[n] = self.cp.check.map(n)
         return self._check_maps[n]
 
     def size(self) -> int:
+        """Number of entries of the phase's block of ``w``."""
         raise NotImplementedError
 
     def _times(self, wb: ca.MX, it0: int) -> tuple[ca.MX, ca.MX]:
@@ -132,31 +147,90 @@ class PhaseDiscretization:
 
     def build(self, wb: ca.MX, P: ca.MX, V: ca.MX, ends: tuple[ca.SX, ca.SX],
               ug: ca.SX) -> PhaseNLP:
-        """The phase's symbolic pieces from its block ``wb`` of ``w``."""
+        """The phase's symbolic pieces from its block ``wb`` of ``w``.
+
+        Parameters
+        ----------
+        wb : MX
+            The phase's block of the decision vector.
+        P, V : MX
+            Parameters and decision variables.
+        ends : tuple of SX
+            Start and end guesses of the states (functions of the parameters).
+        ug : SX
+            Guess of the controls.
+        """
         raise NotImplementedError
 
     def layout(self, offset: int) -> PhaseLayout:
-        """Absolute positions of the block's parts, for a block starting at ``offset``."""
+        """Absolute positions of the block's parts, for a block starting at ``offset``.
+
+        Parameters
+        ----------
+        offset : int
+            Where the block starts in ``w``.
+        """
         raise NotImplementedError
 
     def unpack(self, wb: np.ndarray, pv: np.ndarray, vv: np.ndarray) -> PhaseData:
-        """Arrays of the solved block ``wb`` (parameters ``pv``, variables ``vv``)."""
+        """Arrays of the solved block ``wb`` (parameters ``pv``, variables ``vv``).
+
+        Parameters
+        ----------
+        wb : ndarray
+            The solved block.
+        pv, vv : ndarray
+            Parameter and decision-variable values.
+        """
         raise NotImplementedError
 
-    def sample(self, data: PhaseData, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """States and controls at times ``t`` (within the phase): (n, nx), (n, nu)."""
+    def sample(self, data: PhaseData, t: np.ndarray,
+               substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """States and controls at times ``t`` (within the phase): (n, nx), (n, nu).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        t : ndarray
+            Times.
+        substeps : int
+            RK4 steps per sample (multiple shooting).
+        """
         raise NotImplementedError
 
     def guess_from(self, sample: Any, t0: float, T: float) -> np.ndarray:
-        """A block of ``w`` from ``sample(t) -> (x, u)`` over ``[t0, T]``."""
+        """A block of ``w`` from ``sample(t) -> (x, u)`` over ``[t0, T]``.
+
+        Parameters
+        ----------
+        sample : callable
+            ``t -> (x (n, nx), u (n, nu))``.
+        t0, T : float
+            The phase's times.
+        """
         raise NotImplementedError
 
     def multipliers(self, lam: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Reshape the multipliers of this phase's blocks."""
+        """Reshape the multipliers of this phase's blocks.
+
+        Parameters
+        ----------
+        lam : dict
+            Multipliers by block name, flat.
+        """
         return lam
 
     def check_points(self, data: PhaseData, per_interval: int) -> np.ndarray:
-        """Times at which the path constraints are checked after a solve."""
+        """Times at which the path constraints are checked after a solve.
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        per_interval : int
+            Points per mesh interval.
+        """
         mesh = data.mesh
         frac = np.arange(per_interval) / per_interval
         inner = (mesh[:-1, None] + np.diff(mesh)[:, None] * frac[None, :]).ravel()
@@ -164,17 +238,41 @@ class PhaseDiscretization:
 
 
 def static_vector(P: ca.MX, V: ca.MX, t0: ca.MX, T: ca.MX) -> ca.MX:
-    """``s = [p; v; t0; T]`` as used by the compiled phase functions."""
+    """``s = [p; v; t0; T]`` as used by the compiled phase functions.
+
+    Parameters
+    ----------
+    P, V : MX
+        Parameters and decision variables.
+    t0, T : MX
+        The phase's initial and final times.
+    """
     return ca.vertcat(P, V, t0, T)
 
 
 def linear_guess(a: ca.SX, b: ca.SX, tau: np.ndarray) -> ca.SX:
-    """States ``a + (b - a) tau`` at normalised times ``tau``: shape (nx, len(tau))."""
+    """States ``a + (b - a) tau`` at normalised times ``tau``: shape (nx, len(tau)).
+
+    Parameters
+    ----------
+    a, b : SX
+        Start and end values (column vectors).
+    tau : ndarray
+        Normalised times in [0, 1].
+    """
     row = ca.DM(np.asarray(tau, dtype=float)).T
     return ca.mtimes(a, 1 - row) + ca.mtimes(b, row)
 
 
 def segment_index(mesh: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """Index of the mesh interval holding each time (the last interval holds the end)."""
+    """Index of the mesh interval holding each time (the last interval holds the end).
+
+    Parameters
+    ----------
+    mesh : ndarray
+        Increasing mesh times.
+    t : ndarray
+        Query times.
+    """
     k = np.searchsorted(mesh, t, side="right") - 1
     return np.clip(k, 0, len(mesh) - 2)

@@ -53,7 +53,13 @@ def _rows(cs: list[Constraint], transform) -> list[tuple[ca.SX, ca.SX, ca.SX]]:
 
 
 def midpoint(lo: ca.SX, hi: ca.SX) -> ca.SX:
-    """Midpoint of finite bounds, else 0 clipped into them (symbolic in the parameters)."""
+    """Midpoint of finite bounds, else 0 clipped into them (symbolic in the parameters).
+
+    Parameters
+    ----------
+    lo, hi : SX
+        The bounds.
+    """
     lc, hc = constant(lo), constant(hi)
     lo_fin = lc is None or math.isfinite(lc)
     hi_fin = hc is None or math.isfinite(hc)
@@ -102,7 +108,13 @@ def state_ends(ph: OptimalControlProblem,
 
 
 def control_guess(ph: OptimalControlProblem) -> ca.SX:
-    """Guess of every control (SX vector in the parameters)."""
+    """Guess of every control (SX vector in the parameters).
+
+    Parameters
+    ----------
+    ph : OptimalControlProblem
+        The phase.
+    """
     out = []
     for name in ph.control_names:
         lo, hi = ph.control_bounds[name]
@@ -112,7 +124,13 @@ def control_guess(ph: OptimalControlProblem) -> ca.SX:
 
 
 def variable_guess(shared: Shared) -> ca.SX:
-    """Guess of every decision variable (SX vector in the parameters)."""
+    """Guess of every decision variable (SX vector in the parameters).
+
+    Parameters
+    ----------
+    shared : Shared
+        Parameters and variables of the problem.
+    """
     out = []
     for name in shared.var_names:
         lo, hi = shared.var_bounds[name]
@@ -166,7 +184,13 @@ def diagnose_nonfinite(cp: CompiledPhase, t: np.ndarray, x: np.ndarray, u: np.nd
 
 
 def raise_if_nonfinite(messages: list[str | None]) -> None:
-    """Raise a :class:`GuessError` with the first message, if any."""
+    """Raise a :class:`GuessError` with the first message, if any.
+
+    Parameters
+    ----------
+    messages : list of str or None
+        One per phase, as returned by ``diagnose_nonfinite``.
+    """
     for m in messages:
         if m is not None:
             raise GuessError(m)

@@ -37,7 +37,13 @@ class MeshRound:
 
 
 def integration_matrix(nodes: np.ndarray) -> np.ndarray:
-    """``I[l, m] = int_0^{nodes_l} ell_m(s) ds`` for the Lagrange basis on ``nodes``."""
+    """``I[l, m] = int_0^{nodes_l} ell_m(s) ds`` for the Lagrange basis on ``nodes``.
+
+    Parameters
+    ----------
+    nodes : ndarray
+        Interpolation nodes in [0, 1].
+    """
     n = nodes.size
     out = np.zeros((n, n))
     for m in range(n):

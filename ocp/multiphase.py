@@ -71,7 +71,13 @@ class MultiPhaseProblem:
 
     @classmethod
     def single(cls, problem: OptimalControlProblem) -> MultiPhaseProblem:
-        """A one-phase view of ``problem`` (shares its parameters and variables)."""
+        """A one-phase view of ``problem`` (shares its parameters and variables).
+
+        Parameters
+        ----------
+        problem : OptimalControlProblem
+            The only phase.
+        """
         mp = cls(problem.name)
         mp._shared = problem._shared
         mp._anchor = problem
@@ -80,19 +86,41 @@ class MultiPhaseProblem:
 
     # ------------------------------------------------------------ declarations
     def phase(self, name: str | None = None) -> OptimalControlProblem:
-        """Add a phase (after the existing ones) and return it for definition."""
+        """Add a phase (after the existing ones) and return it for definition.
+
+        Parameters
+        ----------
+        name : str, optional
+            Used in messages and solver names (default ``phase<i>``).
+        """
         ph = OptimalControlProblem(name or f"phase{len(self.phases)}", shared=self._shared)
         self.phases.append(ph)
         return ph
 
     def parameter(self, name: str) -> ca.SX:
-        """A parameter set at solve time, shared by all phases."""
+        """A parameter set at solve time, shared by all phases.
+
+        Parameters
+        ----------
+        name : str
+            Unique among all names of the problem.
+        """
         return self._anchor.parameter(name)
 
     def variable(self, name: str, lower: Bound = -INF, upper: Bound = INF,
                  guess: Bound | None = None) -> ca.SX:
         """A decision parameter shared by all phases (see
-        :meth:`OptimalControlProblem.variable`)."""
+        :meth:`OptimalControlProblem.variable`).
+
+        Parameters
+        ----------
+        name : str
+            Unique among all names of the problem.
+        lower, upper : float or parameter expression
+            Bounds.
+        guess : float or parameter expression, optional
+            Initial guess.
+        """
         return self._anchor.variable(name, lower, upper, guess)
 
     def _index(self, ph: PhaseRef) -> int:
@@ -140,6 +168,17 @@ class MultiPhaseProblem:
 
         ``expr`` uses ``phase.at_t0(...)``, ``phase.at_tf(...)``,
         ``phase.integral(...)``, ``phase.t0``, ``phase.T``, parameters and variables.
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of end-point symbols of any phases, parameters and variables.
+        lower : float or parameter expression
+            Lower bound, or the value of an equality.
+        upper : float or parameter expression, optional
+            Upper bound.
+        name : str, optional
+            Used in messages.
         """
         e = to_sx(expr, "link constraint")
         label = name or f"link{len(self.links)}"
@@ -155,7 +194,13 @@ class MultiPhaseProblem:
         return c
 
     def minimize(self, expr: Any) -> None:
-        """Add an end-point cost over any phases (``phase.at_tf(...)``, ``phase.T``, ...)."""
+        """Add an end-point cost over any phases (``phase.at_tf(...)``, ``phase.T``, ...).
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of end-point symbols of any phases, parameters and variables.
+        """
         e = to_sx(expr, "minimize")
         require_only(e, self.boundary_symbols(), "minimize term",
                      "use phase.at_t0(...) / phase.at_tf(...)")
@@ -164,34 +209,47 @@ class MultiPhaseProblem:
     # ------------------------------------------------------------------ access
     @property
     def param_names(self) -> list[str]:
+        """Names of the parameters."""
         return self._shared.param_names
 
     @property
     def var_names(self) -> list[str]:
+        """Names of the decision variables."""
         return self._shared.var_names
 
     @property
     def np(self) -> int:
+        """Number of parameters."""
         return len(self._shared.params)
 
     @property
     def nv(self) -> int:
+        """Number of decision variables."""
         return len(self._shared.vars)
 
     @property
     def p(self) -> ca.SX:
+        """The parameters, stacked."""
         return self._shared.p
 
     @property
     def v(self) -> ca.SX:
+        """The decision variables, stacked."""
         return self._shared.v
 
     def param_vector(self, params: Mapping[str, float]) -> ndarray:
         """Parameter values in declaration order, checked (see
-        :meth:`OptimalControlProblem.param_vector`)."""
+        :meth:`OptimalControlProblem.param_vector`).
+
+        Parameters
+        ----------
+        params : mapping
+            A value for every declared parameter.
+        """
         return self._anchor.param_vector(params)
 
     def boundary_symbols(self) -> list[ca.SX]:
+        """What link constraints and the objective may depend on."""
         out: list[ca.SX] = []
         for ph in self.phases:
             out += ph.boundary_symbols()[:-(self.np + self.nv) or None]
@@ -215,7 +273,13 @@ class MultiPhaseProblem:
         return out
 
     def boundary_blocks(self, times: list[PhaseTimes]) -> list[tuple[int, str, Constraint]]:
-        """Every end-point constraint, as ``(phase index or -1, block name, constraint)``."""
+        """Every end-point constraint, as ``(phase index or -1, block name, constraint)``.
+
+        Parameters
+        ----------
+        times : list of PhaseTimes
+            Each phase's time handling, as given by the method ``times``.
+        """
         out: list[tuple[int, str, Constraint]] = []
         for i, (ph, tm) in enumerate(zip(self.phases, times, strict=True)):
             for kind, store in (("initial", ph.initial), ("terminal", ph.terminal)):
@@ -261,7 +325,13 @@ def _phase_times(ph: OptimalControlProblem, prev: PhaseTimes | None,
 
 
 def as_multiphase(problem: OptimalControlProblem | MultiPhaseProblem) -> MultiPhaseProblem:
-    """``problem`` as a :class:`MultiPhaseProblem` (a one-phase view if needed)."""
+    """``problem`` as a :class:`MultiPhaseProblem` (a one-phase view if needed).
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    """
     if isinstance(problem, MultiPhaseProblem):
         return problem
     if isinstance(problem, OptimalControlProblem):

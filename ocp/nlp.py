@@ -166,7 +166,8 @@ class Transcription:
         lbg: list[ca.SX] = []
         ubg: list[ca.SX] = []
 
-        def add(blocks: dict[str, slice], name: str, expr: ca.MX, lo: ca.SX, hi: ca.SX) -> None:
+        def _add(blocks: dict[str, slice], name: str, expr: ca.MX, lo: ca.SX,
+                 hi: ca.SX) -> None:
             n0 = sum(int(e.numel()) for e in g)
             e = ca.vec(expr)
             g.append(e)
@@ -176,14 +177,14 @@ class Transcription:
 
         for i, pn in enumerate(pieces):
             for name, expr, lo, hi in pn.constraints:
-                add(self.layouts[i].blocks, name, expr, lo, hi)
+                _add(self.layouts[i].blocks, name, expr, lo, hi)
             for gi, (j, kind, cs) in enumerate(self._groups):
                 if j == i:
-                    add(self.layouts[i].blocks, kind, bvals[gi],
+                    _add(self.layouts[i].blocks, kind, bvals[gi],
                         ca.vertcat(*[c.lower for c in cs]), ca.vertcat(*[c.upper for c in cs]))
         for gi, (j, kind, cs) in enumerate(self._groups):
             if j == -1:
-                add(self.link_blocks, kind, bvals[gi], ca.vertcat(*[c.lower for c in cs]),
+                _add(self.link_blocks, kind, bvals[gi], ca.vertcat(*[c.lower for c in cs]),
                     ca.vertcat(*[c.upper for c in cs]))
         return ca.vertcat(*g), ca.vertcat(*lbg), ca.vertcat(*ubg), bvals[-1]
 
@@ -210,13 +211,24 @@ class Transcription:
 
     # ------------------------------------------------------------------ solve
     def param_vector(self, params: dict[str, float]) -> np.ndarray:
-        """The parameter values in declaration order, checked (see the problem's)."""
+        """The parameter values in declaration order, checked (see the problem's).
+
+        Parameters
+        ----------
+        params : dict
+            A value for every declared parameter.
+        """
         return self.multiphase.param_vector(params)
 
     def default_guess(self, params: dict[str, float] | None = None) -> np.ndarray:
         """The default initial guess (see :mod:`ocp.guess`) for these parameter values.
 
         Without ``params`` the parameters are taken as 0 (non-finite entries become 0).
+
+        Parameters
+        ----------
+        params : dict, optional
+            Parameter values.
         """
         pv = self.param_vector(params) if params is not None else np.zeros(self.multiphase.np)
         with np.errstate(all="ignore"):
@@ -227,7 +239,13 @@ class Transcription:
         """A decision vector for this transcription from a solution of another
         transcription (another grid or method) of the same problem, or from a
         :class:`ocp.Trajectory` (states and controls by name, interpolated
-        linearly; a multi-phase problem needs its ``phase`` column)."""
+        linearly; a multi-phase problem needs its ``phase`` column).
+
+        Parameters
+        ----------
+        sol : Solution or Trajectory
+            Where to start from.
+        """
         if isinstance(sol, Trajectory):
             return self._guess_from_trajectory(sol)
         if len(sol.phases) != len(self.phases):
@@ -252,13 +270,14 @@ class Transcription:
             if missing:
                 raise ValueError(f"the guess trajectory lacks {missing}")
 
-            def sample(tq: np.ndarray, t=t, rows=rows, ph=ph) -> tuple[np.ndarray, np.ndarray]:
+            def _sample(tq: np.ndarray, t: np.ndarray = t, rows: np.ndarray = rows,
+                        ph: Any = ph) -> tuple[np.ndarray, np.ndarray]:
                 col = [np.interp(tq, t, traj[n][rows]) for n in ph.state_names]
                 ucol = [np.interp(tq, t, traj[n][rows]) for n in ph.control_names]
                 x = np.column_stack(col)
                 return x, (np.column_stack(ucol) if ucol else np.zeros((tq.size, 0)))
 
-            parts.append(disc.guess_from(sample, float(t[0]), float(t[-1])))
+            parts.append(disc.guess_from(_sample, float(t[0]), float(t[-1])))
         parts.append(w0[self.iV])
         return np.concatenate(parts)
 
@@ -314,7 +333,7 @@ class Transcription:
         guess : Solution, Trajectory or decision vector, optional
             Primal starting point (cold start); a solution of another
             transcription (grid, method) or a trajectory is resampled.
-            Default: the default guess (see :mod:`ocp.guess`).
+            By default, the default guess (see :mod:`ocp.guess`).
         warm_start : Solution, optional
             Start from this solution's primal and dual values (Ipopt warm start).
 

@@ -75,17 +75,34 @@ class Shared:
 
     @property
     def p(self) -> ca.SX:
+        """The parameters, stacked."""
         return ca.vertcat(*self.params) if self.params else ca.SX(0, 1)
 
     @property
     def v(self) -> ca.SX:
+        """The decision variables, stacked."""
         return ca.vertcat(*self.vars) if self.vars else ca.SX(0, 1)
 
     def taken(self, name: str) -> bool:
+        """Whether ``name`` is already a parameter, a variable or reserved.
+
+        Parameters
+        ----------
+        name : str
+            A candidate name.
+        """
         return name in self.param_names or name in self.var_names or name in RESERVED
 
     def bound(self, value: Bound, what: str) -> ca.SX:
-        """A bound or guess: a number or an expression of the parameters."""
+        """A bound or guess: a number or an expression of the parameters.
+
+        Parameters
+        ----------
+        value : float or SX
+            A number or an expression of the parameters.
+        what : str
+            Named in the error if ``value`` is not acceptable.
+        """
         b = to_sx(value, what)
         require_only(b, self.params, what, "bounds and guesses may depend on parameters only")
         return b
@@ -206,7 +223,13 @@ class OptimalControlProblem:
         return s
 
     def parameter(self, name: str) -> ca.SX:
-        """Declare a parameter, set at solve time (shared by all phases)."""
+        """Declare a parameter, set at solve time (shared by all phases).
+
+        Parameters
+        ----------
+        name : str
+            Unique among all names of the problem.
+        """
         self._check_new(name, phase=False)
         s = ca.SX.sym(name)
         self._shared.param_names.append(name)
@@ -239,7 +262,15 @@ class OptimalControlProblem:
         return s
 
     def bound_control(self, name: str, lower: Bound = -INF, upper: Bound = INF) -> None:
-        """Set or change a control's bounds."""
+        """Set or change a control's bounds.
+
+        Parameters
+        ----------
+        name : str
+            A declared control.
+        lower, upper : float or parameter expression
+            The bounds (``lower <= upper`` where both are numbers).
+        """
         if name not in self.control_names:
             raise ProblemDefinitionError(f"unknown control {name!r}")
         what = f"control {name!r}"
@@ -249,7 +280,15 @@ class OptimalControlProblem:
         self.control_bounds[name] = (lo, hi)
 
     def bound_state(self, name: str, lower: Bound = -INF, upper: Bound = INF) -> None:
-        """Set or change a state's bounds (imposed along the whole trajectory)."""
+        """Set or change a state's bounds (imposed along the whole trajectory).
+
+        Parameters
+        ----------
+        name : str
+            A declared state.
+        lower, upper : float or parameter expression
+            The bounds (``lower <= upper`` where both are numbers).
+        """
         if name not in self.state_names:
             raise ProblemDefinitionError(f"unknown state {name!r}")
         what = f"state {name!r}"
@@ -336,6 +375,16 @@ class OptimalControlProblem:
         Imposed at the shooting nodes (multiple shooting; also at the
         integrator's inner steps with ``inner_constraints=True``) or at the
         collocation points, and checked on a fine grid after every solve.
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of the states, controls, ``t``, ``t0``, ``T``, parameters and
+            variables (a vector gives one constraint per row).
+        lower, upper : float or parameter expression
+            Bounds (``-inf``/``inf`` for none).
+        name : str, optional
+            Used in messages and in ``sol.violations``.
         """
         return self._constraint(self.path, expr, lower, upper, name, "path")
 
@@ -344,6 +393,18 @@ class OptimalControlProblem:
         """``lower <= expr <= upper`` at ``t0`` (equality if ``upper`` is omitted).
 
         States and controls in ``expr`` stand for their values at ``t0``.
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of the states and controls (at ``t0``), end-point symbols,
+            times, parameters and variables.
+        lower : float or parameter expression
+            Lower bound, or the value of an equality.
+        upper : float or parameter expression, optional
+            Upper bound.
+        name : str, optional
+            Used in messages.
         """
         return self._constraint(self.initial, expr, lower, upper, name, "initial")
 
@@ -352,6 +413,18 @@ class OptimalControlProblem:
         """``lower <= expr <= upper`` at ``T`` (equality if ``upper`` is omitted).
 
         States and controls in ``expr`` stand for their values at ``T``.
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of the states and controls (at ``T``), end-point symbols,
+            times, parameters and variables.
+        lower : float or parameter expression
+            Lower bound, or the value of an equality.
+        upper : float or parameter expression, optional
+            Upper bound.
+        name : str, optional
+            Used in messages.
         """
         return self._constraint(self.terminal, expr, lower, upper, name, "terminal")
 
@@ -361,6 +434,17 @@ class OptimalControlProblem:
 
         ``expr`` is built from :meth:`at_t0`, :meth:`at_tf`, :meth:`integral`,
         ``t0``, ``T``, parameters and variables; a bare state is ambiguous here.
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of end-point symbols, times, parameters and variables.
+        lower : float or parameter expression
+            Lower bound, or the value of an equality.
+        upper : float or parameter expression, optional
+            Upper bound.
+        name : str, optional
+            Used in messages.
         """
         e = to_sx(expr, "boundary constraint")
         if ca.depends_on(e, ca.vertcat(self.x, self.u, self.t)):
@@ -371,25 +455,55 @@ class OptimalControlProblem:
 
     def integral_constraint(self, integrand: Any, lower: Bound, upper: Bound | None = None,
                             name: str | None = None) -> Constraint:
-        """``lower <= int_t0^T integrand dt <= upper`` (an isoperimetric constraint)."""
+        """``lower <= int_t0^T integrand dt <= upper`` (an isoperimetric constraint).
+
+        Parameters
+        ----------
+        integrand : SX
+            Expression of the states, controls, ``t`` and parameters.
+        lower : float or parameter expression
+            Lower bound, or the value of an equality.
+        upper : float or parameter expression, optional
+            Upper bound.
+        name : str, optional
+            Used in messages.
+        """
         return self.boundary_constraint(self.integral(integrand), lower, upper,
                                         name or f"integral{len(self.integrals)}")
 
     # ------------------------------------------------------- end-point symbols
     def at_t0(self, expr: Any) -> ca.SX:
-        """``expr`` evaluated at ``t0`` (states, controls and t at the initial time)."""
+        """``expr`` evaluated at ``t0`` (states, controls and t at the initial time).
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of the states, controls and ``t``.
+        """
         e = to_sx(expr, "at_t0()")
         return ca.substitute(e, ca.vertcat(self.x, self.u, self.t),
                              ca.vertcat(self.x0, self.u0, self.t0))
 
     def at_tf(self, expr: Any) -> ca.SX:
-        """``expr`` evaluated at ``T`` (states, controls and t at the final time)."""
+        """``expr`` evaluated at ``T`` (states, controls and t at the final time).
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of the states, controls and ``t``.
+        """
         e = to_sx(expr, "at_tf()")
         return ca.substitute(e, ca.vertcat(self.x, self.u, self.t),
                              ca.vertcat(self.xT, self.uT, self.T))
 
     def integral(self, integrand: Any) -> ca.SX:
-        """A symbol standing for ``int_t0^T integrand dt`` (use in boundary terms)."""
+        """A symbol standing for ``int_t0^T integrand dt`` (use in boundary terms).
+
+        Parameters
+        ----------
+        integrand : SX
+            Scalar expression of the states, controls, ``t`` and parameters.
+        """
         e = to_sx(integrand, "integral()")
         if e.numel() != 1:
             raise ProblemDefinitionError("integral(): the integrand must be a scalar")
@@ -407,20 +521,39 @@ class OptimalControlProblem:
 
     # ------------------------------------------------------------------- cost
     def minimize_terminal(self, expr: Any) -> None:
-        """Add a Mayer term ``phi(x(T), u(T), T, p)`` (bare symbols mean values at ``T``)."""
+        """Add a Mayer term ``phi(x(T), u(T), T, p)`` (bare symbols mean values at ``T``).
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of the states and controls (at ``T``), times, parameters
+            and variables.
+        """
         e = to_sx(expr, "minimize_terminal")
         require_only(self.at_tf(e), self.boundary_symbols(), "minimize_terminal term")
         self.mayer = self.mayer + e
 
     def minimize_integral(self, expr: Any) -> None:
-        """Add a Lagrange term ``int_t0^T L(x, u, t, p) dt``."""
+        """Add a Lagrange term ``int_t0^T L(x, u, t, p) dt``.
+
+        Parameters
+        ----------
+        expr : SX
+            The integrand ``L``.
+        """
         e = to_sx(expr, "minimize_integral")
         require_only(e, self.running_symbols(), "minimize_integral integrand")
         self.lagrange = self.lagrange + e
 
     def minimize(self, expr: Any) -> None:
         """Add an end-point cost built from :meth:`at_t0`, :meth:`at_tf`, :meth:`integral`,
-        ``t0``, ``T``, parameters and variables (e.g. ``p.at_t0(x)**2``)."""
+        ``t0``, ``T``, parameters and variables (e.g. ``p.at_t0(x)**2``).
+
+        Parameters
+        ----------
+        expr : SX
+            Expression of end-point symbols, times, parameters and variables.
+        """
         e = to_sx(expr, "minimize")
         if ca.depends_on(e, ca.vertcat(self.x, self.u, self.t)):
             raise ProblemDefinitionError(
@@ -431,7 +564,13 @@ class OptimalControlProblem:
 
     # ------------------------------------------------------------------ times
     def fixed_final_time(self, T: float) -> None:
-        """Fix the final time (it must exceed a fixed initial time)."""
+        """Fix the final time (it must exceed a fixed initial time).
+
+        Parameters
+        ----------
+        T : float
+            The final time.
+        """
         Tv = finite_number(T, "fixed_final_time(T)")
         if self.t0_mode != "free" and Tv <= self.t0_bounds[0]:
             raise ProblemDefinitionError(
@@ -445,7 +584,15 @@ class OptimalControlProblem:
 
     def free_final_time(self, lower: float = 1e-3, upper: float = 1e3,
                         guess: float | None = None) -> None:
-        """Free final time ``lower <= T <= upper`` (absolute times)."""
+        """Free final time ``lower <= T <= upper`` (absolute times).
+
+        Parameters
+        ----------
+        lower, upper : float
+            Bounds on ``T``.
+        guess : float, optional
+            Initial guess (default: 1 clipped into the bounds).
+        """
         lo = finite_number(lower, "free_final_time(lower)")
         hi = float(upper)
         if not lo < hi:
@@ -465,7 +612,13 @@ class OptimalControlProblem:
         self.duration = None
 
     def fixed_initial_time(self, t0: float) -> None:
-        """Fix the initial time (default 0, or the previous phase's end when linked)."""
+        """Fix the initial time (default 0, or the previous phase's end when linked).
+
+        Parameters
+        ----------
+        t0 : float
+            The initial time.
+        """
         v = finite_number(t0, "fixed_initial_time(t0)")
         if self._T_set and not self.time_free and v >= self.T_bounds[0]:
             raise ProblemDefinitionError(f"fixed_initial_time(t0={v:g}): not before the fixed "
@@ -476,7 +629,15 @@ class OptimalControlProblem:
 
     def free_initial_time(self, lower: float = -INF, upper: float = INF,
                           guess: float | None = None) -> None:
-        """Free initial time ``lower <= t0 <= upper``."""
+        """Free initial time ``lower <= t0 <= upper``.
+
+        Parameters
+        ----------
+        lower, upper : float
+            Bounds on ``t0``.
+        guess : float, optional
+            Initial guess (default: 0 clipped into the bounds).
+        """
         lo, hi = float(lower), float(upper)
         if not lo <= hi or np.isnan(lo) or np.isnan(hi):
             raise ProblemDefinitionError(f"free_initial_time: need lower <= upper, got "
@@ -494,6 +655,13 @@ class OptimalControlProblem:
 
         The natural choice for a phase whose start is linked to the end of the
         previous one.
+
+        Parameters
+        ----------
+        lower, upper : float
+            Bounds on ``T - t0``.
+        guess : float, optional
+            Initial guess of the duration (default: 1 clipped into the bounds).
         """
         lo = finite_number(lower, "free_duration(lower)")
         hi = float(upper)
@@ -511,7 +679,13 @@ class OptimalControlProblem:
         self.duration_guess = g
 
     def fixed_duration(self, duration: float) -> None:
-        """Fix ``T - t0`` (with a free or linked initial time, T moves with it)."""
+        """Fix ``T - t0`` (with a free or linked initial time, T moves with it).
+
+        Parameters
+        ----------
+        duration : float
+            ``T - t0``.
+        """
         d = finite_number(duration, "fixed_duration(duration)")
         if d <= 0:
             raise ProblemDefinitionError(f"fixed_duration({d:g}): must be positive")
@@ -524,14 +698,17 @@ class OptimalControlProblem:
     # ---------------------------------------------------------------- access
     @property
     def x(self) -> ca.SX:
+        """The states, stacked."""
         return ca.vertcat(*self._x) if self._x else ca.SX(0, 1)
 
     @property
     def u(self) -> ca.SX:
+        """The controls, stacked."""
         return ca.vertcat(*self._u) if self._u else ca.SX(0, 1)
 
     @property
     def p(self) -> ca.SX:
+        """The parameters (shared by all phases), stacked."""
         return self._shared.p
 
     @property
@@ -541,18 +718,22 @@ class OptimalControlProblem:
 
     @property
     def x0(self) -> ca.SX:
+        """The states at ``t0`` (end-point symbols), stacked."""
         return ca.vertcat(*self._x0) if self._x0 else ca.SX(0, 1)
 
     @property
     def xT(self) -> ca.SX:
+        """The states at ``T`` (end-point symbols), stacked."""
         return ca.vertcat(*self._xT) if self._xT else ca.SX(0, 1)
 
     @property
     def u0(self) -> ca.SX:
+        """The controls at ``t0`` (end-point symbols), stacked."""
         return ca.vertcat(*self._u0) if self._u0 else ca.SX(0, 1)
 
     @property
     def uT(self) -> ca.SX:
+        """The controls at ``T`` (end-point symbols), stacked."""
         return ca.vertcat(*self._uT) if self._uT else ca.SX(0, 1)
 
     @property
@@ -562,30 +743,37 @@ class OptimalControlProblem:
 
     @property
     def param_names(self) -> list[str]:
+        """Names of the parameters (shared by all phases)."""
         return self._shared.param_names
 
     @property
     def var_names(self) -> list[str]:
+        """Names of the decision variables (shared by all phases)."""
         return self._shared.var_names
 
     @property
     def nx(self) -> int:
+        """Number of states."""
         return len(self._x)
 
     @property
     def nu(self) -> int:
+        """Number of controls."""
         return len(self._u)
 
     @property
     def np(self) -> int:
+        """Number of parameters."""
         return len(self._shared.params)
 
     @property
     def nv(self) -> int:
+        """Number of decision variables."""
         return len(self._shared.vars)
 
     @property
     def rhs(self) -> ca.SX:
+        """The dynamics ``x'``, in state order."""
         if not self._rhs:
             raise ProblemDefinitionError("set_dynamics() was not called")
         return ca.vertcat(*[self._rhs[k] for k in self.state_names])
@@ -653,6 +841,11 @@ class OptimalControlProblem:
         ValueError
             Unknown, missing or non-finite parameters, or a value given for a
             decision variable (those are optimised).
+
+        Parameters
+        ----------
+        params : mapping
+            A value for every declared parameter.
         """
         names = self.param_names
         given_vars = sorted(set(params) & set(self.var_names))
@@ -693,5 +886,11 @@ def _stack(cs: list[Constraint]) -> tuple[ca.SX, ca.SX, ca.SX]:
 
 
 def bound_value(b: ca.SX) -> float | None:
-    """A constant bound as float (None if it depends on parameters)."""
+    """A constant bound as float (None if it depends on parameters).
+
+    Parameters
+    ----------
+    b : SX
+        A bound.
+    """
     return constant(b)

@@ -67,9 +67,11 @@ class ShootingPhase(PhaseDiscretization):
         self._rk: dict[int, ca.Function] = {}
 
     def size(self) -> int:
+        """See :meth:`ocp.discretization.PhaseDiscretization.size`."""
         return self.it0 + self.nt0
 
     def layout(self, offset: int) -> PhaseLayout:
+        """See :meth:`ocp.discretization.PhaseDiscretization.layout`."""
         return PhaseLayout(offset if self.nT else None,
                            slice(offset + self.iX.start, offset + self.iX.stop),
                            slice(offset + self.iU.start, offset + self.iU.stop),
@@ -77,6 +79,7 @@ class ShootingPhase(PhaseDiscretization):
 
     def build(self, wb: ca.MX, P: ca.MX, V: ca.MX, ends: tuple[ca.SX, ca.SX],
               ug: ca.SX) -> PhaseNLP:
+        """See :meth:`ocp.discretization.PhaseDiscretization.build`."""
         cp, N, nx, nu = self.cp, self.N, self.cp.nx, self.cp.nu
         t0, T = self._times(wb, self.it0)
         X = ca.reshape(wb[self.iX], nx, N + 1)
@@ -117,6 +120,7 @@ class ShootingPhase(PhaseDiscretization):
         return "path_inner", C, ca.repmat(clo, n, 1), ca.repmat(chi, n, 1)
 
     def unpack(self, wb: np.ndarray, pv: np.ndarray, vv: np.ndarray) -> PhaseData:
+        """See :meth:`ocp.discretization.PhaseDiscretization.unpack`."""
         nx, nu, N = self.cp.nx, self.cp.nu, self.N
         t0, T = self._unpack_times(wb, self.it0)
         X = wb[self.iX].reshape(N + 1, nx)
@@ -126,7 +130,15 @@ class ShootingPhase(PhaseDiscretization):
                          np.r_[pv, vv, t0, T])
 
     def sampler(self, substeps: int, n: int) -> ca.Function:
-        """RK4 re-integration from a node, mapped over ``n`` samples (cached)."""
+        """RK4 re-integration from a node, mapped over ``n`` samples (cached).
+
+        Parameters
+        ----------
+        substeps : int
+            RK4 steps per sample.
+        n : int
+            Number of samples.
+        """
         key = (substeps, n)
         if key not in self._samplers:
             if substeps not in self._rk:
@@ -136,6 +148,7 @@ class ShootingPhase(PhaseDiscretization):
 
     def sample(self, data: PhaseData, t: np.ndarray,
                substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """See :meth:`ocp.discretization.PhaseDiscretization.sample`."""
         t = np.asarray(t, dtype=float)
         k = segment_index(data.mesh, t)
         n = t.size
@@ -145,6 +158,7 @@ class ShootingPhase(PhaseDiscretization):
 
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
                    t0: float, T: float) -> np.ndarray:
+        """See :meth:`ocp.discretization.PhaseDiscretization.guess_from`."""
         mesh = t0 + (T - t0) * np.linspace(0.0, 1.0, self.N + 1)
         x, _ = sample(mesh)
         _, u = sample((mesh[:-1] + mesh[1:]) / 2)
@@ -154,6 +168,7 @@ class ShootingPhase(PhaseDiscretization):
         return np.concatenate([np.asarray(p, dtype=float) for p in parts])
 
     def multipliers(self, lam: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """See :meth:`ocp.discretization.PhaseDiscretization.multipliers`."""
         out = dict(lam)
         shapes = {"continuity": (self.N, self.cp.nx), "path": (self.N + 1, self.cp.npath),
                   "path_inner": (self.N * (self.M - 1), self.cp.ncheck)}

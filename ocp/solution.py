@@ -19,6 +19,13 @@ def along(fn: ca.Function, *args) -> list[np.ndarray]:
 
     Each argument is an (n, k) array of per-sample rows or a single vector
     broadcast to every sample. Returns one (n, m) array per output.
+
+    Parameters
+    ----------
+    fn : casadi.Function
+        The function.
+    *args : array_like
+        Its arguments, one per input.
     """
     n = max(np.atleast_2d(a).shape[0] if np.ndim(a) == 2 else 1 for a in args)
     cols = [np.asarray(a, dtype=float).T if np.ndim(a) == 2 else np.asarray(a, dtype=float)
@@ -87,16 +94,32 @@ class Solution:
     # python-control / scipy style aliases
     @property
     def fun(self) -> float:
+        """The objective (scipy's name)."""
         return self.objective
 
     @property
     def message(self) -> str:
+        """Ipopt's return status (scipy's name)."""
         return self.status
 
     @classmethod
     def from_nlp(cls, tr: Any, pv: np.ndarray, res: dict, stats: dict,
                  elapsed: float) -> Solution:
-        """Unpack Ipopt's result for the transcription ``tr`` (parameters ``pv``)."""
+        """Unpack Ipopt's result for the transcription ``tr`` (parameters ``pv``).
+
+        Parameters
+        ----------
+        tr : Transcription
+            The transcription that was solved.
+        pv : ndarray
+            The parameter values.
+        res : dict
+            Ipopt's result (``x``, ``f``, ``lam_g``, ``lam_x``).
+        stats : dict
+            The solver's statistics.
+        elapsed : float
+            Solve wall time in seconds.
+        """
         w = np.array(res["x"]).ravel()
         lam_g = np.array(res["lam_g"]).ravel()
         mp = tr.multiphase
@@ -125,14 +148,27 @@ class Solution:
     # ------------------------------------------------------------------ access
     @property
     def is_multiphase(self) -> bool:
+        """True if the problem has more than one phase."""
         return len(self.phases) > 1
 
     def state(self, name: str) -> np.ndarray:
-        """A state's values at the discretisation points."""
+        """A state's values at the discretisation points.
+
+        Parameters
+        ----------
+        name : str
+            A state of the phase.
+        """
         return self.x[:, self.problem.state_names.index(name)]
 
     def control(self, name: str) -> np.ndarray:
-        """A control's values, one per interval (see the class attributes)."""
+        """A control's values, one per interval (see the class attributes).
+
+        Parameters
+        ----------
+        name : str
+            A control of the phase.
+        """
         return self.u[:, self.problem.control_names.index(name)]
 
     def sample(self, n: int = 1000, substeps: int = 8) -> tuple[np.ndarray, np.ndarray,
@@ -144,13 +180,26 @@ class Solution:
         state and control polynomials of each mesh interval.
 
         Returns ``t`` (n,), ``x`` (n, nx), ``u`` (n, nu).
+
+        Parameters
+        ----------
+        n : int
+            Number of samples.
+        substeps : int
+            RK4 steps per sub-interval (multiple shooting).
         """
         t = np.linspace(self.t0, self.T, n)
         x, u = self.discretization.sample(self.data, t, substeps)
         return t, x, u
 
     def at(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """States and controls of a phase at the times ``t`` (see :meth:`sample`)."""
+        """States and controls of a phase at the times ``t`` (see :meth:`sample`).
+
+        Parameters
+        ----------
+        t : array_like
+            Times within the phase.
+        """
         return self.discretization.sample(self.data, np.atleast_1d(np.asarray(t, float)))
 
     def trajectory(self, n: int = 1000) -> Trajectory:
@@ -160,6 +209,11 @@ class Solution:
         phase durations, each phase's ends included) and joined; columns are
         the union of the phases' states and controls (NaN where a phase lacks
         one) and ``phase`` holds the phase index.
+
+        Parameters
+        ----------
+        n : int
+            Number of samples (about; each phase gets at least 2).
         """
         if not self.is_multiphase:
             t, x, u = self.sample(max(int(n), 2))
@@ -172,6 +226,11 @@ class Solution:
 
         Multiple shooting: the last node uses the last control; collocation:
         the first point uses the control polynomial extrapolated to ``t0``.
+
+        Parameters
+        ----------
+        expr : SX
+            The expression.
         """
         pr = self.problem
         s = ca.vertcat(pr.p, pr.v, pr.t0, pr.T)
@@ -180,21 +239,27 @@ class Solution:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain, JSON-able dict."""
-        def clean(v: float) -> float | None:
+        def _clean(v: float) -> float | None:
             return v if math.isfinite(v) else None
 
         d: dict[str, Any] = {
             "status": self.status, "success": self.success, "iterations": self.iterations,
-            "solve_time_s": self.solve_time, "objective": clean(self.objective),
+            "solve_time_s": self.solve_time, "objective": _clean(self.objective),
             "params": self.params, "variables": self.variables,
-            "path_violation": clean(self.path_violation), "verified": self.verified}
+            "path_violation": _clean(self.path_violation), "verified": self.verified}
         if self.is_multiphase:
             d["phases"] = [{**_phase_dict(p), "name": p.problem.name} for p in self.phases]
             return d
         return {**d, **_phase_dict(self)}
 
     def plot(self, fig: Any = None) -> Any:
-        """States and controls against time (one axis each); returns the figure."""
+        """States and controls against time (one axis each); returns the figure.
+
+        Parameters
+        ----------
+        fig : matplotlib.figure.Figure, optional
+            Draw into this figure (default: a new one).
+        """
         import matplotlib.pyplot as plt
 
         traj = self.trajectory(400)

@@ -25,7 +25,15 @@ class Constraint:
 
 
 def to_sx(value: object, what: str) -> ca.SX:
-    """``value`` as a CasADi SX, or a :class:`ProblemDefinitionError` naming ``what``."""
+    """``value`` as a CasADi SX, or a :class:`ProblemDefinitionError` naming ``what``.
+
+    Parameters
+    ----------
+    value : object
+        A number, an SX, or something CasADi turns into one.
+    what : str
+        Named in the error.
+    """
     if isinstance(value, ca.SX):
         return value
     if isinstance(value, ca.MX):
@@ -38,14 +46,28 @@ def to_sx(value: object, what: str) -> ca.SX:
 
 
 def constant(value: ca.SX) -> float | None:
-    """The float of a constant scalar SX, else None."""
+    """The float of a constant scalar SX, else None.
+
+    Parameters
+    ----------
+    value : SX
+        A scalar expression.
+    """
     if value.numel() == 1 and value.is_constant():
         return float(ca.DM(value))
     return None
 
 
 def check_bounds(lower: ca.SX, upper: ca.SX, what: str) -> None:
-    """Reject NaN bounds and numeric ``lower > upper`` (naming ``what``)."""
+    """Reject NaN bounds and numeric ``lower > upper`` (naming ``what``).
+
+    Parameters
+    ----------
+    lower, upper : SX
+        The bounds.
+    what : str
+        Named in the error.
+    """
     lo, hi = constant(lower), constant(upper)
     for v, side in ((lo, "lower"), (hi, "upper")):
         if v is not None and math.isnan(v):
@@ -57,7 +79,15 @@ def check_bounds(lower: ca.SX, upper: ca.SX, what: str) -> None:
 
 
 def free_names(expr: ca.SX, allowed: Sequence[ca.SX]) -> list[str]:
-    """Names of the symbols in ``expr`` that are not among ``allowed``."""
+    """Names of the symbols in ``expr`` that are not among ``allowed``.
+
+    Parameters
+    ----------
+    expr : SX
+        The expression.
+    allowed : sequence of SX
+        The symbols it may use.
+    """
     if expr.numel() == 0 or expr.is_constant():
         return []
     allowed_v = ca.vertcat(*allowed) if allowed else ca.SX(0, 1)
@@ -66,7 +96,19 @@ def free_names(expr: ca.SX, allowed: Sequence[ca.SX]) -> list[str]:
 
 
 def require_only(expr: ca.SX, allowed: Sequence[ca.SX], what: str, hint: str = "") -> None:
-    """Raise a :class:`ProblemDefinitionError` if ``expr`` uses symbols outside ``allowed``."""
+    """Raise a :class:`ProblemDefinitionError` if ``expr`` uses symbols outside ``allowed``.
+
+    Parameters
+    ----------
+    expr : SX
+        The expression.
+    allowed : sequence of SX
+        The symbols it may use.
+    what : str
+        Named in the error.
+    hint : str
+        Appended to the error.
+    """
     bad = free_names(expr, allowed)
     if bad:
         raise ProblemDefinitionError(f"{what} depends on {sorted(set(bad))}, which it may not"
@@ -74,7 +116,15 @@ def require_only(expr: ca.SX, allowed: Sequence[ca.SX], what: str, hint: str = "
 
 
 def finite_number(value: object, what: str) -> float:
-    """``value`` as a finite float, or a :class:`ProblemDefinitionError` naming ``what``."""
+    """``value`` as a finite float, or a :class:`ProblemDefinitionError` naming ``what``.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+    what : str
+        Named in the error.
+    """
     try:
         v = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError) as err:
@@ -85,7 +135,17 @@ def finite_number(value: object, what: str) -> float:
 
 
 def positive_int(value: object, what: str, minimum: int = 1) -> int:
-    """``value`` as an int >= ``minimum``; rejects floats (even 2.0) and bools."""
+    """``value`` as an int >= ``minimum``; rejects floats (even 2.0) and bools.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+    what : str
+        Named in the error.
+    minimum : int
+        Smallest allowed value.
+    """
     if isinstance(value, bool):
         raise ProblemDefinitionError(f"{what} must be an integer, got {value!r}")
     try:

@@ -178,7 +178,15 @@ class Collocation(Transcription):
                 for cp, tm, m in zip(self.compiled, self.times, self.meshes, strict=True)]
 
     def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
-        """A new collocation of the same problem and options on other meshes."""
+        """A new collocation of the same problem and options on other meshes.
+
+        Parameters
+        ----------
+        meshes : list of ndarray
+            Normalised mesh points per phase.
+        verify : str, optional
+            Override of the post-solve check mode.
+        """
         return Collocation(self.problem, degree=self.degree, mesh=meshes,
                            ipopt_options=self.ipopt_options, expand=self.expand,
                            verify=verify or self.verify, verify_tol=self.verify_tol,

@@ -80,7 +80,17 @@ def path_excess(sol: Any, per_interval: int = 10) -> dict[str, tuple[float, floa
 
 
 def interval_excess(ph: Any, params: dict[str, float], per_interval: int = 10) -> np.ndarray:
-    """Largest relative path violation inside each mesh interval of one phase, shape (N,)."""
+    """Largest relative path violation inside each mesh interval of one phase, shape (N,).
+
+    Parameters
+    ----------
+    ph : Solution
+        One phase of a solution.
+    params : dict
+        The parameter values.
+    per_interval : int
+        Check points per mesh interval.
+    """
     rel, t, _ = _phase_excess(ph, params, per_interval)
     n = t.size - 1
     worst = rel.max(axis=0) if rel.size else np.zeros(t.size)
