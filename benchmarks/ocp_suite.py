@@ -49,10 +49,6 @@ def timed(fn: Any) -> tuple[Any, float, float]:
     return out, time.perf_counter() - w, time.process_time() - c
 
 
-def reference(sp: SuiteProblem) -> float:
-    return sp.exact() if sp.exact is not None else sp.published
-
-
 # ------------------------------------------------------------------ ours
 def ours_refine(sp: SuiteProblem) -> tuple[Any, float, float]:
     tr = Collocation(sp.build(), intervals=sp.intervals, degree=sp.degree)
@@ -211,22 +207,38 @@ def med(rows: list[dict[str, float]], key: str) -> float:
     return statistics.median(vals) if vals else math.nan
 
 
+def errors(sp: SuiteProblem, value: float) -> str:
+    """Relative error against the published value and against the closed form."""
+    def rel(ref: float) -> str:
+        return f"{abs(value - ref) / abs(ref):8.1e}" if math.isfinite(ref) else f"{'-':>8s}"
+
+    return rel(sp.published) + " " + rel(sp.exact() if sp.exact is not None else math.nan)
+
+
 def report(res: dict[str, Any]) -> str:
-    sp, ref = res["problem"], reference(res["problem"])
+    """One line of the table."""
+    sp = res["problem"]
     rw, rc, rounds, N = res["refine"]
-    err = abs(res["value"] - ref) / abs(ref)
-    line = (f"{sp.name:22s} {res['value']:>14.9g} {err:8.1e} | refine {rw:6.2f}s "
-            f"({rc:5.2f} cpu, {rounds} meshes, N={N:4d}) | build {med(res['ours'], 'build'):5.2f}s"
-            f" solve {med(res['ours'], 'solve'):6.3f}s ({med(res['ours'], 'solve_cpu'):6.3f} cpu)")
+    ours = res["ours"]
+    line = (f"{sp.name:21s} {res['value']:>13.9g} {errors(sp, res['value'])} | "
+            f"{rw:6.2f} {rc:6.2f} {rounds:2d} {N:4d} | {med(ours, 'build'):5.2f} "
+            f"{med(ours, 'solve'):6.3f} {med(ours, 'solve_cpu'):6.3f}")
     rk = res["rockit"]
     if not rk:
-        return line + " | rockit n/a (multi-phase)"
+        return line + " | n/a (multi-phase: rockit stages not translated)"
     if "error" in rk[0]:
-        return line + f" | rockit failed: {rk[0]['error']}"
-    rerr = abs(med(rk, "value") - ref) / abs(ref)
-    return line + (f" | rockit {med(rk, 'value'):>14.9g} {rerr:8.1e} build "
-                   f"{med(rk, 'build'):5.2f}s solve {med(rk, 'solve'):6.3f}s "
-                   f"({med(rk, 'solve_cpu'):6.3f} cpu)")
+        return line + f" | failed: {rk[0]['error']}"
+    v = med(rk, "value")
+    return line + (f" | {v:>13.9g} {errors(sp, v)} | {med(rk, 'build'):5.2f} "
+                   f"{med(rk, 'solve'):6.3f} {med(rk, 'solve_cpu'):6.3f}")
+
+
+HEADER = (f"{'':21s} {'this toolkit':>13s} {'':17s} | refinement run      | final mesh, "
+          f"median      | {'rockit':>13s} {'':17s} | same N, median\n"
+          f"{'problem':21s} {'objective':>13s} {'err(pub)':>8s} {'err(exa)':>8s} | "
+          f"{'wall':>6s} {'cpu':>6s} {'#m':>2s} {'N':>4s} | {'build':>5s} {'solve':>6s} "
+          f"{'cpu':>6s} | {'objective':>13s} {'err(pub)':>8s} {'err(exa)':>8s} | "
+          f"{'build':>5s} {'solve':>6s} {'cpu':>6s}")
 
 
 def main() -> None:
@@ -235,8 +247,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
     chosen = [p for p in PROBLEMS if not args.names or p.name in args.names]
-    print(f"{'problem':22s} {'objective':>14s} {'error':>8s} | this toolkit ... | rockit "
-          "(DirectCollocation radau 3, same N, uniform)")
+    print(HEADER)
     for sp in chosen:
         print(report(run(sp, args.repeats)), flush=True)
 
