@@ -221,6 +221,21 @@ class PhaseDiscretization:
         """
         return lam
 
+    def check_samples(self, data: PhaseData,
+                      per_interval: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Times, states and controls where the path constraints are checked after a solve.
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        per_interval : int
+            Points per mesh interval.
+        """
+        t = self.check_points(data, per_interval)
+        x, u = self.sample(data, t)
+        return t, x, u
+
     def check_points(self, data: PhaseData, per_interval: int) -> np.ndarray:
         """Times at which the path constraints are checked after a solve.
 

@@ -32,11 +32,10 @@ def _phase_excess(ph: Any, params: dict[str, float],
     cp = disc.cp
     rows = [i for i in range(cp.ncheck)
             if disc.method == "multiple_shooting" or cp.check_u_free[i]]
-    t = disc.check_points(ph.data, per_interval)
     if not rows:
+        t = disc.check_points(ph.data, per_interval)
         return np.zeros((0, t.size)), t, rows
-    # re-integrate with the transcription's own RK4 step count (multiple shooting)
-    x, u = disc.sample(ph.data, t, getattr(disc, "M", 8))
+    t, x, u = disc.check_samples(ph.data, per_interval)
     vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
                     dtype=float)[rows]
     b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
