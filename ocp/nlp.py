@@ -346,6 +346,10 @@ class Transcription:
         GuessError
             If the starting point makes an expression non-finite.
         """
+        return self._solve(params, guess, warm_start, self.verify)
+
+    def _solve(self, params: dict[str, float] | None, guess: Any,
+               warm_start: Solution | None, verify_mode: str) -> Solution:
         params = {} if params is None else params
         pv = self.param_vector(params)
         lbw, ubw, lbg, ubg = (np.array(v, dtype=float).ravel() for v in self._bounds(pv))
@@ -362,7 +366,7 @@ class Transcription:
             cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
             raise cls(sol.status, sol, f"Ipopt failed: {sol.status} after {sol.iterations} "
                                        f"iterations")
-        verify(sol, self.verify, self.verify_tol, self.verify_points)
+        verify(sol, verify_mode, self.verify_tol, self.verify_points)
         return sol
 
     def _check_bound_order(self, lbw: np.ndarray, ubw: np.ndarray, lbg: np.ndarray,

@@ -152,6 +152,10 @@ class Collocation(Transcription):
         Expand the NLP to SX (default True: collocation graphs are small).
     verify, verify_tol, verify_points
         The post-solve check between nodes (see :class:`ocp.nlp.Transcription`).
+
+    Every solution carries ``mesh_error``, the largest interval error
+    estimate of :mod:`ocp.mesh` (relative; compare it with the accuracy you
+    need, or call :meth:`refine`).
     """
 
     method = "collocation"
@@ -176,6 +180,13 @@ class Collocation(Transcription):
     def _discretize(self) -> list[PhaseDiscretization]:
         return [CollocationPhase(cp, tm, m, self.degree)
                 for cp, tm, m in zip(self.compiled, self.times, self.meshes, strict=True)]
+
+    def _solve(self, params: dict[str, float] | None, guess: Any,
+               warm_start: Solution | None, verify_mode: str) -> Solution:
+        """Solve, and attach the discretisation error estimate (``sol.mesh_error``)."""
+        sol = super()._solve(params, guess, warm_start, verify_mode)
+        sol.mesh_error = float(max(interval_errors(ph).max() for ph in sol.phases))
+        return sol
 
     def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
         """A new collocation of the same problem and options on other meshes.
@@ -225,8 +236,8 @@ class Collocation(Transcription):
             ``mesh_error`` is the final estimate and ``mesh_converged`` tells
             whether it met ``tol``. ``sol.transcription`` re-solves on that mesh.
         """
-        tr = self if self.verify == "off" else self.with_mesh(self.meshes, verify="off")
-        sol = tr.solve(params, guess=guess)
+        tr = self  # every round is checked between points by the refinement itself
+        sol = tr._solve(params, guess, None, "off")
         history: list[MeshRound] = []
         for rnd in range(max_rounds + 1):
             errs = [np.maximum(interval_errors(ph), self._gaps(ph, sol.params))
@@ -238,12 +249,11 @@ class Collocation(Transcription):
                    for m, e in zip(tr.meshes, errs, strict=True)]
             if emax <= tol or rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
                 break
-            tr = tr.with_mesh(new, verify="off")
+            tr = tr.with_mesh(new)
             try:
-                sol = tr.solve(params, guess=sol)
+                sol = tr._solve(params, sol, None, "off")
             except SolveError:  # the previous mesh's solution may mislead: start afresh
-                sol = tr.solve(params, guess=guess)
-        tr.verify = self.verify
+                sol = tr._solve(params, guess, None, "off")
         sol.mesh_history, sol.mesh_error, sol.mesh_converged = history, emax, emax <= tol
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol

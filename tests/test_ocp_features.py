@@ -281,6 +281,9 @@ def test_collocation_error_falls_with_the_degree():
     from ocp_suite.problems import brachistochrone, brachistochrone_exact
 
     exact = brachistochrone_exact()
-    errs = [abs(Collocation(brachistochrone(), intervals=20, degree=d).solve().objective
-                - exact) for d in (1, 2, 3)]
+    sols = [Collocation(brachistochrone(), intervals=20, degree=d).solve() for d in (1, 2, 3)]
+    errs = [abs(s.objective - exact) for s in sols]
     assert errs[0] > 1e-3 > errs[1] > 1e-7 > errs[2]
+    # every collocation solution carries its error estimate, falling likewise
+    est = [s.mesh_error for s in sols]
+    assert est[0] > est[1] > est[2]
