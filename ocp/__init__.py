@@ -1,31 +1,57 @@
-"""ocp: generic multiple-shooting optimal control on CasADi and Ipopt.
+"""ocp: generic direct optimal control on CasADi and Ipopt.
 
 Knows nothing of landing. One file per role:
 
-* :mod:`ocp.problem`       -- states, controls, parameters, dynamics, constraints, cost, T;
-* :mod:`ocp.transcription` -- multiple shooting -> parametric NLP (built once), Ipopt,
-  warm starts and continuation;
+* :mod:`ocp.problem`       -- one phase: states, controls, parameters, decision
+  variables, dynamics, constraints, costs, times;
+* :mod:`ocp.multiphase`    -- phases in sequence, linkage constraints, shared parameters;
+* :mod:`ocp.transcription` -- :class:`MultipleShooting` and :class:`Collocation`
+  (Radau, with mesh refinement), :func:`transcribe`, :func:`continuation`;
+* :mod:`ocp.nlp`           -- assembly of the phases into one parametric NLP (built
+  once), Ipopt;
+* :mod:`ocp.shooting`, :mod:`ocp.collocation` -- the per-phase discretisations;
+* :mod:`ocp.integrators`   -- RK4 and CVODES interval integrators;
+* :mod:`ocp.mesh`          -- error estimate and h-refinement of a collocation mesh;
+* :mod:`ocp.guess`         -- default initial guesses and non-finite-guess diagnosis;
+* :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
+* :mod:`ocp.trajectory`    -- the sampled-trajectory type;
 * :mod:`ocp.switching`     -- bang-bang structure detection and switching-time
   refinement to machine precision;
 * :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
   certificate that proves (or refutes) bang-bang structure.
 """
 
-from .errors import InfeasibleError, SolveError
+from .errors import (
+    GuessError,
+    InfeasibleError,
+    PathViolationError,
+    PathViolationWarning,
+    ProblemDefinitionError,
+    SolveError,
+)
+from .multiphase import MultiPhaseProblem
 from .pmp import PMPCertificate, certify
-from .problem import OptimalControlProblem, ProblemDefinitionError
+from .problem import OptimalControlProblem
 from .solution import Solution
-from .transcription import MultipleShooting, continuation
+from .trajectory import Trajectory
+from .transcription import Collocation, MultipleShooting, continuation, transcribe
 
 __all__ = [
+    "Collocation",
+    "GuessError",
     "InfeasibleError",
+    "MultiPhaseProblem",
     "MultipleShooting",
-    "PMPCertificate",
     "OptimalControlProblem",
+    "PMPCertificate",
+    "PathViolationError",
+    "PathViolationWarning",
     "ProblemDefinitionError",
     "Solution",
     "SolveError",
+    "Trajectory",
     "certify",
     "continuation",
+    "transcribe",
 ]

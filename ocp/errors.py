@@ -1,8 +1,20 @@
-"""Exceptions of the ocp package."""
+"""Exceptions and warnings of the ocp package."""
 
 from __future__ import annotations
 
 from typing import Any
+
+
+class ProblemDefinitionError(ValueError):
+    """The problem is incompletely or inconsistently defined, or an argument is invalid.
+
+    Raised at definition time (when the offending call is made) wherever the
+    mistake can be seen then; the message names the argument.
+    """
+
+
+class GuessError(ProblemDefinitionError):
+    """The initial guess makes an expression of the problem non-finite (before any solve)."""
 
 
 class SolveError(RuntimeError):
@@ -25,3 +37,15 @@ class SolveError(RuntimeError):
 
 class InfeasibleError(SolveError):
     """Ipopt reports the problem (locally) infeasible."""
+
+
+class PathViolationError(SolveError):
+    """Ipopt converged, but a path constraint or state bound is violated between nodes.
+
+    ``status`` is ``"Path_Violated_Between_Nodes"``; ``iterate`` is the
+    converged :class:`ocp.Solution` (its ``path_violation`` says by how much).
+    """
+
+
+class PathViolationWarning(UserWarning):
+    """A converged solution violates a path constraint between its nodes."""

@@ -1,83 +1,62 @@
-"""Multiple-shooting transcription into a parametric NLP, built once, solved by Ipopt.
+"""The two transcriptions -- multiple shooting and Radau collocation -- and continuation.
 
-The NLP takes the problem's parameters as CasADi NLP parameters ``p`` and its
-constraint bounds as functions of ``p`` evaluated at solve time, so a new
-parameter value (or a continuation step) re-solves the same NLP object:
-nothing is rebuilt. Ipopt gets exact sparse first and second derivatives from
-CasADi's algorithmic differentiation; with the RK4 integrator the graph is
-expanded to SX (scalar expressions), which is faster to evaluate.
+Both share the problem definition, the NLP assembly (:mod:`ocp.nlp`) and the
+solution type; choose with :func:`transcribe` or by class::
+
+    tr = transcribe(problem, "collocation", intervals=20, degree=3)
+    sol = tr.refine(params, tol=1e-7)          # mesh refinement to an accuracy
+    ms = MultipleShooting(problem, nodes=100)   # or multiple shooting
+    sol = ms.solve(params)
+
+The NLP of a transcription is built once; new parameter values re-solve it
+without a rebuild (``n_builds`` stays 1). Mesh refinement builds one NLP per
+mesh; the final mesh's transcription is ``sol.transcription``.
 """
 
 from __future__ import annotations
 
-import time
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
-from .errors import InfeasibleError, SolveError
+from .collocation import CollocationPhase
+from .discretization import PhaseDiscretization
+from .errors import ProblemDefinitionError, SolveError
+from .integrators import cvodes_function, rk4_function
+from .mesh import MeshRound, interval_errors, refine_mesh
+from .multiphase import MultiPhaseProblem
+from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, Transcription
 from .problem import OptimalControlProblem
+from .shooting import ShootingPhase
 from .solution import Solution
+from .symbols import positive_int
+from .verify import interval_excess, verify
 
-DEFAULT_IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0, "sb": "yes",
-                 "mu_strategy": "adaptive"}
-INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
+__all__ = ["DEFAULT_IPOPT", "INFEASIBLE_STATUSES", "Collocation", "MultipleShooting",
+           "Transcription", "continuation", "cvodes_function", "rk4_function", "transcribe"]
 
-
-def rk4_function(f: ca.Function, L: ca.Function, nx: int, nu: int, np_: int,
-                 substeps: int) -> ca.Function:
-    """One shooting interval of length ``h`` by ``substeps`` RK4 steps; also integrates L."""
-    x = ca.SX.sym("x", nx)
-    u = ca.SX.sym("u", nu)
-    h = ca.SX.sym("h")
-    p = ca.SX.sym("p", np_)
-    dt = h / substeps
-    xk, q = x, ca.SX(0)
-    for _ in range(substeps):
-        k1, l1 = f(xk, u, p), L(xk, u, p)
-        k2, l2 = f(xk + dt / 2 * k1, u, p), L(xk + dt / 2 * k1, u, p)
-        k3, l3 = f(xk + dt / 2 * k2, u, p), L(xk + dt / 2 * k2, u, p)
-        k4, l4 = f(xk + dt * k3, u, p), L(xk + dt * k3, u, p)
-        xk = xk + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        q = q + dt / 6 * (l1 + 2 * l2 + 2 * l3 + l4)
-    return ca.Function("F", [x, u, h, p], [xk, q], ["x", "u", "h", "p"], ["xf", "qf"])
+Problem = OptimalControlProblem | MultiPhaseProblem
 
 
-def cvodes_function(f: ca.Function, L: ca.Function, nx: int, nu: int, np_: int,
-                    tol: float = 1e-10) -> ca.Function:
-    """One shooting interval by CVODES (BDF, for stiff variants), time scaled to [0, 1]."""
-    x = ca.SX.sym("x", nx)
-    u = ca.SX.sym("u", nu)
-    h = ca.SX.sym("h")
-    p = ca.SX.sym("p", np_)
-    dae = {"x": x, "p": ca.vertcat(u, h, p), "ode": h * f(x, u, p), "quad": h * L(x, u, p)}
-    integ = ca.integrator("I", "cvodes", dae, 0.0, 1.0, {"abstol": tol, "reltol": tol})
-    xm, um, hm, pm = (ca.MX.sym(n, k) for n, k in (("x", nx), ("u", nu), ("h", 1), ("p", np_)))
-    r = integ(x0=xm, p=ca.vertcat(um, hm, pm))
-    return ca.Function("F", [xm, um, hm, pm], [r["xf"], r["qf"]],
-                       ["x", "u", "h", "p"], ["xf", "qf"])
+def _per_phase(value: Any, n: int, what: str) -> list[Any]:
+    if isinstance(value, Sequence) and not isinstance(value, str):
+        if len(value) != n:
+            raise ProblemDefinitionError(f"{what}: {len(value)} values for {n} phases")
+        return list(value)
+    return [value] * n
 
 
-@dataclass
-class _Layout:
-    """Where things live in the decision vector w and the constraint vector g."""
-
-    iT: int | None
-    iX: slice
-    iU: slice
-    blocks: dict[str, slice]
-
-
-class MultipleShooting:
-    """Multiple-shooting transcription of an :class:`OptimalControlProblem`.
+class MultipleShooting(Transcription):
+    """Multiple-shooting transcription of an optimal control problem.
 
     Parameters
     ----------
-    problem : OptimalControlProblem
-    nodes : int
-        Number of shooting intervals N (piecewise-constant control on each).
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    nodes : int or sequence of int
+        Number of shooting intervals N (per phase, or one for all), with a
+        piecewise-constant control on each.
     integrator : {"rk4", "cvodes"}
         RK4 with ``substeps`` steps per interval, or CVODES (stiff problems).
     substeps : int
@@ -89,6 +68,11 @@ class MultipleShooting:
         (0.4 s instead of 0.02 s for the soft landing at N = 100) but every
         evaluation is ~5x faster, so re-solves are ~2x faster. Worth it for
         sweeps and continuation.
+    inner_constraints : bool
+        Also impose path constraints and state bounds at the integrator's
+        ``substeps - 1`` inner steps of every interval (default: nodes only).
+    verify, verify_tol, verify_points
+        The post-solve check between nodes (see :class:`ocp.nlp.Transcription`).
 
     Attributes
     ----------
@@ -96,184 +80,220 @@ class MultipleShooting:
         How many times the NLP was built (stays 1: re-solves never rebuild).
     """
 
-    def __init__(self, problem: OptimalControlProblem, nodes: int = 50, integrator: str = "rk4",
-                 substeps: int = 4, ipopt_options: dict | None = None,
-                 expand: bool = False) -> None:
-        problem.validate()
-        if nodes < 1:
-            raise ValueError("nodes must be >= 1")
+    method = "multiple_shooting"
+
+    def __init__(self, problem: Problem, nodes: int | Sequence[int] = 50,
+                 integrator: str = "rk4", substeps: int = 4,
+                 ipopt_options: dict | None = None, expand: bool = False, *,
+                 inner_constraints: bool = False, verify: str = "warn",
+                 verify_tol: float = 1e-6, verify_points: int = 10) -> None:
         if integrator not in ("rk4", "cvodes"):
-            raise ValueError("integrator must be 'rk4' or 'cvodes'")
-        self.problem = problem
-        self.N = int(nodes)
+            raise ProblemDefinitionError(f"integrator must be 'rk4' or 'cvodes', got "
+                                         f"{integrator!r}")
+        n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
+        self.nodes = [positive_int(n, "nodes") for n in _per_phase(nodes, n_ph, "nodes")]
         self.integrator = integrator
-        self.substeps = int(substeps)
-        self.ipopt_options = {**DEFAULT_IPOPT, **(ipopt_options or {})}
-        self.expand = bool(expand) and integrator == "rk4"
-        self.n_builds = 0
-        self._solvers: dict[bool, Any] = {}
-        self._build()
+        self.substeps = positive_int(substeps, "substeps")
+        self.inner_constraints = bool(inner_constraints)
+        super().__init__(problem, ipopt_options, bool(expand) and integrator == "rk4",
+                         verify, verify_tol, verify_points)
+        self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
+        self.F = self.phases[0].F  # type: ignore[attr-defined]
 
-    # ------------------------------------------------------------------ build
-    def _build(self) -> None:
-        pr, N = self.problem, self.N
-        nx, nu, np_ = pr.nx, pr.nu, pr.np
-        f, L = pr.dynamics_function(), pr.lagrange_function()
-        if self.integrator == "rk4":
-            self.F = rk4_function(f, L, nx, nu, np_, self.substeps)
-        else:
-            self.F = cvodes_function(f, L, nx, nu, np_)
-        nT = 1 if pr.time_free else 0
-        nw = nT + nx * (N + 1) + nu * N
-        # An MX graph that maps the per-interval function (SX inside for RK4) over
-        # the N intervals: derivatives of a map are maps of the small function's
-        # derivatives, so building the Hessian stays cheap.
-        Sym = ca.MX
-        w = Sym.sym("w", nw)
-        P = Sym.sym("p", np_)
-        T = w[0] if pr.time_free else Sym(pr.T_bounds[0])
-        X = ca.reshape(w[nT:nT + nx * (N + 1)], nx, N + 1)
-        U = ca.reshape(w[nT + nx * (N + 1):], nu, N)
-        h = T / N
-        Xn, Q = self.F.map(N)(X[:, :N], U, ca.repmat(h, 1, N), ca.repmat(P, 1, N))
+    def _discretize(self) -> list[PhaseDiscretization]:
+        return [ShootingPhase(cp, tm, n, self.integrator, self.substeps, self.inner_constraints)
+                for cp, tm, n in zip(self.compiled, self.times, self.nodes, strict=True)]
 
-        xs, us, ps, Ts = pr.x, pr.u, pr.p, pr.T
-        g, lbg, ubg, blocks = [], [], [], {}
-        n = 0
-
-        def add(name, expr, lo, hi):
-            nonlocal n
-            expr = ca.vec(expr)
-            k = expr.numel()
-            g.append(expr)
-            lbg.append(lo)
-            ubg.append(hi)
-            blocks[name] = slice(n, n + k)
-            n += k
-
-        zeros = ca.SX.zeros(nx * N)
-        # F(X_k, U_k) - X_{k+1} = 0; see ocp.pmp for what its multipliers mean
-        add("continuity", Xn - X[:, 1:], zeros, zeros)
-        if pr.path:
-            H = ca.Function("H", [xs, us, ps], [ca.vertcat(*[c.expr for c in pr.path])])
-            Ucl = ca.horzcat(U, U[:, N - 1])  # the last node sees the last control
-            add("path", H.map(N + 1)(X, Ucl, ca.repmat(P, 1, N + 1)),
-                ca.repmat(ca.vertcat(*[c.lower for c in pr.path]), N + 1, 1),
-                ca.repmat(ca.vertcat(*[c.upper for c in pr.path]), N + 1, 1))
-        if pr.initial:
-            G0 = ca.Function("G0", [xs, ps], [ca.vertcat(*[c.expr for c in pr.initial])])
-            add("initial", G0(X[:, 0], P), ca.vertcat(*[c.lower for c in pr.initial]),
-                ca.vertcat(*[c.upper for c in pr.initial]))
-        if pr.terminal:
-            GT = ca.Function("GT", [xs, Ts, ps], [ca.vertcat(*[c.expr for c in pr.terminal])])
-            add("terminal", GT(X[:, N], T, P), ca.vertcat(*[c.lower for c in pr.terminal]),
-                ca.vertcat(*[c.upper for c in pr.terminal]))
-        mayer = ca.Function("phi", [xs, Ts, ps], [pr.mayer])
-        J = mayer(X[:, N], T, P) + ca.sum2(Q)
-
-        # bounds on w as functions of the parameters
-        lbu = ca.vertcat(*[pr.control_bounds[k][0] for k in pr.control_names])
-        ubu = ca.vertcat(*[pr.control_bounds[k][1] for k in pr.control_names])
-        inf = ca.SX.inf(nx * (N + 1))
-        lbw = [ca.SX(pr.T_bounds[0])] if nT else []
-        ubw = [ca.SX(pr.T_bounds[1])] if nT else []
-        lbw += [-inf, ca.repmat(lbu, N, 1)]
-        ubw += [inf, ca.repmat(ubu, N, 1)]
-        self._bounds = ca.Function("bounds", [ps], [ca.vertcat(*lbw), ca.vertcat(*ubw),
-                                                    ca.vertcat(*lbg), ca.vertcat(*ubg)])
-        self._nlp = {"x": w, "p": P, "f": J, "g": ca.vertcat(*g)}
-        self.layout = _Layout(0 if nT else None, slice(nT, nT + nx * (N + 1)),
-                              slice(nT + nx * (N + 1), nw), blocks)
-        self.n_w, self.n_g = nw, n
-        self._mayer = mayer
-        self.n_builds += 1
-
-    def _solver(self, warm: bool):
-        if warm not in self._solvers:
-            ipopt = dict(self.ipopt_options)
-            if warm:
-                ipopt.update(warm_start_init_point="yes", warm_start_bound_push=1e-9,
-                             warm_start_mult_bound_push=1e-9, mu_init=1e-6)
-            opts = {"ipopt": ipopt, "print_time": False, "error_on_fail": False,
-                    "expand": self.expand}
-            self._solvers[warm] = ca.nlpsol(f"{self.problem.name}_ms", "ipopt", self._nlp, opts)
-        return self._solvers[warm]
-
-    # ------------------------------------------------------------------ solve
-    def param_vector(self, params: dict[str, float]) -> np.ndarray:
-        names = self.problem.param_names
-        unknown = set(params) - set(names)
-        if unknown:
-            raise ValueError(f"unknown parameter(s) {sorted(unknown)}")
-        missing = [k for k in names if k not in params]
-        if missing:
-            raise ValueError(f"missing parameter(s) {missing}")
-        pv = np.array([float(params[k]) for k in names])
-        if not np.all(np.isfinite(pv)):
-            raise ValueError("parameters must be finite")
-        return pv
-
-    def initial_guess(self, T: float | None = None, x=None, u=None) -> np.ndarray:
-        """Decision vector from a final time, states and controls.
-
-        ``x``: array (N+1, nx), (nx,) or a function of normalised time in [0, 1];
-        ``u``: array (N, nu), (nu,) or a function likewise.
-        """
-        pr, N = self.problem, self.N
-        w = np.zeros(self.n_w)
-        if self.layout.iT is not None:
-            w[0] = pr.T_guess if T is None else T
-        s = np.linspace(0, 1, N + 1)
-        X = _fill(x, s, pr.nx)
-        U = _fill(u, s[:-1], pr.nu)
-        w[self.layout.iX] = X.ravel()
-        w[self.layout.iU] = U.ravel()
-        return w
-
-    def solve(self, params: dict[str, float], guess: Solution | np.ndarray | None = None,
-              warm_start: Solution | None = None) -> Solution:
-        """Solve for the given parameter values.
+    def initial_guess(self, T: float | None = None, x: Any = None, u: Any = None,
+                      params: dict[str, float] | None = None) -> np.ndarray:
+        """Decision vector from a final time, states and controls (single phase).
 
         Parameters
         ----------
-        params : dict
-            A value for every declared parameter.
-        guess : Solution or decision vector, optional
-            Primal starting point (cold start). Default: :meth:`initial_guess`.
-        warm_start : Solution, optional
-            Start from this solution's primal and dual values (Ipopt warm start).
-
-        Raises
-        ------
-        InfeasibleError, SolveError
-            Carrying Ipopt's status and the last iterate.
+        T : float, optional
+            Final time (if free).
+        x : array (N+1, nx), (nx,) or callable of normalised time in [0, 1], optional
+            States at the nodes.
+        u : array (N, nu), (nu,) or callable likewise, optional
+            Controls on the intervals.
+        params : dict, optional
+            Parameter values for the defaults of what is not given (see
+            :meth:`default_guess`).
         """
-        pv = self.param_vector(params)
-        lbw, ubw, lbg, ubg = (np.array(v, dtype=float).ravel() for v in self._bounds(pv))
-        args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg}
-        if warm_start is not None:
-            args.update(x0=warm_start.w, lam_x0=warm_start.lam_x, lam_g0=warm_start.lam_g)
-        elif isinstance(guess, Solution):
-            args["x0"] = guess.w
-        elif guess is not None:
-            args["x0"] = np.asarray(guess, dtype=float)
+        w = self.default_guess(params)
+        lay, pr, N = self.layout, self.multiphase.phases[0], self.nodes[0]
+        if lay.iT is not None and T is not None:
+            w[lay.iT] = T
+        s = np.linspace(0, 1, N + 1)
+        if x is not None:
+            w[lay.iX] = _fill(x, s, pr.nx).ravel()
+        if u is not None:
+            w[lay.iU] = _fill(u, s[:-1], pr.nu).ravel()
+        return w
+
+
+class Collocation(Transcription):
+    """Direct collocation on Legendre-Gauss-Radau points, with mesh refinement.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    intervals : int or sequence of int
+        Number of (equal) mesh intervals per phase.
+    degree : int
+        Collocation points per interval (state polynomial degree); 3 gives
+        order 5 at the mesh points.
+    mesh : array or sequence of arrays, optional
+        Normalised mesh points in [0, 1] per phase (overrides ``intervals``).
+    ipopt_options : dict, optional
+        Overrides of :data:`DEFAULT_IPOPT`.
+    expand : bool
+        Expand the NLP to SX (default True: collocation graphs are small).
+    verify, verify_tol, verify_points
+        The post-solve check between nodes (see :class:`ocp.nlp.Transcription`).
+
+    Every solution carries ``mesh_error``, the largest interval error
+    estimate of :mod:`ocp.mesh` (relative; compare it with the accuracy you
+    need, or call :meth:`refine`).
+    """
+
+    method = "collocation"
+
+    def __init__(self, problem: Problem, intervals: int | Sequence[int] = 20, degree: int = 3,
+                 mesh: Any = None, ipopt_options: dict | None = None, expand: bool = True, *,
+                 verify: str = "warn", verify_tol: float = 1e-6,
+                 verify_points: int = 10) -> None:
+        n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
+        self.degree = positive_int(degree, "degree")
+        if mesh is None:
+            ns = [positive_int(n, "intervals") for n in _per_phase(intervals, n_ph,
+                                                                   "intervals")]
+            self.meshes = [np.linspace(0.0, 1.0, n + 1) for n in ns]
         else:
-            args["x0"] = self.initial_guess()
-        solver = self._solver(warm_start is not None)
-        t0 = time.perf_counter()
-        res = solver(**args)
-        elapsed = time.perf_counter() - t0
-        stats = solver.stats()
-        sol = Solution.from_nlp(self, dict(zip(self.problem.param_names, pv, strict=True)),
-                                res, stats, elapsed)
-        if not sol.success:
-            cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
-            raise cls(sol.status, sol, f"Ipopt failed: {sol.status} after {sol.iterations} "
-                                       f"iterations")
+            meshes = [mesh] if n_ph == 1 and np.ndim(mesh[0]) == 0 else list(mesh)
+            self.meshes = [_check_mesh(m) for m in _per_phase(meshes, n_ph, "mesh")]
+        super().__init__(problem, ipopt_options, expand, verify, verify_tol, verify_points)
+        counts = [m.size - 1 for m in self.meshes]
+        self.N: int | list[int] = counts[0] if n_ph == 1 else counts
+
+    def _discretize(self) -> list[PhaseDiscretization]:
+        return [CollocationPhase(cp, tm, m, self.degree)
+                for cp, tm, m in zip(self.compiled, self.times, self.meshes, strict=True)]
+
+    def _solve(self, params: dict[str, float] | None, guess: Any,
+               warm_start: Solution | None, verify_mode: str) -> Solution:
+        """Solve, and attach the discretisation error estimate (``sol.mesh_error``)."""
+        sol = super()._solve(params, guess, warm_start, verify_mode)
+        sol.mesh_error = float(max(interval_errors(ph).max() for ph in sol.phases))
+        return sol
+
+    def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
+        """A new collocation of the same problem and options on other meshes.
+
+        Parameters
+        ----------
+        meshes : list of ndarray
+            Normalised mesh points per phase.
+        verify : str, optional
+            Override of the post-solve check mode.
+        """
+        return Collocation(self.problem, degree=self.degree, mesh=meshes,
+                           ipopt_options=self.ipopt_options, expand=self.expand,
+                           verify=verify or self.verify, verify_tol=self.verify_tol,
+                           verify_points=self.verify_points)
+
+    def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
+               max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
+               max_split: int = 8) -> Solution:
+        """Solve, then refine the mesh until every interval's error estimate is below ``tol``.
+
+        Parameters
+        ----------
+        params : dict, optional
+            Parameter values.
+        tol : float
+            Requested relative accuracy of the states (and cost quadratures).
+        max_rounds : int
+            Most refinements (each builds and solves one NLP).
+        max_intervals : int
+            Stop before a mesh (all phases) would exceed this many intervals.
+        guess : Solution or decision vector, optional
+            Start of the first solve.
+        max_split : int
+            Most pieces an interval is split into per round.
+
+        The error of an interval is the larger of its estimate (see
+        :mod:`ocp.mesh`) and the path-constraint violation found inside it on
+        the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
+        relaxes bounds by about 1e-8), so refinement also closes gaps between
+        points.
+
+        Returns
+        -------
+        Solution
+            On the last mesh; ``mesh_history`` lists every round,
+            ``mesh_error`` is the final estimate and ``mesh_converged`` tells
+            whether it met ``tol``. ``sol.transcription`` re-solves on that mesh.
+        """
+        tr = self  # every round is checked between points by the refinement itself
+        sol = tr._solve(params, guess, None, "off")
+        history: list[MeshRound] = []
+        for rnd in range(max_rounds + 1):
+            errs = [np.maximum(interval_errors(ph), self._gaps(ph, sol.params))
+                    for ph in sol.phases]
+            emax = float(max(e.max() for e in errs))
+            history.append(MeshRound([e.size for e in errs], emax, sol.objective,
+                                     sol.iterations, sol.solve_time))
+            new = [refine_mesh(m, e, tol, self.degree, max_split)
+                   for m, e in zip(tr.meshes, errs, strict=True)]
+            if emax <= tol or rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
+                break
+            tr = tr.with_mesh(new)
+            try:
+                sol = tr._solve(params, sol, None, "off")
+            except SolveError:  # the previous mesh's solution may mislead: start afresh
+                sol = tr._solve(params, guess, None, "off")
+        sol.mesh_history, sol.mesh_error, sol.mesh_converged = history, emax, emax <= tol
+        verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
 
 
-def _fill(spec, s: np.ndarray, n: int) -> np.ndarray:
+    def _gaps(self, ph: Solution, params: dict[str, float]) -> np.ndarray:
+        excess = interval_excess(ph, params, self.verify_points)
+        return np.where(excess > self.verify_tol, excess, 0.0)
+
+
+def transcribe(problem: Problem, method: str = "multiple_shooting", **options: Any
+               ) -> Transcription:
+    """A transcription of ``problem`` by ``method`` ("multiple_shooting" or "collocation").
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    method : str
+        ``"multiple_shooting"`` (alias ``"ms"``) or ``"collocation"`` (alias ``"radau"``).
+    **options
+        Passed to :class:`MultipleShooting` or :class:`Collocation`.
+    """
+    m = method.lower()
+    if m in ("multiple_shooting", "ms", "shooting"):
+        return MultipleShooting(problem, **options)
+    if m in ("collocation", "radau", "lgr"):
+        return Collocation(problem, **options)
+    raise ProblemDefinitionError(f"method must be 'multiple_shooting' or 'collocation', got "
+                                 f"{method!r}")
+
+
+def _check_mesh(mesh: Any) -> np.ndarray:
+    m = np.asarray(mesh, dtype=float).ravel()
+    if m.size < 2 or m[0] != 0.0 or m[-1] != 1.0 or np.any(np.diff(m) <= 0):
+        raise ProblemDefinitionError("mesh must increase strictly from 0 to 1")
+    return m
+
+
+def _fill(spec: Any, s: np.ndarray, n: int) -> np.ndarray:
     if spec is None:
         return np.zeros((len(s), n))
     if callable(spec):
@@ -286,13 +306,28 @@ def _fill(spec, s: np.ndarray, n: int) -> np.ndarray:
     return a
 
 
-def continuation(transcription: MultipleShooting, params: dict[str, float], name: str,
-                 values, guess: Solution | np.ndarray | None = None,
+def continuation(transcription: Transcription, params: dict[str, float], name: str,
+                 values: Any, guess: Solution | np.ndarray | None = None,
                  progress: bool = False) -> list[Solution]:
     """Solve along ``values`` of one parameter, each solve warm-started from the last.
 
     If a warm-started solve fails, it is retried once from the previous primal
     point only (a cold start), then the error is raised.
+
+    Parameters
+    ----------
+    transcription : Transcription
+        A multiple-shooting or collocation transcription.
+    params : dict
+        Values of the other parameters.
+    name : str
+        The parameter to vary.
+    values : iterable of float
+        Its values, in order.
+    guess : Solution or decision vector, optional
+        Start of the first solve.
+    progress : bool
+        Show a progress bar (tqdm).
     """
     out: list[Solution] = []
     prev = guess if isinstance(guess, Solution) else None

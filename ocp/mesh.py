@@ -1,0 +1,122 @@
+"""Mesh refinement for collocation: an error estimate per interval and an h-method.
+
+Error estimate (after Patterson, Hager and Rao's ph method in GPOPS-II): on
+every mesh interval, evaluate the solution's state and control polynomials at
+the ``d + 1`` Radau points of one degree higher, evaluate the dynamics there,
+and integrate them with that higher-degree quadrature from the interval's
+start. The largest difference between this integral and the state polynomial,
+relative to ``1 + max |x_i|`` over the phase, is the interval's error; the
+same comparison of the running cost's and integrals' quadratures (relative to
+``1 + |their total|``) is added, so the objective is refined too.
+
+Refinement (h): every interval whose error exceeds the tolerance is split into
+``n = clip(ceil((e / tol)^(1 / (d + 1))), 2, max_split)`` equal parts (the
+local error of a degree-``d`` interpolant scales as ``h^(d+1)``); a new NLP
+is built on the new mesh and solved from the previous solution resampled.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .collocation import CollocationPhase, radau_points
+
+
+@dataclass
+class MeshRound:
+    """One solve of a mesh-refinement run."""
+
+    intervals: list[int]  # per phase
+    max_error: float
+    objective: float
+    iterations: int
+    solve_time: float
+
+
+def integration_matrix(nodes: np.ndarray) -> np.ndarray:
+    """``I[l, m] = int_0^{nodes_l} ell_m(s) ds`` for the Lagrange basis on ``nodes``.
+
+    Parameters
+    ----------
+    nodes : ndarray
+        Interpolation nodes in [0, 1].
+    """
+    n = nodes.size
+    out = np.zeros((n, n))
+    for m in range(n):
+        poly = np.poly1d([1.0])
+        for r in range(n):
+            if r != m:
+                poly *= np.poly1d([1.0, -nodes[r]]) / (nodes[m] - nodes[r])
+        out[:, m] = np.polyint(poly)(nodes)
+    return out
+
+
+def interval_errors(ph: Any) -> np.ndarray:
+    """Relative error estimate of every mesh interval of a collocation phase solution.
+
+    Parameters
+    ----------
+    ph : Solution
+        One phase of a collocation solution.
+
+    Returns
+    -------
+    ndarray, shape (N,)
+        The error estimate per mesh interval (see the module docstring).
+    """
+    disc: CollocationPhase = ph.discretization
+    data, N, d = ph.data, disc.N, disc.d
+    ch = radau_points(d + 1)
+    Ihat = integration_matrix(ch)
+    mesh, h = data.mesh, np.diff(data.mesh)
+    k = np.repeat(np.arange(N), d + 1)
+    theta = np.tile(ch, N)
+    x, u = disc.local(data, k, theta)
+    t = mesh[k] + h[k] * theta
+    f, qd = disc.cp.ode.map(t.size)(t[None, :], x.T, u.T, data.s)
+    F = np.array(f, dtype=float).T.reshape(N, d + 1, -1)
+    Xint = data.raw["X"][:N, None, :] + h[:, None, None] * np.einsum("lm,kmi->kli", Ihat, F)
+    scale = 1.0 + np.max(np.abs(data.x), axis=0)
+    err = np.max(np.abs(Xint - x.reshape(N, d + 1, -1)) / scale, axis=(1, 2))
+    if disc.cp.nq:
+        Q = np.array(qd, dtype=float).T.reshape(N, d + 1, -1)
+        q_hat = h[:, None] * np.einsum("m,kmi->ki", Ihat[-1], Q)
+        tc = data.t[1:]
+        _, qc = disc.cp.ode.map(tc.size)(tc[None, :], data.x[1:].T, data.u.T, data.s)
+        Qc = np.array(qc, dtype=float).T.reshape(N, d, -1)
+        q_col = h[:, None] * np.einsum("j,kji->ki", disc.B, Qc)
+        qscale = 1.0 + np.abs(q_col.sum(axis=0))
+        err = np.maximum(err, np.max(np.abs(q_hat - q_col) / qscale, axis=1))
+    return err
+
+
+def refine_mesh(tau: np.ndarray, err: np.ndarray, tol: float, degree: int,
+                max_split: int = 8) -> np.ndarray:
+    """Split every interval whose error exceeds ``tol`` (normalised mesh in, mesh out).
+
+    Parameters
+    ----------
+    tau : ndarray, shape (N+1,)
+        Normalised mesh points.
+    err : ndarray, shape (N,)
+        Error estimate per interval.
+    tol : float
+        Requested accuracy.
+    degree : int
+        Collocation degree ``d``.
+    max_split : int
+        Most pieces an interval is split into per round.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(np.isfinite(err), err / tol, np.inf)
+        n = np.ceil(ratio ** (1.0 / (degree + 1)))
+    n = np.where(err > tol, np.clip(np.nan_to_num(n, nan=max_split, posinf=max_split), 2,
+                                    max_split), 1).astype(int)
+    starts = np.repeat(tau[:-1], n)
+    widths = np.repeat(np.diff(tau) / n, n)
+    frac = np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 1
+    return np.r_[tau[0], starts + widths * frac]
