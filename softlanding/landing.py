@@ -310,8 +310,9 @@ def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
     """
     res = simulate(robot.without_force_limit(), impact, Rigid(), ground)
     T = res.t_first_stop if math.isfinite(res.t_first_stop) else 1.0
-    traj = res.trajectory(t_end=T, n=tr.N + 1)
-    t = np.linspace(0, T, tr.N + 1)
+    N = int(tr.N)  # type: ignore[arg-type]  # a one-phase transcription
+    traj = res.trajectory(t_end=T, n=N + 1)
+    t = np.linspace(0, T, N + 1)
     X = np.column_stack([np.interp(t, traj.t, traj.x[:, i]) for i in range(4)])
     u_max = _validate(robot)
     U = np.clip(np.interp(t[:-1], traj.t, traj.u[:, 0]), -u_max, u_max)[:, None]
