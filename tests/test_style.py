@@ -1,4 +1,5 @@
-"""The code base is ruff-clean (part of the README's test command; ruff is in [test])."""
+"""The code base is ruff-clean and type-checks (part of the README's test command; ruff and
+mypy are in [test])."""
 
 import subprocess
 import sys
@@ -10,4 +11,11 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_ruff_clean():
     p = subprocess.run([sys.executable, "-m", "ruff", "check", str(ROOT)],
                        capture_output=True, text=True)
+    assert p.returncode == 0, p.stdout + p.stderr
+
+
+def test_mypy_clean():
+    """The type checker passes on softlanding and ocp (configured in pyproject.toml)."""
+    p = subprocess.run([sys.executable, "-m", "mypy", "--no-error-summary"], cwd=ROOT,
+                       capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stdout + p.stderr
