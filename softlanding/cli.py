@@ -154,6 +154,7 @@ def _cmd_solve(a: argparse.Namespace) -> int:
     if a.pmp:
         from ocp import certify
 
+        assert res.transcribed is not None  # a cold solve always transcribes
         cert = certify(res.transcribed, res.refined)
     written = []
     if plot:

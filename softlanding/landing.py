@@ -23,7 +23,9 @@ the body's weight, is replayed in the exact hybrid simulator as a check.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -32,7 +34,8 @@ import casadi as ca
 import numpy as np
 
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
-from ocp.switching import RefinedSwitching, detect_arcs, refine_switching
+from ocp.errors import PathViolationWarning
+from ocp.switching import RefinedSwitching, detect_arcs, refine_structure, refine_switching
 
 from ._jsonutil import json_safe
 from ._progress import progress as show_progress
@@ -184,6 +187,11 @@ class BangBangLanding:
         What was dropped or failed on the way.
     refine_requested : bool
         Whether the switching times were to be refined.
+    path : str
+        What produced the result: ``"transcription"`` (transcribed NLP, then the
+        switching-time refinement) or ``"structure"`` (the neighbour's arc structure
+        re-solved directly, by Newton or a small NLP: no transcription, so
+        ``transcribed`` is None and ``depth_transcribed`` NaN).
     """
 
     robot: Robot
@@ -200,10 +208,11 @@ class BangBangLanding:
     iterations: int
     solve_time_s: float
     refined: RefinedSwitching | None
-    transcribed: Solution
+    transcribed: Solution | None
     replay: LandingResult | None = None
     notes: list[str] = field(default_factory=list)
     refine_requested: bool = True
+    path: str = "transcription"
 
     def unverified_reasons(self, certificate: Any = None) -> list[str]:
         """Why this result cannot be taken as proven (empty: every check passed).
@@ -221,6 +230,9 @@ class BangBangLanding:
         out = []
         if self.refine_requested and self.refined is None:
             out.append("switching times not refined (" + "; ".join(self.notes) + ")")
+        if self.refined is None and self.transcribed is not None and not getattr(
+                self.transcribed, "verified", True):
+            out.append("the transcription violates a path constraint between its nodes")
         if self.replay is not None:
             rp = self.replay
             if not rp.rest_proven:
@@ -251,6 +263,7 @@ class BangBangLanding:
                     if d > 1e-14]
             xT = self.refined.xT
         else:
+            assert self.transcribed is not None
             u = self.transcribed.u[:, 0]
             h = self.transcribed.T / self.transcribed.N
             durs, vals = [h] * len(u), list(u)
@@ -269,6 +282,7 @@ class BangBangLanding:
              "switch_times": self.switch_times, "arcs": self.arcs, "u_b": self.u_b,
              "arrest_active": self.arrest_active, "status": self.status,
              "iterations": self.iterations, "solve_time_s": self.solve_time_s,
+             "path": self.path + ("" if self.refined is None else f" ({self.refined.path})"),
              "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
              "ground": self.ground.to_dict(), "notes": self.notes}
         if self.refined is not None:
@@ -343,18 +357,30 @@ def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: G
 
 
 def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Ground,
-                 nodes: int, warm_start: Solution | None) -> Solution:
-    """The transcribed solve (warm-started if possible); infeasibility is explained."""
+                 nodes: int, warm_start: Solution | None, notes: list[str]) -> Solution:
+    """The transcribed solve (warm-started if possible); infeasibility is explained.
+
+    A transcription that violates a path constraint between its nodes is noted (its
+    ``verified`` flag is False); the refined solution and the exact replay are checked
+    instead.
+    """
     params = _ocp_params(robot, impact)
-    try:
-        if warm_start is not None:
-            try:
-                return tr.solve(params, warm_start=warm_start)
-            except SolveError:
-                pass
-        return tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
-    except InfeasibleError as err:
-        raise _explain_infeasible(err, robot, impact, ground, nodes) from None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PathViolationWarning)
+        try:
+            sol = None
+            if warm_start is not None:
+                try:
+                    sol = tr.solve(params, warm_start=warm_start)
+                except SolveError:
+                    pass
+            if sol is None:
+                sol = tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
+        except InfeasibleError as err:
+            raise _explain_infeasible(err, robot, impact, ground, nodes) from None
+    notes += [f"transcription: {w.message}".split("; refine the grid")[0] for w in caught
+              if issubclass(w.category, PathViolationWarning)]
+    return sol
 
 
 def _refined(sol: Solution, extra_arcs: int,
@@ -379,9 +405,64 @@ def _refined(sol: Solution, extra_arcs: int,
         return None, st
 
 
+def build_landing_problem_of(nodes: int, ground: Ground) -> OptimalControlProblem:
+    """The (cached) landing problem of :func:`landing_transcription` (one phase).
+
+    Parameters
+    ----------
+    nodes : int
+        Shooting intervals of the transcription it belongs to.
+    ground : Ground
+        Ground model.
+    """
+    problem = landing_transcription(nodes, ground=ground).problem
+    assert isinstance(problem, OptimalControlProblem)
+    return problem
+
+
+def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, ground: Ground,
+                       nodes: int) -> RefinedSwitching | None:
+    """The neighbour's arc structure re-solved for this landing (None if it does not hold)."""
+    if prev.refined is None or prev.ground != ground:
+        return None
+    problem = build_landing_problem_of(nodes, ground)
+    try:
+        r = refine_structure(problem, prev.refined.modes, prev.refined.durations,
+                             impact.initial_state(robot), _ocp_params(robot, impact))
+    except SolveError:
+        return None
+    # the structure must still be the optimum's: arcs that collapsed or a path constraint
+    # violated between the samples send the solve back to the transcription
+    if min(r.durations) <= 1e-9 * r.T or r.path_violation() > 1e-9:
+        return None
+    return r
+
+
+def _landing(robot: Robot, impact: Impact, ground: Ground, sol: Solution | None,
+             refined: RefinedSwitching | None, structure: Any, notes: list[str],
+             refine: bool, path: str) -> BangBangLanding:
+    """Assemble the result (depth, arrest condition, arcs) from what was solved."""
+    assert refined is not None or sol is not None
+    xT = refined.xT if refined is not None else sol.x[-1]  # type: ignore[union-attr]
+    depth = -xT[2]
+    u_b = arrest_force(robot.r_m, xT)
+    gap = depth - robot.foot_mass - u_b
+    src = refined if refined is not None else structure
+    return BangBangLanding(
+        robot=robot, impact=impact, ground=ground, depth=float(depth),
+        depth_transcribed=float(-sol.x[-1, 2]) if sol is not None else math.nan,
+        T=float(refined.T if refined is not None else sol.T),  # type: ignore[union-attr]
+        arcs=list(src.kinds), switch_times=[float(t) for t in src.switch_times],
+        u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
+        status=sol.status if sol is not None else refined.status,  # type: ignore[union-attr]
+        iterations=sol.iterations if sol is not None else refined.iterations,  # type: ignore
+        solve_time_s=sol.solve_time if sol is not None else refined.solve_time,  # type: ignore
+        refined=refined, transcribed=sol, notes=notes, refine_requested=refine, path=path)
+
+
 def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                   ground: Ground = LINEAR_GROUND, *, nodes: int = 100, refine: bool = True,
-                  extra_arcs: int = 0, warm_start: Solution | None = None,
+                  extra_arcs: int = 0, warm_start: Solution | BangBangLanding | None = None,
                   replay: bool = True) -> BangBangLanding:
     """Solve the soft-landing OCP; refine the switching times; replay in the simulator.
 
@@ -399,8 +480,11 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         Refine the switching times with exact arcs.
     extra_arcs : int
         Also try this many more bang arcs (>= 0).
-    warm_start : Solution, optional
-        A neighbouring solution (continuation).
+    warm_start : ocp.Solution or BangBangLanding, optional
+        A neighbouring solution (continuation). A refined :class:`BangBangLanding`
+        is first tried as a structure: its arcs are re-solved directly for this
+        landing (no transcription; ``path == "structure"``), and the transcription
+        is solved only if that fails.
     replay : bool
         Replay the schedule in the exact simulator.
 
@@ -421,25 +505,20 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     _validate(robot)
     nodes = check_count("nodes", nodes, 2, MAX_NODES)
     extra_arcs = check_count("extra_arcs", extra_arcs, 0, 20)
-    tr = landing_transcription(nodes, ground=ground)
-    sol = _transcribed(tr, robot, impact, ground, nodes, warm_start)
-    notes: list[str] = []
-    refined, st = _refined(sol, extra_arcs, notes) if refine else (None, None)
-    xT = refined.xT if refined is not None else sol.x[-1]
-    structure = st if st is not None else detect_arcs(sol)
-    depth = -xT[2]
-    u_b = arrest_force(robot.r_m, xT)
-    gap = depth - robot.foot_mass - u_b
-    out = BangBangLanding(
-        robot=robot, impact=impact, ground=ground, depth=float(depth),
-        depth_transcribed=float(-sol.x[-1, 2]),
-        T=float(refined.T if refined is not None else sol.T),
-        arcs=list(refined.kinds if refined is not None else structure.kinds),
-        switch_times=[float(t) for t in (refined.switch_times if refined is not None
-                                         else structure.switch_times)],
-        u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
-        status=sol.status, iterations=sol.iterations, solve_time_s=sol.solve_time,
-        refined=refined, transcribed=sol, notes=notes, refine_requested=refine)
+    out = None
+    if isinstance(warm_start, BangBangLanding):
+        if refine and extra_arcs == 0:
+            r = _structure_resolve(warm_start, robot, impact, ground, nodes)
+            if r is not None:
+                out = _landing(robot, impact, ground, None, r, None, [], True, "structure")
+        warm_start = warm_start.transcribed
+    if out is None:
+        tr = landing_transcription(nodes, ground=ground)
+        notes: list[str] = []
+        sol = _transcribed(tr, robot, impact, ground, nodes, warm_start, notes)
+        refined, st = _refined(sol, extra_arcs, notes) if refine else (None, None)
+        out = _landing(robot, impact, ground, sol, refined, st or detect_arcs(sol), notes,
+                       refine, "transcription")
     if replay:
         out.replay = simulate(robot, impact, out.schedule(), ground)
     return out
@@ -450,7 +529,9 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
                   replay: bool = False) -> list[BangBangLanding]:
     """Bang-bang depth over impact velocities, by continuation (each solve warm-starts the next).
 
-    The values are solved in the given order; start from the easy end.
+    The values are solved in the given order; start from the easy end. After the first,
+    each landing re-solves its neighbour's arc structure directly (``path ==
+    "structure"``) and falls back to the transcription when the structure changes.
 
     Parameters
     ----------
@@ -473,12 +554,17 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
     _validate(robot)
     it = show_progress(impacts, progress, "bang-bang sweep", "solve")
     out: list[BangBangLanding] = []
-    prev = None
+    prev: BangBangLanding | None = None
+    last_transcribed: Solution | None = None
     for imp in it:
         res = solve_landing(imp, robot, ground, nodes=nodes, refine=refine, warm_start=prev,
                             replay=replay)
         out.append(res)
-        prev = res.transcribed
+        last_transcribed = res.transcribed or last_transcribed
+        prev = res
+        if prev.transcribed is None and last_transcribed is not None:
+            # a structure re-solve has no transcription: keep the last one as warm start
+            prev = dataclasses.replace(prev, transcribed=last_transcribed)
     return out
 
 

@@ -95,6 +95,7 @@ def bang_bang_example(out: Path, files: list[str]) -> dict:
     from .landing import solve_landing
 
     res = solve_landing(BANG_BANG_V0, PAPER_ROBOT)
+    assert res.transcribed is not None  # a cold solve always transcribes
     cert = certify(res.transcribed, res.refined)
     _save(plot_bang_bang(res), out, "fig_bang_bang_trajectory", files)
     return {"v0": BANG_BANG_V0, **PAPER_ROBOT.to_dict(), "depth": res.depth,
