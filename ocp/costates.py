@@ -137,8 +137,14 @@ class _JointArc:
         pr = dyn.problem
         lam = ca.SX.sym("lam", pr.nx)
         H = ca.SX(dyn.problem.lagrange) + ca.dot(lam, pr.rhs)
-        # open-loop adjoint: u held at the arc's value (bang arcs)
-        Hx = ca.substitute(ca.gradient(H, pr.x), pr.u, dyn.u)
+        if dyn.held and all(dyn.orders[c] == 0 for c in dyn.held):
+            # a boundary arc of mixed constraints c(x, u) (relative degree 0): the adjoint
+            # with the constraint's multiplier, lam' = -H_x - nu c_x with nu = -H_u / c_u,
+            # is the closed-loop one, -d/dx H(x, u(x), lam)
+            Hx = ca.gradient(ca.substitute(H, pr.u, dyn.u), pr.x)
+        else:
+            # open-loop adjoint: u held at the arc's value (bang arcs)
+            Hx = ca.substitute(ca.gradient(H, pr.x), pr.u, dyn.u)
         y = ca.vertcat(pr.x, lam)
         ydot = ca.vertcat(dyn.rhs, -Hx)
         self.exact = dyn.exact and is_affine(ydot, y)
@@ -229,7 +235,11 @@ def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> Adjoi
     Z = ref.junctions()
     modes = ref.interval_modes
     xT, T = Z[-1][:pr.nx], float(np.sum(ref.durations))
-    lamT, H_exp = terminal_costate(pr, xT, T, pv, ref.terminal_multipliers)
+    if ref.terminal_costate is not None:  # a phase of a multi-phase problem
+        lamT, H_given = ref.terminal_costate
+        lamT = np.asarray(lamT, dtype=float)
+    else:
+        lamT, H_given = terminal_costate(pr, xT, T, pv, ref.terminal_multipliers)
     edges = np.r_[0.0, np.cumsum(ref.durations)]
     y = np.r_[xT, lamT]
     parts: list[tuple] = []
@@ -252,7 +262,8 @@ def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> Adjoi
     steps.reverse()
     cat = [np.concatenate([p[i] for p in parts]) for i in range(5)]
     return AdjointSweep(cat[0], cat[1], cat[2], cat[3], cat[4].astype(int),
-                        H_exp if pr.time_free else None, float(edges[first]), 0.0, err_x, steps)
+                        H_given if pr.time_free else None, float(edges[first]), 0.0, err_x,
+                        steps)
 
 
 def adjoint_sweep(ref: RefinedSwitching, t_start: float = 0.0, points: int = 2000) -> AdjointSweep:

@@ -239,8 +239,59 @@ def switch_gap(t: np.ndarray, s: np.ndarray, zeros: np.ndarray, ts: float) -> fl
     return float(np.min(np.abs(zeros - ts))) if len(zeros) else math.inf
 
 
+def is_mixed(pr: OptimalControlProblem, name: str | None) -> bool:
+    """True when path constraint ``name`` involves a control (a mixed constraint
+    ``c(x, u)``): held on a boundary arc it bounds the control, the costate does not jump.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    name : str or None
+        A path constraint's name (None: False).
+    """
+    return any(c.name == name and ca.depends_on(c.expr, pr.u) for c in pr.path)
+
+
+def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
+                     pv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Control bounds tightened by the mixed constraints, at each sample: (m, nu) each.
+
+    A mixed constraint ``lo <= a(x) + b(x) u_j <= hi`` affine in one control ``u_j``
+    bounds it to an interval; the minimum principle then selects the ends of the
+    intersection. Mixed constraints in several controls are not used.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    x : ndarray (m, nx)
+        States at the samples.
+    pv : ndarray
+        Parameter values.
+    """
+    m = len(x)
+    los, his = np.empty((m, pr.nu)), np.empty((m, pr.nu))
+    for j, name in enumerate(pr.control_names):
+        lo, hi = pr.control_bounds[name]
+        los[:, j], his[:, j] = (float(v) for v in ca.Function("b", [pr.p], [lo, hi])(pv))
+    for c in pr.path:
+        uses = [j for j in range(pr.nu) if ca.depends_on(c.expr, pr.u[j])]
+        if len(uses) != 1 or ca.depends_on(ca.jacobian(c.expr, pr.u), pr.u):
+            continue
+        j = uses[0]
+        a = ca.substitute(c.expr, pr.u, ca.DM.zeros(pr.nu))
+        fn = ca.Function("ab", [pr.x, pr.p], [a, ca.jacobian(c.expr, pr.u[j]), c.lower,
+                                              c.upper])
+        av, bv, lc, hc = (v.ravel() for v in along(fn, x, pv))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ends = np.stack([(lc - av) / bv, (hc - av) / bv])
+        ok = np.abs(bv) > 1e-300
+        los[ok, j] = np.maximum(los[ok, j], np.min(ends, axis=0)[ok])
+        his[ok, j] = np.minimum(his[ok, j], np.max(ends, axis=0)[ok])
+    return los, his
+
+
 def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
-                        pv: np.ndarray, tol: float) -> np.ndarray:
+                        pv: np.ndarray, tol: float, state_only: bool = False) -> np.ndarray:
     """Where some path constraint is within ``tol * max(1, |value|)`` of a limit.
 
     Parameters
@@ -251,16 +302,19 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
     pv : ndarray
         Parameter values.
     tol : float
+    state_only : bool
+        Leave out the mixed constraints (those involving a control).
 
     Returns
     -------
     ndarray of bool (m,)
     """
-    if not pr.path:
+    cons = [c for c in pr.path if not (state_only and ca.depends_on(c.expr, pr.u))]
+    if not cons:
         return np.zeros(len(x), dtype=bool)
-    fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
-                                                 ca.vertcat(*[c.lower for c in pr.path]),
-                                                 ca.vertcat(*[c.upper for c in pr.path])])
+    fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in cons]),
+                                                 ca.vertcat(*[c.lower for c in cons]),
+                                                 ca.vertcat(*[c.upper for c in cons])])
     v, lo, hi = along(fn, x, u, pv)
     sc = tol * np.maximum(1.0, np.abs(v))
     return np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc), axis=1)
@@ -320,7 +374,8 @@ class _Figures:
 def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarray,
              u: np.ndarray, lam: np.ndarray, H_exp: float | None, skip: np.ndarray,
              switches: dict[str, list[float]], tol_sigma: float, sigma_floor: np.ndarray,
-             u_tol: float, min_singular: float, interior_check: bool = False) -> _Figures:
+             u_tol: float, min_singular: float, interior_check: bool = False,
+             bounds: tuple[np.ndarray, np.ndarray] | None = None) -> _Figures:
     """Evaluate H and sigma and the sign, switch and singularity checks.
 
     ``skip`` marks samples not judged (constrained, or unresolved by the grid);
@@ -328,7 +383,9 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
     besides ``tol_sigma`` times its scale (the numerical error band); a control
     within ``u_tol`` of a bound (relative to the range) sits at it;
     ``interior_check`` (a transcription) counts a run of small sigma as
-    singular only where the control is inside its bounds.
+    singular only where the control is inside its bounds; ``bounds`` (lower, upper),
+    each (m, nu), are the control bounds at each sample when mixed constraints
+    tighten them (see :func:`effective_bounds`).
     """
     pv = np.array([params[k] for k in pr.param_names], dtype=float)
     fns = pmp_functions(pr)
@@ -360,7 +417,8 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
             room = u_tol * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
             inside = (u[:, j] > lo + room) & (u[:, j] < hi - room)
         singular += _singular_runs(t, s, ~clear & judged, band, min_singular, inside)
-        want = np.where(s < 0, hi, lo)
+        want = np.where(s < 0, hi, lo) if bounds is None else \
+            np.where(s < 0, bounds[1][:, j], bounds[0][:, j])
         agree = np.isfinite(want) & (np.abs(u[:, j] - want) <= u_tol * max(1.0, hi - lo))
         agreement[name] = float(np.sum(dt[clear & agree]) / max(np.sum(dt[clear]), 1e-300)) \
             if clear.any() else 1.0
@@ -431,7 +489,7 @@ def _verdict(definite: list[str], uncertain: list[str], active: list[tuple[float
 
 
 # ------------------------------------------------------------- certificates
-def certify(sol: SolutionLike, refined: RefinedSwitching | None = None, *,
+def certify(sol: SolutionLike, refined: Any = None, *,
             tol_H: float | None = None, tol_sigma: float | None = None,
             tol_switch: float | None = None, min_singular: float | None = None,
             n: int = 2000, verify: bool = True) -> PMPCertificate:
@@ -442,9 +500,12 @@ def certify(sol: SolutionLike, refined: RefinedSwitching | None = None, *,
     sol : Solution
         The transcribed solution (its multipliers give the first costate
         estimate, and its nodes the state-constraint activity).
-    refined : RefinedSwitching, optional
+    refined : RefinedSwitching or RefinedPhases, optional
         The refined solution; when given, H and sigma are evaluated on it with
-        the adjoint-integrated costate, and the two estimates compared.
+        the adjoint-integrated costate, and the two estimates compared. A
+        multi-phase solution needs its :class:`~ocp.phase_refinement.RefinedPhases`
+        and gets a :class:`~ocp.phase_pmp.PhasesCertificate` (phase by phase, with
+        the junction conditions checked).
     tol_H : float, optional
         Allowed ``H_max_abs`` (relative to ``H_scale``): default 1e-6 on a
         refined solution, 1e-2 on the transcription alone.
@@ -462,6 +523,15 @@ def certify(sol: SolutionLike, refined: RefinedSwitching | None = None, *,
         fine (a new transcription, solved from this one); without it such a
         result is only "inconclusive".
     """
+    if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":
+        from .phase_pmp import certify_phases
+        from .phase_refinement import RefinedPhases
+
+        if not isinstance(refined, RefinedPhases):
+            raise ValueError("a multi-phase solution is certified with its refinement: "
+                             "certify(sol, ocp.phase_refinement.refine_phases(sol))")
+        return certify_phases(sol, refined, tol_H=tol_H, tol_sigma=tol_sigma,  # type: ignore
+                              tol_switch=tol_switch, min_singular=min_singular, n=n)
     tsol = transcribed(sol)
     t0 = time.process_time()
     pr = tsol.problem
@@ -501,11 +571,14 @@ def _constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[floa
     edges = np.r_[0.0, np.cumsum(ref.durations)]
     T = float(edges[-1])
     tiny = 1e-10 * max(T, 1.0)
+    pr = ref.problem
     bnd = [(float(edges[k]), float(edges[k + 1])) for k, ms in enumerate(ref.interval_modes)
-           if any(m.kind == "boundary" for m in ms) and ref.durations[k] > tiny]
+           if any(m.kind == "boundary" and not is_mixed(pr, m.constraint) for m in ms)
+           and ref.durations[k] > tiny]
     last = max((b for _, b in bnd), default=0.0)
     t, x, u, _ = ref.samples(n)
-    act = path_activity_along(ref.problem, x, u, ref.pv, 1e-7) & (t > tiny) & (t < T - tiny)
+    act = path_activity_along(pr, x, u, ref.pv, 1e-7, state_only=True) & (t > tiny) & \
+        (t < T - tiny)
     dense = intervals_of(t, act, 2 * T / max(len(t), 1))
     if ref.nlp is not None and "path" in ref.blocks and len(ref.lam_g):
         rows = ref.blocks["path"]
@@ -533,16 +606,19 @@ def _certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: _Tole
     switches = _effective_switches(ref, last)
     floor = np.zeros(pr.nu)
     args = (switches, tol.sigma)
+    mixed = any(ca.depends_on(c.expr, pr.u) for c in pr.path)
+    eff = effective_bounds(pr, sw.x[keep], ref.pv) if mixed else None
     fig = _figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                    sw.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
-                   tol.singular)
+                   tol.singular, bounds=eff)
     base = (ref.integration_error or 0.0) + sw.error_x
     err = {"H": base, "sigma": 0.0, "switch": 0.0, "costate": sw.error_lam, "state": sw.error_x}
     if sw.coarse is not None:
         c = sw.coarse
         cf = _figures(pr, ref.params, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
                       c.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
-                      tol.singular)
+                      tol.singular, bounds=effective_bounds(pr, c.x[keep], ref.pv)
+                      if mixed else None)
         err["H"] += float(np.max(np.abs(fig.H - cf.H), initial=0.0)) / fig.H_scale
         dsig = np.max(np.abs(fig.sigma - cf.sigma), axis=0, initial=0.0)
         err["sigma"] = float(np.max(dsig / np.maximum(np.max(np.abs(fig.sigma), axis=0), 1e-300)))
@@ -552,7 +628,7 @@ def _certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: _Tole
         # samples inside the numerical error band of sigma are not judged
         fig = _figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                        sw.H_expected, np.zeros(int(keep.sum()), bool), *args,
-                       ERROR_MARGIN * dsig, 1e-9, tol.singular)
+                       ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
     definite, uncertain = _judge(fig, tol, err, sw.H_expected is not None)
     verdict, reasons = _verdict(definite, uncertain, active, last, T)
     gap_lam = _costate_gap(sol, ref, sw.t[keep], sw.lam[keep], last)

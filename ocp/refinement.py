@@ -173,75 +173,16 @@ class SwitchingNLP:
         self.n_solves = 0
 
     # ------------------------------------------------------------------ build
-    def _flow(self, k: int, z: ca.SX, tau: ca.SX, p: ca.SX) -> tuple[list[ca.SX], ca.SX]:
-        """Sample states (start and interior points) and the end state of interval k."""
-        d, m = self.dyns[k], self.substeps[k]
-        stride = max(1, m // max(1, self.samples + 1))
-        out: list[ca.SX] = []
-        if d.exact:
-            A, b = d.A_fn(p)
-            n = d.nz
-            M = ca.vertcat(ca.horzcat(A, b), ca.SX.zeros(1, n + 1))
-            E = expm_taylor(M * (tau / m))
-            zz = ca.vertcat(z, 1)
-            for j in range(m):
-                if j % stride == 0:
-                    out.append(zz[:n])
-                zz = ca.mtimes(E, zz)
-            return out, zz[:n]
-        h = tau / m
-        for j in range(m):
-            if j % stride == 0:
-                out.append(z)
-            z = rk8_step(d.f_z, z, h, p)
-        return out, z
-
     def _build(self) -> None:
         pr, K = self.problem, self.K
         nx = pr.nx
         p, tau, x0 = pr.p, ca.SX.sym("tau", K), ca.SX.sym("x0", nx)
         z = ca.vertcat(x0, 0) if self.has_quad else x0
         G = _Blocks()
-        names = [c.name for c in pr.path]
-        hfn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path])]) \
-            if pr.path else None
-        hlo = ca.vertcat(*[c.lower for c in pr.path]) if pr.path else ca.SX(0, 1)
-        hhi = ca.vertcat(*[c.upper for c in pr.path]) if pr.path else ca.SX(0, 1)
-        ends = [z]
         self.entry_names: list[str] = []
-        held_prev: tuple[str, ...] = ()
-        for k, d in enumerate(self.dyns):
-            self._entry(G, k, d, z, p, held_prev)
-            samples, z_end = self._flow(k, z, tau[k], p)
-            for j, zj in enumerate(samples):
-                if k == 0 and j == 0:
-                    continue
-                skip = set(d.held) | (set(held_prev) if j == 0 else set())
-                keep = [i for i, n in enumerate(names) if n not in skip]
-                if hfn is not None and keep:
-                    hv = hfn(zj[:nx], ca.substitute(d.u, pr.x, zj[:nx]), p)
-                    G.add("path", hv[keep], hlo[keep], hhi[keep], (k, j))
-                self._law_bounds(G, k, d, zj, p, j)
-            self._law_bounds(G, k, d, z_end, p, -1)
-            z = z_end
-            ends.append(z)
-            held_prev = d.held
+        z, ends = build_intervals(G, pr, self.dyns, self.substeps, self.samples, tau, z, p,
+                                  self.entry_names)
         self._finish(G, p, tau, x0, z, ends)
-
-    def _entry(self, G: _Blocks, k: int, d: ArcDynamics, z: ca.SX, p: ca.SX,
-               held_prev: tuple[str, ...]) -> None:
-        pr = self.problem
-        for (what, e), name in zip(d.entry, _entry_owners(d), strict=True):
-            if name in held_prev:
-                continue  # the boundary arc continues from the previous interval
-            G.add("entry", ca.substitute(e, pr.x, z[:pr.nx]), 0, 0, (k, 0))
-            self.entry_names.append(what)
-
-    def _law_bounds(self, G: _Blocks, k: int, d: ArcDynamics, z: ca.SX, p: ca.SX,
-                    j: int) -> None:
-        pr = self.problem
-        for _, e, lo, hi in d.law_bounds:
-            G.add("law", ca.substitute(e, pr.x, z[:pr.nx]), lo, hi, (k, j))
 
     def _finish(self, G: _Blocks, p: ca.SX, tau: ca.SX, x0: ca.SX, z: ca.SX,
                 ends: list[ca.SX]) -> None:
@@ -578,6 +519,125 @@ class SwitchingNLP:
         per = max(1, -(-self.substeps[k] // points))
         Z = numeric_rk8_flow(rk8_of(d), z0, tau, per * points, pv)
         return Z[::per]
+
+
+def interval_flow(d: ArcDynamics, m: int, samples: int, z: ca.SX, tau: ca.SX,
+                  p: ca.SX) -> tuple[list[ca.SX], ca.SX]:
+    """Sample states (start and interior points) and the end state of one interval.
+
+    Parameters
+    ----------
+    d : ArcDynamics
+        The interval's closed-loop dynamics.
+    m : int
+        Exact sub-steps (affine arcs) or RK8 steps.
+    samples : int
+        About how many interior samples to return.
+    z : SX
+        State (and cost quadrature) at the interval's start.
+    tau : SX
+        Its duration.
+    p : SX
+        Parameters.
+    """
+    stride = max(1, m // max(1, samples + 1))
+    out: list[ca.SX] = []
+    if d.exact:
+        A, b = d.A_fn(p)
+        n = d.nz
+        M = ca.vertcat(ca.horzcat(A, b), ca.SX.zeros(1, n + 1))
+        E = expm_taylor(M * (tau / m))
+        zz = ca.vertcat(z, 1)
+        for j in range(m):
+            if j % stride == 0:
+                out.append(zz[:n])
+            zz = ca.mtimes(E, zz)
+        return out, zz[:n]
+    h = tau / m
+    for j in range(m):
+        if j % stride == 0:
+            out.append(z)
+        z = rk8_step(d.f_z, z, h, p)
+    return out, z
+
+
+def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamics],
+                    substeps: tuple[int, ...], samples: int, tau: ca.SX, z: ca.SX, p: ca.SX,
+                    entry_names: list[str], check_start: bool = False
+                    ) -> tuple[ca.SX, list[ca.SX]]:
+    """Flow one phase's intervals, adding entry, path and law-bound rows to ``G``.
+
+    Path constraints are imposed at the samples of every interval but the phase's start
+    (unless ``check_start``) and where a boundary arc holds them by construction.
+
+    Parameters
+    ----------
+    G : _Blocks
+        Constraint rows (appended to).
+    pr : OptimalControlProblem
+        The phase.
+    dyns : list of ArcDynamics
+        One per interval.
+    substeps : tuple of int
+        Per interval.
+    samples : int
+        Path-constraint samples per interval.
+    tau : SX
+        Interval durations.
+    z : SX
+        State (and cost quadrature) at the phase's start.
+    p : SX
+        Parameters.
+    entry_names : list of str
+        Receives the names of the entry conditions.
+    check_start : bool
+        Also impose the path constraints at the phase's start state.
+
+    Returns
+    -------
+    (SX, list of SX)
+        The end state and the junction states (start first).
+    """
+    nx = pr.nx
+    names = [c.name for c in pr.path]
+    hfn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path])]) \
+        if pr.path else None
+    hlo = ca.vertcat(*[c.lower for c in pr.path]) if pr.path else ca.SX(0, 1)
+    hhi = ca.vertcat(*[c.upper for c in pr.path]) if pr.path else ca.SX(0, 1)
+    ends = [z]
+    held_prev: tuple[str, ...] = ()
+    for k, d in enumerate(dyns):
+        _entry_rows(G, pr, k, d, z, held_prev, entry_names)
+        pts, z_end = interval_flow(d, substeps[k], samples, z, tau[k], p)
+        for j, zj in enumerate(pts):
+            if k == 0 and j == 0 and not check_start:
+                continue
+            skip = set(d.held) | (set(held_prev) if j == 0 else set())
+            keep = [i for i, n in enumerate(names) if n not in skip]
+            if hfn is not None and keep:
+                hv = hfn(zj[:nx], ca.substitute(d.u, pr.x, zj[:nx]), p)
+                G.add("path", hv[keep], hlo[keep], hhi[keep], (k, j))
+            _law_rows(G, pr, k, d, zj, j)
+        _law_rows(G, pr, k, d, z_end, -1)
+        z = z_end
+        ends.append(z)
+        held_prev = d.held
+    return z, ends
+
+
+def _entry_rows(G: _Blocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
+                held_prev: tuple[str, ...], entry_names: list[str]) -> None:
+    for (what, e), name in zip(d.entry, _entry_owners(d), strict=True):
+        if name in held_prev:
+            continue  # the boundary arc continues from the previous interval
+        G.add("entry", ca.substitute(e, pr.x, z[:pr.nx]), 0, 0, (k, 0))
+        entry_names.append(what)
+
+
+def _law_rows(G: _Blocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
+              j: int) -> None:
+    for _, e, lo, hi in d.law_bounds:
+        G.add("law", ca.substitute(e, pr.x, z[:pr.nx]), lo, hi, (k, j))
 
 
 def _entry_owners(d: ArcDynamics) -> list[str]:

@@ -103,6 +103,10 @@ class RefinedSwitching:
         The objective of the solution it started from.
     terminal_multipliers : ndarray
         Multipliers of the terminal constraints (CasADi sign: ``J + nu^T G``).
+    terminal_costate : (ndarray, float or None) or None
+        ``(lambda(T), H expected)`` when the transversality conditions come from
+        elsewhere (a phase of a multi-phase problem, :mod:`ocp.phase_refinement`);
+        None: from this problem's own terminal constraints and Mayer term.
     notes : list of str
         E.g. intervals that shrank to zero length, rebuilds for accuracy.
     """
@@ -134,6 +138,7 @@ class RefinedSwitching:
     nlp: SwitchingNLP | None = field(repr=False, default=None)
     w: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     lam_x: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    terminal_costate: tuple[np.ndarray, float | None] | None = field(repr=False, default=None)
 
     # ------------------------------------------------------------- structure
     @property
@@ -196,7 +201,7 @@ class RefinedSwitching:
         values (so a copy with edited ``values`` describes what its values say)."""
         out = []
         for k, modes in enumerate(self.modes):
-            vals = self.values[k] if len(self.controls) > 1 else (self.values[k],)
+            vals = self.values[k] if len(self.controls) != 1 else (self.values[k],)
             ms = []
             for name, m, v in zip(self.controls, modes, vals, strict=True):
                 lo, hi = control_bounds_at(self.problem, name, self.params)
@@ -386,6 +391,9 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     SolveError, InfeasibleError
         If Ipopt fails, or the integration accuracy cannot be reached.
     """
+    if getattr(sol, "is_multiphase", False):
+        raise ValueError("a multi-phase solution is refined phase by phase with "
+                         "ocp.phase_refinement.refine_phases(sol)")
     tsol = transcribed(sol)
     st = _as_structure(tsol, structure)
     params = dict(tsol.params if params is None else params)
