@@ -1,0 +1,376 @@
+"""The full landing optimised as a hybrid two-phase problem: the body's arrest is optimised
+instead of assumed (see :mod:`softlanding.hybrid_problem` for the formulation).
+
+:func:`solve_two_phase` transcribes the problem (multiple shooting, both phases),
+starting from the exact-simulator replay of the paper's single-phase optimum;
+refines the switching times of both phases with exact arcs
+(:func:`ocp.phase_refinement.refine_phases`); and replays the whole schedule
+(yielding arcs, the phase-2 arrest law, then the body's weight) in the exact
+simulator. :func:`sweep_two_phase` does this over impact velocities by
+continuation, each landing re-solving its neighbour's arc structure directly.
+
+What it finds (r_m = 5, s = 20, u_max = 8.2): the optimal phase-2 force is the
+crater's capacity minus the foot's weight, ``u = -x_f(T1) - 1/(1+r_m)``, held
+until the body stops at the end of the stroke -- a boundary arc of the mixed
+constraint "the crater holds the support force", which is constant because the
+foot is pinned. That is the paper's constant ``u_b`` with its arrest condition
+active, so the two-phase depth equals the paper's (to rounding).
+:func:`two_step_check` asks whether a second yielding step can do better.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ocp import InfeasibleError, Solution, SolveError, Trajectory
+from ocp.phase_refinement import RefinedPhases
+
+from ._jsonutil import json_safe
+from ._progress import progress as show_progress
+from .controllers import Rigid
+from .errors import InfeasibleLandingError
+from .ground import LINEAR_GROUND, Ground
+from .hybrid_problem import OMITTABLE, two_phase_transcription
+from .landing import BangBangLanding, _ocp_params, _validate, solve_landing
+from .model import PAPER_ROBOT, Impact, Robot
+from .phase_schedule import replay_controller
+from .phase_solve import phase_guess, refined_phases, structure_resolve, transcribed_solve
+from .simulate import LandingResult, simulate
+
+
+@dataclass
+class FullLanding:
+    """A solved full landing (yielding, then static until the body stops).
+
+    Attributes
+    ----------
+    robot, impact, ground
+        The problem solved.
+    steps : int
+        Yielding steps allowed (1: two phases; 2: four).
+    depth : float
+        Final depth ``-x_f``, refined unless refinement was off or failed.
+    depth_transcribed : float
+        From the transcription (NaN on the structure path).
+    paper_depth : float
+        The paper's single-phase optimum (constant-force arrest) for the same landing.
+    T1, T : float
+        When the foot stops and when the body stops.
+    arcs : list of list of str
+        Arc kinds per phase.
+    switch_times : list of list of float
+        Switch times per phase (absolute).
+    phase_times : list of float
+        Start of every phase, then the end of the last.
+    arrest_force : float
+        Mean actuator force of the last (arrest) phase.
+    arrest_force_range : (float, float)
+        Its smallest and largest value (equal: a constant force).
+    status, iterations, solve_time_s
+        Of the solve that produced the result.
+    refined : RefinedPhases or None
+    transcribed : ocp.Solution or None
+    replay : LandingResult or None
+        The whole schedule replayed in the exact simulator. Its ``steps`` may exceed
+        ``steps``: the optimal arrest force equals the crater's capacity, so rounding
+        decides whether the resting foot is static or creeps (by the replay difference,
+        ~1e-14); the depth is what is checked.
+    replay_kind : str
+        The simulator controller used.
+    notes : list of str
+    path : str
+        ``"transcription"`` or ``"structure"`` (the neighbour's arcs re-solved directly).
+    """
+
+    robot: Robot
+    impact: Impact
+    ground: Ground
+    steps: int
+    depth: float
+    depth_transcribed: float
+    paper_depth: float
+    T1: float
+    T: float
+    arcs: list[list[str]]
+    switch_times: list[list[float]]
+    phase_times: list[float]
+    arrest_force: float
+    arrest_force_range: tuple[float, float]
+    status: str
+    iterations: int
+    solve_time_s: float
+    refined: RefinedPhases | None
+    transcribed: Solution | None
+    replay: LandingResult | None = None
+    replay_kind: str = ""
+    notes: list[str] = field(default_factory=list)
+    path: str = "transcription"
+
+    @property
+    def depth_gain(self) -> float:
+        """``paper_depth - depth``: what optimising the arrest gains (>= 0 up to rounding)."""
+        return self.paper_depth - self.depth
+
+    @property
+    def replay_difference(self) -> float:
+        """``|replay depth - depth|`` (NaN without a replay)."""
+        return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why this result cannot be taken as proven (empty: every check passed).
+
+        Parameters
+        ----------
+        certificate : ocp.phase_pmp.PhasesCertificate, optional
+            The certificate of this solution.
+        """
+        out = []
+        if self.refined is None:
+            out.append("switching times not refined (" + "; ".join(self.notes) + ")")
+        if self.replay is None:
+            out.append("not replayed in the exact simulator (" + self.replay_kind + ")")
+        else:
+            rp = self.replay
+            if not rp.rest_proven:
+                out.append(f"the exact-simulator replay does not come to rest ({rp.status})")
+            elif not rp.feasible:
+                out.append(f"the exact-simulator replay leaves the stroke (leg length from "
+                           f"{rp.stroke_min:.6g} to {rp.stroke_max:.6g})")
+            tol = (1e-9 if self.refined is not None else 1e-6) * max(1.0, self.depth)
+            if not self.replay_difference <= tol:
+                out.append(f"the replay's depth differs by {self.replay_difference:.2e} "
+                           f"(> {tol:.0e})")
+        if certificate is not None and not certificate.certified:
+            why = f": {certificate.reasons[0]}" if certificate.reasons else ""
+            out.append(f"PMP certificate {certificate.verdict}{why}")
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict: the figures, the refined phases and the replay."""
+        d: dict[str, Any] = {
+            "variant": "two-phase", "steps": self.steps, "depth": self.depth,
+            "depth_transcribed": self.depth_transcribed, "paper_depth": self.paper_depth,
+            "depth_gain": self.depth_gain, "T1": self.T1, "T": self.T, "arcs": self.arcs,
+            "switch_times": self.switch_times, "phase_times": self.phase_times,
+            "arrest_force": self.arrest_force, "arrest_force_range": list(self.arrest_force_range),
+            "status": self.status, "iterations": self.iterations,
+            "solve_time_s": self.solve_time_s, "path": self.path, "notes": self.notes,
+            "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
+            "ground": self.ground.to_dict()}
+        if self.refined is not None:
+            d["refined"] = self.refined.to_dict()
+        if self.replay is not None:
+            d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
+                           "controller": self.replay_kind, "steps": self.replay.steps,
+                           "feasible": self.replay.feasible, "status": self.replay.status}
+        return json_safe(d)
+
+
+# ------------------------------------------------------------------- guesses
+def _guess(robot: Robot, impact: Impact, ground: Ground, paper: BangBangLanding | None,
+           steps: int) -> Any:
+    """The paper's optimum (its refined arcs, then the constant-force arrest, exactly), or
+    a rigid landing, cut into the phases."""
+    if paper is not None and paper.refined is not None:
+        tr = paper.refined.trajectory(300)
+        T1, xT = paper.T, paper.refined.xT
+        L, v = xT[0] - xT[2], xT[1]
+        a = v * v / (2 * L) if v < 0 else 0.0
+        t2 = np.linspace(0.0, -v / a if a > 0 else 1.0, 200)[1:]
+        x2 = np.column_stack([xT[0] + v * t2 + 0.5 * a * t2**2, v + a * t2,
+                              np.full_like(t2, xT[2]), np.zeros_like(t2)])
+        traj = Trajectory(np.r_[tr.t, T1 + t2], np.vstack([tr.x, x2]),
+                          np.r_[tr.u[:, 0], np.full(len(t2), paper.u_b)][:, None],
+                          tr.state_names, tr.control_names)
+    else:
+        res = simulate(robot.without_force_limit(), impact, Rigid(), ground)
+        T1 = res.t_first_stop if math.isfinite(res.t_first_stop) else 1.0
+        traj = res.trajectory(t_end=T1 + 1.0, n=400)
+    if steps == 1:
+        return phase_guess(traj, [T1])
+    late = traj.t > T1
+    shifted = Trajectory(np.where(late, traj.t + 2e-3, traj.t), traj.x, traj.u,
+                         traj.state_names, traj.control_names)
+    return phase_guess(shifted, [T1, T1 + 1e-3, T1 + 2e-3])
+
+
+def _explain(err: SolveError, robot: Robot, impact: Impact, ground: Ground, steps: int,
+             guess: Any) -> InfeasibleLandingError:
+    """Name the condition(s) whose removal makes the request feasible."""
+    params = _ocp_params(robot, impact)
+    culprits = []
+    for name in OMITTABLE:
+        try:
+            two_phase_transcription(steps, ground=ground, omit=(name,)).solve(params, guess=guess)
+            culprits.append(name)
+        except SolveError:
+            continue
+    why = (" or ".join(culprits) + " cannot be met together with the other conditions"
+           if culprits else "the conditions cannot all be met (dropping the crater or the "
+           "stroke condition of the arrest does not help)")
+    return InfeasibleLandingError(
+        f"no two-phase landing at v0={impact.v0:g}, r_m={robot.r_m:g}, s={robot.s:g}, "
+        f"u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
+
+
+# -------------------------------------------------------------------- solving
+def _assemble(robot: Robot, impact: Impact, ground: Ground, steps: int, sol: Solution | None,
+              ref: RefinedPhases | None, paper_depth: float, notes: list[str],
+              path: str) -> FullLanding:
+    if ref is not None:
+        xT = ref.xT
+        times = [float(t) for t in ref.t0] + [ref.T]
+        arcs = [[str(k) for k in r.kinds] for r in ref.phases]
+        sw = ref.switch_times
+        last = ref.phases[-1]
+        u = last.trajectory(200).u[:, 0]
+    else:
+        assert sol is not None
+        xT = sol.phases[-1].x[-1]
+        times = [float(p.t0) for p in sol.phases] + [float(sol.phases[-1].T)]
+        arcs, sw = [], []
+        u = sol.phases[-1].u[:, 0]
+    src = ref if ref is not None else sol
+    return FullLanding(
+        robot=robot, impact=impact, ground=ground, steps=steps, depth=float(-xT[2]),
+        depth_transcribed=float(-sol.phases[-1].x[-1, 2]) if sol is not None else math.nan,
+        paper_depth=paper_depth, T1=times[1], T=times[-1], arcs=arcs, switch_times=sw,
+        phase_times=times, arrest_force=float(np.mean(u)),
+        arrest_force_range=(float(np.min(u)), float(np.max(u))),
+        status=src.status, iterations=int(src.iterations),  # type: ignore[union-attr]
+        solve_time_s=float(src.solve_time), refined=ref, transcribed=sol,  # type: ignore
+        notes=notes, path=path)
+
+
+def _replay(out: FullLanding) -> None:
+    """Replay the refined (or transcribed) schedule in the exact simulator, in place."""
+    tail = out.robot.body_mass
+    try:
+        if out.refined is not None:
+            ctrl, kind = replay_controller(out.refined, tail)
+        else:
+            from .controllers import ForceSchedule
+
+            assert out.transcribed is not None
+            durs, vals = [], []
+            for ph in out.transcribed.phases:
+                h = (ph.T - ph.t0) / ph.N
+                durs += [h] * ph.N if h > 0 else []
+                vals += list(ph.u[:, 0]) if h > 0 else []
+            ctrl = ForceSchedule.from_arcs(durs, vals + [tail])
+            kind = "ForceSchedule (the transcription's piecewise-constant force)"
+    except NotImplementedError as err:
+        out.replay_kind = str(err)
+        return
+    out.replay_kind = kind
+    out.replay = simulate(out.robot, out.impact, ctrl, out.ground)
+
+
+def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                    ground: Ground = LINEAR_GROUND, *, steps: int = 1, refine: bool = True,
+                    warm_start: FullLanding | None = None, replay: bool = True,
+                    paper: BangBangLanding | None = None) -> FullLanding:
+    """Solve the full landing as a hybrid multi-phase OCP; refine; replay exactly.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    steps : {1, 2}
+        Yielding steps allowed (2: yielding, static, yielding, static).
+    refine : bool
+        Refine the switching times of every phase with exact arcs.
+    warm_start : FullLanding, optional
+        A neighbouring solution: its refined structure is re-solved directly first, then
+        its transcription warm-starts the NLP.
+    replay : bool
+        Replay the whole schedule in the exact simulator.
+    paper : BangBangLanding, optional
+        The paper's single-phase optimum for this landing (solved if not given): the
+        starting guess and the comparison.
+
+    Raises
+    ------
+    ParameterError
+        Bad parameters.
+    InfeasibleLandingError
+        No landing satisfies the constraints (the message names the condition).
+    """
+    impact = Impact.of(impact)
+    _validate(robot)
+    if paper is None:
+        try:
+            paper = solve_landing(impact, robot, ground)
+        except InfeasibleLandingError:
+            paper = None
+    paper_depth = paper.depth if paper is not None else math.nan
+    params = _ocp_params(robot, impact)
+    out = None
+    if warm_start is not None and warm_start.refined is not None and refine and \
+            warm_start.steps == steps:
+        r = structure_resolve(warm_start.refined, params)
+        if r is not None:
+            out = _assemble(robot, impact, ground, steps, None, r, paper_depth, [], "structure")
+    if out is None:
+        tr = two_phase_transcription(steps, ground=ground)
+        notes: list[str] = []
+        guess = _guess(robot, impact, ground, paper, steps)
+        try:
+            sol = transcribed_solve(tr, params, guess, warm_start.transcribed
+                                    if warm_start is not None else None, notes)
+        except InfeasibleError as err:
+            raise _explain(err, robot, impact, ground, steps, guess) from None
+        ref = refined_phases(sol, notes) if refine else None
+        out = _assemble(robot, impact, ground, steps, sol, ref, paper_depth, notes,
+                        "transcription")
+    if replay:
+        _replay(out)
+    return out
+
+
+def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR_GROUND, *,
+                    progress: bool | None = False, replay: bool = True) -> list[FullLanding]:
+    """The full landing over impact velocities, by continuation (start from the easy end).
+
+    Each velocity also solves the paper's single-phase problem (continuation too) for the
+    comparison ``depth_gain``.
+
+    Parameters
+    ----------
+    v0_values : sequence of float
+        Impact velocities.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    progress : bool, optional
+        Progress bar.
+    replay : bool
+        Replay every schedule in the exact simulator.
+    """
+    impacts = [Impact.of(v) for v in v0_values]
+    _validate(robot)
+    out: list[FullLanding] = []
+    prev: FullLanding | None = None
+    prev_paper: BangBangLanding | None = None
+    last_sol: Solution | None = None
+    for imp in show_progress(impacts, progress, "two-phase sweep", "solve"):
+        paper = solve_landing(imp, robot, ground, warm_start=prev_paper)
+        res = solve_two_phase(imp, robot, ground, warm_start=prev, replay=replay, paper=paper)
+        out.append(res)
+        last_sol = res.transcribed or last_sol
+        if res.transcribed is None and last_sol is not None:
+            res = FullLanding(**{**res.__dict__, "transcribed": last_sol})
+        prev, prev_paper = res, paper
+    return out
+
+
+__all__ = ["FullLanding", "solve_two_phase", "sweep_two_phase"]

@@ -1,0 +1,134 @@
+"""A refined multi-phase solution as a controller of the exact simulator.
+
+Every refined interval is an affine law of the augmented state ``z = [x_b, v_b,
+x_f, v_f, 1]``: a bang arc is the constant ``u = value``; a boundary arc is the
+state feedback ``u = K x + k0`` that holds its constraint (read off
+:attr:`ocp.switching.RefinedSwitching.control_laws`). The whole schedule is
+therefore a :class:`~softlanding.controllers.FeedbackSchedule` (piecewise-affine
+in time), replayed exactly by :func:`softlanding.simulate.simulate`. Where every
+feedback law only reads states that its mode keeps constant (the crater-capacity
+arc of a static phase reads the pinned foot's ``x_f``), the law *is* a constant
+force and a :class:`~softlanding.controllers.ForceSchedule` replays it exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ocp.phase_refinement import RefinedPhases
+
+from . import controllers as _controllers
+from .controllers import ForceSchedule
+
+TINY = 1e-14
+"""Intervals shorter than this (relative to the horizon) are left out."""
+
+
+@dataclass
+class ArcLaw:
+    """One refined interval as an affine law.
+
+    Attributes
+    ----------
+    phase : int
+        Phase index.
+    duration : float
+        Interval length.
+    gain : ndarray (5,)
+        ``u = gain . [x_b, v_b, x_f, v_f, 1]``.
+    constant : float or None
+        The law's value when it is constant along the exact arc (to 1e-13 relative: it
+        only reads states the mode keeps still), None otherwise.
+    kind : str
+        ``"max"``, ``"min"`` or ``"boundary(...)"``.
+    """
+
+    phase: int
+    duration: float
+    gain: np.ndarray
+    constant: float | None
+    kind: str
+
+
+def arc_laws(refined: RefinedPhases) -> list[ArcLaw]:
+    """The affine law of every interval of every phase, in time order.
+
+    Parameters
+    ----------
+    refined : RefinedPhases
+        A refined multi-phase landing (single control ``u``, states ``x_b, v_b, x_f, v_f``).
+
+    Raises
+    ------
+    ValueError
+        If a boundary law is not affine in the state.
+    """
+    out: list[ArcLaw] = []
+    horizon = max(refined.T - float(refined.t0[0]), 1.0)
+    for i, r in enumerate(refined.phases):
+        laws = r.control_laws
+        _, xs, _, ks = r.samples(400)
+        for k, (modes, dur) in enumerate(zip(r.modes, r.durations, strict=True)):
+            if dur <= TINY * horizon:
+                continue
+            gain = np.zeros(5)
+            if laws[k] is None:
+                gain[4] = float(r.values[k])
+            else:
+                law = laws[k]
+                if law is None or "gain" not in law:
+                    raise ValueError(f"phase {r.problem.name!r}: the boundary law of interval "
+                                     f"{k} is not affine in the state")
+                gain[:4] = np.asarray(law["gain"][0], dtype=float)
+                gain[4] = float(law["offset"][0])
+            along = xs[ks == k][:, :4] @ gain[:4] + gain[4]
+            spread = float(np.ptp(along)) if len(along) else 0.0
+            const = float(along[0]) if spread <= 1e-13 * max(1.0, float(np.max(np.abs(
+                along)))) else None
+            out.append(ArcLaw(i, float(dur), gain, const, modes[0].label()))
+    return out
+
+
+def feedback_available() -> bool:
+    """Whether :class:`softlanding.controllers.FeedbackSchedule` exists in this version."""
+    return hasattr(_controllers, "FeedbackSchedule")
+
+
+def replay_controller(refined: RefinedPhases, tail: float) -> tuple[Any, str]:
+    """The refined schedule as a simulator controller, then ``u = tail`` forever.
+
+    Parameters
+    ----------
+    refined : RefinedPhases
+        A refined multi-phase landing.
+    tail : float
+        Force held after the last phase (e.g. the body's weight at rest).
+
+    Returns
+    -------
+    controller, str
+        A ForceSchedule when every law is a constant along its arc, else a
+        FeedbackSchedule; and which one (with why).
+
+    Raises
+    ------
+    NotImplementedError
+        When a feedback law is needed and FeedbackSchedule is not available.
+    """
+    laws = arc_laws(refined)
+    durs = [a.duration for a in laws]
+    if all(a.constant is not None for a in laws):
+        vals = [float(a.constant) for a in laws] + [tail]  # type: ignore[arg-type]
+        return ForceSchedule.from_arcs(durs, vals), "ForceSchedule (every law constant on its arc)"
+    if not feedback_available():
+        raise NotImplementedError("a boundary arc with state feedback needs "
+                                  "softlanding.controllers.FeedbackSchedule (not in this version)")
+    gains = [a.gain for a in laws] + [np.r_[0.0, 0.0, 0.0, 0.0, tail]]
+    fs = _controllers.FeedbackSchedule  # type: ignore[attr-defined]
+    return fs(tuple(np.cumsum(durs)), tuple(tuple(g) for g in gains)), "FeedbackSchedule"
+
+
+__all__ = ["ArcLaw", "arc_laws", "feedback_available", "replay_controller"]
