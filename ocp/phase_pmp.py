@@ -31,6 +31,7 @@ from .pmp import (
     NOT_BANG_BANG,
     PMPCertificate,
     _certify_refined,
+    _constrained_refined,
     _Tolerances,
 )
 from .solution import Solution
@@ -72,10 +73,11 @@ class PhasesCertificate(PMPCertificate):
 
 def _junction_gap(r: Any, lam0: np.ndarray, n: int) -> tuple[float, float]:
     """Gap between the adjoint sweep's costate at the phase's start and ``lam0``, and the
-    sweep's own error estimate (NaN when a state constraint stops the sweep earlier)."""
-    sw = adjoint_sweep(r, 0.0, n)
-    if sw.t_start > 0:
+    sweep's own error estimate (NaN when a state constraint is active in the phase)."""
+    _, last = _constrained_refined(r, n)
+    if last > 0:  # a state constraint before: the costate may jump, no sweep to the start
         return math.nan, 0.0
+    sw = adjoint_sweep(r, 0.0, n)
     scale = max(float(np.max(np.abs(sw.lam))), float(np.max(np.abs(lam0))), 1e-300)
     return float(np.max(np.abs(sw.lam[0] - lam0))) / scale, sw.error_lam + sw.error_x
 

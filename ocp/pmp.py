@@ -572,9 +572,10 @@ def _constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[floa
     T = float(edges[-1])
     tiny = 1e-10 * max(T, 1.0)
     pr = ref.problem
+    # boundary arcs of state constraints; a zero-length one is a touch point (the costate
+    # may jump there too)
     bnd = [(float(edges[k]), float(edges[k + 1])) for k, ms in enumerate(ref.interval_modes)
-           if any(m.kind == "boundary" and not is_mixed(pr, m.constraint) for m in ms)
-           and ref.durations[k] > tiny]
+           if any(m.kind == "boundary" and not is_mixed(pr, m.constraint) for m in ms)]
     last = max((b for _, b in bnd), default=0.0)
     t, x, u, _ = ref.samples(n)
     act = path_activity_along(pr, x, u, ref.pv, 1e-7, state_only=True) & (t > tiny) & \

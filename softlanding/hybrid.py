@@ -374,3 +374,124 @@ def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINE
 
 
 __all__ = ["FullLanding", "solve_two_phase", "sweep_two_phase"]
+
+
+# ------------------------------------------------------------ a second step
+@dataclass
+class TwoStepCheck:
+    """Whether a second yielding step (yielding, static, yielding, static) lowers the depth.
+
+    Attributes
+    ----------
+    impact : Impact
+    one_step : FullLanding
+        The two-phase optimum.
+    depth : float
+        Best final depth of the four-phase problem over its starts.
+    starts : list of dict
+        Per start (``"collapsed"``: the two-phase optimum with short middle phases;
+        ``"impedance k_p=.., k_d=.."``: a physical two-step landing): its final depth, the
+        phase durations and the depth at the first stop (or the error).
+    collapsed : bool
+        The best four-phase solution's middle phases (static 1, yielding 2) shrank to
+        zero length (< 1e-6) or add no depth: it is the one-step landing.
+    """
+
+    impact: Impact
+    one_step: FullLanding
+    depth: float
+    starts: list[dict[str, Any]]
+    collapsed: bool
+
+    @property
+    def gain(self) -> float:
+        """``one_step.depth - depth``: what the second step gains (> 0 would be a gain)."""
+        return self.one_step.depth - self.depth
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict."""
+        return json_safe({"v0": self.impact.v0, "one_step_depth": self.one_step.depth,
+                          "two_step_depth": self.depth, "gain": self.gain,
+                          "collapsed": self.collapsed, "starts": self.starts})
+
+
+def _two_step_guesses(robot: Robot, impact: Impact, ground: Ground,
+                      paper: BangBangLanding | None, tries: int = 12) -> list[tuple[str, Any]]:
+    """The collapsed start and the shallowest physical two-step impedance landing within
+    the force limit (yielding and static modes only), cut into the four phases."""
+    from .controllers import Impedance
+    from .simulate import simulate_batch
+
+    out = [("collapsed", _guess(robot, impact, ground, paper, 2))]
+    g = np.linspace(0.0, 1.0, 41)
+    b = simulate_batch(robot, impact.v0, g[:, None], g[None, :], ground)
+    ok = (b.steps == 2) & b.strictly_feasible
+    order = np.argsort(np.where(ok, b.depth, np.inf), axis=None)[:tries]
+    for flat in order:
+        i, j = np.unravel_index(flat, ok.shape)
+        if not ok[i, j]:
+            break
+        res = simulate(robot, impact, Impedance(g[i], g[j]), ground)
+        tr = res.trajectory(n=800)
+        runs = np.r_[0, np.cumsum(tr.mode[1:] != tr.mode[:-1])]
+        if "flight" in set(tr.mode[runs <= 3]) or runs.max() < 3:
+            continue
+        last = np.flatnonzero((runs == 3) & (tr.x[:, 1] >= 0))
+        if not len(last):
+            continue
+        keep = np.arange(len(tr.t)) <= last[0]
+        edges = [float(tr.t[np.flatnonzero(runs == k)[0]]) for k in (1, 2, 3)]
+        cut = Trajectory(tr.t[keep], tr.x[keep], tr.u[keep], tr.state_names, tr.control_names)
+        out.append((f"impedance k_p={g[i]:g}, k_d={g[j]:g}", phase_guess(cut, edges)))
+        break
+    return out
+
+
+def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                   ground: Ground = LINEAR_GROUND, *,
+                   one_step: FullLanding | None = None) -> TwoStepCheck:
+    """Solve the four-phase landing (two yielding steps) from several starts and compare
+    its depth with the two-phase optimum.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    one_step : FullLanding, optional
+        The two-phase optimum (solved if not given).
+    """
+    impact = Impact.of(impact)
+    one = one_step if one_step is not None else solve_two_phase(impact, robot, ground)
+    paper = solve_landing(impact, robot, ground)
+    tr = two_phase_transcription(2, ground=ground)
+    params = _ocp_params(robot, impact)
+    starts: list[dict[str, Any]] = []
+    best: tuple[float, list[float]] | None = None
+    for name, guess in _two_step_guesses(robot, impact, ground, paper):
+        notes: list[str] = []
+        try:
+            sol = transcribed_solve(tr, params, guess, None, notes)
+        except SolveError as err:
+            starts.append({"start": name, "error": err.status})
+            continue
+        durs = [float(p.T - p.t0) for p in sol.phases]
+        d = float(-sol.phases[-1].x[-1, 2])
+        starts.append({"start": name, "depth": d, "durations": durs,
+                       "first_stop_depth": float(-sol.phases[0].x[-1, 2]),
+                       "verified": bool(sol.verified), "notes": notes})
+        if sol.verified and (best is None or d < best[0]):
+            best = (d, durs)
+    if best is None:
+        raise SolveError("no_start_converged", None, "the four-phase landing did not "
+                         "converge from any start")
+    first = [s["first_stop_depth"] for s in starts if "depth" in s and s["depth"] == best[0]]
+    collapsed = (best[1][1] < 1e-6 and best[1][2] < 1e-6) or (
+        bool(first) and best[0] - first[0] < 1e-6)
+    return TwoStepCheck(impact, one, best[0], starts, collapsed)
+
+
+__all__ += ["TwoStepCheck", "two_step_check"]

@@ -23,8 +23,8 @@ from ocp.phase_refinement import RefinedPhases
 from . import controllers as _controllers
 from .controllers import ForceSchedule
 
-TINY = 1e-14
-"""Intervals shorter than this (relative to the horizon) are left out."""
+TINY = 1e-10
+"""Intervals shorter than this (relative to the horizon) are left out (touch points)."""
 
 
 @dataclass
@@ -53,13 +53,15 @@ class ArcLaw:
     kind: str
 
 
-def arc_laws(refined: RefinedPhases) -> list[ArcLaw]:
-    """The affine law of every interval of every phase, in time order.
+def arc_laws(refined: RefinedPhases, first: int = 0) -> list[ArcLaw]:
+    """The affine law of every interval of every phase (from phase ``first``), in time order.
 
     Parameters
     ----------
     refined : RefinedPhases
         A refined multi-phase landing (single control ``u``, states ``x_b, v_b, x_f, v_f``).
+    first : int
+        First phase included.
 
     Raises
     ------
@@ -69,6 +71,8 @@ def arc_laws(refined: RefinedPhases) -> list[ArcLaw]:
     out: list[ArcLaw] = []
     horizon = max(refined.T - float(refined.t0[0]), 1.0)
     for i, r in enumerate(refined.phases):
+        if i < first:
+            continue
         laws = r.control_laws
         _, xs, _, ks = r.samples(400)
         for k, (modes, dur) in enumerate(zip(r.modes, r.durations, strict=True)):
@@ -97,8 +101,9 @@ def feedback_available() -> bool:
     return hasattr(_controllers, "FeedbackSchedule")
 
 
-def replay_controller(refined: RefinedPhases, tail: float) -> tuple[Any, str]:
-    """The refined schedule as a simulator controller, then ``u = tail`` forever.
+def replay_controller(refined: RefinedPhases, tail: float, first: int = 0) -> tuple[Any, str]:
+    """The refined schedule (from phase ``first``, time counted from its start) as a
+    simulator controller, then ``u = tail`` forever.
 
     Parameters
     ----------
@@ -106,6 +111,8 @@ def replay_controller(refined: RefinedPhases, tail: float) -> tuple[Any, str]:
         A refined multi-phase landing.
     tail : float
         Force held after the last phase (e.g. the body's weight at rest).
+    first : int
+        First phase replayed (the simulator starts at touchdown).
 
     Returns
     -------
@@ -118,7 +125,7 @@ def replay_controller(refined: RefinedPhases, tail: float) -> tuple[Any, str]:
     NotImplementedError
         When a feedback law is needed and FeedbackSchedule is not available.
     """
-    laws = arc_laws(refined)
+    laws = arc_laws(refined, first)
     durs = [a.duration for a in laws]
     if all(a.constant is not None for a in laws):
         vals = [float(a.constant) for a in laws] + [tail]  # type: ignore[arg-type]
@@ -131,4 +138,29 @@ def replay_controller(refined: RefinedPhases, tail: float) -> tuple[Any, str]:
     return fs(tuple(np.cumsum(durs)), tuple(tuple(g) for g in gains)), "FeedbackSchedule"
 
 
-__all__ = ["ArcLaw", "arc_laws", "feedback_available", "replay_controller"]
+def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
+              x0: np.ndarray) -> np.ndarray:
+    """The state after the arcs ``laws`` under one affine mode ``z' = A z + B u`` (exactly:
+    the matrix exponential of each closed loop ``A + B gain``).
+
+    Parameters
+    ----------
+    laws : list of ArcLaw
+        The arcs, in order.
+    A : ndarray (5, 5)
+        Mode matrix of the augmented state (e.g. flight, from
+        :func:`softlanding.dynamics.mode_matrices`).
+    B : ndarray (5,)
+        Its control column.
+    x0 : ndarray (4,)
+        State at the start.
+    """
+    from ocp.flows import expm
+
+    z = np.r_[np.asarray(x0, dtype=float), 1.0]
+    for a in laws:
+        z = expm((A + np.outer(B, a.gain)) * a.duration) @ z
+    return z[:4]
+
+
+__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller"]

@@ -18,8 +18,18 @@ from typing import Any
 import numpy as np
 
 from ocp import MultipleShooting, Solution, SolveError, Trajectory
+from ocp.arcs import ArcStructure
 from ocp.errors import PathViolationWarning
-from ocp.phase_refinement import RefinedPhases, refine_phase_structure, refine_phases
+from ocp.flows import Mode
+from ocp.phase_refinement import (
+    RefinedPhases,
+    detect_phase_structures,
+    local_phase,
+    refine_phase_structure,
+    refine_phases,
+)
+
+from .stance_phases import CRATER, STROKE
 
 
 def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any,
@@ -63,29 +73,96 @@ def refined_phases(sol: Solution, notes: list[str],
                    structures: list | None = None) -> RefinedPhases | None:
     """Refine every phase's switching times (None and a note when that is not possible).
 
+    The detected structures are tried first, then :func:`repaired_structures` (a
+    touch point of the stroke limit where the transcription reaches it without a
+    boundary arc; a static phase that is not a clean arc read as the crater-capacity arc).
+
     Parameters
     ----------
     sol : Solution
         A transcribed multi-phase solution.
     notes : list of str
-        Receives why the refinement was not done.
+        Receives why the refinement was not done, or which repair was used.
     structures : list of ArcStructure, optional
         Per phase (default: detected).
     """
-    try:
-        return refine_phases(sol, structures)
-    except ValueError as err:
-        notes.append(f"not refined: {err}")
-    except SolveError as err:
-        notes.append(f"switching-time refinement failed ({err.status}); reporting the "
-                     "transcribed solution")
+    first = structures if structures is not None else detect_phase_structures(sol)
+    repaired, what = repaired_structures(sol, first)
+    tried = [(first, "")] + ([(repaired, what)] if what else [])
+    why = ""
+    for sts, label in tried:
+        try:
+            r = refine_phases(sol, sts)
+        except ValueError as err:
+            why = f"not refined: {err}"
+            continue
+        except SolveError as err:
+            why = f"switching-time refinement failed ({err.status})"
+            continue
+        if label:
+            notes.append(f"refined with {label}")
+        return r
+    notes.append(why + "; reporting the transcribed solution")
     return None
+
+
+def _split_at(st: ArcStructure, t: float, mode: Mode) -> ArcStructure:
+    """``st`` (one control) with a zero-length ``mode`` arc inserted at time ``t``."""
+    modes: list[tuple[Mode, ...]] = []
+    durs: list[float] = []
+    for iv in st.intervals:
+        if iv.start < t < iv.end and mode not in iv.modes:
+            modes += [iv.modes, (mode,), iv.modes]
+            durs += [t - iv.start, 0.0, iv.end - t]
+        else:
+            modes.append(iv.modes)
+            durs.append(iv.duration)
+    return ArcStructure.from_modes(st.controls, modes, durs)
+
+
+def repaired_structures(sol: Solution, structures: list[ArcStructure]
+                        ) -> tuple[list[ArcStructure], str]:
+    """Structures with the transcription's grid artefacts repaired, and what was done.
+
+    * a yielding or flight phase whose leg reaches the upper stroke limit (to 1e-7) with
+      no boundary arc on it gets a zero-length boundary arc there: a *touch point*
+      (entry conditions stroke = s and relative velocity 0, imposed exactly);
+    * a static phase whose arcs are not refinable or not a single arc becomes one
+      boundary arc on the crater's capacity (the arrest that uses the whole capacity).
+
+    Parameters
+    ----------
+    sol : Solution
+        The transcribed multi-phase solution.
+    structures : list of ArcStructure
+        The detected structures, per phase.
+    """
+    out, done = [], []
+    s = float(sol.params["s"])
+    for i, st in enumerate(structures):
+        ph = sol.phases[i]
+        names = [c.name for c in ph.problem.path]
+        leg = ph.x[:, 0] - ph.x[:, 2]
+        held = {m.constraint for iv in st.intervals for m in iv.modes}
+        if CRATER in names and (not st.refinable or len(st.intervals) != 1):
+            dur = float(ph.T - ph.t0)
+            out.append(ArcStructure.from_modes(("u",), [(Mode("boundary", CRATER, "upper"),)],
+                                               [dur]))
+            done.append(f"phase {ph.problem.name!r} as one crater-capacity arc")
+        elif STROKE in names and st.refinable and STROKE not in held and \
+                float(np.max(leg)) >= s * (1 - 1e-7):
+            t = float(local_phase(sol, i).t[int(np.argmax(leg))])
+            out.append(_split_at(st, t, Mode("boundary", STROKE, "upper")))
+            done.append(f"a touch point of the stroke limit in phase {ph.problem.name!r}")
+        else:
+            out.append(st)
+    return out, "; ".join(done)
 
 
 def structure_resolve(prev: RefinedPhases, params: dict[str, float],
                       x0s: list[np.ndarray] | None = None) -> RefinedPhases | None:
     """A neighbour's refined structure re-solved for new parameters (None if it fails, an
-    arc collapses or a path constraint is violated between the samples).
+    arc of positive length collapses, or a path constraint is violated between the samples).
 
     Parameters
     ----------
@@ -102,9 +179,10 @@ def structure_resolve(prev: RefinedPhases, params: dict[str, float],
                                    variables=prev.variables)
     except SolveError:
         return None
-    horizon = max(r.T, 1.0)
-    if any(float(np.min(d)) <= 1e-9 * horizon for d in r.durations if len(d)):
-        return None
+    tiny = 1e-9 * max(r.T, 1.0)
+    for new, old in zip(r.durations, prev.durations, strict=True):
+        if np.any((new <= tiny) & (old > tiny)):
+            return None  # an arc collapsed: the structure changed (touch points may stay)
     if r.path_violation(2000) > 1e-9:
         return None
     return r
@@ -139,4 +217,5 @@ def phase_guess(traj: Trajectory, edges: list[float]) -> Trajectory:
                       traj.control_names, phase=np.concatenate(ph))
 
 
-__all__ = ["phase_guess", "refined_phases", "structure_resolve", "transcribed_solve"]
+__all__ = ["phase_guess", "refined_phases", "repaired_structures", "structure_resolve",
+           "transcribed_solve"]
