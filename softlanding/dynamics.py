@@ -19,11 +19,7 @@ import numpy as np
 
 from .errors import check
 from .ground import LINEAR_GROUND, Ground
-
-STATE_NAMES: tuple[str, ...] = ("x_b", "v_b", "x_f", "v_f")
-"""Names of the four state components, in order."""
-
-XB, VB, XF, VF = range(4)
+from .model import STATE_NAMES, VB, VF, XB, XF  # the state layout (re-exported)
 
 
 def robot_rhs(x, u, f_g, r_m):
@@ -226,3 +222,7 @@ def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.nd
     return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "EQ": EQ, "Ec": Ec, "Wg": 0.5 * kg.item(),
             # gravitational weights of body and foot (dE/dx_b, dE/dx_f): the mass fractions
             "E": np.array([dE[XB], dE[XF]])}
+
+
+__all__ = ["STATE_NAMES", "mechanical_energy", "mode_matrices", "robot_rhs", "stance_dynamics",
+           "stance_functions", "yielding_ground_force"]
