@@ -27,6 +27,7 @@ _WHERE = {
     "InfeasibleLandingError": "errors", "ParameterError": "errors",
     "SoftlandingError": "errors",
     "LINEAR_GROUND": "ground", "Ground": "ground", "LinearGround": "ground",
+    "AddedMassGround": "ground", "CustomGround": "ground", "DragGround": "ground",
     "PAPER_IMPEDANCE_ROBOT": "model", "PAPER_ROBOT": "model", "Impact": "model",
     "Robot": "model", "Units": "model",
     "PhysicalParams": "scaling", "Scenario": "scaling", "paper_rig": "scaling",
@@ -35,8 +36,11 @@ _WHERE = {
 }
 
 __all__ = [
+    "AddedMassGround",
     "BatchResult",
     "Controller",
+    "CustomGround",
+    "DragGround",
     "EnergyLedger",
     "ForceSchedule",
     "Ground",
@@ -77,7 +81,14 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, eagerly
     from .controllers import Controller, ForceSchedule, Impedance, Rigid
     from .errors import InfeasibleLandingError, ParameterError, SoftlandingError
-    from .ground import LINEAR_GROUND, Ground, LinearGround
+    from .ground import (
+        LINEAR_GROUND,
+        AddedMassGround,
+        CustomGround,
+        DragGround,
+        Ground,
+        LinearGround,
+    )
     from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Robot, Units
     from .scaling import PhysicalParams, Scenario, paper_rig
     from .simulate import BatchResult, EnergyLedger, LandingResult, simulate, simulate_batch

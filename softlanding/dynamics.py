@@ -22,13 +22,17 @@ from .ground import LINEAR_GROUND, Ground
 from .model import STATE_NAMES, VB, VF, XB, XF  # the state layout (re-exported)
 
 
-def robot_rhs(x, u, f_g, r_m):
+def robot_rhs(x, u, f_g, r_m, m_a=0.0):
     """Time derivative of the state for a given actuator force and ground force.
 
     Newton's law for the body (mass ``r_m/(1+r_m)``) and the foot (mass
     ``1/(1+r_m)``) in units of the total mass:
 
-    ``x_b'' = -1 + (1 + r_m)/r_m * u`` and ``x_f'' = -1 + (1 + r_m) (f_g - u)``.
+    ``x_b'' = -1 + (1 + r_m)/r_m * u`` and ``x_f'' = -1 + (1 + r_m) (f_g - u)``;
+
+    with grains of mass ``m_a`` moving with the foot (an added-mass ground model),
+    ``(m_f + m_a) x_f'' = -m_f + f_g - u`` (their weight is carried by the bed; the
+    momentum they take is part of ``f_g``).
 
     Parameters
     ----------
@@ -40,17 +44,19 @@ def robot_rhs(x, u, f_g, r_m):
         Ground reaction on the foot (upward positive).
     r_m : scalar expression or float
         Mass ratio ``m_b / m_f``.
+    m_a : scalar expression or float
+        Added mass moving with the foot (units of ``m_t``; 0 for the paper's ground).
 
     Returns
     -------
     casadi expression of shape (4, 1)
     """
-    return ca.vertcat(
-        x[VB],
-        -1 + (1 + r_m) / r_m * u,
-        x[VF],
-        -1 + (1 + r_m) * (f_g - u),
-    )
+    if isinstance(m_a, int | float) and m_a == 0.0:
+        foot = -1 + (1 + r_m) * (f_g - u)  # the paper's form (bit-identical mode matrices)
+    else:
+        m_f = 1 / (1 + r_m)
+        foot = (-m_f + f_g - u) / (m_f + m_a)
+    return ca.vertcat(x[VB], -1 + (1 + r_m) / r_m * u, x[VF], foot)
 
 
 def yielding_ground_force(x, ground: Ground = LINEAR_GROUND):
@@ -109,7 +115,7 @@ def stance_functions(ground: Ground = LINEAR_GROUND) -> tuple[ca.Function, ca.Fu
         :func:`robot_rhs` with the ground model's yielding force.
     """
     x, u, _, r = _symbols()
-    xdot = robot_rhs(x, u, yielding_ground_force(x, ground), r)
+    xdot = stance_dynamics(x, u, r, ground)
     g = ca.jacobian(xdot, u)
     f = ca.substitute(xdot, u, 0)
     return (
@@ -132,7 +138,8 @@ def stance_dynamics(x, u, r_m, ground: Ground = LINEAR_GROUND):
     ground : Ground
         Ground model of the yielding stance.
     """
-    return robot_rhs(x, u, yielding_ground_force(x, ground), r_m)
+    return robot_rhs(x, u, yielding_ground_force(x, ground), r_m,
+                     ground.added_mass(-x[XF]))
 
 
 @lru_cache(maxsize=16)
