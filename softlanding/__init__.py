@@ -9,26 +9,38 @@ models) are validated once and passed to every study::
 
     from softlanding import PAPER_ROBOT, Impact, Impedance, simulate
     res = simulate(PAPER_ROBOT.without_force_limit(), Impact(-1), Impedance(0.2, 0.18))
+
+The names below are imported on first use, so a light command (``softlanding
+--help``, a scale conversion) does not load CasADi or compile anything.
 """
 
-from .controllers import Controller, ForceSchedule, Impedance, Rigid
-from .errors import InfeasibleLandingError, ParameterError, SoftlandingError
-from .ground import LINEAR_GROUND, Ground, LinearGround
-from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Robot, Units
-from .scaling import PhysicalParams, Scenario, paper_rig
-from .simulate import (
-    BatchResult,
-    EnergyLedger,
-    LandingResult,
-    simulate,
-    simulate_batch,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.2.0"
 
+_WHERE = {
+    "Controller": "controllers",
+    "ForceSchedule": "controllers", "Impedance": "controllers", "Rigid": "controllers",
+    "InfeasibleLandingError": "errors", "ParameterError": "errors",
+    "SoftlandingError": "errors",
+    "LINEAR_GROUND": "ground", "Ground": "ground", "LinearGround": "ground",
+    "AddedMassGround": "ground", "CustomGround": "ground", "DragGround": "ground",
+    "PAPER_IMPEDANCE_ROBOT": "model", "PAPER_ROBOT": "model", "Impact": "model",
+    "Robot": "model", "Units": "model",
+    "PhysicalParams": "scaling", "Scenario": "scaling", "paper_rig": "scaling",
+    "BatchResult": "simulate", "EnergyLedger": "simulate", "LandingResult": "simulate",
+    "simulate": "simulate", "simulate_batch": "simulate",
+}
+
 __all__ = [
+    "AddedMassGround",
     "BatchResult",
     "Controller",
+    "CustomGround",
+    "DragGround",
     "EnergyLedger",
     "ForceSchedule",
     "Ground",
@@ -51,3 +63,32 @@ __all__ = [
     "simulate",
     "simulate_batch",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module 'softlanding' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{where}", __name__), name)
+    globals()[name] = value  # later lookups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_WHERE))
+
+
+if TYPE_CHECKING:  # for type checkers and IDEs: the same names, eagerly
+    from .controllers import Controller, ForceSchedule, Impedance, Rigid
+    from .errors import InfeasibleLandingError, ParameterError, SoftlandingError
+    from .ground import (
+        LINEAR_GROUND,
+        AddedMassGround,
+        CustomGround,
+        DragGround,
+        Ground,
+        LinearGround,
+    )
+    from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Robot, Units
+    from .scaling import PhysicalParams, Scenario, paper_rig
+    from .simulate import BatchResult, EnergyLedger, LandingResult, simulate, simulate_batch

@@ -14,9 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from .dynamics import VB, VF
 from .errors import ParameterError, check, check_optional
-from .model import Robot, Units
+from .model import VB, VF, Robot, Units
 
 EMPTY = np.zeros(0)
 

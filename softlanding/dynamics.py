@@ -19,20 +19,20 @@ import numpy as np
 
 from .errors import check
 from .ground import LINEAR_GROUND, Ground
-
-STATE_NAMES: tuple[str, ...] = ("x_b", "v_b", "x_f", "v_f")
-"""Names of the four state components, in order."""
-
-XB, VB, XF, VF = range(4)
+from .model import STATE_NAMES, VB, VF, XB, XF  # the state layout (re-exported)
 
 
-def robot_rhs(x, u, f_g, r_m):
+def robot_rhs(x, u, f_g, r_m, m_a=0.0):
     """Time derivative of the state for a given actuator force and ground force.
 
     Newton's law for the body (mass ``r_m/(1+r_m)``) and the foot (mass
     ``1/(1+r_m)``) in units of the total mass:
 
-    ``x_b'' = -1 + (1 + r_m)/r_m * u`` and ``x_f'' = -1 + (1 + r_m) (f_g - u)``.
+    ``x_b'' = -1 + (1 + r_m)/r_m * u`` and ``x_f'' = -1 + (1 + r_m) (f_g - u)``;
+
+    with grains of mass ``m_a`` moving with the foot (an added-mass ground model),
+    ``(m_f + m_a) x_f'' = -m_f + f_g - u`` (their weight is carried by the bed; the
+    momentum they take is part of ``f_g``).
 
     Parameters
     ----------
@@ -44,17 +44,19 @@ def robot_rhs(x, u, f_g, r_m):
         Ground reaction on the foot (upward positive).
     r_m : scalar expression or float
         Mass ratio ``m_b / m_f``.
+    m_a : scalar expression or float
+        Added mass moving with the foot (units of ``m_t``; 0 for the paper's ground).
 
     Returns
     -------
     casadi expression of shape (4, 1)
     """
-    return ca.vertcat(
-        x[VB],
-        -1 + (1 + r_m) / r_m * u,
-        x[VF],
-        -1 + (1 + r_m) * (f_g - u),
-    )
+    if isinstance(m_a, int | float) and m_a == 0.0:
+        foot = -1 + (1 + r_m) * (f_g - u)  # the paper's form (bit-identical mode matrices)
+    else:
+        m_f = 1 / (1 + r_m)
+        foot = (-m_f + f_g - u) / (m_f + m_a)
+    return ca.vertcat(x[VB], -1 + (1 + r_m) / r_m * u, x[VF], foot)
 
 
 def yielding_ground_force(x, ground: Ground = LINEAR_GROUND):
@@ -113,7 +115,7 @@ def stance_functions(ground: Ground = LINEAR_GROUND) -> tuple[ca.Function, ca.Fu
         :func:`robot_rhs` with the ground model's yielding force.
     """
     x, u, _, r = _symbols()
-    xdot = robot_rhs(x, u, yielding_ground_force(x, ground), r)
+    xdot = stance_dynamics(x, u, r, ground)
     g = ca.jacobian(xdot, u)
     f = ca.substitute(xdot, u, 0)
     return (
@@ -136,7 +138,8 @@ def stance_dynamics(x, u, r_m, ground: Ground = LINEAR_GROUND):
     ground : Ground
         Ground model of the yielding stance.
     """
-    return robot_rhs(x, u, yielding_ground_force(x, ground), r_m)
+    return robot_rhs(x, u, yielding_ground_force(x, ground), r_m,
+                     ground.added_mass(-x[XF]))
 
 
 @lru_cache(maxsize=16)
@@ -226,3 +229,7 @@ def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.nd
     return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "EQ": EQ, "Ec": Ec, "Wg": 0.5 * kg.item(),
             # gravitational weights of body and foot (dE/dx_b, dE/dx_f): the mass fractions
             "E": np.array([dE[XB], dE[XF]])}
+
+
+__all__ = ["STATE_NAMES", "mechanical_energy", "mode_matrices", "robot_rhs", "stance_dynamics",
+           "stance_functions", "yielding_ground_force"]

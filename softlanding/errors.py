@@ -121,6 +121,9 @@ FIELDS: dict[str, Rule] = {
     "k_p": within(*LIMITS["gain"], why="stiffness K_p / k_g"),
     "k_d": within(*LIMITS["gain"], why="damping K_d / sqrt(m_t k_g)"),
     "times": FINITE, "values": FINITE, "durations": POSITIVE,
+    # ground models
+    "c_d": within(0.0, 1e3, why="drag number b x_s / m_t"), "pi_a": within(0.0, 1e3),
+    "radius": POSITIVE, "kappa": POSITIVE, "b": NONNEGATIVE,
     # SI (their dimensionless images are checked against the limits above)
     "m_b": POSITIVE, "m_f": POSITIVE, "m_t": POSITIVE, "k_g": POSITIVE, "stroke": POSITIVE,
     "g": POSITIVE, "U_max": POSITIVE, "V0": (lambda x: x <= 0.0, "must be <= 0 (downward)"),

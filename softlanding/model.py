@@ -26,6 +26,12 @@ from .errors import ParameterError, check, check_optional
 G_EARTH = 9.81
 """Gravity used by the paper, m/s^2."""
 
+STATE_NAMES: tuple[str, ...] = ("x_b", "v_b", "x_f", "v_f")
+"""The state ``[x_b, v_b, x_f, v_f]``: body height and velocity, foot height and velocity,
+measured up from the undisturbed ground surface."""
+
+XB, VB, XF, VF = range(4)
+
 
 @dataclass(frozen=True)
 class Units:
