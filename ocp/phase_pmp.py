@@ -82,15 +82,26 @@ def _junction_gap(r: Any, lam0: np.ndarray, n: int) -> tuple[float, float]:
     return float(np.max(np.abs(sw.lam[0] - lam0))) / scale, sw.error_lam + sw.error_x
 
 
-def certify_phases(sol: Solution, refined: RefinedPhases, *, tol_H: float | None = None,
+class _NoTranscription:
+    """Stands in for a phase's transcription when there is none (a structure re-solve):
+    no multiplier costates to compare, shooting intervals of 1/1000 of the phase."""
+
+    def __init__(self, T: float) -> None:
+        self.t, self.T, self.N = np.zeros(1), T, 1000
+        self.multipliers = {"continuity": np.zeros((0, 0))}
+
+
+def certify_phases(sol: Solution | None, refined: RefinedPhases, *,
+                   tol_H: float | None = None,
                    tol_sigma: float | None = None, tol_switch: float | None = None,
                    min_singular: float | None = None, n: int = 2000) -> PhasesCertificate:
     """Check Pontryagin's conditions on every phase of a refined multi-phase solution.
 
     Parameters
     ----------
-    sol : Solution
-        The transcribed multi-phase solution (for the multipliers' costates).
+    sol : Solution or None
+        The transcribed multi-phase solution (for the multipliers' costates); None when
+        the refinement did not come from a transcription (the estimates-gap is then NaN).
     refined : RefinedPhases
         Its refinement.
     tol_H, tol_sigma : float, optional
@@ -106,7 +117,7 @@ def certify_phases(sol: Solution, refined: RefinedPhases, *, tol_H: float | None
     certs, gaps, reasons = [], [], []
     names = [r.problem.name for r in refined.phases]
     for i, r in enumerate(refined.phases):
-        loc = local_phase(sol, i)
+        loc: Any = local_phase(sol, i) if sol is not None else _NoTranscription(r.T)
         h = loc.T / loc.N
         tol = _Tolerances(H=1e-6 if tol_H is None else tol_H,
                           sigma=1e-6 if tol_sigma is None else tol_sigma,

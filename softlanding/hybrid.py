@@ -110,6 +110,14 @@ class FullLanding:
     notes: list[str] = field(default_factory=list)
     path: str = "transcription"
 
+    def certify(self) -> Any:
+        """The PMP certificate of the refined phases (None without a refinement)."""
+        from ocp.phase_pmp import certify_phases
+
+        if self.refined is None:
+            return None
+        return certify_phases(self.transcribed, self.refined)
+
     @property
     def depth_gain(self) -> float:
         """``paper_depth - depth``: what optimising the arrest gains (>= 0 up to rounding)."""
@@ -144,6 +152,9 @@ class FullLanding:
             if not self.replay_difference <= tol:
                 out.append(f"the replay's depth differs by {self.replay_difference:.2e} "
                            f"(> {tol:.0e})")
+        if self.depth_gain < -1e-9 * max(1.0, self.depth):
+            out.append(f"deeper than the paper's single-phase optimum by {-self.depth_gain:.2e}"
+                       ": a local optimum (the paper's constant arrest is admissible)")
         if certificate is not None and not certificate.certified:
             why = f": {certificate.reasons[0]}" if certificate.reasons else ""
             out.append(f"PMP certificate {certificate.verdict}{why}")
@@ -316,7 +327,8 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     out = None
     if warm_start is not None and warm_start.refined is not None and refine and \
             warm_start.steps == steps:
-        r = structure_resolve(warm_start.refined, params)
+        r = structure_resolve(warm_start.refined, params, bound=paper_depth
+                              if math.isfinite(paper_depth) else None)
         if r is not None:
             out = _assemble(robot, impact, ground, steps, None, r, paper_depth, [], "structure")
     if out is None:

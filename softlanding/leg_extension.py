@@ -75,6 +75,9 @@ class LegExtensionLanding:
     flight_arcs : list of ArcLaw
         ``mode="drop"``: the flight's force, arc by arc (refined arcs; or, where the
         flight's force is not unique, the transcription's piecewise-constant force).
+    refined_of : ocp.Solution or None
+        The transcription ``refined`` was refined from (``transcribed``, or, with a
+        non-unique flight, the landing's from the reached touchdown state).
     """
 
     robot: Robot
@@ -102,6 +105,15 @@ class LegExtensionLanding:
     flight_arcs: list[ArcLaw] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     path: str = "transcription"
+    refined_of: Solution | None = None
+
+    def certify(self) -> Any:
+        """The PMP certificate of the refined phases (None without a refinement)."""
+        from ocp.phase_pmp import certify_phases
+
+        if self.refined is None:
+            return None
+        return certify_phases(self.refined_of, self.refined)
 
     @property
     def gain(self) -> float:
@@ -136,6 +148,9 @@ class LegExtensionLanding:
             tol = (1e-9 if self.refined is not None else 1e-6) * max(1.0, self.depth)
             if not self.replay_difference <= tol:
                 out.append(f"the replay's depth differs by {self.replay_difference:.2e}")
+        if self.gain < -1e-9 * max(1.0, self.depth):
+            out.append(f"deeper than with the paper's initial condition by {-self.gain:.2e}: "
+                       "a local optimum (the paper's touchdown state is admissible)")
         if self.mode == "drop" and not self.flight_check <= 1e-9 * max(1.0, abs(
                 self.impact.v0) ** 2):
             out.append(f"the flight arcs propagated exactly miss the touchdown state by "
@@ -225,7 +240,7 @@ def _assemble(robot: Robot, impact: Impact, mode: str, bounds: dict, sol: Soluti
         com_velocity=float(mb * x0[1] + (1 - mb) * x0[3]), arcs=arcs, switch_times=sw,
         phase_times=times, status=src.status, iterations=int(src.iterations),
         solve_time_s=float(src.solve_time), refined=ref, transcribed=sol, notes=notes,
-        path=path)
+        path=path, refined_of=sol)
 
 
 def _release(robot: Robot, impact: Impact) -> np.ndarray:
@@ -293,7 +308,7 @@ def _fixed_flight(out: LegExtensionLanding, robot: Robot, impact: Impact,
     return LegExtensionLanding(
         **{**out.__dict__, "depth": inner.depth, "touchdown": inner.touchdown,
            "extension": inner.extension, "rate": inner.rate, "com_velocity": vc,
-           "refined": inner.refined, "transcribed": inner.transcribed,
+           "refined": inner.refined, "refined_of": inner.refined_of,
            "arcs": [["transcribed"]] + inner.arcs,
            "switch_times": [[]] + [[t + t_f for t in x] for x in inner.switch_times],
            "phase_times": [0.0] + [t + t_f for t in inner.phase_times], "notes": notes,
@@ -349,7 +364,7 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
     notes: list[str] = []
     out = None
     if warm_start is not None and warm_start.refined is not None and warm_start.mode == mode:
-        r = structure_resolve(warm_start.refined, params)
+        r = structure_resolve(warm_start.refined, params, bound=two.depth)
         if r is not None:
             out = _assemble(robot, impact, mode, bounds, None, r, two.depth, notes,
                             "structure")

@@ -60,7 +60,7 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
         if warm_start is not None:
             try:
                 sol = tr.solve(params, warm_start=warm_start)
-            except SolveError:
+            except (SolveError, ValueError):  # failed, or a solution of another problem
                 sol = None
         if sol is None:
             sol = tr.solve(params, guess=guess)
@@ -160,7 +160,8 @@ def repaired_structures(sol: Solution, structures: list[ArcStructure]
 
 
 def structure_resolve(prev: RefinedPhases, params: dict[str, float],
-                      x0s: list[np.ndarray] | None = None) -> RefinedPhases | None:
+                      x0s: list[np.ndarray] | None = None,
+                      bound: float | None = None) -> RefinedPhases | None:
     """A neighbour's refined structure re-solved for new parameters (None if it fails, an
     arc of positive length collapses, or a path constraint is violated between the samples).
 
@@ -172,6 +173,9 @@ def structure_resolve(prev: RefinedPhases, params: dict[str, float],
         The new parameter values.
     x0s : list of ndarray, optional
         Guesses of every phase's start (default: the neighbour's).
+    bound : float, optional
+        An objective value known to be achievable (e.g. a special case's optimum): a
+        re-solve above it has landed on another local solution, and is not kept.
     """
     starts = x0s if x0s is not None else [r.x0 for r in prev.phases]
     try:
@@ -183,6 +187,8 @@ def structure_resolve(prev: RefinedPhases, params: dict[str, float],
     for new, old in zip(r.durations, prev.durations, strict=True):
         if np.any((new <= tiny) & (old > tiny)):
             return None  # an arc collapsed: the structure changed (touch points may stay)
+    if bound is not None and r.objective > bound + 1e-9 * max(1.0, abs(bound)):
+        return None
     if r.path_violation(2000) > 1e-9:
         return None
     return r
