@@ -85,8 +85,11 @@ def segment_work(A: np.ndarray, z0: np.ndarray, c: np.ndarray, duration: float,
             cuts.append(brentq(power, a, b, xtol=1e-15, rtol=1e-15))
     cuts.append(duration)
     out = Work()
+    scale = max(float(np.max(np.abs(ps))) * duration, 1e-300)
     for a, b in zip(cuts[:-1], cuts[1:], strict=True):
-        val = quad(power, a, b, epsabs=1e-14, epsrel=1e-12, limit=200)[0]
+        if b <= a:
+            continue
+        val = quad(power, a, b, epsabs=1e-13 * scale, epsrel=1e-12, limit=200)[0]
         if val >= 0:
             out.positive += val
         else:

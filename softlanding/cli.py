@@ -145,6 +145,10 @@ def _cmd_solve(a: argparse.Namespace) -> int:
     from .landing import solve_landing
 
     plot = _target(a)
+    if getattr(a, "variant", "paper") != "paper":  # the hybrid multi-phase landings
+        from .cli_hybrid import cmd_solve_variant
+
+        return cmd_solve_variant(a, _robot(a), plot)
     pmp_plot = None
     if plot is not None and a.pmp:
         pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
@@ -504,10 +508,16 @@ def _cmd_reproduce(a: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------- errors
+def _cmd_hop(a: argparse.Namespace) -> int:
+    from .cli_hybrid import cmd_hop
+
+    return cmd_hop(a)
+
+
 HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
             "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
-            "reproduce": _cmd_reproduce}
+            "reproduce": _cmd_reproduce, "hop": _cmd_hop}
 
 
 def _report(exc: BaseException) -> int:

@@ -132,7 +132,51 @@ def _solve(sub: Any) -> argparse.ArgumentParser:
                         "and give a bang-bang verdict")
     _plot_arg(o, "the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
     _accept_arg(o)
+    _variant_args(o)
     return o
+
+
+def _variant_args(o: argparse.ArgumentParser) -> None:
+    """``solve --variant``: the hybrid multi-phase landings (softlanding.hybrid, .leg_extension)."""
+    o.add_argument("--variant", choices=["paper", "two-phase", "leg-extension"],
+                   default="paper",
+                   help="paper: the paper's single-phase OCP (default); two-phase: yielding then "
+                        "static stance until the body stops, the arrest optimised; "
+                        "leg-extension: the leg's state at touchdown optimised (changes the "
+                        "paper's initial condition)")
+    o.add_argument("--steps", type=int, choices=[1, 2], default=1,
+                   help="two-phase: yielding steps allowed (2: yielding, static, yielding, "
+                        "static)")
+    o.add_argument("--mode", choices=["impact", "drop"], default="impact",
+                   help="leg-extension: decide the leg's state at impact directly (both "
+                        "masses at v0), or by a flight phase from the drop height v0^2/2")
+    o.add_argument("--extension", default="free",
+                   help="leg-extension, impact mode: 'free' (within the stroke) or a leg "
+                        "length at impact (s/2 is the paper's)")
+    o.add_argument("--rate-max", type=float, default=None,
+                   help="leg-extension, impact mode: also free the relative velocity at "
+                        "impact within +-RATE_MAX (default: 0, the paper's)")
+
+
+def _hop(sub: Any) -> argparse.ArgumentParser:
+    h = sub.add_parser("hop", help="minimum-energy hop cycle on yielding ground",
+                       description="One vertical hop: touchdown on fresh ground at v0 (apex "
+                                   "v0^2/2, leg at s/2), stance on the crater, lift-off, "
+                                   "flight back to the apex posture. Minimises the energy the "
+                                   "actuator draws per cycle, int (P+ - eta P-) dt, and "
+                                   "evaluates it on the exact replay.")
+    h.add_argument("--v0", type=float, required=True, help="touchdown velocity (< 0)")
+    h.add_argument("--eta", type=float, default=0.0,
+                   help="regenerative efficiency in [0, 1) (default 0: a dissipative actuator)")
+    h.add_argument("--leg", choices=["free", "impedance", "rigid", "all"], default="free",
+                   help="free: the optimum; impedance: the best (k_p, k_d) with a thrust from "
+                        "the body's lowest point to lift-off; rigid: a rigid landing, then "
+                        "the optimal push-off; all: the three")
+    h.add_argument("--grid", type=int, default=9, help="impedance gain grid per axis (9)")
+    _model_args(h, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    _plot_arg(h, "the hop cycle figure (the first leg), phases shaded")
+    _accept_arg(h)
+    return h
 
 
 def _solve_sweep(sub: Any) -> argparse.ArgumentParser:
@@ -241,7 +285,7 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
 
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
-            "demo": _demo, "reproduce": _reproduce}
+            "demo": _demo, "reproduce": _reproduce, "hop": _hop}
 
 
 def build_parser(handlers: Handlers,

@@ -44,6 +44,11 @@ from .model import PAPER_ROBOT, Impact, Robot
 from .phase_solve import transcribed_solve
 from .simulate import LandingResult, simulate
 
+SLACK_NOTE = ("the transcription meets its power slack p >= u (v_b - v_f) at its nodes and "
+              "RK4 steps only (p is piecewise constant), so its own energy figure is "
+              "approximate; the energy reported is the exact replay's")
+"""Why a hop transcription's slack figure differs from the exact energy."""
+
 APEX_TOL = 1e-5
 """Largest apex posture error (relative) accepted from a transcription's replay."""
 
@@ -84,6 +89,9 @@ class HopCycle:
         The exact simulation of the cycle (stance and flight).
     transcribed : list of ocp.Solution
         The transcriptions solved.
+    pieces : list of (LandingResult, float, float)
+        The exact simulations the cycle is made of, with the cycle times each covers
+        (each simulation starts at its own time 0).
     notes : list of str
     """
 
@@ -102,7 +110,25 @@ class HopCycle:
     times: dict[str, float] = field(default_factory=dict)
     replay: LandingResult | None = None
     transcribed: list[Solution] = field(default_factory=list)
+    pieces: list[tuple[LandingResult, float, float]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+
+    def trajectory(self, n: int = 1500) -> Trajectory:
+        """The whole cycle from its exact simulations (``mode`` = ground mode).
+
+        Parameters
+        ----------
+        n : int
+            About how many samples.
+        """
+        total = max(sum(b - a for _, a, b in self.pieces), 1e-300)
+        parts = [(r.trajectory(t_end=b - a, n=max(50, int(n * (b - a) / total))), a)
+                 for r, a, b in self.pieces]
+        return Trajectory(np.concatenate([tr.t + a for tr, a in parts]),
+                          np.vstack([tr.x for tr, _ in parts]),
+                          np.vstack([tr.u for tr, _ in parts]), parts[0][0].state_names,
+                          parts[0][0].control_names,
+                          mode=np.concatenate([tr.mode for tr, _ in parts]))
 
     @property
     def apex_height(self) -> float:
@@ -148,7 +174,7 @@ def _params(robot: Robot, impact: Impact, eta: float, start: np.ndarray | None =
     return p
 
 
-def _check(robot: Robot, impact: Impact, eta: float) -> tuple[Robot, Impact]:
+def _check(robot: Robot, impact: Impact | float, eta: float) -> tuple[Robot, Impact]:
     impact = Impact.of(impact)
     _validate(robot)
     if not impact.v0 < 0:
@@ -277,7 +303,8 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     out = _evaluate("free", robot, impact, eta, res, t_apex, Work(),
                     float(mechanical_energy(x0, robot.r_m)))
     out.energy_transcribed = float(sol.objective)
-    out.transcribed, out.notes = [sol], notes
+    out.transcribed, out.pieces = [sol], [(res, 0.0, t_apex)]
+    out.notes = [SLACK_NOTE] + [n for n in notes if "slack p" not in n] if notes else []
     return out
 
 
@@ -287,9 +314,10 @@ def _flight(robot: Robot, impact: Impact, eta: float, start: np.ndarray,
     """The minimum-energy flight from a lift-off state to the apex posture."""
     tr = hop_transcription("lift-off")
     p = _params(robot, impact, eta, start)
+    notes: list[str] = []
     if guess_from is not None:
         try:
-            return tr.solve(p, guess=guess_from)
+            return transcribed_solve(tr, p, guess_from, None, notes)
         except SolveError:
             pass
     mb, mf = robot.body_mass, robot.foot_mass
@@ -304,7 +332,7 @@ def _flight(robot: Robot, impact: Impact, eta: float, start: np.ndarray,
                          np.gradient(com - mb * leg, t), np.full(len(t), -start[2])])
     g = Trajectory(t, x, np.zeros((len(t), 2)), ("x_b", "v_b", "x_f", "v_f", "crater"),
                    ("u", "p"), phase=np.zeros(len(t), dtype=int))
-    return tr.solve(p, guess=g)
+    return transcribed_solve(tr, p, g, None, notes)
 
 
 # ------------------------------------------------------------- impedance
@@ -509,6 +537,8 @@ def impedance_hop(impact: Impact | float, k_p: float, k_d: float,
                      apex=t_lo + t_f)
     out.gains, out.transcribed, out.replay = {"k_p": k_p, "k_d": k_d, "u_t": u_t}, [fl], \
         st.second
+    out.pieces = [(st.first, 0.0, st.t_bottom), (st.second, st.t_bottom, t_lo),
+                  (fres, t_lo, t_lo + t_f)]
     return out
 
 
@@ -600,6 +630,7 @@ def rigid_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     out.times.update(foot_stop=t_rest, lift_off=t_rest + out.times["lift_off"],
                      apex=t_rest + t_f)
     out.energy_transcribed, out.transcribed = float(sol.objective), [sol]
+    out.pieces = [(land, 0.0, t_rest), (res, t_rest, t_rest + t_f)]
     return out
 
 

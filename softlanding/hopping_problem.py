@@ -58,7 +58,6 @@ from .stance_phases import (
     DESCENDING,
     NO_PULL,
     STROKE,
-    T_MAX,
     crater_capacity,
     impact_state,
     parameters,

@@ -245,7 +245,7 @@ def _assemble(robot: Robot, impact: Impact, ground: Ground, steps: int, sol: Sol
         times = [float(p.t0) for p in sol.phases] + [float(sol.phases[-1].T)]
         arcs, sw = [], []
         u = sol.phases[-1].u[:, 0]
-    src = ref if ref is not None else sol
+    src = sol if sol is not None else ref
     return FullLanding(
         robot=robot, impact=impact, ground=ground, steps=steps, depth=float(-xT[2]),
         depth_transcribed=float(-sol.phases[-1].x[-1, 2]) if sol is not None else math.nan,
@@ -320,8 +320,15 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     if paper is None:
         try:
             paper = solve_landing(impact, robot, ground)
-        except InfeasibleLandingError:
-            paper = None
+        except InfeasibleLandingError as err:
+            # the same yielding phases are admissible in both problems: the static phase
+            # stops a descending body inside the stroke with |u| <= u_max and a support
+            # force within the crater's capacity exactly when the paper's arrest force
+            # u_b <= min(u_max, capacity - foot weight) exists
+            raise InfeasibleLandingError(
+                f"no two-phase landing either: {err} (a phase-2 arrest within the force "
+                "limit and the crater's capacity exists exactly when the paper's does)"
+            ) from None
     paper_depth = paper.depth if paper is not None else math.nan
     params = _ocp_params(robot, impact)
     out = None
@@ -443,8 +450,9 @@ def _two_step_guesses(robot: Robot, impact: Impact, ground: Ground,
         i, j = np.unravel_index(flat, ok.shape)
         if not ok[i, j]:
             break
-        res = simulate(robot, impact, Impedance(g[i], g[j]), ground)
+        res = simulate(robot, impact, Impedance(float(g[i]), float(g[j])), ground)
         tr = res.trajectory(n=800)
+        assert tr.mode is not None
         runs = np.r_[0, np.cumsum(tr.mode[1:] != tr.mode[:-1])]
         if "flight" in set(tr.mode[runs <= 3]) or runs.max() < 3:
             continue

@@ -231,7 +231,7 @@ def _assemble(robot: Robot, impact: Impact, mode: str, bounds: dict, sol: Soluti
         times = [float(p.t0) for p in sol.phases] + [float(sol.phases[-1].T)]
         arcs, sw = [], []
     mb = robot.body_mass
-    src: Any = ref if ref is not None else sol
+    src: Any = sol if sol is not None else ref
     return LegExtensionLanding(
         robot=robot, impact=impact, mode=mode, bounds=bounds, depth=float(-xT[2]),
         depth_transcribed=float(-sol.phases[-1].x[-1, 2]) if sol is not None else math.nan,

@@ -70,8 +70,9 @@ def build_leg_extension_problem(mode: str = "impact") -> MultiPhaseProblem:
         x = fl.x
         h = par["v0"] ** 2 / 2
         fl.path_constraint(x[2], 0, ca.inf, name=ABOVE_SURFACE)
-        for k, (e, v) in enumerate(((x[0], h + par["l0"]), (x[1], 0.0), (x[2], h),
-                                    (x[3], 0.0))):
+        release: list[tuple[ca.SX, ca.SX]] = [(x[0], h + par["l0"]), (x[1], ca.SX(0)),
+                                              (x[2], h), (x[3], ca.SX(0))]
+        for k, (e, v) in enumerate(release):
             fl.initial_constraint(e - v, 0.0, name=f"released at rest ({k})")
         fl.terminal_constraint(x[2], 0.0, name="touchdown x_f(T) = 0")
         fl.terminal_constraint(x[3], -ca.inf, 0.0, name="foot moving down at touchdown")

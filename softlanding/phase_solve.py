@@ -99,6 +99,10 @@ def refined_phases(sol: Solution, notes: list[str],
         except SolveError as err:
             why = f"switching-time refinement failed ({err.status})"
             continue
+        viol = r.path_violation(4000)
+        if viol > 1e-9:  # e.g. a touch point between the samples of an interval
+            why = f"the refined arcs violate a path constraint by {viol:.1e} between samples"
+            continue
         if label:
             notes.append(f"refined with {label}")
         return r

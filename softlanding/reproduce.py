@@ -305,8 +305,15 @@ def robustness(out: Path, files: list[str], st: Settings, progress: bool) -> dic
 
 
 # ------------------------------------------------------------------ driver
+def hybrid(out: Path, files: list[str], st: Settings, progress: bool) -> dict:
+    """Beyond the paper: the arrest optimised, leg extension, minimum-energy hopping."""
+    from .reproduce_hybrid import hybrid_findings
+
+    return hybrid_findings(out, files, st.quick, progress)
+
+
 SECTIONS = ("bang-bang example", "stepped intrusions", "depth maps", "optimal gains",
-            "comparison", "experiment", "cost of transport", "robustness")
+            "comparison", "experiment", "cost of transport", "robustness", "hybrid phases")
 
 
 def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True,
@@ -369,6 +376,7 @@ def _run_sections(out: Path, st: Settings, progress: bool,
     summary["cost_of_transport"] = run(7, "cost_of_transport", cost_of_transport, out, files,
                                        st, progress, depth_optimum)
     summary["robustness"] = run(8, "robustness", robustness, out, files, st, progress)
+    summary["hybrid"] = run(9, "hybrid", hybrid, out, files, st, progress)
     from . import __version__
 
     summary["meta"] = {"quick": st.quick, "elapsed_s": time.perf_counter() - t_all,

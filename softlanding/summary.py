@@ -155,7 +155,16 @@ def _robustness(s: dict) -> list[str]:
     return out
 
 
-SECTIONS = (_bang_bang, _stepped, _maps, _gains, _comparison, _experiment, _cot, _robustness)
+def _hybrid(s: dict) -> list[str]:
+    if "hybrid" not in s:
+        return []
+    from .summary_hybrid import hybrid_markdown
+
+    return hybrid_markdown(s["hybrid"])
+
+
+SECTIONS = (_bang_bang, _stepped, _maps, _gains, _comparison, _experiment, _cot, _robustness,
+            _hybrid)
 
 
 def summary_markdown(s: dict) -> str:

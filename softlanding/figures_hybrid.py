@@ -1,0 +1,200 @@
+"""Figures of the hybrid studies: phases shaded and labelled, and the three findings.
+
+Every function returns a :class:`matplotlib.figure.Figure` (nothing is shown or
+saved here).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+PHASE_COLOURS = {"yielding": "#f4c7a1", "static": "#b9d7ea", "flight": "#d9ead3",
+                 "flight up": "#d9ead3", "flight down": "#d9ead3"}
+
+
+def _colour(name: str) -> str:
+    for key, c in PHASE_COLOURS.items():
+        if name.startswith(key):
+            return c
+    return "0.9"
+
+
+def shade_phases(axes: Sequence[Any], spans: list[tuple[float, float, str]]) -> None:
+    """Shade and label ``(start, end, name)`` spans on every axis (labels on the first).
+
+    Parameters
+    ----------
+    axes : sequence of matplotlib axes
+        Axes sharing the time axis.
+    spans : list of (float, float, str)
+        Phase start, end and name.
+    """
+    for ax in axes:
+        for a, b, name in spans:
+            ax.axvspan(a, b, color=_colour(name), alpha=0.55, lw=0, zorder=0)
+    top = axes[0]
+    for a, b, name in spans:
+        top.text(0.5 * (a + b), 1.0, name, transform=top.get_xaxis_transform(),
+                 ha="center", va="bottom", fontsize=8)
+
+
+def plot_phases(t: np.ndarray, x: np.ndarray, u: np.ndarray,
+                spans: list[tuple[float, float, str]], title: str,
+                switches: Sequence[float] = ()) -> plt.Figure:
+    """Heights, velocities and force against time with the phases shaded and labelled.
+
+    Parameters
+    ----------
+    t : ndarray (n,)
+        Times.
+    x : ndarray (n, >= 4)
+        States ``x_b, v_b, x_f, v_f``.
+    u : ndarray (n,)
+        Force.
+    spans : list of (float, float, str)
+        Phases.
+    title : str
+        Figure title.
+    switches : sequence of float
+        Switch times (dashed).
+    """
+    fig, (a1, a2, a3) = plt.subplots(3, 1, sharex=True, figsize=(8.0, 7.0))
+    a1.plot(t, x[:, 0], label=r"body $x_b$")
+    a1.plot(t, x[:, 2], label=r"foot $x_f$", color="C3")
+    a2.plot(t, x[:, 1], label=r"body $\dot x_b$")
+    a2.plot(t, x[:, 3], label=r"foot $\dot x_f$", color="C3")
+    a3.plot(t, u, color="C2")
+    for ax in (a1, a2, a3):
+        for ts in switches:
+            ax.axvline(ts, color="0.3", ls="--", lw=0.8)
+        ax.grid(alpha=0.3)
+    shade_phases([a1, a2, a3], spans)
+    a1.set_ylabel(r"height [$x_s$]")
+    a2.set_ylabel(r"velocity [$x_s/\tau_s$]")
+    a3.set_ylabel(r"force $u$ [$m_t g$]")
+    a3.set_xlabel(r"time $\tau$ [$\sqrt{m_t/k_g}$]")
+    a1.legend(fontsize=8, loc="best")
+    a2.legend(fontsize=8, loc="best")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _refined_spans(ref: Any) -> list[tuple[float, float, str]]:
+    ends = [float(t) for t in ref.t0] + [float(ref.T)]
+    return [(a, b, r.problem.name) for a, b, r in zip(ends[:-1], ends[1:], ref.phases,
+                                                      strict=True)]
+
+
+def plot_full_landing(res: Any) -> plt.Figure:
+    """A two-phase (or leg-extension) landing: the refined exact arcs, phases shaded.
+
+    Parameters
+    ----------
+    res : FullLanding or LegExtensionLanding
+        With a refinement.
+    """
+    ref = res.refined
+    if ref is None:
+        raise ValueError("no refined solution to plot (see the result's notes)")
+    tr = ref.trajectory(1200)
+    sw = [t for ph in ref.switch_times for t in ph]
+    kind = getattr(res, "mode", None)
+    head = "leg extension (" + kind + ")" if kind else "two-phase landing"
+    p = res.robot
+    title = (f"{head}, $v_0$={res.impact.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
+             f"$u_{{max}}$={p.u_max:g}: depth {res.depth:.6f} (paper's: "
+             f"{res.paper_depth:.6f})")
+    return plot_phases(tr.t, tr.x, tr.u[:, 0], _refined_spans(ref), title, sw)
+
+
+def plot_hop(cycle: Any) -> plt.Figure:
+    """One hop cycle from its exact simulations, ground modes shaded and labelled.
+
+    Parameters
+    ----------
+    cycle : HopCycle
+        A solved cycle.
+    """
+    tr = cycle.trajectory(1500)
+    modes = tr.mode
+    spans = []
+    k = 0
+    for i in range(1, len(tr.t) + 1):
+        if i == len(tr.t) or modes[i] != modes[k]:
+            spans.append((float(tr.t[k]), float(tr.t[min(i, len(tr.t) - 1)]), str(modes[k])))
+            k = i
+    merged: list[tuple[float, float, str]] = []
+    for a, b, name in spans:
+        if merged and merged[-1][2] == name:
+            merged[-1] = (merged[-1][0], b, name)
+        else:
+            merged.append((a, b, name))
+    extra = "" if not cycle.gains else ", " + ", ".join(f"{k_}={v:.3g}"
+                                                        for k_, v in cycle.gains.items())
+    title = (f"hop ({cycle.leg}{extra}), $v_0$={cycle.impact.v0:g}, apex "
+             f"{cycle.apex_height:.3g}, $\\eta$={cycle.eta:g}: energy {cycle.energy:.4f} "
+             f"per cycle, crater {cycle.depth:.4f}")
+    return plot_phases(tr.t, tr.x, tr.u[:, 0], merged, title)
+
+
+def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
+                         hops: dict[str, Sequence[Any]]) -> plt.Figure:
+    """The three findings: two-phase vs paper depth; leg extension; hop energy per cycle.
+
+    Parameters
+    ----------
+    two : sequence of FullLanding
+        The two-phase sweep.
+    legs : sequence of LegExtensionLanding
+        The leg-extension sweep.
+    hops : dict
+        Leg -> sequence of HopCycle (or None).
+    """
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.4))
+    a = axes[0]
+    v = np.array([r.impact.v0 for r in two])
+    a.plot(v, [r.paper_depth for r in two], "k-", label="paper (constant arrest)")
+    a.plot(v, [r.depth for r in two], "C0o", ms=3, label="two-phase (arrest optimised)")
+    b = a.twinx()
+    b.semilogy(v, [max(abs(r.depth_gain), 1e-17) for r in two], "C3.", ms=3)
+    b.set_ylabel("|depth difference|", color="C3")
+    a.set_xlabel(r"$v_0$")
+    a.set_ylabel("depth")
+    a.legend(fontsize=8, loc="upper right")
+    a.set_title("1. the body-arrest phase optimised", fontsize=9)
+    a = axes[1]
+    v = np.array([r.impact.v0 for r in legs])
+    a.plot(v, [r.paper_depth for r in legs], "k-", label=r"leg $s/2$ at impact (paper)")
+    a.plot(v, [r.depth for r in legs], "C0o", ms=3, label="optimal extension")
+    b = a.twinx()
+    b.plot(v, [r.extension for r in legs], "C2--", label="optimal leg length")
+    b.set_ylabel("leg length at impact", color="C2")
+    a.set_xlabel(r"$v_0$")
+    a.set_ylabel("depth")
+    a.legend(fontsize=8, loc="upper right")
+    a.set_title("2. pre-impact leg extension", fontsize=9)
+    a = axes[2]
+    for k, (leg, rows) in enumerate(hops.items()):
+        pts = [(r.apex_height, r.energy) for r in rows if r is not None]
+        if pts:
+            h, e = np.array(pts).T
+            a.plot(h, e / h, f"C{k}o-", ms=3, label=leg)
+    a.set_xscale("log")
+    a.set_xlabel(r"apex height $v_0^2/2$")
+    a.set_ylabel("energy per cycle / apex height")
+    a.legend(fontsize=8)
+    eta = next((r.eta for rows in hops.values() for r in rows if r is not None), 0.0)
+    a.set_title(f"3. minimum-energy hopping ($\\eta$ = {eta:g})", fontsize=9)
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["PHASE_COLOURS", "plot_full_landing", "plot_hop", "plot_hybrid_findings",
+           "plot_phases", "shade_phases"]

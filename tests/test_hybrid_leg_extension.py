@@ -1,0 +1,71 @@
+"""Pre-impact leg extension (softlanding.leg_extension): fixed at s/2 it is the paper's
+problem; free, it lowers the depth; replays and the drop's flight are checked exactly."""
+
+import numpy as np
+import pytest
+
+from softlanding import PAPER_ROBOT
+from softlanding.errors import ParameterError
+from softlanding.leg_extension import solve_leg_extension, sweep_leg_extension
+from softlanding.phase_schedule import feedback_available
+
+NEEDS_FEEDBACK = "replaying a boundary arc with state feedback needs FeedbackSchedule"
+
+
+def test_fixed_at_half_the_stroke_gives_the_papers_depth():
+    for v0 in (-0.5, -3.0, -10.0):
+        r = solve_leg_extension(v0, extension=PAPER_ROBOT.s / 2)
+        assert r.depth == pytest.approx(r.paper_depth, abs=1e-9)
+        assert r.extension == pytest.approx(10.0, abs=1e-12) and r.rate == 0.0
+        assert r.unverified_reasons() == []
+
+
+def test_free_extension_lowers_the_depth_and_stays_in_the_stroke():
+    r = solve_leg_extension(-3.0)
+    assert r.gain > 0.2  # 1.284 against the paper's 1.516
+    assert 10.0 < r.extension < PAPER_ROBOT.s
+    assert r.refined is not None and r.refined.path_violation() < 1e-9
+    if not feedback_available():
+        pytest.skip(NEEDS_FEEDBACK)
+    assert r.unverified_reasons() == []
+
+
+def test_a_touch_point_of_the_stroke_is_imposed_exactly():
+    r = solve_leg_extension(-1.0)
+    assert r.refined is not None
+    assert r.refined.path_violation() < 1e-9
+    assert r.unverified_reasons() == []  # zero-length arc: the replay needs no feedback
+    assert r.replay is not None and r.replay.stroke_max <= PAPER_ROBOT.s + 1e-9
+
+
+def test_sweep_of_41_velocities():
+    rows = sweep_leg_extension(np.linspace(-0.5, -10.0, 41))
+    assert len(rows) == 41
+    assert all(r.gain >= -1e-9 for r in rows)
+    assert all(r.refined is not None for r in rows)
+    gains = [r.gain for r in rows]
+    assert gains[-1] > gains[0]  # extension matters more the faster the impact
+
+
+def test_drop_with_a_flight_phase():
+    r = solve_leg_extension(-3.0, mode="drop")
+    assert r.depth < r.paper_depth
+    assert r.flight_check <= 1e-9
+    assert r.unverified_reasons() == []
+    assert abs(r.com_velocity) < 3.0  # touching down early: the centre of mass is slower
+
+
+def test_relative_velocity_freed_within_bounds():
+    r0 = solve_leg_extension(-3.0)
+    r = solve_leg_extension(-3.0, rate=(-1.0, 1.0))
+    assert r.depth <= r0.depth + 1e-9
+    assert -1.0 - 1e-9 <= r.rate <= 1.0 + 1e-9
+
+
+def test_bad_requests():
+    with pytest.raises(ParameterError, match="extension"):
+        solve_leg_extension(-3.0, extension=(5.0, 25.0))
+    with pytest.raises(ParameterError, match="mode"):
+        solve_leg_extension(-3.0, mode="jump")
+    with pytest.raises(ParameterError, match="v0"):
+        solve_leg_extension(0.0, mode="drop")
