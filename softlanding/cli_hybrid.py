@@ -63,10 +63,12 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
     from .cli import EXIT_FAILURE, EXIT_OK, _print_json, _print_table, _savefig
 
     res: Any
+    if a.variant == "two-phase" and a.steps == 2:
+        return _two_steps(a, robot)
     if a.variant == "two-phase":
         from .hybrid import solve_two_phase
 
-        res = solve_two_phase(Impact(a.v0), robot, steps=a.steps)
+        res = solve_two_phase(Impact(a.v0), robot)
     else:
         from .leg_extension import solve_leg_extension
 
@@ -99,6 +101,30 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
             print(f"PMP: {r_}")
         if written:
             print(f"figure written to {written}")
+    return EXIT_OK if not reasons or a.accept_unverified else EXIT_FAILURE
+
+
+def _two_steps(a: argparse.Namespace, robot: Any) -> int:
+    """``--steps 2``: the four-phase landing from several starts against the two-phase one."""
+    from .cli import EXIT_FAILURE, EXIT_OK, _print_json, _print_table
+    from .hybrid import two_step_check
+
+    c = two_step_check(Impact(a.v0), robot)
+    reasons = c.one_step.unverified_reasons()
+    if a.json:
+        _print_json({"verified": not reasons, "unverified_reasons": reasons, "depth": c.depth,
+                     **c.to_dict()})
+    else:
+        _print_table([("verified (one-step optimum)", "yes" if not reasons else
+                       "NO: " + "; ".join(reasons)),
+                      ("one-step depth (refined)", c.one_step.depth),
+                      ("two-step depth (transcribed, best start)", c.depth),
+                      ("gain of a second step", c.gain),
+                      ("middle phases collapse", c.collapsed)])
+        for st in c.starts:
+            print(f"start {st['start']}: " + (f"depth {st['depth']:.10g}, phase durations "
+                  + ", ".join(f"{d:.4g}" for d in st["durations"]) if "depth" in st
+                  else f"failed ({st['error']})"))
     return EXIT_OK if not reasons or a.accept_unverified else EXIT_FAILURE
 
 

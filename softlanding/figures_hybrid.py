@@ -6,7 +6,7 @@ saved here).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import matplotlib.pyplot as plt
@@ -143,7 +143,7 @@ def plot_hop(cycle: Any) -> plt.Figure:
 
 
 def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
-                         hops: dict[str, Sequence[Any]]) -> plt.Figure:
+                         hops: Mapping[str, Sequence[Any]]) -> plt.Figure:
     """The three findings: two-phase vs paper depth; leg extension; hop energy per cycle.
 
     Parameters

@@ -617,7 +617,8 @@ def rigid_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     rest[1] = rest[3] = 0.0
     tr = hop_transcription("rest")
     p = _params(robot, impact, eta, rest)
-    sol = tr.solve(p, guess=_rest_guess(robot, impact, rest))
+    notes: list[str] = []
+    sol = transcribed_solve(tr, p, _rest_guess(robot, impact, rest), None, notes)
     sched, t_f = _schedule([sol])
     res = simulate(robot, impact, sched, x0=rest, t_max=t_f + 1.0)
     out = _evaluate("rigid", robot, impact, eta, res, t_f, Work(),
@@ -631,6 +632,7 @@ def rigid_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
                      apex=t_rest + t_f)
     out.energy_transcribed, out.transcribed = float(sol.objective), [sol]
     out.pieces = [(land, 0.0, t_rest), (res, t_rest, t_rest + t_f)]
+    out.notes = [SLACK_NOTE] + [n for n in notes if "slack p" not in n] if notes else []
     return out
 
 

@@ -152,7 +152,7 @@ class FullLanding:
             if not self.replay_difference <= tol:
                 out.append(f"the replay's depth differs by {self.replay_difference:.2e} "
                            f"(> {tol:.0e})")
-        if self.depth_gain < -1e-9 * max(1.0, self.depth):
+        if self.depth_gain < -(1e-9 if self.refined is not None else 1e-5) * max(1.0, self.depth):
             out.append(f"deeper than the paper's single-phase optimum by {-self.depth_gain:.2e}"
                        ": a local optimum (the paper's constant arrest is admissible)")
         if certificate is not None and not certificate.certified:

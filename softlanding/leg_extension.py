@@ -148,7 +148,7 @@ class LegExtensionLanding:
             tol = (1e-9 if self.refined is not None else 1e-6) * max(1.0, self.depth)
             if not self.replay_difference <= tol:
                 out.append(f"the replay's depth differs by {self.replay_difference:.2e}")
-        if self.gain < -1e-9 * max(1.0, self.depth):
+        if self.gain < -(1e-9 if self.refined is not None else 1e-5) * max(1.0, self.depth):
             out.append(f"deeper than with the paper's initial condition by {-self.gain:.2e}: "
                        "a local optimum (the paper's touchdown state is admissible)")
         if self.mode == "drop" and not self.flight_check <= 1e-9 * max(1.0, abs(

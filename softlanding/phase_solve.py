@@ -73,9 +73,10 @@ def refined_phases(sol: Solution, notes: list[str],
                    structures: list | None = None) -> RefinedPhases | None:
     """Refine every phase's switching times (None and a note when that is not possible).
 
-    The detected structures are tried first, then :func:`repaired_structures` (a
-    touch point of the stroke limit where the transcription reaches it without a
-    boundary arc; a static phase that is not a clean arc read as the crater-capacity arc).
+    The detected structures are tried first, then the repairs of
+    :func:`repaired_structures` (grid artefacts: a touch point of the stroke limit
+    read as an arc or missed, a static phase that is not one clean arc); a refinement
+    is kept only if its arcs keep every path constraint between the samples (1e-9).
 
     Parameters
     ----------
@@ -87,8 +88,7 @@ def refined_phases(sol: Solution, notes: list[str],
         Per phase (default: detected).
     """
     first = structures if structures is not None else detect_phase_structures(sol)
-    repaired, what = repaired_structures(sol, first)
-    tried = [(first, "")] + ([(repaired, what)] if what else [])
+    tried = [(first, "")] + repaired_structures(sol, first)
     why = ""
     for sts, label in tried:
         try:
@@ -124,15 +124,38 @@ def _split_at(st: ArcStructure, t: float, mode: Mode) -> ArcStructure:
     return ArcStructure.from_modes(st.controls, modes, durs)
 
 
-def repaired_structures(sol: Solution, structures: list[ArcStructure]
-                        ) -> tuple[list[ArcStructure], str]:
-    """Structures with the transcription's grid artefacts repaired, and what was done.
+def _by_sign(loc: Solution) -> ArcStructure:
+    """Bang arcs from the sign of the (single) control of a transcribed phase."""
+    u = loc.u[:, 0]
+    h = float(loc.T) / loc.N
+    modes: list[tuple[Mode, ...]] = []
+    durs: list[float] = []
+    for uk in u:
+        m = (Mode("max" if uk >= 0 else "min"),)
+        if modes and modes[-1] == m:
+            durs[-1] += h
+        else:
+            modes.append(m)
+            durs.append(h)
+    return ArcStructure.from_modes(("u",), modes, durs)
 
-    * a yielding or flight phase whose leg reaches the upper stroke limit (to 1e-7) with
-      no boundary arc on it gets a zero-length boundary arc there: a *touch point*
-      (entry conditions stroke = s and relative velocity 0, imposed exactly);
+
+def _crater_arc(ph: Solution) -> ArcStructure:
+    dur = float(ph.T - ph.t0)
+    return ArcStructure.from_modes(("u",), [(Mode("boundary", CRATER, "upper"),)], [dur])
+
+
+def repaired_structures(sol: Solution, structures: list[ArcStructure]
+                        ) -> list[tuple[list[ArcStructure], str]]:
+    """Alternative structures repairing the transcription's grid artefacts, with labels.
+
     * a static phase whose arcs are not refinable or not a single arc becomes one
-      boundary arc on the crater's capacity (the arrest that uses the whole capacity).
+      boundary arc on the crater's capacity (the arrest that uses the whole capacity);
+    * a yielding or flight phase whose leg reaches the upper stroke limit (to 1e-7) gets
+      a zero-length boundary arc there, a *touch point* (entry conditions stroke = s and
+      relative velocity 0, imposed exactly): inserted into the detected arcs when they
+      hold no stroke arc, else into bang arcs read off the sign of the control;
+    * a phase that is not refinable is also read with a looser tolerance.
 
     Parameters
     ----------
@@ -141,26 +164,42 @@ def repaired_structures(sol: Solution, structures: list[ArcStructure]
     structures : list of ArcStructure
         The detected structures, per phase.
     """
-    out, done = [], []
+    from ocp.arcs import detect_structure
+
     s = float(sol.params["s"])
+    variants: list[tuple[list[ArcStructure], list[str]]] = [([], []), ([], [])]
     for i, st in enumerate(structures):
         ph = sol.phases[i]
+        loc = local_phase(sol, i)
         names = [c.name for c in ph.problem.path]
         leg = ph.x[:, 0] - ph.x[:, 2]
+        touches = STROKE in names and float(np.max(leg)) >= s * (1 - 1e-7)
+        t_touch = float(loc.t[int(np.argmax(leg))])
+        touch = Mode("boundary", STROKE, "upper")
         held = {m.constraint for iv in st.intervals for m in iv.modes}
-        if CRATER in names and (not st.refinable or len(st.intervals) != 1):
-            dur = float(ph.T - ph.t0)
-            out.append(ArcStructure.from_modes(("u",), [(Mode("boundary", CRATER, "upper"),)],
-                                               [dur]))
-            done.append(f"phase {ph.problem.name!r} as one crater-capacity arc")
-        elif STROKE in names and st.refinable and STROKE not in held and \
-                float(np.max(leg)) >= s * (1 - 1e-7):
-            t = float(local_phase(sol, i).t[int(np.argmax(leg))])
-            out.append(_split_at(st, t, Mode("boundary", STROKE, "upper")))
-            done.append(f"a touch point of the stroke limit in phase {ph.problem.name!r}")
-        else:
-            out.append(st)
-    return out, "; ".join(done)
+        for k, (sts, labels) in enumerate(variants):
+            if CRATER in names:
+                if not st.refinable or len(st.intervals) != 1:
+                    sts.append(_crater_arc(ph))
+                    labels.append(f"phase {ph.problem.name!r} as one crater-capacity arc")
+                else:
+                    sts.append(st)
+                continue
+            base = st
+            if k == 0 and not st.refinable and ph.problem.nu:
+                loose = detect_structure(loc, tol=1e-2, max_transition=3)
+                if loose.refinable:
+                    base = loose
+                    labels.append(f"phase {ph.problem.name!r} read with a looser tolerance")
+            if k == 1 and touches and ph.problem.nu == 1:
+                base = _by_sign(loc)
+                labels.append(f"phase {ph.problem.name!r} as bang arcs by the control's sign")
+            if touches and base.refinable and (k == 1 or STROKE not in held):
+                base = _split_at(base, t_touch, touch)
+                labels.append(f"a touch point of the stroke limit in phase "
+                              f"{ph.problem.name!r}")
+            sts.append(base)
+    return [(sts, "; ".join(labels)) for sts, labels in variants if labels]
 
 
 def structure_resolve(prev: RefinedPhases, params: dict[str, float],

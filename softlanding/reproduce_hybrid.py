@@ -19,12 +19,11 @@ import numpy as np
 
 from .model import PAPER_ROBOT
 
-QUICK = {"v0": (-0.5, -3.0, -6.0, -10.0), "two_step_v0": (-1.0,), "hop_v0": (-3.0,),
-         "hop_grid": 5}
-FULL = {"v0": tuple(float(v) for v in np.round(np.linspace(-0.5, -10.0, 41), 12)),
-        "two_step_v0": (-1.0, -3.0, -6.0, -10.0), "hop_v0": (-0.5, -1.5, -3.0, -5.0, -7.5,
-                                                               -10.0),
-        "hop_grid": 9}
+QUICK: dict[str, Any] = {"v0": (-0.5, -3.0, -6.0, -10.0), "two_step_v0": (-1.0,),
+                         "hop_v0": (-3.0,), "hop_grid": 5}
+FULL: dict[str, Any] = {"v0": tuple(float(v) for v in np.round(np.linspace(-0.5, -10.0, 41), 12)),
+                        "two_step_v0": (-1.0, -3.0, -6.0, -10.0),
+                        "hop_v0": (-0.5, -1.5, -3.0, -5.0, -7.5, -10.0), "hop_grid": 9}
 
 
 def _two_phase(v0s: tuple[float, ...], progress: bool) -> tuple[list, list[dict]]:

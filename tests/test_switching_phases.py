@@ -47,7 +47,8 @@ def _two_gains(gain: float):
     d = mp.parameter("d")
     a, b = mp.phase("a"), mp.phase("b")
     for ph, k in ((a, 1.0), (b, gain)):
-        x, v = ph.state("x"), ph.state("v")
+        ph.state("x")
+        v = ph.state("v")
         u = ph.control("u", -1, 1)
         ph.set_dynamics({"x": v, "v": k * u})
     a.initial_constraint(a.x[0], 0.0)

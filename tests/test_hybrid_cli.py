@@ -1,0 +1,63 @@
+"""`softlanding solve --variant ...` and `softlanding hop`: JSON, tables, figures, errors."""
+
+import json
+
+import pytest
+
+
+def test_two_phase_json(cli):
+    code, out, _ = cli("solve", "--v0", "-3", "--variant", "two-phase", "--json")
+    assert code == 0
+    d = json.loads(out)
+    assert d["verified"] is True and d["variant"] == "two-phase"
+    assert d["depth"] == pytest.approx(1.516295632282, abs=1e-9)
+    assert d["depth"] == pytest.approx(d["paper_depth"], abs=1e-9)
+    assert d["replay"]["difference"] < 1e-9
+
+
+def test_two_phase_table_pmp_and_plot(cli, tmp_path):
+    png = tmp_path / "two.png"
+    code, out, _ = cli("solve", "--v0", "-2", "--variant", "two-phase", "--pmp", "--plot", png)
+    assert code == 0
+    assert "bang-bang certified" in out and "arrest force" in out
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_two_steps(cli):
+    code, out, _ = cli("solve", "--v0", "-1", "--variant", "two-phase", "--steps", "2",
+                       "--json")
+    d = json.loads(out)
+    assert code == 0 and d["collapsed"] is True and d["gain"] <= 1e-9
+
+
+def test_leg_extension_fixed_and_free(cli):
+    code, out, _ = cli("solve", "--v0", "-1", "--variant", "leg-extension", "--extension",
+                       "10", "--json")
+    d = json.loads(out)
+    assert code == 0 and d["depth"] == pytest.approx(d["paper_depth"], abs=1e-9)
+    code, out, _ = cli("solve", "--v0", "-1", "--variant", "leg-extension", "--json")
+    d = json.loads(out)
+    assert code == 0 and d["gain"] > 0 and d["extension"] > 10
+
+
+def test_hop_json_and_plot(cli, tmp_path):
+    png = tmp_path / "hop.png"
+    code, out, _ = cli("hop", "--v0", "-1.5", "--json", "--plot", png)
+    assert code == 0
+    d = json.loads(out)
+    assert d["verified"] is True and d["leg"] == "free"
+    assert d["energy"] > 0 and d["energy"] == d["cycles"]["free"]["energy"]
+    assert d["cycles"]["free"]["net_work"] == pytest.approx(
+        d["cycles"]["free"]["ground_loss"], rel=1e-6)
+    assert png.stat().st_size > 1000
+
+
+def test_bad_input_exit_2(cli):
+    assert cli("hop", "--v0", "-1", "--eta", "1.5")[0] == 2
+    assert cli("solve", "--v0", "-1", "--variant", "leg-extension", "--extension", "30")[0] == 2
+    assert cli("solve", "--v0", "-1", "--variant", "nope")[0] == 2
+
+
+def test_infeasible_exit_1(cli):
+    code, _, err = cli("solve", "--v0", "-10", "--umax", "2", "--variant", "two-phase")
+    assert code == 1 and "u_b <= u_max" in err
