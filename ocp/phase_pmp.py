@@ -49,6 +49,16 @@ class PhasesCertificate(PMPCertificate):
 
     Attributes
     ----------
+    verdict, reasons, H_expected, H_max_abs, H_variation, H_scale : as PMPCertificate
+        The worst over the phases (reasons prefixed with the phase).
+    sigma_sign_agreement, switch_sigma_gap, singular_intervals : as PMPCertificate
+        Worst over the phases (intervals in absolute time).
+    state_constraint_active_intervals, costate_estimates_gap, source : as PMPCertificate
+        Joined over the phases.
+    t, lam, H, sigma, u : ndarray
+        Joined in absolute time (empty when the phases' states or controls differ).
+    numerical_error, checked_from, per_control, elapsed : as PMPCertificate
+        Worst errors, earliest checked time, per-control figures, seconds.
     phases : list of PMPCertificate
         One per phase (in the phase's own time).
     phase_names : list of str
