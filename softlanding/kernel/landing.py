@@ -1,0 +1,401 @@
+"""One landing: the hybrid segment loop, split into its parts.
+
+* :func:`begin_segment` -- closed-loop matrix of the current mode and regime;
+* :func:`rest_proof` -- the static mode's exact future ranges (rest proven?);
+* :func:`march` -- propagation on the exact step map, event search on each step,
+  stroke and force extrema and the actuator's work on the way;
+* :func:`apply_event` -- the finite state machine's transition at an event;
+* :func:`simulate_one` -- the loop over segments, and :func:`simulate_batch`.
+
+Per-landing bookkeeping lives in two small arrays: ``ext`` (extrema of the
+stroke and the force, the actuator work) and ``bk`` (first stop time, rest
+time, energy and actuator work at the start of the final static phase).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .const import (
+    EV_LAND,
+    EV_LIFT,
+    EV_SAT_HIGH,
+    EV_SAT_LOW,
+    EV_STOP,
+    EV_YIELD,
+    FEAS_TOL,
+    FLIGHT,
+    HORIZON,
+    LINEAR,
+    O_DEPTH,
+    O_E0,
+    O_EACT,
+    O_EGND,
+    O_ET,
+    O_FEAS,
+    O_NSEG,
+    O_SMAX,
+    O_SMIN,
+    O_STATUS,
+    O_STEPS,
+    O_T,
+    O_TSTOP,
+    O_UMAX,
+    O_UMIN,
+    O_UPEAK,
+    OPEN_LOOP,
+    REST_PROVEN,
+    SAT_HIGH,
+    SAT_LOW,
+    STATIC,
+    THETA,
+    TOO_MANY_SEGMENTS,
+    YIELDING,
+)
+from .events import build_events, classify, contact_mode, control_vector, due_event, earliest_event
+from .linalg import (
+    closed_loop,
+    covector_times,
+    dot,
+    expm,
+    gram,
+    interior_extremum,
+    matvec_into,
+    norm_inf4,
+    propagate_into,
+    quad,
+    row,
+)
+from .model import energy_rel, ground_work, mode_A, mode_B
+from .rest import future_range
+
+# ext: extrema and actuator work
+X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT = range(5)
+# bk: first stop time, rest time, energy and actuator work at rest
+B_TSTOP, B_T, B_ET, B_ACT = range(4)
+
+
+@njit(cache=True)
+def begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift):
+    """Control functional and closed-loop matrix of a segment; in flight, shift heights.
+
+    Without ground force the dynamics depend on heights only through the stroke,
+    so in flight heights are measured from the crater bottom: the landing
+    function ``x_f + d`` is then computed without cancellation, which matters
+    at a grazing landing (its time error is sqrt(rounding of ``x_f``)).
+    Returns ``(cu, A, shift)``.
+    """
+    cu = control_vector(mode, regime, Kf, umax, u_ol)
+    A = closed_loop(mode_A(P, mode), mode_B(P, mode), cu)
+    if mode == FLIGHT and shift == 0.0 and d > 0.0:
+        invariant = True
+        for i in range(4):
+            if A[i, 0] + A[i, 2] != 0.0:
+                invariant = False
+        if invariant:
+            shift = d
+            z[0] += shift
+            z[2] += shift
+    return cu, A, shift
+
+
+@njit(cache=True)
+def record_segment(rec, n, t, mode, z, cu, A, shift):
+    """Store segment ``n`` (start time, mode, start state, control, matrix) if room."""
+    rec_t, rec_A, rec_z, rec_cu, rec_mode = rec
+    if n >= rec_t.shape[0] - 1:
+        return
+    rec_t[n] = t
+    rec_mode[n] = mode
+    for i in range(5):
+        rec_z[n, i] = z[i]
+        rec_cu[n, i] = cu[i]
+        for j in range(5):
+            rec_A[n, i, j] = A[i, j]
+    rec_z[n, 0] -= shift
+    rec_z[n, 2] -= shift
+
+
+@njit(cache=True)
+def rest_proof(A, z, C, ne, cs, cu, ext):
+    """Static mode, no schedule switch ahead: True if no event can ever fire.
+
+    Then the future extrema of the stroke and the force are folded into ``ext``.
+    """
+    for k in range(ne):
+        lo, hi = future_range(A, z, row(C, k))
+        if hi > 0.0:
+            return False
+    lo, hi = future_range(A, z, cs)
+    ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
+    lo, hi = future_range(A, z, cu)
+    ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
+    return True
+
+
+@njit(cache=True)
+def step_size(A, mode):
+    """Marching step: ``||A|| h <= THETA`` (in the static mode ``omega h <= THETA``).
+
+    In the static mode only the body moves: event functions are sums of two
+    exponentials, whose derivative has at most one zero per step when omega h < pi.
+    """
+    if mode == STATIC:
+        rho = math.sqrt(abs(A[1, 0])) + abs(A[1, 1])
+        return THETA / max(rho, 1e-2)
+    return THETA / max(norm_inf4(A), 1e-3)
+
+
+@njit(cache=True, inline="always")
+def _fold_step(A, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
+    """Fold the stroke and force extrema over (0, h] into ``ext``."""
+    se_v = interior_extremum(A, z, z1, h, cs, dcs, ddcs)
+    if se_v == se_v:
+        ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], se_v), max(ext[X_SMAX], se_v)
+    ue = interior_extremum(A, z, z1, h, cu, dcu, ddcu)
+    if ue == ue:
+        ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], ue), max(ext[X_UMAX], ue)
+    sv = dot(cs, z1)
+    ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], sv), max(ext[X_SMAX], sv)
+    uv = dot(cu, z1)
+    ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], uv), max(ext[X_UMAX], uv)
+
+
+@njit(cache=True)
+def march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu, Qe, energy, ext):
+    """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
+
+    Returns ``(t, hit, time_event, horizon)``: the new time, the index of the
+    event that fired (-1 if none), whether a schedule switch ended the segment,
+    and whether the horizon ``t_max`` was passed.
+    """
+    dcs = covector_times(cs, A)
+    ddcs = covector_times(dcs, A)
+    dcu = covector_times(cu, A)
+    ddcu = covector_times(dcu, A)
+    hstep = step_size(A, mode)
+    Phi = expm(A, hstep)
+    G = gram(A, Qe, hstep) if energy else Qe
+    z1 = np.empty(5)
+    while True:
+        h = hstep
+        time_event = False
+        if t + h >= t_next:
+            h = t_next - t
+            time_event = True
+        if time_event or h != hstep:
+            propagate_into(A, z, h, z1)
+        else:
+            matvec_into(Phi, z, z1)
+        sbest, hit = earliest_event(A, z, z1, h, C, dC, ne)
+        if hit >= 0:
+            h = sbest
+            propagate_into(A, z, h, z1)
+            time_event = False
+        _fold_step(A, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext)
+        if energy:
+            if h == hstep:
+                ext[X_ACT] -= quad(G, z)
+            else:
+                ext[X_ACT] -= quad(gram(A, Qe, h), z)
+        t += h
+        z[:] = z1
+        if hit >= 0 or time_event:
+            return t, hit, time_event, False
+        if t > t_max:
+            return t, -1, False, True
+
+
+@njit(cache=True)
+def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open_loop, u_ol,
+                ext, bk):
+    """The transition at an event; updates ``z`` and ``bk`` in place.
+
+    Returns ``(mode, regime, d, shift, steps)``.
+    """
+    prev = mode
+    if code == EV_STOP:
+        z[3] = 0.0
+        d = max(d, -z[2])
+        if bk[B_TSTOP] != bk[B_TSTOP]:
+            bk[B_TSTOP] = t
+        mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+    elif code == EV_YIELD:
+        mode = YIELDING
+    elif code == EV_LIFT:
+        mode = FLIGHT
+    elif code == EV_LAND:
+        z[0] -= shift
+        z[2] = -d
+        shift = 0.0
+        if z[3] < 0.0:
+            mode = YIELDING
+        else:
+            z[3] = 0.0
+            mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+    elif code == EV_SAT_HIGH:
+        regime = SAT_HIGH
+    elif code == EV_SAT_LOW:
+        regime = SAT_LOW
+    else:
+        regime = LINEAR
+    if mode != prev:
+        if mode == YIELDING:
+            steps += 1
+        elif mode == STATIC:
+            bk[B_T] = t
+            bk[B_ET] = energy_rel(P, z, z0)
+            bk[B_ACT] = ext[X_ACT]
+        if not open_loop:
+            regime = classify(mode, z, Kf, umax)
+    return mode, regime, d, shift, steps
+
+
+@njit(cache=True)
+def initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk, E0):
+    """Ground mode at impact (from the foot's velocity); returns ``(mode, regime, steps)``."""
+    if z[3] < 0.0:
+        mode = YIELDING
+    elif z[3] > 0.0:
+        mode = FLIGHT
+    else:
+        mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+    steps = 0
+    if mode == YIELDING:
+        steps = 1
+    elif mode == STATIC:
+        bk[B_T] = 0.0
+        bk[B_ET] = E0
+        bk[B_ACT] = 0.0
+    regime = OPEN_LOOP if open_loop else classify(mode, z, Kf, umax)
+    return mode, regime, steps
+
+
+@njit(cache=True)
+def energy_form(cu, energy):
+    """Symmetric form of the actuator power ``u (v_b - v_f)`` (zero if not wanted)."""
+    Qe = np.zeros((5, 5))
+    if energy:
+        cv = np.zeros(5)  # stroke rate v_b - v_f
+        cv[1], cv[3] = 1.0, -1.0
+        for i in range(5):
+            for j in range(5):
+                Qe[i, j] = 0.5 * (cu[i] * cv[j] + cv[i] * cu[j])
+    return Qe
+
+
+@njit(cache=True)
+def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
+    """Fill the output row (layout ``O_*``)."""
+    out[O_DEPTH] = max(d, -z[2])  # the foot may still be creeping down if rest is unproven
+    out[O_STEPS] = steps
+    out[O_TSTOP] = bk[B_TSTOP]
+    out[O_T] = bk[B_T]
+    out[O_UPEAK] = max(abs(ext[X_UMIN]), abs(ext[X_UMAX]))
+    out[O_SMIN] = ext[X_SMIN]
+    out[O_SMAX] = ext[X_SMAX]
+    ftol = FEAS_TOL * max(1.0, s_lim)
+    feas = status == REST_PROVEN and ext[X_SMIN] >= -ftol and ext[X_SMAX] <= s_lim + ftol
+    out[O_FEAS] = 1.0 if feas else 0.0
+    out[O_STATUS] = status
+    out[O_E0] = energy_rel(P, z0, z0)
+    out[O_ET] = bk[B_ET] if status == REST_PROVEN else np.nan
+    out[O_EGND] = ground_work(P, d)
+    out[O_EACT] = bk[B_ACT] if (energy and status == REST_PROVEN) else np.nan
+    out[O_NSEG] = nseg
+    out[O_UMIN] = ext[X_UMIN]
+    out[O_UMAX] = ext[X_UMAX]
+
+
+@njit(cache=True)
+def simulate_one(P, pol, x0, lim, out, rec):
+    """Simulate one landing; fill ``out`` (layout ``O_*``) and the segment records.
+
+    Parameters
+    ----------
+    P : (N_MODEL,) array
+        Packed mode data (:func:`softlanding.kernel.model.pack_model`).
+    pol : tuple ``(Kf, umax, sched_t, sched_u)``
+        Feedback ``u = Kf[mode] . z`` per ground mode (3, 5), its saturation
+        (``inf`` for none), and the open-loop schedule ``u = sched_u[i]`` on
+        ``[sched_t[i-1], sched_t[i])`` (empty ``sched_u`` means feedback).
+    x0 : (4,) array
+        Initial state.
+    lim : tuple ``(s_lim, t_max, max_seg, energy)``
+        Stroke, horizon, segment limit, whether to integrate the actuator work.
+    out : (N_OUT,) array
+    rec : tuple ``(t, A, z, cu, mode)`` of arrays with ``len(t) - 1`` rows (or 0)
+        Segment records; the row after the last holds the end time.
+    """
+    Kf, umax, sched_t, sched_u = pol
+    s_lim, t_max, max_seg, energy = lim
+    open_loop = sched_u.shape[0] > 0
+    z = np.empty(5)
+    z[:4] = x0[:4]
+    z[4] = 1.0
+    z0 = z.copy()
+    t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
+    status = TOO_MANY_SEGMENTS
+    u_ol = sched_u[0] if open_loop else 0.0
+    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0])
+    bk = np.full(4, np.nan)
+    mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk,
+                                       energy_rel(P, z, z0))
+    cs = np.zeros(5)  # stroke x_b - x_f
+    cs[0], cs[2] = 1.0, -1.0
+    C = np.zeros((4, 5))
+    dC = np.zeros((4, 5))
+    codes = np.zeros(4, dtype=np.int64)
+    while nseg < max_seg:
+        cu, A, shift = begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift)
+        record_segment(rec, nseg, t, mode, z, cu, A, shift)
+        nseg += 1
+        u_now = dot(cu, z)
+        ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], u_now), max(ext[X_UMAX], u_now)
+        t_next = sched_t[sidx] if (open_loop and sidx < sched_t.shape[0]) else np.inf
+        ne = build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes)
+        if mode == STATIC and t_next == np.inf and rest_proof(A, z, C, ne, cs, cu, ext):
+            status = REST_PROVEN
+            break
+        for k in range(ne):
+            dk = covector_times(row(C, k), A)
+            for j in range(5):
+                dC[k, j] = dk[j]
+        hit = due_event(C, dC, ne, z)
+        if hit < 0:
+            t, hit, time_event, horizon = march(A, mode, z, t, t_next, t_max, C, dC, ne, cs,
+                                                cu, energy_form(cu, energy), energy, ext)
+            if horizon:
+                status = HORIZON
+                break
+            if time_event:
+                sidx += 1
+                u_ol = sched_u[sidx]
+                if mode == STATIC:
+                    mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+                    if mode == YIELDING:
+                        steps += 1
+                continue
+        mode, regime, d, shift, steps = apply_event(P, codes[hit], z, z0, t, d, shift, mode,
+                                                    regime, steps, Kf, umax, open_loop, u_ol,
+                                                    ext, bk)
+    z[0] -= shift
+    z[2] -= shift
+    if nseg < rec[0].shape[0]:
+        rec[0][nseg] = t
+    write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
+
+
+@njit(cache=True, parallel=True)
+def simulate_batch(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, out):
+    """Feedback-policy landings in parallel; row i uses the packed model ``Ps[ridx[i]]``."""
+    n = x0s.shape[0]
+    empty_t = np.zeros(0)
+    rec = (np.zeros(0), np.zeros((0, 5, 5)), np.zeros((0, 5)), np.zeros((0, 5)),
+           np.zeros(0, dtype=np.int64))
+    for i in prange(n):
+        simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_t), x0s[i],
+                     (s_lims[i], t_max, max_seg, energy), out[i], rec)
