@@ -32,7 +32,9 @@ from .kernel.const import (  # noqa: F401  (re-exported)
     HORIZON,
     LINEAR,
     N_OUT,
+    NEVER_RESTS_CREEP,
     O_DEPTH,
+    O_DLIM,
     O_E0,
     O_EACT,
     O_EGND,
@@ -64,6 +66,7 @@ STATUS_NAMES = {
     REST_PROVEN: "rest proven",
     HORIZON: "horizon reached before rest could be proven",
     TOO_MANY_SEGMENTS: "segment limit reached before rest could be proven",
+    NEVER_RESTS_CREEP: "never rests: the foot creeps toward a limit depth forever",
 }
 """Human-readable name of each status code of ``out[O_STATUS]``."""
 

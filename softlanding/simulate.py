@@ -38,11 +38,7 @@ from .errors import (
 from .scaling import DimensionlessParams, PhysicalParams
 
 MODE_NAMES = ("yielding", "static", "flight")
-STATUS_NAMES = {
-    K.REST_PROVEN: "rest proven",
-    K.HORIZON: "horizon reached before rest could be proven",
-    K.TOO_MANY_SEGMENTS: "segment limit reached before rest could be proven",
-}
+STATUS_NAMES = K.STATUS_NAMES
 DEFAULT_T_MAX = 1.0e4
 DEFAULT_MAX_SEGMENTS = 500
 

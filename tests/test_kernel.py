@@ -70,6 +70,11 @@ def test_impedance_sample_identical_to_frozen_kernel(K0, energy):
         o0, s0, o1, s1 = _pair(K0, mats, Kf, umax, np.zeros(0), np.zeros(0), x0, s, energy)
         if o0[K.O_STATUS] != K.REST_PROVEN:
             continue  # statuses of unproven runs are refined by later kernels
+        if o1[K.O_STATUS] == K.NEVER_RESTS_CREEP:
+            # the old kernel's "rest" after an endless creep was a rounding-level stop
+            # (see test_kernel_creep); the depth agrees to rounding
+            assert kp == 0.0 and abs(o1[K.O_DEPTH] - o0[K.O_DEPTH]) < 1e-12
+            continue
         _assert_identical(o0, s0, o1, s1)
 
 

@@ -30,7 +30,9 @@ from .const import (
     FLIGHT,
     HORIZON,
     LINEAR,
+    NEVER_RESTS_CREEP,
     O_DEPTH,
+    O_DLIM,
     O_E0,
     O_EACT,
     O_EGND,
@@ -55,6 +57,7 @@ from .const import (
     TOO_MANY_SEGMENTS,
     YIELDING,
 )
+from .creep import creep_limit_depth, creep_proof, creep_setup
 from .events import build_events, classify, contact_mode, control_vector, due_event, earliest_event
 from .linalg import (
     closed_loop,
@@ -165,12 +168,16 @@ def _fold_step(A, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
 
 
 @njit(cache=True)
-def march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu, Qe, energy, ext):
+def march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu, Qe, energy, ext, creep, cdata,
+          cres):
     """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
 
-    Returns ``(t, hit, time_event, horizon)``: the new time, the index of the
-    event that fired (-1 if none), whether a schedule switch ended the segment,
-    and whether the horizon ``t_max`` was passed.
+    With ``creep`` (see :mod:`.creep`; ``cdata`` its eigen-data) the proof that
+    the foot creeps forever is tried after every step; ``cres`` receives its
+    results. Returns ``(t, hit, time_event, stop)``: the new time, the index of
+    the event that fired (-1 if none), whether a schedule switch ended the
+    segment, and a status code that ends the landing (``HORIZON``,
+    ``NEVER_RESTS_CREEP``) or -1.
     """
     dcs = covector_times(cs, A)
     ddcs = covector_times(dcs, A)
@@ -204,9 +211,11 @@ def march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu, Qe, energy, ext):
         t += h
         z[:] = z1
         if hit >= 0 or time_event:
-            return t, hit, time_event, False
+            return t, hit, time_event, -1
+        if creep and creep_proof(cdata, z, C, ne, cu, (ext[X_UMIN], ext[X_UMAX]), cres):
+            return t, -1, False, NEVER_RESTS_CREEP
         if t > t_max:
-            return t, -1, False, True
+            return t, -1, False, HORIZON
 
 
 @njit(cache=True)
@@ -290,7 +299,8 @@ def energy_form(cu, energy):
 @njit(cache=True)
 def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     """Fill the output row (layout ``O_*``)."""
-    out[O_DEPTH] = max(d, -z[2])  # the foot may still be creeping down if rest is unproven
+    # the foot may still be creeping down if rest is unproven; a proven creep's d is its limit
+    out[O_DEPTH] = d if status == NEVER_RESTS_CREEP else max(d, -z[2])
     out[O_STEPS] = steps
     out[O_TSTOP] = bk[B_TSTOP]
     out[O_T] = bk[B_T]
@@ -308,6 +318,47 @@ def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     out[O_NSEG] = nseg
     out[O_UMIN] = ext[X_UMIN]
     out[O_UMAX] = ext[X_UMAX]
+    out[O_DLIM] = out[O_DEPTH] if status in (REST_PROVEN, NEVER_RESTS_CREEP) else np.nan
+
+
+@njit(cache=True)
+def fold_creep(ext, cres):
+    """Fold a proven creep's future stroke range and force limit into ``ext``."""
+    if cres[0] == cres[0]:
+        ext[X_SMIN] = min(ext[X_SMIN], cres[0])
+    if cres[1] == cres[1]:
+        ext[X_SMAX] = max(ext[X_SMAX], cres[1])
+    ext[X_UMIN] = min(ext[X_UMIN], cres[2])
+    ext[X_UMAX] = max(ext[X_UMAX], cres[2])
+
+
+@njit(cache=True)
+def workspace():
+    """Per-landing work arrays: the stroke functional, event functionals and their
+    derivatives, event codes, a creep proof's eigen-data and results."""
+    cs = np.zeros(5)  # stroke x_b - x_f
+    cs[0], cs[2] = 1.0, -1.0
+    return (cs, np.zeros((4, 5)), np.zeros((4, 5)), np.zeros(4, dtype=np.int64),
+            np.zeros((3, 8), dtype=np.complex128), np.full(3, np.nan))
+
+
+@njit(cache=True)
+def derivative_functionals(C, A, ne, dC):
+    """``dC[k] = C[k] A``: d/dt of each event function."""
+    for k in range(ne):
+        dk = covector_times(row(C, k), A)
+        for j in range(5):
+            dC[k, j] = dk[j]
+
+
+@njit(cache=True)
+def schedule_switch(P, z, d, mode, steps, u_ol):
+    """An open-loop schedule switch: a pinned foot may yield or lift off under the new force."""
+    if mode == STATIC:
+        mode = contact_mode(P, z, d, np.zeros((3, 5)), np.inf, True, u_ol)
+        if mode == YIELDING:
+            steps += 1
+    return mode, steps
 
 
 @njit(cache=True)
@@ -344,11 +395,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
     bk = np.full(4, np.nan)
     mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk,
                                        energy_rel(P, z, z0))
-    cs = np.zeros(5)  # stroke x_b - x_f
-    cs[0], cs[2] = 1.0, -1.0
-    C = np.zeros((4, 5))
-    dC = np.zeros((4, 5))
-    codes = np.zeros(4, dtype=np.int64)
+    cs, C, dC, codes, cdata, cres = workspace()
     while nseg < max_seg:
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift)
         record_segment(rec, nseg, t, mode, z, cu, A, shift)
@@ -360,24 +407,21 @@ def simulate_one(P, pol, x0, lim, out, rec):
         if mode == STATIC and t_next == np.inf and rest_proof(A, z, C, ne, cs, cu, ext):
             status = REST_PROVEN
             break
-        for k in range(ne):
-            dk = covector_times(row(C, k), A)
-            for j in range(5):
-                dC[k, j] = dk[j]
+        derivative_functionals(C, A, ne, dC)
         hit = due_event(C, dC, ne, z)
         if hit < 0:
-            t, hit, time_event, horizon = march(A, mode, z, t, t_next, t_max, C, dC, ne, cs,
-                                                cu, energy_form(cu, energy), energy, ext)
-            if horizon:
-                status = HORIZON
+            creep = (mode == YIELDING and t_next == np.inf
+                     and creep_setup(A, cu, C, ne, cdata))
+            t, hit, time_event, stop = march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu,
+                                             energy_form(cu, energy), energy, ext, creep,
+                                             cdata, cres)
+            if stop >= 0:
+                status = stop
                 break
             if time_event:
                 sidx += 1
                 u_ol = sched_u[sidx]
-                if mode == STATIC:
-                    mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
-                    if mode == YIELDING:
-                        steps += 1
+                mode, steps = schedule_switch(P, z, d, mode, steps, u_ol)
                 continue
         mode, regime, d, shift, steps = apply_event(P, codes[hit], z, z0, t, d, shift, mode,
                                                     regime, steps, Kf, umax, open_loop, u_ol,
@@ -386,6 +430,9 @@ def simulate_one(P, pol, x0, lim, out, rec):
     z[2] -= shift
     if nseg < rec[0].shape[0]:
         rec[0][nseg] = t
+    if status == NEVER_RESTS_CREEP:
+        fold_creep(ext, cres)
+        d = creep_limit_depth(cdata)
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
 
 
