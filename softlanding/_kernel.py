@@ -58,7 +58,7 @@ from .kernel.const import (  # noqa: F401  (re-exported)
     TOO_MANY_SEGMENTS,
     YIELDING,
 )
-from .kernel.landing import simulate_batch, simulate_one
+from .kernel.landing import batch_range, landing_entry
 from .kernel.model import pack_model
 
 # ------------------------------------------------------------ Python entry points
@@ -69,6 +69,31 @@ STATUS_NAMES = {
     NEVER_RESTS_CREEP: "never rests: the foot creeps toward a limit depth forever",
 }
 """Human-readable name of each status code of ``out[O_STATUS]``."""
+
+
+_PACKED: dict[int, tuple[dict, np.ndarray]] = {}
+_POOL: list = []  # [ThreadPoolExecutor, its size]
+RECORDS_FIRST = 64  # segment records allocated first; a longer landing is re-run with all
+
+
+def packed_model(mats: dict) -> np.ndarray:
+    """The packed mode data of ``mats``, cached by the dict's identity.
+
+    The dicts of :func:`softlanding.dynamics.mode_matrices` are cached and
+    treated as immutable; a new dict (``dict(mats, Wg=...)``) is packed anew.
+    """
+    hit = _PACKED.get(id(mats))
+    if hit is not None and hit[0] is mats:
+        return hit[1]
+    P = pack_model(mats)
+    if len(_PACKED) >= 256:
+        _PACKED.clear()
+    _PACKED[id(mats)] = (mats, P)
+    return P
+
+
+def _f64(a) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy):
@@ -97,31 +122,58 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
         segment start times (and the end time), closed-loop matrices, start
         states, control functionals and ground modes.
     """
-    P = pack_model(mats)
-    nrec = 32  # segment records; grown and re-run in the rare long case
-    while True:
-        out = np.zeros(N_OUT)
-        rec_t = np.full(nrec + 1, np.nan)
-        rec_A = np.empty((nrec, 5, 5))
-        rec_z = np.empty((nrec, 5))
-        rec_cu = np.empty((nrec, 5))
-        rec_mode = np.empty(nrec, dtype=np.int64)
-        simulate_one(P, (Kf, float(umax), sched_t, sched_u), x0,
-                     (float(s_lim), float(t_max), int(max_seg), bool(energy)), out,
-                     (rec_t, rec_A, rec_z, rec_cu, rec_mode))
-        if out[O_NSEG] < nrec:
-            break
-        nrec = max_seg + 1
-    n = int(out[O_NSEG])
-    return out, {"t": rec_t[: n + 1].copy(), "A": rec_A[:n].copy(), "z": rec_z[:n].copy(),
-                 "cu": rec_cu[:n].copy(), "mode": rec_mode[:n].copy()}
+    out, t, A, z, cu, mode = landing_entry(
+        packed_model(mats), _f64(Kf), float(umax), _f64(sched_t), _f64(sched_u), _f64(x0),
+        float(s_lim), float(t_max), int(max_seg), bool(energy), RECORDS_FIRST)
+    return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode}
 
 
-def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out):
+def _pool(threads: int):
+    if not _POOL or _POOL[1] != threads:
+        from concurrent.futures import ThreadPoolExecutor
+
+        if _POOL:
+            _POOL[0].shutdown(wait=False)
+        _POOL[:] = [ThreadPoolExecutor(threads, thread_name_prefix="softlanding"), threads]
+    return _POOL[0]
+
+
+def default_threads() -> int:
+    """Worker threads of a batch: ``NUMBA_NUM_THREADS`` (default: the number of cores)."""
+    import numba
+
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))
+
+
+def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out, *,
+              threads=None, chunk=None):
     """Feedback landings in parallel; row ``i`` uses ``mats_list[ridx[i]]``.
 
     ``Kf`` (n, 3, 5), ``umax`` (n,), ``x0`` (n, 4), ``s_lim`` (n,); fills ``out`` (n, N_OUT).
+    ``threads`` workers (default :func:`default_threads`) take chunks of ``chunk``
+    landings (default: n / (16 threads), between 16 and 1024) as they finish the
+    previous one, so a busy core or a run of long landings delays no one else.
     """
-    Ps = np.stack([pack_model(m) for m in mats_list])
-    simulate_batch(Ps, np.asarray(ridx, dtype=np.int64), Kf, umax, x0, s_lim, float(t_max),
-                   int(max_seg), bool(energy), out)
+    import itertools
+
+    Ps = np.stack([packed_model(m) for m in mats_list])
+    args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(Kf), _f64(umax), _f64(x0),
+            _f64(s_lim), float(t_max), int(max_seg), bool(energy))
+    n = len(args[4])
+    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
+    threads = default_threads() if threads is None else max(1, int(threads))
+    chunk = int(chunk) if chunk else min(1024, max(16, n // (16 * threads)))
+    if threads == 1 or n <= chunk:
+        batch_range(*args, res, 0, n)
+    else:
+        counter = itertools.count()
+
+        def work():
+            while (a := next(counter) * chunk) < n:
+                batch_range(*args, res, a, min(n, a + chunk))
+
+        futures = [_pool(threads).submit(work) for _ in range(threads)]
+        for f in futures:
+            f.result()
+    if res is not out:
+        out[...] = res

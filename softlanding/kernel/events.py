@@ -28,7 +28,7 @@ from .const import (
     TIE,
     YIELDING,
 )
-from .linalg import dot, dot4, hermite_root, prop4, refine, row, scaled
+from .linalg import dot, hermite_root, prop4_t, refine_t, row, scaled
 from .model import M_FU, support_Fz
 
 
@@ -131,35 +131,45 @@ def due_event(C, dC, ne, z):
 
 
 @njit(cache=True, inline="always")
-def _crossing_time(A, z, z1e, h, c, dc):
+def rows4(C):
+    """The four rows of a (4, 5) array as a tuple of 5-tuples."""
+    return (row(C, 0), row(C, 1), row(C, 2), row(C, 3))
+
+
+@njit(cache=True, inline="always")
+def _crossing_time(A, nrm, z, z1, h, c, dc):
     """First time in (0, h] at which ``c . z`` turns positive, or -1 if it does not.
 
     A sign change over the step is refined directly; otherwise a maximum inside
-    the step (``c A . z`` from + to -) is located and tested.
+    the step (``c A . z`` from + to -) is located and tested. ``A`` is a flat
+    25-tuple with row norm ``nrm``; states and functionals are 5-tuples.
     """
     g0 = dot(c, z)
-    g1 = dot(c, z1e)
+    g1 = dot(c, z1)
     if g0 <= 0.0 < g1:
-        s0 = hermite_root(g0, dot(dc, z), g1, dot(dc, z1e), h)
-        return refine(A, z, c, 0.0, h, g0, g1, 2e-15, s0)
-    if g1 <= 0.0 and dot(dc, z) > 0.0 and dot(dc, z1e) < 0.0:
+        s0 = hermite_root(g0, dot(dc, z), g1, dot(dc, z1), h)
+        return refine_t(A, nrm, z, c, 0.0, h, g0, g1, 2e-15, s0)
+    if g1 <= 0.0 and dot(dc, z) > 0.0 and dot(dc, z1) < 0.0:
         # a maximum inside the step: does it poke above zero?
         dg0 = dot(dc, z)
-        dg1 = dot(dc, z1e)
-        se = refine(A, z, scaled(dc, -1.0), 0.0, h, -dg0, -dg1)
-        ge = dot4(c, prop4(A, z, se), z[4])
+        dg1 = dot(dc, z1)
+        se = refine_t(A, nrm, z, scaled(dc, -1.0), 0.0, h, -dg0, -dg1)
+        ge = dot(c, prop4_t(A, nrm, z, se))
         if ge > 0.0:
-            return refine(A, z, c, 0.0, se, g0, ge)
+            return refine_t(A, nrm, z, c, 0.0, se, g0, ge)
     return -1.0
 
 
 @njit(cache=True, inline="always")
-def earliest_event(A, z, z1e, h, C, dC, ne):
-    """Earliest event in (0, h] of a marching step: ``(time, index)``; index -1 if none."""
+def earliest_event(A, nrm, z, z1, h, C, dC, ne):
+    """Earliest event in (0, h] of a marching step: ``(time, index)``; index -1 if none.
+
+    ``C``, ``dC``: the event functionals and their derivatives as tuples of 5-tuples.
+    """
     sbest = np.inf
     hit = -1
     for k in range(ne):
-        sk = _crossing_time(A, z, z1e, h, row(C, k), row(dC, k))
+        sk = _crossing_time(A, nrm, z, z1, h, C[k], dC[k])
         if sk < 0.0:
             continue
         if sk < sbest:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from .const import (
     EV_LAND,
@@ -30,6 +30,7 @@ from .const import (
     FLIGHT,
     HORIZON,
     LINEAR,
+    N_OUT,
     NEVER_RESTS_CREEP,
     O_DEPTH,
     O_DLIM,
@@ -58,19 +59,31 @@ from .const import (
     YIELDING,
 )
 from .creep import creep_limit_depth, creep_proof, creep_setup
-from .events import build_events, classify, contact_mode, control_vector, due_event, earliest_event
+from .events import (
+    build_events,
+    classify,
+    contact_mode,
+    control_vector,
+    due_event,
+    earliest_event,
+    rows4,
+)
 from .linalg import (
     closed_loop,
+    covector_t,
     covector_times,
     dot,
     expm,
+    flat25,
     gram,
-    interior_extremum,
-    matvec_into,
+    interior_extremum_t,
+    matvec_t,
     norm_inf4,
-    propagate_into,
-    quad,
+    norm_rows4,
+    prop4_t,
+    quad_t,
     row,
+    row5,
 )
 from .model import energy_rel, ground_work, mode_A, mode_B
 from .rest import future_range
@@ -153,12 +166,12 @@ def step_size(A, mode):
 
 
 @njit(cache=True, inline="always")
-def _fold_step(A, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
-    """Fold the stroke and force extrema over (0, h] into ``ext``."""
-    se_v = interior_extremum(A, z, z1, h, cs, dcs, ddcs)
+def _fold_step(A, nrm, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
+    """Fold the stroke and force extrema over (0, h] into ``ext`` (tuples, see march)."""
+    se_v = interior_extremum_t(A, nrm, z, z1, h, cs, dcs, ddcs)
     if se_v == se_v:
         ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], se_v), max(ext[X_SMAX], se_v)
-    ue = interior_extremum(A, z, z1, h, cu, dcu, ddcu)
+    ue = interior_extremum_t(A, nrm, z, z1, h, cu, dcu, ddcu)
     if ue == ue:
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], ue), max(ext[X_UMAX], ue)
     sv = dot(cs, z1)
@@ -168,25 +181,45 @@ def _fold_step(A, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
 
 
 @njit(cache=True)
-def march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu, Qe, energy, ext, creep, cdata,
-          cres):
-    """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
-
-    With ``creep`` (see :mod:`.creep`; ``cdata`` its eigen-data) the proof that
-    the foot creeps forever is tried after every step; ``cres`` receives its
-    results. Returns ``(t, hit, time_event, stop)``: the new time, the index of
-    the event that fired (-1 if none), whether a schedule switch ended the
-    segment, and a status code that ends the landing (``HORIZON``,
-    ``NEVER_RESTS_CREEP``) or -1.
-    """
-    dcs = covector_times(cs, A)
-    ddcs = covector_times(dcs, A)
-    dcu = covector_times(cu, A)
-    ddcu = covector_times(dcu, A)
+def step_map(A, mode, key, Qe, energy, phic, gc, hc):
+    """Marching step ``h``, ``exp(A h)`` and the Gramian of ``Qe`` over ``h`` (``Qe`` itself
+    if no energy), from the cache slot ``key`` if filled (a closed loop is fixed by
+    its mode and regime in a feedback landing)."""
+    if key >= 0 and hc[key] == hc[key]:
+        return hc[key], phic[key], gc[key]
     hstep = step_size(A, mode)
     Phi = expm(A, hstep)
     G = gram(A, Qe, hstep) if energy else Qe
-    z1 = np.empty(5)
+    if key >= 0:
+        hc[key] = hstep
+        phic[key] = Phi
+        gc[key] = G
+    return hstep, Phi, G
+
+
+@njit(cache=True)
+def march(A, mode, key, z, t, t_next, t_max, ne, cu, Qe, energy, ext, creep, ws):
+    """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
+
+    ``ws`` is the landing's :func:`workspace`. The step map ``exp(A h)`` (and the
+    energy Gramian) of a closed loop are cached under ``key`` (mode and regime;
+    -1: no caching). With ``creep`` (see :mod:`.creep`) the proof that the foot
+    creeps forever is tried after every step. Returns ``(t, hit, time_event, stop)``:
+    the new time, the index of the event that fired (-1 if none), whether a
+    schedule switch ended the segment, and a status code that ends the landing
+    (``HORIZON``, ``NEVER_RESTS_CREEP``) or -1.
+    """
+    cs, C, dC, _, cdata, cres, phic, gc, hc = ws
+    hstep, Phi, G = step_map(A, mode, key, Qe, energy, phic, gc, hc)
+    At, Pt, Gt = flat25(A), flat25(Phi), flat25(G)
+    nrm = norm_rows4(At)
+    Ct, dCt = rows4(C), rows4(dC)
+    cst, cut = row5(cs), row5(cu)
+    dcs = covector_t(cst, At)
+    ddcs = covector_t(dcs, At)
+    dcu = covector_t(cut, At)
+    ddcu = covector_t(dcu, At)
+    zt = row5(z)
     while True:
         h = hstep
         time_event = False
@@ -194,28 +227,29 @@ def march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu, Qe, energy, ext, cree
             h = t_next - t
             time_event = True
         if time_event or h != hstep:
-            propagate_into(A, z, h, z1)
+            z1 = prop4_t(At, nrm, zt, h)
         else:
-            matvec_into(Phi, z, z1)
-        sbest, hit = earliest_event(A, z, z1, h, C, dC, ne)
+            z1 = matvec_t(Pt, zt)
+        sbest, hit = earliest_event(At, nrm, zt, z1, h, Ct, dCt, ne)
         if hit >= 0:
             h = sbest
-            propagate_into(A, z, h, z1)
+            z1 = prop4_t(At, nrm, zt, h)
             time_event = False
-        _fold_step(A, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext)
+        _fold_step(At, nrm, zt, z1, h, cst, dcs, ddcs, cut, dcu, ddcu, ext)
         if energy:
-            if h == hstep:
-                ext[X_ACT] -= quad(G, z)
-            else:
-                ext[X_ACT] -= quad(gram(A, Qe, h), z)
+            ext[X_ACT] -= quad_t(Gt if h == hstep else flat25(gram(A, Qe, h)), zt)
         t += h
-        z[:] = z1
-        if hit >= 0 or time_event:
-            return t, hit, time_event, -1
-        if creep and creep_proof(cdata, z, C, ne, cu, (ext[X_UMIN], ext[X_UMAX]), cres):
-            return t, -1, False, NEVER_RESTS_CREEP
-        if t > t_max:
-            return t, -1, False, HORIZON
+        zt = z1
+        stop = -1
+        if hit < 0 and not time_event:
+            if creep and creep_proof(cdata, zt, C, ne, cu, (ext[X_UMIN], ext[X_UMAX]), cres):
+                stop = NEVER_RESTS_CREEP
+            elif t > t_max:
+                stop = HORIZON
+        if hit >= 0 or time_event or stop >= 0:
+            for i in range(5):
+                z[i] = zt[i]
+            return t, hit, time_event, stop
 
 
 @njit(cache=True)
@@ -335,11 +369,13 @@ def fold_creep(ext, cres):
 @njit(cache=True)
 def workspace():
     """Per-landing work arrays: the stroke functional, event functionals and their
-    derivatives, event codes, a creep proof's eigen-data and results."""
+    derivatives, event codes, a creep proof's eigen-data and results, and the cache of
+    step maps and Gramians per (mode, regime)."""
     cs = np.zeros(5)  # stroke x_b - x_f
     cs[0], cs[2] = 1.0, -1.0
     return (cs, np.zeros((4, 5)), np.zeros((4, 5)), np.zeros(4, dtype=np.int64),
-            np.zeros((3, 8), dtype=np.complex128), np.full(3, np.nan))
+            np.zeros((3, 8), dtype=np.complex128), np.full(3, np.nan), np.empty((12, 5, 5)),
+            np.empty((12, 5, 5)), np.full(12, np.nan))
 
 
 @njit(cache=True)
@@ -395,7 +431,8 @@ def simulate_one(P, pol, x0, lim, out, rec):
     bk = np.full(4, np.nan)
     mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk,
                                        energy_rel(P, z, z0))
-    cs, C, dC, codes, cdata, cres = workspace()
+    ws = workspace()
+    cs, C, dC, codes, cdata, cres = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
     while nseg < max_seg:
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift)
         record_segment(rec, nseg, t, mode, z, cu, A, shift)
@@ -412,9 +449,9 @@ def simulate_one(P, pol, x0, lim, out, rec):
         if hit < 0:
             creep = (mode == YIELDING and t_next == np.inf
                      and creep_setup(A, cu, C, ne, cdata))
-            t, hit, time_event, stop = march(A, mode, z, t, t_next, t_max, C, dC, ne, cs, cu,
-                                             energy_form(cu, energy), energy, ext, creep,
-                                             cdata, cres)
+            key = -1 if open_loop else 4 * mode + regime
+            t, hit, time_event, stop = march(A, mode, key, z, t, t_next, t_max, ne, cu,
+                                             energy_form(cu, energy), energy, ext, creep, ws)
             if stop >= 0:
                 status = stop
                 break
@@ -436,13 +473,38 @@ def simulate_one(P, pol, x0, lim, out, rec):
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
 
 
-@njit(cache=True, parallel=True)
-def simulate_batch(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, out):
-    """Feedback-policy landings in parallel; row i uses the packed model ``Ps[ridx[i]]``."""
-    n = x0s.shape[0]
+@njit(cache=True, nogil=True)
+def landing_entry(P, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, nrec):
+    """One landing with its segment records (``nrec`` rows first; all ``max_seg`` if needed).
+
+    Returns ``(out, t, A, z, cu, mode)``, the records trimmed to the segments run.
+    Releases the GIL.
+    """
+    while True:
+        out = np.zeros(N_OUT)
+        rec = (np.full(nrec + 1, np.nan), np.empty((nrec, 5, 5)), np.empty((nrec, 5)),
+               np.empty((nrec, 5)), np.empty(nrec, dtype=np.int64))
+        simulate_one(P, (Kf, umax, sched_t, sched_u), x0, (s_lim, t_max, max_seg, energy), out,
+                     rec)
+        n = int(out[O_NSEG])
+        if n <= nrec:
+            break
+        nrec = max_seg
+    return (out, rec[0][:n + 1].copy(), rec[1][:n].copy(), rec[2][:n].copy(),
+            rec[3][:n].copy(), rec[4][:n].copy())
+
+
+@njit(cache=True, nogil=True)
+def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, out, i0, i1):
+    """Feedback-policy landings ``i0 <= i < i1``; row i uses the packed model ``Ps[ridx[i]]``.
+
+    Serial and GIL-free: :func:`softlanding._kernel.run_batch` runs chunks of a
+    batch on a pool of threads that take the next chunk when done (dynamic
+    scheduling: no spinning, no idle core behind a busy one).
+    """
     empty_t = np.zeros(0)
     rec = (np.zeros(0), np.zeros((0, 5, 5)), np.zeros((0, 5)), np.zeros((0, 5)),
            np.zeros(0, dtype=np.int64))
-    for i in prange(n):
+    for i in range(i0, i1):
         simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_t), x0s[i],
                      (s_lims[i], t_max, max_seg, energy), out[i], rec)

@@ -313,3 +313,180 @@ def quad(G, z):
 @njit(cache=True)
 def hull(lo, hi, v):
     return min(lo, v), max(hi, v)
+
+
+# ------------------------------------------------ reference-count-free variants
+# The march and the event refinement run on tuples (a closed-loop matrix as a
+# flat 25-tuple, states and functionals as 5-tuples): numba passes them by value,
+# so the innermost loops do no reference counting. The arithmetic is the same,
+# operation for operation, as that of the array versions above.
+
+
+@njit(cache=True, inline="always")
+def flat25(A):
+    """A 5x5 array as a flat row-major 25-tuple."""
+    return (A[0, 0], A[0, 1], A[0, 2], A[0, 3], A[0, 4], A[1, 0], A[1, 1], A[1, 2], A[1, 3],
+            A[1, 4], A[2, 0], A[2, 1], A[2, 2], A[2, 3], A[2, 4], A[3, 0], A[3, 1], A[3, 2],
+            A[3, 3], A[3, 4], A[4, 0], A[4, 1], A[4, 2], A[4, 3], A[4, 4])
+
+
+@njit(cache=True, inline="always")
+def row5(v):
+    """A 5-vector (array or tuple) as a 5-tuple."""
+    return (v[0], v[1], v[2], v[3], v[4])
+
+
+@njit(cache=True, inline="always")
+def quad_t(G, z):
+    """``z . G z`` for a flat 25-tuple ``G`` (the sum of :func:`quad`)."""
+    acc = 0.0
+    for i in range(5):
+        for j in range(5):
+            acc += z[i] * G[5 * i + j] * z[j]
+    return acc
+
+
+@njit(cache=True, inline="always")
+def norm_rows4(A):
+    """Largest absolute row sum of the first four rows of a flat 25-tuple (as in :func:`prop4`)."""
+    nrm = 0.0
+    for i in range(4):
+        r = 0.0
+        for j in range(5):
+            r += abs(A[5 * i + j])
+        nrm = max(nrm, r)
+    return nrm
+
+
+@njit(cache=True, inline="always")
+def matvec_t(M, z):
+    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple (the sums of :func:`matvec_into`)."""
+    y0 = 0.0
+    y0 += M[0] * z[0]
+    y0 += M[1] * z[1]
+    y0 += M[2] * z[2]
+    y0 += M[3] * z[3]
+    y0 += M[4] * z[4]
+    y1 = 0.0
+    y1 += M[5] * z[0]
+    y1 += M[6] * z[1]
+    y1 += M[7] * z[2]
+    y1 += M[8] * z[3]
+    y1 += M[9] * z[4]
+    y2 = 0.0
+    y2 += M[10] * z[0]
+    y2 += M[11] * z[1]
+    y2 += M[12] * z[2]
+    y2 += M[13] * z[3]
+    y2 += M[14] * z[4]
+    y3 = 0.0
+    y3 += M[15] * z[0]
+    y3 += M[16] * z[1]
+    y3 += M[17] * z[2]
+    y3 += M[18] * z[3]
+    y3 += M[19] * z[4]
+    y4 = 0.0
+    y4 += M[20] * z[0]
+    y4 += M[21] * z[1]
+    y4 += M[22] * z[2]
+    y4 += M[23] * z[3]
+    y4 += M[24] * z[4]
+    return (y0, y1, y2, y3, y4)
+
+
+@njit(cache=True, inline="always")
+def prop4_t(A, nrm, z, h):
+    """:func:`prop4` on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
+    nsub = max(1, int(math.ceil(nrm * abs(h))))
+    dt = h / nsub
+    x0, x1, x2, x3 = z[0], z[1], z[2], z[3]
+    x4 = z[4]
+    for _ in range(nsub):
+        t0, t1, t2, t3 = x0, x1, x2, x3
+        a0, a1, a2, a3 = x0, x1, x2, x3
+        scale = abs(x0) + abs(x1) + abs(x2) + abs(x3) + abs(x4)
+        for k in range(1, 40):
+            f = dt / k
+            n0 = (A[0] * t0 + A[1] * t1 + A[2] * t2 + A[3] * t3
+                  + (A[4] * x4 if k == 1 else 0.0)) * f
+            n1 = (A[5] * t0 + A[6] * t1 + A[7] * t2 + A[8] * t3
+                  + (A[9] * x4 if k == 1 else 0.0)) * f
+            n2 = (A[10] * t0 + A[11] * t1 + A[12] * t2 + A[13] * t3
+                  + (A[14] * x4 if k == 1 else 0.0)) * f
+            n3 = (A[15] * t0 + A[16] * t1 + A[17] * t2 + A[18] * t3
+                  + (A[19] * x4 if k == 1 else 0.0)) * f
+            t0, t1, t2, t3 = n0, n1, n2, n3
+            a0 += t0
+            a1 += t1
+            a2 += t2
+            a3 += t3
+            if abs(t0) + abs(t1) + abs(t2) + abs(t3) <= 1e-17 * scale:
+                break
+        x0, x1, x2, x3 = a0, a1, a2, a3
+    return (x0, x1, x2, x3, x4)
+
+
+@njit(cache=True, inline="always")
+def covector_t(c, A):
+    """``c A`` for a flat 25-tuple ``A`` (the sums of :func:`covector_times`)."""
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    d3 = 0.0
+    d4 = 0.0
+    for i in range(5):
+        d0 += c[i] * A[5 * i]
+    for i in range(5):
+        d1 += c[i] * A[5 * i + 1]
+    for i in range(5):
+        d2 += c[i] * A[5 * i + 2]
+    for i in range(5):
+        d3 += c[i] * A[5 * i + 3]
+    for i in range(5):
+        d4 += c[i] * A[5 * i + 4]
+    return (d0, d1, d2, d3, d4)
+
+
+@njit(cache=True)
+def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
+    """:func:`refine` on tuples: ``A`` flat 25-tuple with norm ``nrm``, ``z`` and ``c`` 5-tuples."""
+    dc = covector_t(c, A)
+    if a < s0 < b:
+        s = s0
+    else:
+        s = a - ga * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
+    for _ in range(100):
+        xs = prop4_t(A, nrm, z, s)
+        g = dot(c, xs)
+        if g > 0.0:
+            b = s
+        else:
+            a = s
+        if b - a <= rtol * max(1.0, abs(b)):
+            break
+        dg = dot(dc, xs)
+        sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
+        if not (a < sn < b):
+            sn = 0.5 * (a + b)
+        if abs(sn - s) <= 0.5 * rtol * max(1.0, abs(s)):
+            # converged: step just past the root to close the bracket
+            step = 1e-15 * max(1.0, abs(sn))
+            sn = sn + step if g <= 0.0 else sn - step
+            sn = min(max(sn, a), b)
+            if sn == s:
+                break
+        s = sn
+    return b
+
+
+@njit(cache=True, inline="always")
+def interior_extremum_t(A, nrm, z, z1, h, c, dc, ddc):
+    """:func:`interior_extremum` on tuples."""
+    d0 = dot(dc, z)
+    d1 = dot(dc, z1)
+    if not ((d0 > 0.0 and d1 < 0.0) or (d0 < 0.0 and d1 > 0.0)):
+        return np.nan
+    sg = 1.0 if d0 < 0.0 else -1.0
+    s0 = hermite_root(sg * d0, sg * dot(ddc, z), sg * d1, sg * dot(ddc, z1), h)
+    se = refine_t(A, nrm, z, scaled(dc, sg), 0.0, h, sg * d0, sg * d1, 1e-9, s0)
+    return dot(c, prop4_t(A, nrm, z, se))
