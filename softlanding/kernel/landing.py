@@ -20,6 +20,8 @@ import numpy as np
 from numba import njit
 
 from .const import (
+    BODY_FLIES_OFF,
+    BODY_THROUGH_FOOT,
     EV_LAND,
     EV_LIFT,
     EV_SAT_HIGH,
@@ -39,6 +41,7 @@ from .const import (
     O_EGND,
     O_ET,
     O_FEAS,
+    O_FOOT_REST,
     O_NSEG,
     O_SMAX,
     O_SMIN,
@@ -50,10 +53,13 @@ from .const import (
     O_UMIN,
     O_UPEAK,
     OPEN_LOOP,
+    OUT_OF_RANGE,
     REST_PROVEN,
     SAT_HIGH,
     SAT_LOW,
+    SCALE_MAX,
     STATIC,
+    STEP_BUDGET,
     THETA,
     TOO_MANY_SEGMENTS,
     YIELDING,
@@ -89,7 +95,7 @@ from .model import energy_rel, ground_work, mode_A, mode_B
 from .rest import future_range
 
 # ext: extrema and actuator work
-X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT = range(5)
+X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT, X_WORK = range(6)
 # bk: first stop time, rest time, energy and actuator work at rest
 B_TSTOP, B_T, B_ET, B_ACT = range(4)
 
@@ -198,7 +204,7 @@ def step_map(A, mode, key, Qe, energy, phic, gc, hc):
 
 
 @njit(cache=True)
-def march(A, mode, key, z, t, t_next, t_max, ne, cu, Qe, energy, ext, creep, ws):
+def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext, creep, ws):
     """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
 
     ``ws`` is the landing's :func:`workspace`. The step map ``exp(A h)`` (and the
@@ -207,7 +213,8 @@ def march(A, mode, key, z, t, t_next, t_max, ne, cu, Qe, energy, ext, creep, ws)
     creeps forever is tried after every step. Returns ``(t, hit, time_event, stop)``:
     the new time, the index of the event that fired (-1 if none), whether a
     schedule switch ended the segment, and a status code that ends the landing
-    (``HORIZON``, ``NEVER_RESTS_CREEP``) or -1.
+    (``HORIZON``, ``NEVER_RESTS_CREEP``, ``STEP_BUDGET`` once ``ext[X_WORK]``, the
+    landing's count of steps and segments, reaches ``max_steps``) or -1.
     """
     cs, C, dC, _, cdata, cres, phic, gc, hc = ws
     hstep, Phi, G = step_map(A, mode, key, Qe, energy, phic, gc, hc)
@@ -240,12 +247,15 @@ def march(A, mode, key, z, t, t_next, t_max, ne, cu, Qe, energy, ext, creep, ws)
             ext[X_ACT] -= quad_t(Gt if h == hstep else flat25(gram(A, Qe, h)), zt)
         t += h
         zt = z1
+        ext[X_WORK] += 1.0
         stop = -1
         if hit < 0 and not time_event:
             if creep and creep_proof(cdata, zt, C, ne, cu, (ext[X_UMIN], ext[X_UMAX]), cres):
                 stop = NEVER_RESTS_CREEP
             elif t > t_max:
                 stop = HORIZON
+            elif ext[X_WORK] >= max_steps:
+                stop = STEP_BUDGET
         if hit >= 0 or time_event or stop >= 0:
             for i in range(5):
                 z[i] = zt[i]
@@ -346,13 +356,29 @@ def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     out[O_FEAS] = 1.0 if feas else 0.0
     out[O_STATUS] = status
     out[O_E0] = energy_rel(P, z0, z0)
-    out[O_ET] = bk[B_ET] if status == REST_PROVEN else np.nan
+    foot_rests = status in (REST_PROVEN, BODY_THROUGH_FOOT, BODY_FLIES_OFF)
+    out[O_ET] = bk[B_ET] if foot_rests else np.nan
     out[O_EGND] = ground_work(P, d)
-    out[O_EACT] = bk[B_ACT] if (energy and status == REST_PROVEN) else np.nan
+    out[O_EACT] = bk[B_ACT] if (energy and foot_rests) else np.nan
     out[O_NSEG] = nseg
     out[O_UMIN] = ext[X_UMIN]
     out[O_UMAX] = ext[X_UMAX]
-    out[O_DLIM] = out[O_DEPTH] if status in (REST_PROVEN, NEVER_RESTS_CREEP) else np.nan
+    out[O_DLIM] = out[O_DEPTH] if (foot_rests or status == NEVER_RESTS_CREEP) else np.nan
+    out[O_FOOT_REST] = 1.0 if foot_rests else 0.0
+
+
+@njit(cache=True)
+def final_status(status, d, ext, cdata, cres):
+    """A proven creep's limits; a proven rest of the foot under a body that does not rest
+    (stroke without bound) is not a rest. Returns ``(status, d)``."""
+    if status == NEVER_RESTS_CREEP:
+        fold_creep(ext, cres)
+        d = creep_limit_depth(cdata)
+    elif status == REST_PROVEN and ext[X_SMIN] == -np.inf:
+        status = BODY_THROUGH_FOOT
+    elif status == REST_PROVEN and ext[X_SMAX] == np.inf:
+        status = BODY_FLIES_OFF
+    return status, d
 
 
 @njit(cache=True)
@@ -364,6 +390,28 @@ def fold_creep(ext, cres):
         ext[X_SMAX] = max(ext[X_SMAX], cres[1])
     ext[X_UMIN] = min(ext[X_UMIN], cres[2])
     ext[X_UMAX] = max(ext[X_UMAX], cres[2])
+
+
+@njit(cache=True)
+def in_range(x0, s_lim):
+    """False if an initial state component or the stroke is not finite or exceeds
+    ``SCALE_MAX``: in double precision the events of such a landing (foot speeds of
+    order 1 against positions beyond 1e8) cannot be resolved, and a run would
+    report rounding as physics."""
+    if not abs(s_lim) <= SCALE_MAX:
+        return False
+    for i in range(4):
+        if not abs(x0[i]) <= SCALE_MAX:
+            return False
+    return True
+
+
+@njit(cache=True)
+def reject(out):
+    """Output row of a landing not simulated (``OUT_OF_RANGE``): NaN but the counts."""
+    out[:] = np.nan
+    out[O_STATUS] = OUT_OF_RANGE
+    out[O_STEPS] = out[O_NSEG] = out[O_FEAS] = out[O_FOOT_REST] = 0.0
 
 
 @njit(cache=True)
@@ -411,14 +459,17 @@ def simulate_one(P, pol, x0, lim, out, rec):
         ``[sched_t[i-1], sched_t[i])`` (empty ``sched_u`` means feedback).
     x0 : (4,) array
         Initial state.
-    lim : tuple ``(s_lim, t_max, max_seg, energy)``
-        Stroke, horizon, segment limit, whether to integrate the actuator work.
+    lim : tuple ``(s_lim, t_max, max_seg, energy, max_steps)``
+        Stroke, horizon, segment limit, whether to integrate the actuator work, and
+        the budget of marching steps plus segments (bounded work for any input).
     out : (N_OUT,) array
     rec : tuple ``(t, A, z, cu, mode)`` of arrays with ``len(t) - 1`` rows (or 0)
         Segment records; the row after the last holds the end time.
     """
     Kf, umax, sched_t, sched_u = pol
-    s_lim, t_max, max_seg, energy = lim
+    s_lim, t_max, max_seg, energy, max_steps = lim
+    if not in_range(x0, s_lim):
+        return reject(out)
     open_loop = sched_u.shape[0] > 0
     z = np.empty(5)
     z[:4] = x0[:4]
@@ -427,13 +478,17 @@ def simulate_one(P, pol, x0, lim, out, rec):
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
     u_ol = sched_u[0] if open_loop else 0.0
-    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0])
+    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
     bk = np.full(4, np.nan)
     mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk,
                                        energy_rel(P, z, z0))
     ws = workspace()
     cs, C, dC, codes, cdata, cres = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
     while nseg < max_seg:
+        ext[X_WORK] += 1.0
+        if ext[X_WORK] > max_steps:
+            status = STEP_BUDGET
+            break
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift)
         record_segment(rec, nseg, t, mode, z, cu, A, shift)
         nseg += 1
@@ -450,7 +505,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
             creep = (mode == YIELDING and t_next == np.inf
                      and creep_setup(A, cu, C, ne, cdata))
             key = -1 if open_loop else 4 * mode + regime
-            t, hit, time_event, stop = march(A, mode, key, z, t, t_next, t_max, ne, cu,
+            t, hit, time_event, stop = march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu,
                                              energy_form(cu, energy), energy, ext, creep, ws)
             if stop >= 0:
                 status = stop
@@ -467,15 +522,15 @@ def simulate_one(P, pol, x0, lim, out, rec):
     z[2] -= shift
     if nseg < rec[0].shape[0]:
         rec[0][nseg] = t
-    if status == NEVER_RESTS_CREEP:
-        fold_creep(ext, cres)
-        d = creep_limit_depth(cdata)
+    status, d = final_status(status, d, ext, cdata, cres)
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
 
 
 @njit(cache=True, nogil=True)
-def landing_entry(P, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, nrec):
-    """One landing with its segment records (``nrec`` rows first; all ``max_seg`` if needed).
+def landing_entry(P, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, max_steps,
+                  nrec):
+    """One landing with its segment records (``nrec`` rows first; re-run with as many
+    rows as segments if that was too few).
 
     Returns ``(out, t, A, z, cu, mode)``, the records trimmed to the segments run.
     Releases the GIL.
@@ -484,18 +539,19 @@ def landing_entry(P, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ener
         out = np.zeros(N_OUT)
         rec = (np.full(nrec + 1, np.nan), np.empty((nrec, 5, 5)), np.empty((nrec, 5)),
                np.empty((nrec, 5)), np.empty(nrec, dtype=np.int64))
-        simulate_one(P, (Kf, umax, sched_t, sched_u), x0, (s_lim, t_max, max_seg, energy), out,
-                     rec)
+        simulate_one(P, (Kf, umax, sched_t, sched_u), x0,
+                     (s_lim, t_max, max_seg, energy, max_steps), out, rec)
         n = int(out[O_NSEG])
         if n <= nrec:
             break
-        nrec = max_seg
+        nrec = n
     return (out, rec[0][:n + 1].copy(), rec[1][:n].copy(), rec[2][:n].copy(),
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
 @njit(cache=True, nogil=True)
-def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, out, i0, i1):
+def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps, out, i0,
+                i1):
     """Feedback-policy landings ``i0 <= i < i1``; row i uses the packed model ``Ps[ridx[i]]``.
 
     Serial and GIL-free: :func:`softlanding._kernel.run_batch` runs chunks of a
@@ -507,4 +563,4 @@ def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, out, 
            np.zeros(0, dtype=np.int64))
     for i in range(i0, i1):
         simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_t), x0s[i],
-                     (s_lims[i], t_max, max_seg, energy), out[i], rec)
+                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec)

@@ -12,6 +12,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .const import MAX_SUBSTEPS
+
 
 @njit(cache=True)
 def norm_inf4(A):
@@ -35,6 +37,8 @@ def expm(M, h):
             r += abs(M[i, j])
         nrm = max(nrm, r)
     nrm *= abs(h)
+    if not nrm < 1e300:
+        return np.full((n, n), np.nan)  # no finite step map: the march will run out of budget
     sq = 0
     while nrm > 0.5:
         nrm *= 0.5
@@ -397,6 +401,8 @@ def matvec_t(M, z):
 @njit(cache=True, inline="always")
 def prop4_t(A, nrm, z, h):
     """:func:`prop4` on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
+    if not nrm * abs(h) <= MAX_SUBSTEPS:
+        return (np.nan, np.nan, np.nan, np.nan, z[4])  # scales beyond any sensible landing
     nsub = max(1, int(math.ceil(nrm * abs(h))))
     dt = h / nsub
     x0, x1, x2, x3 = z[0], z[1], z[2], z[3]
