@@ -174,6 +174,21 @@ def grid_section(a):
     print(f"  feasible: {new.feasible.mean():.1%}; deepest feasible landing: {deepest:.4f}")
 
 
+def rss_child() -> None:
+    """In a fresh process: the paper grid with the current kernel only; print peak RSS."""
+    g = np.round(np.linspace(0, 1, 101), 12)
+    v = np.round(np.linspace(-10, 0, 21), 12)
+    simulate_batch([0.2], [0.2], [-1.0])
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    KP, KD, V = np.meshgrid(g, g, v, indexing="ij")
+    w = time.perf_counter()
+    simulate_batch(KP, KD, V, progress=False)
+    w = time.perf_counter() - w
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(f"  fresh process, current kernel only: grid wall {w:.2f} s; peak RSS {rss1:.0f} MiB "
+          f"(after imports and JIT load {rss0:.0f} MiB)")
+
+
 def _rows_equal(b0, b1):
     ok = None
     for name in S.BATCH_FIELDS:
@@ -191,7 +206,10 @@ def main() -> None:
     ap.add_argument("--grid-repeats", type=int, default=2)
     ap.add_argument("--skip-grid", action="store_true")
     ap.add_argument("--skip-ivp", action="store_true")
+    ap.add_argument("--rss-child", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
+    if a.rss_child:
+        return rss_child()
 
     rng = np.random.default_rng(a.seed)
     kp = rng.uniform(0, 1, a.cases)
@@ -206,6 +224,10 @@ def main() -> None:
         ivp_section(a, kp, kd, v0, ours)
     if not a.skip_grid:
         grid_section(a)
+        import subprocess
+
+        print(subprocess.run([sys.executable, __file__, "--rss-child"], capture_output=True,
+                             text=True, check=True).stdout.rstrip())
     print(f"after: {_load()}")
 
 

@@ -54,7 +54,13 @@ def _pair(K0, mats, Kf, umax, st, su, x0, s, energy, t_max=2e3, max_seg=120):
 
 
 def _assert_identical(o0, s0, o1, s1):
-    assert same(o0, o1[: o0.size]).all(), np.nonzero(~same(o0, o1[: o0.size]))
+    o1 = o1[: o0.size].copy()
+    if o1[K.O_STATUS] in (K.BODY_THROUGH_FOOT, K.BODY_FLIES_OFF):
+        # the old kernel called a resting foot under a runaway body "rest proven"
+        assert o0[K.O_STATUS] == K.REST_PROVEN
+        assert o1[K.O_SMIN] == -math.inf or o1[K.O_SMAX] == math.inf
+        o1[K.O_STATUS] = K.REST_PROVEN
+    assert same(o0, o1).all(), np.nonzero(~same(o0, o1))
     for key in ("t", "A", "z", "cu", "mode"):
         assert s0[key].shape == s1[key].shape, key
         assert same(s0[key], s1[key]).all(), key

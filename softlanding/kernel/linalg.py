@@ -76,16 +76,6 @@ def expm(M, h):
 
 
 @njit(cache=True, inline="always")
-def matvec_into(M, z, out):
-    """``out = M z`` (5x5 times 5)."""
-    for i in range(5):
-        acc = 0.0
-        for j in range(5):
-            acc += M[i, j] * z[j]
-        out[i] = acc
-
-
-@njit(cache=True, inline="always")
 def dot(c, z):
     """``c . z`` for 5-vectors (arrays or tuples), summed in index order."""
     acc = 0.0
@@ -94,18 +84,6 @@ def dot(c, z):
     acc += c[2] * z[2]
     acc += c[3] * z[3]
     acc += c[4] * z[4]
-    return acc
-
-
-@njit(cache=True, inline="always")
-def dot4(c, x, x4):
-    """``c . [x0, x1, x2, x3, x4]`` for a 4-tuple ``x`` (the same sum as :func:`dot`)."""
-    acc = 0.0
-    acc += c[0] * x[0]
-    acc += c[1] * x[1]
-    acc += c[2] * x[2]
-    acc += c[3] * x[3]
-    acc += c[4] * x4
     return acc
 
 
@@ -119,64 +97,6 @@ def row(C, k):
 def scaled(c, s):
     """The functional ``s c`` as a tuple."""
     return (s * c[0], s * c[1], s * c[2], s * c[3], s * c[4])
-
-
-@njit(cache=True, inline="always")
-def prop4(A, z, h):
-    """The first four components of exp(A h) z, by Taylor series on the vector,
-    substepped so ||A h|| <= 0.5 (the fifth stays ``z[4]``).
-
-    Written on scalars (no temporaries): this is the innermost loop of the
-    event refinement.
-    """
-    nrm = 0.0
-    for i in range(4):
-        r = 0.0
-        for j in range(5):
-            r += abs(A[i, j])
-        nrm = max(nrm, r)
-    nsub = max(1, int(math.ceil(nrm * abs(h))))
-    dt = h / nsub
-    x0, x1, x2, x3 = z[0], z[1], z[2], z[3]
-    x4 = z[4]
-    for _ in range(nsub):
-        t0, t1, t2, t3 = x0, x1, x2, x3
-        a0, a1, a2, a3 = x0, x1, x2, x3
-        scale = abs(x0) + abs(x1) + abs(x2) + abs(x3) + abs(x4)
-        for k in range(1, 40):
-            f = dt / k
-            n0 = (A[0, 0] * t0 + A[0, 1] * t1 + A[0, 2] * t2 + A[0, 3] * t3
-                  + (A[0, 4] * x4 if k == 1 else 0.0)) * f
-            n1 = (A[1, 0] * t0 + A[1, 1] * t1 + A[1, 2] * t2 + A[1, 3] * t3
-                  + (A[1, 4] * x4 if k == 1 else 0.0)) * f
-            n2 = (A[2, 0] * t0 + A[2, 1] * t1 + A[2, 2] * t2 + A[2, 3] * t3
-                  + (A[2, 4] * x4 if k == 1 else 0.0)) * f
-            n3 = (A[3, 0] * t0 + A[3, 1] * t1 + A[3, 2] * t2 + A[3, 3] * t3
-                  + (A[3, 4] * x4 if k == 1 else 0.0)) * f
-            t0, t1, t2, t3 = n0, n1, n2, n3
-            a0 += t0
-            a1 += t1
-            a2 += t2
-            a3 += t3
-            if abs(t0) + abs(t1) + abs(t2) + abs(t3) <= 1e-17 * scale:
-                break
-        x0, x1, x2, x3 = a0, a1, a2, a3
-    return (x0, x1, x2, x3)
-
-
-@njit(cache=True, inline="always")
-def propagate_into(A, z, h, out):
-    """``out = exp(A h) z`` (see :func:`prop4`); ``out`` may not be ``z``."""
-    x = prop4(A, z, h)
-    out[0], out[1], out[2], out[3], out[4] = x[0], x[1], x[2], x[3], z[4]
-
-
-@njit(cache=True)
-def propagate(A, z, h):
-    """``exp(A h) z`` as a new array."""
-    out = np.empty(5)
-    propagate_into(A, z, h, out)
-    return out
 
 
 @njit(cache=True, inline="always")
@@ -219,63 +139,6 @@ def hermite_root(g0, d0, g1, d1, h):
 
 
 @njit(cache=True)
-def refine(A, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
-    """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
-
-    Newton on the exact solution, safeguarded by the bracket, converged to
-    about 1e-15; the returned time lies on the far side of the crossing (the
-    event has happened), so the next segment starts strictly inside its regime.
-    ``c`` is a 5-tuple (or array).
-    """
-    dc = covector_times(c, A)
-    z4 = z[4]
-    if a < s0 < b:
-        s = s0
-    else:
-        s = a - ga * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
-    for _ in range(100):
-        xs = prop4(A, z, s)
-        g = dot4(c, xs, z4)
-        if g > 0.0:
-            b = s
-        else:
-            a = s
-        if b - a <= rtol * max(1.0, abs(b)):
-            break
-        dg = dot4(dc, xs, z4)
-        sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
-        if not (a < sn < b):
-            sn = 0.5 * (a + b)
-        if abs(sn - s) <= 0.5 * rtol * max(1.0, abs(s)):
-            # converged: step just past the root to close the bracket
-            step = 1e-15 * max(1.0, abs(sn))
-            sn = sn + step if g <= 0.0 else sn - step
-            sn = min(max(sn, a), b)
-            if sn == s:
-                break
-        s = sn
-    return b
-
-
-@njit(cache=True, inline="always")
-def interior_extremum(A, z, z1, h, c, dc, ddc):
-    """Value of q = c . z at its turning point inside (0, h), or NaN if none.
-
-    A turning point is a sign change of q' = dc . z; its time is refined from a
-    Hermite starting guess (q'' = ddc . z) to 1e-9: the value's error is
-    quadratic in the time's.
-    """
-    d0 = dot(dc, z)
-    d1 = dot(dc, z1)
-    if not ((d0 > 0.0 and d1 < 0.0) or (d0 < 0.0 and d1 > 0.0)):
-        return np.nan
-    sg = 1.0 if d0 < 0.0 else -1.0
-    s0 = hermite_root(sg * d0, sg * dot(ddc, z), sg * d1, sg * dot(ddc, z1), h)
-    se = refine(A, z, scaled(dc, sg), 0.0, h, sg * d0, sg * d1, 1e-9, s0)
-    return dot4(c, prop4(A, z, se), z[4])
-
-
-@njit(cache=True)
 def closed_loop(Am, Bm, cu):
     """A + B cu^T: the affine closed loop for u = cu . z."""
     A = Am.copy()
@@ -305,25 +168,16 @@ def gram(A, Q, h):
     return G
 
 
-@njit(cache=True, inline="always")
-def quad(G, z):
-    acc = 0.0
-    for i in range(5):
-        for j in range(5):
-            acc += z[i] * G[i, j] * z[j]
-    return acc
-
-
 @njit(cache=True)
 def hull(lo, hi, v):
     return min(lo, v), max(hi, v)
 
 
-# ------------------------------------------------ reference-count-free variants
+# ---------------------------------------------------------- the march, on tuples
 # The march and the event refinement run on tuples (a closed-loop matrix as a
-# flat 25-tuple, states and functionals as 5-tuples): numba passes them by value,
-# so the innermost loops do no reference counting. The arithmetic is the same,
-# operation for operation, as that of the array versions above.
+# flat row-major 25-tuple, states and functionals as 5-tuples): numba passes
+# them by value, so the innermost loops do no reference counting (which cost
+# a third of the time when they ran on arrays).
 
 
 @njit(cache=True, inline="always")
@@ -342,7 +196,7 @@ def row5(v):
 
 @njit(cache=True, inline="always")
 def quad_t(G, z):
-    """``z . G z`` for a flat 25-tuple ``G`` (the sum of :func:`quad`)."""
+    """``z . G z`` for a flat 25-tuple ``G``."""
     acc = 0.0
     for i in range(5):
         for j in range(5):
@@ -352,7 +206,8 @@ def quad_t(G, z):
 
 @njit(cache=True, inline="always")
 def norm_rows4(A):
-    """Largest absolute row sum of the first four rows of a flat 25-tuple (as in :func:`prop4`)."""
+    """Largest absolute row sum (affine column included) of the first four rows of a flat
+    25-tuple: sets the substeps of :func:`prop4_t`."""
     nrm = 0.0
     for i in range(4):
         r = 0.0
@@ -364,7 +219,7 @@ def norm_rows4(A):
 
 @njit(cache=True, inline="always")
 def matvec_t(M, z):
-    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple (the sums of :func:`matvec_into`)."""
+    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple."""
     y0 = 0.0
     y0 += M[0] * z[0]
     y0 += M[1] * z[1]
@@ -400,7 +255,7 @@ def matvec_t(M, z):
 
 @njit(cache=True, inline="always")
 def prop4_t(A, nrm, z, h):
-    """:func:`prop4` on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
+    """the Taylor series on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
     if not nrm * abs(h) <= MAX_SUBSTEPS:
         return (np.nan, np.nan, np.nan, np.nan, z[4])  # scales beyond any sensible landing
     nsub = max(1, int(math.ceil(nrm * abs(h))))
@@ -455,7 +310,13 @@ def covector_t(c, A):
 
 @njit(cache=True)
 def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
-    """:func:`refine` on tuples: ``A`` flat 25-tuple with norm ``nrm``, ``z`` and ``c`` 5-tuples."""
+    """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
+
+    Newton on the exact solution, safeguarded by the bracket, converged to
+    about 1e-15; the returned time lies on the far side of the crossing (the
+    event has happened), so the next segment starts strictly inside its regime.
+    ``A`` is a flat 25-tuple with norm ``nrm``; ``z`` and ``c`` are 5-tuples.
+    """
     dc = covector_t(c, A)
     if a < s0 < b:
         s = s0
@@ -487,7 +348,12 @@ def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
 
 @njit(cache=True, inline="always")
 def interior_extremum_t(A, nrm, z, z1, h, c, dc, ddc):
-    """:func:`interior_extremum` on tuples."""
+    """Value of q = c . z at its turning point inside (0, h), or NaN if none.
+
+    A turning point is a sign change of q' = dc . z; its time is refined from a
+    Hermite starting guess (q'' = ddc . z) to 1e-9: the value's error is
+    quadratic in the time's. All arguments are tuples (see :func:`refine_t`).
+    """
     d0 = dot(dc, z)
     d1 = dot(dc, z1)
     if not ((d0 > 0.0 and d1 < 0.0) or (d0 < 0.0 and d1 > 0.0)):
