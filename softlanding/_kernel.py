@@ -13,6 +13,16 @@ Python entry points :func:`run_landing` and :func:`run_batch` used by
 :mod:`softlanding.simulate`, and re-exports the output layout and status codes.
 The mode data are read from :func:`softlanding.dynamics.mode_matrices`
 (matrices, support force, the energy's quadratic form and the ground work).
+
+Statuses (``out[O_STATUS]``, names in :data:`STATUS_NAMES`): ``REST_PROVEN`` (the
+foot rests forever and so does the body: the stroke stays bounded);
+``BODY_THROUGH_FOOT`` / ``BODY_FLIES_OFF`` (the foot's rest is proven but the
+stroke runs away to -inf / +inf); ``NEVER_RESTS_CREEP`` (proven: the foot creeps
+toward the limit depth ``O_DLIM`` forever); ``HORIZON``, ``TOO_MANY_SEGMENTS``,
+``STEP_BUDGET`` (gave up: nothing proven); ``OUT_OF_RANGE`` (not simulated).
+Columns added to the first layout: ``O_DLIM`` (the depth's limit as t -> inf:
+the rest depth when the foot rests, a creep's limit depth, else NaN) and
+``O_FOOT_REST`` (1 if the foot's rest is proven, whatever the body does).
 """
 
 from __future__ import annotations

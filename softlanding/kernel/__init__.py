@@ -5,7 +5,8 @@
 * :mod:`.linalg` -- matrix exponential, propagation, event-time refinement, Gramians;
 * :mod:`.events` -- control regimes, the ground's mode logic, event functionals and search;
 * :mod:`.rest` -- exact future ranges in the static mode (the rest proof);
-* :mod:`.landing` -- the segment loop of one landing and the parallel batch.
+* :mod:`.creep` -- the proof that a yielding foot creeps toward a limit depth forever;
+* :mod:`.landing` -- the segment loop of one landing, its GIL-free entry points.
 
 The Python-level entry points are in :mod:`softlanding._kernel`.
 """
