@@ -20,6 +20,35 @@ from .model import VB, VF, Robot, Units
 EMPTY = np.zeros(0)
 
 
+def impedance_gains(k_p: float, k_d: float, l0: float) -> np.ndarray:
+    """``K`` with ``u = K . [x_b, v_b, x_f, v_f, 1] = -k_p (x_b - x_f - l0) - k_d (v_b - v_f)``.
+
+    Parameters
+    ----------
+    k_p, k_d : float
+        Stiffness and damping.
+    l0 : float
+        Rest length.
+    """
+    return np.array([-k_p, -k_d, k_p, k_d, k_p * l0])
+
+
+def rigid_lock_gains(mats: dict[str, Any]) -> np.ndarray:
+    """Per-mode feedback ``u = Kf[mode] . z`` keeping ``v_b' = v_f'``, read off the mode matrices.
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`softlanding.dynamics.mode_matrices` of the robot and ground.
+    """
+    R = np.zeros(5)
+    R[VB], R[VF] = 1.0, -1.0
+    Kf = np.empty((3, 5))
+    for m in range(3):
+        Kf[m] = -(R @ mats["A"][m]) / (R @ mats["B"][m])
+    return Kf
+
+
 @dataclass(frozen=True)
 class Rigid:
     """Body and foot locked together: the actuator supplies whatever force keeps the
@@ -48,12 +77,7 @@ class Rigid:
         sched_t, sched_u : empty arrays
             (no open-loop schedule)
         """
-        R = np.zeros(5)
-        R[VB], R[VF] = 1.0, -1.0
-        Kf = np.empty((3, 5))
-        for m in range(3):
-            Kf[m] = -(R @ mats["A"][m]) / (R @ mats["B"][m])
-        return Kf, EMPTY, EMPTY
+        return rigid_lock_gains(mats), EMPTY, EMPTY
 
     def to_si(self, units: Units) -> dict[str, Any]:
         """No parameter to convert."""
@@ -105,8 +129,7 @@ class Impedance:
 
     def gain_vector(self, robot: Robot) -> np.ndarray:
         """``u = K . [x_b, v_b, x_f, v_f, 1]``."""
-        l0 = self.rest_length(robot)
-        return np.array([-self.k_p, -self.k_d, self.k_p, self.k_d, self.k_p * l0])
+        return impedance_gains(self.k_p, self.k_d, self.rest_length(robot))
 
     def kernel_arrays(self, mats: dict[str, Any],
                       robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -215,4 +238,5 @@ class ForceSchedule:
 Controller = Rigid | Impedance | ForceSchedule
 """Any of the three controllers."""
 
-__all__ = ["Controller", "ForceSchedule", "Impedance", "Rigid"]
+__all__ = ["Controller", "ForceSchedule", "Impedance", "Rigid", "impedance_gains",
+           "rigid_lock_gains"]

@@ -179,7 +179,6 @@ class LandingResult:
         """
         seg = self._segments
         ts = seg["t"]
-        nseg = len(ts) - 1
         if not self.rest_proven:
             if t_end is not None and t_end > ts[-1]:
                 raise RestNotProvenError(
@@ -189,15 +188,8 @@ class LandingResult:
         elif t_end is None:
             t_end = max(1.3 * self.T, self.T + 2.0, ts[-1])
         grid = np.union1d(np.linspace(0.0, t_end, n), ts[(ts >= 0) & (ts <= t_end)])
-        x = np.empty((len(grid), 4))
-        u = np.empty(len(grid))
-        mode = np.empty(len(grid), dtype=int)
-        idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
-        for i, (tt, k) in enumerate(zip(grid, idx, strict=True)):
-            zk = K._propagate(seg["A"][k], seg["z"][k], tt - ts[k])
-            x[i] = zk[:4]
-            u[i] = seg["cu"][k] @ zk
-            mode[i] = seg["mode"][k]
+        z, u, mode = K.sample_segments(seg, grid)
+        x = z[:, :4]
         return Trajectory(grid, x, u[:, None], STATE_NAMES, ("u",),
                           mode=np.array(MODE_NAMES)[mode])
 
