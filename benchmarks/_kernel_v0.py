@@ -8,7 +8,7 @@ points without a sign change of the event function or of its derivative, then
 locate the event time by safeguarded Newton iteration on the exact solution.
 There is no ODE tolerance anywhere: errors are rounding only.
 
-Everything here works on plain arrays prepared by :mod:`softlanding.simulate`
+Everything here works on plain arrays prepared by :mod:`softlanding.simulator`
 from :func:`softlanding.dynamics.mode_matrices`; this module knows no physics
 beyond the mode logic of the paper's finite state machine.
 """

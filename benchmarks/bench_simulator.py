@@ -43,7 +43,7 @@ from ivp_reference import landing_depth_ivp  # noqa: E402
 from softlanding import DimensionlessParams, Impedance, simulate, simulate_batch  # noqa: E402
 from softlanding import _kernel as K  # noqa: E402
 
-S = sys.modules["softlanding.simulate"]
+S = sys.modules["softlanding.simulator"]
 
 KERNELS = {"old": K0, "new": K}
 
@@ -66,7 +66,7 @@ def interleaved(blocks: dict, repeats: int) -> dict:
 
 
 def with_kernel(name, fn):
-    """``fn`` run with ``softlanding.simulate`` wired to kernel ``name``."""
+    """``fn`` run with ``softlanding.simulator`` wired to kernel ``name``."""
     def run():
         S.K = KERNELS[name]
         try:

@@ -10,7 +10,7 @@ There is no ODE tolerance anywhere: errors are rounding only.
 
 The compiled parts live in :mod:`softlanding.kernel`; this module holds the
 Python entry points :func:`run_landing` and :func:`run_batch` used by
-:mod:`softlanding.simulate`, and re-exports the output layout and status codes.
+:mod:`softlanding.simulator`, and re-exports the output layout and status codes.
 The mode data are read from :func:`softlanding.dynamics.mode_matrices`
 (matrices, support force, the energy's quadratic form and the ground work).
 
@@ -120,6 +120,16 @@ def _f64(a) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
+def _gain_rows(sched_u) -> np.ndarray:
+    """Open-loop schedule as gain rows (m + 1, 5): a constant force u is [0, 0, 0, 0, u]."""
+    s = np.asarray(sched_u, dtype=np.float64)
+    if s.ndim == 2:
+        return np.ascontiguousarray(s)
+    rows = np.zeros((s.shape[0], 5))
+    rows[:, 4] = s
+    return rows
+
+
 def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, *,
                 max_steps=DEFAULT_MAX_STEPS):
     """One landing; returns the output row (layout ``O_*``) and the segment records.
@@ -132,8 +142,10 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
         Feedback ``u = Kf[mode] . z`` per ground mode (ignored when open loop).
     umax : float
         Force limit (``inf`` for none).
-    sched_t, sched_u : arrays (m,), (m + 1,)
-        Open-loop schedule; empty ``sched_u`` means feedback.
+    sched_t, sched_u : arrays (m,), and (m + 1,) or (m + 1, 5)
+        Open-loop schedule on ``[sched_t[i-1], sched_t[i])``: constant forces
+        ``u = sched_u[i]``, or affine laws ``u = sched_u[i] . [x_b, v_b, x_f, v_f, 1]``;
+        empty ``sched_u`` means feedback.
     x0 : (4,) array
         Initial state.
     s_lim, t_max, max_seg, energy
@@ -152,7 +164,7 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
         states, control functionals and ground modes.
     """
     out, t, A, z, cu, mode = landing_entry(
-        packed_model(mats), _f64(Kf), float(umax), _f64(sched_t), _f64(sched_u), _f64(x0),
+        packed_model(mats), _f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u), _f64(x0),
         float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps), RECORDS_FIRST)
     return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode}
 

@@ -235,8 +235,88 @@ class ForceSchedule:
         return {"kind": "schedule", "times": list(self.times), "values": list(self.values)}
 
 
-Controller = Rigid | Impedance | ForceSchedule
-"""Any of the three controllers."""
+@dataclass(frozen=True)
+class FeedbackSchedule:
+    """Open-loop schedule of affine laws: ``u = gains[i] . [x_b, v_b, x_f, v_f, 1]`` on
+    ``[times[i-1], times[i])``, the last held forever.
 
-__all__ = ["Controller", "ForceSchedule", "Impedance", "Rigid", "impedance_gains",
-           "rigid_lock_gains"]
+    A constant force ``u`` is the row ``[0, 0, 0, 0, u]`` (:class:`ForceSchedule` is the
+    all-constant case); a state-feedback row replays an optimal control's boundary arc
+    (e.g. the force that holds the leg at a stroke limit). Exact in the simulator (every
+    piece is affine). The laws are not saturated: they are what the optimiser found within
+    its bounds.
+
+    Parameters
+    ----------
+    times : sequence of float
+        Switching instants, strictly increasing and > 0.
+    gains : sequence of sequence of float
+        One row of 5 per piece (one more row than ``times``).
+    """
+
+    times: tuple[float, ...]
+    gains: tuple[tuple[float, ...], ...]
+
+    def __post_init__(self) -> None:
+        t = tuple(float(v) for v in check("times", np.asarray(self.times, float).ravel()))
+        g = np.asarray(self.gains, dtype=float)
+        if g.ndim != 2 or g.shape != (len(t) + 1, 5):
+            raise ParameterError("gains", f"needs {len(t) + 1} rows of 5 (one more than "
+                                          f"times), got shape {g.shape}")
+        check("values", g)
+        if any(b <= a for a, b in zip((0.0,) + t, t, strict=False)):
+            raise ParameterError("times", "must be strictly increasing and > 0")
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "gains", tuple(tuple(float(x) for x in row) for row in g))
+
+    @classmethod
+    def from_arcs(cls, durations, gains) -> FeedbackSchedule:
+        """Schedule from arc durations (> 0) and the law on each arc (and after).
+
+        Parameters
+        ----------
+        durations : sequence of float
+            Length of each arc but the last (held forever).
+        gains : sequence of sequence of float
+            Rows of 5; one more than ``durations``.
+        """
+        d = check("durations", np.asarray(durations, float).ravel())
+        return cls(tuple(np.cumsum(d)), tuple(tuple(r) for r in gains))
+
+    def kernel_arrays(self, mats: dict[str, Any],
+                      robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """No feedback gains of the impedance kind; the schedule's times and rows.
+
+        Parameters
+        ----------
+        mats : dict
+            Unused.
+        robot : Robot
+            Unused (the laws are not saturated).
+        """
+        return np.zeros((3, 5)), np.asarray(self.times, float), np.asarray(self.gains, float)
+
+    def describe(self) -> str:
+        """One line for tables and titles."""
+        n = sum(any(row[:4]) for row in self.gains)
+        return f"open-loop schedule with {len(self.times)} switches ({n} feedback pieces)"
+
+    def to_si(self, units: Units) -> dict[str, Any]:
+        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N)."""
+        scale = np.array([units.force / units.length, units.force / units.velocity,
+                          units.force / units.length, units.force / units.velocity,
+                          units.force])
+        return {"times_s": [t * units.time for t in self.times],
+                "gains_SI": (np.asarray(self.gains) * scale).tolist()}
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": "feedback schedule", "times", "gains"}``."""
+        return {"kind": "feedback schedule", "times": list(self.times),
+                "gains": [list(r) for r in self.gains]}
+
+
+Controller = Rigid | Impedance | ForceSchedule | FeedbackSchedule
+"""Any of the controllers."""
+
+__all__ = ["Controller", "FeedbackSchedule", "ForceSchedule", "Impedance", "Rigid",
+           "impedance_gains", "rigid_lock_gains"]

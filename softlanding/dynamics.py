@@ -76,7 +76,7 @@ def mechanical_energy(x, r_m):
     """Robot mechanical energy (kinetic + gravitational), in units of ``m_t g x_s``.
 
     Gravitational energy is measured from heights 0, so differences are what
-    matter; :mod:`softlanding.simulate` reports energies relative to the
+    matter; :mod:`softlanding.simulator` reports energies relative to the
     configuration at impact (its kernel reads this quadratic form off here).
 
     Parameters

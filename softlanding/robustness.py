@@ -40,7 +40,7 @@ from ._progress import progress as show_progress
 from .controllers import Controller, ForceSchedule, Impedance
 from .errors import ParameterError, check, check_count
 from .model import PAPER_ROBOT, Impact, Robot, Units
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 PARAMETERS = ("k_g", "r_m", "v0", "switch")
 CONTROLLERS = ("bang-bang", "impedance")

@@ -91,7 +91,7 @@ def test_infeasible_request_one_line_exit_1(args, match, cli):
 def test_an_internal_error_is_reported_as_a_bug(cli, monkeypatch):
     import importlib
 
-    sim = importlib.import_module("softlanding.simulate")  # the module, not the function
+    sim = importlib.import_module("softlanding.simulator")
 
     def boom(*a, **k):
         raise ZeroDivisionError("synthetic")

@@ -18,7 +18,7 @@ from softlanding import (
     simulate,
     simulate_batch,
 )
-from softlanding.simulate import stroke
+from softlanding.simulator import stroke
 
 R = Robot(r_m=5, s=20)  # the paper's robot without force limit
 

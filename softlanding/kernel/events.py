@@ -33,11 +33,13 @@ from .model import M_FU, support_Fz
 
 
 @njit(cache=True)
-def control_vector(mode, regime, Kf, umax, u_ol):
-    """The functional cu with u = cu . z for the current mode and regime."""
+def control_vector(mode, regime, Kf, umax, k_ol):
+    """The functional cu with u = cu . z for the current mode and regime (``k_ol``: the
+    open-loop schedule's current gain row, a constant force ``u`` being ``[0, 0, 0, 0, u]``)."""
     cu = np.zeros(5)
     if regime == OPEN_LOOP:
-        cu[4] = u_ol
+        for j in range(5):
+            cu[j] = k_ol[j]
     elif regime == SAT_HIGH:
         cu[4] = umax
     elif regime == SAT_LOW:
@@ -60,10 +62,10 @@ def classify(mode, z, Kf, umax):
 
 
 @njit(cache=True)
-def contact_mode(P, z, d, Kf, umax, open_loop, u_ol):
+def contact_mode(P, z, d, Kf, umax, open_loop, k_ol):
     """Foot at rest at the crater bottom: static, yielding again, or lifting off."""
     if open_loop:
-        u = u_ol
+        u = dot(k_ol, z)
     else:
         u = dot(row(Kf, STATIC), z)
         u = min(umax, max(-umax, u))

@@ -101,7 +101,7 @@ B_TSTOP, B_T, B_ET, B_ACT = range(4)
 
 
 @njit(cache=True)
-def begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift):
+def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     """Control functional and closed-loop matrix of a segment; in flight, shift heights.
 
     Without ground force the dynamics depend on heights only through the stroke,
@@ -110,7 +110,7 @@ def begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift):
     at a grazing landing (its time error is sqrt(rounding of ``x_f``)).
     Returns ``(cu, A, shift)``.
     """
-    cu = control_vector(mode, regime, Kf, umax, u_ol)
+    cu = control_vector(mode, regime, Kf, umax, k_ol)
     A = closed_loop(mode_A(P, mode), mode_B(P, mode), cu)
     if mode == FLIGHT and shift == 0.0 and d > 0.0:
         invariant = True
@@ -263,7 +263,7 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
 
 
 @njit(cache=True)
-def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open_loop, u_ol,
+def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open_loop, k_ol,
                 ext, bk):
     """The transition at an event; updates ``z`` and ``bk`` in place.
 
@@ -275,7 +275,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
         d = max(d, -z[2])
         if bk[B_TSTOP] != bk[B_TSTOP]:
             bk[B_TSTOP] = t
-        mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
     elif code == EV_YIELD:
         mode = YIELDING
     elif code == EV_LIFT:
@@ -288,7 +288,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
             mode = YIELDING
         else:
             z[3] = 0.0
-            mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+            mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
     elif code == EV_SAT_HIGH:
         regime = SAT_HIGH
     elif code == EV_SAT_LOW:
@@ -308,14 +308,14 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
 
 
 @njit(cache=True)
-def initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk, E0):
+def initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk, E0):
     """Ground mode at impact (from the foot's velocity); returns ``(mode, regime, steps)``."""
     if z[3] < 0.0:
         mode = YIELDING
     elif z[3] > 0.0:
         mode = FLIGHT
     else:
-        mode = contact_mode(P, z, d, Kf, umax, open_loop, u_ol)
+        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
     steps = 0
     if mode == YIELDING:
         steps = 1
@@ -436,10 +436,10 @@ def derivative_functionals(C, A, ne, dC):
 
 
 @njit(cache=True)
-def schedule_switch(P, z, d, mode, steps, u_ol):
+def schedule_switch(P, z, d, mode, steps, k_ol):
     """An open-loop schedule switch: a pinned foot may yield or lift off under the new force."""
     if mode == STATIC:
-        mode = contact_mode(P, z, d, np.zeros((3, 5)), np.inf, True, u_ol)
+        mode = contact_mode(P, z, d, np.zeros((3, 5)), np.inf, True, k_ol)
         if mode == YIELDING:
             steps += 1
     return mode, steps
@@ -453,10 +453,11 @@ def simulate_one(P, pol, x0, lim, out, rec):
     ----------
     P : (N_MODEL,) array
         Packed mode data (:func:`softlanding.kernel.model.pack_model`).
-    pol : tuple ``(Kf, umax, sched_t, sched_u)``
+    pol : tuple ``(Kf, umax, sched_t, sched_K)``
         Feedback ``u = Kf[mode] . z`` per ground mode (3, 5), its saturation
-        (``inf`` for none), and the open-loop schedule ``u = sched_u[i]`` on
-        ``[sched_t[i-1], sched_t[i])`` (empty ``sched_u`` means feedback).
+        (``inf`` for none), and the open-loop schedule ``u = sched_K[i] . z`` on
+        ``[sched_t[i-1], sched_t[i])`` ((m + 1, 5); a constant force is the row
+        ``[0, 0, 0, 0, u]``; no rows means feedback).
     x0 : (4,) array
         Initial state.
     lim : tuple ``(s_lim, t_max, max_seg, energy, max_steps)``
@@ -466,21 +467,21 @@ def simulate_one(P, pol, x0, lim, out, rec):
     rec : tuple ``(t, A, z, cu, mode)`` of arrays with ``len(t) - 1`` rows (or 0)
         Segment records; the row after the last holds the end time.
     """
-    Kf, umax, sched_t, sched_u = pol
+    Kf, umax, sched_t, sched_K = pol
     s_lim, t_max, max_seg, energy, max_steps = lim
     if not in_range(x0, s_lim):
         return reject(out)
-    open_loop = sched_u.shape[0] > 0
+    open_loop = sched_K.shape[0] > 0
     z = np.empty(5)
     z[:4] = x0[:4]
     z[4] = 1.0
     z0 = z.copy()
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
-    u_ol = sched_u[0] if open_loop else 0.0
+    k_ol = sched_K[0] if open_loop else np.zeros(5)
     ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
     bk = np.full(4, np.nan)
-    mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, u_ol, bk,
+    mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk,
                                        energy_rel(P, z, z0))
     ws = workspace()
     cs, C, dC, codes, cdata, cres = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
@@ -489,7 +490,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
         if ext[X_WORK] > max_steps:
             status = STEP_BUDGET
             break
-        cu, A, shift = begin_segment(P, mode, regime, Kf, umax, u_ol, z, d, shift)
+        cu, A, shift = begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift)
         record_segment(rec, nseg, t, mode, z, cu, A, shift)
         nseg += 1
         u_now = dot(cu, z)
@@ -512,11 +513,11 @@ def simulate_one(P, pol, x0, lim, out, rec):
                 break
             if time_event:
                 sidx += 1
-                u_ol = sched_u[sidx]
-                mode, steps = schedule_switch(P, z, d, mode, steps, u_ol)
+                k_ol = sched_K[sidx]
+                mode, steps = schedule_switch(P, z, d, mode, steps, k_ol)
                 continue
         mode, regime, d, shift, steps = apply_event(P, codes[hit], z, z0, t, d, shift, mode,
-                                                    regime, steps, Kf, umax, open_loop, u_ol,
+                                                    regime, steps, Kf, umax, open_loop, k_ol,
                                                     ext, bk)
     z[0] -= shift
     z[2] -= shift
@@ -527,7 +528,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
 
 
 @njit(cache=True, nogil=True)
-def landing_entry(P, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, max_steps,
+def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy, max_steps,
                   nrec):
     """One landing with its segment records (``nrec`` rows first; re-run with as many
     rows as segments if that was too few).
@@ -539,7 +540,7 @@ def landing_entry(P, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ener
         out = np.zeros(N_OUT)
         rec = (np.full(nrec + 1, np.nan), np.empty((nrec, 5, 5)), np.empty((nrec, 5)),
                np.empty((nrec, 5)), np.empty(nrec, dtype=np.int64))
-        simulate_one(P, (Kf, umax, sched_t, sched_u), x0,
+        simulate_one(P, (Kf, umax, sched_t, sched_K), x0,
                      (s_lim, t_max, max_seg, energy, max_steps), out, rec)
         n = int(out[O_NSEG])
         if n <= nrec:
@@ -559,8 +560,9 @@ def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_s
     scheduling: no spinning, no idle core behind a busy one).
     """
     empty_t = np.zeros(0)
+    empty_K = np.zeros((0, 5))
     rec = (np.zeros(0), np.zeros((0, 5, 5)), np.zeros((0, 5)), np.zeros((0, 5)),
            np.zeros(0, dtype=np.int64))
     for i in range(i0, i1):
-        simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_t), x0s[i],
+        simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_K), x0s[i],
                      (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec)
