@@ -30,7 +30,7 @@ from . import _kernel as K
 from ._jsonutil import json_safe
 from .controllers import Controller, ForceSchedule, Impedance, Rigid
 from .dynamics import STATE_NAMES, mode_matrices
-from .errors import ParameterError, RestNotProvenError, check
+from .errors import ParameterError, RestNotProvenError, check, check_count
 from .ground import LINEAR_GROUND, Ground
 from .model import Impact, Robot
 
@@ -261,7 +261,9 @@ def simulate(
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
     out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
-                                  check("t_max", t_max), int(max_segments), bool(energy))
+                                  check("t_max", t_max),
+                                  check_count("max_segments", max_segments, 1, 10**6),
+                                  bool(energy))
     return LandingResult(
         depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
         u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),
@@ -410,7 +412,13 @@ def simulate_batch(
     -------
     BatchResult
     """
-    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d)))
+    try:
+        arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d)))
+    except ValueError:
+        shapes = ", ".join(f"{n} {np.shape(a)}" for n, a in (("v0", v0), ("k_p", k_p),
+                                                              ("k_d", k_d)))
+        raise ParameterError("k_p", f"v0, k_p and k_d must broadcast together: {shapes}") \
+            from None
     shape = arrays[0].shape
     v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))
                  for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
