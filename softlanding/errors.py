@@ -162,7 +162,7 @@ def check(name: str, value: Any, rule: Rule | None = None) -> Any:
         x = float(value)
         if not math.isfinite(x):
             raise ParameterError(name, f"must be finite, got {plain(x)}")
-        if not test(np.float64(x)):
+        if not test(np.asarray(x)):
             raise ParameterError(name, f"{what}, got {plain(x)}")
         return x
     scalar = np.ndim(value) == 0 and not isinstance(value, np.ndarray)
