@@ -128,6 +128,13 @@ class LandingResult:
         Hybrid segments simulated.
     robot, impact, controller, ground
         What was simulated.
+    depth_limit : float
+        The depth as t -> inf: the rest depth when the foot rests, the limit a
+        never-resting creep approaches (then ``depth`` is that limit too, a supremum the
+        foot never reaches), NaN when unknown.
+    foot_rest : bool
+        The foot's rest is proven, whatever the body does (a body that passes through
+        its foot is not a rest of the robot: ``status`` says so).
     """
 
     depth: float
@@ -145,6 +152,8 @@ class LandingResult:
     impact: Impact
     controller: Controller
     ground: Ground = LINEAR_GROUND
+    depth_limit: float = math.nan
+    foot_rest: bool = False
     _segments: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
@@ -179,6 +188,8 @@ class LandingResult:
         """
         seg = self._segments
         ts = seg["t"]
+        if len(ts) < 2:
+            raise RestNotProvenError(f"nothing was simulated ({self.status})")
         if not self.rest_proven:
             if t_end is not None and t_end > ts[-1]:
                 raise RestNotProvenError(
@@ -206,7 +217,8 @@ class LandingResult:
             "u_peak": self.u_peak, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,
-            "n_segments": self.n_segments, "energy": self.energy.to_dict(),
+            "n_segments": self.n_segments, "depth_limit": self.depth_limit,
+            "foot_rest": self.foot_rest, "energy": self.energy.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
             "ground": self.ground.to_dict(), "controller": self.controller.to_dict(),
         }
@@ -272,6 +284,7 @@ def simulate(
         energy=EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
                             float(out[K.O_EACT])),
         n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
+        depth_limit=float(out[K.O_DLIM]), foot_rest=bool(out[K.O_FOOT_REST]),
         ground=ground, _segments=segments)
 
 
@@ -315,6 +328,7 @@ _FIELD_COL = {
     "depth": K.O_DEPTH, "steps": K.O_STEPS, "t_first_stop": K.O_TSTOP, "T": K.O_T,
     "u_peak": K.O_UPEAK, "stroke_min": K.O_SMIN, "stroke_max": K.O_SMAX, "feasible": K.O_FEAS,
     "status": K.O_STATUS, "E0": K.O_E0, "ET": K.O_ET, "ground": K.O_EGND, "actuator": K.O_EACT,
+    "depth_limit": K.O_DLIM, "foot_rest": K.O_FOOT_REST,
 }
 BATCH_FIELDS = tuple(_FIELD_COL)
 
@@ -447,7 +461,7 @@ def simulate_batch(
     data = {}
     for name, col in _FIELD_COL.items():
         v_ = out[:, col].reshape(shape)
-        if name == "feasible":
+        if name in ("feasible", "foot_rest"):
             v_ = v_.astype(bool)
         elif name in ("steps", "status"):
             v_ = v_.astype(np.int64)
