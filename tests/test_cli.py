@@ -238,3 +238,14 @@ def test_a_failed_run_leaves_no_file_behind(tmp_path, cli, monkeypatch):
                        "--plot", tmp_path / "m.png")
     assert code == 130 and err.strip() == "softlanding: interrupted"
     assert list(tmp_path.iterdir()) == []  # no dataset, no figure, no temporary file
+
+
+def test_progress_bars_only_on_a_terminal(cli):
+    """A log or a pipe gets no carriage-return frames; --progress forces them."""
+    code, out, err = cli("solve-sweep", "--n", "3", "--v0-min", "-2")
+    assert code == 0 and "\r" not in err and err == ""
+    code, out, err = cli("--progress", "solve-sweep", "--n", "3", "--v0-min", "-2")
+    assert code == 0 and "\r" in err and "bang-bang sweep" in err
+    from softlanding import _progress
+
+    _progress.FORCE = False
