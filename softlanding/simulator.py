@@ -28,7 +28,7 @@ from ocp.trajectory import Trajectory
 
 from . import _kernel as K
 from ._jsonutil import json_safe
-from .controllers import Controller, ForceSchedule, Impedance, Rigid
+from .controllers import Controller, ForceSchedule, Impedance, Rigid, impedance_gains
 from .dynamics import STATE_NAMES, mode_matrices
 from .errors import ParameterError, RestNotProvenError, check, check_count
 from .ground import LINEAR_GROUND, Ground
@@ -387,6 +387,16 @@ class BatchResult:
         return (self.data["status"] == K.REST_PROVEN) & (self.stroke_margin >= 0.0)
 
 
+def _broadcast(v0, k_p, k_d) -> tuple[np.ndarray, ...]:
+    try:
+        return tuple(np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d))))
+    except ValueError:
+        shapes = ", ".join(f"{n} {np.shape(a)}" for n, a in (("v0", v0), ("k_p", k_p),
+                                                              ("k_d", k_d)))
+        raise ParameterError("k_p", f"v0, k_p and k_d must broadcast together: {shapes}") \
+            from None
+
+
 def simulate_batch(
     robot: Robot,
     v0,
@@ -426,13 +436,7 @@ def simulate_batch(
     -------
     BatchResult
     """
-    try:
-        arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d)))
-    except ValueError:
-        shapes = ", ".join(f"{n} {np.shape(a)}" for n, a in (("v0", v0), ("k_p", k_p),
-                                                              ("k_d", k_d)))
-        raise ParameterError("k_p", f"v0, k_p and k_d must broadcast together: {shapes}") \
-            from None
+    arrays = _broadcast(v0, k_p, k_d)
     shape = arrays[0].shape
     v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))
                  for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
@@ -441,9 +445,7 @@ def simulate_batch(
     mats = mode_matrices(robot.r_m, ground)
     l0 = robot.rest_length
     Kf = np.empty((n, 3, 5))
-    Kf[:, :, 0], Kf[:, :, 1] = -kp[:, None], -kd[:, None]
-    Kf[:, :, 2], Kf[:, :, 3] = kp[:, None], kd[:, None]
-    Kf[:, :, 4] = (kp * l0)[:, None]
+    Kf[:] = impedance_gains(kp, kd, np.full(n, l0)).T[:, None, :]  # the one impedance law
     x0 = np.stack([np.full(n, l0), v, np.zeros(n), v], axis=1)
     um = np.full(n, math.inf if robot.u_max is None else robot.u_max)
     ss = np.full(n, robot.s)
