@@ -249,3 +249,20 @@ def test_progress_bars_only_on_a_terminal(cli):
     from softlanding import _progress
 
     _progress.FORCE = False
+
+
+@pytest.mark.parametrize("args", [
+    ["impedance", "--v0", "-3", "--grid", "10000000"],
+    ["map", "--v0", "-3", "--n", "10000000", "--out", "x.nc"],
+    ["sweep", "--grid", "10000000"],
+    ["solve", "--v0", "-3", "--nodes", "10000000"],
+    ["solve-sweep", "--n", "100000000"],
+])
+def test_huge_sizes_are_refused_at_once(args, cli):
+    import time
+
+    cli("--version")  # imports paid before the clock starts
+    c = time.process_time()
+    code, _, err = cli(*args)
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert time.process_time() - c < 1.0
