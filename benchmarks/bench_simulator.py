@@ -47,6 +47,8 @@ from softlanding.controllers import impedance_gains  # noqa: E402
 S = sys.modules["softlanding.simulator"]
 
 KERNELS = {"old": K0, "new": K}
+COMMON_FIELDS = [f for f in S.BATCH_FIELDS if f not in ("depth_limit", "foot_rest")]
+"""Columns both kernels have (the first one predates the depth limit and foot-rest flag)."""
 
 
 def _load() -> str:
@@ -160,7 +162,7 @@ def grid_section(a):
     report("grid", t, 1, unit="s")
     print(f"  peak RSS of this process {rss1:.0f} MiB (before the grids {rss0:.0f} MiB)")
     old, new = outs["old"], outs["new"]
-    for name in S.BATCH_FIELDS:
+    for name in COMMON_FIELDS:
         x, y = np.asarray(old.data[name], float), np.asarray(new.data[name], float)
         nd = int((~((x == y) | (np.isnan(x) & np.isnan(y)))).sum())
         if nd:
@@ -181,7 +183,7 @@ def grid_section(a):
 
 def _rows_equal(b0, b1, skip=()):
     ok = None
-    for name in S.BATCH_FIELDS:
+    for name in COMMON_FIELDS:
         if name in skip:
             continue
         x, y = np.asarray(b0.data[name], float), np.asarray(b1.data[name], float)

@@ -34,6 +34,7 @@ from .errors import ParameterError, RestNotProvenError, check, check_count
 from .ground import LINEAR_GROUND, Ground
 from .model import Impact, Robot
 
+_O_DLIM, _O_FOOT_REST = K.O_DLIM, K.O_FOOT_REST
 MODE_NAMES = ("yielding", "static", "flight")
 STATUS_NAMES = K.STATUS_NAMES
 DEFAULT_T_MAX = 1.0e4
@@ -284,7 +285,9 @@ def simulate(
         energy=EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
                             float(out[K.O_EACT])),
         n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
-        depth_limit=float(out[K.O_DLIM]), foot_rest=bool(out[K.O_FOOT_REST]),
+        # (a kernel without these columns, e.g. the benchmark's frozen first one: unknown)
+        depth_limit=float(out[_O_DLIM]) if out.size > _O_DLIM else math.nan,
+        foot_rest=bool(out[_O_FOOT_REST]) if out.size > _O_FOOT_REST else False,
         ground=ground, _segments=segments)
 
 
@@ -462,6 +465,8 @@ def simulate_batch(
             bar.update(b - a)
     data = {}
     for name, col in _FIELD_COL.items():
+        if col >= out.shape[1]:  # a kernel without this column (the benchmark's first one)
+            continue
         v_ = out[:, col].reshape(shape)
         if name in ("feasible", "foot_rest"):
             v_ = v_.astype(bool)
