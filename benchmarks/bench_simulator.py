@@ -1,16 +1,25 @@
-"""Exact simulator against scipy solve_ivp, and the paper's full impedance grid.
+"""Exact simulator: current kernel against the frozen first kernel, and against scipy solve_ivp.
 
-Run:  python benchmarks/bench_simulator.py [--cases 200] [--skip-grid]
+Run:  python benchmarks/bench_simulator.py [--cases 200] [--repeats 5] [--grid-repeats 2]
+                                           [--skip-grid] [--skip-ivp]
 
-Prints, measured in this run on this machine:
-* mean time per landing of the toolkit (one ``simulate`` call each, and
-  per landing inside ``simulate_batch``) and of scipy ``solve_ivp`` (LSODA,
-  rtol 1e-10, atol 1e-12, events; the same mode logic, tests/ivp_reference.py),
-  their ratio, and the largest depth difference;
-* wall time and peak resident memory of the paper's grid, k_p and k_d in
-  [0, 1] step 0.01 times v0 in {0, -0.5, ..., -10}: 214,221 landings.
-Goals (issue 2): ratio >= 1000x (floor 300x); depth difference <= 1e-7;
-grid <= 20 s on 2 cores (floor 60 s); peak memory <= 2 GiB.
+Every timing is measured in this run, interleaved: the current kernel
+(``softlanding._kernel``) and the frozen first kernel (``benchmarks/_kernel_v0.py``,
+the kernel before the split, plugged into the same ``simulate`` wrappers) run
+block by block in alternating order, several repeats; medians are reported in
+CPU time (``time.process_time``: all threads of this process) and in wall time.
+The machine's load average is printed before and after, since the cores are
+shared.
+
+Prints:
+* per ``simulate()`` call and per landing of ``simulate_batch`` on a random
+  sample (k_p, k_d in [0, 1], v0 in [-10, 0]); the ratio old / new;
+* scipy ``solve_ivp`` (LSODA, rtol 1e-10, atol 1e-12, events; the same mode logic,
+  tests/ivp_reference.py) on the same sample: time, ratio, largest depth difference;
+* the paper's grid, k_p and k_d in [0, 1] step 0.01 times v0 in {0, -0.5, ..., -10}:
+  214,221 landings; wall and CPU time of both kernels, the ratio, how many landings
+  differ between them (by output column) and the statuses; then the grid alone in a
+  fresh process (``_grid_rss_child.py``): its time and peak RSS.
 """
 
 from __future__ import annotations
@@ -25,85 +34,192 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "tests"))
+sys.path.insert(0, str(HERE))
+import _kernel_v0 as K0  # noqa: E402
 from ivp_reference import landing_depth_ivp  # noqa: E402
 
-from softlanding import DimensionlessParams, Impedance, simulate, simulate_batch  # noqa: E402
+from softlanding import Impact, Impedance, Robot, simulate, simulate_batch  # noqa: E402
+from softlanding import _kernel as K  # noqa: E402
+from softlanding.controllers import impedance_gains  # noqa: E402
+
+S = sys.modules["softlanding.simulator"]
+
+KERNELS = {"old": K0, "new": K}
+COMMON_FIELDS = [f for f in S.BATCH_FIELDS if f not in ("depth_limit", "foot_rest")]
+"""Columns both kernels have (the first one predates the depth limit and foot-rest flag)."""
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--cases", type=int, default=200)
-    ap.add_argument("--seed", type=int, default=2026)
-    ap.add_argument("--skip-grid", action="store_true")
-    a = ap.parse_args()
+def _load() -> str:
+    return "load average {:.2f} {:.2f} {:.2f}".format(*os.getloadavg())
 
-    rng = np.random.default_rng(a.seed)
-    kp = rng.uniform(0, 1, a.cases)
-    kd = rng.uniform(0, 1, a.cases)
-    v0 = rng.uniform(-10, 0, a.cases)
 
-    # warm-up (JIT load) outside the timings
-    simulate(DimensionlessParams(v0=-1), Impedance(0.2, 0.2), energy=False)
-    simulate_batch([0.2], [0.2], [-1.0])
+def interleaved(blocks: dict, repeats: int) -> dict:
+    """Run each callable once per repeat, alternating the order; median (cpu, wall)."""
+    res = {k: ([], []) for k in blocks}
+    names = list(blocks)
+    for r in range(repeats):
+        for k in names if r % 2 == 0 else names[::-1]:
+            c, w = time.process_time(), time.perf_counter()
+            blocks[k]()
+            res[k][0].append(time.process_time() - c)
+            res[k][1].append(time.perf_counter() - w)
+    return {k: (float(np.median(c)), float(np.median(w))) for k, (c, w) in res.items()}
 
-    t = time.perf_counter()
-    ours = [simulate(DimensionlessParams(r_m=5, s=20, v0=v), Impedance(p, d), energy=False)
-            for p, d, v in zip(kp, kd, v0, strict=True)]
-    t_ours = (time.perf_counter() - t) / a.cases
 
+def with_kernel(name, fn):
+    """``fn`` run with ``softlanding.simulator`` wired to kernel ``name``."""
+    def run():
+        S.K = KERNELS[name]
+        try:
+            return fn()
+        finally:
+            S.K = K
+    return run
+
+
+def report(label, t, n, unit="us"):
+    scale = 1e6 if unit == "us" else 1.0
+    for k in ("old", "new"):
+        c, w = t[k]
+        print(f"  {label} {k}: cpu {c / n * scale:9.2f} {unit}, wall {w / n * scale:9.2f} {unit}")
+    print(f"  {label} ratio old/new: cpu {t['old'][0] / t['new'][0]:.2f}x, "
+          f"wall {t['old'][1] / t['new'][1]:.2f}x")
+
+
+def sample_section(a, kp, kd, v0):
+    robot = Robot(r_m=5, s=20)
+    params = [Impact(v) for v in v0]
+    pols = [Impedance(p, d) for p, d in zip(kp, kd, strict=True)]
+
+    def calls():
+        return [simulate(robot, p, q, energy=False) for p, q in zip(params, pols, strict=True)]
+
+    t = interleaved({k: with_kernel(k, calls) for k in KERNELS}, a.repeats)
+    print(f"simulate() per call ({a.cases} landings per block, {a.repeats} blocks each):")
+    report("simulate()", t, a.cases)
+    mats = S.mode_matrices(5.0)
+    Kf = [np.tile(impedance_gains(p, d, 10.0), (3, 1)) for p, d in zip(kp, kd, strict=True)]
+    x0 = [np.array([10.0, v, 0.0, v]) for v in v0]
+    e = np.zeros(0)
+
+    def kern(mod):
+        def run():
+            for i in range(a.cases):
+                mod.run_landing(mats, Kf[i], math.inf, e, e, x0[i], 20.0, 1e4, 500, False)
+        return run
+
+    t = interleaved({k: kern(m) for k, m in KERNELS.items()}, a.repeats)
+    print("kernel run_landing() per call (the kernel's part of simulate()):")
+    report("run_landing()", t, a.cases)
     reps = 20
-    t = time.perf_counter()
-    for _ in range(reps):
-        b = simulate_batch(kp, kd, v0)
-    t_batch = (time.perf_counter() - t) / (reps * a.cases)
 
+    def batch():
+        for _ in range(reps):
+            simulate_batch(Robot(5, 20), v0, kp, kd)
+
+    t = interleaved({k: with_kernel(k, batch) for k in KERNELS}, a.repeats)
+    print(f"simulate_batch() per landing ({os.cpu_count()} cores):")
+    report("batch", t, reps * a.cases)
+    return calls()
+
+
+def ivp_section(a, kp, kd, v0, ours):
     ref, t_ref, skipped = [], 0.0, 0
     for p, d, v, r in zip(kp, kd, v0, ours, strict=True):
         if not r.rest_proven:
             skipped += 1
             ref.append(None)
             continue
-        t = time.perf_counter()
+        t = time.process_time()
         ref.append(landing_depth_ivp(v, p, d))
-        t_ref += time.perf_counter() - t
+        t_ref += time.process_time() - t
     n_cmp = a.cases - skipped
-    t_ref /= max(n_cmp, 1)
     diffs = [abs(r.depth - q["depth"]) for r, q in zip(ours, ref, strict=True) if q is not None]
-    steps_agree = sum(r.steps == q["steps"] for r, q in zip(ours, ref, strict=True)
-                      if q is not None)
-    assert np.array_equal(b.depth, np.array([r.depth for r in ours]))
+    agree = sum(r.steps == q["steps"] for r, q in zip(ours, ref, strict=True) if q is not None)
+    print(f"scipy solve_ivp (LSODA): cpu {t_ref / max(n_cmp, 1) * 1e6:10.1f} us per landing on "
+          f"{n_cmp} landings (rest not proven by the toolkit: {skipped}); largest depth "
+          f"difference {max(diffs):.2e}; intrusion steps agree in {agree}/{n_cmp}")
 
-    print(f"landings sampled: {a.cases} (k_p, k_d in [0,1], v0 in [-10,0], r_m=5, s=20); "
-          f"compared: {n_cmp} (rest not proven by the toolkit: {skipped})")
-    print(f"toolkit simulate()      : {t_ours * 1e6:10.1f} us per landing")
-    print(f"toolkit simulate_batch(): {t_batch * 1e6:10.1f} us per landing "
-          f"({os.cpu_count()} cores)")
-    print(f"scipy solve_ivp (LSODA) : {t_ref * 1e6:10.1f} us per landing")
-    print(f"speed ratio solve_ivp / simulate()       : {t_ref / t_ours:8.0f}x")
-    print(f"speed ratio solve_ivp / batch per landing: {t_ref / t_batch:8.0f}x")
-    print(f"largest depth difference: {max(diffs):.2e}; intrusion steps agree in "
-          f"{steps_agree}/{n_cmp}")
 
-    if a.skip_grid:
-        return
+def grid_section(a):
     g = np.round(np.linspace(0, 1, 101), 12)
     v = np.round(np.linspace(-10, 0, 21), 12)
     KP, KD, V = np.meshgrid(g, g, v, indexing="ij")
+    outs = {}
+
+    def run(name):
+        def go():
+            outs[name] = simulate_batch(Robot(5, 20), V, KP, KD, progress=False)
+        return with_kernel(name, go)
+
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    t = time.perf_counter()
-    grid = simulate_batch(KP, KD, V, progress=False)
-    t_grid = time.perf_counter() - t
+    t = interleaved({k: run(k) for k in KERNELS}, a.grid_repeats)
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    unproven = int((grid.status != 0).sum())
-    print(f"paper grid: {KP.size:,} landings in {t_grid:.1f} s "
-          f"({t_grid / KP.size * 1e6:.0f} us each, {os.cpu_count()} cores); "
-          f"peak RSS {rss1:.0f} MiB (before the grid {rss0:.0f} MiB)")
-    print(f"  feasible: {grid.feasible.mean():.1%}; rest not proven: {unproven} "
-          f"(k_p = 0 creeping, or k_d = 0 endless hopping), reported as such")
+    print(f"paper grid: {KP.size:,} landings ({os.cpu_count()} cores, {a.grid_repeats} runs "
+          f"of each kernel, alternating):")
+    report("grid", t, 1, unit="s")
+    print(f"  peak RSS of this process {rss1:.0f} MiB (before the grids {rss0:.0f} MiB)")
+    old, new = outs["old"], outs["new"]
+    for name in COMMON_FIELDS:
+        x, y = np.asarray(old.data[name], float), np.asarray(new.data[name], float)
+        nd = int((~((x == y) | (np.isnan(x) & np.isnan(y)))).sum())
+        if nd:
+            print(f"  column {name}: {nd} landings differ between the kernels")
+    proven = old.status == 0
+    eq = _rows_equal(old, new)
+    eq_but_status = _rows_equal(old, new, skip=("status",))
+    print(f"  rest proven by the old kernel: {int(proven.sum())}; of these identical in every "
+          f"column: {int(eq[proven].sum())}, identical apart from the status: "
+          f"{int(eq_but_status[proven].sum())}")
+    for code in np.unique(new.status):
+        print(f"  new status {int(code)} ({K.STATUS_NAMES[int(code)]}): "
+              f"{int((new.status == code).sum())}")
     with np.errstate(invalid="ignore"):
-        depth_ratio = np.nanmax(np.where(grid.feasible, grid.depth, math.nan))
-    print(f"  deepest feasible landing: {depth_ratio:.4f}")
+        deepest = np.nanmax(np.where(new.feasible, new.depth, math.nan))
+    print(f"  feasible: {new.feasible.mean():.1%}; deepest feasible landing: {deepest:.4f}")
+
+
+def _rows_equal(b0, b1, skip=()):
+    ok = None
+    for name in COMMON_FIELDS:
+        if name in skip:
+            continue
+        x, y = np.asarray(b0.data[name], float), np.asarray(b1.data[name], float)
+        eq = (x == y) | (np.isnan(x) & np.isnan(y))
+        ok = eq if ok is None else ok & eq
+    return ok
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cases", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--grid-repeats", type=int, default=2)
+    ap.add_argument("--skip-grid", action="store_true")
+    ap.add_argument("--skip-ivp", action="store_true")
+    a = ap.parse_args()
+
+    rng = np.random.default_rng(a.seed)
+    kp = rng.uniform(0, 1, a.cases)
+    kd = rng.uniform(0, 1, a.cases)
+    v0 = rng.uniform(-10, 0, a.cases)
+    for name in KERNELS:  # warm-up (JIT load) outside the timings
+        with_kernel(name, lambda: (simulate(Robot(5, 20), Impact(-1), Impedance(0.2, 0.2)),
+                                   simulate_batch(Robot(5, 20), [-1.0], [0.2], [0.2])))()
+    print(f"before: {_load()}; {os.cpu_count()} cores")
+    ours = sample_section(a, kp, kd, v0)
+    if not a.skip_ivp:
+        ivp_section(a, kp, kd, v0, ours)
+    if not a.skip_grid:
+        grid_section(a)
+        import subprocess
+
+        print(subprocess.run([sys.executable, str(HERE / "_grid_rss_child.py")],
+                             capture_output=True, text=True, check=True).stdout.rstrip())
+    print(f"after: {_load()}")
 
 
 if __name__ == "__main__":

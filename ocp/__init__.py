@@ -22,20 +22,22 @@ Knows nothing of landing. One file per role:
   certificate that proves (or refutes) bang-bang structure.
 """
 
-from .errors import (
-    GuessError,
-    InfeasibleError,
-    PathViolationError,
-    PathViolationWarning,
-    ProblemDefinitionError,
-    SolveError,
-)
-from .multiphase import MultiPhaseProblem
-from .pmp import PMPCertificate, certify
-from .problem import OptimalControlProblem
-from .solution import Solution
-from .trajectory import Trajectory
-from .transcription import Collocation, MultipleShooting, continuation, transcribe
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+# names are imported on first use: `import ocp.trajectory` (a light module) loads neither
+# CasADi nor the transcriptions
+_WHERE = {
+    "GuessError": "errors", "InfeasibleError": "errors", "PathViolationError": "errors",
+    "PathViolationWarning": "errors", "ProblemDefinitionError": "errors",
+    "SolveError": "errors", "MultiPhaseProblem": "multiphase", "PMPCertificate": "pmp",
+    "certify": "pmp", "OptimalControlProblem": "problem", "Solution": "solution",
+    "Trajectory": "trajectory", "Collocation": "transcription",
+    "MultipleShooting": "transcription", "continuation": "transcription",
+    "transcribe": "transcription",
+}
 
 __all__ = [
     "Collocation",
@@ -55,3 +57,33 @@ __all__ = [
     "continuation",
     "transcribe",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module 'ocp' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{where}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_WHERE))
+
+
+if TYPE_CHECKING:
+    from .errors import (
+        GuessError,
+        InfeasibleError,
+        PathViolationError,
+        PathViolationWarning,
+        ProblemDefinitionError,
+        SolveError,
+    )
+    from .multiphase import MultiPhaseProblem
+    from .pmp import PMPCertificate, certify
+    from .problem import OptimalControlProblem
+    from .solution import Solution
+    from .trajectory import Trajectory
+    from .transcription import Collocation, MultipleShooting, continuation, transcribe

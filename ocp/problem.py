@@ -190,6 +190,7 @@ class OptimalControlProblem:
             the midpoint of finite bounds, else 0 clipped into the bounds.
         """
         self._check_new(name, phase=True)
+        self._checked_bounds(lower, upper, f"state {name!r}")  # before anything is declared
         s = ca.SX.sym(name)
         self.state_names.append(name)
         self._x.append(s)
@@ -213,6 +214,7 @@ class OptimalControlProblem:
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
         """
         self._check_new(name, phase=True)
+        self._checked_bounds(lower, upper, f"control {name!r}")  # before anything is declared
         s = ca.SX.sym(name)
         self.control_names.append(name)
         self._u.append(s)
@@ -273,11 +275,7 @@ class OptimalControlProblem:
         """
         if name not in self.control_names:
             raise ProblemDefinitionError(f"unknown control {name!r}")
-        what = f"control {name!r}"
-        lo = self._shared.bound(lower, f"{what} lower bound")
-        hi = self._shared.bound(upper, f"{what} upper bound")
-        check_bounds(lo, hi, what)
-        self.control_bounds[name] = (lo, hi)
+        self.control_bounds[name] = self._checked_bounds(lower, upper, f"control {name!r}")
 
     def bound_state(self, name: str, lower: Bound = -INF, upper: Bound = INF) -> None:
         """Set or change a state's bounds (imposed along the whole trajectory).
@@ -291,11 +289,13 @@ class OptimalControlProblem:
         """
         if name not in self.state_names:
             raise ProblemDefinitionError(f"unknown state {name!r}")
-        what = f"state {name!r}"
+        self.state_bounds[name] = self._checked_bounds(lower, upper, f"state {name!r}")
+
+    def _checked_bounds(self, lower: Bound, upper: Bound, what: str) -> tuple[ca.SX, ca.SX]:
         lo = self._shared.bound(lower, f"{what} lower bound")
         hi = self._shared.bound(upper, f"{what} upper bound")
         check_bounds(lo, hi, what)
-        self.state_bounds[name] = (lo, hi)
+        return lo, hi
 
     def _check_new(self, name: str, phase: bool) -> None:
         if not isinstance(name, str) or not name:

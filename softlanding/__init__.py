@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 __version__ = "0.2.0"
 
 _WHERE = {
-    "Controller": "controllers",
+    "Controller": "controllers", "FeedbackSchedule": "controllers",
     "ForceSchedule": "controllers", "Impedance": "controllers", "Rigid": "controllers",
     "InfeasibleLandingError": "errors", "ParameterError": "errors",
     "SoftlandingError": "errors",
@@ -31,8 +31,8 @@ _WHERE = {
     "PAPER_IMPEDANCE_ROBOT": "model", "PAPER_ROBOT": "model", "Impact": "model",
     "Robot": "model", "Units": "model",
     "PhysicalParams": "scaling", "Scenario": "scaling", "paper_rig": "scaling",
-    "BatchResult": "simulate", "EnergyLedger": "simulate", "LandingResult": "simulate",
-    "simulate": "simulate", "simulate_batch": "simulate",
+    "BatchResult": "simulator", "EnergyLedger": "simulator", "LandingResult": "simulator",
+    "simulate": "simulator", "simulate_batch": "simulator",
 }
 
 __all__ = [
@@ -42,6 +42,7 @@ __all__ = [
     "CustomGround",
     "DragGround",
     "EnergyLedger",
+    "FeedbackSchedule",
     "ForceSchedule",
     "Ground",
     "Impact",
@@ -79,7 +80,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, eagerly
-    from .controllers import Controller, ForceSchedule, Impedance, Rigid
+    from .controllers import Controller, FeedbackSchedule, ForceSchedule, Impedance, Rigid
     from .errors import InfeasibleLandingError, ParameterError, SoftlandingError
     from .ground import (
         LINEAR_GROUND,
@@ -91,4 +92,4 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, eagerly
     )
     from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Robot, Units
     from .scaling import PhysicalParams, Scenario, paper_rig
-    from .simulate import BatchResult, EnergyLedger, LandingResult, simulate, simulate_batch
+    from .simulator import BatchResult, EnergyLedger, LandingResult, simulate, simulate_batch

@@ -81,7 +81,7 @@ def _savefig(fig: Any, path: Any) -> str:
 # ------------------------------------------------------------------- simulate
 def _cmd_simulate(a: argparse.Namespace) -> int:
     from .controllers import Impedance, Rigid
-    from .simulate import simulate
+    from .simulator import simulate
 
     if a.rigid and (a.kp is not None or a.kd is not None):
         raise ParameterError("rigid", "--rigid takes no --kp/--kd (choose one leg)")

@@ -20,6 +20,35 @@ from .model import VB, VF, Robot, Units
 EMPTY = np.zeros(0)
 
 
+def impedance_gains(k_p: Any, k_d: Any, l0: Any) -> np.ndarray:
+    """``K`` with ``u = K . [x_b, v_b, x_f, v_f, 1] = -k_p (x_b - x_f - l0) - k_d (v_b - v_f)``.
+
+    Parameters
+    ----------
+    k_p, k_d : float or array
+        Stiffness and damping (arrays give one gain vector per column).
+    l0 : float or array
+        Rest length.
+    """
+    return np.array([-k_p, -k_d, k_p, k_d, k_p * l0])
+
+
+def rigid_lock_gains(mats: dict[str, Any]) -> np.ndarray:
+    """Per-mode feedback ``u = Kf[mode] . z`` keeping ``v_b' = v_f'``, read off the mode matrices.
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`softlanding.dynamics.mode_matrices` of the robot and ground.
+    """
+    R = np.zeros(5)
+    R[VB], R[VF] = 1.0, -1.0
+    Kf = np.empty((3, 5))
+    for m in range(3):
+        Kf[m] = -(R @ mats["A"][m]) / (R @ mats["B"][m])
+    return Kf
+
+
 @dataclass(frozen=True)
 class Rigid:
     """Body and foot locked together: the actuator supplies whatever force keeps the
@@ -48,12 +77,7 @@ class Rigid:
         sched_t, sched_u : empty arrays
             (no open-loop schedule)
         """
-        R = np.zeros(5)
-        R[VB], R[VF] = 1.0, -1.0
-        Kf = np.empty((3, 5))
-        for m in range(3):
-            Kf[m] = -(R @ mats["A"][m]) / (R @ mats["B"][m])
-        return Kf, EMPTY, EMPTY
+        return rigid_lock_gains(mats), EMPTY, EMPTY
 
     def to_si(self, units: Units) -> dict[str, Any]:
         """No parameter to convert."""
@@ -105,8 +129,7 @@ class Impedance:
 
     def gain_vector(self, robot: Robot) -> np.ndarray:
         """``u = K . [x_b, v_b, x_f, v_f, 1]``."""
-        l0 = self.rest_length(robot)
-        return np.array([-self.k_p, -self.k_d, self.k_p, self.k_d, self.k_p * l0])
+        return impedance_gains(self.k_p, self.k_d, self.rest_length(robot))
 
     def kernel_arrays(self, mats: dict[str, Any],
                       robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -212,7 +235,88 @@ class ForceSchedule:
         return {"kind": "schedule", "times": list(self.times), "values": list(self.values)}
 
 
-Controller = Rigid | Impedance | ForceSchedule
-"""Any of the three controllers."""
+@dataclass(frozen=True)
+class FeedbackSchedule:
+    """Open-loop schedule of affine laws: ``u = gains[i] . [x_b, v_b, x_f, v_f, 1]`` on
+    ``[times[i-1], times[i])``, the last held forever.
 
-__all__ = ["Controller", "ForceSchedule", "Impedance", "Rigid"]
+    A constant force ``u`` is the row ``[0, 0, 0, 0, u]`` (:class:`ForceSchedule` is the
+    all-constant case); a state-feedback row replays an optimal control's boundary arc
+    (e.g. the force that holds the leg at a stroke limit). Exact in the simulator (every
+    piece is affine). The laws are not saturated: they are what the optimiser found within
+    its bounds.
+
+    Parameters
+    ----------
+    times : sequence of float
+        Switching instants, strictly increasing and > 0.
+    gains : sequence of sequence of float
+        One row of 5 per piece (one more row than ``times``).
+    """
+
+    times: tuple[float, ...]
+    gains: tuple[tuple[float, ...], ...]
+
+    def __post_init__(self) -> None:
+        t = tuple(float(v) for v in check("times", np.asarray(self.times, float).ravel()))
+        g = np.asarray(self.gains, dtype=float)
+        if g.ndim != 2 or g.shape != (len(t) + 1, 5):
+            raise ParameterError("gains", f"needs {len(t) + 1} rows of 5 (one more than "
+                                          f"times), got shape {g.shape}")
+        check("values", g)
+        if any(b <= a for a, b in zip((0.0,) + t, t, strict=False)):
+            raise ParameterError("times", "must be strictly increasing and > 0")
+        object.__setattr__(self, "times", t)
+        object.__setattr__(self, "gains", tuple(tuple(float(x) for x in row) for row in g))
+
+    @classmethod
+    def from_arcs(cls, durations, gains) -> FeedbackSchedule:
+        """Schedule from arc durations (> 0) and the law on each arc (and after).
+
+        Parameters
+        ----------
+        durations : sequence of float
+            Length of each arc but the last (held forever).
+        gains : sequence of sequence of float
+            Rows of 5; one more than ``durations``.
+        """
+        d = check("durations", np.asarray(durations, float).ravel())
+        return cls(tuple(np.cumsum(d)), tuple(tuple(r) for r in gains))
+
+    def kernel_arrays(self, mats: dict[str, Any],
+                      robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """No feedback gains of the impedance kind; the schedule's times and rows.
+
+        Parameters
+        ----------
+        mats : dict
+            Unused.
+        robot : Robot
+            Unused (the laws are not saturated).
+        """
+        return np.zeros((3, 5)), np.asarray(self.times, float), np.asarray(self.gains, float)
+
+    def describe(self) -> str:
+        """One line for tables and titles."""
+        n = sum(any(row[:4]) for row in self.gains)
+        return f"open-loop schedule with {len(self.times)} switches ({n} feedback pieces)"
+
+    def to_si(self, units: Units) -> dict[str, Any]:
+        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N)."""
+        scale = np.array([units.force / units.length, units.force / units.velocity,
+                          units.force / units.length, units.force / units.velocity,
+                          units.force])
+        return {"times_s": [t * units.time for t in self.times],
+                "gains_SI": (np.asarray(self.gains) * scale).tolist()}
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": "feedback schedule", "times", "gains"}``."""
+        return {"kind": "feedback schedule", "times": list(self.times),
+                "gains": [list(r) for r in self.gains]}
+
+
+Controller = Rigid | Impedance | ForceSchedule | FeedbackSchedule
+"""Any of the controllers."""
+
+__all__ = ["Controller", "FeedbackSchedule", "ForceSchedule", "Impedance", "Rigid",
+           "impedance_gains", "rigid_lock_gains"]

@@ -12,7 +12,7 @@ import numpy as np
 from .comparison import rigid_depth
 from .controllers import Impedance, Rigid
 from .model import PAPER_IMPEDANCE_ROBOT, Impact, Robot
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 DEMO_V0 = (0.0, -1.0, -3.0, -5.0, -10.0)
 """Impact velocities of the demo table."""

@@ -17,7 +17,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from .errors import check
+from .errors import POSITIVE, check
 from .ground import LINEAR_GROUND, Ground
 from .model import STATE_NAMES, VB, VF, XB, XF  # the state layout (re-exported)
 
@@ -76,7 +76,7 @@ def mechanical_energy(x, r_m):
     """Robot mechanical energy (kinetic + gravitational), in units of ``m_t g x_s``.
 
     Gravitational energy is measured from heights 0, so differences are what
-    matter; :mod:`softlanding.simulate` reports energies relative to the
+    matter; :mod:`softlanding.simulator` reports energies relative to the
     configuration at impact (its kernel reads this quadratic form off here).
 
     Parameters
@@ -191,7 +191,7 @@ def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.nd
         and ``Wg``, the ground work ``Wg d^2`` done by a foot that dug to depth
         ``d`` (``Wg = f'(d) / 2`` for the affine ground law ``f``).
     """
-    r_m = check("r_m", r_m)
+    r_m = check("r_m", r_m, POSITIVE)  # the Robot holds the range; any mass ratio > 0 here
     if not ground.is_affine:
         raise ValueError(f"the {ground.name} ground is not affine: no mode matrices")
     parts = [np.array(m, dtype=float) for m in _affine_parts(ground)(r_m)]

@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .model import PAPER_ROBOT, Robot
-from .simulate import LandingResult
+from .simulator import LandingResult
 
 MODE_COLOURS = {"yielding": "#f4cccc", "static": "#d9ead3", "flight": "#cfe2f3"}
 
@@ -132,6 +132,8 @@ def plot_bang_bang(landing) -> plt.Figure:
             a3.plot(tt, uu, color="C2")
         a3.set_xlabel(r"time $\tau$ [$\sqrt{m_t/k_g}$]")
         for ax in (a1, a2, a3):
+            for t0, t1 in _boundary_spans(landing):
+                ax.axvspan(t0, t1, color="#fde0c5", lw=0, zorder=0)
             for ts in landing.switch_times:
                 ax.axvline(ts, color="0.3", ls="--", lw=0.8)
             ax.axvline(landing.T, color="0.5", ls="-.", lw=0.8)
@@ -145,10 +147,13 @@ def plot_bang_bang(landing) -> plt.Figure:
     axes[1, 0].legend(fontsize=8)
     from matplotlib.lines import Line2D
 
-    events = [Line2D([], [], color="0.3", ls="--", lw=0.8, label="switch of u"),
+    events: list[Any] = [Line2D([], [], color="0.3", ls="--", lw=0.8, label="switch of u"),
               Line2D([], [], color="0.5", ls="-.", lw=0.8, label="foot stops (T)")]
     if ncol == 2:
         events.append(Line2D([], [], color="0.5", ls=":", lw=1.0, label="body stops"))
+    if _boundary_spans(landing):
+        events.append(matplotlib.patches.Patch(color="#fde0c5",
+                                               label="boundary arc (stroke limit held)"))
     axes[2, ncol - 1].legend(handles=events, fontsize=8, loc="best")
     axes[0, 0].set_title("stance: until the foot stops", fontsize=9)
     if ncol == 2:
@@ -156,12 +161,23 @@ def plot_bang_bang(landing) -> plt.Figure:
                              fontsize=9)
     p = landing.robot
     sw = ", ".join(f"{ts:.4f}" for ts in landing.switch_times)
-    fig.suptitle(f"bang-bang landing, $v_0$={landing.impact.v0:g}, $r_m$={p.r_m:g}, "
+    kind = "bang-bang" if not _boundary_spans(landing) else "optimal"
+    fig.suptitle(f"{kind} landing, $v_0$={landing.impact.v0:g}, $r_m$={p.r_m:g}, "
                  f"$s$={p.s:g}, $u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, "
                  f"switch at {sw}, "
                  f"foot stops at {landing.T:.4f}", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+def _boundary_spans(landing) -> list[tuple[float, float]]:
+    """Time spans of the refined boundary arcs (a path constraint held)."""
+    r = landing.refined
+    if r is None:
+        return []
+    edges = np.r_[0.0, np.cumsum(r.durations)]
+    return [(float(edges[i]), float(edges[i + 1])) for i, k in enumerate(r.kinds)
+            if k == "boundary"]
 
 
 def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:

@@ -46,7 +46,7 @@ class Ground(Protocol):
     @property
     def is_affine(self) -> bool:
         """True if the yielding dynamics are affine in the state (exact matrix-exponential
-        path); otherwise the simulator integrates them (see :mod:`softlanding.simulate`)."""
+        path); otherwise the simulator integrates them (see :mod:`softlanding.simulator`)."""
 
     def to_dict(self) -> dict[str, Any]:
         """``{"model": name, **parameters}`` for JSON output."""

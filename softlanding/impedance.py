@@ -29,7 +29,7 @@ from .controllers import Impedance
 from .errors import ParameterError, check_count
 from .ground import LINEAR_GROUND, Ground
 from .model import PAPER_IMPEDANCE_ROBOT, Impact, Robot
-from .simulate import BatchResult, simulate, simulate_batch
+from .simulator import BatchResult, simulate, simulate_batch
 
 OBJECTIVES = ("depth", "cot", "cot-lossless")
 GAIN_RANGE = (0.0, 1.0)
@@ -62,7 +62,7 @@ class ImpedanceOptimum:
     value : float
         Objective at the optimum.
     depth, steps, u_peak, stroke_min, stroke_max, cot, cot_lossless
-        The optimal landing's figures (see :class:`~softlanding.simulate.LandingResult`).
+        The optimal landing's figures (see :class:`~softlanding.simulator.LandingResult`).
     on_stroke_boundary : bool
         The stroke margin at the optimum is below 1e-6 (the paper finds all depth
         optima there).

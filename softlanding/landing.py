@@ -39,12 +39,12 @@ from ocp.switching import RefinedSwitching, detect_arcs, refine_structure, refin
 
 from ._jsonutil import json_safe
 from ._progress import progress as show_progress
-from .controllers import ForceSchedule, Rigid
+from .controllers import FeedbackSchedule, ForceSchedule, Rigid
 from .dynamics import STATE_NAMES, stance_dynamics
 from .errors import InfeasibleLandingError, ParameterError, check_count
 from .ground import LINEAR_GROUND, Ground
 from .model import PAPER_ROBOT, Impact, Robot
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 T_MAX = 30.0
 MAX_NODES = 5000
@@ -254,27 +254,34 @@ class BangBangLanding:
         """``|replay depth - depth|`` (NaN without a replay)."""
         return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
 
-    def schedule(self) -> ForceSchedule:
-        """Open-loop force: the bang arcs, then ``u_b`` until the body stops, then its weight."""
+    def schedule(self) -> ForceSchedule | FeedbackSchedule:
+        """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,
+        then its weight.
+
+        A bang arc is a constant force; a boundary arc (a stroke limit held) is the state
+        feedback that holds it, so the schedule is then a :class:`FeedbackSchedule`.
+        """
         r_m = self.robot.r_m
         if self.refined is not None:
-            durs = [d for d in self.refined.durations if d > 1e-14]
-            vals = [v for v, d in zip(self.refined.values, self.refined.durations, strict=True)
-                    if d > 1e-14]
+            keep = [i for i, d in enumerate(self.refined.durations) if d > 1e-14]
+            durs = [float(self.refined.durations[i]) for i in keep]
+            rows = [_law_row(self.refined, i) for i in keep]
             xT = self.refined.xT
         else:
             assert self.transcribed is not None
             u = self.transcribed.u[:, 0]
             h = self.transcribed.T / self.transcribed.N
-            durs, vals = [h] * len(u), list(u)
+            durs, rows = [h] * len(u), [_const_row(v) for v in u]
             xT = self.transcribed.x[-1]
         stroke = xT[0] - xT[2]
-        vals = vals + [self.u_b]
+        rows.append(_const_row(self.u_b))
         if xT[1] < 0:
             decel = xT[1] ** 2 / (2 * stroke)
-            durs = durs + [-xT[1] / decel]
-        vals = vals + [r_m / (1 + r_m)]
-        return ForceSchedule.from_arcs(durs, vals)
+            durs.append(-xT[1] / decel)
+        rows.append(_const_row(r_m / (1 + r_m)))
+        if all(not any(r[:4]) for r in rows):
+            return ForceSchedule.from_arcs(durs, [r[4] for r in rows])
+        return FeedbackSchedule.from_arcs(durs, rows)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined arcs and the replay."""
@@ -293,6 +300,20 @@ class BangBangLanding:
                            "stroke_min": self.replay.stroke_min,
                            "stroke_max": self.replay.stroke_max}
         return json_safe(d)
+
+
+def _const_row(u: float) -> list[float]:
+    return [0.0, 0.0, 0.0, 0.0, float(u)]
+
+
+def _law_row(refined: RefinedSwitching, i: int) -> list[float]:
+    """Interval ``i``'s control as a row of ``u = K . [x, 1]``: its bang value, or the
+    boundary arc's law ``u = K x + k0``."""
+    law = refined.control_laws[i] if refined.control_laws else None
+    if law is None:
+        return _const_row(refined.values[i])
+    return [float(k) for k in np.asarray(law["gain"], float).reshape(-1)[:4]] + [
+        float(np.asarray(law["offset"], float).reshape(-1)[0])]
 
 
 def _validate(robot: Robot) -> float:
@@ -388,14 +409,15 @@ def _refined(sol: Solution, extra_arcs: int,
     """Detect the bang-bang structure and refine it (None when not bang-bang or failed)."""
     st = detect_arcs(sol)
     trimmed = st.without_trailing_constrained()
-    if trimmed is not st and trimmed.bang_bang:
+    if trimmed is not st and trimmed.refinable:
         notes.append(
             f"dropped the final {st.arcs[-1].duration:.4g}-long arc on which "
             f"{' and '.join(st.arcs[-1].active)} is active: the foot has already stopped "
             "and the force holds the crater's yield load, which is the body-arrest phase")
         st = trimmed
-    if not st.bang_bang:
-        notes.append(f"structure {st.kinds} is not bang-bang; not refined")
+    if not st.refinable:
+        notes.append(f"structure {st.kinds} has arcs that are neither bang nor on a "
+                     "constraint; not refined")
         return None, st
     try:
         return refine_switching(sol, st, extra_arcs=extra_arcs), st
@@ -431,9 +453,10 @@ def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, grou
                              impact.initial_state(robot), _ocp_params(robot, impact))
     except SolveError:
         return None
-    # the structure must still be the optimum's: arcs that collapsed or a path constraint
-    # violated between the samples send the solve back to the transcription
-    if min(r.durations) <= 1e-9 * r.T or r.path_violation() > 1e-9:
+    # the structure must still be the optimum's: an arc that collapsed sends the solve back
+    # to the transcription (path constraints are checked inside every arc by the re-solve,
+    # and exactly by the replay)
+    if min(r.durations) <= 1e-9 * r.T:
         return None
     return r
 
@@ -521,6 +544,10 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                        refine, "transcription")
     if replay:
         out.replay = simulate(robot, impact, out.schedule(), ground)
+        if out.path == "structure" and out.unverified_reasons():
+            # the neighbour's structure does not hold here: solve it properly
+            return solve_landing(impact, robot, ground, nodes=nodes, refine=refine,
+                                 warm_start=out.transcribed, replay=replay)
     return out
 
 

@@ -120,7 +120,7 @@ def stepped_intrusions(out: Path, files: list[str], st: Settings, cache: dict) -
     """[fig:multi_intrusion_regions] three stepped trajectories and step-count maps."""
     from .controllers import Impedance
     from .figures import plot_stepped_intrusion_figure
-    from .simulate import simulate
+    from .simulator import simulate
 
     runs = [simulate(PAPER_IMPEDANCE_ROBOT, Impact(-1.0), Impedance(0.2, kd))
             for kd in (0.4, 0.18, 0.0)]
@@ -262,7 +262,7 @@ def cost_of_transport(out: Path, files: list[str], st: Settings, progress: bool,
     from .controllers import Rigid
     from .figures import plot_cot_comparison
     from .impedance import optimize_impedance
-    from .simulate import simulate
+    from .simulator import simulate
 
     robot = PAPER_IMPEDANCE_ROBOT
     rows = []

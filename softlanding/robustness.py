@@ -40,7 +40,7 @@ from ._progress import progress as show_progress
 from .controllers import Controller, ForceSchedule, Impedance
 from .errors import ParameterError, check, check_count
 from .model import PAPER_ROBOT, Impact, Robot, Units
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 PARAMETERS = ("k_g", "r_m", "v0", "switch")
 CONTROLLERS = ("bang-bang", "impedance")
@@ -195,11 +195,9 @@ def robustness_study(impact: Impact | float = -3.0, robot: Robot = PAPER_ROBOT, 
                      grid: int = 101, progress: bool | None = False) -> xr.Dataset:
     """Depth penalty and stroke violations of the nominal controllers under model error.
 
-    Each nominal controller is replayed on the perturbed model and compared with
-    the controller of the same kind (and margin) designed for that model: the
-    *regret* ``depth_ratio = replayed depth / redesigned depth`` is what the
-    model error costs, apart from the change that any controller would see (a
-    softer ground or a faster impact sinks deeper whatever the control).
+    Each nominal controller is replayed on the perturbed model and compared with the
+    controller of the same kind (and margin) designed for that model: the *regret*
+    ``depth_ratio = replayed depth / redesigned depth`` is what the model error costs.
 
     Parameters
     ----------

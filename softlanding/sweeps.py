@@ -23,7 +23,7 @@ from .errors import ParameterError, check_count
 from .ground import LINEAR_GROUND, Ground
 from .impedance import MAX_GRID, optimize_impedance
 from .model import PAPER_IMPEDANCE_ROBOT, Impact, Robot
-from .simulate import BATCH_FIELDS, check_batch_size, simulate_batch
+from .simulator import BATCH_FIELDS, check_batch_size, simulate_batch
 
 CURVE_VARIABLES = ("feasible", "k_p", "k_d", "depth", "steps", "u_peak", "stroke_min",
                    "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "value")

@@ -14,7 +14,7 @@ from numpydoc.docscrape import ClassDoc, FunctionDoc
 MODULES = [
     "softlanding", "softlanding.model", "softlanding.controllers", "softlanding.ground",
     "softlanding.errors", "softlanding.dynamics", "softlanding.scaling",
-    "softlanding.simulate", "softlanding.impedance", "softlanding.sweeps",
+    "softlanding.simulator", "softlanding.impedance", "softlanding.sweeps",
     "softlanding.landing", "softlanding.comparison", "softlanding.robustness",
     "softlanding.reproduce", "softlanding.summary", "softlanding.demo", "ocp.trajectory",
 ]

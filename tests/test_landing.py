@@ -13,7 +13,7 @@ from softlanding.landing import (
     solve_landing,
     sweep_landing,
 )
-from softlanding.simulate import stroke
+from softlanding.simulator import stroke
 
 
 def rigid(v0):
@@ -141,3 +141,43 @@ def test_an_unverified_result_is_not_a_plain_success(cli, monkeypatch):
     assert code == 0 and out.splitlines()[0].startswith("verified") and "NO:" in out.splitlines()[0]
     code, out, _ = cli("solve-sweep", "--n", "2", "--v0-min", "-2", "--json")
     assert code == 1 and json.loads(out)["verified"] is False
+
+
+@pytest.mark.parametrize("s,v0", [(0.5, -3.0), (1.0, -10.0), (2.0, -1.0), (5.0, -10.0)])
+def test_short_strokes_refine_with_boundary_arcs_and_replay_exactly(s, v0):
+    """At short strokes the stroke limit is held on an interval: the refinement has a
+    boundary arc, and the exact simulator replays its state-feedback law to 1e-9."""
+    r = solve_landing(v0, Robot(r_m=5.0, s=s, u_max=8.2))
+    assert "boundary" in r.arcs
+    assert not r.unverified_reasons(), r.unverified_reasons()
+    assert r.replay.rest_proven and r.replay.feasible
+    assert r.replay_difference <= 1e-9
+    assert r.depth <= r.depth_transcribed + 1e-6  # the transcription relaxes between nodes
+
+
+def test_feedback_schedule_generalises_force_schedule():
+    from softlanding import FeedbackSchedule, ForceSchedule, Impact, simulate
+
+    robot = Robot(5.0, 20.0)
+    const = simulate(robot, Impact(-3.0), ForceSchedule((0.1, 0.3), (8.0, -8.0, 1.0)))
+    rows = [[0, 0, 0, 0, 8.0], [0, 0, 0, 0, -8.0], [0, 0, 0, 0, 1.0]]
+    same = simulate(robot, Impact(-3.0), FeedbackSchedule((0.1, 0.3), rows))
+    assert (same.depth, same.T, same.stroke_min) == (const.depth, const.T, const.stroke_min)
+    # a state-feedback piece (a spring on the leg) against an independent integration
+    from scipy.integrate import solve_ivp
+
+    k = 0.4
+    law = FeedbackSchedule((), [[-k, 0, k, 0, k * 10.0]])  # u = -k (x_b - x_f - 10)
+    r = simulate(robot, Impact(-1.0), law)
+
+    def rhs(t, x):
+        u = -k * (x[0] - x[2] - 10.0)
+        return [x[1], -1 + 6 / 5 * u, x[3], -1 - 6 * (x[2] + u)]
+
+    stop = lambda t, x: x[3]  # noqa: E731
+    stop.terminal, stop.direction = True, 1
+    ref = solve_ivp(rhs, (0, 20), [10.0, -1.0, 0.0, -1.0], events=stop, rtol=1e-12,
+                    atol=1e-12, method="DOP853")
+    assert r.t_first_stop == pytest.approx(ref.t_events[0][0], abs=1e-8)
+    assert -r.trajectory(t_end=r.t_first_stop, n=3).state("x_f")[-1] == pytest.approx(
+        -ref.y_events[0][0][2], abs=1e-8)

@@ -18,7 +18,7 @@ from softlanding import (
     simulate,
     simulate_batch,
 )
-from softlanding.simulate import stroke
+from softlanding.simulator import stroke
 
 R = Robot(r_m=5, s=20)  # the paper's robot without force limit
 
@@ -116,8 +116,9 @@ def test_open_loop_zero_force_is_a_lone_foot_and_a_falling_body():
     r = simulate(robot(r_m=r_m), Impact(v0), ForceSchedule((), (0.0,)))
     mf = 1 / (1 + r_m)
     assert r.depth == pytest.approx(mf + math.sqrt(mf**2 + v0**2 * mf), abs=1e-12)
-    assert r.rest_proven
-    assert r.stroke_min == -math.inf  # the body falls through the foot
+    assert not r.rest_proven  # the foot rests, the body does not: it falls through the foot
+    assert "passes through" in r.status
+    assert r.stroke_min == -math.inf
     assert not r.feasible
 
 
@@ -138,8 +139,8 @@ def test_open_loop_switch_matches_matrix_exponential_composition():
 
 
 def test_rest_not_proven_is_reported():
-    # no spring: the body sinks onto the foot, which creeps toward depth 1 forever
-    r = simulate(R, Impact(-1.0), Impedance(0.0, 0.07), t_max=200.0)
+    # no damping: the foot hops on and on; rest is not proven within the horizon
+    r = simulate(R, Impact(-5.0), Impedance(0.5, 0.0), t_max=200.0)
     assert not r.rest_proven
     assert "horizon" in r.status
     assert not r.feasible
@@ -178,3 +179,14 @@ def test_batch_broadcasts_and_validates():
 def test_policy_bad_input(bad):
     with pytest.raises(ParameterError):
         bad()
+
+
+@pytest.mark.parametrize("call,name", [
+    (lambda: simulate(R, Impact(-1.0), Impedance(0.2, 0.1, l0=1e9)), "l0"),
+    (lambda: simulate(R, Impact(-1.0), Impedance(0.2, 0.1), t_max=math.nan), "t_max"),
+    (lambda: simulate(R, Impact(-1.0), Impedance(0.2, 0.1), max_segments=-5), "max_segments"),
+    (lambda: simulate_batch(R, [-1.0, -2.0], [0.1, 0.2, 0.3], 0.1), "k_p"),
+])
+def test_api_misuse_names_the_argument(call, name):
+    with pytest.raises(ParameterError, match=name):
+        call()

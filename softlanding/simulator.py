@@ -28,12 +28,13 @@ from ocp.trajectory import Trajectory
 
 from . import _kernel as K
 from ._jsonutil import json_safe
-from .controllers import Controller, ForceSchedule, Impedance, Rigid
+from .controllers import Controller, ForceSchedule, Impedance, Rigid, impedance_gains
 from .dynamics import STATE_NAMES, mode_matrices
-from .errors import ParameterError, RestNotProvenError, check
+from .errors import ParameterError, RestNotProvenError, check, check_count
 from .ground import LINEAR_GROUND, Ground
 from .model import Impact, Robot
 
+_O_DLIM, _O_FOOT_REST = K.O_DLIM, K.O_FOOT_REST
 MODE_NAMES = ("yielding", "static", "flight")
 STATUS_NAMES = K.STATUS_NAMES
 DEFAULT_T_MAX = 1.0e4
@@ -128,6 +129,13 @@ class LandingResult:
         Hybrid segments simulated.
     robot, impact, controller, ground
         What was simulated.
+    depth_limit : float
+        The depth as t -> inf: the rest depth when the foot rests, the limit a
+        never-resting creep approaches (then ``depth`` is that limit too, a supremum the
+        foot never reaches), NaN when unknown.
+    foot_rest : bool
+        The foot's rest is proven, whatever the body does (a body that passes through
+        its foot is not a rest of the robot: ``status`` says so).
     """
 
     depth: float
@@ -145,6 +153,8 @@ class LandingResult:
     impact: Impact
     controller: Controller
     ground: Ground = LINEAR_GROUND
+    depth_limit: float = math.nan
+    foot_rest: bool = False
     _segments: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
@@ -179,7 +189,8 @@ class LandingResult:
         """
         seg = self._segments
         ts = seg["t"]
-        nseg = len(ts) - 1
+        if len(ts) < 2:
+            raise RestNotProvenError(f"nothing was simulated ({self.status})")
         if not self.rest_proven:
             if t_end is not None and t_end > ts[-1]:
                 raise RestNotProvenError(
@@ -189,15 +200,8 @@ class LandingResult:
         elif t_end is None:
             t_end = max(1.3 * self.T, self.T + 2.0, ts[-1])
         grid = np.union1d(np.linspace(0.0, t_end, n), ts[(ts >= 0) & (ts <= t_end)])
-        x = np.empty((len(grid), 4))
-        u = np.empty(len(grid))
-        mode = np.empty(len(grid), dtype=int)
-        idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
-        for i, (tt, k) in enumerate(zip(grid, idx, strict=True)):
-            zk = K._propagate(seg["A"][k], seg["z"][k], tt - ts[k])
-            x[i] = zk[:4]
-            u[i] = seg["cu"][k] @ zk
-            mode[i] = seg["mode"][k]
+        z, u, mode = K.sample_segments(seg, grid)
+        x = z[:, :4]
         return Trajectory(grid, x, u[:, None], STATE_NAMES, ("u",),
                           mode=np.array(MODE_NAMES)[mode])
 
@@ -214,7 +218,8 @@ class LandingResult:
             "u_peak": self.u_peak, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,
-            "n_segments": self.n_segments, "energy": self.energy.to_dict(),
+            "n_segments": self.n_segments, "depth_limit": self.depth_limit,
+            "foot_rest": self.foot_rest, "energy": self.energy.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
             "ground": self.ground.to_dict(), "controller": self.controller.to_dict(),
         }
@@ -269,7 +274,9 @@ def simulate(
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
     out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
-                                  check("t_max", t_max), int(max_segments), bool(energy))
+                                  check("t_max", t_max),
+                                  check_count("max_segments", max_segments, 1, 10**6),
+                                  bool(energy))
     return LandingResult(
         depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
         u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),
@@ -278,6 +285,9 @@ def simulate(
         energy=EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
                             float(out[K.O_EACT])),
         n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
+        # (a kernel without these columns, e.g. the benchmark's frozen first one: unknown)
+        depth_limit=float(out[_O_DLIM]) if out.size > _O_DLIM else math.nan,
+        foot_rest=bool(out[_O_FOOT_REST]) if out.size > _O_FOOT_REST else False,
         ground=ground, _segments=segments)
 
 
@@ -321,6 +331,7 @@ _FIELD_COL = {
     "depth": K.O_DEPTH, "steps": K.O_STEPS, "t_first_stop": K.O_TSTOP, "T": K.O_T,
     "u_peak": K.O_UPEAK, "stroke_min": K.O_SMIN, "stroke_max": K.O_SMAX, "feasible": K.O_FEAS,
     "status": K.O_STATUS, "E0": K.O_E0, "ET": K.O_ET, "ground": K.O_EGND, "actuator": K.O_EACT,
+    "depth_limit": K.O_DLIM, "foot_rest": K.O_FOOT_REST,
 }
 BATCH_FIELDS = tuple(_FIELD_COL)
 
@@ -379,6 +390,16 @@ class BatchResult:
         return (self.data["status"] == K.REST_PROVEN) & (self.stroke_margin >= 0.0)
 
 
+def _broadcast(v0, k_p, k_d) -> tuple[np.ndarray, ...]:
+    try:
+        return tuple(np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d))))
+    except ValueError:
+        shapes = ", ".join(f"{n} {np.shape(a)}" for n, a in (("v0", v0), ("k_p", k_p),
+                                                              ("k_d", k_d)))
+        raise ParameterError("k_p", f"v0, k_p and k_d must broadcast together: {shapes}") \
+            from None
+
+
 def simulate_batch(
     robot: Robot,
     v0,
@@ -418,7 +439,7 @@ def simulate_batch(
     -------
     BatchResult
     """
-    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d)))
+    arrays = _broadcast(v0, k_p, k_d)
     shape = arrays[0].shape
     v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))
                  for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
@@ -427,9 +448,7 @@ def simulate_batch(
     mats = mode_matrices(robot.r_m, ground)
     l0 = robot.rest_length
     Kf = np.empty((n, 3, 5))
-    Kf[:, :, 0], Kf[:, :, 1] = -kp[:, None], -kd[:, None]
-    Kf[:, :, 2], Kf[:, :, 3] = kp[:, None], kd[:, None]
-    Kf[:, :, 4] = (kp * l0)[:, None]
+    Kf[:] = impedance_gains(kp, kd, np.full(n, l0)).T[:, None, :]  # the one impedance law
     x0 = np.stack([np.full(n, l0), v, np.zeros(n), v], axis=1)
     um = np.full(n, math.inf if robot.u_max is None else robot.u_max)
     ss = np.full(n, robot.s)
@@ -446,8 +465,10 @@ def simulate_batch(
             bar.update(b - a)
     data = {}
     for name, col in _FIELD_COL.items():
+        if col >= out.shape[1]:  # a kernel without this column (the benchmark's first one)
+            continue
         v_ = out[:, col].reshape(shape)
-        if name == "feasible":
+        if name in ("feasible", "foot_rest"):
             v_ = v_.astype(bool)
         elif name in ("steps", "status"):
             v_ = v_.astype(np.int64)

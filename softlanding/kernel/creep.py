@@ -1,0 +1,184 @@
+"""Proof that a yielding foot creeps toward a limit depth forever (it never stops).
+
+When neither the dynamics nor the force depend on the body height ``x_b`` (no
+stiffness: ``k_p = 0``), the yielding mode restricted to ``y = (v_b, x_f, v_f)``
+is an autonomous affine system ``y' = M y + b``. If every eigenvalue of ``M``
+has a negative real part, ``y`` tends to the equilibrium ``y*`` (with
+``v_f* = 0``: ``x_f' = v_f`` is one of the rows) and every linear functional is
+
+    g(t) = g* + sum_i a_i exp(lambda_i t),   a_i = (c . V_i) (V^-1 (y - y*))_i.
+
+The proof is the closed form read with a margin:
+
+* the foot never stops: the slowest eigenvalue ``lambda_1`` is real, strictly
+  slower than the others, ``a_1 < 0`` for ``v_f`` and ``|a_1| > sum_{i>1} |a_i|``;
+  then ``v_f(t) = exp(lambda_1 t) (a_1 + sum_{i>1} a_i exp((lambda_i - lambda_1) t)) < 0``
+  for all ``t >= 0``, so the depth rises monotonically to ``L = -x_f*`` and never
+  reaches it;
+* no other event (saturation) can fire: ``g* + sum_i |a_i| < 0``;
+* the stroke rate ``v_b - v_f`` keeps one sign forever (``|w*| > sum_i |a_i|``), so
+  the stroke is monotone and unbounded (``v_b* != 0``: the body falls at a terminal
+  speed): its future range is ``(-inf, now]`` or ``[now, inf)``;
+* the force's future range ``[u* - sum |b_i|, u* + sum |b_i|]`` lies inside the hull
+  of its past extrema and its limit ``u*``, so the force extrema are exact.
+
+Every inequality must hold with a relative margin well above the rounding of
+the eigen-decomposition (``1e-12`` times its condition number); otherwise the
+march goes on and the proof is tried again one step later (the transients decay).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+MARGIN = 1e-12  # relative margin per unit condition number of the eigenvectors
+
+
+@njit(cache=True)
+def creep_setup(A, cu, C, ne, data):
+    """Eigen-data of the ``x_b``-free yielding subsystem; returns False if not applicable.
+
+    ``data`` (complex, 3 x 8) receives: column 0 the eigenvalues (slowest first),
+    columns 1-3 the eigenvectors, columns 4-6 the inverse's rows (as columns of
+    rows), column 7 the equilibrium ``y*`` and, in ``data[0, 7].imag``, the
+    condition number of the eigenvectors.
+    """
+    for i in range(1, 4):
+        if A[i, 0] != 0.0:
+            return False
+    if A[1, 1] == 0.0 and A[1, 2] == 0.0 and A[1, 3] == 0.0:
+        return False  # the body's velocity is not restored: eigenvalue 0
+    if A[2, 1] != 0.0 or A[2, 2] != 0.0 or A[2, 3] != 1.0 or A[2, 4] != 0.0:
+        return False
+    if cu[0] != 0.0:
+        return False
+    for k in range(ne):
+        if C[k, 0] != 0.0:
+            return False
+    M = np.empty((3, 3), dtype=np.complex128)
+    for i in range(3):
+        for j in range(3):
+            M[i, j] = A[1 + i, 1 + j]
+    for i in range(3):
+        for j in range(3):
+            if not np.isfinite(A[1 + i, 1 + j]):
+                return False
+    lam, V = np.linalg.eig(M)
+    order = np.argsort(-lam.real)
+    for i in range(3):
+        if not lam[i].real < 0.0:
+            return False
+    lam = lam[order]
+    V = V[:, order]
+    det = np.linalg.det(V)
+    if not abs(det) > 1e-8:
+        return False
+    Vi = np.linalg.inv(V)
+    kappa = np.abs(V).sum(axis=1).max() * np.abs(Vi).sum(axis=1).max()
+    # equilibrium: v_f* = 0 exactly (x_f' = v_f); then v_b*, x_f* from the other two rows
+    # M[0,0] vb + M[0,1] xf = -b0 ; M[2,0] vb + M[2,1] xf = -b2
+    a00, a01, a20, a21 = A[1, 1], A[1, 2], A[3, 1], A[3, 2]
+    den = a00 * a21 - a01 * a20
+    if den == 0.0 or not np.isfinite(den):
+        return False
+    b0, b2 = -A[1, 4], -A[3, 4]
+    vb_eq = (b0 * a21 - a01 * b2) / den
+    xf_eq = (a00 * b2 - b0 * a20) / den
+    for i in range(3):
+        data[i, 0] = lam[i]
+        for j in range(3):
+            data[i, 1 + j] = V[i, j]
+            data[i, 4 + j] = Vi[i, j]
+    data[0, 7] = complex(vb_eq, kappa)
+    data[1, 7] = xf_eq
+    data[2, 7] = 0.0
+    return True
+
+
+@njit(cache=True)
+def _coeffs(data, z):
+    """Modal coordinates ``V^-1 (y - y*)`` of the current state."""
+    w0 = z[1] - data[0, 7].real
+    w1 = z[2] - data[1, 7].real
+    w2 = z[3]
+    alpha = np.empty(3, dtype=np.complex128)
+    for i in range(3):
+        alpha[i] = data[i, 4] * w0 + data[i, 5] * w1 + data[i, 6] * w2
+    return alpha
+
+
+@njit(cache=True)
+def _terms(data, alpha, c1, c2, c3):
+    """Modal amplitudes ``a_i`` of the functional ``c1 v_b + c2 x_f + c3 v_f``."""
+    a = np.empty(3, dtype=np.complex128)
+    for i in range(3):
+        a[i] = (c1 * data[0, 1 + i] + c2 * data[1, 1 + i] + c3 * data[2, 1 + i]) * alpha[i]
+    return a
+
+
+@njit(cache=True)
+def _equilibrium_value(data, c):
+    return c[1] * data[0, 7].real + c[2] * data[1, 7].real + c[4]
+
+
+@njit(cache=True)
+def creep_proof(data, z, C, ne, cu, ext_u, smin_smax):
+    """True if, from ``z``, the foot creeps forever (see the module docstring).
+
+    ``ext_u`` = (umin, umax) so far; ``smin_smax`` receives the stroke's future
+    range folded in (``-inf`` or ``inf`` on the side it runs away to) and the
+    force's limit, as ``[smin_new, smax_new, u_limit]`` (NaN if not proven).
+    """
+    kappa = data[0, 7].imag
+    tol = MARGIN * max(kappa, 1.0)
+    lam1 = data[0, 0]
+    # a gap to the other eigenvalues makes lambda_1 real (its conjugate would share it)
+    gap = lam1.real - max(data[1, 0].real, data[2, 0].real)
+    if not (gap > 1e-9 * abs(lam1.real) and abs(lam1.imag) <= 1e-12 * abs(lam1.real)):
+        return False
+    alpha = _coeffs(data, z)
+    # the foot never stops: v_f = sum a_i e^{lambda_i t}, dominated by a real a_1 < 0
+    a = _terms(data, alpha, 0.0, 0.0, 1.0)
+    rest = abs(a[1]) + abs(a[2])
+    if not (a[0].real < 0.0 and abs(a[0].imag) <= tol * abs(a[0].real)
+            and -a[0].real > rest + tol * (abs(a[0]) + rest)):
+        return False
+    # no other event can fire
+    for k in range(1, ne):
+        ck = C[k]
+        a = _terms(data, alpha, ck[1], ck[2], ck[3])
+        bound = abs(a[0]) + abs(a[1]) + abs(a[2])
+        gs = _equilibrium_value(data, ck)
+        if not gs + bound < -tol * (abs(gs) + bound):
+            return False
+    # the stroke rate keeps its sign: the stroke is monotone and unbounded
+    a = _terms(data, alpha, 1.0, 0.0, -1.0)
+    bound = abs(a[0]) + abs(a[1]) + abs(a[2])
+    ws = data[0, 7].real
+    if not abs(ws) > bound + tol * (abs(ws) + bound):
+        return False
+    # the force: inside the hull of its past extrema and its limit, or on one side of
+    # its limit (dominant real term) and inside the hull on the other
+    a = _terms(data, alpha, cu[1], cu[2], cu[3])
+    bound = (abs(a[0]) + abs(a[1]) + abs(a[2])) * (1.0 + tol)
+    us = _equilibrium_value(data, cu)
+    lo, hi = min(ext_u[0], us), max(ext_u[1], us)
+    if not (us - bound >= lo and us + bound <= hi):
+        rest = abs(a[1]) + abs(a[2])
+        if not (abs(a[0].real) > rest + tol * (abs(a[0]) + rest)):
+            return False
+        if a[0].real > 0.0 and not us + bound <= ext_u[1]:
+            return False
+        if a[0].real < 0.0 and not us - bound >= ext_u[0]:
+            return False
+    smin_smax[0] = -np.inf if ws < 0.0 else np.nan
+    smin_smax[1] = np.inf if ws > 0.0 else np.nan
+    smin_smax[2] = us
+    return True
+
+
+@njit(cache=True)
+def creep_limit_depth(data):
+    """The limit depth ``L = -x_f*`` of a proven creep."""
+    return -data[1, 7].real
