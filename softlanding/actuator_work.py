@@ -118,7 +118,7 @@ def result_work(res, t_end: float) -> Work:
     Parameters
     ----------
     res : LandingResult
-        A simulation (:func:`softlanding.simulate.simulate`).
+        A simulation (:func:`softlanding.simulator.simulate`).
     t_end : float
         Where to stop.
     """

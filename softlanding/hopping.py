@@ -42,7 +42,7 @@ from .hopping_problem import START_PARAMETERS, hop_transcription
 from .landing import _ocp_params, _validate
 from .model import PAPER_ROBOT, Impact, Robot
 from .phase_solve import transcribed_solve
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 SLACK_NOTE = ("the transcription meets its power slack p >= u (v_b - v_f) at its nodes and "
               "RK4 steps only (p is piecewise constant), so its own energy figure is "

@@ -39,7 +39,7 @@ from .landing import BangBangLanding, _ocp_params, _validate, solve_landing
 from .model import PAPER_ROBOT, Impact, Robot
 from .phase_schedule import replay_controller
 from .phase_solve import phase_guess, refined_phases, structure_resolve, transcribed_solve
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 
 @dataclass
@@ -439,7 +439,7 @@ def _two_step_guesses(robot: Robot, impact: Impact, ground: Ground,
     """The collapsed start and the shallowest physical two-step impedance landing within
     the force limit (yielding and static modes only), cut into the four phases."""
     from .controllers import Impedance
-    from .simulate import simulate_batch
+    from .simulator import simulate_batch
 
     out = [("collapsed", _guess(robot, impact, ground, paper, 2))]
     g = np.linspace(0.0, 1.0, 41)

@@ -34,7 +34,7 @@ from .leg_extension_problem import MODES, leg_extension_transcription
 from .model import PAPER_ROBOT, Impact, Robot
 from .phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
 from .phase_solve import phase_guess, refined_phases, structure_resolve, transcribed_solve
-from .simulate import LandingResult, simulate
+from .simulator import LandingResult, simulate
 
 
 @dataclass

@@ -5,7 +5,7 @@ x_f, v_f, 1]``: a bang arc is the constant ``u = value``; a boundary arc is the
 state feedback ``u = K x + k0`` that holds its constraint (read off
 :attr:`ocp.switching.RefinedSwitching.control_laws`). The whole schedule is
 therefore a :class:`~softlanding.controllers.FeedbackSchedule` (piecewise-affine
-in time), replayed exactly by :func:`softlanding.simulate.simulate`. Where every
+in time), replayed exactly by :func:`softlanding.simulator.simulate`. Where every
 feedback law only reads states that its mode keeps constant (the crater-capacity
 arc of a static phase reads the pinned foot's ``x_f``), the law *is* a constant
 force and a :class:`~softlanding.controllers.ForceSchedule` replays it exactly.
@@ -22,6 +22,9 @@ from ocp.phase_refinement import RefinedPhases
 
 from . import controllers as _controllers
 from .controllers import ForceSchedule
+
+TAIL_DAMPING = 1.0
+"""Damping on the body's velocity added to the force held after the last phase."""
 
 TINY = 1e-10
 """Intervals shorter than this (relative to the horizon) are left out (touch points)."""
@@ -117,8 +120,9 @@ def replay_controller(refined: RefinedPhases, tail: float, first: int = 0) -> tu
     Returns
     -------
     controller, str
-        A ForceSchedule when every law is a constant along its arc, else a
-        FeedbackSchedule; and which one (with why).
+        A FeedbackSchedule (the laws, then ``tail`` with a damper on the body's
+        velocity, :data:`TAIL_DAMPING`); without FeedbackSchedule in this version, a
+        ForceSchedule when every law is a constant along its arc. And which one.
 
     Raises
     ------
@@ -127,15 +131,26 @@ def replay_controller(refined: RefinedPhases, tail: float, first: int = 0) -> tu
     """
     laws = arc_laws(refined, first)
     durs = [a.duration for a in laws]
-    if all(a.constant is not None for a in laws):
-        vals = [float(a.constant) for a in laws] + [tail]  # type: ignore[arg-type]
-        return ForceSchedule.from_arcs(durs, vals), "ForceSchedule (every law constant on its arc)"
     if not feedback_available():
+        if all(a.constant is not None for a in laws):
+            vals = [float(a.constant) for a in laws] + [tail]  # type: ignore[arg-type]
+            return (ForceSchedule.from_arcs(durs, vals),
+                    "ForceSchedule (every law constant on its arc)")
         raise NotImplementedError("a boundary arc with state feedback needs "
                                   "softlanding.controllers.FeedbackSchedule (not in this version)")
-    gains = [a.gain for a in laws] + [np.r_[0.0, 0.0, 0.0, 0.0, tail]]
+    # after the last phase: the tail force plus a damper on the body's velocity, so a
+    # rounding-level residual velocity of a body arrested at the stroke limit dies out
+    # instead of carrying it through the limit
+    # a law constant along its arc is replayed as that constant: the crater-capacity law
+    # u = -x_f - 1/(1+r_m) is neutral for a foot that still creeps by a rounding error
+    # when the simulator's foot stop falls just after the switch (it would never stop)
+    gains = [a.gain if a.constant is None else np.r_[0.0, 0.0, 0.0, 0.0, a.constant]
+             for a in laws] + [np.r_[0.0, -TAIL_DAMPING, 0.0, 0.0, tail]]
     fs = _controllers.FeedbackSchedule  # type: ignore[attr-defined]
-    return fs(tuple(np.cumsum(durs)), tuple(tuple(g) for g in gains)), "FeedbackSchedule"
+    kinds = "constant forces" if all(a.constant is not None for a in laws) else \
+        "constant forces and state feedback"
+    return (fs(tuple(np.cumsum(durs)), tuple(tuple(g) for g in gains)),
+            f"FeedbackSchedule ({kinds}; then the tail force with a damper)")
 
 
 def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
