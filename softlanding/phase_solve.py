@@ -192,7 +192,11 @@ def repaired_structures(sol: Solution, structures: list[ArcStructure]
                     base = loose
                     labels.append(f"phase {ph.problem.name!r} read with a looser tolerance")
             if k == 1 and touches and ph.problem.nu == 1:
-                base = _by_sign(loc)
+                signed = _by_sign(loc)
+                if len(signed.intervals) > 4:  # not a clean bang-bang phase: no repair
+                    sts.append(st)
+                    continue
+                base = signed
                 labels.append(f"phase {ph.problem.name!r} as bang arcs by the control's sign")
             if touches and base.refinable and (k == 1 or STROKE not in held):
                 base = _split_at(base, t_touch, touch)
