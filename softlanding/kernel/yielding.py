@@ -368,3 +368,17 @@ def advance(sysd, y, span, wsn):
             break
         h = hs * (MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err**ERR_EXP))
         cells[H_LAST] = h
+
+
+@njit(cache=True)
+def fixed_steps(sysd, y, span, n, wsn):
+    """``n`` equal DOP853 steps over ``span`` (no error control): the method's order shows in
+    the error's decrease with ``n`` (used by the tests and the benchmark)."""
+    K, _, _, ynew, Yt, _, buf, _ = wsn
+    A, cu, G, fp, _ = sysd
+    h = span / n
+    for _ in range(n):
+        yield_rhs(A, cu, G, fp, buf, y, K, 0)
+        dop_step(A, cu, G, fp, buf, y, h, K, Yt, ynew)
+        for i in range(NY):
+            y[i] = ynew[i]
