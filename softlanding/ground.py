@@ -336,7 +336,7 @@ class CustomGround:
             return f
         slope = _mass_slope(self.mass)(depth)
         if isinstance(depth, numbers.Real) and isinstance(v_f, numbers.Real):
-            return float(f) + float(slope) * v_f * v_f
+            return float(f) + float(slope) * float(v_f) ** 2
         return f + slope * v_f**2
 
     def added_mass(self, depth: Any) -> Any:

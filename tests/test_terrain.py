@@ -3,7 +3,6 @@ against an independent solve_ivp, its convergence, the energy ledger, user laws.
 
 import math
 
-import casadi as ca
 import numpy as np
 import pytest
 from ivp_terrain import landing_ivp
@@ -136,7 +135,7 @@ def test_power_law_rigid_leg_matches_energy_balance():
 
     for n, v0 in ((1.5, -4.0), (0.7, -2.0), (2.0, -8.0)):
         r = simulate(ROBOT, Impact(v0), Rigid(), power_law_ground(n))
-        d = brentq(lambda x: x ** (n + 1) / (n + 1) - x - v0 * v0 / 2, 1e-9, 100.0,
+        d = brentq(lambda x, n=n, v0=v0: x ** (n + 1) / (n + 1) - x - v0 * v0 / 2, 1e-9, 100.0,
                    xtol=1e-15)
         assert abs(r.depth - d) < 1e-9
 
