@@ -30,10 +30,11 @@ out = np.zeros((n, K.N_OUT))
 @njit(parallel=True, cache=True)
 def batch_prange(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps, out):
     e = np.zeros(0)
+    eK = np.zeros((0, 5))
     rec = (np.zeros(0), np.zeros((0, 5, 5)), np.zeros((0, 5)), np.zeros((0, 5)),
            np.zeros(0, dtype=np.int64))
     for i in prange(x0s.shape[0]):
-        simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], e, e), x0s[i],
+        simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], e, eK), x0s[i],
                      (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec)
 
 def run():

@@ -5,20 +5,20 @@ import time
 
 import numpy as np
 
-from softlanding import simulate_batch
+from softlanding import Robot, simulate_batch
 
 
 def rss() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-simulate_batch([0.2], [0.2], [-1.0])  # JIT load
+simulate_batch(Robot(5, 20), [-1.0], [0.2], [0.2])  # JIT load
 rss0 = rss()
 g = np.round(np.linspace(0, 1, 101), 12)
 v = np.round(np.linspace(-10, 0, 21), 12)
 KP, KD, V = np.meshgrid(g, g, v, indexing="ij")
 c, w = time.process_time(), time.perf_counter()
-simulate_batch(KP, KD, V, progress=False)
+simulate_batch(Robot(5, 20), V, KP, KD, progress=False)
 c, w = time.process_time() - c, time.perf_counter() - w
 print(f"  fresh process, current kernel only: grid cpu {c:.2f} s, wall {w:.2f} s; peak RSS "
       f"{rss():.0f} MiB (after imports and JIT load {rss0:.0f} MiB)")

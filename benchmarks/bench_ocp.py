@@ -1,23 +1,31 @@
-"""The soft-landing OCP with this toolkit and with rockit, in one run.
+"""The soft-landing OCP with this toolkit and with rockit, in one interleaved run.
 
 Run:  pip install -e ".[bench]" && python benchmarks/bench_ocp.py [--n 20]
 
 Same problem (the paper's, with the body-arrest conditions multiplied by the
 final stroke as in softlanding.landing), same N = 100 multiple-shooting
-intervals with 4 RK4 steps each, same Ipopt options, same initial guess (the
-rigid-leg landing) at every v0, for ``--n`` values of v0 in [-10, -0.5]
-(r_m = 5, s = 20, u_max = 8.2). Prints for each tool: first solve (build
-included), median re-solve at a new v0, and the depth error against the
-refined, exact depth (checked against the exact simulator replay). rockit is
-timed two ways, its plain ``Ocp.solve()`` with ``set_value`` and its
-documented fast path ``Ocp.to_function``; the ratios use rockit's faster one.
-Goals (issue 3): median re-solve >= 5x faster than rockit; first solve >= 3x;
-refined depth error <= 1e-9.
+intervals with 4 RK4 steps each, same Ipopt options, for ``--n`` values of v0
+in [-10, -0.5] (r_m = 5, s = 20, u_max = 8.2), solved in order (continuation).
+At every v0 the contenders run one after the other, in an order that alternates
+from one v0 to the next (the machine is shared: interleaving keeps load drift
+out of the ratios), each timed in CPU and wall time:
+
+* rockit ``Ocp.to_function`` (its documented fast path), warm from the previous v0;
+* this toolkit's transcription, warm (primal-dual) from the previous v0;
+* this toolkit's structure re-solve: the previous refined arc structure re-solved
+  for the new v0 (Newton fast path, no transcription), exact arcs;
+* this toolkit end to end: ``solve_landing`` in a warm sweep (structure re-solve or
+  transcription + refinement, then the exact-simulator replay).
+
+Depth errors are against the refined depth checked by the exact simulator replay.
+Goals (speed issue): end-to-end <= 10 ms per v0; exact re-solve >= 50x faster than
+rockit's warm ``to_function`` (which only reaches its grid error).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import time
 
@@ -72,115 +80,93 @@ def guess_arrays(v0: float, N: int):
     return T, X, U, w
 
 
+def timed(fn):
+    c, w = time.process_time(), time.perf_counter()
+    out = fn()
+    return out, time.process_time() - c, time.perf_counter() - w
+
+
+def rockit_function(N: int, v0: float, guess):
+    ocp, X, u, P = rockit_problem(N)
+    for p_, val in zip(P, (5.0, 20.0, v0, 8.2), strict=True):
+        ocp.set_value(p_, val)
+    primal = ([ocp.value(ocp.T)] + [ocp.sample(x, grid="control")[1] for x in X]
+              + [ocp.sample(u, grid="control-")[1]])
+    fn = ocp.to_function("landing", [ocp.value(p_) for p_ in P] + primal, primal)
+    T0, Xg, Ug, _ = guess
+    return fn, fn(5.0, 20.0, v0, 8.2, T0, *[Xg[:, k] for k in range(4)], Ug)
+
+
 def main() -> None:
+    from ocp import MultipleShooting
+    from ocp.switching import refine_structure
+    from softlanding import PAPER_ROBOT, Impact
+    from softlanding.landing import PARAMETERS, build_landing_problem, solve_landing
+
     ap = argparse.ArgumentParser(description="soft-landing OCP: this toolkit vs rockit")
     ap.add_argument("--n", type=int, default=20, help="number of v0 values (default 20)")
     ap.add_argument("--nodes", type=int, default=100)
     a = ap.parse_args()
-    N = a.nodes
-    v0s = np.linspace(-0.5, -10.0, a.n)
-    guesses = {v: guess_arrays(v, N) for v in v0s}  # same guess for both tools, untimed
+    N, v0s = a.nodes, np.linspace(-0.5, -10.0, a.n)
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    guesses = {v: guess_arrays(v, N) for v in v0s}  # same first guess for both, untimed
+    par = dict(zip(PARAMETERS, (PAPER_ROBOT.r_m, PAPER_ROBOT.s, 0.0, PAPER_ROBOT.u_max,
+                                PAPER_ROBOT.rest_length), strict=True))
+    # first solves (build included), one each
+    (tr, first), c_ours, w_ours = timed(lambda: (lambda t: (t, t.solve(
+        {**par, "v0": v0s[0]}, guess=guesses[v0s[0]][3])))(MultipleShooting(
+            build_landing_problem(), nodes=N, substeps=4, ipopt_options=IPOPT, expand=True)))
+    (fn, out), c_rk, w_rk = timed(lambda: rockit_function(N, v0s[0], guesses[v0s[0]]))
+    land = solve_landing(v0s[0], PAPER_ROBOT)  # the sweep's first point, and the exact depth
+    ref, prev_sol, prev_out = land.refined, first, out
+    names = ("rockit to_function", "toolkit transcribed", "toolkit structure re-solve",
+             "toolkit solve_landing (sweep)")
+    times = {k: ([], []) for k in names}
+    depth = {k: [] for k in names}
+    exact = []
+    for i, v in enumerate(v0s[1:]):
+        runs = {
+            names[0]: lambda v=v, o=prev_out: fn(5.0, 20.0, v, 8.2, *o),
+            names[1]: lambda v=v, s=prev_sol: tr.solve({**par, "v0": v}, warm_start=s),
+            names[2]: lambda v=v, r=ref: refine_structure(
+                tr.problem, r.modes, r.durations, Impact(v).initial_state(PAPER_ROBOT),
+                {**par, "v0": v}),
+            names[3]: lambda v=v, g=land: solve_landing(v, PAPER_ROBOT, warm_start=g),
+        }
+        results = {}
+        for k in (names if i % 2 == 0 else names[::-1]):
+            results[k], c, w = timed(runs[k])
+            times[k][0].append(c)
+            times[k][1].append(w)
+        prev_out, prev_sol = results[names[0]], results[names[1]]
+        ref, land = results[names[2]], results[names[3]]
+        depth[names[0]].append(-float(np.array(prev_out[3]).ravel()[-1]))
+        depth[names[1]].append(-prev_sol.x[-1, 2])
+        depth[names[2]].append(-ref.xT[2])
+        depth[names[3]].append(land.depth)
+        assert land.replay is not None
+        exact.append(land.replay.depth)
+    report(a, names, times, depth, np.array(exact), (c_ours, w_ours), (c_rk, w_rk), tr)
 
-    # ---------------------------------------------------------------- toolkit
-    from ocp import MultipleShooting
-    from softlanding import PAPER_ROBOT
-    from softlanding.landing import build_landing_problem, solve_landing
 
-    par = {"r_m": PAPER_ROBOT.r_m, "s": PAPER_ROBOT.s, "u_max": PAPER_ROBOT.u_max,
-           "l0": PAPER_ROBOT.rest_length}
-    t = time.perf_counter()
-    tr = MultipleShooting(build_landing_problem(), nodes=N, substeps=4, ipopt_options=IPOPT,
-                          expand=True)
-    ours = [tr.solve({**par, "v0": v0s[0]}, guess=guesses[v0s[0]][3])]
-    first_ours = time.perf_counter() - t
-    cold_ours, warm_ours, warm_sols = [], [], [ours[0]]
-    for v in v0s[1:]:
-        t = time.perf_counter()
-        ours.append(tr.solve({**par, "v0": v}, guess=guesses[v][3]))
-        cold_ours.append(time.perf_counter() - t)
-        t = time.perf_counter()
-        warm_sols.append(tr.solve({**par, "v0": v}, warm_start=warm_sols[-1]))
-        warm_ours.append(time.perf_counter() - t)
-    assert tr.n_builds == 1
-
-    # exact reference: refined switching times, checked by the simulator replay
-    exact, replay_gap = [], []
-    for v in v0s:
-        r = solve_landing(v)
-        exact.append(r.depth)
-        replay_gap.append(r.replay_difference)
-    exact = np.array(exact)
-    depth_ours = np.array([-s.x[-1, 2] for s in ours])
-    depth_warm = np.array([-s.x[-1, 2] for s in warm_sols])
-
-    # ----------------------------------------------------------------- rockit
-    t = time.perf_counter()
-    ocp, X, u, P = rockit_problem(N)
-    depth_rk, times_rk = [], []
-    for i, v in enumerate(v0s[:5]):  # the plain path is slow; five solves give its median
-        T0, Xg, Ug, _ = guesses[v]
-        t1 = time.perf_counter()
-        for p_, val in zip(P, (5.0, 20.0, v, 8.2), strict=True):
-            ocp.set_value(p_, val)
-        ocp.set_initial(ocp.T, T0)
-        for k, x in enumerate(X):
-            ocp.set_initial(x, Xg[:, k])
-        ocp.set_initial(u, Ug)
-        sol = ocp.solve()
-        depth_rk.append(-float(sol.value(ocp.at_tf(X[2]))))
-        if i == 0:
-            first_rk = time.perf_counter() - t
-        else:
-            times_rk.append(time.perf_counter() - t1)
-    t = time.perf_counter()
-    ocp2, X2, u2, P2 = rockit_problem(N)
-    for p_, val in zip(P2, (5.0, 20.0, v0s[0], 8.2), strict=True):
-        ocp2.set_value(p_, val)
-    primal = ([ocp2.value(ocp2.T)] + [ocp2.sample(x, grid="control")[1] for x in X2]
-              + [ocp2.sample(u2, grid="control-")[1]])
-    fn = ocp2.to_function("landing", [ocp2.value(p_) for p_ in P2] + primal, primal)
-    depth_fn, cold_fn, warm_fn = [], [], []
-    prev = None
-    for i, v in enumerate(v0s):
-        T0, Xg, Ug, _ = guesses[v]
-        t1 = time.perf_counter()
-        out = fn(5.0, 20.0, v, 8.2, T0, *[Xg[:, k] for k in range(4)], Ug)
-        dt = time.perf_counter() - t1
-        depth_fn.append(-float(np.array(out[3]).ravel()[-1]))
-        if i == 0:
-            first_fn = time.perf_counter() - t
-        else:
-            cold_fn.append(dt)
-            t1 = time.perf_counter()
-            fn(5.0, 20.0, v, 8.2, *prev)
-            warm_fn.append(time.perf_counter() - t1)
-        prev = out
-    depth_fn = np.array(depth_fn)
-
+def report(a, names, times, depth, exact, first_ours, first_rk, tr) -> None:
     med = statistics.median
-    err = lambda d: float(np.max(np.abs(np.asarray(d) - exact[:len(d)])))  # noqa: E731
-    print(f"soft-landing OCP, N={N}, RK4 x4, {a.n} values of v0 in [-10, -0.5], r_m=5, s=20, "
-          "u_max=8.2, same Ipopt options")
-    print(f"{'':30}{'first solve':>12}{'re-solve, cold':>16}{'re-solve, warm':>16}"
-          f"{'depth error':>13}")
-    print(f"{'':30}{'[s]':>12}{'median [s]':>16}{'median [s]':>16}{'(max)':>13}")
-    print(f"{'this toolkit (transcribed)':30}{first_ours:>12.3f}{med(cold_ours):>16.4f}"
-          f"{med(warm_ours):>16.4f}{max(err(depth_ours), err(depth_warm)):>13.2e}")
-    print(f"{'this toolkit (refined)':30}{'':>12}{'':>16}{'':>16}{max(replay_gap):>13.2e}"
-          "  vs exact simulator replay")
-    print(f"{'rockit Ocp.solve+set_value':30}{first_rk:>12.3f}{med(times_rk):>16.4f}{'-':>16}"
-          f"{err(depth_rk):>13.2e}  ({len(depth_rk)} solves)")
-    print(f"{'rockit Ocp.to_function':30}{first_fn:>12.3f}{med(cold_fn):>16.4f}"
-          f"{med(warm_fn):>16.4f}{err(depth_fn):>13.2e}")
-    print("warm: from the previous v0's solution (this toolkit: primal and dual, Ipopt warm "
-          "start; rockit: primal, its documented pattern)")
-    best_first = min(first_rk, first_fn)
-    print(f"speed-up, first solve (vs rockit's faster path): {best_first / first_ours:6.1f}x")
-    print(f"speed-up, median cold re-solve (vs to_function): {med(cold_fn) / med(cold_ours):6.1f}x")
-    print(f"speed-up, median warm re-solve (vs to_function): {med(warm_fn) / med(warm_ours):6.1f}x")
-    print(f"speed-up, median re-solve vs rockit Ocp.solve : {med(times_rk) / med(warm_ours):6.1f}x")
-    print("depth error of a transcription is its RK4/grid error (max over v0 against the "
-          "refined depth); the refined depth is exact to rounding")
+    print(f"soft-landing OCP, N={a.nodes}, RK4 x4, {a.n} values of v0 in [-10, -0.5], r_m=5, "
+          "s=20, u_max=8.2, same Ipopt options; interleaved, order alternating per v0")
+    print(f"first solve (build included): toolkit cpu {first_ours[0]:.3f} s, wall "
+          f"{first_ours[1]:.3f} s; rockit to_function cpu {first_rk[0]:.3f} s, wall "
+          f"{first_rk[1]:.3f} s; ratio cpu {first_rk[0] / first_ours[0]:.1f}x")
+    print(f"{'':32}{'cpu [ms]':>10}{'wall [ms]':>11}{'depth error':>13}  (medians per v0)")
+    for k in names:
+        c, w = med(times[k][0]) * 1e3, med(times[k][1]) * 1e3
+        err = float(np.max(np.abs(np.array(depth[k]) - exact)))
+        print(f"{k:32}{c:>10.2f}{w:>11.2f}{err:>13.2e}")
+    rk = med(times[names[0]][0])
+    for k in names[1:]:
+        print(f"speed-up vs rockit to_function (cpu): {k:30} {rk / med(times[k][0]):7.1f}x")
+    print(f"NLP builds: {tr.n_builds} (re-solves never rebuild)")
+    print("exact depth: the sweep's refined depth replayed in the exact simulator; rockit and "
+          "the transcription carry their RK4 grid error")
 
 
 if __name__ == "__main__":

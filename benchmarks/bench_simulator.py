@@ -40,8 +40,9 @@ sys.path.insert(0, str(HERE))
 import _kernel_v0 as K0  # noqa: E402
 from ivp_reference import landing_depth_ivp  # noqa: E402
 
-from softlanding import DimensionlessParams, Impedance, simulate, simulate_batch  # noqa: E402
+from softlanding import Impact, Impedance, Robot, simulate, simulate_batch  # noqa: E402
 from softlanding import _kernel as K  # noqa: E402
+from softlanding.controllers import impedance_gains  # noqa: E402
 
 S = sys.modules["softlanding.simulator"]
 
@@ -86,18 +87,18 @@ def report(label, t, n, unit="us"):
 
 
 def sample_section(a, kp, kd, v0):
-    params = [DimensionlessParams(r_m=5, s=20, v0=v) for v in v0]
+    robot = Robot(r_m=5, s=20)
+    params = [Impact(v) for v in v0]
     pols = [Impedance(p, d) for p, d in zip(kp, kd, strict=True)]
 
     def calls():
-        return [simulate(p, q, energy=False) for p, q in zip(params, pols, strict=True)]
+        return [simulate(robot, p, q, energy=False) for p, q in zip(params, pols, strict=True)]
 
     t = interleaved({k: with_kernel(k, calls) for k in KERNELS}, a.repeats)
     print(f"simulate() per call ({a.cases} landings per block, {a.repeats} blocks each):")
     report("simulate()", t, a.cases)
     mats = S.mode_matrices(5.0)
-    Kf = [np.tile(S.impedance_gain_vector(p, d, 10.0), (3, 1)) for p, d in zip(kp, kd,
-                                                                             strict=True)]
+    Kf = [np.tile(impedance_gains(p, d, 10.0), (3, 1)) for p, d in zip(kp, kd, strict=True)]
     x0 = [np.array([10.0, v, 0.0, v]) for v in v0]
     e = np.zeros(0)
 
@@ -114,7 +115,7 @@ def sample_section(a, kp, kd, v0):
 
     def batch():
         for _ in range(reps):
-            simulate_batch(kp, kd, v0)
+            simulate_batch(Robot(5, 20), v0, kp, kd)
 
     t = interleaved({k: with_kernel(k, batch) for k in KERNELS}, a.repeats)
     print(f"simulate_batch() per landing ({os.cpu_count()} cores):")
@@ -148,7 +149,7 @@ def grid_section(a):
 
     def run(name):
         def go():
-            outs[name] = simulate_batch(KP, KD, V, progress=False)
+            outs[name] = simulate_batch(Robot(5, 20), V, KP, KD, progress=False)
         return with_kernel(name, go)
 
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -204,8 +205,8 @@ def main() -> None:
     kd = rng.uniform(0, 1, a.cases)
     v0 = rng.uniform(-10, 0, a.cases)
     for name in KERNELS:  # warm-up (JIT load) outside the timings
-        with_kernel(name, lambda: (simulate(DimensionlessParams(v0=-1), Impedance(0.2, 0.2)),
-                                   simulate_batch([0.2], [0.2], [-1.0])))()
+        with_kernel(name, lambda: (simulate(Robot(5, 20), Impact(-1), Impedance(0.2, 0.2)),
+                                   simulate_batch(Robot(5, 20), [-1.0], [0.2], [0.2])))()
     print(f"before: {_load()}; {os.cpu_count()} cores")
     ours = sample_section(a, kp, kd, v0)
     if not a.skip_ivp:

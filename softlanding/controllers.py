@@ -20,14 +20,14 @@ from .model import VB, VF, Robot, Units
 EMPTY = np.zeros(0)
 
 
-def impedance_gains(k_p: float, k_d: float, l0: float) -> np.ndarray:
+def impedance_gains(k_p: Any, k_d: Any, l0: Any) -> np.ndarray:
     """``K`` with ``u = K . [x_b, v_b, x_f, v_f, 1] = -k_p (x_b - x_f - l0) - k_d (v_b - v_f)``.
 
     Parameters
     ----------
-    k_p, k_d : float
-        Stiffness and damping.
-    l0 : float
+    k_p, k_d : float or array
+        Stiffness and damping (arrays give one gain vector per column).
+    l0 : float or array
         Rest length.
     """
     return np.array([-k_p, -k_d, k_p, k_d, k_p * l0])

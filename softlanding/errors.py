@@ -160,6 +160,13 @@ def check(name: str, value: Any, rule: Rule | None = None) -> Any:
         Naming the field and the first offending value.
     """
     test, what = rule if rule is not None else FIELDS[name]
+    if type(value) is float or type(value) is int:  # the common case, without numpy
+        x = float(value)
+        if not math.isfinite(x):
+            raise ParameterError(name, f"must be finite, got {plain(x)}")
+        if not test(np.asarray(x)):
+            raise ParameterError(name, f"{what}, got {plain(x)}")
+        return x
     scalar = np.ndim(value) == 0 and not isinstance(value, np.ndarray)
     try:
         arr = np.asarray(value, dtype=float)

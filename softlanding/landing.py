@@ -453,9 +453,10 @@ def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, grou
                              impact.initial_state(robot), _ocp_params(robot, impact))
     except SolveError:
         return None
-    # the structure must still be the optimum's: arcs that collapsed or a path constraint
-    # violated between the samples send the solve back to the transcription
-    if min(r.durations) <= 1e-9 * r.T or r.path_violation() > 1e-9:
+    # the structure must still be the optimum's: an arc that collapsed sends the solve back
+    # to the transcription (path constraints are checked inside every arc by the re-solve,
+    # and exactly by the replay)
+    if min(r.durations) <= 1e-9 * r.T:
         return None
     return r
 
@@ -543,6 +544,10 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                        refine, "transcription")
     if replay:
         out.replay = simulate(robot, impact, out.schedule(), ground)
+        if out.path == "structure" and out.unverified_reasons():
+            # the neighbour's structure does not hold here: solve it properly
+            return solve_landing(impact, robot, ground, nodes=nodes, refine=refine,
+                                 warm_start=out.transcribed, replay=replay)
     return out
 
 

@@ -36,9 +36,9 @@ from ocp.trajectory import Trajectory
 
 from . import _kernel as K
 from ._jsonutil import json_safe
-from .controllers import Controller, ForceSchedule, Impedance, Rigid
+from .controllers import Controller, ForceSchedule, Impedance, Rigid, impedance_gains
 from .dynamics import STATE_NAMES, mode_matrices
-from .errors import ParameterError, RestNotProvenError, check
+from .errors import ParameterError, RestNotProvenError, check, check_count
 from .ground import LINEAR_GROUND, Ground
 from .groundcode import kernel_law, needs_integration
 from .model import Impact, Robot
@@ -156,6 +156,13 @@ class LandingResult:
         Hybrid segments simulated.
     robot, impact, controller, ground
         What was simulated.
+    depth_limit : float
+        The depth as t -> inf: the rest depth when the foot rests, the limit a
+        never-resting creep approaches (then ``depth`` is that limit too, a supremum the
+        foot never reaches), NaN when unknown.
+    foot_rest : bool
+        The foot's rest is proven, whatever the body does (a body that passes through
+        its foot is not a rest of the robot: ``status`` says so).
     """
 
     depth: float
@@ -173,6 +180,8 @@ class LandingResult:
     impact: Impact
     controller: Controller
     ground: Ground = LINEAR_GROUND
+    depth_limit: float = math.nan
+    foot_rest: bool = False
     _segments: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
@@ -208,6 +217,8 @@ class LandingResult:
         """
         seg = self._segments
         ts = seg["t"]
+        if len(ts) < 2:
+            raise RestNotProvenError(f"nothing was simulated ({self.status})")
         if not self.rest_proven:
             if t_end is not None and t_end > ts[-1]:
                 raise RestNotProvenError(
@@ -236,7 +247,8 @@ class LandingResult:
             "u_peak": self.u_peak, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,
-            "n_segments": self.n_segments, "energy": self.energy.to_dict(),
+            "n_segments": self.n_segments, "depth_limit": self.depth_limit,
+            "foot_rest": self.foot_rest, "energy": self.energy.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
             "ground": self.ground.to_dict(), "controller": self.controller.to_dict(),
         }
@@ -299,14 +311,15 @@ def simulate(
     z0 = impact.initial_state(robot) if x0 is None else np.asarray(x0, float)
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
+    max_seg = check_count("max_segments", max_segments, 1, 10**6)
     if integrate:
         law = kernel_law(ground, robot.r_m, lock=isinstance(controller, Rigid), u_max=umax)
         out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
-                                         check("t_max", t_max), int(max_segments),
-                                         bool(energy), check("rtol", rtol))
+                                         check("t_max", t_max), max_seg, bool(energy),
+                                         check("rtol", rtol))
     else:
         out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
-                                      check("t_max", t_max), int(max_segments), bool(energy))
+                                      check("t_max", t_max), max_seg, bool(energy))
     return LandingResult(
         depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
         u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),
@@ -314,6 +327,7 @@ def simulate(
         T=float(out[K.O_T]), status=STATUS_NAMES[int(out[K.O_STATUS])],
         energy=_ledger(out, integrate),
         n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
+        depth_limit=float(out[K.O_DLIM]), foot_rest=bool(out[K.O_FOOT_REST]),
         ground=ground, _segments=segments)
 
 
@@ -390,6 +404,7 @@ _FIELD_COL = {
     "depth": K.O_DEPTH, "steps": K.O_STEPS, "t_first_stop": K.O_TSTOP, "T": K.O_T,
     "u_peak": K.O_UPEAK, "stroke_min": K.O_SMIN, "stroke_max": K.O_SMAX, "feasible": K.O_FEAS,
     "status": K.O_STATUS, "E0": K.O_E0, "ET": K.O_ET, "ground": K.O_EGND, "actuator": K.O_EACT,
+    "depth_limit": K.O_DLIM, "foot_rest": K.O_FOOT_REST,
 }
 BATCH_FIELDS = tuple(_FIELD_COL)
 
@@ -449,6 +464,16 @@ class BatchResult:
         return (self.data["status"] == K.REST_PROVEN) & (self.stroke_margin >= 0.0)
 
 
+def _broadcast(v0, k_p, k_d) -> tuple[np.ndarray, ...]:
+    try:
+        return tuple(np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d))))
+    except ValueError:
+        shapes = ", ".join(f"{n} {np.shape(a)}" for n, a in (("v0", v0), ("k_p", k_p),
+                                                              ("k_d", k_d)))
+        raise ParameterError("k_p", f"v0, k_p and k_d must broadcast together: {shapes}") \
+            from None
+
+
 def simulate_batch(
     robot: Robot,
     v0,
@@ -495,7 +520,7 @@ def simulate_batch(
     -------
     BatchResult
     """
-    arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (v0, k_p, k_d)))
+    arrays = _broadcast(v0, k_p, k_d)
     shape = arrays[0].shape
     v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))
                  for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
@@ -506,9 +531,7 @@ def simulate_batch(
     law = kernel_law(ground, robot.r_m) if integrate else None
     l0 = robot.rest_length
     Kf = np.empty((n, 3, 5))
-    Kf[:, :, 0], Kf[:, :, 1] = -kp[:, None], -kd[:, None]
-    Kf[:, :, 2], Kf[:, :, 3] = kp[:, None], kd[:, None]
-    Kf[:, :, 4] = (kp * l0)[:, None]
+    Kf[:] = impedance_gains(kp, kd, np.full(n, l0)).T[:, None, :]  # the one impedance law
     x0 = np.stack([np.full(n, l0), v, np.zeros(n), v], axis=1)
     um = np.full(n, math.inf if robot.u_max is None else robot.u_max)
     ss = np.full(n, robot.s)
@@ -532,7 +555,7 @@ def simulate_batch(
     cols = dict(_FIELD_COL, drag=O_EDRAG, grains=O_EGRAIN) if integrate else _FIELD_COL
     for name, col in cols.items():
         v_ = out[:, col].reshape(shape)
-        if name == "feasible":
+        if name in ("feasible", "foot_rest"):
             v_ = v_.astype(bool)
         elif name in ("steps", "status"):
             v_ = v_.astype(np.int64)

@@ -65,6 +65,15 @@ def test_negative_numbers_in_scientific_notation_are_values(cli):
     ["impedance", "--v0", "-3", "--grid", "10000000"],
     ["map", "--v0", "-3", "--n", "10000000", "--out", "x.nc"],
     ["sweep", "--n", "0"],
+    ["simulate", "--v0", "-1", "--kp", "1e7", "--kd", ".2"],
+    ["simulate", "--v0", "-1", "--rigid", "--rm", "1e300"],
+    ["simulate", "--v0", "-1", "--rigid", "--rm", "1e-300"],
+    ["simulate", "--v0", "-1", "--rigid", "--s", "1e300"],
+    ["simulate", "--v0=-1e6", "--rigid"],
+    ["impedance", "--v0=-1e6"],
+    ["solve", "--v0", "-3", "--umax", "1e300"],
+    ["solve", "--v0", "-3", "--s", "1e-300"],
+    ["scale", "--to-si", "--mb", "10"],
     ["reproduce", "--quick"],
 ])
 def test_bad_input_one_line_exit_2(args, cli):
@@ -74,6 +83,24 @@ def test_bad_input_one_line_exit_2(args, cli):
     assert "Traceback" not in err
     assert err.startswith("softlanding")
     assert "np.float64" not in err
+
+
+@pytest.mark.parametrize("args,status", [
+    (["simulate", "--v0", "-1", "--kp", "0", "--kd", "0"], "passes through"),
+    (["simulate", "--v0", "-1", "--kp", "0.2", "--kd", "0.18", "--umax", "0.01"],
+     "passes through"),
+])
+def test_a_meaningless_landing_is_not_reported_as_rest(args, status, cli):
+    code, out, _ = cli(*args, "--json")
+    d = json.loads(out)
+    assert code == 1 and status in d["status"] and not d["rest_proven"] and not d["feasible"]
+
+
+def test_the_force_limit_applies_to_the_rigid_leg(cli):
+    code, out, _ = cli("simulate", "--v0", "-1", "--rigid", "--umax", "1", "--json")
+    d = json.loads(out)
+    assert d["u_peak"] <= 1.0 + 1e-12  # the lock slips at the limit instead of ignoring it
+    assert not d["feasible"] and code == 1
 
 
 @pytest.mark.parametrize("args,match", [
@@ -211,3 +238,14 @@ def test_a_failed_run_leaves_no_file_behind(tmp_path, cli, monkeypatch):
                        "--plot", tmp_path / "m.png")
     assert code == 130 and err.strip() == "softlanding: interrupted"
     assert list(tmp_path.iterdir()) == []  # no dataset, no figure, no temporary file
+
+
+def test_progress_bars_only_on_a_terminal(cli):
+    """A log or a pipe gets no carriage-return frames; --progress forces them."""
+    code, out, err = cli("solve-sweep", "--n", "3", "--v0-min", "-2")
+    assert code == 0 and "\r" not in err and err == ""
+    code, out, err = cli("--progress", "solve-sweep", "--n", "3", "--v0-min", "-2")
+    assert code == 0 and "\r" in err and "bang-bang sweep" in err
+    from softlanding import _progress
+
+    _progress.FORCE = False

@@ -179,3 +179,14 @@ def test_batch_broadcasts_and_validates():
 def test_policy_bad_input(bad):
     with pytest.raises(ParameterError):
         bad()
+
+
+@pytest.mark.parametrize("call,name", [
+    (lambda: simulate(R, Impact(-1.0), Impedance(0.2, 0.1, l0=1e9)), "l0"),
+    (lambda: simulate(R, Impact(-1.0), Impedance(0.2, 0.1), t_max=math.nan), "t_max"),
+    (lambda: simulate(R, Impact(-1.0), Impedance(0.2, 0.1), max_segments=-5), "max_segments"),
+    (lambda: simulate_batch(R, [-1.0, -2.0], [0.1, 0.2, 0.3], 0.1), "k_p"),
+])
+def test_api_misuse_names_the_argument(call, name):
+    with pytest.raises(ParameterError, match=name):
+        call()
