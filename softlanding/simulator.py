@@ -551,6 +551,12 @@ def simulate_batch(
                 K.run_batch([mats], ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b],
                             check("t_max", t_max), max_segments, energy, out[a:b])
             bar.update(b - a)
+    inputs = {"v0": arrays[0], "k_p": arrays[1], "k_d": arrays[2]}
+    return BatchResult(robot, ground, inputs, _batch_data(out, shape, integrate))
+
+
+def _batch_data(out: np.ndarray, shape: tuple, integrate: bool) -> dict[str, np.ndarray]:
+    """The output rows as one array per field (drag and grains on an integrated ground)."""
     data = {}
     cols = dict(_FIELD_COL, drag=O_EDRAG, grains=O_EGRAIN) if integrate else _FIELD_COL
     for name, col in cols.items():
@@ -560,8 +566,7 @@ def simulate_batch(
         elif name in ("steps", "status"):
             v_ = v_.astype(np.int64)
         data[name] = v_
-    inputs = {"v0": arrays[0], "k_p": arrays[1], "k_d": arrays[2]}
-    return BatchResult(robot, ground, inputs, data)
+    return data
 
 
 __all__ = ["BATCH_FIELDS", "BatchResult", "EnergyLedger", "ForceSchedule", "Impedance",

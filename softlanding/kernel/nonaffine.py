@@ -272,6 +272,13 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
     if nseg < rec[0].shape[0]:
         rec[0][nseg] = t
     status, d = final_status(status, d, ext, cdata, cres)
+    write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk, acc)
+
+
+@njit(cache=True)
+def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk, acc):
+    """:func:`.landing.write_output`, with the integrated plastic work and the drag and grain
+    losses (NaN unless the foot's rest is proven)."""
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
     foot_rests = out[O_ET] == out[O_ET]
     out[O_EGND] = acc[A_PLAST] if foot_rests else np.nan
