@@ -306,7 +306,7 @@ def robustness(out: Path, files: list[str], st: Settings, progress: bool) -> dic
 
 # ------------------------------------------------------------------ driver
 SECTIONS = ("bang-bang example", "stepped intrusions", "depth maps", "optimal gains",
-            "comparison", "experiment", "cost of transport", "robustness")
+            "comparison", "experiment", "cost of transport", "robustness", "terrain models")
 
 
 def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True,
@@ -369,6 +369,9 @@ def _run_sections(out: Path, st: Settings, progress: bool,
     summary["cost_of_transport"] = run(7, "cost_of_transport", cost_of_transport, out, files,
                                        st, progress, depth_optimum)
     summary["robustness"] = run(8, "robustness", robustness, out, files, st, progress)
+    from .terrain_study import terrain_section
+
+    summary["terrain_models"] = run(9, "terrain_models", terrain_section, out, files, st.quick)
     from . import __version__
 
     summary["meta"] = {"quick": st.quick, "elapsed_s": time.perf_counter() - t_all,

@@ -155,7 +155,16 @@ def _robustness(s: dict) -> list[str]:
     return out
 
 
-SECTIONS = (_bang_bang, _stepped, _maps, _gains, _comparison, _experiment, _cot, _robustness)
+def _terrain(s: dict) -> list[str]:
+    if "terrain_models" not in s:
+        return []
+    from .terrain_study import terrain_markdown
+
+    return terrain_markdown(s["terrain_models"])
+
+
+SECTIONS = (_bang_bang, _stepped, _maps, _gains, _comparison, _experiment, _cot, _robustness,
+            _terrain)
 
 
 def summary_markdown(s: dict) -> str:
