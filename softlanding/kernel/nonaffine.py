@@ -218,8 +218,7 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
     initial_grains(G, fp, buf, z, acc)
     mode, regime, steps = initial_mode(P, z, hold_force(G, fp, buf, d), Kf, umax, open_loop,
                                        k_ol, bk, energy_rel(P, z, z0))
-    ws = workspace()
-    wsn = workspace_nl(rtol)
+    ws, wsn = workspace(), workspace_nl(rtol)
     cs, C, dC, codes, cdata, cres = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
     while nseg < max_seg:
         ext[X_WORK] += 1.0
@@ -267,8 +266,7 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
         mode, regime, d, shift, steps = apply_event_nl(P, law_args, codes[hit], z, z0, t, d,
                                                        shift, mode, regime, steps, Kf, umax,
                                                        open_loop, k_ol, ext, bk, acc)
-    z[0] -= shift
-    z[2] -= shift
+    z[0], z[2] = z[0] - shift, z[2] - shift
     if nseg < rec[0].shape[0]:
         rec[0][nseg] = t
     status, d = final_status(status, d, ext, cdata, cres)
