@@ -248,7 +248,8 @@ class SwitchingNLP:
             residuals are below :data:`KKT_PRIMAL` and :data:`KKT_DUAL`.
         """
         args: dict[str, Any] = {"p": pv, "x0": w0, **self.bounds(pv)}
-        if lam_g0 is not None:
+        if lam_g0 is not None and np.size(lam_g0) == self.solver.nnz_in("lam_g0"):
+            # (multipliers of an NLP rebuilt with more RK8 steps have another size: cold)
             args.update(lam_g0=lam_g0, lam_x0=lam_x0)
         t0 = time.perf_counter()
         res = self.solver(**args)

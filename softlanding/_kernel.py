@@ -245,3 +245,79 @@ def sample_segments(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.nd
     _sample(ts, segments["A"], segments["z"], np.asarray(grid, float), idx.astype(np.int64), z)
     u = np.einsum("ij,ij->i", segments["cu"][idx], z)
     return z, u, segments["mode"][idx]
+
+
+# ------------------------------------------------- non-affine grounds (integrated yielding)
+DEFAULT_RTOL = 1e-12
+"""Relative (and absolute) tolerance of the DOP853 yielding segments of a non-affine ground."""
+
+
+def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy,
+                   rtol=DEFAULT_RTOL, *, max_steps=DEFAULT_MAX_STEPS):
+    """One landing on a non-affine ground (:mod:`softlanding.kernel.nonaffine`).
+
+    As :func:`run_landing`, with ``law = (G, fp)`` from
+    :func:`softlanding.groundcode.kernel_law` and the integrator's tolerance ``rtol``;
+    ``mats`` are the mode matrices of the robot on the linear ground (their static and
+    flight modes and body rows are every ground's). The output row has
+    ``N_OUT_NL`` columns (``O_EDRAG``, ``O_EGRAIN`` added).
+    """
+    from .kernel.nonaffine import landing_entry_nl
+
+    G, fp = law
+    out, t, A, z, cu, mode = landing_entry_nl(
+        packed_model(mats), _f64(G), fp, _f64(Kf), float(umax), _f64(sched_t),
+        _gain_rows(sched_u), _f64(x0), float(s_lim), float(t_max), int(max_seg), bool(energy),
+        float(max_steps), float(rtol), RECORDS_FIRST)
+    return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode, "law": (G, fp, float(rtol))}
+
+
+def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
+                 rtol=DEFAULT_RTOL, *, threads=None, chunk=None, max_steps=DEFAULT_MAX_STEPS):
+    """Feedback landings on one non-affine ground in parallel (as :func:`run_batch`;
+    ``out`` has ``N_OUT_NL`` columns)."""
+    import itertools
+
+    from .kernel.nonaffine import batch_range_nl
+
+    G, fp = law
+    Ps = np.stack([packed_model(m) for m in mats_list])
+    args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(G), fp, _f64(Kf), _f64(umax),
+            _f64(x0), _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps),
+            float(rtol))
+    n = len(args[6])
+    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
+    threads = default_threads() if threads is None else max(1, int(threads))
+    chunk = int(chunk) if chunk else min(256, max(4, n // (16 * threads)))
+    if threads == 1 or n <= chunk:
+        batch_range_nl(*args, res, 0, n)
+    else:
+        counter = itertools.count()
+
+        def work():
+            while (a := next(counter) * chunk) < n:
+                batch_range_nl(*args, res, a, min(n, a + chunk))
+
+        futures = [_pool(threads).submit(work) for _ in range(threads)]
+        for f in futures:
+            f.result()
+    if res is not out:
+        out[...] = res
+
+
+def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
+                                                                   np.ndarray]:
+    """:func:`sample_segments` for a non-affine landing: its yielding segments are integrated
+    again from their recorded starts (same integrator and tolerance)."""
+    from .kernel.nonaffine import sample_nl
+
+    G, fp, rtol = segments["law"]
+    ts = segments["t"]
+    nseg = len(ts) - 1
+    grid = np.asarray(grid, float)
+    idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
+    z = np.empty((len(grid), 5))
+    u = np.empty(len(grid))
+    sample_nl(np.zeros(1), _f64(G), fp, rtol, ts, segments["A"], segments["z"], segments["cu"],
+              segments["mode"], grid, idx.astype(np.int64), z, u)
+    return z, u, segments["mode"][idx]

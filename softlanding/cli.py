@@ -60,6 +60,13 @@ def _robot(a: argparse.Namespace) -> Robot:
     return Robot(r_m=a.rm, s=a.s, u_max=a.umax, l0=a.l0)
 
 
+def _ground(a: argparse.Namespace) -> Any:
+    """The ground model of the ``--ground`` options (validated by the model)."""
+    from .cli_ground import ground_of
+
+    return ground_of(a)
+
+
 def _target(a: argparse.Namespace, option: str = "plot") -> Any:
     """The figure or data file an option names, checked before any work (None if not given)."""
     from ._files import output_path
@@ -89,7 +96,7 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
         raise ParameterError("kp", "give both --kp and --kd, or --rigid")
     controller = Rigid() if a.rigid else Impedance(a.kp, a.kd)
     plot = _target(a)
-    res = simulate(_robot(a), Impact(a.v0), controller)
+    res = simulate(_robot(a), Impact(a.v0), controller, _ground(a))
     written = None
     if plot:
         from .figures import plot_trajectory
@@ -107,7 +114,8 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
             ("peak |u|", res.u_peak), ("stroke min", res.stroke_min),
             ("stroke max", res.stroke_max), ("E(0)", e.E0), ("E(T)", e.ET),
             ("ground loss", e.ground), ("actuator loss", e.actuator), ("CoT", e.cot),
-        ])
+        ] + ([("ground model", res.ground.name), ("drag loss", e.drag),
+              ("grain loss", e.grains)] if e.integrated else []))
         if written:
             print(f"figure written to {written}")
     return EXIT_OK if res.rest_proven else EXIT_FAILURE
@@ -152,7 +160,8 @@ def _cmd_solve(a: argparse.Namespace) -> int:
     pmp_plot = None
     if plot is not None and a.pmp:
         pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
-    res = solve_landing(Impact(a.v0), _robot(a), nodes=a.nodes, refine=not a.no_refine,
+    res = solve_landing(Impact(a.v0), _robot(a), _ground(a), nodes=a.nodes,
+                        refine=not a.no_refine,
                         extra_arcs=a.extra_arcs)
     cert = None
     if a.pmp:
@@ -209,8 +218,9 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
 
     v = _v0_grid(a)
     plot = _target(a)
-    res = sweep_landing(v, _robot(a), nodes=a.nodes, progress=not a.json)
-    rigid = [rigid_depth(x) for x in v]
+    ground = _ground(a)
+    res = sweep_landing(v, _robot(a), ground, nodes=a.nodes, progress=not a.json)
+    rigid = [rigid_depth(x, ground) for x in v]
     rows: list[dict[str, Any]] = [
         {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
          "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
@@ -246,7 +256,8 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
 def _cmd_impedance(a: argparse.Namespace) -> int:
     from .impedance import optimize_impedance
 
-    o = optimize_impedance(Impact(a.v0), _robot(a), objective=a.objective, grid=a.grid)
+    o = optimize_impedance(Impact(a.v0), _robot(a), _ground(a), objective=a.objective,
+                           grid=a.grid)
     if a.json:
         _print_json(o.to_dict())
         return EXIT_OK
@@ -269,10 +280,10 @@ def _cmd_map(a: argparse.Namespace) -> int:
     from .impedance import optimize_impedance
     from .sweeps import depth_map, save_dataset
 
-    robot, impact = _robot(a), Impact(a.v0)
+    robot, impact, ground = _robot(a), Impact(a.v0), _ground(a)
     out, plot = _target(a, "out"), _target(a)
-    ds = depth_map(impact, robot, n=a.n, scheduler=a.scheduler)
-    opt = optimize_impedance(impact, robot, grid=a.n)
+    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler)
+    opt = optimize_impedance(impact, robot, ground, grid=a.n)
     with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
         save_dataset(ds, tmp)
     written = None
@@ -323,7 +334,8 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
     robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
                   u_max=a.umax)
     out, plot = _target(a, "out"), _target(a)
-    curves = optimal_impedance_curves(v0, robot, r_m=a.rm, s=a.s, objective=a.objective,
+    curves = optimal_impedance_curves(v0, robot, _ground(a), r_m=a.rm, s=a.s,
+                                      objective=a.objective,
                                       grid=a.grid, scheduler=a.scheduler, progress=not a.json)
     if out:
         with atomic(out) as tmp:
@@ -354,7 +366,8 @@ def _cmd_compare(a: argparse.Namespace) -> int:
 
     robot = _robot(a)
     v0, plot = _v0_grid(a), _target(a)
-    rows = compare_controllers(v0, robot, grid=a.grid, progress=not a.json)
+    ground = _ground(a)
+    rows = compare_controllers(v0, robot, ground, grid=a.grid, progress=not a.json)
     written = None
     if plot:
         from .comparison import comparison_arrays
@@ -362,10 +375,10 @@ def _cmd_compare(a: argparse.Namespace) -> int:
 
         written = _savefig(plot_controller_comparison(comparison_arrays(rows), robot), plot)
     if a.json:
-        _print_json({"rows": rows, "robot": robot.to_dict()})
+        _print_json({"rows": rows, "robot": robot.to_dict(), "ground": ground.to_dict()})
         return EXIT_OK
     print(f"Depth -x_f(T) at r_m = {robot.r_m:g}, s = {robot.s:g} "
-          f"(bang-bang with u_max = {robot.u_max:g})")
+          f"(bang-bang with u_max = {robot.u_max:g}), ground {ground.name}")
     print(f"{'v0':>7} {'rigid':>10} {'impedance':>11} {'(k_p*, k_d*)':>22} {'bang-bang':>11} "
           f"{'imp/rigid':>9} {'bb/rigid':>9}")
     for r in rows:
@@ -390,6 +403,10 @@ def _scale_from_si(a: argparse.Namespace) -> Any:
              (("mb", "m_b"), ("mf", "m_f"), ("kg", "k_g"), ("stroke", "stroke"),
               ("umax_si", "u_max"), ("Kp", "K_p"), ("Kd", "K_d"), ("g", "g"),
               ("v0_si", "v0")) if getattr(a, flag) is not None}
+    if getattr(a, "medium", None) is not None or getattr(a, "foot_diameter", None) is not None:
+        from .cli_ground import rft_stiffness_of
+
+        given["k_g"] = rft_stiffness_of(a)
     if a.preset == "paper":
         return paper_rig(**given)  # every flag given overrides the preset
     missing = [f for f, n in (("mb", "m_b"), ("mf", "m_f"), ("kg", "k_g"),
@@ -430,10 +447,19 @@ def _cmd_scale(a: argparse.Namespace) -> int:
     dimensionless = {**robot.to_dict(), **impact.to_dict(), **gain_dict}
     out = {"physical": ph.to_dict(), "dimensionless": dimensionless,
            "scales": ph.units.to_dict()}
+    if getattr(a, "medium", None) is not None:
+        from .terrain import PAPER_K_G
+
+        out["rft"] = {"medium": a.medium, "k_g_rft": ph.units.k_g, "k_g_paper": PAPER_K_G,
+                      "ratio": ph.units.k_g / PAPER_K_G}
     if a.json:
         _print_json(out)
     else:
         rows = [(f"SI {k}", v) for k, v in ph.to_dict().items() if v is not None]
+        if "rft" in out:
+            rows += [("RFT k_g [N/m]", out["rft"]["k_g_rft"]),
+                     ("paper's measured k_g [N/m]", out["rft"]["k_g_paper"]),
+                     ("RFT / measured", out["rft"]["ratio"])]
         rows += [(f"scale {k}", v) for k, v in ph.units.to_dict().items()]
         rows += [(f"dimensionless {k}", v) for k, v in dimensionless.items() if v is not None]
         _print_table(rows)

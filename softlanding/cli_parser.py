@@ -6,6 +6,7 @@ import argparse
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from .cli_ground import ground_args
 from .errors import LIMITS
 from .model import PAPER_ROBOT
 
@@ -85,6 +86,7 @@ def _simulate(sub: Any) -> argparse.ArgumentParser:
                    help=f"impedance damping k_d = K_d / sqrt(m_t k_g), {_range('gain')}")
     _model_args(s, None, "actuator force limit, saturating the leg (default: no limit)")
     _plot_arg(s, "the trajectory figure (heights, force, ground mode)")
+    ground_args(s)
     return s
 
 
@@ -103,6 +105,12 @@ def _scale(sub: Any) -> argparse.ArgumentParser:
                        ("--Kp", "leg stiffness [N/m]"), ("--Kd", "leg damping [N s/m]"),
                        ("--g", "gravity [m/s^2] (default 9.81)")):
         c.add_argument(flag, type=float, help=what)
+    c.add_argument("--medium", choices=["poppy-lp", "poppy-cp"],
+                   help="instead of --kg: the ground stiffness of a flat foot by resistive "
+                        "force theory, k_g = alpha_z A (poppy seeds, loosely or closely "
+                        "packed), printed beside the paper's measured 4.4 kN/m")
+    c.add_argument("--foot-diameter", type=float,
+                   help="foot diameter for --medium [m] (default 0.130, the paper's foot)")
     c.add_argument("--to-si", action="store_true", help="convert dimensionless -> SI")
     c.add_argument("--mt", type=float, default=3.0, help="total mass for --to-si [kg] (3)")
     for flag, what in (("--rm", "mass ratio"), ("--s", "stroke"), ("--v0", "impact velocity"),
@@ -132,6 +140,7 @@ def _solve(sub: Any) -> argparse.ArgumentParser:
                         "and give a bang-bang verdict")
     _plot_arg(o, "the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
     _accept_arg(o)
+    ground_args(o)
     _variant_args(o)
     return o
 
@@ -188,6 +197,7 @@ def _solve_sweep(sub: Any) -> argparse.ArgumentParser:
     w.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
     _plot_arg(w, "depth against v0")
     _accept_arg(w)
+    ground_args(w)
     return w
 
 
@@ -203,6 +213,7 @@ def _impedance(sub: Any) -> argparse.ArgumentParser:
                    help="depth; CoT with actuator and ground losses; or ground losses only")
     i.add_argument("--grid", type=int, default=101,
                    help="starting grid per axis (default 101, 2 to 2001)")
+    ground_args(i)
     return i
 
 
@@ -219,6 +230,7 @@ def _map(sub: Any) -> argparse.ArgumentParser:
     _plot_arg(m, "the map figure")
     m.add_argument("--scheduler", metavar="tcp://host:port",
                    help="run on a Dask cluster instead of the local cores")
+    ground_args(m)
     return m
 
 
@@ -237,6 +249,7 @@ def _sweep(sub: Any) -> argparse.ArgumentParser:
     _plot_arg(w, "the curves figure")
     w.add_argument("--scheduler", metavar="tcp://host:port", help="Dask scheduler address")
     w.add_argument("--json", action="store_true", help="print one JSON object")
+    ground_args(w)
     return w
 
 
@@ -251,6 +264,7 @@ def _compare(sub: Any) -> argparse.ArgumentParser:
                 f"force limit of the bang-bang controller (default {PAPER_ROBOT.u_max:g})")
     cp.add_argument("--grid", type=int, default=101, help="impedance starting grid per axis")
     _plot_arg(cp, "depth against v0")
+    ground_args(cp)
     return cp
 
 

@@ -19,15 +19,25 @@ from .landing import sweep_landing
 from .model import PAPER_ROBOT, Impact, Robot
 
 
-def rigid_depth(v0: float) -> float:
-    """Depth of a rigid leg, ``1 + sqrt(1 + v0^2)`` (one mass on the paper's spring).
+def rigid_depth(v0: float, ground: Ground = LINEAR_GROUND) -> float:
+    """Depth of a rigid leg: ``1 + sqrt(1 + v0^2)`` on the paper's spring (one mass on a
+    one-way spring); on another ground, the simulated rigid leg (without force limit: one
+    body, so the mass ratio does not matter).
 
     Parameters
     ----------
     v0 : float
         Impact velocity.
+    ground : Ground
+        Ground model.
     """
-    return 1.0 + math.sqrt(1.0 + v0 * v0)
+    if isinstance(ground, LinearGround):
+        return 1.0 + math.sqrt(1.0 + v0 * v0)
+    from .controllers import Rigid
+    from .simulator import simulate
+
+    res = simulate(PAPER_ROBOT.without_force_limit(), Impact(v0), Rigid(), ground)
+    return res.depth if res.rest_proven else math.nan
 
 
 def compare_controllers(v0: Sequence[float], robot: Robot = PAPER_ROBOT,
@@ -44,8 +54,7 @@ def compare_controllers(v0: Sequence[float], robot: Robot = PAPER_ROBOT,
     robot : Robot
         The robot; its force limit bounds the bang-bang force.
     ground : Ground
-        Ground model (the rigid column is the paper's spring's formula, so it is
-        only given for the linear ground).
+        Ground model (the rigid column: :func:`rigid_depth`).
     grid : int
         Starting grid of the impedance optimisation.
     saturate_impedance : bool
@@ -70,8 +79,7 @@ def compare_controllers(v0: Sequence[float], robot: Robot = PAPER_ROBOT,
     opt = impedance_optimum or (lambda x: optimize_impedance(x, imp_robot, ground, grid=grid))
     imp = [opt(i.v0) for i in show_progress(impacts, progress, "optimal impedance",
                                             "landing problem")]
-    linear = isinstance(ground, LinearGround)
-    return [{"v0": i.v0, "rigid": rigid_depth(i.v0) if linear else math.nan,
+    return [{"v0": i.v0, "rigid": rigid_depth(i.v0, ground),
              "impedance": o.depth, "impedance_k_p": o.k_p, "impedance_k_d": o.k_d,
              "impedance_u_peak": o.u_peak, "bang_bang": b.depth,
              "bang_bang_switch": b.switch_times[0] if b.switch_times else math.nan,

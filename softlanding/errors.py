@@ -130,6 +130,8 @@ FIELDS: dict[str, Rule] = {
     "K_p": NONNEGATIVE, "K_d": NONNEGATIVE, "rest_length": NONNEGATIVE,
     # run settings
     "t_max": POSITIVE, "factor": POSITIVE,
+    "rtol": within(1e-15, 1e-3, why="integrator tolerance of a non-affine ground"),
+    "foot_diameter": POSITIVE, "exponent": within(0.0, 10.0, open_lo=True, why="f = d^n"),
 }
 """The validation rule of every named model number (finiteness is always required)."""
 

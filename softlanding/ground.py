@@ -24,6 +24,7 @@ import math
 import numbers
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 from .errors import ParameterError, check
@@ -279,6 +280,12 @@ class CustomGround:
         import casadi as ca
         ground = CustomGround("power-1.5", lambda d, v: ca.fmax(d, 0) ** 1.5)
 
+    ``force`` is the bed's resistance (quasi-static and rate-dependent); with a ``mass``
+    law the grains' momentum flux ``m_a'(d) v_f^2`` (momentum given to grains accreted at
+    rest, ``d/dt (m_a v_f)``) is added by :meth:`yield_force`, and the dynamics divide by
+    ``m_f + m_a``. The crater's static hold is ``force(d, 0)``. The simulator compiles the
+    law to C once (:mod:`softlanding.groundcode`).
+
     Parameters
     ----------
     label : str
@@ -314,7 +321,8 @@ class CustomGround:
         return hash((self.label, id(self.force), id(self.mass)))
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
-        """``force(depth, v_f)``.
+        """``force(depth, v_f) + m_a'(depth) v_f^2``: the bed's force, plus the grains' momentum
+        flux when a mass law is given (as :class:`AddedMassGround`).
 
         Parameters
         ----------
@@ -323,7 +331,13 @@ class CustomGround:
         v_f : float or expression
             The foot's velocity.
         """
-        return self.force(depth, v_f)
+        f = self.force(depth, v_f)
+        if self.mass is None:
+            return f
+        slope = _mass_slope(self.mass)(depth)
+        if isinstance(depth, numbers.Real) and isinstance(v_f, numbers.Real):
+            return float(f) + float(slope) * float(v_f) ** 2
+        return f + slope * v_f**2
 
     def added_mass(self, depth: Any) -> Any:
         """``mass(depth)`` (0 when not given).
@@ -346,6 +360,15 @@ class CustomGround:
 
     def to_dict(self) -> dict[str, Any]:
         return {"model": self.label, **self.parameters}
+
+
+@lru_cache(maxsize=64)
+def _mass_slope(mass: Callable[[Any], Any]) -> Any:
+    """``d -> m_a'(d)`` of a mass law, as a CasADi function (numbers, SX or MX)."""
+    import casadi as ca
+
+    d = ca.SX.sym("d")
+    return ca.Function("mass_slope", [d], [ca.jacobian(ca.SX(mass(d)), d)])
 
 
 LINEAR_GROUND = LinearGround()

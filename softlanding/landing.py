@@ -274,8 +274,8 @@ class BangBangLanding:
             durs, rows = [h] * len(u), [_const_row(v) for v in u]
             xT = self.transcribed.x[-1]
         stroke = xT[0] - xT[2]
-        rows.append(_const_row(self.u_b))
-        if xT[1] < 0:
+        if xT[1] < 0:  # the arrest force until the body stops (none if it has stopped)
+            rows.append(_const_row(self.u_b))
             decel = xT[1] ** 2 / (2 * stroke)
             durs.append(-xT[1] / decel)
         rows.append(_const_row(r_m / (1 + r_m)))

@@ -313,7 +313,8 @@ def hybrid(out: Path, files: list[str], st: Settings, progress: bool) -> dict:
 
 
 SECTIONS = ("bang-bang example", "stepped intrusions", "depth maps", "optimal gains",
-            "comparison", "experiment", "cost of transport", "robustness", "hybrid phases")
+            "comparison", "experiment", "cost of transport", "robustness", "terrain models",
+            "hybrid phases")
 
 
 def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True,
@@ -376,7 +377,10 @@ def _run_sections(out: Path, st: Settings, progress: bool,
     summary["cost_of_transport"] = run(7, "cost_of_transport", cost_of_transport, out, files,
                                        st, progress, depth_optimum)
     summary["robustness"] = run(8, "robustness", robustness, out, files, st, progress)
-    summary["hybrid"] = run(9, "hybrid", hybrid, out, files, st, progress)
+    from .terrain_study import terrain_section
+
+    summary["terrain_models"] = run(9, "terrain_models", terrain_section, out, files, st.quick)
+    summary["hybrid"] = run(10, "hybrid", hybrid, out, files, st, progress)
     from . import __version__
 
     summary["meta"] = {"quick": st.quick, "elapsed_s": time.perf_counter() - t_all,

@@ -1,12 +1,20 @@
-"""Exact event-driven simulation of a landing on yielding ground.
+"""Event-driven simulation of a landing on yielding ground: exact, or integrated.
 
-The ground is the paper's one-way plastic spring with three modes (yielding,
-static, flight) and crater memory: once the foot has dug to depth ``d`` the
-ground holds any support force up to ``d`` without yielding, and a foot that
-lifts off lands again at the crater bottom. Every mode is affine in the state,
-so each is propagated with the matrix exponential and each event (foot stops,
-support force exceeded, lift-off, re-landing, saturation on/off, schedule
-switches) is located as a root of the exact solution; see :mod:`._kernel`.
+The ground has three modes (yielding, static, flight) and crater memory: once the
+foot has dug to depth ``d`` the ground holds any support force up to ``f(d, 0)``
+(``d`` for the paper's spring) without yielding, and a foot that lifts off lands
+again at the crater bottom. On the paper's spring (any affine ground law) every
+mode is affine in the state, so each is propagated with the matrix exponential and
+each event (foot stops, support force exceeded, lift-off, re-landing, saturation
+on/off, schedule switches) is located as a root of the exact solution; see
+:mod:`._kernel`.
+
+On a non-affine ground (inertial drag, added mass, a user's law) only the yielding
+mode is non-affine: its segments are integrated by an adaptive Dormand-Prince
+8(5,3) method (relative and absolute tolerance ``rtol``, default 1e-12) with events
+located by Newton on the integrator's own steps, while the static and flight modes,
+the rest proof and their events stay exact (:mod:`softlanding.kernel.nonaffine`).
+The energy ledger then also has the drag loss and the grains' loss.
 
 Example
 -------
@@ -32,9 +40,13 @@ from .controllers import Controller, ForceSchedule, Impedance, Rigid, impedance_
 from .dynamics import STATE_NAMES, mode_matrices
 from .errors import ParameterError, RestNotProvenError, check, check_count
 from .ground import LINEAR_GROUND, Ground
+from .groundcode import kernel_law, needs_integration
 from .model import Impact, Robot
 
 _O_DLIM, _O_FOOT_REST = K.O_DLIM, K.O_FOOT_REST
+O_EDRAG, O_EGRAIN = K.N_OUT, K.N_OUT + 1  # the integrated path's extra columns
+N_OUT_NL = K.N_OUT + 2
+
 MODE_NAMES = ("yielding", "static", "flight")
 STATUS_NAMES = K.STATUS_NAMES
 DEFAULT_T_MAX = 1.0e4
@@ -46,8 +58,12 @@ DEFAULT_MAX_SEGMENTS = 500
 class EnergyLedger:
     """Energies in units of ``m_t g x_s``, potential energy measured from the impact pose.
 
-    ``E0 - ET = ground + actuator`` where ``ground`` is the work done on the
-    plastic ground (``x_f(T)^2 / 2`` for the paper's spring) and
+    ``E0 - ET = ground + drag + grains + actuator`` where ``ground`` is the work done
+    on the plastic ground (``int f(d, 0) dd``: ``x_f(T)^2 / 2`` for the paper's spring),
+    ``drag`` the work of the bed's rate-dependent force (``int c_d |v_f|^3 dtau`` for
+    inertial drag), ``grains`` the loss to the accreted grains (their inelastic
+    accretion, ``int m_a'(d) |v_f|^3 / 2 dtau``, and the collisions of a foot landing
+    again on them; both 0 on the paper's spring), and
     ``actuator = -int_0^T u (v_b - v_f) dtau`` is the energy taken out of the
     robot by the actuator (the paper writes its magnitude; with ``u > 0``
     pushing the masses apart the balance needs the minus sign). ``E0 = v0^2 / 2``
@@ -62,12 +78,19 @@ class EnergyLedger:
         Mechanical energy at impact and at rest.
     ground, actuator : float
         Work done on the ground and taken out by the actuator.
+    drag, grains : float
+        Drag loss and grain loss (non-affine grounds; 0 otherwise).
+    integrated : bool
+        The yielding segments were integrated (the ledger then lists drag and grains).
     """
 
     E0: float
     ET: float
     ground: float
     actuator: float
+    drag: float = 0.0
+    grains: float = 0.0
+    integrated: bool = False
 
     @property
     def cot(self) -> float:
@@ -76,18 +99,23 @@ class EnergyLedger:
 
     @property
     def cot_lossless(self) -> float:
-        """``ground / E0`` (NaN at ``v0 = 0``)."""
-        return self.ground / self.E0 if self.E0 > 0 else math.nan
+        """Losses to the terrain over ``E0``: ``(ground + drag + grains) / E0`` (NaN at
+        ``v0 = 0``)."""
+        return (self.ground + self.drag + self.grains) / self.E0 if self.E0 > 0 else math.nan
 
     @property
     def residual(self) -> float:
-        """``(E0 - ET) - (ground + actuator)``: zero up to rounding."""
-        return (self.E0 - self.ET) - (self.ground + self.actuator)
+        """``(E0 - ET) - (ground + drag + grains + actuator)``: zero up to rounding (and the
+        integrator's tolerance on a non-affine ground)."""
+        return (self.E0 - self.ET) - (self.ground + self.drag + self.grains + self.actuator)
 
     def to_dict(self) -> dict[str, float]:
         """Every figure, the two CoTs included."""
-        return {"E0": self.E0, "ET": self.ET, "ground": self.ground,
-                "actuator": self.actuator, "cot": self.cot, "cot_lossless": self.cot_lossless}
+        d = {"E0": self.E0, "ET": self.ET, "ground": self.ground, "actuator": self.actuator}
+        if self.integrated:
+            d.update(drag=self.drag, grains=self.grains)
+        d.update(cot=self.cot, cot_lossless=self.cot_lossless)
+        return d
 
 
 def stroke(traj: Trajectory) -> np.ndarray:
@@ -166,7 +194,8 @@ class LandingResult:
         """Sample the exact solution on ``n`` points of ``[0, t_end]`` plus every event time.
 
         The samples use the simulator's own propagator, so they are exact to rounding
-        (a pinned foot has exactly zero velocity).
+        (a pinned foot has exactly zero velocity); on a non-affine ground the yielding
+        segments are integrated again from their starts at the simulation's tolerance.
 
         Parameters
         ----------
@@ -200,7 +229,8 @@ class LandingResult:
         elif t_end is None:
             t_end = max(1.3 * self.T, self.T + 2.0, ts[-1])
         grid = np.union1d(np.linspace(0.0, t_end, n), ts[(ts >= 0) & (ts <= t_end)])
-        z, u, mode = K.sample_segments(seg, grid)
+        sampler = K.sample_segments_nl if "law" in seg else K.sample_segments
+        z, u, mode = sampler(seg, grid)
         x = z[:, :4]
         return Trajectory(grid, x, u[:, None], STATE_NAMES, ("u",),
                           mode=np.array(MODE_NAMES)[mode])
@@ -239,8 +269,10 @@ def simulate(
     energy: bool = True,
     t_max: float = DEFAULT_T_MAX,
     max_segments: int = DEFAULT_MAX_SEGMENTS,
+    method: str = "auto",
+    rtol: float = K.DEFAULT_RTOL,
 ) -> LandingResult:
-    """Simulate one landing exactly.
+    """Simulate one landing (exactly on an affine ground).
 
     Parameters
     ----------
@@ -251,7 +283,8 @@ def simulate(
     controller : Rigid, Impedance or ForceSchedule, optional
         Default: the rigid leg.
     ground : Ground
-        Ground model (must be affine for this exact simulator).
+        Ground model. Affine laws are simulated exactly; others have their yielding
+        segments integrated (see the module notes).
     x0 : array of 4, optional
         Initial state; defaults to the impact state ``[l0, v0, 0, v0]``.
     energy : bool
@@ -260,6 +293,11 @@ def simulate(
         Give up proving rest after this time.
     max_segments : int
         Give up proving rest after this many hybrid segments.
+    method : str
+        ``"auto"`` (exact if the ground allows it), ``"exact"`` (refuses a non-affine
+        ground) or ``"integrate"`` (the DOP853 path even for an affine ground: a check).
+    rtol : float
+        Relative and absolute tolerance of the integrated yielding segments.
 
     Returns
     -------
@@ -267,28 +305,66 @@ def simulate(
     """
     impact = Impact.of(impact)
     controller = Rigid() if controller is None else controller
-    mats = mode_matrices(robot.r_m, ground)
+    integrate = integrated(ground, method)
+    mats = mode_matrices(robot.r_m, LINEAR_GROUND if integrate else ground)
     Kf, st, su = controller.kernel_arrays(mats, robot)
     umax = math.inf if robot.u_max is None else robot.u_max
     z0 = impact.initial_state(robot) if x0 is None else np.asarray(x0, float)
     if z0.shape != (4,) or not np.all(np.isfinite(z0)):
         raise ParameterError("x0", "must be 4 finite numbers")
-    out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
-                                  check("t_max", t_max),
-                                  check_count("max_segments", max_segments, 1, 10**6),
-                                  bool(energy))
+    max_seg = check_count("max_segments", max_segments, 1, 10**6)
+    if integrate:
+        law = kernel_law(ground, robot.r_m, lock=isinstance(controller, Rigid), u_max=umax)
+        out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
+                                         check("t_max", t_max), max_seg, bool(energy),
+                                         check("rtol", rtol))
+    else:
+        out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
+                                      check("t_max", t_max), max_seg, bool(energy))
     return LandingResult(
         depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
         u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),
         stroke_max=float(out[K.O_SMAX]), t_first_stop=float(out[K.O_TSTOP]),
         T=float(out[K.O_T]), status=STATUS_NAMES[int(out[K.O_STATUS])],
-        energy=EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
-                            float(out[K.O_EACT])),
+        energy=_ledger(out, integrate),
         n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
         # (a kernel without these columns, e.g. the benchmark's frozen first one: unknown)
         depth_limit=float(out[_O_DLIM]) if out.size > _O_DLIM else math.nan,
         foot_rest=bool(out[_O_FOOT_REST]) if out.size > _O_FOOT_REST else False,
         ground=ground, _segments=segments)
+
+
+def integrated(ground: Ground, method: str = "auto") -> bool:
+    """Whether landings on ``ground`` are integrated (True) or exact (False).
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    method : str
+        ``"auto"``, ``"exact"`` or ``"integrate"``.
+
+    Raises
+    ------
+    ParameterError
+        An unknown method, or ``"exact"`` for a ground that has no exact path.
+    """
+    if method not in ("auto", "exact", "integrate"):
+        raise ParameterError("method", f"must be auto, exact or integrate, got {method!r}")
+    need = needs_integration(ground)
+    if method == "exact" and need:
+        raise ParameterError("method", f"the {ground.name} ground is not affine (or its "
+                                       "crater holds other than f(d, 0) = d): no exact path")
+    return need or method == "integrate"
+
+
+def _ledger(out: np.ndarray, integrate: bool) -> EnergyLedger:
+    if not integrate:
+        return EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
+                            float(out[K.O_EACT]))
+    return EnergyLedger(float(out[K.O_E0]), float(out[K.O_ET]), float(out[K.O_EGND]),
+                        float(out[K.O_EACT]), float(out[O_EDRAG]), float(out[O_EGRAIN]),
+                        integrated=True)
 
 
 # ------------------------------------------------------------------------ batch
@@ -374,9 +450,10 @@ class BatchResult:
 
     @property
     def cot_lossless(self) -> np.ndarray:
-        """``ground / E0`` per landing."""
+        """Losses to the terrain over ``E0`` (``(ground + drag + grains) / E0``) per landing."""
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(self.data["E0"] > 0, self.data["ground"] / self.data["E0"], np.nan)
+            loss = self.data["ground"] + self.data.get("drag", 0.0) + self.data.get("grains", 0.0)
+            return np.where(self.data["E0"] > 0, loss / self.data["E0"], np.nan)
 
     @property
     def stroke_margin(self) -> np.ndarray:
@@ -412,6 +489,8 @@ def simulate_batch(
     chunk_size: int = 8192,
     t_max: float = DEFAULT_T_MAX,
     max_segments: int = DEFAULT_MAX_SEGMENTS,
+    method: str = "auto",
+    rtol: float = K.DEFAULT_RTOL,
 ) -> BatchResult:
     """Simulate many impedance-controlled landings of one robot in parallel (all cores).
 
@@ -423,7 +502,8 @@ def simulate_batch(
     v0, k_p, k_d : array_like
         Impact velocities and gains, broadcast against each other.
     ground : Ground
-        Ground model (affine).
+        Ground model (a non-affine one is integrated, see :func:`simulate`; the result
+        then also has the fields ``drag`` and ``grains``).
     energy : bool
         Also compute the energy ledger.
     progress : bool or None
@@ -434,6 +514,10 @@ def simulate_batch(
         Give up proving rest after this time.
     max_segments : int
         Give up proving rest after this many hybrid segments.
+    method : str
+        As :func:`simulate`.
+    rtol : float
+        Tolerance of the integrated yielding segments.
 
     Returns
     -------
@@ -445,14 +529,16 @@ def simulate_batch(
                  for name, a in zip(("v0", "k_p", "k_d"), arrays, strict=True))
     n = kp.size
     check_batch_size(n)
-    mats = mode_matrices(robot.r_m, ground)
+    integrate = integrated(ground, method)
+    mats = mode_matrices(robot.r_m, LINEAR_GROUND if integrate else ground)
+    law = kernel_law(ground, robot.r_m) if integrate else None
     l0 = robot.rest_length
     Kf = np.empty((n, 3, 5))
     Kf[:] = impedance_gains(kp, kd, np.full(n, l0)).T[:, None, :]  # the one impedance law
     x0 = np.stack([np.full(n, l0), v, np.zeros(n), v], axis=1)
     um = np.full(n, math.inf if robot.u_max is None else robot.u_max)
     ss = np.full(n, robot.s)
-    out = np.zeros((n, K.N_OUT))
+    out = np.zeros((n, N_OUT_NL if integrate else K.N_OUT))
     ridx = np.zeros(n, dtype=np.int64)
     from ._progress import progress_bar
 
@@ -460,11 +546,23 @@ def simulate_batch(
                       "simulating", "landing") as bar:
         for a in range(0, n, chunk_size):
             b = min(n, a + chunk_size)
-            K.run_batch([mats], ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b],
-                        check("t_max", t_max), max_segments, energy, out[a:b])
+            if law is not None:
+                K.run_batch_nl([mats], ridx[a:b], law, Kf[a:b], um[a:b], x0[a:b], ss[a:b],
+                               check("t_max", t_max), max_segments, energy, out[a:b],
+                               check("rtol", rtol))
+            else:
+                K.run_batch([mats], ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b],
+                            check("t_max", t_max), max_segments, energy, out[a:b])
             bar.update(b - a)
+    inputs = {"v0": arrays[0], "k_p": arrays[1], "k_d": arrays[2]}
+    return BatchResult(robot, ground, inputs, _batch_data(out, shape, integrate))
+
+
+def _batch_data(out: np.ndarray, shape: tuple, integrate: bool) -> dict[str, np.ndarray]:
+    """The output rows as one array per field (drag and grains on an integrated ground)."""
     data = {}
-    for name, col in _FIELD_COL.items():
+    cols = dict(_FIELD_COL, drag=O_EDRAG, grains=O_EGRAIN) if integrate else _FIELD_COL
+    for name, col in cols.items():
         if col >= out.shape[1]:  # a kernel without this column (the benchmark's first one)
             continue
         v_ = out[:, col].reshape(shape)
@@ -473,8 +571,7 @@ def simulate_batch(
         elif name in ("steps", "status"):
             v_ = v_.astype(np.int64)
         data[name] = v_
-    inputs = {"v0": arrays[0], "k_p": arrays[1], "k_d": arrays[2]}
-    return BatchResult(robot, ground, inputs, data)
+    return data
 
 
 __all__ = ["BATCH_FIELDS", "BatchResult", "EnergyLedger", "ForceSchedule", "Impedance",

@@ -155,6 +155,14 @@ def _robustness(s: dict) -> list[str]:
     return out
 
 
+def _terrain(s: dict) -> list[str]:
+    if "terrain_models" not in s:
+        return []
+    from .terrain_study import terrain_markdown
+
+    return terrain_markdown(s["terrain_models"])
+
+
 def _hybrid(s: dict) -> list[str]:
     if "hybrid" not in s:
         return []
@@ -164,7 +172,7 @@ def _hybrid(s: dict) -> list[str]:
 
 
 SECTIONS = (_bang_bang, _stepped, _maps, _gains, _comparison, _experiment, _cot, _robustness,
-            _hybrid)
+            _terrain, _hybrid)
 
 
 def summary_markdown(s: dict) -> str:

@@ -25,9 +25,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 from .errors import ParameterError, check
-from .ground import AddedMassGround, DragGround
+from .ground import AddedMassGround, CustomGround, DragGround
 from .model import G_EARTH, Units
 
 PAPER_FOOT_DIAMETER = 0.130
@@ -162,6 +163,26 @@ def poppy_seed_added_mass(units: Units, diameter: float = PAPER_FOOT_DIAMETER, *
     return AddedMassGround(pi_a=pi_a, radius=0.5 * diameter / x_s, kappa=kappa, c_d=c_d)
 
 
+@lru_cache(maxsize=32)
+def power_law_ground(n: float) -> CustomGround:
+    """The power-law ground ``f = d^n`` (stiffening for ``n > 1``), a user law.
+
+    The worked example of a :class:`~softlanding.ground.CustomGround`: one CasADi
+    expression, from which the simulator (C code generated and compiled once), the OCP
+    and the certificate all derive. Cached per ``n`` (one object, one compiled law).
+
+    Parameters
+    ----------
+    n : float
+        Exponent (> 0); ``n = 1`` is the paper's spring.
+    """
+    import casadi as ca
+
+    n = check("exponent", n)
+    return CustomGround(f"power-{n:g}", lambda d, v: ca.fmax(d, 0.0) ** n,
+                        parameters={"exponent": n})
+
+
 def paper_rig_units() -> Units:
     """The paper's rig: ``m_t = 3 kg`` on ``k_g = 4.4 kN/m``."""
     return Units(m_t=3.0, k_g=PAPER_K_G, g=G_EARTH)
@@ -170,4 +191,5 @@ def paper_rig_units() -> Units:
 _POS = (lambda x: x > 0.0, "must be > 0 (metres)")
 
 __all__ = ["MEDIA", "Medium", "PAPER_FOOT_DIAMETER", "PAPER_K_G", "foot_area", "medium",
-           "paper_rig_units", "poppy_seed_added_mass", "poppy_seed_drag", "rft_stiffness"]
+           "paper_rig_units", "poppy_seed_added_mass", "poppy_seed_drag", "power_law_ground",
+           "rft_stiffness"]

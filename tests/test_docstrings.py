@@ -17,6 +17,7 @@ MODULES = [
     "softlanding.simulator", "softlanding.impedance", "softlanding.sweeps",
     "softlanding.landing", "softlanding.comparison", "softlanding.robustness",
     "softlanding.reproduce", "softlanding.summary", "softlanding.demo", "ocp.trajectory",
+    "softlanding.terrain", "softlanding.groundcode", "softlanding.cli_ground",
 ]
 
 

@@ -157,3 +157,19 @@ def test_a_rest_length_survives_the_replay_unchanged_in_si(parameter):
     assert lr == pytest.approx(1.0, rel=1e-15)
     assert res.depth == pytest.approx(direct.depth, rel=1e-12)
     assert res.stroke_min == pytest.approx(direct.stroke_min, rel=1e-9)
+
+
+def test_terrain_models_match_the_api(run):
+    from softlanding.comparison import rigid_depth
+    from softlanding.ground import DragGround
+
+    out, s = run
+    t = s["terrain_models"]
+    assert {"fig_terrain_models.png", "fig_terrain_experiment.pdf"} <= set(s["files"])
+    row = next(r for r in t["models"]["drag 0.2"] if r["v0"] == -4.8)
+    direct = solve_landing(-4.8, PAPER_ROBOT, DragGround(0.2))
+    assert row["bang_bang"] == pytest.approx(direct.depth, rel=1e-9)
+    assert row["rigid"] == rigid_depth(-4.8, DragGround(0.2))
+    assert row["verdict"] == "bang-bang certified"
+    assert all(r["change"] < 0 for r in t["experiment_shift"])  # drag: shallower
+    assert "Terrain models" in (out / "summary.md").read_text()
