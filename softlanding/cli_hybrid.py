@@ -61,14 +61,20 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
         The figure to write (checked already).
     """
     from .cli import EXIT_FAILURE, EXIT_OK, _print_json, _print_table, _savefig
+    from .cli_ground import ground_of
+    from .ground import LINEAR_GROUND
 
+    ground = ground_of(a)
+    if ground != LINEAR_GROUND and (a.variant != "two-phase" or a.steps == 2):
+        raise ParameterError("ground", "only --variant two-phase (one step) takes another "
+                                       "ground than the paper's linear spring")
     res: Any
     if a.variant == "two-phase" and a.steps == 2:
         return _two_steps(a, robot)
     if a.variant == "two-phase":
         from .hybrid import solve_two_phase
 
-        res = solve_two_phase(Impact(a.v0), robot)
+        res = solve_two_phase(Impact(a.v0), robot, ground)
     else:
         from .leg_extension import solve_leg_extension
 
