@@ -146,7 +146,7 @@ def replay_controller(refined: RefinedPhases, tail: float, first: int = 0) -> tu
     # when the simulator's foot stop falls just after the switch (it would never stop)
     gains = [a.gain if a.constant is None else np.r_[0.0, 0.0, 0.0, 0.0, a.constant]
              for a in laws] + [np.r_[0.0, -TAIL_DAMPING, 0.0, 0.0, tail]]
-    fs = _controllers.FeedbackSchedule  # type: ignore[attr-defined]
+    fs = _controllers.FeedbackSchedule
     kinds = "constant forces" if all(a.constant is not None for a in laws) else \
         "constant forces and state feedback"
     return (fs(tuple(np.cumsum(durs)), tuple(tuple(g) for g in gains)),
