@@ -225,7 +225,7 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
         {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
          "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
          "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations,
-         "unverified_reasons": r.unverified_reasons()}
+         "path": r.path, "unverified_reasons": r.unverified_reasons()}
         for r, rd in zip(res, rigid, strict=True)]
     unverified = [r for r in rows if r["unverified_reasons"]]
     code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
@@ -242,11 +242,12 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     if unverified:
         print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
             f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
-    print(f"{'v0':>7} {'depth':>14} {'rigid':>10} {'ratio':>7} {'T':>8}  switch  iters")
+    print(f"{'v0':>7} {'depth':>14} {'rigid':>10} {'ratio':>7} {'T':>8}  switch   solved by")
     for r in rows:
         sw = ",".join(f"{t:.5f}" for t in r["switch_times"])
+        by = ("transcription" if r["path"] == "transcription" else "structure re-solve")
         print(f"{r['v0']:>7.3f} {r['depth']:>14.10f} {r['rigid_depth']:>10.6f} "
-              f"{r['ratio_to_rigid']:>7.4f} {r['T']:>8.5f}  {sw}  {r['iterations']}")
+              f"{r['ratio_to_rigid']:>7.4f} {r['T']:>8.5f}  {sw}  {by} ({r['iterations']} it.)")
     if written:
         print(f"figure written to {written}")
     return code
