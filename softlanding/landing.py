@@ -45,6 +45,7 @@ from .errors import InfeasibleLandingError, ParameterError, check_count
 from .ground import LINEAR_GROUND, Ground
 from .model import PAPER_ROBOT, Impact, Robot
 from .simulator import LandingResult, simulate
+from .verification import certificate_reasons, replay_reasons
 
 T_MAX = 30.0
 MAX_NODES = 5000
@@ -234,20 +235,8 @@ class BangBangLanding:
                 self.transcribed, "verified", True):
             out.append("the transcription violates a path constraint between its nodes")
         if self.replay is not None:
-            rp = self.replay
-            if not rp.rest_proven:
-                out.append(f"the exact-simulator replay does not come to rest ({rp.status})")
-            elif not rp.feasible:
-                out.append(f"the exact-simulator replay leaves the stroke [0, {self.robot.s:g}] "
-                           f"(leg length from {rp.stroke_min:.6g} to {rp.stroke_max:.6g})")
-            tol = (1e-9 if self.refined is not None else 1e-6) * max(1.0, self.depth)
-            if not self.replay_difference <= tol:
-                out.append(f"the replay's depth differs by {self.replay_difference:.2e} "
-                           f"(> {tol:.0e})")
-        if certificate is not None and not certificate.certified:
-            why = f": {certificate.reasons[0]}" if certificate.reasons else ""
-            out.append(f"PMP certificate {certificate.verdict}{why}")
-        return out
+            out += replay_reasons(self.replay, self.depth, self.refined is not None)
+        return out + certificate_reasons(certificate)
 
     @property
     def replay_difference(self) -> float:

@@ -35,6 +35,7 @@ from .model import PAPER_ROBOT, Impact, Robot
 from .phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
 from .phase_solve import phase_guess, refined_phases, structure_resolve, transcribed_solve
 from .simulator import LandingResult, simulate
+from .verification import certificate_reasons, replay_reasons
 
 
 @dataclass
@@ -139,15 +140,7 @@ class LegExtensionLanding:
         if self.replay is None:
             out.append(f"not replayed in the exact simulator ({self.replay_kind})")
         else:
-            rp = self.replay
-            if not rp.rest_proven:
-                out.append(f"the exact-simulator replay does not come to rest ({rp.status})")
-            elif not rp.feasible:
-                out.append(f"the exact-simulator replay leaves the stroke (leg length from "
-                           f"{rp.stroke_min:.6g} to {rp.stroke_max:.6g})")
-            tol = (1e-9 if self.refined is not None else 1e-6) * max(1.0, self.depth)
-            if not self.replay_difference <= tol:
-                out.append(f"the replay's depth differs by {self.replay_difference:.2e}")
+            out += replay_reasons(self.replay, self.depth, self.refined is not None)
         if self.gain < -(1e-9 if self.refined is not None else 1e-5) * max(1.0, self.depth):
             out.append(f"deeper than with the paper's initial condition by {-self.gain:.2e}: "
                        "a local optimum (the paper's touchdown state is admissible)")
@@ -155,10 +148,7 @@ class LegExtensionLanding:
                 self.impact.v0) ** 2):
             out.append(f"the flight arcs propagated exactly miss the touchdown state by "
                        f"{self.flight_check:.2e}")
-        if certificate is not None and not certificate.certified:
-            why = f": {certificate.reasons[0]}" if certificate.reasons else ""
-            out.append(f"PMP certificate {certificate.verdict}{why}")
-        return out
+        return out + certificate_reasons(certificate)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict."""
