@@ -295,6 +295,15 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
         regime = SAT_LOW
     else:
         regime = LINEAR
+    steps, regime = mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop,
+                                 ext, bk)
+    return mode, regime, d, shift, steps
+
+
+@njit(cache=True)
+def mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop, ext, bk):
+    """Bookkeeping of a ground-mode change: count a new intrusion step, note the foot's
+    (latest) rest, re-classify the feedback's regime. Returns ``(steps, regime)``."""
     if mode != prev:
         if mode == YIELDING:
             steps += 1
@@ -304,7 +313,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
             bk[B_ACT] = ext[X_ACT]
         if not open_loop:
             regime = classify(mode, z, Kf, umax)
-    return mode, regime, d, shift, steps
+    return steps, regime
 
 
 @njit(cache=True)

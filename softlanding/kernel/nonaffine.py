@@ -45,7 +45,7 @@ from .const import (
     TOO_MANY_SEGMENTS,
     YIELDING,
 )
-from .events import build_events, classify, contact_mode, due_event
+from .events import build_events, contact_mode, due_event
 from .groundlaw import (
     G_DC,
     G_LOCK,
@@ -57,11 +57,7 @@ from .groundlaw import (
     yield_rhs,
 )
 from .landing import (
-    B_ACT,
-    B_ET,
-    B_T,
     B_TSTOP,
-    X_ACT,
     X_UMAX,
     X_UMIN,
     X_WORK,
@@ -72,6 +68,7 @@ from .landing import (
     in_range,
     initial_mode,
     march,
+    mode_changed,
     record_segment,
     reject,
     rest_proof,
@@ -146,15 +143,8 @@ def apply_event_nl(P, law_args, code, z, z0, t, d, shift, mode, regime, steps, K
         regime = SAT_LOW
     elif code != EV_CONE:
         regime = LINEAR
-    if mode != prev:
-        if mode == YIELDING:
-            steps += 1
-        elif mode == STATIC:
-            bk[B_T] = t
-            bk[B_ET] = energy_rel(P, z, z0)
-            bk[B_ACT] = ext[X_ACT]
-        if not open_loop:
-            regime = classify(mode, z, Kf, umax)
+    steps, regime = mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop,
+                                 ext, bk)
     return mode, regime, d, shift, steps
 
 
