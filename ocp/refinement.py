@@ -42,6 +42,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .active_set_newton import ActiveSetNewton
 from .flows import (
     THETA_MAX,
     ArcDynamics,
@@ -328,6 +329,8 @@ class SwitchingNLP:
         last = getattr(self, "last", None)
         if last is None:
             return None
+        if "active" in last:
+            return last["active"]
         b = self.bounds(last["pv"])
         lam_g, lam_x = last["lam_g"], last["lam_x"]
         big = max(1.0, float(np.max(np.abs(np.r_[lam_g, lam_x]), initial=0.0)))
@@ -336,18 +339,22 @@ class SwitchingNLP:
         act_x = np.abs(lam_x) > 1e-9 * big
         rows = np.flatnonzero(act_g)
         cols = np.flatnonzero(act_x)
-        return (rows, np.where(eq[rows], 0, np.sign(lam_g[rows])).astype(int), cols,
-                np.sign(lam_x[cols]).astype(int))
+        last["active"] = (rows, np.where(eq[rows], 0, np.sign(lam_g[rows])).astype(int), cols,
+                          np.sign(lam_x[cols]).astype(int))
+        return last["active"]
 
     def newton(self, pv: np.ndarray, w0: np.ndarray, max_iter: int = 12) -> dict[str, Any] | None:
         """Re-solve by Newton's method on the last solution's active set, if it is square.
 
         The active constraints (and active variable bounds) of the last Ipopt
         solution are solved as equations at the new parameters, from ``w0``
-        and then from the last solution; the result is accepted only if every
-        other constraint and every bound holds (to :data:`KKT_PRIMAL`), the
-        multipliers from ``J_A^T mu = -grad J`` have the signs their sides
-        demand, and the iteration converged to rounding level.
+        and then from the last solution, by a CasADi rootfinder compiled once
+        per active set (:class:`ocp.active_set_newton.ActiveSetNewton`; a
+        Python Newton loop over the KKT function is the second chance). The
+        result is accepted only if every other constraint and every bound
+        holds (to :data:`KKT_PRIMAL`), the multipliers from
+        ``J_A^T mu = -grad J`` have the signs their sides demand, and the
+        iteration converged to rounding level.
 
         Parameters
         ----------
@@ -356,7 +363,7 @@ class SwitchingNLP:
         w0 : ndarray
             Starting point ``[durations, x0]``.
         max_iter : int
-            Newton steps allowed per start.
+            Newton steps allowed per start (Python loop).
 
         Returns
         -------
@@ -372,17 +379,31 @@ class SwitchingNLP:
             return None
         t0 = time.perf_counter()
         b = self.bounds(pv)
+        held = np.where(cside > 0, b["ubx"][cols], b["lbx"][cols])
+        solver = self._compiled_newton(rows, side, cols)
         target = np.where(side > 0, b["ubg"][rows], b["lbg"][rows])
         for start in (w0, self.last["w"]):
-            w = np.array(start, dtype=float)
-            w[cols] = np.where(cside > 0, b["ubx"][cols], b["lbx"][cols])
-            it = self._newton_iterate(w, pv, rows, target, cols, max_iter)
-            if it:
-                out = self._newton_result(w, pv, rows, side, cols, cside, it,
+            found = solver.solve(pv, start, held)
+            if found is None:  # second chance: the Python loop (other stopping rule)
+                w = np.array(start, dtype=float)
+                w[cols] = held
+                it = self._newton_iterate(w, pv, rows, target, cols, max_iter)
+                found = (w, it) if it else None
+            if found is not None:
+                out = self._newton_result(solver, b, found[0], pv, side, cside, found[1],
                                           time.perf_counter() - t0)
                 if out is not None:
                     return out
         return None
+
+    def _compiled_newton(self, rows: np.ndarray, side: np.ndarray,
+                         cols: np.ndarray) -> ActiveSetNewton:
+        """The :class:`ActiveSetNewton` of an active set, built on first use."""
+        cache = self.__dict__.setdefault("_newton_cache", {})
+        key = (rows.tobytes(), side.tobytes(), cols.tobytes())
+        if key not in cache:
+            cache[key] = ActiveSetNewton(self._nlp, self.bounds_fn, rows, side, cols)
+        return cache[key]
 
     def _newton_iterate(self, w: np.ndarray, pv: np.ndarray, rows: np.ndarray,
                         target: np.ndarray, cols: np.ndarray, max_iter: int) -> int:
@@ -409,19 +430,19 @@ class SwitchingNLP:
                 return it
         return 0
 
-    def _newton_result(self, w: np.ndarray, pv: np.ndarray, rows: np.ndarray, side: np.ndarray,
-                       cols: np.ndarray, cside: np.ndarray, it: int,
+    def _newton_result(self, solver: ActiveSetNewton, b: dict[str, np.ndarray], w: np.ndarray,
+                       pv: np.ndarray, side: np.ndarray, cside: np.ndarray, it: int,
                        elapsed: float) -> dict[str, Any] | None:
-        """Multipliers and the acceptance checks of :meth:`newton`."""
-        g, Jg, gJ = (np.array(ca.DM(v), dtype=float) for v in self.kkt_fn(w, pv))
-        g, gJ = g.ravel(), gJ.ravel()
-        b = self.bounds(pv)
+        """Multipliers and the acceptance checks of :meth:`newton` (one CasADi call)."""
+        rows, cols = solver.rows, solver.cols
+        g, Jr, gJ, f = solver.check(w, pv)
         sc = np.maximum(1.0, np.abs(g))
-        if np.any((b["lbg"] - g) / sc > KKT_PRIMAL) or np.any((g - b["ubg"]) / sc > KKT_PRIMAL):
+        viol = np.r_[(b["lbg"] - g) / sc, (g - b["ubg"]) / sc, 0.0]
+        if np.max(viol) > KKT_PRIMAL:
             return None
         if np.any(w < b["lbx"]) or np.any(w > b["ubx"]):
             return None  # e.g. a negative duration: the structure no longer fits
-        A = np.vstack([Jg[rows], np.eye(self.n_w)[cols]])
+        A = np.vstack([Jr, np.eye(self.n_w)[cols]])
         try:
             mu = np.linalg.solve(A.T, -gJ)
         except np.linalg.LinAlgError:
@@ -434,11 +455,14 @@ class SwitchingNLP:
         lam_g[rows] = mu[:len(rows)]
         lam_x = np.zeros(self.n_w)
         lam_x[cols] = mu[len(rows):]
-        primal, dual = self.kkt(w, lam_g, lam_x, pv)
+        # the KKT residuals of :meth:`kkt`, from the same numbers (lam_g is zero off the rows)
+        dual = gJ + Jr.T @ mu[:len(rows)] + lam_x
+        primal = float(max(np.max(viol), np.max(np.r_[b["lbx"] - w, w - b["ubx"]])))
         self.n_solves += 1
-        return {"w": w, "f": float(self.out_fn(w, pv)[2]), "lam_g": lam_g, "lam_x": lam_x,
+        return {"w": w, "f": f, "lam_g": lam_g, "lam_x": lam_x,
                 "status": "Solve_Succeeded", "success": True, "iterations": it,
-                "time": elapsed, "path": "newton", "primal": primal, "dual": dual}
+                "time": elapsed, "path": "newton", "primal": primal,
+                "dual": float(np.max(np.abs(dual), initial=0.0) / max(1.0, np.max(np.abs(gJ))))}
 
     # ----------------------------------------------------------- verification
     def accuracy(self, w: np.ndarray, pv: np.ndarray, tol: float) -> tuple[bool, float,
@@ -463,13 +487,15 @@ class SwitchingNLP:
         (bool, float, list of int)
             All good; the worst RK8 error estimate; the intervals that fail.
         """
+        theta = self.summary(w, pv)["theta"]
+        bad = [k for k in range(self.K) if self.exact[k] and theta[k] > THETA_MAX]
+        worst = 0.0
+        if all(self.exact):
+            return not bad, worst, bad
         _, _, _, Z = self.outputs(w, pv)
-        bad, worst = [], 0.0
         for k, d in enumerate(self.dyns):
             tau, m = float(w[k]), self.substeps[k]
             if d.exact:
-                if d.norm_A(pv) * tau / m > THETA_MAX:
-                    bad.append(k)
                 continue
             step = rk8_of(d)
             a = numeric_rk8_flow(step, Z[k], tau, m, pv)[-1]
@@ -479,6 +505,58 @@ class SwitchingNLP:
             if err > tol:
                 bad.append(k)
         return not bad, worst, bad
+
+    def summary(self, w: np.ndarray, pv: np.ndarray) -> dict[str, Any]:
+        """What a result reports at ``w``, from one call of a function built once.
+
+        Parameters
+        ----------
+        w : ndarray
+            ``[durations, x0]``.
+        pv : ndarray
+            Parameter values.
+
+        Returns
+        -------
+        dict
+            ``xT``, ``T``, ``J``; ``theta`` (``||A||_1 tau / m`` per interval, 0 on
+            RK8 intervals); ``control_bounds`` (``(lower, upper)`` per control);
+            ``end_violation`` (largest path-constraint violation at ``t = 0`` and
+            ``t = T``, where the boundary conditions rule and the NLP imposes no
+            path row, with the first and last arcs' control laws).
+        """
+        key = (w.tobytes(), np.asarray(pv, dtype=float).tobytes())
+        memo = self.__dict__.get("_summary_memo")
+        if memo is not None and memo[0] == key:
+            return memo[1]
+        fn = self.__dict__.get("_summary_fn") or self._build_summary()
+        xT, T, J, theta, cb, viol = fn(w, pv)
+        cb = np.asarray(cb, dtype=float).ravel()
+        out = {"xT": xT.full().ravel(), "T": float(T), "J": float(J),
+               "theta": theta.full().ravel(),
+               "control_bounds": [(float(cb[2 * j]), float(cb[2 * j + 1]))
+                                  for j in range(self.problem.nu)],
+               "end_violation": float(viol)}
+        self._summary_memo = (key, out)
+        return out
+
+    def _build_summary(self) -> ca.Function:
+        pr, K = self.problem, self.K
+        w, p = self._nlp["x"], self._nlp["p"]
+        xT, T, J, _ = self.out_fn(w, p)
+        theta = [ca.mmax(ca.sum1(ca.fabs(d.A_fn(p)[0]))) * w[k] / self.substeps[k]
+                 if d.exact else ca.SX(0) for k, d in enumerate(self.dyns)]
+        cb = ca.vertcat(*[ca.vertcat(*pr.control_bounds[n]) for n in pr.control_names])
+        viol = ca.SX(0)
+        if pr.path:
+            h = ca.vertcat(*[c.expr for c in pr.path])
+            lo, hi = (ca.vertcat(*[getattr(c, s) for c in pr.path]) for s in ("lower", "upper"))
+            for x, d in ((w[K:K + pr.nx], self.dyns[0]), (xT, self.dyns[-1])):
+                he = ca.substitute(ca.substitute(h, pr.u, d.u), pr.x, x)
+                viol = ca.fmax(viol, ca.mmax(ca.vertcat(lo - he, he - hi, 0)))
+        fn = self._summary_fn = ca.Function("summary", [w, p], [xT, T, J, ca.vertcat(*theta),
+                                                                 cb, viol])
+        return fn
 
     def row_times(self, w: np.ndarray) -> np.ndarray:
         """Time of every constraint row at the solution ``w`` (samples, junctions, ends)."""
@@ -718,8 +796,7 @@ def switching_nlp(problem: OptimalControlProblem, modes: Modes, substeps: tuple[
     -------
     SwitchingNLP
     """
-    key = (tuple(modes), int(samples), _freeze(ipopt_options))
-    built = _NLP_CACHE.setdefault(problem, {}).setdefault(key, [])
+    built = cached_nlps(problem, modes, samples, ipopt_options)
     for nlp in built:
         if all(a >= b for a, b in zip(nlp.substeps, substeps, strict=True)) and \
                 all(a <= 4 * b for a, b in zip(nlp.substeps, substeps, strict=True)):
@@ -727,6 +804,28 @@ def switching_nlp(problem: OptimalControlProblem, modes: Modes, substeps: tuple[
     nlp = SwitchingNLP(problem, modes, substeps, samples, ipopt_options)
     built.append(nlp)
     return nlp
+
+
+def cached_nlps(problem: OptimalControlProblem, modes: Modes, samples: int = 16,
+                ipopt_options: dict | None = None) -> list[SwitchingNLP]:
+    """The cached NLPs of a structure, oldest first (the list itself: appending caches).
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one mode per control.
+    samples : int
+        Path-constraint samples per interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`REFINE_IPOPT` (part of the cache key).
+
+    Returns
+    -------
+    list of SwitchingNLP
+    """
+    key = (tuple(modes), int(samples), _freeze(ipopt_options))
+    return _NLP_CACHE.setdefault(problem, {}).setdefault(key, [])
 
 
 def clear_cache(problem: OptimalControlProblem | None = None) -> None:

@@ -55,6 +55,7 @@ from .refinement import (
     REFINE_IPOPT,
     SwitchingNLP,
     arc_dynamics,
+    cached_nlps,
     clear_cache,
     required_substeps,
     rk8_of,
@@ -506,8 +507,16 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
     """
     pv = np.array([float(params[k]) for k in problem.param_names])
     durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)
-    need = required_substeps(problem, modes, pv, durations, x0, interior_samples, tol)
     w0 = np.r_[durations, x0]
+    solved = solved_nlp(problem, modes, interior_samples, ipopt_options) if fast else None
+    if solved is not None:  # re-solve the last solved NLP of this structure (re-checked)
+        quick = solved.newton(pv, w0)
+        if quick is not None:
+            ok, err, _ = solved.accuracy(quick["w"], pv, tol)
+            if ok:
+                return _result(problem, solved, quick, pv, params, transcribed_objective,
+                               err, [])
+    need = required_substeps(problem, modes, pv, durations, x0, interior_samples, tol)
     notes: list[str] = []
     warm: tuple[np.ndarray, np.ndarray] | tuple[None, None] = (None, None)
     for _ in range(max_rebuilds + 1):
@@ -537,28 +546,19 @@ def _result(pr: OptimalControlProblem, nlp: SwitchingNLP, res: dict, pv: np.ndar
             notes: list[str]) -> RefinedSwitching:
     w = res["w"]
     K = nlp.K
-    xT, T, J, _ = nlp.outputs(w, pv)
+    summ = nlp.summary(w, pv)
+    xT, T, J, bounds = summ["xT"], summ["T"], summ["J"], summ["control_bounds"]
     single = pr.nu == 1
     values, kinds = [], []
     for modes in nlp.modes:
-        vals = []
-        for name, m in zip(pr.control_names, modes, strict=True):
-            lo, hi = control_bounds_at(pr, name, params)
-            vals.append(hi if m.kind == "max" else lo if m.kind == "min" else math.nan)
+        vals = [hi if m.kind == "max" else lo if m.kind == "min" else math.nan
+                for (lo, hi), m in zip(bounds, modes, strict=True)]
         values.append(vals[0] if single else tuple(vals))
         kinds.append(modes[0].kind if single else tuple(m.kind for m in modes))
     tiny = [k for k in range(K) if w[k] <= 1e-10 * max(T, 1.0)]
     if tiny:
         notes = [*notes, f"interval(s) {tiny} shrank to zero length: those arcs are not needed"]
-    end_viol = 0.0
-    if pr.path:
-        fn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path]),
-                                                   ca.vertcat(*[c.lower for c in pr.path]),
-                                                   ca.vertcat(*[c.upper for c in pr.path])])
-        for xe, dyn in ((w[K:], nlp.dyns[0]), (xT, nlp.dyns[-1])):
-            ue = np.array(dyn.u_fn(xe, pv), dtype=float).ravel()
-            hv, lo_, hi_ = (np.array(v, dtype=float).ravel() for v in fn(xe, ue, pv))
-            end_viol = max(end_viol, float(np.max(np.r_[lo_ - hv, hv - hi_, 0.0])))
+    end_viol = summ["end_violation"]
     return RefinedSwitching(
         problem=pr, params=dict(params), control=pr.control_names[0], kinds=kinds,
         values=values, durations=w[:K].copy(), T=T, objective=J, x0=w[K:].copy(), xT=xT,
@@ -567,3 +567,28 @@ def _result(pr: OptimalControlProblem, nlp: SwitchingNLP, res: dict, pv: np.ndar
         lam_g=res["lam_g"], blocks=nlp.blocks, end_path_violation=end_viol, modes=nlp.modes,
         controls=tuple(pr.control_names), integration_error=err, path=res["path"],
         notes=list(notes), build_time=nlp.build_time, nlp=nlp, w=w, lam_x=res["lam_x"])
+
+
+def solved_nlp(problem: OptimalControlProblem, modes: tuple, samples: int,
+               ipopt_options: dict | None) -> SwitchingNLP | None:
+    """The most recently built cached NLP of this structure that Ipopt has solved, if any.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one mode per control.
+    samples : int
+        Path-constraint samples per interval.
+    ipopt_options : dict or None
+        Overrides of :data:`REFINE_IPOPT` (part of the cache key).
+
+    Returns
+    -------
+    SwitchingNLP or None
+    """
+    for nlp in reversed(cached_nlps(problem, modes, samples, ipopt_options)):
+        if getattr(nlp, "last", None) is not None:
+            return nlp
+    return None
+

@@ -101,7 +101,6 @@ def build_leg_extension_problem(mode: str = "impact") -> MultiPhaseProblem:
     return mp
 
 
-@lru_cache(maxsize=4)
 def leg_extension_transcription(mode: str = "impact") -> MultipleShooting:
     """The transcribed leg-extension problem, built once per mode (expanded to SX).
 
@@ -112,10 +111,31 @@ def leg_extension_transcription(mode: str = "impact") -> MultipleShooting:
     """
     # no bound relaxation: a flight ending at the stroke limit must not overshoot it by
     # Ipopt's default 1e-8 relative relaxation (its end is propagated exactly afterwards)
+    return _transcription(mode, False)
+
+
+def leg_extension_transcription_inner(mode: str = "impact") -> MultipleShooting:
+    """As :func:`leg_extension_transcription`, with the path constraints imposed at the
+    integrator's inner steps too (a second start when the first solution dives through
+    the stroke limit between the nodes and its structure cannot be refined).
+
+    Parameters
+    ----------
+    mode : {"impact", "drop"}
+        See :func:`build_leg_extension_problem`.
+    """
+    return _transcription(mode, True)
+
+
+@lru_cache(maxsize=4)
+def _transcription(mode: str, inner: bool) -> MultipleShooting:
+    # no bound relaxation: a flight ending at the stroke limit must not overshoot it by
+    # Ipopt's default 1e-8 relative relaxation (its end is propagated exactly afterwards)
     return MultipleShooting(build_leg_extension_problem(mode), nodes=list(NODES[mode]),
                             integrator="rk4", substeps=4, expand=True,
-                            ipopt_options={"bound_relax_factor": 0.0})
+                            ipopt_options={"bound_relax_factor": 0.0},
+                            inner_constraints=inner)
 
 
 __all__ = ["EXTRA_PARAMETERS", "MODES", "NODES", "build_leg_extension_problem",
-           "leg_extension_transcription"]
+           "leg_extension_transcription", "leg_extension_transcription_inner"]
