@@ -6,9 +6,19 @@ Same problem (the paper's, with the body-arrest conditions multiplied by the
 final stroke as in softlanding.landing), same N = 100 multiple-shooting
 intervals with 4 RK4 steps each, same Ipopt options, for ``--n`` values of v0
 in [-10, -0.5] (r_m = 5, s = 20, u_max = 8.2), solved in order (continuation).
-At every v0 the contenders run one after the other, in an order that alternates
-from one v0 to the next (the machine is shared: interleaving keeps load drift
-out of the ratios), each timed in CPU and wall time:
+Two interleavings (the machine is shared: interleaving keeps load drift out of
+the ratios), each timed in CPU and wall time:
+
+1. solve by solve: at every v0 the contenders run one after the other, in an
+   order that alternates from one v0 to the next. Each contender then starts
+   with caches the other three have filled (rockit's and the transcription's
+   large NLPs evict the re-solve's small functions: it runs about 2x slower
+   than in a sweep of its own);
+2. whole sweeps: each contender runs the whole sweep alone, from the same
+   start, in rounds whose order alternates (ABCD, DCBA, ...), as a user's
+   sweep runs.
+
+The contenders:
 
 * rockit ``Ocp.to_function`` (its documented fast path), warm from the previous v0;
 * this toolkit's transcription, warm (primal-dual) from the previous v0;
@@ -97,19 +107,18 @@ def rockit_function(N: int, v0: float, guess):
     return fn, fn(5.0, 20.0, v0, 8.2, T0, *[Xg[:, k] for k in range(4)], Ug)
 
 
-def main() -> None:
+NAMES = ("rockit to_function", "toolkit transcribed", "toolkit structure re-solve",
+         "toolkit solve_landing (sweep)")
+
+
+def contenders(N: int, v0s, guesses):
+    """The four sweeps, each as ``(start, step)``: ``step(state, v0) -> state`` re-solves
+    warm from its own previous result; ``depth(name, state)`` reads the depth."""
     from ocp import MultipleShooting
     from ocp.switching import refine_structure
     from softlanding import PAPER_ROBOT, Impact
     from softlanding.landing import PARAMETERS, build_landing_problem, solve_landing
 
-    ap = argparse.ArgumentParser(description="soft-landing OCP: this toolkit vs rockit")
-    ap.add_argument("--n", type=int, default=20, help="number of v0 values (default 20)")
-    ap.add_argument("--nodes", type=int, default=100)
-    a = ap.parse_args()
-    N, v0s = a.nodes, np.linspace(-0.5, -10.0, a.n)
-    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    guesses = {v: guess_arrays(v, N) for v in v0s}  # same first guess for both, untimed
     par = dict(zip(PARAMETERS, (PAPER_ROBOT.r_m, PAPER_ROBOT.s, 0.0, PAPER_ROBOT.u_max,
                                 PAPER_ROBOT.rest_length), strict=True))
     # first solves (build included), one each
@@ -118,51 +127,85 @@ def main() -> None:
             build_landing_problem(), nodes=N, substeps=4, ipopt_options=IPOPT, expand=True)))
     (fn, out), c_rk, w_rk = timed(lambda: rockit_function(N, v0s[0], guesses[v0s[0]]))
     land = solve_landing(v0s[0], PAPER_ROBOT)  # the sweep's first point, and the exact depth
-    ref, prev_sol, prev_out = land.refined, first, out
-    names = ("rockit to_function", "toolkit transcribed", "toolkit structure re-solve",
-             "toolkit solve_landing (sweep)")
-    times = {k: ([], []) for k in names}
-    depth = {k: [] for k in names}
+    # the structure re-solve's NLP belongs to tr.problem: solve it once by Ipopt, untimed
+    refine_structure(tr.problem, land.refined.modes, land.refined.durations,
+                     Impact(v0s[0]).initial_state(PAPER_ROBOT), {**par, "v0": v0s[0]})
+    steps = {
+        NAMES[0]: (out, lambda o, v: fn(5.0, 20.0, v, 8.2, *o)),
+        NAMES[1]: (first, lambda s, v: tr.solve({**par, "v0": v}, warm_start=s)),
+        NAMES[2]: (land.refined, lambda r, v: refine_structure(
+            tr.problem, r.modes, r.durations, Impact(v).initial_state(PAPER_ROBOT),
+            {**par, "v0": v})),
+        NAMES[3]: (land, lambda g, v: solve_landing(v, PAPER_ROBOT, warm_start=g)),
+    }
+    return steps, tr, (c_ours, w_ours), (c_rk, w_rk)
+
+
+def depth_of(name: str, state) -> float:
+    if name == NAMES[0]:
+        return -float(np.array(state[3]).ravel()[-1])
+    if name == NAMES[1]:
+        return -state.x[-1, 2]
+    if name == NAMES[2]:
+        return -state.xT[2]
+    return state.depth
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description="soft-landing OCP: this toolkit vs rockit")
+    ap.add_argument("--n", type=int, default=20, help="number of v0 values (default 20)")
+    ap.add_argument("--nodes", type=int, default=100)
+    ap.add_argument("--rounds", type=int, default=4,
+                    help="rounds of whole sweeps in alternating order (default 4)")
+    a = ap.parse_args()
+    N, v0s = a.nodes, np.linspace(-0.5, -10.0, a.n)
+    print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
+    guesses = {v: guess_arrays(v, N) for v in v0s}  # same first guess for both, untimed
+    steps, tr, first_ours, first_rk = contenders(N, v0s, guesses)
+    # (1) solve by solve: at every v0 the four run one after the other, order alternating
+    times = {k: ([], []) for k in NAMES}
+    depth = {k: [] for k in NAMES}
     exact = []
+    state = {k: steps[k][0] for k in NAMES}
     for i, v in enumerate(v0s[1:]):
-        runs = {
-            names[0]: lambda v=v, o=prev_out: fn(5.0, 20.0, v, 8.2, *o),
-            names[1]: lambda v=v, s=prev_sol: tr.solve({**par, "v0": v}, warm_start=s),
-            names[2]: lambda v=v, r=ref: refine_structure(
-                tr.problem, r.modes, r.durations, Impact(v).initial_state(PAPER_ROBOT),
-                {**par, "v0": v}),
-            names[3]: lambda v=v, g=land: solve_landing(v, PAPER_ROBOT, warm_start=g),
-        }
-        results = {}
-        for k in (names if i % 2 == 0 else names[::-1]):
-            results[k], c, w = timed(runs[k])
+        for k in (NAMES if i % 2 == 0 else NAMES[::-1]):
+            state[k], c, w = timed(lambda k=k, v=v: steps[k][1](state[k], v))
             times[k][0].append(c)
             times[k][1].append(w)
-        prev_out, prev_sol = results[names[0]], results[names[1]]
-        ref, land = results[names[2]], results[names[3]]
-        depth[names[0]].append(-float(np.array(prev_out[3]).ravel()[-1]))
-        depth[names[1]].append(-prev_sol.x[-1, 2])
-        depth[names[2]].append(-ref.xT[2])
-        depth[names[3]].append(land.depth)
-        assert land.replay is not None
-        exact.append(land.replay.depth)
-    report(a, names, times, depth, np.array(exact), (c_ours, w_ours), (c_rk, w_rk), tr)
+            depth[k].append(depth_of(k, state[k]))
+        assert state[NAMES[3]].replay is not None
+        exact.append(state[NAMES[3]].replay.depth)
+    report(a, "solve by solve (each contender runs after the other three: cold caches)",
+           times, depth, np.array(exact), first_ours, first_rk, tr)
+    # (2) whole sweeps: each contender runs the sweep alone (warm caches, as in use),
+    # the contenders' order reversed from one round to the next
+    blocks = {k: ([], []) for k in NAMES}
+    for rnd in range(a.rounds):
+        for k in (NAMES if rnd % 2 == 0 else NAMES[::-1]):
+            st = steps[k][0]
+            for v in v0s[1:]:
+                st, c, w = timed(lambda st=st, k=k, v=v: steps[k][1](st, v))
+                blocks[k][0].append(c)
+                blocks[k][1].append(w)
+    report(a, f"whole sweeps, {a.rounds} rounds in alternating order (warm caches)",
+           blocks, depth, np.array(exact), None, None, tr)
 
 
-def report(a, names, times, depth, exact, first_ours, first_rk, tr) -> None:
+def report(a, title, times, depth, exact, first_ours, first_rk, tr) -> None:
     med = statistics.median
     print(f"soft-landing OCP, N={a.nodes}, RK4 x4, {a.n} values of v0 in [-10, -0.5], r_m=5, "
-          "s=20, u_max=8.2, same Ipopt options; interleaved, order alternating per v0")
-    print(f"first solve (build included): toolkit cpu {first_ours[0]:.3f} s, wall "
-          f"{first_ours[1]:.3f} s; rockit to_function cpu {first_rk[0]:.3f} s, wall "
-          f"{first_rk[1]:.3f} s; ratio cpu {first_rk[0] / first_ours[0]:.1f}x")
+          f"s=20, u_max=8.2, same Ipopt options; {title}")
+    if first_ours is not None:
+        print(f"first solve (build included): toolkit cpu {first_ours[0]:.3f} s, wall "
+              f"{first_ours[1]:.3f} s; rockit to_function cpu {first_rk[0]:.3f} s, wall "
+              f"{first_rk[1]:.3f} s; ratio cpu {first_rk[0] / first_ours[0]:.1f}x")
     print(f"{'':32}{'cpu [ms]':>10}{'wall [ms]':>11}{'depth error':>13}  (medians per v0)")
-    for k in names:
+    for k in NAMES:
         c, w = med(times[k][0]) * 1e3, med(times[k][1]) * 1e3
         err = float(np.max(np.abs(np.array(depth[k]) - exact)))
         print(f"{k:32}{c:>10.2f}{w:>11.2f}{err:>13.2e}")
-    rk = med(times[names[0]][0])
-    for k in names[1:]:
+    rk = med(times[NAMES[0]][0])
+    for k in NAMES[1:]:
         print(f"speed-up vs rockit to_function (cpu): {k:30} {rk / med(times[k][0]):7.1f}x")
     print(f"NLP builds: {tr.n_builds} (re-solves never rebuild)")
     print("exact depth: the sweep's refined depth replayed in the exact simulator; rockit and "

@@ -48,6 +48,9 @@ class ActiveSetNewton:
         Active constraint rows and their sides (-1 lower, +1 upper, 0 equality).
     cols : ndarray of int
         Active variable bounds (their values are passed to :meth:`solve`).
+    extra : casadi.Function, optional
+        ``(w, p) -> ...`` evaluated in the same call as the checks (what the caller
+        reports of a solution), returned by :meth:`check` after them.
 
     Attributes
     ----------
@@ -56,7 +59,7 @@ class ActiveSetNewton:
     """
 
     def __init__(self, nlp_dict: dict[str, Any], bounds_fn: ca.Function, rows: np.ndarray,
-                 side: np.ndarray, cols: np.ndarray) -> None:
+                 side: np.ndarray, cols: np.ndarray, extra: ca.Function | None = None) -> None:
         w, p, g, f = (nlp_dict[k] for k in ("x", "p", "g", "f"))
         n_w = w.numel()
         self.rows, self.cols = np.asarray(rows, dtype=int), np.asarray(cols, dtype=int)
@@ -80,8 +83,9 @@ class ActiveSetNewton:
             "active_set_newton", "newton", residual,
             {"abstol": RESIDUAL_TOL, "abstolStep": RESIDUAL_TOL, "max_iter": MAX_ITER,
              "error_on_fail": False})
+        more = list(extra(w, p)) if extra is not None else []
         self.check_fn = ca.Function("active_set_check", [w, p],
-                                    [g, ca.jacobian(g_act, w), ca.gradient(f, w), f])
+                                    [g, ca.jacobian(g_act, w), ca.gradient(f, w), f, *more])
 
     def solve(self, pv: np.ndarray, w0: np.ndarray,
               held: np.ndarray) -> tuple[np.ndarray, int] | None:
@@ -113,8 +117,9 @@ class ActiveSetNewton:
         return w, int(st["iter_count"])
 
     def check(self, w: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                            np.ndarray, float]:
-        """All rows ``g``, the active rows' Jacobian, ``grad f`` and ``f`` at ``w``."""
-        g, Jg, gJ, f = self.check_fn(w, pv)
+                                                            np.ndarray, float, list]:
+        """All rows ``g``, the active rows' Jacobian, ``grad f``, ``f`` and the ``extra``
+        outputs (CasADi DM) at ``w``."""
+        g, Jg, gJ, f, *more = self.check_fn.call([w, pv])
         return (g.full().ravel(), np.asarray(ca.DM(Jg).full()), gJ.full().ravel(),
-                float(f))
+                float(f), more)

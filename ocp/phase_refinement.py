@@ -256,8 +256,10 @@ class PhaseSwitchingNLP(SwitchingNLP):
         o = self.offsets[i]
         return slice(o, o + self.phase_K[i] + self.multiphase.phases[i].nx)
 
-    def bounds(self, pv: np.ndarray) -> dict[str, np.ndarray]:
-        """Numeric ``lbx, ubx, lbg, ubg`` at parameters ``pv``."""
+    def _report_fn(self) -> ca.Function | None:
+        return None  # the phases report through phase_outputs and transversality
+
+    def _bounds(self, pv: np.ndarray) -> dict[str, np.ndarray]:
         lbg, ubg = (np.array(v, dtype=float).ravel() for v in self.bounds_fn(pv))
         lbx, ubx = [], []
         for K, ph in zip(self.phase_K, self.multiphase.phases, strict=True):

@@ -219,12 +219,24 @@ class SwitchingNLP:
 
     # ------------------------------------------------------------------ solve
     def bounds(self, pv: np.ndarray) -> dict[str, np.ndarray]:
-        """Numeric ``lbx, ubx, lbg, ubg`` at parameters ``pv``."""
-        lbg, ubg = (np.array(v, dtype=float).ravel() for v in self.bounds_fn(pv))
-        nx = self.problem.nx
-        lbx = np.r_[np.zeros(self.K), -np.inf * np.ones(nx)]
-        ubx = np.r_[np.full(self.K, self.T_max), np.inf * np.ones(nx)]
-        return {"lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
+        """Numeric ``lbx, ubx, lbg, ubg`` at parameters ``pv`` (read-only arrays; the
+        last parameter values' bounds are remembered)."""
+        key = np.asarray(pv, dtype=float).tobytes()
+        memo = self.__dict__.get("_bounds_memo")
+        if memo is None or memo[0] != key:
+            out = self._bounds(pv)
+            for v in out.values():
+                v.setflags(write=False)
+            memo = self._bounds_memo = (key, out)
+        return memo[1]
+
+    def _bounds(self, pv: np.ndarray) -> dict[str, np.ndarray]:
+        lbg, ubg = (v.full().ravel() for v in self.bounds_fn(pv))
+        if "_box" not in self.__dict__:  # durations in [0, T_max], states free
+            nx = self.problem.nx
+            self._box = (np.r_[np.zeros(self.K), -np.inf * np.ones(nx)],
+                         np.r_[np.full(self.K, self.T_max), np.inf * np.ones(nx)])
+        return {"lbx": self._box[0], "ubx": self._box[1], "lbg": lbg, "ubg": ubg}
 
     def solve(self, pv: np.ndarray, w0: np.ndarray, lam_g0: np.ndarray | None = None,
               lam_x0: np.ndarray | None = None) -> dict[str, Any]:
@@ -402,7 +414,8 @@ class SwitchingNLP:
         cache = self.__dict__.setdefault("_newton_cache", {})
         key = (rows.tobytes(), side.tobytes(), cols.tobytes())
         if key not in cache:
-            cache[key] = ActiveSetNewton(self._nlp, self.bounds_fn, rows, side, cols)
+            cache[key] = ActiveSetNewton(self._nlp, self.bounds_fn, rows, side, cols,
+                                         self._report_fn())
         return cache[key]
 
     def _newton_iterate(self, w: np.ndarray, pv: np.ndarray, rows: np.ndarray,
@@ -435,7 +448,9 @@ class SwitchingNLP:
                        elapsed: float) -> dict[str, Any] | None:
         """Multipliers and the acceptance checks of :meth:`newton` (one CasADi call)."""
         rows, cols = solver.rows, solver.cols
-        g, Jr, gJ, f = solver.check(w, pv)
+        g, Jr, gJ, f, more = solver.check(w, pv)
+        if more:  # what the result reports, evaluated in the same call
+            self._summary_memo = (self._summary_key(w, pv), self._decode_summary(more))
         sc = np.maximum(1.0, np.abs(g))
         viol = np.r_[(b["lbg"] - g) / sc, (g - b["ubg"]) / sc, 0.0]
         if np.max(viol) > KKT_PRIMAL:
@@ -525,20 +540,30 @@ class SwitchingNLP:
             ``t = T``, where the boundary conditions rule and the NLP imposes no
             path row, with the first and last arcs' control laws).
         """
-        key = (w.tobytes(), np.asarray(pv, dtype=float).tobytes())
+        key = self._summary_key(w, pv)
         memo = self.__dict__.get("_summary_memo")
         if memo is not None and memo[0] == key:
             return memo[1]
-        fn = self.__dict__.get("_summary_fn") or self._build_summary()
-        xT, T, J, theta, cb, viol = fn(w, pv)
-        cb = np.asarray(cb, dtype=float).ravel()
-        out = {"xT": xT.full().ravel(), "T": float(T), "J": float(J),
-               "theta": theta.full().ravel(),
-               "control_bounds": [(float(cb[2 * j]), float(cb[2 * j + 1]))
-                                  for j in range(self.problem.nu)],
-               "end_violation": float(viol)}
+        out = self._decode_summary(self._report_fn().call([w, pv]))  # type: ignore[union-attr]
         self._summary_memo = (key, out)
         return out
+
+    @staticmethod
+    def _summary_key(w: np.ndarray, pv: np.ndarray) -> tuple[bytes, bytes]:
+        return (np.asarray(w, dtype=float).tobytes(), np.asarray(pv, dtype=float).tobytes())
+
+    def _decode_summary(self, values: list) -> dict[str, Any]:
+        xT, T, J, theta, cb, viol = values
+        cb = cb.full().ravel()
+        return {"xT": xT.full().ravel(), "T": float(T), "J": float(J),
+                "theta": theta.full().ravel(),
+                "control_bounds": [(float(cb[2 * j]), float(cb[2 * j + 1]))
+                                   for j in range(self.problem.nu)],
+                "end_violation": float(viol)}
+
+    def _report_fn(self) -> ca.Function | None:
+        """The function behind :meth:`summary` (None where it does not apply)."""
+        return self.__dict__.get("_summary_fn") or self._build_summary()
 
     def _build_summary(self) -> ca.Function:
         pr, K = self.problem, self.K
