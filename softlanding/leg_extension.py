@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp import Solution, SolveError, Trajectory
+from ocp import Solution, Trajectory
 from ocp.phase_refinement import RefinedPhases
 
 from ._jsonutil import json_safe
@@ -37,7 +37,13 @@ from .leg_extension_problem import (
 )
 from .model import PAPER_ROBOT, Impact, Robot
 from .phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
-from .phase_solve import phase_guess, refined_phases, structure_resolve, transcribed_solve
+from .phase_solve import (
+    phase_guess,
+    refined_phases,
+    second_start,
+    structure_resolve,
+    transcribed_solve,
+)
 from .simulator import LandingResult, simulate
 from .verification import certificate_reasons, replay_reasons
 
@@ -369,7 +375,9 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         sol = transcribed_solve(tr, params, guess, ws, notes)
         ref = refined_phases(sol, notes)
         if ref is None:
-            sol, ref = _second_start(mode, params, guess, sol, notes)
+            sol, ref = second_start(leg_extension_transcription_inner(mode),
+                                    leg_extension_transcription(mode), params, guess, sol,
+                                    notes)
         out = _assemble(robot, impact, mode, bounds, sol, ref, two.depth, notes,
                         "transcription")
         if mode == "drop" and ref is None:
@@ -379,27 +387,6 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
     if replay:
         _replay(out)
     return out
-
-
-def _second_start(mode: str, params: dict[str, float], guess: Any, sol: Solution,
-                  notes: list[str]) -> tuple[Solution, RefinedPhases | None]:
-    """When the transcription's structure cannot be refined (typically a solution that
-    dives through the stroke limit between the nodes and shows interior arcs there),
-    solve once more from a transcription that imposes the path constraints between the
-    nodes too, then polish on the plain grid; keep it if it refines."""
-    try:
-        inner = transcribed_solve(leg_extension_transcription_inner(mode), params, guess,
-                                  None, [])
-        again: list[str] = []
-        sol2 = transcribed_solve(leg_extension_transcription(mode), params, inner, None, again)
-    except SolveError:
-        return sol, None
-    ref2 = refined_phases(sol2, again)
-    if ref2 is None:
-        return sol, None
-    notes[:] = [*again, "the first transcription could not be refined; solved again from a "
-                "start with the stroke limits imposed between the nodes"]
-    return sol2, ref2
 
 
 def sweep_leg_extension(v0_values, robot: Robot = PAPER_ROBOT, *, mode: str = "impact",

@@ -110,6 +110,47 @@ def refined_phases(sol: Solution, notes: list[str],
     return None
 
 
+def second_start(inner: MultipleShooting, tr: MultipleShooting, params: dict[str, float],
+                 guess: Any, sol: Solution, notes: list[str]
+                 ) -> tuple[Solution, RefinedPhases | None]:
+    """A second start for a transcription whose structure could not be refined.
+
+    A solution that dives through a path constraint between the nodes can show
+    interior arcs there, and the refinement then gives up. Solve once more with
+    ``inner`` (the same problem with the path constraints imposed at the inner
+    integrator steps), polish on ``tr`` from there, and keep that if it refines.
+
+    Parameters
+    ----------
+    inner, tr : MultipleShooting
+        The transcription with inner constraints, and the plain one.
+    params : dict
+        Parameter values.
+    guess : Trajectory, Solution or array
+        The first start's guess.
+    sol : Solution
+        The first start's solution (returned unchanged if the second start fails).
+    notes : list of str
+        Replaced by the second start's notes when it succeeds.
+
+    Returns
+    -------
+    (Solution, RefinedPhases or None)
+    """
+    try:
+        start = transcribed_solve(inner, params, guess, None, [])
+        again: list[str] = []
+        sol2 = transcribed_solve(tr, params, start, None, again)
+    except SolveError:
+        return sol, None
+    ref2 = refined_phases(sol2, again)
+    if ref2 is None:
+        return sol, None
+    notes[:] = [*again, "the first transcription could not be refined; solved again from a "
+                "start with the path constraints imposed between the nodes"]
+    return sol2, ref2
+
+
 def _split_at(st: ArcStructure, t: float, mode: Mode) -> ArcStructure:
     """``st`` (one control) with a zero-length ``mode`` arc inserted at time ``t``."""
     modes: list[tuple[Mode, ...]] = []

@@ -69,3 +69,35 @@ def test_bad_requests():
         solve_leg_extension(-3.0, mode="jump")
     with pytest.raises(ParameterError, match="v0"):
         solve_leg_extension(0.0, mode="drop")
+
+
+def test_second_start_refines_where_the_first_transcription_dives_through_the_stroke():
+    """The rescue used when a transcription cannot be refined (its solution dives through
+    the stroke limit between the nodes): inner constraints first, then the plain grid."""
+    from softlanding.hybrid import solve_two_phase
+    from softlanding.landing import _ocp_params
+    from softlanding.leg_extension import _guess
+    from softlanding.leg_extension_problem import (
+        leg_extension_transcription,
+        leg_extension_transcription_inner,
+    )
+    from softlanding.model import Impact
+    from softlanding.phase_solve import second_start
+
+    impact = Impact(-0.5)
+    two = solve_two_phase(impact, PAPER_ROBOT.replace(l0=None), replay=False)
+    params = {**_ocp_params(PAPER_ROBOT, impact), "l_min": 0.0, "l_max": PAPER_ROBOT.s,
+              "w_min": 0.0, "w_max": 0.0, "l0": PAPER_ROBOT.replace(l0=None).rest_length}
+    guess = _guess(two, "impact", PAPER_ROBOT, impact)
+    notes = ["placeholder of the first start"]
+    sol, ref = second_start(leg_extension_transcription_inner(), leg_extension_transcription(),
+                            params, guess, None, notes)
+    assert ref is not None and sol is not None
+    assert notes[-1].startswith("the first transcription could not be refined")
+    assert ref.path_violation() < 1e-9
+    # the depth is the optimum's: below the paper's condition, above the leg-free bound 1
+    assert 1.0 < ref.objective < two.depth
+    # the same optimum as the normal pipeline's (from its own start)
+    direct = solve_leg_extension(impact, two_phase=two, replay=False)
+    assert direct.refined is not None
+    assert ref.objective == pytest.approx(direct.depth, abs=1e-9)
