@@ -853,6 +853,30 @@ def cached_nlps(problem: OptimalControlProblem, modes: Modes, samples: int = 16,
     return _NLP_CACHE.setdefault(problem, {}).setdefault(key, [])
 
 
+def solved_nlp(problem: OptimalControlProblem, modes: tuple, samples: int,
+               ipopt_options: dict | None) -> SwitchingNLP | None:
+    """The most recently built cached NLP of this structure that Ipopt has solved, if any.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one mode per control.
+    samples : int
+        Path-constraint samples per interval.
+    ipopt_options : dict or None
+        Overrides of :data:`REFINE_IPOPT` (part of the cache key).
+
+    Returns
+    -------
+    SwitchingNLP or None
+    """
+    for nlp in reversed(cached_nlps(problem, modes, samples, ipopt_options)):
+        if getattr(nlp, "last", None) is not None:
+            return nlp
+    return None
+
+
 def clear_cache(problem: OptimalControlProblem | None = None) -> None:
     """Forget the cached refinement NLPs (of one problem, or all)."""
     if problem is None:

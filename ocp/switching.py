@@ -55,10 +55,10 @@ from .refinement import (
     REFINE_IPOPT,
     SwitchingNLP,
     arc_dynamics,
-    cached_nlps,
     clear_cache,
     required_substeps,
     rk8_of,
+    solved_nlp,
     switching_nlp,
 )
 from .solution import along
@@ -567,28 +567,4 @@ def _result(pr: OptimalControlProblem, nlp: SwitchingNLP, res: dict, pv: np.ndar
         lam_g=res["lam_g"], blocks=nlp.blocks, end_path_violation=end_viol, modes=nlp.modes,
         controls=tuple(pr.control_names), integration_error=err, path=res["path"],
         notes=list(notes), build_time=nlp.build_time, nlp=nlp, w=w, lam_x=res["lam_x"])
-
-
-def solved_nlp(problem: OptimalControlProblem, modes: tuple, samples: int,
-               ipopt_options: dict | None) -> SwitchingNLP | None:
-    """The most recently built cached NLP of this structure that Ipopt has solved, if any.
-
-    Parameters
-    ----------
-    problem : OptimalControlProblem
-    modes : tuple of tuple of Mode
-        Per interval, one mode per control.
-    samples : int
-        Path-constraint samples per interval.
-    ipopt_options : dict or None
-        Overrides of :data:`REFINE_IPOPT` (part of the cache key).
-
-    Returns
-    -------
-    SwitchingNLP or None
-    """
-    for nlp in reversed(cached_nlps(problem, modes, samples, ipopt_options)):
-        if getattr(nlp, "last", None) is not None:
-            return nlp
-    return None
 
