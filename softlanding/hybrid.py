@@ -40,7 +40,7 @@ from .model import PAPER_ROBOT, Impact, Robot
 from .phase_schedule import replay_controller
 from .phase_solve import phase_guess, refined_phases, structure_resolve, transcribed_solve
 from .simulator import LandingResult, simulate
-from .verification import certificate_reasons, replay_reasons
+from .verification import certificate_reasons, refined_result_reasons
 
 
 @dataclass
@@ -137,17 +137,10 @@ class FullLanding:
         certificate : ocp.phase_pmp.PhasesCertificate, optional
             The certificate of this solution.
         """
-        out = []
-        if self.refined is None:
-            out.append("switching times not refined (" + "; ".join(self.notes) + ")")
-        if self.replay is None:
-            out.append("not replayed in the exact simulator (" + self.replay_kind + ")")
-        else:
-            out += replay_reasons(self.replay, self.depth, self.refined is not None)
-        if self.depth_gain < -(1e-9 if self.refined is not None else 1e-5) * max(1.0, self.depth):
-            out.append(f"deeper than the paper's single-phase optimum by {-self.depth_gain:.2e}"
-                       ": a local optimum (the paper's constant arrest is admissible)")
-        return out + certificate_reasons(certificate)
+        return refined_result_reasons(
+            self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
+            self.depth_gain, "the paper's single-phase optimum by {:.2e}: a local optimum "
+            "(the paper's constant arrest is admissible)") + certificate_reasons(certificate)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined phases and the replay."""

@@ -45,7 +45,7 @@ from .phase_solve import (
     transcribed_solve,
 )
 from .simulator import LandingResult, simulate
-from .verification import certificate_reasons, replay_reasons
+from .verification import certificate_reasons, refined_result_reasons
 
 
 @dataclass
@@ -144,16 +144,10 @@ class LegExtensionLanding:
         certificate : ocp.phase_pmp.PhasesCertificate, optional
             The certificate of this solution.
         """
-        out = []
-        if self.refined is None:
-            out.append("switching times not refined (" + "; ".join(self.notes) + ")")
-        if self.replay is None:
-            out.append(f"not replayed in the exact simulator ({self.replay_kind})")
-        else:
-            out += replay_reasons(self.replay, self.depth, self.refined is not None)
-        if self.gain < -(1e-9 if self.refined is not None else 1e-5) * max(1.0, self.depth):
-            out.append(f"deeper than with the paper's initial condition by {-self.gain:.2e}: "
-                       "a local optimum (the paper's touchdown state is admissible)")
+        out = refined_result_reasons(
+            self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
+            self.gain, "with the paper's initial condition by {:.2e}: a local optimum (the "
+            "paper's touchdown state is admissible)")
         if self.mode == "drop" and not self.flight_check <= 1e-9 * max(1.0, abs(
                 self.impact.v0) ** 2):
             out.append(f"the flight arcs propagated exactly miss the touchdown state by "

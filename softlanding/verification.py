@@ -37,6 +37,41 @@ def replay_reasons(replay: Any, depth: float, refined: bool) -> list[str]:
     return out
 
 
+def refined_result_reasons(refined: bool, notes: list[str], replay: Any, replay_kind: str,
+                           depth: float, gain: float, baseline: str) -> list[str]:
+    """The lines every refined multi-phase result states: refinement, replay, and a
+    depth worse than an admissible baseline's (a local optimum).
+
+    Parameters
+    ----------
+    refined : bool
+        The switching times were refined.
+    notes : list of str
+        Why not, when they were not.
+    replay : LandingResult or None
+        The exact-simulator replay.
+    replay_kind : str
+        Why there is no replay, when there is none.
+    depth : float
+        The depth the optimiser reports.
+    gain : float
+        ``baseline depth - depth`` (>= 0 up to the tolerance when the result is optimal).
+    baseline : str
+        What the baseline is and why it is admissible, e.g. ``"the paper's initial
+        condition by {:.2e}: a local optimum (...)"`` with one ``{:.2e}`` for the excess.
+    """
+    out = []
+    if not refined:
+        out.append("switching times not refined (" + "; ".join(notes) + ")")
+    if replay is None:
+        out.append(f"not replayed in the exact simulator ({replay_kind})")
+    else:
+        out += replay_reasons(replay, depth, refined)
+    if gain < -(1e-9 if refined else 1e-5) * max(1.0, depth):
+        out.append("deeper than " + baseline.format(-gain))
+    return out
+
+
 def certificate_reasons(certificate: Any) -> list[str]:
     """One line when a PMP certificate does not certify (empty when it does or is None).
 
@@ -51,4 +86,4 @@ def certificate_reasons(certificate: Any) -> list[str]:
     return [f"PMP certificate {certificate.verdict}{why}"]
 
 
-__all__ = ["certificate_reasons", "replay_reasons"]
+__all__ = ["certificate_reasons", "refined_result_reasons", "replay_reasons"]
