@@ -43,6 +43,7 @@ from .kernel.const import (  # noqa: F401  (re-exported)
     EV_YIELD,
     FEAS_TOL,
     FLIGHT,
+    HOPS_TO_LIMIT,
     HORIZON,
     LINEAR,
     N_OUT,
@@ -86,6 +87,8 @@ STATUS_NAMES = {
     HORIZON: "horizon reached before rest could be proven",
     TOO_MANY_SEGMENTS: "segment limit reached before rest could be proven",
     NEVER_RESTS_CREEP: "never rests: the foot creeps toward a limit depth forever",
+    HOPS_TO_LIMIT: "rest not proven: an undamped leg hops on, the hops shrinking toward a "
+                   "limit depth (the depth given, exact by energy balance)",
     STEP_BUDGET: "step budget exhausted before rest could be proven",
     BODY_THROUGH_FOOT: "the foot rests but the body passes through it (stroke without bound)",
     BODY_FLIES_OFF: "the foot rests but the body moves off without bound (stroke without bound)",

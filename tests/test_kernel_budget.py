@@ -83,7 +83,7 @@ def test_constant_push_lifts_the_body_off_a_resting_foot():
 def test_batch_reports_the_new_statuses():
     from softlanding import simulate_batch
 
-    b = simulate_batch(Robot(5, 20), [-1.0, -0.5, -5.0, -2.0], [0.0, 0.0, 0.5, 0.3],
-                       [0.0, 0.28, 0.0, 0.4])
-    assert list(b.status) == [K.BODY_THROUGH_FOOT, K.NEVER_RESTS_CREEP, K.TOO_MANY_SEGMENTS,
-                              K.REST_PROVEN]
+    b = simulate_batch(Robot(5, 20), [-1.0, -0.5, -5.0, -2.0, -6.0], [0.0, 0.0, 0.5, 0.3, 0.26],
+                       [0.0, 0.28, 0.0, 0.4, 0.0])
+    assert list(b.status) == [K.BODY_THROUGH_FOOT, K.NEVER_RESTS_CREEP, K.HOPS_TO_LIMIT,
+                              K.REST_PROVEN, K.TOO_MANY_SEGMENTS]

@@ -139,8 +139,9 @@ def test_open_loop_switch_matches_matrix_exponential_composition():
 
 
 def test_rest_not_proven_is_reported():
-    # no damping: the foot hops on and on; rest is not proven within the horizon
-    r = simulate(R, Impact(-5.0), Impedance(0.5, 0.0), t_max=200.0)
+    # no damping, hops toward a symmetric (periodic) hop: rest is not proven within the
+    # horizon (hops shrinking toward the threshold stop early: test_kernel_hops)
+    r = simulate(R, Impact(-6.0), Impedance(0.26, 0.0), t_max=50.0)
     assert not r.rest_proven
     assert "horizon" in r.status
     assert not r.feasible

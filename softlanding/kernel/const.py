@@ -11,11 +11,12 @@ EV_STOP, EV_YIELD, EV_LIFT, EV_LAND, EV_SAT_HIGH, EV_SAT_LOW, EV_UNSAT = range(7
 # status codes
 REST_PROVEN, HORIZON, TOO_MANY_SEGMENTS, NEVER_RESTS_CREEP = 0, 1, 2, 3
 STEP_BUDGET, BODY_THROUGH_FOOT, BODY_FLIES_OFF, OUT_OF_RANGE = 4, 5, 6, 7
+HOPS_TO_LIMIT = 8
 
 # output layout
 O_DEPTH, O_STEPS, O_TSTOP, O_T, O_UPEAK, O_SMIN, O_SMAX, O_FEAS, O_STATUS = range(9)
 O_E0, O_ET, O_EGND, O_EACT, O_NSEG, O_UMIN, O_UMAX = range(9, 16)
-O_DLIM = 16  # the depth's limit as t -> inf: the rest depth, a creep's limit, else NaN
+O_DLIM = 16  # the depth's limit as t -> inf: the rest depth, a creep's or hops' limit, else NaN
 O_FOOT_REST = 17  # 1 if the foot's rest is proven (also when the body does not rest)
 N_OUT = 18
 

@@ -30,6 +30,7 @@ from .const import (
     EV_YIELD,
     FEAS_TOL,
     FLIGHT,
+    HOPS_TO_LIMIT,
     HORIZON,
     LINEAR,
     N_OUT,
@@ -65,6 +66,7 @@ from .const import (
     YIELDING,
 )
 from .creep import creep_limit_depth, creep_proof, creep_setup
+from .hops import H_DLIM, hop_eligible, hop_event, hop_state, hops_settled
 from .events import (
     build_events,
     classify,
@@ -142,6 +144,15 @@ def record_segment(rec, n, t, mode, z, cu, A, shift):
 
 
 @njit(cache=True)
+def fold_stance(A, z, cs, cu, ext):
+    """Fold the current stance oscillation's exact stroke and force ranges into ``ext``."""
+    lo, hi = future_range(A, z, cs)
+    ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
+    lo, hi = future_range(A, z, cu)
+    ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
+
+
+@njit(cache=True)
 def rest_proof(A, z, C, ne, cs, cu, ext):
     """Static mode, no schedule switch ahead: True if no event can ever fire.
 
@@ -151,10 +162,7 @@ def rest_proof(A, z, C, ne, cs, cu, ext):
         lo, hi = future_range(A, z, row(C, k))
         if hi > 0.0:
             return False
-    lo, hi = future_range(A, z, cs)
-    ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
-    lo, hi = future_range(A, z, cu)
-    ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
+    fold_stance(A, z, cs, cu, ext)
     return True
 
 
@@ -352,8 +360,10 @@ def energy_form(cu, energy):
 @njit(cache=True)
 def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     """Fill the output row (layout ``O_*``)."""
-    # the foot may still be creeping down if rest is unproven; a proven creep's d is its limit
-    out[O_DEPTH] = d if status == NEVER_RESTS_CREEP else max(d, -z[2])
+    # the foot may still be creeping down if rest is unproven; a proven creep's d is its
+    # limit, and so is settled hops' (energy balance, see .hops)
+    at_limit = status == NEVER_RESTS_CREEP or status == HOPS_TO_LIMIT
+    out[O_DEPTH] = d if at_limit else max(d, -z[2])
     out[O_STEPS] = steps
     out[O_TSTOP] = bk[B_TSTOP]
     out[O_T] = bk[B_T]
@@ -372,7 +382,7 @@ def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     out[O_NSEG] = nseg
     out[O_UMIN] = ext[X_UMIN]
     out[O_UMAX] = ext[X_UMAX]
-    out[O_DLIM] = out[O_DEPTH] if (foot_rests or status == NEVER_RESTS_CREEP) else np.nan
+    out[O_DLIM] = out[O_DEPTH] if (foot_rests or at_limit) else np.nan
     out[O_FOOT_REST] = 1.0 if foot_rests else 0.0
 
 
@@ -494,6 +504,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
                                        energy_rel(P, z, z0))
     ws = workspace()
     cs, C, dC, codes, cdata, cres = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
+    hops, hk = hop_eligible(Kf, umax, open_loop), hop_state()
     while nseg < max_seg:
         ext[X_WORK] += 1.0
         if ext[X_WORK] > max_steps:
@@ -508,6 +519,10 @@ def simulate_one(P, pol, x0, lim, out, rec):
         ne = build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes)
         if mode == STATIC and t_next == np.inf and rest_proof(A, z, C, ne, cs, cu, ext):
             status = REST_PROVEN
+            break
+        if hops and mode == STATIC and hops_settled(P, A, z, z0, d, C, cu, hk):
+            status = HOPS_TO_LIMIT
+            d = hk[H_DLIM]
             break
         derivative_functionals(C, A, ne, dC)
         hit = due_event(C, dC, ne, z)
@@ -525,6 +540,8 @@ def simulate_one(P, pol, x0, lim, out, rec):
                 k_ol = sched_K[sidx]
                 mode, steps = schedule_switch(P, z, d, mode, steps, k_ol)
                 continue
+        if hops:
+            hop_event(codes[hit], z, t, hk)
         mode, regime, d, shift, steps = apply_event(P, codes[hit], z, z0, t, d, shift, mode,
                                                     regime, steps, Kf, umax, open_loop, k_ol,
                                                     ext, bk)
