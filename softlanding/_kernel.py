@@ -18,10 +18,13 @@ Statuses (``out[O_STATUS]``, names in :data:`STATUS_NAMES`): ``REST_PROVEN`` (th
 foot rests forever and so does the body: the stroke stays bounded);
 ``BODY_THROUGH_FOOT`` / ``BODY_FLIES_OFF`` (the foot's rest is proven but the
 stroke runs away to -inf / +inf); ``NEVER_RESTS_CREEP`` (proven: the foot creeps
-toward the limit depth ``O_DLIM`` forever); ``HORIZON``, ``TOO_MANY_SEGMENTS``,
-``STEP_BUDGET`` (gave up: nothing proven); ``OUT_OF_RANGE`` (not simulated).
-Columns added to the first layout: ``O_DLIM`` (the depth's limit as t -> inf:
-the rest depth when the foot rests, a creep's limit depth, else NaN) and
+toward the limit depth ``O_DLIM`` forever); ``HOPS_TO_LIMIT`` (rest not proven: an
+undamped leg's hops shrink toward the lift-off threshold, and ``O_DEPTH`` =
+``O_DLIM`` is their limit by energy balance, :mod:`softlanding.kernel.hops`);
+``HORIZON``, ``TOO_MANY_SEGMENTS``, ``STEP_BUDGET`` (gave up: nothing proven);
+``OUT_OF_RANGE`` (not simulated). Columns added to the first layout: ``O_DLIM``
+(the depth's limit as t -> inf: the rest depth when the foot rests, a creep's or
+shrinking hops' limit depth, else NaN) and
 ``O_FOOT_REST`` (1 if the foot's rest is proven, whatever the body does).
 """
 

@@ -136,9 +136,11 @@ class LandingResult:
     Attributes
     ----------
     depth : float
-        Final penetration depth ``-x_f`` at rest (positive).
+        Final penetration depth ``-x_f`` at rest (positive); without a proven rest, the
+        depth reached, or the limit of a proven creep or of undamped hops shrinking toward
+        the lift-off threshold (see ``status`` and :mod:`softlanding.kernel.hops`).
     steps : int
-        Number of intrusion (yielding) phases.
+        Number of intrusion (yielding) phases (those simulated, if rest is not proven).
     feasible : bool
         Rest proven and ``0 <= x_b - x_f <= s`` throughout (to 1e-9 s).
     u_peak : float
@@ -160,7 +162,9 @@ class LandingResult:
     depth_limit : float
         The depth as t -> inf: the rest depth when the foot rests, the limit a
         never-resting creep approaches (then ``depth`` is that limit too, a supremum the
-        foot never reaches), NaN when unknown.
+        foot never reaches), the limit of undamped hops shrinking toward the lift-off
+        threshold (by energy balance; if the hops ever ended, the foot would rest at
+        least this deep), NaN when unknown.
     foot_rest : bool
         The foot's rest is proven, whatever the body does (a body that passes through
         its foot is not a rest of the robot: ``status`` says so).

@@ -66,7 +66,6 @@ from .const import (
     YIELDING,
 )
 from .creep import creep_limit_depth, creep_proof, creep_setup
-from .hops import H_DLIM, hop_eligible, hop_event, hop_state, hops_settled
 from .events import (
     build_events,
     classify,
@@ -76,6 +75,7 @@ from .events import (
     earliest_event,
     rows4,
 )
+from .hops import H_DLIM, hop_eligible, hop_event, hop_state, hops_settled
 from .linalg import (
     closed_loop,
     covector_t,
