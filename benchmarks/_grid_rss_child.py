@@ -9,6 +9,15 @@ from softlanding import Robot, simulate_batch
 
 
 def rss() -> float:
+    """Peak RSS in MiB: VmHWM (Linux) belongs to this program alone, whereas ru_maxrss
+    survives execve and so includes the parent's peak at the fork."""
+    try:
+        with open("/proc/self/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 

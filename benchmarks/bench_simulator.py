@@ -176,6 +176,16 @@ def grid_section(a):
     for code in np.unique(new.status):
         print(f"  new status {int(code)} ({K.STATUS_NAMES[int(code)]}): "
               f"{int((new.status == code).sum())}")
+    hops = new.status == K.HOPS_TO_LIMIT
+    if hops.any():  # their limit against the closed form of the energy balance (r_m = 5)
+        m_b, m_f = 5 / 6, 1 / 6
+        closed = 1 + np.sqrt(1 + V[hops] ** 2 - m_f * (2 * m_b + m_f) / KP[hops])
+        was = old.depth[hops]
+        print(f"  undamped hops stopped at their limit: {int(hops.sum())}; largest difference "
+              f"from the closed form 1 + sqrt(1 + v0^2 - m_f (2 m_b + m_f) / k_p): "
+              f"{np.max(np.abs(new.depth[hops] - closed)):.1e}; the old kernel's depth at "
+              f"its segment limit was short of it by {np.min(closed - was):.1e} to "
+              f"{np.max(closed - was):.1e}")
     with np.errstate(invalid="ignore"):
         deepest = np.nanmax(np.where(new.feasible, new.depth, math.nan))
     print(f"  feasible: {new.feasible.mean():.1%}; deepest feasible landing: {deepest:.4f}")
