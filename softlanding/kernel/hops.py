@@ -49,9 +49,9 @@ from .model import M_FU, M_FZ, energy_rel, ground_work, mode_A, mode_B
 from .rest import future_range
 
 RHO = 0.05
-"""Largest share of the remaining excess ``eps - eps*`` lost per hop at which the march stops."""
+"""Largest share of the excess ``eps`` lost per hop at which the march stops."""
 ENERGY_TOL = 1e-9
-"""Relative drift of ``E_tot`` between stance entries that still counts as conserved."""
+"""Relative drift of ``E_tot`` from its value at impact that still counts as conserved."""
 
 # hop-tracking slots: reference energy, last excess, last two loss shares, hops in a row,
 # limit depth, lift-off time and stroke, last two flight times, the first symmetric hop's

@@ -144,15 +144,6 @@ def record_segment(rec, n, t, mode, z, cu, A, shift):
 
 
 @njit(cache=True)
-def fold_stance(A, z, cs, cu, ext):
-    """Fold the current stance oscillation's exact stroke and force ranges into ``ext``."""
-    lo, hi = future_range(A, z, cs)
-    ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
-    lo, hi = future_range(A, z, cu)
-    ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
-
-
-@njit(cache=True)
 def rest_proof(A, z, C, ne, cs, cu, ext):
     """Static mode, no schedule switch ahead: True if no event can ever fire.
 
@@ -162,7 +153,10 @@ def rest_proof(A, z, C, ne, cs, cu, ext):
         lo, hi = future_range(A, z, row(C, k))
         if hi > 0.0:
             return False
-    fold_stance(A, z, cs, cu, ext)
+    lo, hi = future_range(A, z, cs)
+    ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
+    lo, hi = future_range(A, z, cu)
+    ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
     return True
 
 
