@@ -86,6 +86,10 @@ def _savefig(fig: Any, path: Any) -> str:
 
 
 # ------------------------------------------------------------------- simulate
+_DEPTH_LABEL = {"final": "depth -x_f(T)", "limit": "depth limit (t -> inf)",
+                "reached": "depth reached (rest not proven)"}
+
+
 def _cmd_simulate(a: argparse.Namespace) -> int:
     from .controllers import Impedance, Rigid
     from .simulator import simulate
@@ -108,7 +112,7 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
         e = res.energy
         _print_table([
             ("controller", controller.describe()), ("v0", a.v0), ("r_m", a.rm), ("s", a.s),
-            ("depth -x_f(T)", res.depth), ("intrusion steps", res.steps),
+            (_DEPTH_LABEL[res.depth_kind], res.depth), ("intrusion steps", res.steps),
             ("feasible (0<=stroke<=s)", res.feasible), ("status", res.status),
             ("first foot stop tau", res.t_first_stop), ("final rest tau T", res.T),
             ("peak |u|", res.u_peak), ("stroke min", res.stroke_min),

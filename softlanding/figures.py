@@ -29,6 +29,10 @@ def _shade_modes(ax, traj) -> None:
         ax.axvspan(traj.t[a], traj.t[b], color=MODE_COLOURS[m[a]], lw=0, zorder=0)
 
 
+_DEPTH_PHRASE = {"final": "depth {:.4f}", "limit": "depth $\\to$ {:.4f} (limit)",
+                 "reached": "depth {:.4f} reached, rest not proven"}
+
+
 def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figure:
     """Body and foot heights, actuator force and ground mode against time.
 
@@ -54,8 +58,10 @@ def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figu
     ax2.legend(handles=handles, loc="best", fontsize=8, title="ground mode", title_fontsize=8)
     r = result.robot
     ax1.set_title(title or (f"{result.controller.describe()}; $v_0$={result.impact.v0:g}, "
-                            f"$r_m$={r.r_m:g}, $s$={r.s:g}: depth {result.depth:.4f}, "
-                            f"{result.steps} step(s)"),
+                            f"$r_m$={r.r_m:g}, $s$={r.s:g}: "
+                            + _DEPTH_PHRASE[result.depth_kind].format(result.depth)
+                            + f", {result.steps} step(s)"
+                            + ("" if result.depth_kind == "final" else " simulated")),
                   fontsize=9)
     fig.tight_layout()
     return fig

@@ -194,6 +194,15 @@ class LandingResult:
         """The foot's final rest is proven (no further event can happen)."""
         return self.status == STATUS_NAMES[K.REST_PROVEN]
 
+    @property
+    def depth_kind(self) -> str:
+        """What ``depth`` is: ``"final"`` (the foot's rest is proven), ``"limit"`` (the
+        limit of a proven creep or of shrinking undamped hops) or ``"reached"`` (where the
+        simulation gave up)."""
+        if self.foot_rest:
+            return "final"
+        return "limit" if math.isfinite(self.depth_limit) else "reached"
+
     def trajectory(self, t_end: float | None = None, n: int = 2000) -> Trajectory:
         """Sample the exact solution on ``n`` points of ``[0, t_end]`` plus every event time.
 
@@ -253,6 +262,7 @@ class LandingResult:
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,
             "n_segments": self.n_segments, "depth_limit": self.depth_limit,
+            "depth_kind": self.depth_kind,
             "foot_rest": self.foot_rest, "energy": self.energy.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
             "ground": self.ground.to_dict(), "controller": self.controller.to_dict(),

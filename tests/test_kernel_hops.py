@@ -89,3 +89,11 @@ def test_only_a_conservative_spring_leg_is_eligible():
     assert not hop_eligible(damped, math.inf, False)
     assert not hop_eligible(spring, 8.2, False)
     assert not hop_eligible(spring, math.inf, True)
+
+
+def test_results_say_what_their_depth_is():
+    hops = simulate(ROBOT, Impact(-3.0), Impedance(0.5, 0.0))
+    periodic = simulate(ROBOT, Impact(-6.0), Impedance(0.26, 0.0))
+    rests = simulate(ROBOT, Impact(-3.0), Impedance(0.5, 0.5))
+    assert (hops.depth_kind, periodic.depth_kind, rests.depth_kind) == ("limit", "reached", "final")
+    assert hops.to_dict()["depth_kind"] == "limit"
