@@ -20,14 +20,14 @@ hop that lands with zero speed and loses nothing. Two kinds exist:
   ``D``, increasing beyond the static depth);
 * symmetric hops: no damping makes the motion time-reversible, so a flight that
   lands at rest mirrors its lift-off and is at rest half-way, ``v_b(tau) =
-  v_f(tau) = 0``, two equations linear in ``w`` whose determinant ``D(tau)``
+  v_f(tau) = 0``, two equations linear in ``w`` whose determinant ``Delta(tau)``
   vanishes there. These are the "periodic hops"; the approach to them is a
-  degenerate tangency (landing-time errors of order rounding^(1/3)), and long
+  degenerate tangency (the landing is a near-triple root of the foot's height), and long
   runs can leave them: at ``k_p = 0.12, v0 = -6`` the depth settles near 3.532 for
   5,000 segments, then the hops leave and approach the threshold's limit, 6.87.
   No stop is made on them: the march goes on.
 
-The march stops when the landing time falls, no root of ``D(tau)`` lies between
+The march stops when the landing time falls, no root of ``Delta(tau)`` lies between
 half of it and 0 (the hops head for the threshold), the stance cannot yield,
 ``E_tot`` is conserved, and each hop loses at most :data:`RHO` of ``eps``, a share
 falling for three hops in a row (near the threshold the share lost per hop is
@@ -144,9 +144,9 @@ def limit_depth(P, A, cu, z0, d, energy):
 
 @njit(cache=True)
 def first_symmetric_hop(P, cu, s_lift, T):
-    """Lower bound of the first root of ``D(tau)`` on ``(0, T/2]`` (the half-flight time of
-    the shortest symmetric hop), ``inf`` if ``D`` keeps its sign there, NaN if the flight
-    is not translation-invariant or too long to scan. ``D`` is scanned with the exact
+    """Lower bound of the first root of ``Delta(tau)`` on ``(0, T/2]`` (the half-flight time of
+    the shortest symmetric hop), ``inf`` if ``Delta`` keeps its sign there, NaN if the flight
+    is not translation-invariant or too long to scan. ``Delta`` is scanned with the exact
     step map, eight points per unit of ``||A|| tau``.
     """
     Af = closed_loop(mode_A(P, FLIGHT), mode_B(P, FLIGHT), cu)
