@@ -143,8 +143,9 @@ class MultiPhaseProblem:
             The phases (``b`` usually follows ``a``).
         states : sequence of str, optional
             States equal across the junction (default: every state name the two
-            phases share). Use :meth:`link_constraint` for anything else (jumps,
-            resets, inequalities).
+            phases share; refused when they share none, so that a typo cannot leave
+            the phases unlinked; ``()`` links the time only). Use
+            :meth:`link_constraint` for anything else (jumps, resets, inequalities).
         time : bool
             Also ``t0 of b = T of a``.
         """
@@ -152,6 +153,12 @@ class MultiPhaseProblem:
         pa, pb = self.phases[ia], self.phases[ib]
         names = [n for n in pa.state_names if n in pb.state_names] if states is None \
             else list(states)
+        if states is None and not names and pa.nx and pb.nx:
+            # a link that silently joins nothing would solve as two unrelated phases
+            raise ProblemDefinitionError(
+                f"link: phases {pa.name!r} and {pb.name!r} share no state name; name the "
+                "states (states=[...]), pass states=() to link time only, or use "
+                "link_constraint")
         for n in names:
             if n not in pa.state_names or n not in pb.state_names:
                 raise ProblemDefinitionError(f"link: state {n!r} is not in both phases")

@@ -1,0 +1,110 @@
+"""The published-problem suite on two revisions of this toolkit, interleaved.
+
+Run:  python benchmarks/bench_revisions.py --baseline REV [--repeats 3] [names...]
+
+Answers "is anything slower than before?" for a change to ``ocp``: the baseline
+revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
+worktree, and every problem of ``tests/ocp_suite`` that both revisions know is
+solved by each revision in turn, in fresh processes, alternating baseline and
+current run by run (and starting with the other one every second repeat), so that
+a drift of the shared machine's load falls on both. Each run times, inside the
+process after its imports, the whole collocation refinement (``Collocation.refine``
+to the problem's tolerance) and one solve on the final mesh, in wall and CPU time
+(``time.process_time``). The table gives medians and the ratio current / baseline
+(below 1: faster now), and the objectives of both, which must agree.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHILD = r"""
+import json, sys, time, warnings
+from ocp_suite import PROBLEMS
+from ocp import Collocation
+sp = {p.name: p for p in PROBLEMS}[sys.argv[1]]
+guess = sp.guess() if sp.guess else None
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    w, c = time.perf_counter(), time.process_time()
+    sol = Collocation(sp.build(), intervals=sp.intervals, degree=sp.degree).refine(
+        tol=sp.tol, max_rounds=sp.max_rounds, guess=guess)
+    rw, rc = time.perf_counter() - w, time.process_time() - c
+    meshes = [ph.discretization.tau for ph in sol.phases]
+    tr = Collocation(sp.build(), mesh=meshes, degree=sp.degree, verify="off")
+    w, c = time.perf_counter(), time.process_time()
+    one = tr.solve(guess=guess)
+    sw, sc = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"refine": rw, "refine_cpu": rc, "solve": sw, "solve_cpu": sc,
+                  "value": sp.value(sol), "rounds": len(sol.mesh_history),
+                  "ok": bool(sol.success and one.success)}))
+"""
+
+NAMES = r"""
+import json
+from ocp_suite import PROBLEMS
+print(json.dumps([p.name for p in PROBLEMS]))
+"""
+
+
+def run_in(tree: Path, code: str, *args: str) -> dict | list:
+    """Run ``code`` with ``tree``'s ``ocp`` and ``tests`` first on the path; its JSON."""
+    env = dict(os.environ, PYTHONPATH=f"{tree}{os.pathsep}{tree / 'tests'}")
+    out = subprocess.run([sys.executable, "-c", code, *args], env=env, cwd=tree,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--baseline", required=True, help="git revision to compare against")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
+    args = ap.parse_args()
+    if args.repeats < 1:
+        ap.error("--repeats must be at least 1")
+    with tempfile.TemporaryDirectory(prefix="bench-rev-") as tmp:
+        base = Path(tmp) / "baseline"
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base),
+                        args.baseline], check=True)
+        try:
+            both = set(run_in(base, NAMES)) & set(run_in(ROOT, NAMES))
+            names = [n for n in run_in(ROOT, NAMES) if n in both
+                     and (not args.names or n in args.names)]
+            print(f"baseline {args.baseline} against the working tree; medians of "
+                  f"{args.repeats} interleaved runs; ratio = current / baseline")
+            print(f"{'problem':22s} {'refine wall':>11s} {'cpu':>6s} {'ratio':>6s} "
+                  f"{'cpu':>6s} | {'solve cpu':>9s} {'ratio':>6s} | objective (both)")
+            for name in names:
+                rows: dict[str, list[dict]] = {"base": [], "now": []}
+                for k in range(args.repeats):
+                    order = [("base", base), ("now", ROOT)]
+                    for key, tree in order if k % 2 == 0 else order[::-1]:
+                        rows[key].append(run_in(tree, CHILD, name))  # type: ignore[arg-type]
+
+                def med(key: str, field: str, rows: dict = rows) -> float:
+                    return statistics.median(r[field] for r in rows[key])
+
+                vb, vn = rows["base"][0]["value"], rows["now"][0]["value"]
+                print(f"{name:22s} {med('now', 'refine'):11.3f} {med('now', 'refine_cpu'):6.2f} "
+                      f"{med('now', 'refine') / med('base', 'refine'):6.2f} "
+                      f"{med('now', 'refine_cpu') / med('base', 'refine_cpu'):6.2f} | "
+                      f"{med('now', 'solve_cpu'):9.3f} "
+                      f"{med('now', 'solve_cpu') / med('base', 'solve_cpu'):6.2f} | "
+                      f"{vn:.10g} {vb:.10g}", flush=True)
+        finally:
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(base)],
+                           check=False)
+
+
+if __name__ == "__main__":
+    main()
