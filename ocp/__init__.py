@@ -16,8 +16,9 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.trajectory`    -- the sampled-trajectory type;
-* :mod:`ocp.switching`     -- bang-bang structure detection and switching-time
-  refinement to machine precision;
+* :mod:`ocp.arcs`, :mod:`ocp.switching` -- bang-bang structure detection
+  (:func:`detect_structure`) and switching-time refinement to machine precision
+  (:func:`refine_switching`, :func:`refine_structure`; phases: :func:`refine_phases`);
 * :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
   certificate that proves (or refutes) bang-bang structure.
 """
@@ -36,7 +37,9 @@ _WHERE = {
     "certify": "pmp", "OptimalControlProblem": "problem", "Solution": "solution",
     "Trajectory": "trajectory", "Collocation": "transcription",
     "MultipleShooting": "transcription", "continuation": "transcription",
-    "transcribe": "transcription",
+    "transcribe": "transcription", "detect_arcs": "arcs", "detect_structure": "arcs",
+    "refine_switching": "switching", "refine_structure": "switching",
+    "refine_phases": "phase_refinement", "certify_phases": "phase_pmp",
 }
 
 __all__ = [
@@ -54,7 +57,13 @@ __all__ = [
     "SolveError",
     "Trajectory",
     "certify",
+    "certify_phases",
     "continuation",
+    "detect_arcs",
+    "detect_structure",
+    "refine_phases",
+    "refine_structure",
+    "refine_switching",
     "transcribe",
 ]
 
@@ -73,6 +82,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
+    from .arcs import detect_arcs, detect_structure
     from .errors import (
         GuessError,
         InfeasibleError,
@@ -82,8 +92,11 @@ if TYPE_CHECKING:
         SolveError,
     )
     from .multiphase import MultiPhaseProblem
+    from .phase_pmp import certify_phases
+    from .phase_refinement import refine_phases
     from .pmp import PMPCertificate, certify
     from .problem import OptimalControlProblem
     from .solution import Solution
+    from .switching import refine_structure, refine_switching
     from .trajectory import Trajectory
     from .transcription import Collocation, MultipleShooting, continuation, transcribe

@@ -20,13 +20,15 @@ class GuessError(ProblemDefinitionError):
 class SolveError(RuntimeError):
     """Ipopt did not converge to a solution.
 
-    Attributes
+    Parameters
     ----------
     status : str
         Ipopt's return status (e.g. ``"Infeasible_Problem_Detected"``,
         ``"Maximum_Iterations_Exceeded"``, ``"Restoration_Failed"``).
     iterate : Any
         The last iterate, as a :class:`ocp.Solution` (not an optimum).
+    message : str, optional
+        The text (default: ``"Ipopt failed: STATUS"``).
     """
 
     def __init__(self, status: str, iterate: Any = None, message: str | None = None) -> None:
@@ -36,14 +38,30 @@ class SolveError(RuntimeError):
 
 
 class InfeasibleError(SolveError):
-    """Ipopt reports the problem (locally) infeasible."""
+    """Ipopt reports the problem (locally) infeasible.
+
+    Parameters
+    ----------
+    status : str
+        Ipopt's return status.
+    iterate : Any
+        The last iterate, as a :class:`ocp.Solution` (infeasible: not a candidate).
+    message : str, optional
+        The text.
+    """
 
 
 class PathViolationError(SolveError):
     """Ipopt converged, but a path constraint or state bound is violated between nodes.
 
-    ``status`` is ``"Path_Violated_Between_Nodes"``; ``iterate`` is the
-    converged :class:`ocp.Solution` (its ``path_violation`` says by how much).
+    Parameters
+    ----------
+    status : str
+        ``"Path_Violated_Between_Nodes"``.
+    iterate : Any
+        The converged :class:`ocp.Solution` (its ``path_violation`` says by how much).
+    message : str, optional
+        The text.
     """
 
 

@@ -65,6 +65,12 @@ class Solution:
         One per phase (a single-phase solution is its own only phase). A
         multi-phase solution has no ``t``, ``x``, ``u``: use ``phases[i]`` or
         :meth:`trajectory`.
+
+    Parameters
+    ----------
+    **kw
+        The attributes above, as the transcription sets them (a solution is made by
+        a transcription's ``solve``, not by users).
     """
 
     phases: list[Solution]

@@ -18,7 +18,7 @@ MODULES = [
     "softlanding.landing", "softlanding.comparison", "softlanding.robustness",
     "softlanding.reproduce", "softlanding.summary", "softlanding.demo", "ocp.trajectory",
     "softlanding.terrain", "softlanding.groundcode", "softlanding.cli_ground",
-    "softlanding.verification",
+    "softlanding.verification", "ocp",
 ]
 
 
