@@ -55,6 +55,7 @@ from .refinement import (
     REFINE_IPOPT,
     SwitchingNLP,
     arc_dynamics,
+    check_control_set,
     clear_cache,
     required_substeps,
     rk8_of,
@@ -506,6 +507,7 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
         If Ipopt fails, or the accuracy is not reached after ``max_rebuilds``.
     """
     pv = np.array([float(params[k]) for k in problem.param_names])
+    check_control_set(problem, modes, pv)
     durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)
     w0 = np.r_[durations, x0]
     solved = solved_nlp(problem, modes, interior_samples, ipopt_options) if fast else None
