@@ -30,7 +30,15 @@ from typing import Any, Protocol, cast
 import casadi as ca
 import numpy as np
 
-from .constraint_kinds import CONTROL, KINDS, control_constraints, path_kinds, riding_controls
+from .constraint_kinds import (
+    CONTROL,
+    KINDS,
+    control_constraints,
+    coupled_groups,
+    path_kinds,
+    riding_controls,
+)
+from .control_set import control_polytope, vertex_faces
 from .flows import Mode
 from .problem import OptimalControlProblem
 from .solution import Solution
@@ -129,8 +137,9 @@ class SwitchingStructure:
 
     @property
     def bang_bang(self) -> bool:
-        """Every arc at a bound (no boundary and no interior arc)."""
-        return all(a.kind in BANG for a in self.arcs)
+        """Every arc at a bound or at a vertex of the control set (no boundary and no
+        interior arc)."""
+        return all(a.kind in BANG or a.kind == "vertex" for a in self.arcs)
 
     @property
     def refinable(self) -> bool:
@@ -412,6 +421,35 @@ def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_g
                 lab[a:b] = [f"boundary:{i}:{side}"] * (b - a)
 
 
+def _vertex_labels(sol: TranscribedSolution, lab: list[str], tol: float, control: str) -> None:
+    """Relabel as ``"vertex:<i>:<side>"`` the interior intervals where the group of
+    coupled controls sits at a vertex of its polytope at which ``control`` is inside
+    its own bounds, fixed by control-only constraint i at its ``side`` limit."""
+    pr = sol.problem
+    group = next((g for g in coupled_groups(pr) if control in g), None)
+    if group is None or "interior" not in lab:
+        return
+    pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
+    poly = control_polytope(pr, group, pv)
+    if poly is None:
+        return
+    U = np.column_stack([sol.control(n) for n in group])
+    rng = np.maximum(1.0, poly.upper - poly.lower)
+    faces: dict[int, dict[str, tuple[int, str]]] = {}
+    for k, label in enumerate(lab):
+        if label != "interior" or k >= len(U):
+            continue
+        dist = np.max(np.abs(U[k] - poly.vertices) / rng, axis=1)
+        v = int(np.argmin(dist))
+        if dist[v] > tol:
+            continue
+        if v not in faces:
+            faces[v] = vertex_faces(pr, poly, poly.vertices[v], pv)
+        if control in faces[v]:
+            i, side = faces[v][control]
+            lab[k] = f"vertex:{i}:{side}"
+
+
 def _absorb_end_transitions(runs: list[list], max_transition: int) -> None:
     """A short interior run at either end next to another arc is that arc (the grid
     cannot end the arc exactly on a node)."""
@@ -438,9 +476,9 @@ def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h
             # the switch lies inside: split by the average control
             _split_transition(arcs, runs, i, u, h, lo, hi)
             continue
-        if label.startswith("boundary"):
-            _, ci, side = label.split(":")
-            arcs.append(Arc("boundary", start, (b + 1) * h, (), names[int(ci)], side))
+        if label.startswith(("boundary", "vertex")):
+            kind, ci, side = label.split(":")
+            arcs.append(Arc(kind, start, (b + 1) * h, (), names[int(ci)], side))
         else:
             arcs.append(Arc(label, start, (b + 1) * h))
     merged: list[Arc] = []
@@ -456,7 +494,8 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
                       lo: float, hi: float) -> None:
     """Place the switch inside transition run i (its previous arc is ``arcs[-1]``).
 
-    Between two bang arcs the switch splits the interval by its average control.
+    Between two bang (or vertex) arcs the switch splits the interval by its average
+    control.
     Between a boundary and a bang arc, an average outside the range of the
     boundary control (the mean of its two nearest intervals) and the bang value
     means a short arc of the opposite bang lies inside: it is inserted, next
@@ -467,7 +506,10 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
     n = b - a + 1
     avg = float(np.mean(u[a:b + 1]))
     val = {"max": hi, "min": lo}
-    if prev[0] in BANG and nxt[0] in BANG:
+    for run in (prev, nxt):  # a vertex arc's value is a constant, as a bang's
+        if run[0].startswith("vertex"):
+            val[run[0]] = float(np.median(u[run[1]:run[2] + 1]))
+    if prev[0] in val and nxt[0] in val:
         ua, ub = val[prev[0]], val[nxt[0]]
         theta = float(np.clip((avg - ub) / (ua - ub), 0.0, 1.0))
         arcs[-1].end = (a + theta * n) * h
@@ -541,6 +583,7 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
     at_lo = np.isfinite(lo) & (np.abs(u - lo) <= tol * max(1.0, abs(lo)))
     lab = np.where(at_hi, "max", np.where(at_lo, "min", "interior")).tolist()
     _boundary_labels(tsol, lab, tol, max_gap, min_boundary_nodes, name)
+    _vertex_labels(tsol, lab, tol, name)
     runs = _runs(lab)
     _absorb_end_transitions(runs, max_transition)
     arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, max_transition)

@@ -191,3 +191,58 @@ def distance_to_vertices(poly: ControlPolytope, u: np.ndarray) -> np.ndarray:
     rng = np.maximum(1.0, poly.upper - poly.lower)
     d = np.abs(np.asarray(u, dtype=float)[:, None, :] - poly.vertices[None, :, :]) / rng
     return np.asarray(np.min(np.max(d, axis=2), axis=1))
+
+
+def vertex_faces(pr: OptimalControlProblem, poly: ControlPolytope, vertex: np.ndarray,
+                 pv: np.ndarray, tol: float = 1e-6) -> dict[str, tuple[int, str]]:
+    """Which control-only constraint fixes each control of a vertex that is not at a bound.
+
+    At a vertex of the polytope, a control strictly inside its own bounds is set
+    by a control-only constraint held at a limit. Controls (in order) are matched
+    to distinct active constraints that involve them, so the held constraints
+    determine the vertex (one equation per such control).
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    poly : ControlPolytope
+    vertex : ndarray (len(poly.controls),)
+    pv : ndarray
+        Parameter values.
+    tol : float
+        Distance (relative to ``max(1, |value|)``) at which a bound or a limit is met.
+
+    Returns
+    -------
+    dict
+        Control name -> ``(index of the constraint in pr.path, "lower" or "upper")``;
+        the controls at a bound of their own are not in it.
+    """
+    u = np.zeros(pr.nu)
+    u[list(poly.index)] = vertex
+    group = set(poly.controls)
+    faces: list[tuple[int, str, set[str]]] = []
+    linear = {c.name for c in control_constraints(pr, linear=True)}
+    for i, c in enumerate(pr.path):
+        names = set(controls_in(pr, c))
+        if c.name not in linear or not names <= group:
+            continue
+        fn = ca.Function("f", [pr.u, pr.p, pr.v], [c.expr, c.lower, c.upper])
+        val, lo, hi = (float(a) for a in fn(u, pv, np.zeros(pr.nv)))
+        room = tol * max(1.0, abs(val))
+        for side, limit in (("upper", hi), ("lower", lo)):
+            if math.isfinite(limit) and abs(val - limit) <= room:
+                faces.append((i, side, names))
+                break
+    out: dict[str, tuple[int, str]] = {}
+    used: set[int] = set()
+    for c, name in enumerate(poly.controls):
+        room = tol * max(1.0, abs(vertex[c]))
+        if abs(vertex[c] - poly.lower[c]) <= room or abs(vertex[c] - poly.upper[c]) <= room:
+            continue
+        for i, side, names in faces:
+            if name in names and i not in used:
+                out[name] = (i, side)
+                used.add(i)
+                break
+    return out

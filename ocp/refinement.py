@@ -43,6 +43,7 @@ import casadi as ca
 import numpy as np
 
 from .active_set_newton import ActiveSetNewton
+from .constraint_kinds import control_constraints
 from .flows import (
     THETA_MAX,
     ArcDynamics,
@@ -55,7 +56,6 @@ from .flows import (
     rk8_step_function,
     rk8_steps_for,
 )
-from .constraint_kinds import control_constraints
 from .problem import OptimalControlProblem
 
 REFINE_IPOPT: dict[str, Any] = {
@@ -796,10 +796,16 @@ def check_control_set(problem: OptimalControlProblem, modes: Modes, pv: np.ndarr
                      for a in fn(np.zeros(problem.nx), u, pv))
         bad = np.flatnonzero((lo - v > tol * np.maximum(1.0, np.abs(v))) |
                              (v - hi > tol * np.maximum(1.0, np.abs(v))))
+        labels = [mm.label() for mm in m]
         if len(bad):
-            labels = [mm.label() for mm in m]
             raise ValueError(f"interval {k} ({labels}) violates the control-only constraint "
                              f"{cons[int(bad[0])].name!r}: not a vertex of the control set")
+        for j, (name, mm) in enumerate(zip(problem.control_names, m, strict=True)):
+            blo, bhi = (float(b) for b in ca.Function("b", [problem.p],
+                                                      list(problem.control_bounds[name]))(pv))
+            if mm.kind == "vertex" and not blo - tol <= u[j] <= bhi + tol:
+                raise ValueError(f"interval {k} ({labels}): the vertex value {u[j]:.6g} of "
+                                 f"{name!r} is outside its bounds [{blo:g}, {bhi:g}]")
 
 
 def required_substeps(problem: OptimalControlProblem, modes: Modes, pv: np.ndarray,

@@ -164,6 +164,29 @@ def test_equality_coupled_modes():
     assert certify(sol, dataclasses.replace(r, durations=dur)).verdict != CERTIFIED
 
 
+def test_vertex_inside_the_box():
+    """Thrusters that could each push 2 but share a supply of 1 (u in [0, 2], u1 + u2 <= 1):
+    a thruster on sits at a vertex of the triangle inside its own bounds. Detected as a
+    vertex arc (held by its pair's constraint), refined with its value fixed by that
+    constraint to the same closed form, certified; a moved switch is not (before: the
+    'on' arcs were interior or boundary arcs and the refinement failed)."""
+    sol = MultipleShooting(thrusters_2d(umax=2.0), nodes=NODES).solve()
+    st = detect_structure(sol)
+    assert st.refinable and st.bang_bang
+    on = [a for s in st.per_control for a in s.arcs if a.kind not in ("max", "min")]
+    assert len(on) == 4 and {a.kind for a in on} == {"vertex"}
+    assert {a.constraint for a in on} == {"u1 + u2 <= 1", "u3 + u4 <= 1"}
+    r = refine_switching(sol, st)
+    assert np.allclose(r.switch_times, thrusters_2d_switch_times(), rtol=0, atol=1e-10)
+    assert r.objective == pytest.approx(thrusters_2d_exact(), rel=1e-10)
+    assert r.values[0] == pytest.approx((0.0, 1.0, 0.0, 1.0), abs=1e-14)
+    assert certify(sol, r).verdict == CERTIFIED
+    dur = r.durations.copy()
+    dur[0] += 0.05
+    dur[1] -= 0.05
+    assert certify(sol, dataclasses.replace(r, durations=dur)).verdict != CERTIFIED
+
+
 def test_mode_outside_the_control_set_is_refused():
     """Both x thrusters on is no vertex of the control set: a clear error, not a solve."""
     p = thrusters_2d()

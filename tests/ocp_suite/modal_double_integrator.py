@@ -25,7 +25,6 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ocp import OptimalControlProblem
-
 from ocp_suite.problems import SuiteProblem
 
 DATA = {"d": 2.0, "T": 4.0}

@@ -25,18 +25,22 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from ocp import OptimalControlProblem
-
 from ocp_suite.problems import SuiteProblem
 
 DATA = {"dx": 1.0, "dy": 0.5, "T": 3.0}
 
 
-def thrusters_2d(dx: float = DATA["dx"], dy: float = DATA["dy"],
-                 T: float = DATA["T"]) -> OptimalControlProblem:
-    """The problem: four on/off thrusters, two coupling constraints, minimum fuel."""
+def thrusters_2d(dx: float = DATA["dx"], dy: float = DATA["dy"], T: float = DATA["T"],
+                 umax: float = 1.0) -> OptimalControlProblem:
+    """The problem: four on/off thrusters, two coupling constraints, minimum fuel.
+
+    With ``umax > 1`` each thruster alone could push harder than the pair's limit
+    allows (a shared supply): the optimum is the same, but a thruster on sits at
+    a vertex of its axis' triangle strictly inside its own bounds.
+    """
     p = OptimalControlProblem("thrusters_2d")
     x, vx, y, vy = p.state("x"), p.state("vx"), p.state("y"), p.state("vy")
-    u = [p.control(f"u{i}", 0.0, 1.0) for i in range(1, 5)]
+    u = [p.control(f"u{i}", 0.0, umax) for i in range(1, 5)]
     p.set_dynamics({"x": vx, "vx": u[0] - u[1], "y": vy, "vy": u[2] - u[3]})
     p.path_constraint(u[0] + u[1], upper=1.0, name="u1 + u2 <= 1")
     p.path_constraint(u[2] + u[3], upper=1.0, name="u3 + u4 <= 1")
