@@ -236,9 +236,9 @@ def vertex_faces(pr: OptimalControlProblem, poly: ControlPolytope, vertex: np.nd
                 break
     out: dict[str, tuple[int, str]] = {}
     used: set[int] = set()
-    for c, name in enumerate(poly.controls):
-        room = tol * max(1.0, abs(vertex[c]))
-        if abs(vertex[c] - poly.lower[c]) <= room or abs(vertex[c] - poly.upper[c]) <= room:
+    for j, name in enumerate(poly.controls):
+        room = tol * max(1.0, abs(vertex[j]))
+        if abs(vertex[j] - poly.lower[j]) <= room or abs(vertex[j] - poly.upper[j]) <= room:
             continue
         for i, side, names in faces:
             if name in names and i not in used:
