@@ -63,8 +63,15 @@ def constraint_kind(pr: OptimalControlProblem, c: Constraint | str) -> str:
 
 
 def is_control_only(pr: OptimalControlProblem, c: Constraint | str | None) -> bool:
-    """True when path constraint ``c`` (a constraint or its name) is a control constraint
-    (:func:`constraint_kind` is ``"control"``); None gives False."""
+    """True when path constraint ``c`` is a control constraint (:func:`constraint_kind`
+    is ``"control"``).
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    c : Constraint, str or None
+        A path constraint of ``pr``, its name, or None (False).
+    """
     return c is not None and constraint_kind(pr, c) == CONTROL
 
 

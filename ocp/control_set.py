@@ -186,8 +186,19 @@ def vertex_scores(poly: ControlPolytope, sigma: np.ndarray) -> VertexScores:
 
 
 def distance_to_vertices(poly: ControlPolytope, u: np.ndarray) -> np.ndarray:
-    """Largest-component distance of each control vector (m, k) to its nearest vertex,
-    relative to each control's range."""
+    """Largest-component distance of each control vector to its nearest vertex, relative
+    to each control's range.
+
+    Parameters
+    ----------
+    poly : ControlPolytope
+    u : ndarray (m, len(poly.controls))
+        The group's controls at m samples.
+
+    Returns
+    -------
+    ndarray (m,)
+    """
     rng = np.maximum(1.0, poly.upper - poly.lower)
     d = np.abs(np.asarray(u, dtype=float)[:, None, :] - poly.vertices[None, :, :]) / rng
     return np.asarray(np.min(np.max(d, axis=2), axis=1))

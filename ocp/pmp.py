@@ -262,7 +262,7 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
     bounds it to an interval; the minimum principle then selects the ends of the
     intersection. Constraints in several controls are not used here: linear
     control-only ones couple controls into a polytope, checked by
-    :func:`coupled_figures` (the Hamiltonian minimised over it, a linear programme).
+    ``_coupled_figures`` (the Hamiltonian minimised over it, a linear programme).
 
     Parameters
     ----------
@@ -410,7 +410,7 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
     agreement, gap, zeros = {}, {}, {}
     singular: list[tuple[float, float]] = []
-    coupled = coupled_figures(pr, pv, t, u, sigma, terms, judged, switches, tol_sigma,
+    coupled = _coupled_figures(pr, pv, t, u, sigma, terms, judged, switches, tol_sigma,
                               sigma_floor, u_tol, min_singular, interior_check)
     for name, (frac, g, zc, runs) in coupled.items():
         agreement[name], gap[name], zeros[name] = frac, g, zc
@@ -441,7 +441,7 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
                     fns.linear)
 
 
-def coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u: np.ndarray,
+def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u: np.ndarray,
                     sigma: np.ndarray, terms: np.ndarray, judged: np.ndarray,
                     switches: dict[str, list[float]], tol_sigma: float,
                     sigma_floor: np.ndarray, u_tol: float, min_singular: float,
@@ -457,7 +457,22 @@ def coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u:
     of those clear samples (by time) where each control equals the minimiser's
     component; a switch of a control must sit where the minimising vertex changes;
     a run where the programme stays degenerate (no unique minimiser) for at least
-    ``min_singular`` is singular. Arguments are those of :func:`_figures`.
+    ``min_singular`` is singular.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    pv : ndarray
+        Parameter values.
+    t, u, sigma, terms : ndarray
+        Sample times, controls (m, nu), switching functions (m, nu) and the sizes of
+        their terms (m, nu).
+    judged : ndarray of bool (m,)
+        Samples that are judged.
+    switches : dict
+        Switch times per control.
+    tol_sigma, sigma_floor, u_tol, min_singular, interior_check
+        As in :func:`_figures`.
 
     Returns
     -------
