@@ -96,6 +96,29 @@ def test_constraint_kinds():
     assert riding_controls(q, "x <= 1") == ("a",)
 
 
+def test_control_not_in_a_state_constraint_does_not_ride_it():
+    """Bryson-Denham (x'' = a, x <= 1/9, boundary arc on [1/3, 2/3]) beside an independent
+    y' = b, |b| <= 1, maximising int y with y(0) = y(1) = 0 (b = +1, then -1 at t = 1/2,
+    inside the boundary arc). Only a holds x <= 1/9; before, b was labelled as riding it
+    on [1/3, 2/3]."""
+    p = OptimalControlProblem("bryson_denham_and_b")
+    x, v, y = p.state("x"), p.state("v"), p.state("y")
+    a, b = p.control("a", -10, 10), p.control("b", -1, 1)
+    p.set_dynamics({"x": v, "v": a, "y": b})
+    p.path_constraint(x, upper=1 / 9, name="x <= 1/9")
+    for s, start, end in ((x, 0, 0), (v, 1, -1), (y, 0, 0)):
+        p.initial_constraint(s, start)
+        p.terminal_constraint(s, end)
+    p.fixed_final_time(1.0)
+    p.minimize_integral(a**2 / 2 - y)
+    sol = MultipleShooting(p, nodes=NODES).solve()
+    st = detect_structure(sol)
+    assert [x.kind for x in st.per_control[0].arcs] == ["interior", "boundary", "interior"]
+    kinds_b = [(x.kind, x.constraint) for x in st.per_control[1].arcs]
+    assert kinds_b == [("max", None), ("min", None)]
+    assert st.per_control[1].switch_times == pytest.approx([0.5], abs=1.5 / NODES)
+
+
 def test_structure_has_bang_arcs_only():
     """No control rides a control-only constraint: every arc is a bang, at the closed-form
     switches to the grid's resolution (before: u3/u4 'boundary' on u1 + u2 <= 1)."""
