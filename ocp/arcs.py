@@ -426,7 +426,7 @@ def _vertex_labels(sol: TranscribedSolution, lab: list[str], tol: float, control
     coupled controls sits at a vertex of its polytope at which ``control`` is inside
     its own bounds, fixed by control-only constraint i at its ``side`` limit."""
     pr = sol.problem
-    group = next((g for g in coupled_groups(pr) if control in g), None)
+    group = next((g for g in coupled_groups(pr, singletons=True) if control in g), None)
     if group is None or "interior" not in lab:
         return
     pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)

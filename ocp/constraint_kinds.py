@@ -148,7 +148,7 @@ def riding_controls(pr: OptimalControlProblem, c: Constraint | str) -> tuple[str
     return ()
 
 
-def coupled_groups(pr: OptimalControlProblem) -> list[tuple[str, ...]]:
+def coupled_groups(pr: OptimalControlProblem, singletons: bool = False) -> list[tuple[str, ...]]:
     """Sets of controls coupled by linear control-only constraints in several controls.
 
     Two controls are in one group when some linear control-only constraint
@@ -157,6 +157,9 @@ def coupled_groups(pr: OptimalControlProblem) -> list[tuple[str, ...]]:
     Parameters
     ----------
     pr : OptimalControlProblem
+    singletons : bool
+        Also return, as a group of one, each control in a linear control-only
+        constraint of its own (``u1 <= 0.5``: its set is an interval).
 
     Returns
     -------
@@ -173,7 +176,7 @@ def coupled_groups(pr: OptimalControlProblem) -> list[tuple[str, ...]]:
     linked: set[str] = set()
     for c in control_constraints(pr, linear=True):
         names = controls_in(pr, c)
-        if len(names) < 2:
+        if len(names) < 2 and not singletons:
             continue
         linked.update(names)
         for n in names[1:]:

@@ -483,7 +483,7 @@ def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u
     """
     out: dict[str, tuple[float, float, np.ndarray, list[tuple[float, float]]]] = {}
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
-    for group in coupled_groups(pr):
+    for group in coupled_groups(pr, singletons=True):
         poly = control_polytope(pr, group, pv)
         if poly is None:
             continue
