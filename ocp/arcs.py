@@ -434,7 +434,7 @@ def _vertex_labels(sol: TranscribedSolution, lab: list[str], tol: float, control
     if poly is None:
         return
     U = np.column_stack([sol.control(n) for n in group])
-    rng = np.maximum(1.0, poly.upper - poly.lower)
+    rng = poly.span
     faces: dict[int, dict[str, tuple[int, str]]] = {}
     for k, label in enumerate(lab):
         if label != "interior" or k >= len(U):

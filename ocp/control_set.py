@@ -40,7 +40,7 @@ class ControlPolytope:
         Their positions in the problem's control vector.
     vertices : ndarray (n_vertices, len(controls))
     lower, upper : ndarray
-        The controls' own bounds (their ranges set the agreement tolerance).
+        The controls' own bounds (infinite where the constraints alone bound them).
     """
 
     controls: tuple[str, ...]
@@ -48,6 +48,11 @@ class ControlPolytope:
     vertices: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
+
+    @property
+    def span(self) -> np.ndarray:
+        """Each control's range over the polytope, at least 1 (the scale of its tolerance)."""
+        return np.maximum(1.0, np.ptp(self.vertices, axis=0))
 
 
 def _numeric(pr: OptimalControlProblem, exprs: list[ca.SX], pv: np.ndarray) -> np.ndarray:
@@ -74,18 +79,16 @@ def control_polytope(pr: OptimalControlProblem, group: tuple[str, ...],
     Returns
     -------
     ControlPolytope or None
-        None when the set is unbounded (a control of the group has an infinite
-        bound), empty, or too large to enumerate.
+        None when the set is unbounded, empty, or too large to enumerate.
     """
     idx = tuple(pr.control_names.index(n) for n in group)
     k = len(idx)
     lo = _numeric(pr, [pr.control_bounds[n][0] for n in group], pv)
     hi = _numeric(pr, [pr.control_bounds[n][1] for n in group], pv)
-    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-        return None
     ug = ca.vertcat(*[pr.u[j] for j in idx])
-    rows_G: list[np.ndarray] = [np.eye(k), -np.eye(k)]
-    rows_h: list[np.ndarray] = [hi, -lo]
+    eye = np.eye(k)
+    rows_G: list[np.ndarray] = [eye[np.isfinite(hi)], -eye[np.isfinite(lo)]]
+    rows_h: list[np.ndarray] = [hi[np.isfinite(hi)], -lo[np.isfinite(lo)]]
     for c in control_constraints(pr, linear=True):
         if not set(controls_in(pr, c)) <= set(group):
             continue
@@ -99,10 +102,40 @@ def control_polytope(pr: OptimalControlProblem, group: tuple[str, ...],
             rows_G.append(-a[None, :])
             rows_h.append(np.array([b - clo]))
     G, h = np.vstack(rows_G), np.concatenate(rows_h)
+    if not bounded(G):
+        return None
     V = polytope_vertices(G, h)
     if V is None or not len(V):
         return None
     return ControlPolytope(tuple(group), idx, V, lo, hi)
+
+
+def bounded(G: np.ndarray) -> bool:
+    """True when ``{u : G u <= h}`` is bounded for every ``h``: no direction ``d != 0`` with
+    ``G d <= 0`` (checked by a linear programme per coordinate direction and sign).
+
+    Parameters
+    ----------
+    G : ndarray (m, k)
+
+    Returns
+    -------
+    bool
+    """
+    from scipy.optimize import linprog  # imported on first use: scipy.optimize is slow to load
+
+    m, k = G.shape
+    if m <= k:
+        return False
+    for j in range(k):
+        for sign in (1.0, -1.0):
+            c = np.zeros(k)
+            c[j] = -sign  # maximise sign * d_j over the recession cone, |d| <= 1
+            res = linprog(c, A_ub=G, b_ub=np.zeros(m), bounds=[(-1.0, 1.0)] * k,
+                          method="highs")
+            if res.status != 0 or -res.fun > 1e-9:
+                return False
+    return True
 
 
 def polytope_vertices(G: np.ndarray, h: np.ndarray, tol: float = 1e-9) -> np.ndarray | None:
@@ -199,8 +232,7 @@ def distance_to_vertices(poly: ControlPolytope, u: np.ndarray) -> np.ndarray:
     -------
     ndarray (m,)
     """
-    rng = np.maximum(1.0, poly.upper - poly.lower)
-    d = np.abs(np.asarray(u, dtype=float)[:, None, :] - poly.vertices[None, :, :]) / rng
+    d = np.abs(np.asarray(u, dtype=float)[:, None, :] - poly.vertices[None, :, :]) / poly.span
     return np.asarray(np.min(np.max(d, axis=2), axis=1))
 
 

@@ -498,7 +498,7 @@ def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u
         want = poly.vertices[sc.best]
         zc = sign_changes(t, sc.signed, 1e-14 * scale)
         for c, (name, j) in enumerate(zip(poly.controls, idx, strict=True)):
-            rng = max(1.0, float(poly.upper[c] - poly.lower[c]))
+            rng = float(poly.span[c])
             agree = np.abs(u[:, j] - want[:, c]) <= u_tol * rng
             frac = float(np.sum(dt[clear & agree]) / max(np.sum(dt[clear]), 1e-300)) \
                 if clear.any() else 1.0

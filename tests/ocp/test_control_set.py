@@ -210,23 +210,26 @@ def test_vertex_inside_the_box():
     assert certify(sol, dataclasses.replace(r, durations=dur)).verdict != CERTIFIED
 
 
-def test_single_control_cap():
-    """Minimum time 0 -> 1 of x'' = u, |u| <= 1, with u <= 1/2 a control-only constraint:
+@pytest.mark.parametrize("box", [True, False], ids=["box", "no box"])
+def test_single_control_cap(box):
+    """Minimum time 0 -> 1 of x'' = u, u in [-1, 1/2] (with a box [-1, 1] and the cap
+    u <= 1/2 a control-only constraint, or with no box and -1 <= u <= 1/2 the constraint):
     u = 1/2 for t1 then -1 for t1/2, 0.375 t1^2 = 1, T = 1.5 sqrt(8/3) (closed form).
-    The capped arc is a vertex arc of the interval [-1, 1/2] (before: 'boundary' then
-    'interior', not refinable)."""
+    The capped arc is a vertex arc of the interval [-1, 1/2] (before, with the box:
+    'boundary' then 'interior', not refinable)."""
     p = OptimalControlProblem("capped_double_integrator")
     x, v = p.state("x"), p.state("v")
-    u = p.control("u", -1, 1)
+    u = p.control("u", -1, 1) if box else p.control("u")
     p.set_dynamics({"x": v, "v": u})
-    p.path_constraint(u, upper=0.5, name="u <= 1/2")
+    p.path_constraint(u, upper=0.5, lower=-1.0 if not box else -np.inf, name="u <= 1/2")
     for s, start, end in ((x, 0, 1), (v, 0, 0)):
         p.initial_constraint(s, start)
         p.terminal_constraint(s, end)
     p.free_final_time(0.1, 10, guess=2)
     p.minimize_terminal(p.T)
     sol = MultipleShooting(p, nodes=40).solve()
-    assert [a.kind for a in detect_structure(sol).per_control[0].arcs] == ["vertex", "min"]
+    kinds = [a.kind for a in detect_structure(sol).per_control[0].arcs]
+    assert kinds == (["vertex", "min"] if box else ["vertex", "vertex"])
     r = refine_switching(sol)
     assert r.T == pytest.approx(1.5 * np.sqrt(8 / 3), rel=1e-12)
     assert r.values == pytest.approx([0.5, -1.0], abs=1e-15)
