@@ -410,8 +410,10 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
     agreement, gap, zeros = {}, {}, {}
     singular: list[tuple[float, float]] = []
+    # H linear in u: minimised at a vertex of the control polytope (else per control)
     coupled = _coupled_figures(pr, pv, t, u, sigma, terms, judged, switches, tol_sigma,
-                              sigma_floor, u_tol, min_singular, interior_check)
+                               sigma_floor, u_tol, min_singular, interior_check) \
+        if fns.linear else {}
     for name, (frac, g, zc, runs) in coupled.items():
         agreement[name], gap[name], zeros[name] = frac, g, zc
         singular += [r for r in runs if r not in singular]
