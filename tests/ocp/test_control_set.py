@@ -187,6 +187,22 @@ def test_equality_coupled_modes():
     assert certify(sol, dataclasses.replace(r, durations=dur)).verdict != CERTIFIED
 
 
+def test_suboptimal_fixed_structure_is_not_certified():
+    """Brake, accelerate, coast (no coast in the middle) is feasible: brake and accelerate
+    sqrt(2) each, coast T - 2 sqrt(2); its fuel 2 sqrt(2) is 2.4 times the optimum. Refined
+    within that fixed structure it is an extremal of nothing: the Hamiltonian is not
+    minimised over the simplex, and the certificate says so."""
+    p = modal_double_integrator()
+    on, off = Mode("max"), Mode("min")
+    r = refine_structure(p, ((off, off, on), (on, off, off), (off, on, off)),
+                         np.array([1.4, 1.4, 1.2]), np.array([2.0, 0.0]), {})
+    assert r.durations[:2] == pytest.approx([np.sqrt(2)] * 2, rel=1e-12)
+    assert r.objective == pytest.approx(2 * np.sqrt(2), rel=1e-12)
+    c = certify(solved("modal"), r)
+    assert c.verdict == "not bang-bang"
+    assert c.sigma_sign_agreement < 0.5
+
+
 def test_vertex_inside_the_box():
     """Thrusters that could each push 2 but share a supply of 1 (u in [0, 2], u1 + u2 <= 1):
     a thruster on sits at a vertex of the triangle inside its own bounds. Detected as a
