@@ -102,7 +102,8 @@ def control_polytope(pr: OptimalControlProblem, group: tuple[str, ...],
             rows_G.append(-a[None, :])
             rows_h.append(np.array([b - clo]))
     G, h = np.vstack(rows_G), np.concatenate(rows_h)
-    if not bounded(G):
+    boxed = bool(np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)))
+    if not boxed and not bounded(G):
         return None
     V = polytope_vertices(G, h)
     if V is None or not len(V):
