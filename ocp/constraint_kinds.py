@@ -19,12 +19,30 @@ certificate alike:
 
 from __future__ import annotations
 
+import weakref
+from collections.abc import Callable
+from typing import Any
+
 import casadi as ca
 
 from .problem import Constraint, OptimalControlProblem
 
 STATE, MIXED, CONTROL = "state", "mixed", "control"
 KINDS = (STATE, MIXED, CONTROL)
+
+# per problem, per constraint object: what was found (the symbolic checks cost ~1 ms each,
+# and structure detection asks for every control and constraint)
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _cached(pr: OptimalControlProblem, what: str, con: Constraint,
+            compute: Callable[[], Any]) -> Any:
+    store = _CACHE.setdefault(pr, {})
+    key = (what, id(con))
+    hit = store.get(key)
+    if hit is None or hit[0] is not con:
+        hit = store[key] = (con, compute())
+    return hit[1]
 
 MAX_RELATIVE_DEGREE = 3
 """Highest time derivative of a state constraint searched for a control."""
@@ -56,10 +74,14 @@ def constraint_kind(pr: OptimalControlProblem, c: Constraint | str) -> str:
         state or the time; ``"state"`` when it involves no control.
     """
     con = _constraint(pr, c)
-    if pr.nu == 0 or not ca.depends_on(con.expr, pr.u):
-        return STATE
-    other = ca.vertcat(pr.x, pr.t, pr.t0, pr.T)
-    return MIXED if ca.depends_on(con.expr, other) else CONTROL
+
+    def compute() -> str:
+        if pr.nu == 0 or not ca.depends_on(con.expr, pr.u):
+            return STATE
+        other = ca.vertcat(pr.x, pr.t, pr.t0, pr.T)
+        return MIXED if ca.depends_on(con.expr, other) else CONTROL
+
+    return str(_cached(pr, "kind", con, compute))
 
 
 def is_control_only(pr: OptimalControlProblem, c: Constraint | str | None) -> bool:
@@ -94,8 +116,14 @@ def control_constraints(pr: OptimalControlProblem, linear: bool = False) -> list
     list of Constraint
     """
     out = [c for c in pr.path if constraint_kind(pr, c) == CONTROL]
-    if linear:
-        out = [c for c in out if not ca.depends_on(ca.jacobian(c.expr, pr.u), pr.u)]
+    if linear and out:
+        u = pr.u
+
+        def affine(c: Constraint) -> bool:
+            return bool(_cached(pr, "linear", c,
+                                lambda: not ca.depends_on(ca.jacobian(c.expr, u), u)))
+
+        out = [c for c in out if affine(c)]
     return out
 
 
@@ -112,7 +140,12 @@ def controls_in(pr: OptimalControlProblem, c: Constraint | str) -> tuple[str, ..
     tuple of str
     """
     con = _constraint(pr, c)
-    return tuple(n for j, n in enumerate(pr.control_names) if ca.depends_on(con.expr, pr.u[j]))
+
+    def compute() -> tuple[str, ...]:
+        u = pr.u
+        return tuple(n for j, n in enumerate(pr.control_names) if ca.depends_on(con.expr, u[j]))
+
+    return tuple(_cached(pr, "controls", con, compute))
 
 
 def riding_controls(pr: OptimalControlProblem, c: Constraint | str) -> tuple[str, ...]:
@@ -139,13 +172,17 @@ def riding_controls(pr: OptimalControlProblem, c: Constraint | str) -> tuple[str
         return ()
     if kind == MIXED:
         return controls_in(pr, con)
-    d = con.expr
-    for _ in range(MAX_RELATIVE_DEGREE):
-        d = ca.jtimes(d, pr.x, pr.rhs)
-        if ca.depends_on(d, pr.u):
-            return tuple(n for j, n in enumerate(pr.control_names)
-                         if ca.depends_on(d, pr.u[j]))
-    return ()
+
+    def compute() -> tuple[str, ...]:
+        d, x, u, rhs = con.expr, pr.x, pr.u, pr.rhs
+        for _ in range(MAX_RELATIVE_DEGREE):
+            d = ca.jtimes(d, x, rhs)
+            if ca.depends_on(d, u):
+                return tuple(n for j, n in enumerate(pr.control_names)
+                             if ca.depends_on(d, u[j]))
+        return ()
+
+    return tuple(_cached(pr, "riding", con, compute))
 
 
 def coupled_groups(pr: OptimalControlProblem, singletons: bool = False) -> list[tuple[str, ...]]:
