@@ -19,6 +19,9 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.arcs`, :mod:`ocp.switching` -- bang-bang structure detection
   (:func:`detect_structure`) and switching-time refinement to machine precision
   (:func:`refine_switching`, :func:`refine_structure`; phases: :func:`refine_phases`);
+* :mod:`ocp.constraint_kinds` -- path constraints classified as state, mixed or
+  control-only; :mod:`ocp.control_set` -- the polytope of coupled controls and
+  the Hamiltonian's minimiser over it;
 * :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
   certificate that proves (or refutes) bang-bang structure.
 """

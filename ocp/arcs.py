@@ -7,9 +7,14 @@ inside) and merges them into arcs. An interior run of at most
 (its time is estimated from the interval's average control). A longer
 interior run on which a path constraint is active at every node is a
 **boundary arc** (``"boundary"``, with the constraint and the limit it sits
-at): there the control is whatever keeps the state on the constraint. Any
-other interior run stays ``"interior"`` (a singular or free arc: not
-refinable by switching times).
+at): there the control is whatever keeps the state on the constraint. Only a
+control that can hold the constraint rides it (one in the constraint, or in
+its first time derivative that involves a control: see
+:func:`ocp.constraint_kinds.riding_controls`); a control-only constraint
+(``u1 + u2 <= 1``) is a face of the control set, never a boundary arc: the
+controls sit at a vertex of that set, each at a bound when the set's vertices
+are corners of the box. Any other interior run stays ``"interior"`` (a
+singular or free arc: not refinable by switching times).
 
 :func:`detect_structure` does this for every control and merges the switch
 events of all controls into one list of intervals (an :class:`ArcStructure`),
@@ -25,6 +30,15 @@ from typing import Any, Protocol, cast
 import casadi as ca
 import numpy as np
 
+from .constraint_kinds import (
+    CONTROL,
+    KINDS,
+    control_constraints,
+    coupled_groups,
+    path_kinds,
+    riding_controls,
+)
+from .control_set import control_polytope, vertex_faces
 from .flows import Mode
 from .problem import OptimalControlProblem
 from .solution import Solution
@@ -74,9 +88,12 @@ class Arc:
     kind : {"max", "min", "boundary", "interior"}
     start, end : float
     active : tuple of str
-        Path constraints active at every node of the arc.
+        State and mixed path constraints active at every node of the arc.
     constraint, side : str or None
         On a boundary arc, the constraint held and its limit (``"lower"``/``"upper"``).
+    faces : tuple of str
+        Control-only path constraints active at every node of the arc (faces of
+        the control set the controls sit on; not state constraints).
     """
 
     kind: str
@@ -85,6 +102,7 @@ class Arc:
     active: tuple[str, ...] = ()
     constraint: str | None = None
     side: str | None = None
+    faces: tuple[str, ...] = ()
 
     @property
     def duration(self) -> float:
@@ -119,8 +137,9 @@ class SwitchingStructure:
 
     @property
     def bang_bang(self) -> bool:
-        """Every arc at a bound (no boundary and no interior arc)."""
-        return all(a.kind in BANG for a in self.arcs)
+        """Every arc at a bound or at a vertex of the control set (no boundary and no
+        interior arc)."""
+        return all(a.kind in BANG or a.kind == "vertex" for a in self.arcs)
 
     @property
     def refinable(self) -> bool:
@@ -294,7 +313,8 @@ def control_bounds_at(problem: OptimalControlProblem, name: str,
     return a, b
 
 
-def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray]:
+def path_activity(sol: SolutionLike, tol: float,
+                  kinds: tuple[str, ...] = KINDS) -> tuple[np.ndarray, np.ndarray]:
     """Which path constraints sit at which limit at every node.
 
     Parameters
@@ -303,6 +323,9 @@ def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray
         A transcribed solution.
     tol : float
         Relative distance to a limit that counts as at it.
+    kinds : tuple of str
+        Which kinds of constraint to report (:func:`ocp.constraint_kinds.constraint_kind`:
+        ``"state"``, ``"mixed"``, ``"control"``); the columns of the others are False.
 
     Returns
     -------
@@ -316,7 +339,11 @@ def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray
         return np.zeros((n, 0), dtype=bool), np.zeros((n, 0), dtype=bool)
     pv = [tsol.params[k] for k in pr.param_names]
     lows, ups = [], []
-    for c in pr.path:
+    for c, kind in zip(pr.path, path_kinds(pr), strict=True):
+        if kind not in kinds:
+            lows.append(np.zeros(n, dtype=bool))
+            ups.append(np.zeros(n, dtype=bool))
+            continue
         vals = tsol.evaluate(c.expr)
         lo, hi = (float(v) for v in ca.Function("b", [pr.p], [c.lower, c.upper])(pv))
         scale = tol * np.maximum(1.0, np.abs(vals))
@@ -325,7 +352,8 @@ def path_activity(sol: SolutionLike, tol: float) -> tuple[np.ndarray, np.ndarray
     return np.column_stack(lows), np.column_stack(ups)
 
 
-def active_path_constraints(sol: SolutionLike, tol: float) -> np.ndarray:
+def active_path_constraints(sol: SolutionLike, tol: float,
+                            kinds: tuple[str, ...] = KINDS) -> np.ndarray:
     """Which path constraints are active (at either limit) at every node.
 
     Parameters
@@ -334,13 +362,15 @@ def active_path_constraints(sol: SolutionLike, tol: float) -> np.ndarray:
         A transcribed solution.
     tol : float
         As in :func:`path_activity`.
+    kinds : tuple of str
+        As in :func:`path_activity`.
 
     Returns
     -------
     ndarray of bool (N+1, n_path)
     """
     tsol = transcribed(sol)
-    lo, up = path_activity(tsol, tol)
+    lo, up = path_activity(tsol, tol, kinds)
     return lo | up
 
 
@@ -368,13 +398,19 @@ def _clusters(active: np.ndarray, max_gap: int) -> list[tuple[int, int, int]]:
 
 
 def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_gap: int,
-                     min_nodes: int) -> None:
+                     min_nodes: int, control: str) -> None:
     """Relabel as ``"boundary:<i>:<side>"`` the intervals between the first and the last
     node of every cluster of at least ``min_nodes`` nodes where path constraint i sits at
     one limit (gaps of ``max_gap`` nodes allowed: a transcription zig-zags along a
-    constraint of relative degree two), unless the control sits at one bound throughout."""
-    at_lo, at_up = path_activity(sol, tol)
+    constraint of relative degree two), unless the control sits at one bound throughout.
+    Only state and mixed constraints that ``control`` can hold are considered (a
+    control-only constraint is a face of the control set, not a boundary arc)."""
+    pr = sol.problem
+    at_lo, at_up = path_activity(sol, tol, kinds=("state", "mixed"))
     for i in range(at_lo.shape[1]):
+        if not (at_lo[:, i].any() or at_up[:, i].any()) or \
+                control not in riding_controls(pr, pr.path[i]):
+            continue
         for side, act in (("lower", at_lo[:, i]), ("upper", at_up[:, i])):
             for a, b, count in _clusters(act, max_gap):
                 span = lab[a:b]
@@ -383,6 +419,35 @@ def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_g
                 if len(set(span)) == 1 and span[0] in BANG:
                     continue  # a bang arc along the constraint
                 lab[a:b] = [f"boundary:{i}:{side}"] * (b - a)
+
+
+def _vertex_labels(sol: TranscribedSolution, lab: list[str], tol: float, control: str) -> None:
+    """Relabel as ``"vertex:<i>:<side>"`` the interior intervals where the group of
+    coupled controls sits at a vertex of its polytope at which ``control`` is inside
+    its own bounds, fixed by control-only constraint i at its ``side`` limit."""
+    pr = sol.problem
+    group = next((g for g in coupled_groups(pr, singletons=True) if control in g), None)
+    if group is None or "interior" not in lab:
+        return
+    pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
+    poly = control_polytope(pr, group, pv)
+    if poly is None:
+        return
+    U = np.column_stack([sol.control(n) for n in group])
+    rng = poly.span
+    faces: dict[int, dict[str, tuple[int, str]]] = {}
+    for k, label in enumerate(lab):
+        if label != "interior" or k >= len(U):
+            continue
+        dist = np.max(np.abs(U[k] - poly.vertices) / rng, axis=1)
+        v = int(np.argmin(dist))
+        if dist[v] > tol:
+            continue
+        if v not in faces:
+            faces[v] = vertex_faces(pr, poly, poly.vertices[v], pv)
+        if control in faces[v]:
+            i, side = faces[v][control]
+            lab[k] = f"vertex:{i}:{side}"
 
 
 def _absorb_end_transitions(runs: list[list], max_transition: int) -> None:
@@ -411,9 +476,9 @@ def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h
             # the switch lies inside: split by the average control
             _split_transition(arcs, runs, i, u, h, lo, hi)
             continue
-        if label.startswith("boundary"):
-            _, ci, side = label.split(":")
-            arcs.append(Arc("boundary", start, (b + 1) * h, (), names[int(ci)], side))
+        if label.startswith(("boundary", "vertex")):
+            kind, ci, side = label.split(":")
+            arcs.append(Arc(kind, start, (b + 1) * h, (), names[int(ci)], side))
         else:
             arcs.append(Arc(label, start, (b + 1) * h))
     merged: list[Arc] = []
@@ -429,7 +494,8 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
                       lo: float, hi: float) -> None:
     """Place the switch inside transition run i (its previous arc is ``arcs[-1]``).
 
-    Between two bang arcs the switch splits the interval by its average control.
+    Between two bang (or vertex) arcs the switch splits the interval by its average
+    control.
     Between a boundary and a bang arc, an average outside the range of the
     boundary control (the mean of its two nearest intervals) and the bang value
     means a short arc of the opposite bang lies inside: it is inserted, next
@@ -440,7 +506,10 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
     n = b - a + 1
     avg = float(np.mean(u[a:b + 1]))
     val = {"max": hi, "min": lo}
-    if prev[0] in BANG and nxt[0] in BANG:
+    for run in (prev, nxt):  # a vertex arc's value is a constant, as a bang's
+        if run[0].startswith("vertex"):
+            val[run[0]] = float(np.median(u[run[1]:run[2] + 1]))
+    if prev[0] in val and nxt[0] in val:
         ua, ub = val[prev[0]], val[nxt[0]]
         theta = float(np.clip((avg - ub) / (ua - ub), 0.0, 1.0))
         arcs[-1].end = (a + theta * n) * h
@@ -463,15 +532,18 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
 
 
 def _label_active(sol: TranscribedSolution, arcs: list[Arc], h: float, tol: float) -> None:
-    """Fill ``active``: the path constraints active at every node inside each arc."""
+    """Fill ``active`` (state and mixed path constraints) and ``faces`` (control-only
+    ones) active at every node inside each arc."""
     pr = sol.problem
     act = active_path_constraints(sol, tol)
+    kinds = path_kinds(pr)
     for arc in arcs:
         k0 = int(round(arc.start / h)) if h > 0 else 0
         k1 = max(k0 + 1, int(round(arc.end / h)))
         nodes = act[k0 + 1:k1] if k1 - k0 > 1 else act[k0:k1]
-        arc.active = tuple(c.name for i, c in enumerate(pr.path)
-                           if nodes.shape[0] and nodes[:, i].all())
+        held = [i for i in range(len(pr.path)) if nodes.shape[0] and nodes[:, i].all()]
+        arc.active = tuple(pr.path[i].name for i in held if kinds[i] != CONTROL)
+        arc.faces = tuple(pr.path[i].name for i in held if kinds[i] == CONTROL)
         if arc.constraint is not None and arc.constraint not in arc.active:
             arc.active = (arc.constraint, *arc.active)
 
@@ -510,7 +582,8 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
     at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
     at_lo = np.isfinite(lo) & (np.abs(u - lo) <= tol * max(1.0, abs(lo)))
     lab = np.where(at_hi, "max", np.where(at_lo, "min", "interior")).tolist()
-    _boundary_labels(tsol, lab, tol, max_gap, min_boundary_nodes)
+    _boundary_labels(tsol, lab, tol, max_gap, min_boundary_nodes, name)
+    _vertex_labels(tsol, lab, tol, name)
     runs = _runs(lab)
     _absorb_end_transitions(runs, max_transition)
     arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, max_transition)
@@ -548,4 +621,89 @@ def detect_structure(sol: SolutionLike, tol: float = 1e-4, max_transition: int =
     tsol = transcribed(sol)
     per = [detect_arcs(tsol, name, tol, max_transition, max_gap, min_boundary_nodes)
            for name in tsol.problem.control_names]
-    return ArcStructure.from_controls(per, merge_tol)
+    st = ArcStructure.from_controls(per, merge_tol)
+    return snap_to_control_set(tsol, st, (max_transition + 1) * tsol.T / tsol.N, merge_tol)
+
+
+def outside_control_set(problem: OptimalControlProblem, modes: tuple[Mode, ...],
+                        params: dict[str, float], tol: float = 1e-9) -> bool:
+    """True when bang ``modes`` (one per control) put the controls outside the control set
+    (some control-only path constraint violated: e.g. ``u1 + u2 <= 1`` with both at 1).
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of Mode
+    params : dict
+        A value for every parameter.
+    tol : float
+        Allowed violation, relative to ``max(1, |value|)``.
+
+    Returns
+    -------
+    bool
+        False when some mode is not a bang (its value depends on the state).
+    """
+    cons = control_constraints(problem)
+    if not cons or any(m.kind not in BANG for m in modes):
+        return False
+    u = []
+    for name, m in zip(problem.control_names, modes, strict=True):
+        lo, hi = control_bounds_at(problem, name, params)
+        u.append(hi if m.kind == "max" else lo)
+    fn = ca.Function("cc", [problem.x, problem.u, problem.p],
+                     [ca.vertcat(*[c.expr for c in cons]), ca.vertcat(*[c.lower for c in cons]),
+                      ca.vertcat(*[c.upper for c in cons])])
+    pv = [params[k] for k in problem.param_names]
+    v, lo_c, hi_c = (np.array(a, dtype=float).ravel()
+                     for a in fn(np.zeros(problem.nx), u, pv))
+    room = tol * np.maximum(1.0, np.abs(v))
+    return bool(np.any((lo_c - v > room) | (v - hi_c > room)))
+
+
+def snap_to_control_set(sol: SolutionLike, st: ArcStructure, short: float,
+                        merge_tol: float = 1e-12) -> ArcStructure:
+    """Merge the switch events that bound a short interval outside the control set.
+
+    Coupled controls switch together (``w1 + w2 + w3 = 1``: one mode leaves as
+    another enters), but each control's switch time is read off its own
+    transcribed values, so their estimates differ slightly and leave a sliver
+    where the modes violate a control-only constraint. Such an interval, at most
+    ``short`` long, is collapsed: the events at both its ends move to its middle.
+
+    Parameters
+    ----------
+    sol : Solution
+        The transcribed solution (problem and parameters).
+    st : ArcStructure
+    short : float
+        Longest interval collapsed (longer ones are left for the refinement to reject).
+    merge_tol : float
+        As in :meth:`ArcStructure.from_controls`.
+
+    Returns
+    -------
+    ArcStructure
+    """
+    tsol = transcribed(sol)
+    pr = tsol.problem
+    if not control_constraints(pr):
+        return st
+    for _ in range(len(st.intervals)):
+        bad = [iv for iv in st.intervals[1:-1] if iv.duration <= short
+               and outside_control_set(pr, iv.modes, tsol.params)]
+        if not bad:
+            return st
+        a, b = bad[0].start, bad[0].end
+        mid = 0.5 * (a + b)
+        near = 1e-12 * max(st.T, 1.0)
+        per = []
+        for s in st.per_control:
+            arcs = [Arc(x.kind, x.start, x.end, x.active, x.constraint, x.side, x.faces)
+                    for x in s.arcs]
+            for x, y in zip(arcs[:-1], arcs[1:], strict=True):
+                if abs(x.end - a) <= near or abs(x.end - b) <= near:
+                    x.end = y.start = mid
+            per.append(SwitchingStructure(s.control, arcs, s.lower, s.upper))
+        st = ArcStructure.from_controls(per, merge_tol)
+    return st

@@ -1,8 +1,11 @@
 """Arc dynamics for switching-time refinement and the PMP certificate.
 
 An *arc mode* says, for every control, what it does on an interval of time:
-sit at its upper bound (``"max"``), its lower bound (``"min"``) or keep a path
-constraint at one of its limits (``"boundary"``). :class:`ArcDynamics` turns a
+sit at its upper bound (``"max"``), its lower bound (``"min"``), keep a path
+constraint at one of its limits (``"boundary"``), or sit at a vertex of the
+control set cut by a control-only constraint held at a limit (``"vertex"``:
+``u1 = 1 - u2`` on ``u1 + u2 <= 1`` with ``u2`` at its lower bound, a value
+inside ``u1``'s own bounds). :class:`ArcDynamics` turns a
 tuple of modes into closed-loop dynamics ``x' = F(x, p) = f(x, u(x, p), p)``
 (and the running cost ``L(x, u(x, p), p)``), with
 
@@ -62,11 +65,13 @@ class Mode:
 
     Parameters
     ----------
-    kind : {"max", "min", "boundary"}
-        At its upper bound, at its lower bound, or keeping ``constraint`` at
-        its ``side`` limit.
+    kind : {"max", "min", "boundary", "vertex"}
+        At its upper bound, at its lower bound, keeping (state or mixed) path
+        constraint ``constraint`` at its ``side`` limit, or at the vertex of the
+        control set where control-only constraint ``constraint`` is at its
+        ``side`` limit (the other controls' modes fixing the rest).
     constraint : str, optional
-        Name of the path constraint kept at its limit (boundary arcs).
+        Name of the path constraint kept at its limit (boundary and vertex arcs).
     side : {"lower", "upper"}, optional
         Which limit of ``constraint``.
     """
@@ -76,17 +81,24 @@ class Mode:
     side: str | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in ("max", "min", "boundary"):
-            raise ValueError(f"mode kind must be 'max', 'min' or 'boundary', not {self.kind!r}")
-        if (self.kind == "boundary") != (self.constraint is not None):
-            raise ValueError("a boundary mode needs a constraint, a bang mode none")
-        if self.kind == "boundary" and self.side not in ("lower", "upper"):
-            raise ValueError("a boundary mode needs side 'lower' or 'upper'")
+        if self.kind not in ("max", "min", "boundary", "vertex"):
+            raise ValueError("mode kind must be 'max', 'min', 'boundary' or 'vertex', not "
+                             f"{self.kind!r}")
+        if self.held != (self.constraint is not None):
+            raise ValueError(f"a {self.kind} mode needs a constraint, a bang mode none")
+        if self.held and self.side not in ("lower", "upper"):
+            raise ValueError(f"a {self.kind} mode needs side 'lower' or 'upper'")
+
+    @property
+    def held(self) -> bool:
+        """True for the modes that hold a constraint at a limit (boundary, vertex)."""
+        return self.kind in ("boundary", "vertex")
 
     def label(self) -> str:
-        """``"max"``, ``"min"`` or ``"boundary(<constraint> <side>)"``."""
-        if self.kind == "boundary":
-            return f"boundary({self.constraint} {self.side})"
+        """``"max"``, ``"min"``, ``"boundary(<constraint> <side>)"`` or
+        ``"vertex(<constraint> <side>)"``."""
+        if self.held:
+            return f"{self.kind}({self.constraint} {self.side})"
         return self.kind
 
 
@@ -183,7 +195,7 @@ class ArcDynamics:
         usyms = [pr.u[i] for i in range(pr.nu)]
         fixed, values, by_name = [], [], {}
         for name, sym, mode in zip(pr.control_names, usyms, modes, strict=True):
-            if mode.kind != "boundary":
+            if not mode.held:
                 lo, hi = pr.control_bounds[name]
                 bound = hi if mode.kind == "max" else lo
                 if bound.is_constant() and not math.isfinite(float(bound)):
@@ -221,8 +233,7 @@ class ArcDynamics:
         """Solve ``d^r c / dt^r = 0`` of every held constraint for its boundary control."""
         pr = self.problem
         x = pr.x
-        bnames = [n for n, m in zip(pr.control_names, self.modes, strict=True)
-                  if m.kind == "boundary"]
+        bnames = [n for n, m in zip(pr.control_names, self.modes, strict=True) if m.held]
         if not bnames:
             return {}
         uB = ca.vertcat(*[pr.u[pr.control_names.index(n)] for n in bnames])
@@ -235,6 +246,9 @@ class ArcDynamics:
             if limit.is_constant() and not math.isfinite(float(limit)):
                 raise ValueError(f"{c.name!r} has no finite {mode.side} limit")
             d = ca.substitute(c.expr, ca.vertcat(*fixed), ca.vertcat(*values)) if fixed else c.expr
+            if mode.kind == "vertex" and (ca.depends_on(c.expr, x) or not ca.depends_on(d, uB)):
+                raise ValueError(f"vertex mode of {name!r}: {c.name!r} must be a control-only "
+                                 "constraint involving it")
             r = 0
             while not ca.depends_on(d, uB):
                 if r == 3:
@@ -256,7 +270,10 @@ class ArcDynamics:
         out = {}
         for i, name in enumerate(bnames):
             lo, hi = pr.control_bounds[name]
-            self.law_bounds.append((f"{name} within its bounds", kappa[i], lo, hi))
+            if self.modes[pr.control_names.index(name)].kind == "boundary":
+                # a vertex value is a constant of p, checked once (a constant row at a
+                # bound would leave an interior-point method no slack)
+                self.law_bounds.append((f"{name} within its bounds", kappa[i], lo, hi))
             out[name] = kappa[i]
         return out
 

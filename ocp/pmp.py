@@ -48,6 +48,8 @@ from .arcs import (
     detect_arcs,
     transcribed,
 )
+from .constraint_kinds import MIXED, STATE, coupled_groups
+from .control_set import control_polytope, distance_to_vertices, vertex_scores
 from .costates import (
     adjoint_along_refined,
     adjoint_sweep,
@@ -258,7 +260,9 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
 
     A mixed constraint ``lo <= a(x) + b(x) u_j <= hi`` affine in one control ``u_j``
     bounds it to an interval; the minimum principle then selects the ends of the
-    intersection. Mixed constraints in several controls are not used.
+    intersection. Constraints in several controls are not used here: linear
+    control-only ones couple controls into a polytope, checked by
+    ``_coupled_figures`` (the Hamiltonian minimised over it, a linear programme).
 
     Parameters
     ----------
@@ -406,7 +410,16 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
     agreement, gap, zeros = {}, {}, {}
     singular: list[tuple[float, float]] = []
+    # H linear in u: minimised at a vertex of the control polytope (else per control)
+    coupled = _coupled_figures(pr, pv, t, u, sigma, terms, judged, switches, tol_sigma,
+                               sigma_floor, u_tol, min_singular, interior_check) \
+        if fns.linear else {}
+    for name, (frac, g, zc, runs) in coupled.items():
+        agreement[name], gap[name], zeros[name] = frac, g, zc
+        singular += [r for r in runs if r not in singular]
     for j, name in enumerate(pr.control_names):
+        if name in coupled:
+            continue
         lo, hi = control_bounds_at(pr, name, params)
         s = sigma[:, j]
         s_scale = float(np.max(np.r_[np.abs(s[judged]), terms[judged, j]], initial=0.0)) or 1.0
@@ -428,6 +441,73 @@ def _figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarr
                         default=0.0)
     return _Figures(H, sigma, H_scale, H_max_abs, H_var, agreement, gap, singular, zeros,
                     fns.linear)
+
+
+def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u: np.ndarray,
+                    sigma: np.ndarray, terms: np.ndarray, judged: np.ndarray,
+                    switches: dict[str, list[float]], tol_sigma: float,
+                    sigma_floor: np.ndarray, u_tol: float, min_singular: float,
+                    interior_check: bool) -> dict[str, tuple[float, float, np.ndarray,
+                                                             list[tuple[float, float]]]]:
+    """Sign, switch and singularity checks of controls coupled by control-only constraints.
+
+    For a group of controls whose admissible set is a polytope ``P``
+    (:mod:`ocp.control_set`) the minimum principle asks ``u = argmin sigma^T v over
+    v in P``: at every sample the vertex scores give the minimiser, unique where the
+    best vertex beats the second best by more than the band (``tol_sigma`` times the
+    group's sigma scale, or the group's ``sigma_floor``). Agreement is the fraction
+    of those clear samples (by time) where each control equals the minimiser's
+    component; a switch of a control must sit where the minimising vertex changes;
+    a run where the programme stays degenerate (no unique minimiser) for at least
+    ``min_singular`` is singular.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    pv : ndarray
+        Parameter values.
+    t, u, sigma, terms : ndarray
+        Sample times, controls (m, nu), switching functions (m, nu) and the sizes of
+        their terms (m, nu).
+    judged : ndarray of bool (m,)
+        Samples that are judged.
+    switches : dict
+        Switch times per control.
+    tol_sigma, sigma_floor, u_tol, min_singular, interior_check
+        As in :func:`_figures`.
+
+    Returns
+    -------
+    dict
+        Per coupled control: ``(agreement, switch gap, vertex-change times, singular runs)``.
+        Groups whose polytope cannot be enumerated (unbounded, too large) are left out
+        (their controls get the per-control checks).
+    """
+    out: dict[str, tuple[float, float, np.ndarray, list[tuple[float, float]]]] = {}
+    dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
+    for group in coupled_groups(pr, singletons=True):
+        poly = control_polytope(pr, group, pv)
+        if poly is None:
+            continue
+        idx = list(poly.index)
+        sc = vertex_scores(poly, sigma[:, idx])
+        scale = float(np.max(np.r_[np.abs(sigma[judged][:, idx]).ravel(),
+                                   terms[judged][:, idx].ravel()], initial=0.0)) or 1.0
+        band = max(tol_sigma * scale, float(np.max(sigma_floor[idx], initial=0.0)))
+        clear = (sc.gap > band) & judged
+        inside = distance_to_vertices(poly, u[:, idx]) > u_tol if interior_check else None
+        runs = _singular_runs(t, sc.signed, ~clear & judged, band, min_singular, inside)
+        want = poly.vertices[sc.best]
+        zc = sign_changes(t, sc.signed, 1e-14 * scale)
+        for c, (name, j) in enumerate(zip(poly.controls, idx, strict=True)):
+            rng = float(poly.span[c])
+            agree = np.abs(u[:, j] - want[:, c]) <= u_tol * rng
+            frac = float(np.sum(dt[clear & agree]) / max(np.sum(dt[clear]), 1e-300)) \
+                if clear.any() else 1.0
+            g = max((switch_gap(t, sc.signed, zc, ts) for ts in switches.get(name, [])),
+                    default=0.0)
+            out[name] = (frac, g, zc, runs)
+    return out
 
 
 @dataclass
@@ -683,7 +763,8 @@ def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, fl
     (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
     finds (which bridge the zig-zag of a transcription along a constraint)."""
     h = sol.T / sol.N
-    act = active_path_constraints(sol, 1e-6)
+    # control-only constraints shape the control set: they are no state constraint
+    act = active_path_constraints(sol, 1e-6, kinds=(STATE, MIXED))
     act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, dtype=bool)
     spans = intervals_of(sol.t, np.asarray(act_nodes), h - 1e-12)
     for name in sol.problem.control_names:

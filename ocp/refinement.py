@@ -43,6 +43,7 @@ import casadi as ca
 import numpy as np
 
 from .active_set_newton import ActiveSetNewton
+from .constraint_kinds import control_constraints
 from .flows import (
     THETA_MAX,
     ArcDynamics,
@@ -673,6 +674,9 @@ def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamic
 
     Path constraints are imposed at the samples of every interval but the phase's start
     (unless ``check_start``) and where a boundary arc holds them by construction.
+    Control-only constraints are not rows: on an interval they are constants of the
+    parameters (a row at its limit with no dependence on the unknowns would leave an
+    interior-point method no slack); :func:`check_control_set` checks them instead.
 
     Parameters
     ----------
@@ -704,6 +708,7 @@ def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamic
     """
     nx = pr.nx
     names = [c.name for c in pr.path]
+    control_only = {c.name for c in control_constraints(pr)}
     hfn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path])]) \
         if pr.path else None
     hlo = ca.vertcat(*[c.lower for c in pr.path]) if pr.path else ca.SX(0, 1)
@@ -716,7 +721,7 @@ def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamic
         for j, zj in enumerate(pts):
             if k == 0 and j == 0 and not check_start:
                 continue
-            skip = set(d.held) | (set(held_prev) if j == 0 else set())
+            skip = set(d.held) | control_only | (set(held_prev) if j == 0 else set())
             keep = [i for i, n in enumerate(names) if n not in skip]
             if hfn is not None and keep:
                 hv = hfn(zj[:nx], ca.substitute(d.u, pr.x, zj[:nx]), p)
@@ -751,6 +756,56 @@ def _entry_owners(d: ArcDynamics) -> list[str]:
         if m.constraint is not None:
             owners.extend([m.constraint] * d.orders[m.constraint])
     return owners
+
+
+def check_control_set(problem: OptimalControlProblem, modes: Modes, pv: np.ndarray,
+                      tol: float = 1e-9) -> None:
+    """Raise if an interval's controls violate a control-only path constraint.
+
+    On an interval whose controls are all at bounds the control-only constraints
+    (``u1 + u2 <= 1``) are numbers: a mode outside the control set (both ``u1``
+    and ``u2`` at their upper bound) is no vertex of it.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    modes : tuple of tuple of Mode
+        Per interval, one mode per control.
+    pv : ndarray
+        Parameter values.
+    tol : float
+        Allowed violation, relative to ``max(1, |value|)``.
+
+    Raises
+    ------
+    ValueError
+        Naming the interval, its modes and the constraint.
+    """
+    cons = control_constraints(problem)
+    if not cons:
+        return
+    fn = ca.Function("cc", [problem.x, problem.u, problem.p],
+                     [ca.vertcat(*[c.expr for c in cons]), ca.vertcat(*[c.lower for c in cons]),
+                      ca.vertcat(*[c.upper for c in cons])])
+    for k, m in enumerate(modes):
+        d = arc_dynamics(problem, m)
+        if ca.depends_on(d.u, problem.x):
+            continue  # a boundary law: the constraint is a row of the NLP's law checks
+        u = np.array(d.u_fn(np.zeros(problem.nx), pv), dtype=float).ravel()
+        v, lo, hi = (np.array(a, dtype=float).ravel()
+                     for a in fn(np.zeros(problem.nx), u, pv))
+        bad = np.flatnonzero((lo - v > tol * np.maximum(1.0, np.abs(v))) |
+                             (v - hi > tol * np.maximum(1.0, np.abs(v))))
+        labels = [mm.label() for mm in m]
+        if len(bad):
+            raise ValueError(f"interval {k} ({labels}) violates the control-only constraint "
+                             f"{cons[int(bad[0])].name!r}: not a vertex of the control set")
+        for j, (name, mm) in enumerate(zip(problem.control_names, m, strict=True)):
+            blo, bhi = (float(b) for b in ca.Function("b", [problem.p],
+                                                      list(problem.control_bounds[name]))(pv))
+            if mm.kind == "vertex" and not blo - tol <= u[j] <= bhi + tol:
+                raise ValueError(f"interval {k} ({labels}): the vertex value {u[j]:.6g} of "
+                                 f"{name!r} is outside its bounds [{blo:g}, {bhi:g}]")
 
 
 def required_substeps(problem: OptimalControlProblem, modes: Modes, pv: np.ndarray,

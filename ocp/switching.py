@@ -55,6 +55,7 @@ from .refinement import (
     REFINE_IPOPT,
     SwitchingNLP,
     arc_dynamics,
+    check_control_set,
     clear_cache,
     required_substeps,
     rk8_of,
@@ -79,11 +80,13 @@ class RefinedSwitching:
     Attributes
     ----------
     kinds : list
-        Per interval: the arc kind (``"max"``, ``"min"``, ``"boundary"``) for a
-        single-control problem, a tuple of kinds (one per control) otherwise.
+        Per interval: the arc kind (``"max"``, ``"min"``, ``"boundary"``,
+        ``"vertex"``) for a single-control problem, a tuple of kinds (one per
+        control) otherwise.
     values : list
         Per interval: the control value (a tuple for several controls); NaN
         where the control follows a boundary law (see :attr:`control_laws`).
+        On a vertex arc, the value the control-only constraint fixes.
     modes : tuple of tuple of Mode
         Per interval, each control's :class:`~ocp.flows.Mode` (with the held constraint).
     durations : ndarray
@@ -206,7 +209,7 @@ class RefinedSwitching:
             ms = []
             for name, m, v in zip(self.controls, modes, vals, strict=True):
                 lo, hi = control_bounds_at(self.problem, name, self.params)
-                if m.kind != "boundary" and np.isfinite(v):
+                if m.kind in ("max", "min") and np.isfinite(v):
                     m = Mode("max") if abs(v - hi) <= abs(v - lo) else Mode("min")
                 ms.append(m)
             out.append(tuple(ms))
@@ -506,6 +509,7 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
         If Ipopt fails, or the accuracy is not reached after ``max_rebuilds``.
     """
     pv = np.array([float(params[k]) for k in problem.param_names])
+    check_control_set(problem, modes, pv)
     durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)
     w0 = np.r_[durations, x0]
     solved = solved_nlp(problem, modes, interior_samples, ipopt_options) if fast else None
@@ -550,9 +554,12 @@ def _result(pr: OptimalControlProblem, nlp: SwitchingNLP, res: dict, pv: np.ndar
     xT, T, J, bounds = summ["xT"], summ["T"], summ["J"], summ["control_bounds"]
     single = pr.nu == 1
     values, kinds = [], []
-    for modes in nlp.modes:
-        vals = [hi if m.kind == "max" else lo if m.kind == "min" else math.nan
-                for (lo, hi), m in zip(bounds, modes, strict=True)]
+    for modes, d in zip(nlp.modes, nlp.dyns, strict=True):
+        vertex = np.array(d.u_fn(np.zeros(pr.nx), pv), dtype=float).ravel() \
+            if any(m.kind == "vertex" for m in modes) else None
+        vals = [hi if m.kind == "max" else lo if m.kind == "min" else
+                float(vertex[j]) if m.kind == "vertex" and vertex is not None else math.nan
+                for j, ((lo, hi), m) in enumerate(zip(bounds, modes, strict=True))]
         values.append(vals[0] if single else tuple(vals))
         kinds.append(modes[0].kind if single else tuple(m.kind for m in modes))
     tiny = [k for k in range(K) if w[k] <= 1e-10 * max(T, 1.0)]
