@@ -727,7 +727,42 @@ def _transcription_figures(sol: TranscribedSolution, tol: _Tolerances
                           if a.kind in ("max", "min") and b.kind in ("max", "min")]
     fig = _figures(pr, sol.params, t, x, u, lam, H_exp, constrained, switches, tol.sigma,
                    np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
+    if is_collocation(sol):
+        _rescore_H(fig, ~constrained & ~_kinked_points(sol, switches), H_exp)
     return fig, H_exp, active, t
+
+
+def _kinked_points(sol: TranscribedSolution, switches: dict[str, list[float]]) -> np.ndarray:
+    """Collocation points of the mesh intervals at and next to a switch of some control
+    whose control is not at one bound at all their points: there the state polynomial
+    cannot follow the kink of the state, and H (which needs the state) carries an error
+    of the order of the interval, however fine the mesh; (N d,) bool."""
+    pr = sol.problem
+    mesh = mesh_level(sol).t
+    N, d = len(mesh) - 1, len(sol.t[1:]) // max(len(mesh) - 1, 1)
+    out = np.zeros(len(sol.t) - 1, dtype=bool)
+    for j, name in enumerate(pr.control_names):
+        lo, hi = control_bounds_at(pr, name, sol.params)
+        room = 1e-3 * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
+        U = np.asarray(sol.u)[:, j].reshape(N, d)
+        one_bound = np.all(np.abs(U - hi) <= room, axis=1) | np.all(np.abs(U - lo) <= room,
+                                                                    axis=1)
+        for ts in switches.get(name, []):
+            k = int(np.clip(np.searchsorted(mesh, ts, side="right") - 1, 0, N - 1))
+            for i in range(max(k - 1, 0), min(k + 2, N)):
+                if not one_bound[i]:
+                    out[i * d:(i + 1) * d] = True
+    return out
+
+
+def _rescore_H(fig: _Figures, keep: np.ndarray, H_exp: float | None) -> None:
+    """``H_max_abs`` and ``H_variation`` of ``fig`` over the samples ``keep`` only."""
+    if not keep.any():
+        return
+    H = fig.H[keep]
+    ref = H_exp if H_exp is not None else float(np.mean(H))
+    fig.H_max_abs = float(np.max(np.abs(H - ref))) / fig.H_scale
+    fig.H_var = float(np.ptp(H)) / fig.H_scale
 
 
 def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
@@ -809,7 +844,8 @@ def _certify_transcription(sol: TranscribedSolution, tol: _Tolerances, verify: b
                            default_switch: bool) -> PMPCertificate:
     fig, H_exp, active, t = _transcription_figures(sol, tol)
     definite, uncertain = _judge(fig, tol, {}, H_exp is not None)
-    src = "transcription (costates from continuity multipliers)"
+    src = ("transcription (costates from collocation multipliers / Radau weights)"
+           if is_collocation(sol) else "transcription (costates from continuity multipliers)")
     _, _, u, lam = _transcription_samples(sol)
     if not definite:
         verdict, reasons = _verdict([], uncertain, active, 0.0, sol.T)
