@@ -15,6 +15,8 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.guess`         -- default initial guesses and non-finite-guess diagnosis;
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
+* :mod:`ocp.gridview`      -- how a solution's grid is read (collocation on its mesh,
+  costates from the Radau defect multipliers);
 * :mod:`ocp.trajectory`    -- the sampled-trajectory type;
 * :mod:`ocp.arcs`, :mod:`ocp.switching` -- bang-bang structure detection
   (:func:`detect_structure`) and switching-time refinement to machine precision

@@ -40,6 +40,7 @@ from .constraint_kinds import (
 )
 from .control_set import control_polytope, vertex_faces
 from .flows import Mode
+from .gridview import is_collocation, mesh_level
 from .problem import OptimalControlProblem
 from .solution import Solution
 
@@ -450,13 +451,22 @@ def _vertex_labels(sol: TranscribedSolution, lab: list[str], tol: float, control
             lab[k] = f"vertex:{i}:{side}"
 
 
-def _absorb_end_transitions(runs: list[list], max_transition: int) -> None:
+def _run_width(t: np.ndarray | None, a: int, b: int) -> float:
+    """Length of grid intervals ``a..b`` in mean intervals (their count on an even grid;
+    a refined collocation mesh crowds short intervals around a switch)."""
+    if t is None or len(t) < 2:
+        return float(b - a + 1)
+    return float((t[b + 1] - t[a]) / ((t[-1] - t[0]) / (len(t) - 1))) - 1e-9
+
+
+def _absorb_end_transitions(runs: list[list], max_transition: int,
+                            t: np.ndarray | None = None) -> None:
     """A short interior run at either end next to another arc is that arc (the grid
-    cannot end the arc exactly on a node)."""
+    cannot end the arc exactly on a node); ``t``: the grid times (default even)."""
     for end in (0, -1):
         nb = 1 if end == 0 else -2
         if (len(runs) > 1 and runs[end][0] == "interior" and runs[nb][0] != "interior"
-                and runs[end][2] - runs[end][1] + 1 <= max_transition):
+                and _run_width(t, runs[end][1], runs[end][2]) <= max_transition):
             if end == 0:
                 runs[1][1] = runs[0][1]
             else:
@@ -467,14 +477,16 @@ def _absorb_end_transitions(runs: list[list], max_transition: int) -> None:
 def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h: float, lo: float,
                     hi: float, max_transition: int) -> list[Arc]:
     names = [c.name for c in sol.problem.path]
+    t = np.asarray(sol.t, dtype=float)
     arcs: list[Arc] = []
     for i, (label, a, b) in enumerate(runs):
         start = a * h if not arcs else arcs[-1].end
-        if (label == "interior" and 0 < i < len(runs) - 1 and b - a + 1 <= max_transition
+        if (label == "interior" and 0 < i < len(runs) - 1
+                and _run_width(t, a, b) <= max_transition
                 and runs[i - 1][0] != "interior" and runs[i + 1][0] != "interior"
                 and runs[i - 1][0] != runs[i + 1][0]):
             # the switch lies inside: split by the average control
-            _split_transition(arcs, runs, i, u, h, lo, hi)
+            _split_transition(arcs, runs, i, u, h, lo, hi, t)
             continue
         if label.startswith(("boundary", "vertex")):
             kind, ci, side = label.split(":")
@@ -491,7 +503,7 @@ def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h
 
 
 def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, h: float,
-                      lo: float, hi: float) -> None:
+                      lo: float, hi: float, t: np.ndarray | None = None) -> None:
     """Place the switch inside transition run i (its previous arc is ``arcs[-1]``).
 
     Between two bang (or vertex) arcs the switch splits the interval by its average
@@ -499,12 +511,20 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
     Between a boundary and a bang arc, an average outside the range of the
     boundary control (the mean of its two nearest intervals) and the bang value
     means a short arc of the opposite bang lies inside: it is inserted, next
-    to the boundary arc, with the length that reproduces the average.
+    to the boundary arc, with the length that reproduces the average. Positions are
+    in units of ``h`` per grid interval; on an uneven grid ``t`` the average is
+    weighted by duration and a fraction of the run is a fraction of its duration.
     """
     prev, nxt = runs[i - 1], runs[i + 1]
     _, a, b = runs[i]
-    n = b - a + 1
-    avg = float(np.mean(u[a:b + 1]))
+    grid = np.arange(len(u) + 1, dtype=float) if t is None else t
+    k = np.arange(len(grid), dtype=float)
+    dur = np.diff(grid)[a:b + 1]
+    avg = float(np.sum(u[a:b + 1] * dur) / np.sum(dur))
+
+    def at(frac: float) -> float:  # a fraction of the run's duration, in units of h
+        return float(np.interp(grid[a] + frac * (grid[b + 1] - grid[a]), grid, k)) * h
+
     val = {"max": hi, "min": lo}
     for run in (prev, nxt):  # a vertex arc's value is a constant, as a bang's
         if run[0].startswith("vertex"):
@@ -512,22 +532,22 @@ def _split_transition(arcs: list[Arc], runs: list[list], i: int, u: np.ndarray, 
     if prev[0] in val and nxt[0] in val:
         ua, ub = val[prev[0]], val[nxt[0]]
         theta = float(np.clip((avg - ub) / (ua - ub), 0.0, 1.0))
-        arcs[-1].end = (a + theta * n) * h
+        arcs[-1].end = at(theta)
         return
     bang, bnd = (nxt, prev) if nxt[0] in BANG else (prev, nxt)
     ub = float(np.mean(u[bnd[2] - 1:bnd[2] + 1] if bnd is prev else u[bnd[1]:bnd[1] + 2]))
     v = val.get(bang[0], ub)
     margin = 0.05 * (hi - lo)
     if bang[0] not in BANG or min(ub, v) - margin <= avg <= max(ub, v) + margin:
-        arcs[-1].end = (a + 0.5 * n) * h
+        arcs[-1].end = at(0.5)
         return
     other = "min" if bang[0] == "max" else "max"
     theta = float(np.clip((v - avg) / (v - val[other]), 0.05, 0.95))
     if bnd is prev:  # boundary, other, bang
         arcs[-1].end = a * h
-        arcs.append(Arc(other, a * h, (a + theta * n) * h))
+        arcs.append(Arc(other, a * h, at(theta)))
     else:  # bang, other, boundary
-        arcs[-1].end = (a + (1 - theta) * n) * h
+        arcs[-1].end = at(1 - theta)
         arcs.append(Arc(other, arcs[-1].end, (b + 1) * h))
 
 
@@ -566,30 +586,52 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
         Interior runs of at most this many intervals between two different
         arcs are read as the switch (the control averages both bounds over the
         interval that contains the switching time); such runs at either end of
-        the horizon are read as the neighbouring arc.
+        the horizon are read as the neighbouring arc. On an uneven grid the run's
+        length counts in mean intervals.
     max_gap, min_boundary_nodes : int
         A boundary arc spans a group of at least ``min_boundary_nodes`` nodes at
         which one path constraint sits at one limit, with gaps of at most
         ``max_gap`` nodes (a transcription zig-zags along a constraint of
         relative degree two), unless the control sits at one bound throughout.
+
+    A collocation solution is read on its mesh (:func:`ocp.gridview.mesh_level`):
+    per mesh interval, the quadrature average of the control over its collocation
+    points, and the path constraints at the mesh points. Its control polynomials
+    spread a switch over the points next to it, so a transition may be one mean
+    interval longer than ``max_transition``.
     """
-    tsol = transcribed(sol)
+    # a collocation solution is read on its mesh (one average control per interval);
+    # arcs are found in units of grid intervals, then placed on the grid's times
+    tsol = transcribed(mesh_level(sol))
     pr = tsol.problem
     name = control or pr.control_names[0]
     lo, hi = control_bounds_at(pr, name, tsol.params)
     u = tsol.control(name)
-    h = tsol.T / tsol.N
+    h = 1.0
     at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
     at_lo = np.isfinite(lo) & (np.abs(u - lo) <= tol * max(1.0, abs(lo)))
     lab = np.where(at_hi, "max", np.where(at_lo, "min", "interior")).tolist()
     _boundary_labels(tsol, lab, tol, max_gap, min_boundary_nodes, name)
     _vertex_labels(tsol, lab, tol, name)
     runs = _runs(lab)
-    _absorb_end_transitions(runs, max_transition)
-    arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, max_transition)
-    arcs[-1].end = tsol.T
+    # a collocation control spreads a switch over the neighbouring points: one more
+    # (mean) interval of transition
+    width = max_transition + 1 if is_collocation(sol) else max_transition
+    _absorb_end_transitions(runs, width, np.asarray(tsol.t, dtype=float))
+    arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, width)
+    arcs[-1].end = float(tsol.N)
     _label_active(tsol, arcs, h, tol)
+    _place_on_grid(arcs, np.asarray(tsol.t, dtype=float))
+    arcs[-1].end = tsol.T
     return SwitchingStructure(name, arcs, lo, hi)
+
+
+def _place_on_grid(arcs: list[Arc], t: np.ndarray) -> None:
+    """Turn arc ends in units of grid intervals (fractions inside one) into times on the
+    grid ``t`` (uneven on a refined collocation mesh)."""
+    k = np.arange(len(t), dtype=float)
+    for arc in arcs:
+        arc.start, arc.end = (float(np.interp(v, k, t)) for v in (arc.start, arc.end))
 
 
 def detect_structure(sol: SolutionLike, tol: float = 1e-4, max_transition: int = 1,

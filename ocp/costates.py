@@ -31,6 +31,7 @@ import numpy as np
 
 from .arcs import SolutionLike, transcribed
 from .flows import ArcDynamics, Mode, expm, is_affine, rk8_step_function
+from .gridview import collocation_costates, is_collocation
 from .problem import OptimalControlProblem
 from .refinement import arc_dynamics
 from .solution import along
@@ -93,8 +94,25 @@ def pmp_functions(pr: OptimalControlProblem) -> PMPFunctions:
 
 
 def costates_from_multipliers(sol: SolutionLike) -> tuple[np.ndarray, np.ndarray]:
-    """Node times ``t_1..t_N`` and costates ``lambda(t_{k+1}) = mu_k`` (see module doc)."""
+    """Costates from the transcription's multipliers, at the points after the first.
+
+    Multiple shooting: node times ``t_1..t_N`` and ``lambda(t_{k+1}) = mu_k`` (see
+    the module doc). Collocation: every collocation point (``sol.t[1:]``) and
+    ``lambda = -mu / B`` from the defect multipliers ``mu`` and the Radau
+    quadrature weights ``B`` (:func:`ocp.gridview.collocation_costates`).
+
+    Parameters
+    ----------
+    sol : Solution
+        A single-phase transcribed solution (or one phase).
+
+    Returns
+    -------
+    t, lam : ndarray (m,), (m, nx)
+    """
     tsol = transcribed(sol)
+    if is_collocation(tsol):
+        return np.asarray(tsol.t[1:], dtype=float), collocation_costates(tsol)
     return tsol.t[1:], tsol.multipliers["continuity"].copy()
 
 

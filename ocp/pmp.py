@@ -57,6 +57,7 @@ from .costates import (
     pmp_functions,
     terminal_costate,
 )
+from .gridview import is_collocation, mesh_level
 from .problem import OptimalControlProblem
 from .solution import Solution, along
 from .switching import RefinedSwitching
@@ -752,9 +753,11 @@ def _certificate(verdict: str, reasons: list[str], H_exp: float | None, fig: _Fi
 
 def _transcription_samples(sol: TranscribedSolution) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                     np.ndarray]:
-    """Node times t_1..t_N, states, the control after each node, multiplier costates."""
+    """Times t_1..t_N, states, controls and multiplier costates: at the nodes with the
+    control after each node (multiple shooting), or at every collocation point with its
+    collocated control (collocation)."""
     t, lam = costates_from_multipliers(sol)
-    u = np.vstack([sol.u[1:], sol.u[-1:]])
+    u = np.asarray(sol.u) if is_collocation(sol) else np.vstack([sol.u[1:], sol.u[-1:]])
     return t, sol.x[1:], u, lam
 
 
@@ -762,11 +765,10 @@ def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, fl
     """Intervals where a path constraint is active in a transcription: nodes at a limit
     (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
     finds (which bridge the zig-zag of a transcription along a constraint)."""
-    h = sol.T / sol.N
     # control-only constraints shape the control set: they are no state constraint
     act = active_path_constraints(sol, 1e-6, kinds=(STATE, MIXED))
     act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, dtype=bool)
-    spans = intervals_of(sol.t, np.asarray(act_nodes), h - 1e-12)
+    spans = intervals_of(sol.t, np.asarray(act_nodes), _shortest_interval(sol) - 1e-12)
     for name in sol.problem.control_names:
         spans += [(a.start, a.end) for a in detect_arcs(sol, name).arcs if a.kind == "boundary"]
     merged: list[tuple[float, float]] = []
@@ -776,6 +778,14 @@ def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, fl
         else:
             merged.append((float(a), float(b)))
     return merged
+
+
+def _shortest_interval(sol: TranscribedSolution) -> float:
+    """A run of active points shorter than this is a touch, not an arc: one shooting
+    interval, or the shortest collocation mesh interval (its d + 1 points)."""
+    if is_collocation(sol):
+        return float(np.min(np.diff(mesh_level(sol).t)))
+    return sol.T / sol.N
 
 
 def _transcription_figures(sol: TranscribedSolution, tol: _Tolerances
@@ -798,7 +808,42 @@ def _transcription_figures(sol: TranscribedSolution, tol: _Tolerances
                           if a.kind in ("max", "min") and b.kind in ("max", "min")]
     fig = _figures(pr, sol.params, t, x, u, lam, H_exp, constrained, switches, tol.sigma,
                    np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
+    if is_collocation(sol):
+        _rescore_H(fig, ~constrained & ~_kinked_points(sol, switches), H_exp)
     return fig, H_exp, active, t
+
+
+def _kinked_points(sol: TranscribedSolution, switches: dict[str, list[float]]) -> np.ndarray:
+    """Collocation points of the mesh intervals at and next to a switch of some control
+    whose control is not at one bound at all their points: there the state polynomial
+    cannot follow the kink of the state, and H (which needs the state) carries an error
+    of the order of the interval, however fine the mesh; (N d,) bool."""
+    pr = sol.problem
+    mesh = mesh_level(sol).t
+    N, d = len(mesh) - 1, len(sol.t[1:]) // max(len(mesh) - 1, 1)
+    out = np.zeros(len(sol.t) - 1, dtype=bool)
+    for j, name in enumerate(pr.control_names):
+        lo, hi = control_bounds_at(pr, name, sol.params)
+        room = 1e-3 * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
+        U = np.asarray(sol.u)[:, j].reshape(N, d)
+        one_bound = np.all(np.abs(U - hi) <= room, axis=1) | np.all(np.abs(U - lo) <= room,
+                                                                    axis=1)
+        for ts in switches.get(name, []):
+            k = int(np.clip(np.searchsorted(mesh, ts, side="right") - 1, 0, N - 1))
+            for i in range(max(k - 1, 0), min(k + 2, N)):
+                if not one_bound[i]:
+                    out[i * d:(i + 1) * d] = True
+    return out
+
+
+def _rescore_H(fig: _Figures, keep: np.ndarray, H_exp: float | None) -> None:
+    """``H_max_abs`` and ``H_variation`` of ``fig`` over the samples ``keep`` only."""
+    if not keep.any():
+        return
+    H = fig.H[keep]
+    ref = H_exp if H_exp is not None else float(np.mean(H))
+    fig.H_max_abs = float(np.max(np.abs(H - ref))) / fig.H_scale
+    fig.H_var = float(np.ptp(H)) / fig.H_scale
 
 
 def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
@@ -807,9 +852,10 @@ def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
     Parameters
     ----------
     sol : Solution
-        A multiple-shooting solution.
+        A multiple-shooting or collocation solution.
     factor : int
-        How many times more nodes.
+        How many times more nodes (shooting) or mesh intervals (collocation: each
+        interval split into ``factor`` equal ones).
 
     Returns
     -------
@@ -817,9 +863,11 @@ def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
         None when the transcription cannot be rebuilt or the solve fails.
     """
     tsol = transcribed(sol)
-    from .transcription import MultipleShooting
+    from .transcription import Collocation, MultipleShooting
 
     tr = getattr(tsol, "transcription", None)
+    if isinstance(tr, Collocation) and len(tr.meshes) == 1:
+        return _finer_collocation(tsol, tr, factor)
     if not isinstance(tr, MultipleShooting):
         return None
     try:
@@ -831,6 +879,18 @@ def finer_transcription(sol: SolutionLike, factor: int = 2) -> Solution | None:
                              for i in range(tsol.problem.nx)])
         U = tsol.u[np.minimum((s[:-1] * tsol.N + 1e-9).astype(int), tsol.N - 1)]
         return fine.solve(tsol.params, guess=fine.initial_guess(T=tsol.T, x=X, u=U))
+    except Exception:  # any failure: the refutation stays unverified
+        return None
+
+
+def _finer_collocation(sol: TranscribedSolution, tr: Any, factor: int) -> Solution | None:
+    """``sol`` re-solved on its mesh with every interval split into ``factor``, started from
+    its polynomials (None when the solve fails)."""
+    m = np.asarray(tr.meshes[0], dtype=float)
+    s = np.linspace(0.0, 1.0, factor + 1)[:-1]
+    fine = np.r_[(m[:-1, None] + np.diff(m)[:, None] * s[None, :]).ravel(), 1.0]
+    try:
+        return tr.with_mesh([fine]).solve(sol.params, guess=sol)
     except Exception:  # any failure: the refutation stays unverified
         return None
 
@@ -865,9 +925,9 @@ def _certify_transcription(sol: TranscribedSolution, tol: _Tolerances, verify: b
                            default_switch: bool) -> PMPCertificate:
     fig, H_exp, active, t = _transcription_figures(sol, tol)
     definite, uncertain = _judge(fig, tol, {}, H_exp is not None)
-    src = "transcription (costates from continuity multipliers)"
-    lam = costates_from_multipliers(sol)[1]
-    u = np.vstack([sol.u[1:], sol.u[-1:]])
+    src = ("transcription (costates from collocation multipliers / Radau weights)"
+           if is_collocation(sol) else "transcription (costates from continuity multipliers)")
+    _, _, u, lam = _transcription_samples(sol)
     if not definite:
         verdict, reasons = _verdict([], uncertain, active, 0.0, sol.T)
         return _certificate(verdict, reasons, H_exp, fig, active, math.nan, src, t, lam, u,
@@ -884,8 +944,7 @@ def _certify_transcription(sol: TranscribedSolution, tol: _Tolerances, verify: b
     fig2, H2, active2, t2 = _transcription_figures(fine, tol_f)
     persistent = _persistent(fig, fig2, tol, tol_f)
     src2 = f"{src}; re-checked on {fine.N} nodes"
-    lam2 = costates_from_multipliers(fine)[1]
-    u2 = np.vstack([fine.u[1:], fine.u[-1:]])
+    _, _, u2, lam2 = _transcription_samples(fine)
     if persistent:
         return _certificate(NOT_BANG_BANG, persistent, H_exp, fig, active, math.nan, src2, t,
                             lam, u, {}, 0.0)

@@ -49,6 +49,7 @@ from .arcs import (
 )
 from .errors import InfeasibleError, SolveError
 from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
+from .gridview import mesh_level
 from .problem import OptimalControlProblem
 from .refinement import (
     DEFAULT_TOL,
@@ -383,7 +384,7 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         with a square active set (falls back to Ipopt if a check fails).
     repair : bool
         If the detected structure fails, retry without each arc shorter than
-        ``repair_length`` (default 2.5 shooting intervals) in turn, keeping the
+        ``repair_length`` (default 2.5 shooting or mesh intervals) in turn, keeping the
         best success (a note says which arc was dropped).
     repair_length : float, optional
         See ``repair``.
@@ -419,7 +420,8 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     except SolveError as err:
         if repair_length is None and not repair:
             raise
-        short = (2.5 * tsol.T / tsol.N) if repair_length is None else repair_length
+        # 2.5 shooting intervals, or mesh intervals of a collocation solution
+        short = (2.5 * tsol.T / mesh_level(tsol).N) if repair_length is None else repair_length
         return _repair(st, attempt, err, short)
 
 
