@@ -18,8 +18,22 @@ involve T; -1 for minimum time posed as ``phi = T``). ``H_max_abs`` and
 ``H_variation`` are normalised by ``H_scale = max_t sum_i |lambda_i xdot_i|``
 (the size of the terms that must cancel).
 
-The verdict is ``"bang-bang certified"``, ``"not bang-bang"`` or
-``"inconclusive"``. A check fails only by more than its tolerance *and* more
+What a verdict means. ``"bang-bang certified"``: the minimum principle's
+*necessary* conditions hold along this candidate, which structure detection
+sees as bang (and boundary) arcs only and which shows no chattering. It is a
+local statement: the candidate is a bang-bang extremal, not necessarily the
+global optimum (a problem with several extremals needs several starts).
+``"not bang-bang"``: this candidate fails the conditions (beyond tolerance and
+numerical error). ``"inconclusive"``: nothing refutes, but a violation lies
+inside the error band, a state constraint is active, or structure detection
+finds an interior (singular, free or unresolved) arc, which is never
+certified. ``"chattering suspected"``: switch intervals shrink geometrically
+toward a point and a finer grid resolves more of them (:mod:`ocp.chattering`);
+no finite switching structure is certified. ``"not applicable: ..."``: the
+solution (or its refinement) did not converge or is not verified, and nothing
+is checked.
+
+A check fails only by more than its tolerance *and* more
 than ten times the certificate's own estimated numerical error; a violation
 inside that error band gives "inconclusive", never a refutation. From a
 transcription alone, whose costates carry the grid's error, a would-be
