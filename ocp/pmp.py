@@ -557,7 +557,8 @@ def certify(sol: SolutionLike, refined: Any = None, *,
       :class:`~ocp.errors.InfeasibleError`), or ``refined`` is the iterate of a
       failed refinement; the reasons give Ipopt's status. ``"not applicable:
       the solution is not verified"`` (:data:`UNVERIFIED`): ``sol.verified`` is
-      False (a path constraint violated between nodes). Nothing is checked
+      False (a path constraint violated between nodes) and there is no
+      ``refined`` (which would be the candidate then). Nothing is checked
       then: a certificate of a point that is not a converged optimum would
       mean nothing.
 
@@ -644,7 +645,7 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
     ----------
     sol : Solution or None
         A transcribed solution: refused when ``success`` is False (:data:`NOT_APPLICABLE`)
-        or ``verified`` is False (:data:`UNVERIFIED`).
+        or, certified alone (no ``refined``), when ``verified`` is False (:data:`UNVERIFIED`).
     refined : RefinedSwitching or RefinedPhases, optional
         Refused when its ``success`` is False (the iterate of a failed refinement).
 
@@ -662,7 +663,9 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
             f"the switching refinement did not converge (status "
             f"{getattr(refined, 'status', '?')}): its iterate is no optimum, nothing is "
             "checked"])
-    if sol is not None and getattr(sol, "verified", None) is False:
+    if refined is None and sol is not None and getattr(sol, "verified", None) is False:
+        # (with a refinement, the candidate is the refined solution: the transcription
+        # only started it, and its violation between nodes is the grid's)
         viol = getattr(sol, "path_violation", math.nan)
         return not_applicable(UNVERIFIED, [
             f"the transcription violates its path constraints between nodes (by {viol:.2e}, "
