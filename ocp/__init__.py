@@ -18,8 +18,10 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.trajectory`    -- the sampled-trajectory type;
 * :mod:`ocp.switching`     -- bang-bang structure detection and switching-time
   refinement to machine precision;
+* :mod:`ocp.chattering`    -- switches accumulating at a point (Fuller's phenomenon),
+  confirmed on a finer grid;
 * :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
-  certificate that proves (or refutes) bang-bang structure.
+  certificate that proves (or refutes) bang-bang structure, and refuses what it cannot.
 """
 
 from __future__ import annotations
