@@ -172,8 +172,10 @@ def _unreachable() -> OptimalControlProblem:
 
 
 def test_failed_solves_are_refused():
-    """The iterate of an InfeasibleError (today: "bang-bang certified"), of a SolveError and a
-    solution not verified between its nodes get "not applicable", with Ipopt's status."""
+    """The iterate of an InfeasibleError (today: "bang-bang certified" although x(1) misses
+    100 by 0.26 with |u| <= 1 violated), of a SolveError (today: "inconclusive") and a
+    solution not verified between its nodes (today: "bang-bang certified") get
+    "not applicable", with Ipopt's status."""
     with pytest.raises(InfeasibleError) as info:
         MultipleShooting(_unreachable(), nodes=20).solve({})
     cert = certify(info.value.iterate)
@@ -193,7 +195,8 @@ def test_failed_solves_are_refused():
 
 def test_failed_refinement_is_refused():
     """A refinement that ran out of iterations raises SolveError; its iterate says
-    success False and certify refuses it (today it is certified or refuted as if converged)."""
+    success False and certify refuses it (today: "not bang-bang", a refutation of a point
+    that is no extremal)."""
     clear_cache()
     sol = _solve(1.0, 5.0, False, 30)
     with pytest.raises(SolveError) as info:
