@@ -173,9 +173,9 @@ def _unreachable() -> OptimalControlProblem:
 
 def test_failed_solves_are_refused():
     """The iterate of an InfeasibleError (today: "bang-bang certified" although its last node
-    sits at x = 99.7 where at most 1/2 is reachable: its continuity is broken), of a SolveError (today: "inconclusive") and a
-    solution not verified between its nodes (today: "bang-bang certified") get
-    "not applicable", with Ipopt's status."""
+    sits at x = 99.7 where at most 1/2 is reachable: its continuity is broken), of a
+    SolveError (today: "inconclusive") and a solution not verified between its nodes (today:
+    "bang-bang certified") get "not applicable", with Ipopt's status."""
     with pytest.raises(InfeasibleError) as info:
         MultipleShooting(_unreachable(), nodes=20).solve({})
     cert = certify(info.value.iterate)
