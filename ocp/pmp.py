@@ -601,9 +601,6 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     -------
     PMPCertificate
     """
-    refused = refusal(sol, refined)
-    if refused is not None:
-        return refused
     if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":
         from .phase_pmp import certify_phases
         from .phase_refinement import RefinedPhases
@@ -611,8 +608,12 @@ def certify(sol: SolutionLike, refined: Any = None, *,
         if not isinstance(refined, RefinedPhases):
             raise ValueError("a multi-phase solution is certified with its refinement: "
                              "certify(sol, ocp.phase_refinement.refine_phases(sol))")
+        # (certify_phases refuses a failed solve or refinement itself)
         return certify_phases(sol, refined, tol_H=tol_H, tol_sigma=tol_sigma,  # type: ignore
                               tol_switch=tol_switch, min_singular=min_singular, n=n)
+    refused = refusal(sol, refined)
+    if refused is not None:
+        return refused
     tsol = transcribed(sol)
     t0 = time.process_time()
     pr = tsol.problem

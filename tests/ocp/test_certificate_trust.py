@@ -234,3 +234,46 @@ def test_kkt_acceptance_logic():
     assert not kkt_converged({**ok, "complementarity": 1e-3})
     assert not kkt_converged({**ok, "dual": math.nan})
     assert not kkt_converged({**ok, "status": "Infeasible_Problem_Detected", "primal": 0.3})
+
+
+def _two_phase():
+    """The README's push-then-brake problem: push with |u| <= 1, then brake at -1; minimum
+    total time to rest at d (the brake phase has no control)."""
+    from ocp import MultiPhaseProblem
+
+    mp = MultiPhaseProblem("push_brake")
+    d = mp.parameter("d")
+    push, brake = mp.phase("push"), mp.phase("brake")
+    x, v = push.state("x"), push.state("v")
+    u = push.control("u", lower=-1, upper=1)
+    push.set_dynamics({"x": v, "v": u})
+    push.initial_constraint(x, 0.0)
+    push.initial_constraint(v, 0.0)
+    push.free_final_time(0.01, 10)
+    xb, vb = brake.state("x"), brake.state("v")
+    brake.set_dynamics({"x": vb, "v": -1.0})
+    brake.terminal_constraint(xb - d, 0.0)
+    brake.terminal_constraint(vb, 0.0)
+    brake.free_duration(0.01, 10)
+    mp.link(push, brake)
+    mp.minimize(brake.T)
+    return mp
+
+
+def test_failed_phase_refinement_is_refused():
+    """Multi-phase: the iterate of a failed refine_phases (success False) is refused by
+    certify and certify_phases alike (today: "not bang-bang", judged as if converged)."""
+    from ocp.phase_pmp import PhasesCertificate, certify_phases
+    from ocp.phase_refinement import refine_phases
+
+    sol = MultipleShooting(_two_phase(), nodes=[20, 20]).solve({"d": 2.0})
+    good = refine_phases(sol)
+    assert good.success and certify(sol, good).verdict == CERTIFIED
+    assert good.T == pytest.approx(2 * math.sqrt(2.0), rel=1e-12)
+    with pytest.raises(SolveError) as info:
+        refine_phases(sol, ipopt_options={"max_iter": 1}, fast=False)
+    bad = info.value.iterate
+    assert bad.success is False
+    for cert in (certify(sol, bad), certify_phases(sol, bad)):
+        assert isinstance(cert, PhasesCertificate)
+        assert cert.verdict == NOT_APPLICABLE and not cert.applicable
