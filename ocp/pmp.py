@@ -591,7 +591,9 @@ def certify(sol: SolutionLike, refined: Any = None, *,
         result is only "inconclusive". Also allows the re-solve that confirms
         chattering.
     structure : ArcStructure, optional
-        The transcription's arc structure (default: :func:`detect_structure` of ``sol``).
+        The arc structure to hold the verdict to (default: :func:`detect_structure`
+        of ``sol``); with ``refined`` from a structure of your own, pass that one. An
+        interior arc in it forbids "bang-bang certified".
     chattering : bool
         Look for chattering (:func:`detect_chattering`).
     max_nodes : int
