@@ -97,15 +97,17 @@ def fuller_value(x0: float = 0.01, T: float = 1.0, free_end: bool = False) -> fl
 PROBLEM = SuiteProblem(
     name="fuller", source="mintOC Fuller's problem (Fuller 1963; Zelikin & Borisov 1994)",
     published=MINTOC_PUBLISHED, rtol=2e-3, build=fuller, exact=fuller_value,
-    exact_rtol=1e-3, covers=("chattering", "singular arc"), bang_bang=False,
+    exact_rtol=3e-4, covers=("chattering", "singular arc"), bang_bang=False,
     notes="chattering into and out of a singular arc at the origin on [0.2715, 0.7285]: "
-          "no finite switching structure; certify must not certify it")
+          "no finite switching structure; certify must not certify it. Radau collocation "
+          "with mesh refinement (defaults): 1.52819e-05, 1.0e-4 above the closed form (the "
+          "objective sits at Ipopt's tolerance at this scale)")
 
 PROBLEM_FREE_END = SuiteProblem(
     name="fuller_free_end", source="Fuller 1963, free final state, x0 = (1, 0), T = 10",
-    published=cost_to_origin(1.0)[0], rtol=1e-3,
+    published=cost_to_origin(1.0)[0], rtol=1e-5,
     build=lambda: fuller(1.0, 10.0, free_end=True),
-    exact=lambda: fuller_value(1.0, 10.0, free_end=True), exact_rtol=1e-3,
+    exact=lambda: fuller_value(1.0, 10.0, free_end=True), exact_rtol=1e-5,
     covers=("chattering", "singular arc", "free end"), bang_bang=False,
     notes="published value: Fuller's cost to go V(1, 0) (closed form)")
 
