@@ -536,8 +536,8 @@ def certify(sol: SolutionLike, refined: Any = None, *,
       switches at sign changes of sigma; no singular interval), structure
       detection finds only bang (and boundary) arcs, and no chattering is
       seen. It is a local statement: the candidate is an extremal, not
-      necessarily the global optimum (another extremal may be better; see the
-      README on local optima);
+      necessarily the global optimum (another extremal may be better: several
+      starts find them);
     * ``"not bang-bang"``: this candidate *fails* the conditions beyond their
       tolerance and the certificate's own numerical error (from a transcription
       alone, also on a grid twice as fine): e.g. a singular arc, or a control
@@ -549,9 +549,10 @@ def certify(sol: SolutionLike, refined: Any = None, *,
       [a, b] ..."``), which is never certified bang-bang;
     * ``"chattering suspected"`` (:data:`CHATTERING`): switch intervals shrink
       geometrically toward a point ``t*`` and a finer grid resolves more of
-      them (:func:`detect_chattering`, reported in ``cert.chattering``); the
-      optimal control switches infinitely often there, so no finite bang-bang
-      structure is certified. It takes precedence over the other verdicts;
+      them (:func:`detect_chattering`, reported in ``cert.chattering``): a
+      control that chatters switches infinitely often, so no finite bang-bang
+      structure is certified. It takes precedence over the other verdicts (the
+      checks' own reasons follow it);
     * ``"not applicable: the solve did not converge"`` (:data:`NOT_APPLICABLE`):
       ``sol.success`` is False (e.g. the iterate of an
       :class:`~ocp.errors.InfeasibleError`), or ``refined`` is the iterate of a
