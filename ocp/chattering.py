@@ -65,8 +65,10 @@ class ChatteringResult:
         ``"forward"`` (intervals shrink as t grows, toward t* from the left) or
         ``"backward"`` (they shrink as t decreases: switches leaving t*).
     confirmed : bool
-        A finer grid resolved more switches in the run (or, without a re-solve,
-        the run has at least :data:`MIN_RUN_UNCONFIRMED` shrinking intervals).
+        True: a finer grid resolved more switches in the run. False: no finer grid
+        could be solved (not allowed, or its solve failed), and the run counts on its
+        own (at least :data:`MIN_RUN_UNCONFIRMED` shrinking intervals, ratios within a
+        factor 3 of each other).
     counts : dict
         Grid nodes -> switches of the run found on that grid.
     """
@@ -274,7 +276,8 @@ def detect_chattering(sol: SolutionLike, *,
     Returns
     -------
     ChatteringResult or None
-        The confirmed run with the most switches; None when there is none.
+        The run with the most switches that counts (see ``confirmed``); None when
+        there is none.
     """
     tsol = transcribed(sol)
     smp = samples or node_samples
@@ -290,26 +293,24 @@ def detect_chattering(sol: SolutionLike, *,
 def _confirm(sol: TranscribedSolution, name: str, run: _Run,
              resolve: Callable[[Any, int], Any] | None, max_nodes: int,
              samples: Samples) -> ChatteringResult | None:
-    """The run as a result if a finer grid gives it more switches (or, without
-    ``resolve``, if it is long enough on its own)."""
+    """The run as a result if a finer grid gives it more switches or, when no finer grid
+    can be solved, if it is long enough on its own; None otherwise."""
     N, h = int(sol.N), float(sol.T) / int(sol.N)
     counts = {N: len(run.zeros)}
-    best = run
-    confirmed = False
+    fine = None
     if resolve is not None and max_nodes >= 2 * N:
-        factor = _factor_to_resolve(run, h, max_nodes // N)
-        fine = resolve(sol, factor)
-        if fine is not None:
-            fsol = transcribed(fine)
-            tol = max(abs(float(run.zeros[-1] - run.zeros[0])), 4 * h)
-            match = _matching(_runs_of(fsol, samples).get(name, []), run, tol)
-            counts[int(fsol.N)] = 0 if match is None else len(match.zeros)
-            if match is not None and len(match.zeros) > len(run.zeros):
-                best, confirmed = match, True
-    elif len(run.ratios) + 1 >= MIN_RUN_UNCONFIRMED and \
-            float(np.max(run.ratios) / np.min(run.ratios)) <= 3.0:
-        confirmed = True
-    if not confirmed:
-        return None
-    return ChatteringResult(name, best.t_star, best.ratio, tuple(map(float, best.zeros)),
-                            best.direction, True, counts)
+        fine = resolve(sol, _factor_to_resolve(run, h, max_nodes // N))
+    if fine is not None:
+        fsol = transcribed(fine)
+        tol = max(abs(float(run.zeros[-1] - run.zeros[0])), 4 * h)
+        match = _matching(_runs_of(fsol, samples).get(name, []), run, tol)
+        counts[int(fsol.N)] = 0 if match is None else len(match.zeros)
+        if match is None or len(match.zeros) <= len(run.zeros):
+            return None  # the finer grid does not add switches: no accumulation point
+        return ChatteringResult(name, match.t_star, match.ratio,
+                                tuple(map(float, match.zeros)), match.direction, True, counts)
+    consistent = float(np.max(run.ratios) / np.min(run.ratios)) <= 3.0
+    if len(run.ratios) + 1 >= MIN_RUN_UNCONFIRMED and consistent:
+        return ChatteringResult(name, run.t_star, run.ratio, tuple(map(float, run.zeros)),
+                                run.direction, False, counts)
+    return None

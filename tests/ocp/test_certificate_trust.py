@@ -277,3 +277,20 @@ def test_failed_phase_refinement_is_refused():
     for cert in (certify(sol, bad), certify_phases(sol, bad)):
         assert isinstance(cert, PhasesCertificate)
         assert cert.verdict == NOT_APPLICABLE and not cert.applicable
+
+
+def test_chattering_without_a_re_solve_needs_a_long_run():
+    """Without re-solves (verify=False), a grid fine enough to show three shrinking switch
+    intervals with consistent ratios suffices (unconfirmed); a coarse grid showing only two
+    does not (today: "bang-bang certified" on the fine grid, "inconclusive" on the coarse
+    one, which without chattering the structure check also gives)."""
+    fine = _solve(1.0, 6.0, False, 480)
+    ch = detect_chattering(fine, resolve=False)
+    assert ch is not None and not ch.confirmed
+    t_star = ch.t_star if ch.direction == "forward" else 6.0 - ch.t_star
+    assert t_star == pytest.approx(T0_FULLER, abs=0.01)
+    assert ch.ratio == pytest.approx(ratio(), abs=0.02)
+    assert certify(fine, verify=False).verdict == CHATTERING
+    coarse = _solve(1.0, 6.0, False, 40)
+    assert detect_chattering(coarse, resolve=False) is None
+    assert certify(coarse, verify=False).verdict == INCONCLUSIVE  # the interior arc
