@@ -24,8 +24,10 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.constraint_kinds` -- path constraints classified as state, mixed or
   control-only; :mod:`ocp.control_set` -- the polytope of coupled controls and
   the Hamiltonian's minimiser over it;
+* :mod:`ocp.chattering`    -- switches accumulating at a point (Fuller's phenomenon),
+  confirmed on a finer grid;
 * :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
-  certificate that proves (or refutes) bang-bang structure.
+  certificate that proves (or refutes) bang-bang structure, and refuses what it cannot.
 """
 
 from __future__ import annotations

@@ -33,6 +33,8 @@ from .pmp import (
     _certify_refined,
     _constrained_refined,
     _Tolerances,
+    not_applicable,
+    refusal,
 )
 from .solution import Solution
 
@@ -122,7 +124,18 @@ def certify_phases(sol: Solution | None, refined: RefinedPhases, *,
         Shortest singular interval reported (default: two shooting intervals of the phase).
     n : int
         About how many samples per phase.
+
+    Returns
+    -------
+    PhasesCertificate
+        With the verdict "not applicable: ..." (and no figures) when ``sol`` did not
+        converge or is not verified, or ``refined`` is a failed refinement's iterate.
     """
+    refused = refusal(sol, refined)
+    if refused is not None:
+        out = not_applicable(refused.verdict, refused.reasons, PhasesCertificate)
+        assert isinstance(out, PhasesCertificate)
+        return out
     t_start = time.process_time()
     certs, gaps, reasons = [], [], []
     names = [r.problem.name for r in refined.phases]

@@ -479,6 +479,11 @@ class RefinedPhases:
     exact : bool
         Every interval of every phase integrated by the matrix exponential.
     status, iterations, solve_time, path : Ipopt's (or the Newton fast path's) figures.
+        ``status`` says ``"Solve_Succeeded (KKT residual ...; Ipopt said ...)"`` when Ipopt
+        stopped on another message at a point our own KKT check accepts.
+    success : bool
+        Converged to the requested accuracy (False on the iterate of a
+        :class:`~ocp.errors.SolveError`: :func:`ocp.pmp.certify` refuses it).
     transcribed_objective : float
         The objective of the transcription it started from (NaN without one).
     junction_costates : list of ndarray
@@ -511,6 +516,7 @@ class RefinedPhases:
     w: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     lam_g: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     lam_x: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    success: bool = True
 
     @property
     def xT(self) -> np.ndarray:
@@ -690,6 +696,9 @@ def refine_phase_structure(mp: MultiPhaseProblem, modes: PhaseModes, durations: 
                      for i, s in enumerate(nlp.phase_substeps))
         w0, warm = res["w"], (res["lam_g"], res["lam_x"])
     out = _assemble(nlp, res, pv, dict(params), err, notes, transcribed_objective)
+    out.success = bool(res["success"] and ok)
+    for ph in out.phases:
+        ph.success = out.success
     if not res["success"]:
         cls = InfeasibleError if "Infeasible" in res["status"] else SolveError
         raise cls(res["status"], out, f"multi-phase switching refinement failed: "

@@ -18,8 +18,22 @@ involve T; -1 for minimum time posed as ``phi = T``). ``H_max_abs`` and
 ``H_variation`` are normalised by ``H_scale = max_t sum_i |lambda_i xdot_i|``
 (the size of the terms that must cancel).
 
-The verdict is ``"bang-bang certified"``, ``"not bang-bang"`` or
-``"inconclusive"``. A check fails only by more than its tolerance *and* more
+What a verdict means. ``"bang-bang certified"``: the minimum principle's
+*necessary* conditions hold along this candidate, which structure detection
+sees as bang (and boundary) arcs only and which shows no chattering. It is a
+local statement: the candidate is a bang-bang extremal, not necessarily the
+global optimum (a problem with several extremals needs several starts).
+``"not bang-bang"``: this candidate fails the conditions (beyond tolerance and
+numerical error). ``"inconclusive"``: nothing refutes, but a violation lies
+inside the error band, a state constraint is active, or structure detection
+finds an interior (singular, free or unresolved) arc, which is never
+certified. ``"chattering suspected"``: switch intervals shrink geometrically
+toward a point and a finer grid resolves more of them (:mod:`ocp.chattering`);
+no finite switching structure is certified. ``"not applicable: ..."``: the
+solution (or its refinement) did not converge or is not verified, and nothing
+is checked.
+
+A check fails only by more than its tolerance *and* more
 than ten times the certificate's own estimated numerical error; a violation
 inside that error band gives "inconclusive", never a refutation. From a
 transcription alone, whose costates carry the grid's error, a would-be
@@ -41,13 +55,17 @@ import casadi as ca
 import numpy as np
 
 from .arcs import (
+    ArcStructure,
     SolutionLike,
     TranscribedSolution,
     active_path_constraints,
     control_bounds_at,
     detect_arcs,
+    detect_structure,
     transcribed,
 )
+from .chattering import ChatteringResult
+from .chattering import detect_chattering as chattering_of
 from .constraint_kinds import MIXED, STATE, coupled_groups
 from .control_set import control_polytope, distance_to_vertices, vertex_scores
 from .costates import (
@@ -65,11 +83,15 @@ from .switching import RefinedSwitching
 CERTIFIED = "bang-bang certified"
 NOT_BANG_BANG = "not bang-bang"
 INCONCLUSIVE = "inconclusive"
+CHATTERING = "chattering suspected"
+NOT_APPLICABLE = "not applicable: the solve did not converge"
+UNVERIFIED = "not applicable: the solution is not verified"
 ERROR_MARGIN = 10.0
 """A violation within this factor of the estimated numerical error is not a refutation."""
 
-__all__ = ["CERTIFIED", "INCONCLUSIVE", "NOT_BANG_BANG", "PMPCertificate",
-           "adjoint_along_refined", "certify", "costates_from_multipliers", "plot_certificate"]
+__all__ = ["CERTIFIED", "CHATTERING", "ChatteringResult", "INCONCLUSIVE", "NOT_APPLICABLE",
+           "NOT_BANG_BANG", "PMPCertificate", "UNVERIFIED", "adjoint_along_refined", "certify",
+           "costates_from_multipliers", "detect_chattering", "plot_certificate"]
 
 
 @dataclass
@@ -79,7 +101,8 @@ class PMPCertificate:
     Attributes
     ----------
     verdict : str
-        ``"bang-bang certified"``, ``"not bang-bang"`` or ``"inconclusive"``.
+        ``"bang-bang certified"``, ``"not bang-bang"``, ``"inconclusive"``,
+        ``"chattering suspected"`` or ``"not applicable: ..."`` (see :func:`certify`).
     reasons : list of str
         Why (every failed, uncertain or unverifiable check).
     H_expected : float or None
@@ -108,6 +131,8 @@ class PMPCertificate:
         Per control: ``sigma_sign_agreement`` and ``switch_sigma_gap``.
     elapsed : float
         Seconds the certificate took.
+    chattering : ChatteringResult or None
+        Switches accumulating at a point (:func:`detect_chattering`), if found.
     t, lam, H, sigma, u : arrays for plotting (``sigma``/``u`` 1-D for one control).
     """
 
@@ -132,11 +157,17 @@ class PMPCertificate:
     checked_from: float = 0.0
     per_control: dict[str, dict[str, float]] = field(default_factory=dict)
     elapsed: float = 0.0
+    chattering: ChatteringResult | None = None
 
     @property
     def certified(self) -> bool:
         """True when the verdict is "bang-bang certified"."""
         return self.verdict == CERTIFIED
+
+    @property
+    def applicable(self) -> bool:
+        """False when the solution was refused (not converged, or not verified)."""
+        return not self.verdict.startswith("not applicable")
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dict (non-finite numbers become None)."""
@@ -156,7 +187,8 @@ class PMPCertificate:
                 "checked_from": float(self.checked_from),
                 "per_control": {c: {k: f(v) for k, v in d.items()}
                                 for c, d in self.per_control.items()},
-                "elapsed_s": float(self.elapsed)}
+                "elapsed_s": float(self.elapsed),
+                "chattering": self.chattering.to_dict() if self.chattering else None}
 
 
 # ------------------------------------------------------------------ helpers
@@ -573,8 +605,44 @@ def _verdict(definite: list[str], uncertain: list[str], active: list[tuple[float
 def certify(sol: SolutionLike, refined: Any = None, *,
             tol_H: float | None = None, tol_sigma: float | None = None,
             tol_switch: float | None = None, min_singular: float | None = None,
-            n: int = 2000, verify: bool = True) -> PMPCertificate:
-    """Check Pontryagin's conditions for bang-bang structure.
+            n: int = 2000, verify: bool = True, structure: ArcStructure | None = None,
+            chattering: bool = True, max_nodes: int = 1000) -> PMPCertificate:
+    """Check Pontryagin's necessary conditions for bang-bang structure along a candidate.
+
+    What a verdict means:
+
+    * ``"bang-bang certified"``: along *this candidate* the minimum principle's
+      necessary conditions hold to the stated tolerances (H constant, or equal
+      to its free-T value; every control at the bound ``sign(sigma)`` selects;
+      switches at sign changes of sigma; no singular interval), structure
+      detection finds only bang (and boundary) arcs, and no chattering is
+      seen. It is a local statement: the candidate is an extremal, not
+      necessarily the global optimum (another extremal may be better: several
+      starts find them);
+    * ``"not bang-bang"``: this candidate *fails* the conditions beyond their
+      tolerance and the certificate's own numerical error (from a transcription
+      alone, also on a grid twice as fine): e.g. a singular arc, or a control
+      off the bound sigma selects;
+    * ``"inconclusive"``: nothing refutes, but something prevents the
+      certificate: a violation inside the error band, a state constraint
+      active, or an interior (singular, free or unresolved) arc that structure
+      detection finds (``"structure detection finds an interior arc on
+      [a, b] ..."``), which is never certified bang-bang;
+    * ``"chattering suspected"`` (:data:`CHATTERING`): switch intervals shrink
+      geometrically toward a point ``t*`` and a finer grid resolves more of
+      them (:func:`detect_chattering`, reported in ``cert.chattering``): a
+      control that chatters switches infinitely often, so no finite bang-bang
+      structure is certified. It takes precedence over the other verdicts (the
+      checks' own reasons follow it);
+    * ``"not applicable: the solve did not converge"`` (:data:`NOT_APPLICABLE`):
+      ``sol.success`` is False (e.g. the iterate of an
+      :class:`~ocp.errors.InfeasibleError`), or ``refined`` is the iterate of a
+      failed refinement; the reasons give Ipopt's status. ``"not applicable:
+      the solution is not verified"`` (:data:`UNVERIFIED`): ``sol.verified`` is
+      False (a path constraint violated between nodes) and there is no
+      ``refined`` (which would be the candidate then). Nothing is checked
+      then: a certificate of a point that is not a converged optimum would
+      mean nothing.
 
     Parameters
     ----------
@@ -602,7 +670,20 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     verify : bool
         Transcription alone: re-check a would-be refutation on a grid twice as
         fine (a new transcription, solved from this one); without it such a
-        result is only "inconclusive".
+        result is only "inconclusive". Also allows the re-solve that confirms
+        chattering.
+    structure : ArcStructure, optional
+        The arc structure to hold the verdict to (default: :func:`detect_structure`
+        of ``sol``); with ``refined`` from a structure of your own, pass that one. An
+        interior arc in it forbids "bang-bang certified".
+    chattering : bool
+        Look for chattering (:func:`detect_chattering`).
+    max_nodes : int
+        Largest grid the chattering confirmation may solve.
+
+    Returns
+    -------
+    PMPCertificate
     """
     if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":
         from .phase_pmp import certify_phases
@@ -611,8 +692,12 @@ def certify(sol: SolutionLike, refined: Any = None, *,
         if not isinstance(refined, RefinedPhases):
             raise ValueError("a multi-phase solution is certified with its refinement: "
                              "certify(sol, ocp.phase_refinement.refine_phases(sol))")
+        # (certify_phases refuses a failed solve or refinement itself)
         return certify_phases(sol, refined, tol_H=tol_H, tol_sigma=tol_sigma,  # type: ignore
                               tol_switch=tol_switch, min_singular=min_singular, n=n)
+    refused = refusal(sol, refined)
+    if refused is not None:
+        return refused
     tsol = transcribed(sol)
     t0 = time.process_time()
     pr = tsol.problem
@@ -627,8 +712,119 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     else:
         tol.switch = 1.5 * h if tol_switch is None else tol_switch
         cert = _certify_transcription(tsol, tol, verify, tol_switch is None)
+    _against_structure(cert, detect_structure(tsol) if structure is None else structure)
+    if chattering:
+        found = detect_chattering(tsol, resolve=verify, max_nodes=max_nodes)
+        if found is not None:
+            cert.chattering = found
+            cert.reasons = [found.reason, *cert.reasons]
+            cert.verdict = CHATTERING
     cert.elapsed = time.process_time() - t0
     return cert
+
+
+def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | None:
+    """The "not applicable" certificate of a solution that is no converged, verified optimum.
+
+    Parameters
+    ----------
+    sol : Solution or None
+        A transcribed solution: refused when ``success`` is False (:data:`NOT_APPLICABLE`)
+        or, certified alone (no ``refined``), when ``verified`` is False (:data:`UNVERIFIED`).
+    refined : RefinedSwitching or RefinedPhases, optional
+        Refused when its ``success`` is False (the iterate of a failed refinement).
+
+    Returns
+    -------
+    PMPCertificate or None
+        None when nothing is refused.
+    """
+    if sol is not None and getattr(sol, "success", True) is False:
+        return not_applicable(NOT_APPLICABLE, [
+            f"the transcription's solve did not converge (Ipopt status "
+            f"{getattr(sol, 'status', '?')}): its iterate is no optimum, nothing is checked"])
+    if refined is not None and getattr(refined, "success", True) is False:
+        return not_applicable(NOT_APPLICABLE, [
+            f"the switching refinement did not converge (status "
+            f"{getattr(refined, 'status', '?')}): its iterate is no optimum, nothing is "
+            "checked"])
+    if refined is None and sol is not None and getattr(sol, "verified", None) is False:
+        # (with a refinement, the candidate is the refined solution: the transcription
+        # only started it, and its violation between nodes is the grid's)
+        viol = getattr(sol, "path_violation", math.nan)
+        return not_applicable(UNVERIFIED, [
+            f"the transcription violates its path constraints between nodes (by {viol:.2e}, "
+            f"{sorted(getattr(sol, 'violations', {}))}): not a verified solution, nothing is "
+            "checked"])
+    return None
+
+
+def not_applicable(verdict: str, reasons: list[str],
+                   cls: type[PMPCertificate] = PMPCertificate) -> PMPCertificate:
+    """A certificate with a "not applicable" verdict and no figures (all NaN).
+
+    Parameters
+    ----------
+    verdict : str
+        :data:`NOT_APPLICABLE` or :data:`UNVERIFIED`.
+    reasons : list of str
+    cls : type
+        :class:`PMPCertificate` or a subclass whose extra fields have defaults.
+    """
+    nan = math.nan
+    return cls(verdict, reasons, None, nan, nan, nan, nan, nan, [], [], nan,
+               "none (refused)")
+
+
+def _interior_arcs(structure: ArcStructure) -> list[tuple[str, float, float]]:
+    """``(control, start, end)`` of every interior arc of the structure."""
+    return [(s.control, a.start, a.end) for s in structure.per_control for a in s.arcs
+            if a.kind == "interior"]
+
+
+def _against_structure(cert: PMPCertificate, structure: ArcStructure) -> None:
+    """Never certify what structure detection doubts: an interior arc (singular, free or
+    unresolved by the grid) makes a "bang-bang certified" verdict "inconclusive"."""
+    interior = _interior_arcs(structure)
+    if not interior and structure.refinable:
+        return
+    spans = ", ".join(f"[{a:.6g}, {b:.6g}] ({c})" for c, a, b in interior) or "some control"
+    reason = (f"structure detection finds an interior arc on {spans}: a singular, free or "
+              "unresolved arc (refine_switching refuses it), never certified bang-bang")
+    if cert.verdict == CERTIFIED:
+        cert.verdict = INCONCLUSIVE
+    if cert.verdict != NOT_BANG_BANG:  # a refutation stands on its own checks
+        cert.reasons = [*cert.reasons, reason]
+
+
+def detect_chattering(sol: SolutionLike, *, resolve: bool = True,
+                      max_nodes: int = 1000) -> ChatteringResult | None:
+    """Switches whose intervals shrink geometrically toward a point (chattering).
+
+    Reads the sign changes of the switching functions of a transcription (costates
+    from its multipliers) and, with ``resolve``, confirms a suspicion by a re-solve
+    on a grid fine enough to resolve the next predicted switch
+    (:func:`finer_transcription`): the run must gain switches. See
+    :mod:`ocp.chattering`.
+
+    Parameters
+    ----------
+    sol : Solution
+        A converged transcribed solution.
+    resolve : bool
+        Allow the confirming re-solve (without it, only runs of at least
+        :data:`ocp.chattering.MIN_RUN_UNCONFIRMED` shrinking intervals count).
+    max_nodes : int
+        Largest grid the confirmation may solve.
+
+    Returns
+    -------
+    ChatteringResult or None
+        ``t_star``, ``ratio``, ``switch_times``, ``counts`` (nodes -> switches in the
+        run); None when no chattering is seen.
+    """
+    return chattering_of(sol, resolve=finer_transcription if resolve else None,
+                         max_nodes=max_nodes, samples=_transcription_samples)
 
 
 def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[float]]:

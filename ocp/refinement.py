@@ -69,6 +69,44 @@ NEAR_CONVERGED = ("Search_Direction_Becomes_Too_Small", "Solved_To_Acceptable_Le
 KKT_PRIMAL, KKT_DUAL = 1e-12, 1e-8
 """Relative primal violation and dual residual accepted by that check."""
 
+KKT_MACHINE = 1e-10
+"""Dual and complementarity residuals below which any Ipopt ending is a converged point
+(with the primal violation below :data:`KKT_PRIMAL`): rounding level for these NLPs."""
+
+
+def kkt_converged(res: dict[str, Any]) -> bool:
+    """Whether a solve's result is a KKT point to rounding, whatever Ipopt's last message.
+
+    A rounding-level stall (:data:`NEAR_CONVERGED`) needs the primal violation below
+    :data:`KKT_PRIMAL` and the dual and complementarity residuals below :data:`KKT_DUAL`;
+    any other ending needs them below :data:`KKT_MACHINE`. Non-finite residuals never pass.
+
+    Parameters
+    ----------
+    res : dict
+        With ``status``, ``primal``, ``dual`` and ``complementarity`` (as returned by
+        :meth:`SwitchingNLP.solve`).
+    """
+    primal, dual = float(res["primal"]), float(res["dual"])
+    comp = float(res.get("complementarity", 0.0))
+    if not all(np.isfinite([primal, dual, comp])):
+        return False
+    limit = KKT_DUAL if res["status"] in NEAR_CONVERGED else KKT_MACHINE
+    return primal <= KKT_PRIMAL and dual <= limit and comp <= limit
+
+
+def converged_status(res: dict[str, Any]) -> str:
+    """The status text of a result :func:`kkt_converged` accepted, naming Ipopt's message.
+
+    Parameters
+    ----------
+    res : dict
+        As for :func:`kkt_converged`.
+    """
+    r = max(float(res["primal"]), float(res["dual"]), float(res.get("complementarity", 0.0)))
+    return f"Solve_Succeeded (KKT residual {r:.0e}; Ipopt said {res['status']})"
+
+
 DEFAULT_TOL = 1e-12
 """Requested relative accuracy of the non-affine arcs' end states (RK8 steps)."""
 
@@ -257,9 +295,12 @@ class SwitchingNLP:
         dict
             ``w``, ``f``, ``lam_g``, ``lam_x``, ``status``, ``success``,
             ``iterations``, ``time``, ``path`` (``"ipopt"``), ``primal`` and
-            ``dual`` (the KKT residuals of :meth:`kkt`). A stall at rounding
-            level (:data:`NEAR_CONVERGED`) counts as success when the KKT
-            residuals are below :data:`KKT_PRIMAL` and :data:`KKT_DUAL`.
+            ``dual`` (the KKT residuals of :meth:`kkt`), ``complementarity``
+            (:meth:`complementarity`) and ``ipopt_status`` (Ipopt's own word).
+            Whatever Ipopt's last message, the result counts as converged when
+            :func:`kkt_converged` says the point is a KKT point to rounding;
+            ``status`` then reads e.g. ``"Solve_Succeeded (KKT residual 3e-15;
+            Ipopt said Search_Direction_Becomes_Too_Small)"``.
         """
         args: dict[str, Any] = {"p": pv, "x0": w0, **self.bounds(pv)}
         if lam_g0 is not None and np.size(lam_g0) == self.solver.nnz_in("lam_g0"):
@@ -276,9 +317,12 @@ class SwitchingNLP:
                "status": str(st["return_status"]), "success": bool(st["success"]),
                "iterations": int(st["iter_count"]), "time": elapsed, "path": "ipopt"}
         out["primal"], out["dual"] = self.kkt(out["w"], out["lam_g"], out["lam_x"], pv)
-        if not out["success"] and out["status"] in NEAR_CONVERGED and \
-                out["primal"] <= KKT_PRIMAL and out["dual"] <= KKT_DUAL:
-            out["success"] = True  # stalled at rounding level: a KKT point to our tolerance
+        out["complementarity"] = self.complementarity(out["w"], out["lam_g"], out["lam_x"], pv)
+        out["ipopt_status"] = out["status"]
+        if out["status"] != "Solve_Succeeded" and kkt_converged(out):
+            # Ipopt stopped on a message, but the point is a KKT point to rounding: say so
+            out["success"] = True
+            out["status"] = converged_status(out)
         if out["success"]:
             self.last = {"w": out["w"], "lam_g": out["lam_g"], "lam_x": out["lam_x"],
                          "pv": np.array(pv, dtype=float)}
@@ -311,6 +355,39 @@ class SwitchingNLP:
         dual = gJ + Jg.T @ lam_g + lam_x
         return (float(np.max(viol)),
                 float(np.max(np.abs(dual), initial=0.0) / max(1.0, np.max(np.abs(gJ)))))
+
+    def complementarity(self, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray,
+                        pv: np.ndarray) -> float:
+        """Largest complementarity or multiplier-sign violation, relative.
+
+        With CasADi's signs a positive multiplier belongs to an active upper
+        bound and a negative one to an active lower bound: each multiplier times
+        its row's distance to the bound it claims (infinite: the multiplier's own
+        size) must vanish.
+
+        Parameters
+        ----------
+        w, lam_g, lam_x : ndarray
+            Primal point and multipliers (CasADi's signs).
+        pv : ndarray
+            Parameter values.
+
+        Returns
+        -------
+        float
+            ``max |lam| * slack / max(1, |value|)`` over ``max(1, max |lam|)``.
+        """
+        b = self.bounds(pv)
+        g = np.array(self.kkt_fn(w, pv)[0], dtype=float).ravel()
+        worst = 0.0
+        for val, lam, lo, hi in ((g, lam_g, b["lbg"], b["ubg"]), (w, lam_x, b["lbx"], b["ubx"])):
+            with np.errstate(invalid="ignore"):
+                slack = np.where(lam > 0, hi - val, val - lo)
+            slack = np.where(np.isfinite(slack), np.abs(slack) / np.maximum(1.0, np.abs(val)),
+                             1.0)
+            worst = max(worst, float(np.max(np.abs(lam) * slack, initial=0.0)))
+        scale = max(1.0, float(np.max(np.abs(np.r_[lam_g, lam_x]), initial=0.0)))
+        return worst / scale
 
     def outputs(self, w: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, float, float,
                                                              np.ndarray]:

@@ -102,6 +102,12 @@ class RefinedSwitching:
         Largest relative end-state error of the RK8 intervals, estimated by
         halving at the solution (0 when every interval is exact).
     status, iterations, solve_time : Ipopt's figures (or the Newton fast path's).
+        ``status`` says ``"Solve_Succeeded (KKT residual ...; Ipopt said ...)"`` when Ipopt
+        stopped on another message at a point our own KKT check accepts
+        (:func:`ocp.refinement.kkt_converged`).
+    success : bool
+        Converged to the requested accuracy (False on the iterate of a
+        :class:`~ocp.errors.SolveError`: :func:`ocp.pmp.certify` refuses it).
     path : str
         ``"ipopt"`` or ``"newton"`` (the fast path): what produced the result.
     transcribed_objective : float
@@ -144,6 +150,7 @@ class RefinedSwitching:
     w: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     lam_x: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     terminal_costate: tuple[np.ndarray, float | None] | None = field(repr=False, default=None)
+    success: bool = True
 
     # ------------------------------------------------------------- structure
     @property
@@ -315,7 +322,7 @@ class RefinedSwitching:
                 "controls": list(self.controls),
                 "modes": [[m.label() for m in ms] for ms in self.modes],
                 "control_laws": self.control_laws, "integration_error": self.integration_error,
-                "path": self.path, "notes": self.notes}
+                "path": self.path, "notes": self.notes, "success": self.success}
 
 
 # ------------------------------------------------------------------ refine
@@ -537,6 +544,7 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
         need = tuple(2 * n if k in bad else n for k, n in enumerate(nlp.substeps))
         w0, warm = res["w"], (res["lam_g"], res["lam_x"])
     out = _result(problem, nlp, res, pv, params, transcribed_objective, err, notes)
+    out.success = bool(res["success"] and ok)
     if not res["success"]:
         cls = InfeasibleError if "Infeasible" in out.status else SolveError
         raise cls(out.status, out, f"switching-time refinement failed: {out.status}")
