@@ -571,8 +571,8 @@ def _judge(fig: _Figures, tol: _Tolerances, err: dict[str, float],
           f"H deviates from {what} by {fig.H_max_abs:.2e} of its scale (> {tol.H:g})")
     for name, frac in fig.agreement.items():
         if frac < 0.99:
-            definite.append(f"{name} sits at the bound selected by sign(sigma) only "
-                            f"{frac:.1%} of the time")
+            definite.append(f"{name} sits at the bound (or vertex of its control set) "
+                            f"that minimises H only {frac:.1%} of the time")
     for name, g in fig.gap.items():
         check(g, tol.switch, err.get("switch", 0.0),
               f"a switch of {name} is {g:.2e} away from the nearest sign change of its sigma")
