@@ -32,7 +32,7 @@ import numpy as np
 from numpy import ndarray
 
 from .errors import ProblemDefinitionError
-from .problem import INF, Bound, OptimalControlProblem, Shared
+from .problem import INF, Bound, OptimalControlProblem, Shared, objective_ref
 from .symbols import Constraint, check_bounds, require_only, to_sx
 
 PhaseRef = OptimalControlProblem | int
@@ -108,7 +108,8 @@ class MultiPhaseProblem:
         return self._anchor.parameter(name)
 
     def variable(self, name: str, lower: Bound = -INF, upper: Bound = INF,
-                 guess: Bound | None = None) -> ca.SX:
+                 guess: Bound | None = None, *, ref: float | None = None,
+                 ref0: float | None = None) -> ca.SX:
         """A decision parameter shared by all phases (see
         :meth:`OptimalControlProblem.variable`).
 
@@ -120,8 +121,10 @@ class MultiPhaseProblem:
             Bounds.
         guess : float or parameter expression, optional
             Initial guess.
+        ref, ref0 : float, optional
+            Scaling (see :meth:`OptimalControlProblem.state`).
         """
-        return self._anchor.variable(name, lower, upper, guess)
+        return self._anchor.variable(name, lower, upper, guess, ref=ref, ref0=ref0)
 
     def _index(self, ph: PhaseRef) -> int:
         if isinstance(ph, int):
@@ -193,14 +196,20 @@ class MultiPhaseProblem:
         self.links.append(c)
         return c
 
-    def minimize(self, expr: Any) -> None:
+    def minimize(self, expr: Any, *, ref: float | None = None) -> None:
         """Add an end-point cost over any phases (``phase.at_tf(...)``, ``phase.T``, ...).
 
         Parameters
         ----------
         expr : SX
             Expression of end-point symbols of any phases, parameters and variables.
+        ref : float, optional
+            Typical magnitude of the objective (see
+            :meth:`OptimalControlProblem.minimize`).
         """
+        r = objective_ref(ref)
+        if r is not None:
+            self._shared.objective_ref = r
         e = to_sx(expr, "minimize")
         require_only(e, self.boundary_symbols(), "minimize term",
                      "use phase.at_t0(...) / phase.at_tf(...)")
