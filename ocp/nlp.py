@@ -29,7 +29,15 @@ import numpy as np
 from .compiled import CompiledPhase
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
 from .errors import InfeasibleError, ProblemDefinitionError, SolveError
-from .guess import control_guess, diagnose_nonfinite, raise_if_nonfinite, state_ends, variable_guess
+from .guess import (
+    DefaultChoices,
+    control_guess,
+    diagnose_nonfinite,
+    raise_if_nonfinite,
+    repair_default,
+    state_ends,
+    variable_guess,
+)
 from .multiphase import MultiPhaseProblem, as_multiphase
 from .problem import OptimalControlProblem
 from .scaling import Scaling, ScalingBuilder, check_scaling, phase_quantities
@@ -117,21 +125,26 @@ class Transcription:
         V = w[self.iV]
         pieces: list[PhaseNLP] = []
         ends: list[tuple[ca.SX, ca.SX]] = []
+        plain: list[tuple[ca.SX, ca.SX]] = []  # the same without replaceable defaults
+        choices = DefaultChoices()
         for i, (disc, ph) in enumerate(zip(self.phases, mp.phases, strict=True)):
-            a, b = state_ends(ph, self._previous_ends(i, ends))
+            a, b = state_ends(ph, self._previous_ends(i, ends), choices)
             ends.append((a, b))
+            plain.append(state_ends(ph, self._previous_ends(i, plain)))
             wb = w[self.offsets[i]:self.offsets[i] + sizes[i]]
-            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph)))
+            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph, choices)))
         g, lbg, ubg, J_end = self._constraints(pieces, P, V)
         J = J_end + sum(pn.lagrange for pn in pieces)
         lbw = ca.vertcat(*[pn.lbw for pn in pieces], *self._var_bounds(0))
         ubw = ca.vertcat(*[pn.ubw for pn in pieces], *self._var_bounds(1))
-        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared))
+        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared, choices))
         self._bounds = ca.Function("bounds", [mp.p], [lbw, ubw, lbg, ubg])
-        self._guess = ca.Function("guess", [mp.p], [w0])
+        self._guess = ca.Function("guess", [mp.p, *choices.symbols], [w0])
+        self._choices = choices
+        self._choice_bounds = choices.bound_function(mp.p)
         self._nlp = {"x": w, "p": P, "f": J, "g": g}
         self.n_w, self.n_g = nw, int(g.numel())
-        self.scaling = self._scaling(ends)
+        self.scaling = self._scaling(plain)
         self._scaled = self._scaled_nlp()
         self.n_builds += 1
 
@@ -304,9 +317,43 @@ class Transcription:
             Parameter values.
         """
         pv = self.param_vector(params) if params is not None else np.zeros(self.multiphase.np)
-        with np.errstate(all="ignore"):
-            w0 = np.array(self._guess(pv), dtype=float).ravel()
-        return w0 if params is not None else np.nan_to_num(w0, posinf=0.0, neginf=0.0)
+        n = len(self._choices.names)
+        if params is None:
+            with np.errstate(all="ignore"):
+                w0 = np.array(self._guess(pv, np.zeros(n), np.zeros(n)), dtype=float).ravel()
+            return np.nan_to_num(w0, posinf=0.0, neginf=0.0)
+        return self._repaired_default(pv)
+
+    def _repaired_default(self, pv: np.ndarray) -> np.ndarray:
+        """The default guess, with bare defaults replaced where they make the NLP
+        non-finite and another point within the bounds does not (see :mod:`ocp.guess`)."""
+        n = len(self._choices.names)
+
+        def at(use: np.ndarray, val: np.ndarray) -> np.ndarray:
+            with np.errstate(all="ignore"):
+                return np.array(self._guess(pv, use, val), dtype=float).ravel()
+
+        def count(use: np.ndarray, val: np.ndarray) -> int:
+            w = at(use, val)
+            if not np.all(np.isfinite(w)):
+                return w.size + self.n_g + 1
+            with np.errstate(all="ignore"):
+                f, g = (np.array(v, dtype=float) for v in self._nlp_function()(w, pv))
+            return int(np.sum(~np.isfinite(f)) + np.sum(~np.isfinite(g)))
+
+        zeros = np.zeros(n)
+        if n == 0 or count(zeros, zeros) == 0:
+            return at(zeros, zeros)
+        lo, hi = (np.array(v, dtype=float).ravel() for v in self._choice_bounds(pv))
+        use, val = repair_default(count, lo, hi, self._choices.refs)
+        return at(use, val)
+
+    def _nlp_function(self) -> ca.Function:
+        """``(w, p) -> (f, g)`` in the user's units (built on first use)."""
+        if self._nlp_fn is None:
+            self._nlp_fn = ca.Function("nlp", [self._nlp["x"], self._nlp["p"]],
+                                       [self._nlp["f"], self._nlp["g"]])
+        return self._nlp_fn
 
     def guess_from(self, sol: Solution | Trajectory) -> np.ndarray:
         """A decision vector for this transcription from a solution of another
@@ -375,11 +422,8 @@ class Transcription:
     def _check_start(self, x0: np.ndarray, pv: np.ndarray) -> float:
         """The objective at the start; a clear error if the start makes the NLP
         non-finite, naming the expression."""
-        if self._nlp_fn is None:
-            self._nlp_fn = ca.Function("nlp", [self._nlp["x"], self._nlp["p"]],
-                                       [self._nlp["f"], self._nlp["g"]])
         with np.errstate(all="ignore"):
-            f, g = (np.array(v, dtype=float) for v in self._nlp_fn(x0, pv))
+            f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
         if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
             return float(f.ravel()[0])
         if not np.all(np.isfinite(x0)):

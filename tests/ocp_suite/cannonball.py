@@ -66,25 +66,27 @@ def mass(radius: float | ca.SX) -> float | ca.SX:
     return 4.0 / 3.0 * math.pi * DENSITY * radius**3
 
 
-def cannonball(h_ref: float | None = None) -> MultiPhaseProblem:
+def cannonball(refs: bool = True) -> MultiPhaseProblem:
     """The two-phase cannonball in SI units, default guesses only (no hand guess).
 
     Parameters
     ----------
-    h_ref : float, optional
-        A reference altitude handed to ``state("h", ref=...)`` (default: none,
-        the automatic scaling decides).
+    refs : bool
+        Give the states and the objective their typical magnitudes (``ref=``, as a
+        dymos user would: 1 km for range and altitude, 100 m/s for speed, 1 km for
+        the objective); False poses it bare, for the automatic scaling alone.
     """
     rho = ca.interpolant("rho", "linear", [ALT_M], RHO_SI)
+    km = {"ref": 1e3} if refs else {}
     mp = MultiPhaseProblem("cannonball")
     radius = mp.variable("radius", lower=0.01, upper=0.10)
     m, S = mass(radius), math.pi * radius**2
     ascent, descent = mp.phase("ascent"), mp.phase("descent")
     for ph in (ascent, descent):
-        ph.state("r", lower=0.0)
-        h = ph.state("h", lower=0.0) if h_ref is None else ph.state("h", lower=0.0, ref=h_ref)
+        ph.state("r", lower=0.0, **km)
+        h = ph.state("h", lower=0.0, **km)
         gam = ph.state("gam", lower=-math.pi / 2, upper=math.pi / 2)
-        v = ph.state("v", lower=0.0)
+        v = ph.state("v", lower=0.0, **({"ref": 1e2} if refs else {}))
         D = 0.5 * rho(h) * v**2 * S * CD
         ph.set_dynamics({"r": v * ca.cos(gam), "h": v * ca.sin(gam),
                          "gam": -G * ca.cos(gam) / v, "v": -D / m - G * ca.sin(gam)})
@@ -97,7 +99,7 @@ def cannonball(h_ref: float | None = None) -> MultiPhaseProblem:
     descent.terminal_constraint(descent.x[1], 0.0)  # impact
     descent.free_duration(0.5, 100.0)
     mp.link(ascent, descent)
-    mp.minimize(-descent.at_tf(descent.x[0]))
+    mp.minimize(-descent.at_tf(descent.x[0]), **km)
     return mp
 
 
