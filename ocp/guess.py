@@ -117,8 +117,7 @@ class DefaultChoices:
     @property
     def symbols(self) -> list[ca.SX]:
         """``[use, val]`` as two column vectors."""
-        col = (lambda xs: ca.vertcat(*xs) if xs else ca.SX(0, 1))
-        return [col(self.use), col(self.val)]
+        return [_column(self.use), _column(self.val)]
 
     def bound_function(self, p: ca.SX) -> ca.Function:
         """``p -> (lower, upper)`` of every registered quantity.
@@ -131,6 +130,10 @@ class DefaultChoices:
         lo = ca.vertcat(*[b[0] for b in self.bounds]) if self.bounds else ca.SX(0, 1)
         hi = ca.vertcat(*[b[1] for b in self.bounds]) if self.bounds else ca.SX(0, 1)
         return ca.Function("default_bounds", [p], [lo, hi])
+
+
+def _column(xs: list[ca.SX]) -> ca.SX:
+    return ca.SX(ca.vertcat(*xs)) if xs else ca.SX(0, 1)
 
 
 def candidates(lo: float, hi: float, ref: tuple[float, float] | None) -> list[float]:
