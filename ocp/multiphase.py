@@ -32,7 +32,14 @@ import numpy as np
 from numpy import ndarray
 
 from .errors import ProblemDefinitionError
-from .problem import INF, Bound, OptimalControlProblem, Shared, objective_ref
+from .problem import (
+    INF,
+    Bound,
+    OptimalControlProblem,
+    Shared,
+    constraint_ref,
+    objective_ref,
+)
 from .symbols import Constraint, check_bounds, require_only, to_sx
 
 PhaseRef = OptimalControlProblem | int
@@ -166,7 +173,7 @@ class MultiPhaseProblem:
             self.time_links.append((ia, ib))
 
     def link_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                        name: str | None = None) -> Constraint:
+                        name: str | None = None, *, ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` on end-point values of any phases.
 
         ``expr`` uses ``phase.at_t0(...)``, ``phase.at_tf(...)``,
@@ -182,6 +189,8 @@ class MultiPhaseProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr`` (see :meth:`OptimalControlProblem.path_constraint`).
         """
         e = to_sx(expr, "link constraint")
         label = name or f"link{len(self.links)}"
@@ -192,7 +201,7 @@ class MultiPhaseProblem:
         hi = ca.repmat(self._shared.bound(upper, f"{label} upper bound"), e.numel(), 1)
         for i in range(e.numel()):
             check_bounds(lo[i], hi[i], f"link constraint {label!r}")
-        c = Constraint(e, lo, hi, label)
+        c = Constraint(e, lo, hi, label, constraint_ref(ref, f"link constraint {label!r}"))
         self.links.append(c)
         return c
 
@@ -294,7 +303,7 @@ class MultiPhaseProblem:
             for kind, store in (("initial", ph.initial), ("terminal", ph.terminal)):
                 for c in store:
                     e = ph.at_t0(c.expr) if kind == "initial" else ph.at_tf(c.expr)
-                    out.append((i, kind, Constraint(e, c.lower, c.upper, c.name)))
+                    out.append((i, kind, Constraint(e, c.lower, c.upper, c.name, c.ref)))
             out += [(i, "boundary", c) for c in ph.boundary]
             if tm.span is not None:
                 out.append((i, "time", Constraint(ph.T - ph.t0, ca.SX(tm.span[0]),

@@ -171,8 +171,7 @@ class Transcription:
             if lay.it0 is not None:
                 sb.set_entries(lay.it0, sb.ref("time", None, *tm.t0_bounds, tm.t0_guess))
             if "path" in lay.blocks:
-                _, plo, phi = ph.path_stack()
-                rs = [sb.row_scale_from_bounds(plo[j], phi[j]) for j in range(plo.numel())]
+                rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
                 sl = lay.blocks["path"]
                 sb.r[sl] = np.tile(rs, (sl.stop - sl.start) // max(len(rs), 1))
         sh = mp._shared
@@ -182,8 +181,7 @@ class Transcription:
                                                       sh.var_guess.get(name)))
         for i, kind, cs in self._groups:
             sl = (self.link_blocks if i == -1 else self.layouts[i].blocks)[kind]
-            rs = [sb.row_scale_from_bounds(c.lower[j], c.upper[j])
-                  for c in cs for j in range(c.expr.numel())]
+            rs = [sb.row_scale(c, j) for c in cs for j in range(c.expr.numel())]
             sb.r[sl] = rs
         if "objective" not in self.scaling_options["refs"] and sh.objective_ref is not None:
             self.scaling_options["refs"]["objective"] = (0.0, sh.objective_ref)

@@ -151,11 +151,24 @@ def objective_ref(ref: float | None) -> float | None:
     ref : float or None
         The objective's typical magnitude.
     """
+    return constraint_ref(ref, "minimize")
+
+
+def constraint_ref(ref: float | None, what: str) -> float | None:
+    """A checked constraint reference (finite, positive) or None.
+
+    Parameters
+    ----------
+    ref : float or None
+        The constraint's typical size.
+    what : str
+        Named in the error.
+    """
     if ref is None:
         return None
-    r = finite_number(ref, "minimize: ref")
+    r = finite_number(ref, f"{what}: ref")
     if not r > 0:
-        raise ProblemDefinitionError(f"minimize: ref must be positive, got {r:g}")
+        raise ProblemDefinitionError(f"{what}: ref must be positive, got {r:g}")
     return r
 
 
@@ -405,7 +418,8 @@ class OptimalControlProblem:
 
     # ------------------------------------------------------------ constraints
     def _constraint(self, store: list[Constraint], expr: Any, lower: Bound,
-                    upper: Bound | None, name: str | None, kind: str) -> Constraint:
+                    upper: Bound | None, name: str | None, kind: str,
+                    ref: float | None = None) -> Constraint:
         if upper is None:
             upper = lower  # one value: an equality
         e = to_sx(expr, f"{kind} constraint")
@@ -424,12 +438,13 @@ class OptimalControlProblem:
                          "a path constraint is an expression of x, u, t, parameters")
         else:
             require_only(self._to_boundary(e, kind), self.boundary_symbols(), what)
-        c = Constraint(e, lo, hi, label)
+        c = Constraint(e, lo, hi, label, constraint_ref(ref, what))
         store.append(c)
         return c
 
     def path_constraint(self, expr: Any, lower: Bound = -INF, upper: Bound = INF,
-                        name: str | None = None) -> Constraint:
+                        name: str | None = None, *,
+                        ref: float | None = None) -> Constraint:
         """``lower <= expr(x, u, t, p) <= upper`` along the trajectory.
 
         Imposed at the shooting nodes (multiple shooting; also at the
@@ -445,11 +460,15 @@ class OptimalControlProblem:
             Bounds (``-inf``/``inf`` for none).
         name : str, optional
             Used in messages and in ``sol.violations``.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
-        return self._constraint(self.path, expr, lower, upper, name, "path")
+        return self._constraint(self.path, expr, lower, upper, name, "path", ref)
 
     def initial_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                           name: str | None = None) -> Constraint:
+                           name: str | None = None, *,
+                           ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` at ``t0`` (equality if ``upper`` is omitted).
 
         States and controls in ``expr`` stand for their values at ``t0``.
@@ -465,11 +484,15 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
-        return self._constraint(self.initial, expr, lower, upper, name, "initial")
+        return self._constraint(self.initial, expr, lower, upper, name, "initial", ref)
 
     def terminal_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                            name: str | None = None) -> Constraint:
+                            name: str | None = None, *,
+                            ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` at ``T`` (equality if ``upper`` is omitted).
 
         States and controls in ``expr`` stand for their values at ``T``.
@@ -485,11 +508,15 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
-        return self._constraint(self.terminal, expr, lower, upper, name, "terminal")
+        return self._constraint(self.terminal, expr, lower, upper, name, "terminal", ref)
 
     def boundary_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                            name: str | None = None) -> Constraint:
+                            name: str | None = None, *,
+                            ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` on end-point values (equality if ``upper`` is omitted).
 
         ``expr`` is built from :meth:`at_t0`, :meth:`at_tf`, :meth:`integral`,
@@ -505,16 +532,20 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
         e = to_sx(expr, "boundary constraint")
         if ca.depends_on(e, ca.vertcat(self.x, self.u, self.t)):
             raise ProblemDefinitionError(
                 "boundary_constraint: a bare state, control or t is ambiguous here; wrap it "
                 "in p.at_t0(...) or p.at_tf(...)")
-        return self._constraint(self.boundary, e, lower, upper, name, "boundary")
+        return self._constraint(self.boundary, e, lower, upper, name, "boundary", ref)
 
     def integral_constraint(self, integrand: Any, lower: Bound, upper: Bound | None = None,
-                            name: str | None = None) -> Constraint:
+                            name: str | None = None, *,
+                            ref: float | None = None) -> Constraint:
         """``lower <= int_t0^T integrand dt <= upper`` (an isoperimetric constraint).
 
         Parameters
@@ -527,9 +558,12 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
         return self.boundary_constraint(self.integral(integrand), lower, upper,
-                                        name or f"integral{len(self.integrals)}")
+                                        name or f"integral{len(self.integrals)}", ref=ref)
 
     # ------------------------------------------------------- end-point symbols
     def at_t0(self, expr: Any) -> ca.SX:

@@ -22,8 +22,10 @@ Where the numbers come from (``scaling="auto"``, the default):
   their bounds or guess;
 * defect rows (``continuity``, ``collocation``) are divided by their state's
   ``ref``, so a scaled defect is the defect of the scaled state;
-* other constraint rows are divided by the largest finite magnitude of their
-  bounds;
+* other constraint rows by their ``ref=`` if given (``path_constraint(...,
+  ref=)``, ``initial_constraint``, ``terminal_constraint``,
+  ``boundary_constraint``, ``integral_constraint``, ``link_constraint``), else by
+  the largest finite magnitude of their bounds;
 * the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
   starting point of each solve.
 
@@ -53,7 +55,7 @@ import numpy as np
 
 from .errors import ProblemDefinitionError
 from .problem import OptimalControlProblem, scale_ref
-from .symbols import constant
+from .symbols import Constraint, constant
 
 AUTO_RANGE = (1e-2, 1e2)  # automatic references inside this range are not applied
 SCALING_MODES = ("auto", "none")
@@ -230,6 +232,22 @@ class ScalingBuilder:
             ``(ref0, ref)``.
         """
         self.c[index], self.D[index] = ref
+
+    def row_scale(self, c: Constraint, row: int) -> float:
+        """``r`` of row ``row`` of constraint ``c``: ``1 / c.ref`` if given, else from bounds.
+
+        Parameters
+        ----------
+        c : Constraint
+            The constraint.
+        row : int
+            Which of its rows.
+        """
+        if not self.opt["enabled"]:
+            return 1.0
+        if c.ref is not None:
+            return 1.0 / c.ref
+        return self.row_scale_from_bounds(c.lower[row], c.upper[row])
 
     def row_scale_from_bounds(self, lo: Any, hi: Any) -> float:
         """``r`` of a row from its bounds: 1 / their largest finite magnitude, if far from 1.
