@@ -17,17 +17,21 @@ Where the numbers come from (``scaling="auto"``, the default):
 
 * a state, control or decision variable: its ``ref``/``ref0`` if given (as
   dymos: the NLP sees ``(x - ref0) / ref``); else, if both bounds are finite
-  numbers, ``ref0 = lower`` and ``ref = upper - lower``; else the magnitude of its
-  default guess where that is a non-zero number; else 1. Free times likewise from
-  their bounds or guess;
+  numbers and not *loose* (a safety box like ``(1e-3, 1e4)``: spanning more than
+  100 guess magnitudes, or two non-zero bounds more than 100 apart),
+  ``ref0 = lower`` and ``ref = upper - lower``; else the magnitude of its default
+  guess where that is a non-zero number; else 1. Free times likewise from their
+  bounds or guess;
 * defect rows (``continuity``, ``collocation``) are divided by their state's
   ``ref``, so a scaled defect is the defect of the scaled state;
 * other constraint rows by their ``ref=`` if given (``path_constraint(...,
   ref=)``, ``initial_constraint``, ``terminal_constraint``,
   ``boundary_constraint``, ``integral_constraint``, ``link_constraint``), else by
-  the largest finite magnitude of their bounds;
+  the largest finite magnitude of their bounds (unless two non-zero bounds are
+  loose);
 * the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
-  starting point of each solve.
+  starting point of each solve when that exceeds 100 (never up: a small value at
+  the start may be small by accident).
 
 An automatic number is used only when it is far from 1 (outside
 :data:`AUTO_RANGE`): well-scaled problems -- every problem posed in
@@ -88,7 +92,9 @@ class Scaling:
         if self.objective_ref is not None:
             return self.objective_ref
         a = abs(f0)
-        return a if math.isfinite(a) and a > 0 and _far(a) else 1.0
+        # only down: a small objective at the start may be small by accident (a guess
+        # at rest, a cost that vanishes there), and scaling it up would blow it up
+        return a if math.isfinite(a) and a > AUTO_RANGE[1] else 1.0
 
     # ---------------------------------------------------------------- maps
     def x_to_scaled(self, w: np.ndarray) -> np.ndarray:
@@ -261,7 +267,7 @@ class ScalingBuilder:
             return 1.0
         mags = [abs(v) for v in (_number(lo), _number(hi))
                 if v is not None and math.isfinite(v) and v != 0.0]
-        if not mags:
+        if not mags or (len(mags) == 2 and _loose(*mags)):
             return 1.0
         m = max(mags)
         return 1.0 / m if _far(m) else 1.0
@@ -281,17 +287,31 @@ def _number(v: Any) -> float | None:
     return constant(v)
 
 
+LOOSE = 1e2  # bounds wider than this many guess magnitudes, or this ratio apart, are loose
+
+
 def _auto_ref(lo: Any, hi: Any, guess: Any) -> tuple[float, float]:
-    """From finite bounds ``(lo, hi - lo)``, else from the guess magnitude, else (0, 1)."""
+    """From finite bounds ``(lo, hi - lo)`` unless they are loose, else from the guess
+    magnitude, else (0, 1).
+
+    Bounds are *loose* -- a safety box such as ``(1e-3, 1e4)``, not a magnitude --
+    when they span more than :data:`LOOSE` times the guess magnitude, or when both
+    are non-zero and more than :data:`LOOSE` apart in magnitude.
+    """
     lv, hv = _number(lo), _number(hi)
-    if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
-            and hv > lv:
-        return lv, hv - lv
     vals = guess if isinstance(guess, tuple | list) else (guess,)
     nums = [abs(x) for x in (_number(g) for g in vals) if x is not None and math.isfinite(x)]
-    if nums and max(nums) > 0:
-        return 0.0, max(nums)
-    return 0.0, 1.0
+    g = max(nums) if nums else 0.0
+    if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
+            and hv > lv and not _loose(lv, hv) and not (g > 0 and hv - lv > LOOSE * g):
+        return lv, hv - lv
+    return (0.0, g) if g > 0 else (0.0, 1.0)
+
+
+def _loose(a: float, b: float) -> bool:
+    """Both non-zero and more than :data:`LOOSE` apart in magnitude."""
+    small, big = sorted((abs(a), abs(b)))
+    return small > 0 and big > LOOSE * small
 
 
 def phase_quantities(ph: OptimalControlProblem, starts: Any, ends: Any,

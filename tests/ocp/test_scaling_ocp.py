@@ -144,17 +144,20 @@ def test_automatic_references_from_bounds_only_when_far_from_one():
     p.initial_constraint(v, 0.0)
     p.terminal_constraint(x, 400.0)
     p.terminal_constraint(v, 0.0)
-    p.free_final_time(1.0, 1e3)
+    p.free_final_time(10.0, 1e3, guess=30.0)
     p.minimize_terminal(p.T)
     ms = MultipleShooting(p, nodes=20)
     lay, sc = ms.layout, ms.scaling
     assert np.all(sc.D[lay.iX][0::2] == 2e4) and np.all(sc.D[lay.iX][1::2] == 1.0)
-    assert sc.D[lay.iT] == 999.0 and sc.c[lay.iT] == 1.0
+    assert sc.D[lay.iT] == 990.0 and sc.c[lay.iT] == 10.0
     sol = ms.solve()
     assert sol.T == pytest.approx(2 * math.sqrt(400.0), rel=1e-8)  # closed form
     assert sol.x[-1, 0] == pytest.approx(400.0, rel=1e-10)  # metres, not [0, 1]
-    # a well-scaled problem keeps exactly the NLP it had
+    # a well-scaled problem keeps exactly the NLP it had; loose bounds (a safety box
+    # far wider than the guess) say nothing about magnitudes
     assert MultipleShooting(double_integrator(), nodes=10).scaling.is_identity()
+    p.free_final_time(1e-3, 1e4, guess=30.0)
+    assert MultipleShooting(p, nodes=20).scaling.D[lay.iT] == 1.0
 
 
 # ------------------------------------------------------------------ invisible in the solution
