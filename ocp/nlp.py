@@ -307,7 +307,11 @@ class Transcription:
     def default_guess(self, params: dict[str, float] | None = None) -> np.ndarray:
         """The default initial guess (see :mod:`ocp.guess`) for these parameter values.
 
-        Without ``params`` the parameters are taken as 0 (non-finite entries become 0).
+        A bare default (the bounds' midpoint, or 0 clipped into them) that makes
+        the dynamics or constraints non-finite is replaced by another point within
+        the bounds where one helps (:func:`ocp.guess.repair_default`). Without
+        ``params`` the parameters are taken as 0 (non-finite entries become 0, no
+        replacement).
 
         Parameters
         ----------
