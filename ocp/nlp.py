@@ -151,6 +151,13 @@ class Transcription:
     def _scaling(self, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
         """The constants of the scaled NLP (see :mod:`ocp.scaling`)."""
         mp = self.multiphase
+        known = {"objective", "time", *mp.var_names}
+        for ph in mp.phases:
+            known |= {*ph.state_names, *ph.control_names}
+        unknown = sorted(set(self.scaling_options["refs"]) - known)
+        if unknown:
+            raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
+                                         "variables of the problem (nor 'objective', 'time')")
         sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
         for ph, lay, tm, (a, b) in zip(mp.phases, self.layouts, self.times, ends, strict=True):
             states, controls = phase_quantities(ph, a, b)

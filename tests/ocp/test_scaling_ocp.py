@@ -263,3 +263,5 @@ def test_bad_objective_ref_and_scaling_argument_are_rejected():
         MultipleShooting(p, nodes=5, scaling="fast")
     with pytest.raises(ProblemDefinitionError, match=r"scaling\['x'\].*ref"):
         MultipleShooting(p, nodes=5, scaling={"x": -1.0})
+    with pytest.raises(ProblemDefinitionError, match=r"\['xx'\] are not states"):
+        MultipleShooting(p, nodes=5, scaling={"xx": 10.0})
