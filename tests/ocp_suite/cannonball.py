@@ -6,9 +6,9 @@ Source: the dymos documentation, "Multi-Phase Cannonball" (OpenMDAO/dymos,
 asserts the range to 1e-4): a solid iron ball (density 7870 kg/m^3, drag
 coefficient 0.5) of free radius 0.01 m <= R <= 0.1 m is fired with at most
 400 kJ of muzzle energy from r = 0, h = 0 (the documentation's prose says
-h0 = 100 m, but its code fixes the initial altitude at the guess value 0, and
-the published range belongs to h0 = 0; the independent check below agrees with
-it only for h0 = 0); the ascent ends at apogee (flight-path angle 0), the
+h0 = 100 m, but its code fixes the initial altitude at its guess, 0, and the
+published range belongs to h0 = 0: the independent check below, from h0 = 0,
+is 9e-5 from it, within dymos' own 1e-4); the ascent ends at apogee (flight-path angle 0), the
 descent at impact (h = 0); maximise the range. Air density: the 1976 US
 standard atmosphere table of dymos (``USatm1976Data``, feet and slug/ft^3),
 interpolated linearly as in the documentation's ODE. Published optimum: range
@@ -22,9 +22,11 @@ non-finite.
 Independent check (:func:`cannonball_exact`): the ball's flight is an initial
 value problem in the two design numbers (radius, launch angle), with the muzzle
 energy at its bound (more energy never shortens the flight); scipy's
-``solve_ivp`` (DOP853, rtol 1e-12) integrates to impact with a terminal event
-and ``scipy.optimize.minimize`` maximises the range over the two numbers. No
-part of ``ocp`` is used.
+``solve_ivp`` (DOP853, rtol 1e-11, restarted at every knot of the density table
+so each piece is smooth) integrates to impact with a terminal event, and
+``scipy.optimize.minimize`` (Nelder-Mead) maximises the range over the two
+numbers: 3182.95439 m at R = 0.0418694 m, 32.02 degrees. No part of ``ocp`` is
+used.
 """
 
 from __future__ import annotations
