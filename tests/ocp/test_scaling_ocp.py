@@ -178,10 +178,15 @@ def least_effort(**refs: dict) -> OptimalControlProblem:
     return p
 
 
-@pytest.fixture(scope="module")
-def pair():
-    plain = MultipleShooting(least_effort(), nodes=40, scaling="none").solve({"d": 2.0})
-    scaled = MultipleShooting(least_effort(**REFS), nodes=40).solve({"d": 2.0})
+@pytest.fixture(scope="module", params=["multiple_shooting", "collocation"])
+def pair(request):
+    def make(p, **kw):
+        if request.param == "collocation":
+            return Collocation(p, intervals=10, **kw)
+        return MultipleShooting(p, nodes=40, **kw)
+
+    plain = make(least_effort(), scaling="none").solve({"d": 2.0})
+    scaled = make(least_effort(**REFS)).solve({"d": 2.0})
     return plain, scaled
 
 
