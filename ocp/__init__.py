@@ -12,7 +12,10 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.shooting`, :mod:`ocp.collocation` -- the per-phase discretisations;
 * :mod:`ocp.integrators`   -- RK4 and CVODES interval integrators;
 * :mod:`ocp.mesh`          -- error estimate and h-refinement of a collocation mesh;
-* :mod:`ocp.guess`         -- default initial guesses and non-finite-guess diagnosis;
+* :mod:`ocp.scaling`       -- scaling of the NLP (references from ``ref=``, bounds,
+  guesses), invisible in the solution;
+* :mod:`ocp.guess`         -- default initial guesses (moved off non-finite points) and
+  non-finite-guess diagnosis;
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.gridview`      -- how a solution's grid is read (collocation on its mesh,

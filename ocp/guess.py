@@ -9,12 +9,21 @@ or 0 clipped into the bounds. Controls and decision variables take their
 ``guess=``, else the midpoint of finite bounds, else 0 clipped into them. All
 of these are symbolic in the parameters, so the guess follows new parameter
 values without a rebuild.
+
+Where that default (a state with neither end fixed nor guessed, a control or a
+decision variable without ``guess=``) makes the dynamics or constraints
+non-finite -- ``v = 0`` in ``gamma' = -g cos(gamma) / v`` -- the solve tries
+other points within the bounds, one quantity at a time (:func:`repair_default`):
+its ``ref0 + ref`` and ``ref0 - ref`` when it has a scaling reference, the
+quarter points of finite bounds, then +-1, +-10, +-100 clipped into the bounds;
+only if none makes everything finite is the culprit named (:class:`GuessError`).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
@@ -68,8 +77,130 @@ def midpoint(lo: ca.SX, hi: ca.SX) -> ca.SX:
     return ca.fmin(ca.fmax(ca.SX(0), lo), hi)
 
 
-def state_ends(ph: OptimalControlProblem,
-               previous: dict[str, ca.SX] | None = None) -> tuple[ca.SX, ca.SX]:
+@dataclass
+class DefaultChoices:
+    """Quantities whose guess is a bare default, with a switch to replace it.
+
+    Each registered quantity gets two symbols: ``use[i]`` (0 or 1) and
+    ``val[i]``; its default becomes ``val[i]`` clipped into its bounds when
+    ``use[i]`` is 1. The guess function takes ``use`` and ``val`` after the
+    parameters, so a replacement needs no rebuild.
+    """
+
+    names: list[str] = field(default_factory=list)
+    bounds: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
+    refs: list[tuple[float, float] | None] = field(default_factory=list)
+    use: list[ca.SX] = field(default_factory=list)
+    val: list[ca.SX] = field(default_factory=list)
+
+    def default(self, name: str, lo: ca.SX, hi: ca.SX,
+                ref: tuple[float, float] | None = None) -> ca.SX:
+        """The default of a quantity (the bounds' midpoint), replaceable.
+
+        Parameters
+        ----------
+        name : str
+            Named in messages.
+        lo, hi : SX
+            Its bounds.
+        ref : tuple, optional
+            Its ``(ref0, ref)`` scaling reference, if the user gave one.
+        """
+        u, v = ca.SX.sym(f"use_{len(self.names)}"), ca.SX.sym(f"val_{len(self.names)}")
+        self.names.append(name)
+        self.bounds.append((lo, hi))
+        self.refs.append(ref)
+        self.use.append(u)
+        self.val.append(v)
+        return ca.if_else(u, ca.fmin(ca.fmax(v, lo), hi), midpoint(lo, hi))
+
+    @property
+    def symbols(self) -> list[ca.SX]:
+        """``[use, val]`` as two column vectors."""
+        return [_column(self.use), _column(self.val)]
+
+    def bound_function(self, p: ca.SX) -> ca.Function:
+        """``p -> (lower, upper)`` of every registered quantity.
+
+        Parameters
+        ----------
+        p : SX
+            The parameters.
+        """
+        lo = ca.vertcat(*[b[0] for b in self.bounds]) if self.bounds else ca.SX(0, 1)
+        hi = ca.vertcat(*[b[1] for b in self.bounds]) if self.bounds else ca.SX(0, 1)
+        return ca.Function("default_bounds", [p], [lo, hi])
+
+
+def _column(xs: list[ca.SX]) -> ca.SX:
+    return ca.SX(ca.vertcat(*xs)) if xs else ca.SX(0, 1)
+
+
+def candidates(lo: float, hi: float, ref: tuple[float, float] | None) -> list[float]:
+    """Replacement values to try for a default, within ``[lo, hi]``, best first.
+
+    Parameters
+    ----------
+    lo, hi : float
+        The bounds (possibly infinite).
+    ref : tuple or None
+        ``(ref0, ref)`` if the user gave a scaling reference.
+    """
+    out: list[float] = []
+    if ref is not None:
+        out += [ref[0] + ref[1], ref[0] - ref[1]]
+    if math.isfinite(lo) and math.isfinite(hi):
+        out += [lo + (hi - lo) / 4, lo + 3 * (hi - lo) / 4]
+    out += [s * m for m in (1.0, 10.0, 100.0) for s in (1.0, -1.0)]
+    seen: list[float] = []
+    for v in out:
+        c = min(max(v, lo), hi)
+        if c not in seen:
+            seen.append(c)
+    return seen
+
+
+def repair_default(count_nonfinite: Callable[[np.ndarray, np.ndarray], int],
+                   lo: np.ndarray, hi: np.ndarray,
+                   refs: list[tuple[float, float] | None]) -> tuple[np.ndarray, np.ndarray]:
+    """Replace defaults, one quantity at a time, until the guess is finite.
+
+    Greedy: for each quantity in turn, the candidate (see :func:`candidates`)
+    leaving the fewest non-finite entries is kept if it improves on the current
+    count; it stops as soon as nothing is non-finite.
+
+    Parameters
+    ----------
+    count_nonfinite : callable
+        ``(use, val) -> number of non-finite entries`` of the NLP at that guess.
+    lo, hi : ndarray
+        Bounds of the quantities.
+    refs : list
+        Their scaling references, or None.
+
+    Returns
+    -------
+    use, val : ndarray
+        The replacements (``use`` all 0 if none helped).
+    """
+    n = lo.size
+    use, val = np.zeros(n), np.zeros(n)
+    best = count_nonfinite(use, val)
+    for i in range(n):
+        if best == 0:
+            break
+        keep = (0.0, 0.0)
+        for c in candidates(float(lo[i]), float(hi[i]), refs[i]):
+            use[i], val[i] = 1.0, c
+            k = count_nonfinite(use, val)
+            if k < best:
+                best, keep = k, (1.0, c)
+        use[i], val[i] = keep
+    return use, val
+
+
+def state_ends(ph: OptimalControlProblem, previous: dict[str, ca.SX] | None = None,
+               choices: DefaultChoices | None = None) -> tuple[ca.SX, ca.SX]:
     """Start and end guesses of every state (SX vectors in the parameters).
 
     Parameters
@@ -78,6 +209,9 @@ def state_ends(ph: OptimalControlProblem,
         The phase.
     previous : dict, optional
         End guesses of the phase this one is linked from, by state name.
+    choices : DefaultChoices, optional
+        Registers the states whose guess is a bare default, so that a solve
+        can replace it (see :func:`repair_default`).
     """
     others_x0 = [*ph._u0, *ph._xT, *ph._uT, ph.t0, ph.T, *[s for s, _ in ph.integrals],
                  *ph._shared.vars]
@@ -99,7 +233,9 @@ def state_ends(ph: OptimalControlProblem,
             if a is None and previous is not None and name in previous:
                 a = previous[name]
             if a is None and b is None:
-                a = b = midpoint(lo, hi)
+                a = b = (midpoint(lo, hi) if choices is None else
+                         choices.default(f"state {name!r} of phase {ph.name!r}", lo, hi,
+                                         ph.state_ref.get(name)))
             a = b if a is None else a
             b = a if b is None else b
         starts.append(ca.fmin(ca.fmax(a, lo), hi))
@@ -107,35 +243,50 @@ def state_ends(ph: OptimalControlProblem,
     return ca.vertcat(*starts), ca.vertcat(*ends)
 
 
-def control_guess(ph: OptimalControlProblem) -> ca.SX:
+def control_guess(ph: OptimalControlProblem, choices: DefaultChoices | None = None) -> ca.SX:
     """Guess of every control (SX vector in the parameters).
 
     Parameters
     ----------
     ph : OptimalControlProblem
         The phase.
+    choices : DefaultChoices, optional
+        Registers the controls without a guess (see :func:`state_ends`).
     """
     out = []
     for name in ph.control_names:
         lo, hi = ph.control_bounds[name]
         g = ph.control_guess.get(name)
-        out.append(midpoint(lo, hi) if g is None else ca.fmin(ca.fmax(g, lo), hi))
+        if g is not None:
+            out.append(ca.fmin(ca.fmax(g, lo), hi))
+        elif choices is None:
+            out.append(midpoint(lo, hi))
+        else:
+            out.append(choices.default(f"control {name!r} of phase {ph.name!r}", lo, hi,
+                                       ph.control_ref.get(name)))
     return ca.vertcat(*out) if out else ca.SX(0, 1)
 
 
-def variable_guess(shared: Shared) -> ca.SX:
+def variable_guess(shared: Shared, choices: DefaultChoices | None = None) -> ca.SX:
     """Guess of every decision variable (SX vector in the parameters).
 
     Parameters
     ----------
     shared : Shared
         Parameters and variables of the problem.
+    choices : DefaultChoices, optional
+        Registers the variables without a guess (see :func:`state_ends`).
     """
     out = []
     for name in shared.var_names:
         lo, hi = shared.var_bounds[name]
         g = shared.var_guess.get(name)
-        out.append(midpoint(lo, hi) if g is None else ca.fmin(ca.fmax(g, lo), hi))
+        if g is not None:
+            out.append(ca.fmin(ca.fmax(g, lo), hi))
+        elif choices is None:
+            out.append(midpoint(lo, hi))
+        else:
+            out.append(choices.default(f"variable {name!r}", lo, hi, shared.var_ref.get(name)))
     return ca.vertcat(*out) if out else ca.SX(0, 1)
 
 

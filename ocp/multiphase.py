@@ -32,7 +32,14 @@ import numpy as np
 from numpy import ndarray
 
 from .errors import ProblemDefinitionError
-from .problem import INF, Bound, OptimalControlProblem, Shared
+from .problem import (
+    INF,
+    Bound,
+    OptimalControlProblem,
+    Shared,
+    constraint_ref,
+    objective_ref,
+)
 from .symbols import Constraint, check_bounds, require_only, to_sx
 
 PhaseRef = OptimalControlProblem | int
@@ -108,7 +115,8 @@ class MultiPhaseProblem:
         return self._anchor.parameter(name)
 
     def variable(self, name: str, lower: Bound = -INF, upper: Bound = INF,
-                 guess: Bound | None = None) -> ca.SX:
+                 guess: Bound | None = None, *, ref: float | None = None,
+                 ref0: float | None = None) -> ca.SX:
         """A decision parameter shared by all phases (see
         :meth:`OptimalControlProblem.variable`).
 
@@ -120,8 +128,10 @@ class MultiPhaseProblem:
             Bounds.
         guess : float or parameter expression, optional
             Initial guess.
+        ref, ref0 : float, optional
+            Scaling (see :meth:`OptimalControlProblem.state`).
         """
-        return self._anchor.variable(name, lower, upper, guess)
+        return self._anchor.variable(name, lower, upper, guess, ref=ref, ref0=ref0)
 
     def _index(self, ph: PhaseRef) -> int:
         if isinstance(ph, int):
@@ -170,7 +180,7 @@ class MultiPhaseProblem:
             self.time_links.append((ia, ib))
 
     def link_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                        name: str | None = None) -> Constraint:
+                        name: str | None = None, *, ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` on end-point values of any phases.
 
         ``expr`` uses ``phase.at_t0(...)``, ``phase.at_tf(...)``,
@@ -186,6 +196,8 @@ class MultiPhaseProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr`` (see :meth:`OptimalControlProblem.path_constraint`).
         """
         e = to_sx(expr, "link constraint")
         label = name or f"link{len(self.links)}"
@@ -196,18 +208,24 @@ class MultiPhaseProblem:
         hi = ca.repmat(self._shared.bound(upper, f"{label} upper bound"), e.numel(), 1)
         for i in range(e.numel()):
             check_bounds(lo[i], hi[i], f"link constraint {label!r}")
-        c = Constraint(e, lo, hi, label)
+        c = Constraint(e, lo, hi, label, constraint_ref(ref, f"link constraint {label!r}"))
         self.links.append(c)
         return c
 
-    def minimize(self, expr: Any) -> None:
+    def minimize(self, expr: Any, *, ref: float | None = None) -> None:
         """Add an end-point cost over any phases (``phase.at_tf(...)``, ``phase.T``, ...).
 
         Parameters
         ----------
         expr : SX
             Expression of end-point symbols of any phases, parameters and variables.
+        ref : float, optional
+            Typical magnitude of the objective (see
+            :meth:`OptimalControlProblem.minimize`).
         """
+        r = objective_ref(ref)
+        if r is not None:
+            self._shared.objective_ref = r
         e = to_sx(expr, "minimize")
         require_only(e, self.boundary_symbols(), "minimize term",
                      "use phase.at_t0(...) / phase.at_tf(...)")
@@ -292,7 +310,7 @@ class MultiPhaseProblem:
             for kind, store in (("initial", ph.initial), ("terminal", ph.terminal)):
                 for c in store:
                     e = ph.at_t0(c.expr) if kind == "initial" else ph.at_tf(c.expr)
-                    out.append((i, kind, Constraint(e, c.lower, c.upper, c.name)))
+                    out.append((i, kind, Constraint(e, c.lower, c.upper, c.name, c.ref)))
             out += [(i, "boundary", c) for c in ph.boundary]
             if tm.span is not None:
                 out.append((i, "time", Constraint(ph.T - ph.t0, ca.SX(tm.span[0]),

@@ -11,6 +11,11 @@ Decision vector: the phases' blocks in order, then the decision variables.
 Constraint vector: each phase's blocks (``continuity``, ``path`` /
 ``collocation``, ``path_inner``, then its ``initial``, ``terminal``,
 ``boundary`` and ``time`` constraints), then the ``link`` constraints.
+
+Ipopt solves a scaled copy of this NLP (:mod:`ocp.scaling`): ``w = D w_s + c``,
+rows and objective multiplied by constants; every result is mapped back, so
+``sol.w``, ``sol.objective``, ``lam_g``, ``lam_x`` and ``multipliers`` are in the
+user's units whatever the scaling.
 """
 
 from __future__ import annotations
@@ -24,9 +29,18 @@ import numpy as np
 from .compiled import CompiledPhase
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
 from .errors import InfeasibleError, ProblemDefinitionError, SolveError
-from .guess import control_guess, diagnose_nonfinite, raise_if_nonfinite, state_ends, variable_guess
+from .guess import (
+    DefaultChoices,
+    control_guess,
+    diagnose_nonfinite,
+    raise_if_nonfinite,
+    repair_default,
+    state_ends,
+    variable_guess,
+)
 from .multiphase import MultiPhaseProblem, as_multiphase
 from .problem import OptimalControlProblem
+from .scaling import Scaling, ScalingBuilder, check_scaling, phase_quantities
 from .solution import Solution
 from .symbols import positive_int
 from .trajectory import Trajectory
@@ -59,6 +73,13 @@ class Transcription:
         Allowed violation, relative to ``max(1, |bound|)``.
     verify_points : int
         Check points per interval.
+    scaling : {"auto", "none"} or dict
+        How the NLP is scaled for Ipopt (results are always reported in the
+        user's units): ``"auto"`` uses the problem's ``ref``/``ref0`` and
+        ``minimize(..., ref=)`` and, where none is given, references from bounds
+        and guesses that are far from 1 (see :mod:`ocp.scaling`); ``"none"``
+        solves the NLP exactly as posed; a dict overrides references by name
+        (``{"h": 1e4, "v": (0, 300), "objective": 1e3, "time": 10}``).
 
     Attributes
     ----------
@@ -71,8 +92,9 @@ class Transcription:
     def __init__(self, problem: OptimalControlProblem | MultiPhaseProblem,
                  ipopt_options: dict | None = None, expand: bool = False,
                  verify: str = "warn", verify_tol: float = 1e-6,
-                 verify_points: int = 10) -> None:
+                 verify_points: int = 10, scaling: Any = "auto") -> None:
         self.multiphase = as_multiphase(problem)
+        self.scaling_options = check_scaling(scaling)
         self.multiphase.validate()
         if verify not in VERIFY_MODES:
             raise ProblemDefinitionError(f"verify must be one of {VERIFY_MODES}, got {verify!r}")
@@ -103,21 +125,90 @@ class Transcription:
         V = w[self.iV]
         pieces: list[PhaseNLP] = []
         ends: list[tuple[ca.SX, ca.SX]] = []
+        plain: list[tuple[ca.SX, ca.SX]] = []  # the same without replaceable defaults
+        choices = DefaultChoices()
         for i, (disc, ph) in enumerate(zip(self.phases, mp.phases, strict=True)):
-            a, b = state_ends(ph, self._previous_ends(i, ends))
+            a, b = state_ends(ph, self._previous_ends(i, ends), choices)
             ends.append((a, b))
+            plain.append(state_ends(ph, self._previous_ends(i, plain)))
             wb = w[self.offsets[i]:self.offsets[i] + sizes[i]]
-            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph)))
+            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph, choices)))
         g, lbg, ubg, J_end = self._constraints(pieces, P, V)
         J = J_end + sum(pn.lagrange for pn in pieces)
         lbw = ca.vertcat(*[pn.lbw for pn in pieces], *self._var_bounds(0))
         ubw = ca.vertcat(*[pn.ubw for pn in pieces], *self._var_bounds(1))
-        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared))
+        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared, choices))
         self._bounds = ca.Function("bounds", [mp.p], [lbw, ubw, lbg, ubg])
-        self._guess = ca.Function("guess", [mp.p], [w0])
+        self._guess = ca.Function("guess", [mp.p, *choices.symbols], [w0])
+        self._choices = choices
+        self._choice_bounds = choices.bound_function(mp.p)
         self._nlp = {"x": w, "p": P, "f": J, "g": g}
         self.n_w, self.n_g = nw, int(g.numel())
+        self.scaling = self._scaling(plain)
+        self._scaled = self._scaled_nlp()
         self.n_builds += 1
+
+    def _scaling(self, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
+        """The constants of the scaled NLP (see :mod:`ocp.scaling`)."""
+        mp = self.multiphase
+        known = {"objective", "time", *mp.var_names}
+        for ph in mp.phases:
+            known |= {*ph.state_names, *ph.control_names}
+        unknown = sorted(set(self.scaling_options["refs"]) - known)
+        if unknown:
+            raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
+                                         "variables of the problem (nor 'objective', 'time')")
+        sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
+        for ph, lay, tm, (a, b) in zip(mp.phases, self.layouts, self.times, ends, strict=True):
+            states, controls = phase_quantities(ph, a, b)
+            for k, (name, user, lo, hi, guess) in enumerate(states):
+                ref = sb.ref(name, user, lo, hi, guess)
+                for sl in (lay.iX, lay.iZ):
+                    if sl is not None:
+                        sb.set_entries(np.arange(sl.start, sl.stop)[k::ph.nx], ref)
+                for kind in ("continuity", "collocation"):  # defects: state fastest
+                    if kind in lay.blocks:
+                        rows = np.arange(lay.blocks[kind].start, lay.blocks[kind].stop)
+                        sb.r[rows[k::ph.nx]] = 1.0 / ref[1]
+            for k, (name, user, lo, hi, guess) in enumerate(controls):
+                sb.set_entries(np.arange(lay.iU.start, lay.iU.stop)[k::ph.nu],
+                               sb.ref(name, user, lo, hi, guess))
+            if lay.iT is not None:
+                sb.set_entries(lay.iT, sb.ref("time", None, *tm.T_bounds, tm.T_guess))
+            if lay.it0 is not None:
+                sb.set_entries(lay.it0, sb.ref("time", None, *tm.t0_bounds, tm.t0_guess))
+            if "path" in lay.blocks:
+                rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
+                sl = lay.blocks["path"]
+                sb.r[sl] = np.tile(rs, (sl.stop - sl.start) // max(len(rs), 1))
+        sh = mp._shared
+        for k, name in enumerate(sh.var_names):
+            sb.set_entries(self.iV.start + k, sb.ref(name, sh.var_ref.get(name),
+                                                      *sh.var_bounds[name],
+                                                      sh.var_guess.get(name)))
+        for i, kind, cs in self._groups:
+            sl = (self.link_blocks if i == -1 else self.layouts[i].blocks)[kind]
+            rs = [sb.row_scale(c, j) for c in cs for j in range(c.expr.numel())]
+            sb.r[sl] = rs
+        if "objective" not in self.scaling_options["refs"] and sh.objective_ref is not None:
+            self.scaling_options["refs"]["objective"] = (0.0, sh.objective_ref)
+        return sb.build()
+
+    def _scaled_nlp(self) -> dict[str, ca.MX]:
+        """The NLP Ipopt solves: ``w = D w_s + c``, rows times ``r``, objective times ``kf``.
+
+        ``kf = 1 / f_ref`` is an NLP parameter (after the problem's), so the
+        objective scale can follow each solve's start without a rebuild.
+        """
+        nlp, sc = self._nlp, self.scaling
+        kf = ca.MX.sym("kf")
+        P = ca.vertcat(nlp["p"], kf)
+        if sc.is_identity():  # keep the graph (and Ipopt's iterations) as posed
+            return {"x": nlp["x"], "p": P, "f": kf * nlp["f"], "g": nlp["g"]}
+        ws = ca.MX.sym("ws", self.n_w)
+        f, g = ca.substitute([nlp["f"], nlp["g"]], [nlp["x"]],
+                             [ca.DM(sc.D) * ws + ca.DM(sc.c)])
+        return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
 
     def _previous_ends(self, i: int, ends: list) -> dict[str, ca.SX] | None:
         """End guesses of the phase that phase ``i`` is time-linked from, by state name."""
@@ -205,7 +296,7 @@ class Transcription:
             opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False,
                                     "error_on_fail": False, "expand": self.expand}
             name = f"{self.multiphase.name}_{self.method}"
-            nlp: Any = self._nlp
+            nlp: Any = self._scaled
             self._solvers[warm] = ca.nlpsol(name, "ipopt", nlp, opts)
         return self._solvers[warm]
 
@@ -223,7 +314,11 @@ class Transcription:
     def default_guess(self, params: dict[str, float] | None = None) -> np.ndarray:
         """The default initial guess (see :mod:`ocp.guess`) for these parameter values.
 
-        Without ``params`` the parameters are taken as 0 (non-finite entries become 0).
+        A bare default (the bounds' midpoint, or 0 clipped into them) that makes
+        the dynamics or constraints non-finite is replaced by another point within
+        the bounds where one helps (:func:`ocp.guess.repair_default`). Without
+        ``params`` the parameters are taken as 0 (non-finite entries become 0, no
+        replacement).
 
         Parameters
         ----------
@@ -231,9 +326,43 @@ class Transcription:
             Parameter values.
         """
         pv = self.param_vector(params) if params is not None else np.zeros(self.multiphase.np)
-        with np.errstate(all="ignore"):
-            w0 = np.array(self._guess(pv), dtype=float).ravel()
-        return w0 if params is not None else np.nan_to_num(w0, posinf=0.0, neginf=0.0)
+        n = len(self._choices.names)
+        if params is None:
+            with np.errstate(all="ignore"):
+                w0 = np.array(self._guess(pv, np.zeros(n), np.zeros(n)), dtype=float).ravel()
+            return np.nan_to_num(w0, posinf=0.0, neginf=0.0)
+        return self._repaired_default(pv)
+
+    def _repaired_default(self, pv: np.ndarray) -> np.ndarray:
+        """The default guess, with bare defaults replaced where they make the NLP
+        non-finite and another point within the bounds does not (see :mod:`ocp.guess`)."""
+        n = len(self._choices.names)
+
+        def at(use: np.ndarray, val: np.ndarray) -> np.ndarray:
+            with np.errstate(all="ignore"):
+                return np.array(self._guess(pv, use, val), dtype=float).ravel()
+
+        def count(use: np.ndarray, val: np.ndarray) -> int:
+            w = at(use, val)
+            if not np.all(np.isfinite(w)):
+                return w.size + self.n_g + 1
+            with np.errstate(all="ignore"):
+                f, g = (np.array(v, dtype=float) for v in self._nlp_function()(w, pv))
+            return int(np.sum(~np.isfinite(f)) + np.sum(~np.isfinite(g)))
+
+        zeros = np.zeros(n)
+        if n == 0 or count(zeros, zeros) == 0:
+            return at(zeros, zeros)
+        lo, hi = (np.array(v, dtype=float).ravel() for v in self._choice_bounds(pv))
+        use, val = repair_default(count, lo, hi, self._choices.refs)
+        return at(use, val)
+
+    def _nlp_function(self) -> ca.Function:
+        """``(w, p) -> (f, g)`` in the user's units (built on first use)."""
+        if self._nlp_fn is None:
+            self._nlp_fn = ca.Function("nlp", [self._nlp["x"], self._nlp["p"]],
+                                       [self._nlp["f"], self._nlp["g"]])
+        return self._nlp_fn
 
     def guess_from(self, sol: Solution | Trajectory) -> np.ndarray:
         """A decision vector for this transcription from a solution of another
@@ -299,15 +428,13 @@ class Transcription:
             return {"x0": x0}
         return {"x0": self.default_guess(params)}
 
-    def _check_start(self, x0: np.ndarray, pv: np.ndarray) -> None:
-        """A clear error if the start makes the NLP non-finite, naming the expression."""
-        if self._nlp_fn is None:
-            self._nlp_fn = ca.Function("nlp", [self._nlp["x"], self._nlp["p"]],
-                                       [self._nlp["f"], self._nlp["g"]])
+    def _check_start(self, x0: np.ndarray, pv: np.ndarray) -> float:
+        """The objective at the start; a clear error if the start makes the NLP
+        non-finite, naming the expression."""
         with np.errstate(all="ignore"):
-            f, g = (np.array(v, dtype=float) for v in self._nlp_fn(x0, pv))
+            f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
         if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
-            return
+            return float(f.ravel()[0])
         if not np.all(np.isfinite(x0)):
             raise ProblemDefinitionError("the initial guess has non-finite entries")
         sol = self._unpack_only(x0, pv)
@@ -356,18 +483,42 @@ class Transcription:
         self._check_bound_order(lbw, ubw, lbg, ubg)
         args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg,
                 **self._start(pv, params, guess, warm_start)}
-        self._check_start(np.asarray(args["x0"], dtype=float), pv)
+        f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
         solver = self._solver(warm_start is not None and "lam_g0" in args)
+        fref = self.scaling.objective_scale(f0)
         t0 = time.perf_counter()
-        res = solver(**args)
+        res = self._unscale(solver(**self._scale_args(args, fref)), fref)
         elapsed = time.perf_counter() - t0
         sol = Solution.from_nlp(self, pv, res, solver.stats(), elapsed)
+        sol.objective_scale = fref
         if not sol.success:
             cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
             raise cls(sol.status, sol, f"Ipopt failed: {sol.status} after {sol.iterations} "
                                        f"iterations")
         verify(sol, verify_mode, self.verify_tol, self.verify_points)
         return sol
+
+    def _scale_args(self, args: dict[str, Any], fref: float) -> dict[str, Any]:
+        """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""
+        sc = self.scaling
+        out = dict(args)
+        out["p"] = np.r_[args["p"], 1.0 / fref]
+        for k in ("x0", "lbx", "ubx"):
+            out[k] = sc.x_to_scaled(args[k])
+        out["lbg"], out["ubg"] = sc.r * args["lbg"], sc.r * args["ubg"]
+        if "lam_g0" in args:
+            out["lam_g0"], out["lam_x0"] = sc.multipliers_to_scaled(args["lam_g0"],
+                                                                    args["lam_x0"], fref)
+        return out
+
+    def _unscale(self, res: dict[str, Any], fref: float) -> dict[str, Any]:
+        """Ipopt's result mapped back to the user's units."""
+        sc = self.scaling
+        lam_g, lam_x = sc.multipliers_from_scaled(np.array(res["lam_g"]).ravel(),
+                                                  np.array(res["lam_x"]).ravel(), fref)
+        return {"x": sc.x_from_scaled(np.array(res["x"]).ravel()),
+                "f": float(res["f"]) * fref, "lam_g": lam_g, "lam_x": lam_x,
+                "g": np.array(res["g"]).ravel() / sc.r}
 
     def _check_bound_order(self, lbw: np.ndarray, ubw: np.ndarray, lbg: np.ndarray,
                            ubg: np.ndarray) -> None:

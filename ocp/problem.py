@@ -71,6 +71,8 @@ class Shared:
         self.vars: list[ca.SX] = []
         self.var_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
         self.var_guess: dict[str, ca.SX | None] = {}
+        self.var_ref: dict[str, tuple[float, float] | None] = {}
+        self.objective_ref: float | None = None  # set by minimize(..., ref=)
         self.phase_names: set[str] = set()  # states and controls of every phase
 
     @property
@@ -119,6 +121,57 @@ def _guess_value(shared: Shared, guess: Any, what: str) -> Any:
     return shared.bound(guess, what)
 
 
+def scale_ref(ref: float | None, ref0: float | None, what: str) -> tuple[float, float] | None:
+    """``(ref0, ref)`` checked (finite, ``ref > 0``), or None if neither is given.
+
+    As in dymos, the NLP sees ``(value - ref0) / ref``: ``ref0`` maps to 0 and
+    ``ref0 + ref`` to 1 (``ref0`` defaults to 0, ``ref`` to 1).
+
+    Parameters
+    ----------
+    ref, ref0 : float or None
+        The reference values.
+    what : str
+        Named in the error.
+    """
+    if ref is None and ref0 is None:
+        return None
+    r = 1.0 if ref is None else finite_number(ref, f"{what}: ref")
+    r0 = 0.0 if ref0 is None else finite_number(ref0, f"{what}: ref0")
+    if not r > 0:
+        raise ProblemDefinitionError(f"{what}: ref must be positive, got {r:g}")
+    return r0, r
+
+
+def objective_ref(ref: float | None) -> float | None:
+    """A checked objective reference (finite, positive) or None.
+
+    Parameters
+    ----------
+    ref : float or None
+        The objective's typical magnitude.
+    """
+    return constraint_ref(ref, "minimize")
+
+
+def constraint_ref(ref: float | None, what: str) -> float | None:
+    """A checked constraint reference (finite, positive) or None.
+
+    Parameters
+    ----------
+    ref : float or None
+        The constraint's typical size.
+    what : str
+        Named in the error.
+    """
+    if ref is None:
+        return None
+    r = finite_number(ref, f"{what}: ref")
+    if not r > 0:
+        raise ProblemDefinitionError(f"{what}: ref must be positive, got {r:g}")
+    return r
+
+
 class OptimalControlProblem:
     """States, controls, parameters, dynamics, constraints, cost and times (one phase).
 
@@ -152,6 +205,8 @@ class OptimalControlProblem:
         self.control_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
         self.state_guess: dict[str, Any] = {}
         self.control_guess: dict[str, Any] = {}
+        self.state_ref: dict[str, tuple[float, float] | None] = {}
+        self.control_ref: dict[str, tuple[float, float] | None] = {}
         self.path: list[Constraint] = []
         self.initial: list[Constraint] = []
         self.terminal: list[Constraint] = []
@@ -175,7 +230,8 @@ class OptimalControlProblem:
 
     # ----------------------------------------------------------- declarations
     def state(self, name: str, lower: Bound = -INF, upper: Bound = INF,
-              guess: Any = None) -> ca.SX:
+              guess: Any = None, *, ref: float | None = None,
+              ref0: float | None = None) -> ca.SX:
         """Declare a state; returns its symbol.
 
         Parameters
@@ -188,9 +244,15 @@ class OptimalControlProblem:
             Initial guess (a pair is interpolated linearly in time). Default:
             the fixed initial/final values where the constraints fix them, else
             the midpoint of finite bounds, else 0 clipped into the bounds.
+        ref, ref0 : float, optional
+            Scaling, as dymos' ``ref``/``ref0``: the NLP works with
+            ``(x - ref0) / ref`` (defect rows are divided by ``ref`` too);
+            the solution is reported in the user's units. Default: automatic
+            (see :mod:`ocp.scaling`).
         """
         self._check_new(name, phase=True)
         self._checked_bounds(lower, upper, f"state {name!r}")  # before anything is declared
+        sref = scale_ref(ref, ref0, f"state {name!r}")
         s = ca.SX.sym(name)
         self.state_names.append(name)
         self._x.append(s)
@@ -198,10 +260,12 @@ class OptimalControlProblem:
         self._xT.append(ca.SX.sym(f"{name}(tf)"))
         self.bound_state(name, lower, upper)
         self.state_guess[name] = _guess_value(self._shared, guess, f"state {name!r} guess")
+        self.state_ref[name] = sref
         return s
 
     def control(self, name: str, lower: Bound = -INF, upper: Bound = INF,
-                guess: Any = None) -> ca.SX:
+                guess: Any = None, *, ref: float | None = None,
+                ref0: float | None = None) -> ca.SX:
         """Declare a control with optional bounds (numbers or parameter expressions).
 
         Parameters
@@ -212,9 +276,12 @@ class OptimalControlProblem:
             Control bounds.
         guess : float or parameter expression, optional
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
+        ref, ref0 : float, optional
+            Scaling: the NLP works with ``(u - ref0) / ref`` (see :meth:`state`).
         """
         self._check_new(name, phase=True)
         self._checked_bounds(lower, upper, f"control {name!r}")  # before anything is declared
+        sref = scale_ref(ref, ref0, f"control {name!r}")
         s = ca.SX.sym(name)
         self.control_names.append(name)
         self._u.append(s)
@@ -222,6 +289,7 @@ class OptimalControlProblem:
         self._uT.append(ca.SX.sym(f"{name}(tf)"))
         self.bound_control(name, lower, upper)
         self.control_guess[name] = _guess_value(self._shared, guess, f"control {name!r} guess")
+        self.control_ref[name] = sref
         return s
 
     def parameter(self, name: str) -> ca.SX:
@@ -239,7 +307,8 @@ class OptimalControlProblem:
         return s
 
     def variable(self, name: str, lower: Bound = -INF, upper: Bound = INF,
-                 guess: Bound | None = None) -> ca.SX:
+                 guess: Bound | None = None, *, ref: float | None = None,
+                 ref0: float | None = None) -> ca.SX:
         """Declare a decision parameter: a constant optimised with the trajectory.
 
         Parameters
@@ -250,17 +319,21 @@ class OptimalControlProblem:
             Bounds.
         guess : float or parameter expression, optional
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
+        ref, ref0 : float, optional
+            Scaling: the NLP works with ``(v - ref0) / ref`` (see :meth:`state`).
         """
         self._check_new(name, phase=False)
         sh = self._shared
         what = f"variable {name!r}"
         lo, hi = sh.bound(lower, f"{what} lower bound"), sh.bound(upper, f"{what} upper bound")
         check_bounds(lo, hi, what)
+        sref = scale_ref(ref, ref0, what)
         s = ca.SX.sym(name)
         sh.var_names.append(name)
         sh.vars.append(s)
         sh.var_bounds[name] = (lo, hi)
         sh.var_guess[name] = None if guess is None else sh.bound(guess, f"{what} guess")
+        sh.var_ref[name] = sref
         return s
 
     def bound_control(self, name: str, lower: Bound = -INF, upper: Bound = INF) -> None:
@@ -345,7 +418,8 @@ class OptimalControlProblem:
 
     # ------------------------------------------------------------ constraints
     def _constraint(self, store: list[Constraint], expr: Any, lower: Bound,
-                    upper: Bound | None, name: str | None, kind: str) -> Constraint:
+                    upper: Bound | None, name: str | None, kind: str,
+                    ref: float | None = None) -> Constraint:
         if upper is None:
             upper = lower  # one value: an equality
         e = to_sx(expr, f"{kind} constraint")
@@ -364,12 +438,13 @@ class OptimalControlProblem:
                          "a path constraint is an expression of x, u, t, parameters")
         else:
             require_only(self._to_boundary(e, kind), self.boundary_symbols(), what)
-        c = Constraint(e, lo, hi, label)
+        c = Constraint(e, lo, hi, label, constraint_ref(ref, what))
         store.append(c)
         return c
 
     def path_constraint(self, expr: Any, lower: Bound = -INF, upper: Bound = INF,
-                        name: str | None = None) -> Constraint:
+                        name: str | None = None, *,
+                        ref: float | None = None) -> Constraint:
         """``lower <= expr(x, u, t, p) <= upper`` along the trajectory.
 
         Imposed at the shooting nodes (multiple shooting; also at the
@@ -385,11 +460,15 @@ class OptimalControlProblem:
             Bounds (``-inf``/``inf`` for none).
         name : str, optional
             Used in messages and in ``sol.violations``.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
-        return self._constraint(self.path, expr, lower, upper, name, "path")
+        return self._constraint(self.path, expr, lower, upper, name, "path", ref)
 
     def initial_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                           name: str | None = None) -> Constraint:
+                           name: str | None = None, *,
+                           ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` at ``t0`` (equality if ``upper`` is omitted).
 
         States and controls in ``expr`` stand for their values at ``t0``.
@@ -405,11 +484,15 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
-        return self._constraint(self.initial, expr, lower, upper, name, "initial")
+        return self._constraint(self.initial, expr, lower, upper, name, "initial", ref)
 
     def terminal_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                            name: str | None = None) -> Constraint:
+                            name: str | None = None, *,
+                            ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` at ``T`` (equality if ``upper`` is omitted).
 
         States and controls in ``expr`` stand for their values at ``T``.
@@ -425,11 +508,15 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
-        return self._constraint(self.terminal, expr, lower, upper, name, "terminal")
+        return self._constraint(self.terminal, expr, lower, upper, name, "terminal", ref)
 
     def boundary_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
-                            name: str | None = None) -> Constraint:
+                            name: str | None = None, *,
+                            ref: float | None = None) -> Constraint:
         """``lower <= expr <= upper`` on end-point values (equality if ``upper`` is omitted).
 
         ``expr`` is built from :meth:`at_t0`, :meth:`at_tf`, :meth:`integral`,
@@ -445,16 +532,20 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
         e = to_sx(expr, "boundary constraint")
         if ca.depends_on(e, ca.vertcat(self.x, self.u, self.t)):
             raise ProblemDefinitionError(
                 "boundary_constraint: a bare state, control or t is ambiguous here; wrap it "
                 "in p.at_t0(...) or p.at_tf(...)")
-        return self._constraint(self.boundary, e, lower, upper, name, "boundary")
+        return self._constraint(self.boundary, e, lower, upper, name, "boundary", ref)
 
     def integral_constraint(self, integrand: Any, lower: Bound, upper: Bound | None = None,
-                            name: str | None = None) -> Constraint:
+                            name: str | None = None, *,
+                            ref: float | None = None) -> Constraint:
         """``lower <= int_t0^T integrand dt <= upper`` (an isoperimetric constraint).
 
         Parameters
@@ -467,9 +558,12 @@ class OptimalControlProblem:
             Upper bound.
         name : str, optional
             Used in messages.
+        ref : float, optional
+            Typical size of ``expr``: its NLP rows are divided by it (default:
+            automatic, see :mod:`ocp.scaling`).
         """
         return self.boundary_constraint(self.integral(integrand), lower, upper,
-                                        name or f"integral{len(self.integrals)}")
+                                        name or f"integral{len(self.integrals)}", ref=ref)
 
     # ------------------------------------------------------- end-point symbols
     def at_t0(self, expr: Any) -> ca.SX:
@@ -520,7 +614,7 @@ class OptimalControlProblem:
         return expr
 
     # ------------------------------------------------------------------- cost
-    def minimize_terminal(self, expr: Any) -> None:
+    def minimize_terminal(self, expr: Any, *, ref: float | None = None) -> None:
         """Add a Mayer term ``phi(x(T), u(T), T, p)`` (bare symbols mean values at ``T``).
 
         Parameters
@@ -528,24 +622,31 @@ class OptimalControlProblem:
         expr : SX
             Expression of the states and controls (at ``T``), times, parameters
             and variables.
+        ref : float, optional
+            Typical magnitude of the whole objective: the NLP minimises
+            ``J / ref`` (reported unscaled). See :meth:`minimize`.
         """
+        self._set_objective_ref(ref)
         e = to_sx(expr, "minimize_terminal")
         require_only(self.at_tf(e), self.boundary_symbols(), "minimize_terminal term")
         self.mayer = self.mayer + e
 
-    def minimize_integral(self, expr: Any) -> None:
+    def minimize_integral(self, expr: Any, *, ref: float | None = None) -> None:
         """Add a Lagrange term ``int_t0^T L(x, u, t, p) dt``.
 
         Parameters
         ----------
         expr : SX
             The integrand ``L``.
+        ref : float, optional
+            Typical magnitude of the whole objective (see :meth:`minimize`).
         """
+        self._set_objective_ref(ref)
         e = to_sx(expr, "minimize_integral")
         require_only(e, self.running_symbols(), "minimize_integral integrand")
         self.lagrange = self.lagrange + e
 
-    def minimize(self, expr: Any) -> None:
+    def minimize(self, expr: Any, *, ref: float | None = None) -> None:
         """Add an end-point cost built from :meth:`at_t0`, :meth:`at_tf`, :meth:`integral`,
         ``t0``, ``T``, parameters and variables (e.g. ``p.at_t0(x)**2``).
 
@@ -553,7 +654,14 @@ class OptimalControlProblem:
         ----------
         expr : SX
             Expression of end-point symbols, times, parameters and variables.
+        ref : float, optional
+            Typical magnitude of the whole objective (one value per problem,
+            the last given wins): the NLP minimises ``J / ref``, so Ipopt's
+            tolerances become relative to it; ``sol.objective`` and the
+            multipliers stay in the user's units. Default: automatic (see
+            :mod:`ocp.scaling`).
         """
+        self._set_objective_ref(ref)
         e = to_sx(expr, "minimize")
         if ca.depends_on(e, ca.vertcat(self.x, self.u, self.t)):
             raise ProblemDefinitionError(
@@ -561,6 +669,11 @@ class OptimalControlProblem:
                 "p.at_t0(...) or p.at_tf(...), or use minimize_terminal/minimize_integral")
         require_only(e, self.boundary_symbols(), "minimize term")
         self.boundary_cost = self.boundary_cost + e
+
+    def _set_objective_ref(self, ref: float | None) -> None:
+        r = objective_ref(ref)
+        if r is not None:
+            self._shared.objective_ref = r
 
     # ------------------------------------------------------------------ times
     def fixed_final_time(self, T: float) -> None:

@@ -56,6 +56,9 @@ class Solution:
         ``time``; ``link`` on a multi-phase solution.
     params, variables : dicts of the parameter values and the optimised
         decision variables.
+    objective_scale : float
+        What the objective was divided by for Ipopt (:mod:`ocp.scaling`); the
+        objective and multipliers here are unscaled.
     path_violation : float
         Largest violation of a path constraint or state bound found on a fine
         grid between the nodes (relative to ``max(1, |bound|)``); ``verified``
@@ -87,6 +90,7 @@ class Solution:
     mesh_history: list[Any]
     mesh_error: float
     mesh_converged: bool
+    objective_scale: float
 
     def __init__(self, **kw: Any) -> None:
         self.__dict__.update(kw)

@@ -22,6 +22,7 @@ class Constraint:
     lower: ca.SX
     upper: ca.SX
     name: str
+    ref: float | None = None  # typical size: the NLP row is divided by it (ocp.scaling)
 
 
 def to_sx(value: object, what: str) -> ca.SX:

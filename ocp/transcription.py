@@ -73,6 +73,8 @@ class MultipleShooting(Transcription):
         ``substeps - 1`` inner steps of every interval (default: nodes only).
     verify, verify_tol, verify_points
         The post-solve check between nodes (see :class:`ocp.nlp.Transcription`).
+    scaling : {"auto", "none"} or dict
+        Scaling of the NLP (see :class:`ocp.nlp.Transcription` and :mod:`ocp.scaling`).
 
     Attributes
     ----------
@@ -86,7 +88,8 @@ class MultipleShooting(Transcription):
                  integrator: str = "rk4", substeps: int = 4,
                  ipopt_options: dict | None = None, expand: bool = False, *,
                  inner_constraints: bool = False, verify: str = "warn",
-                 verify_tol: float = 1e-6, verify_points: int = 10) -> None:
+                 verify_tol: float = 1e-6, verify_points: int = 10,
+                 scaling: Any = "auto") -> None:
         if integrator not in ("rk4", "cvodes"):
             raise ProblemDefinitionError(f"integrator must be 'rk4' or 'cvodes', got "
                                          f"{integrator!r}")
@@ -96,7 +99,7 @@ class MultipleShooting(Transcription):
         self.substeps = positive_int(substeps, "substeps")
         self.inner_constraints = bool(inner_constraints)
         super().__init__(problem, ipopt_options, bool(expand) and integrator == "rk4",
-                         verify, verify_tol, verify_points)
+                         verify, verify_tol, verify_points, scaling)
         self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
         self.F = self.phases[0].F  # type: ignore[attr-defined]
 
@@ -152,6 +155,8 @@ class Collocation(Transcription):
         Expand the NLP to SX (default True: collocation graphs are small).
     verify, verify_tol, verify_points
         The post-solve check between nodes (see :class:`ocp.nlp.Transcription`).
+    scaling : {"auto", "none"} or dict
+        Scaling of the NLP (see :class:`ocp.nlp.Transcription` and :mod:`ocp.scaling`).
 
     Every solution carries ``mesh_error``, the largest interval error
     estimate of :mod:`ocp.mesh` (relative; compare it with the accuracy you
@@ -163,8 +168,9 @@ class Collocation(Transcription):
     def __init__(self, problem: Problem, intervals: int | Sequence[int] = 20, degree: int = 3,
                  mesh: Any = None, ipopt_options: dict | None = None, expand: bool = True, *,
                  verify: str = "warn", verify_tol: float = 1e-6,
-                 verify_points: int = 10) -> None:
+                 verify_points: int = 10, scaling: Any = "auto") -> None:
         n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
+        self.scaling_arg = scaling
         self.degree = positive_int(degree, "degree")
         if mesh is None:
             ns = [positive_int(n, "intervals") for n in _per_phase(intervals, n_ph,
@@ -173,7 +179,8 @@ class Collocation(Transcription):
         else:
             meshes = [mesh] if n_ph == 1 and np.ndim(mesh[0]) == 0 else list(mesh)
             self.meshes = [_check_mesh(m) for m in _per_phase(meshes, n_ph, "mesh")]
-        super().__init__(problem, ipopt_options, expand, verify, verify_tol, verify_points)
+        super().__init__(problem, ipopt_options, expand, verify, verify_tol, verify_points,
+                         scaling)
         counts = [m.size - 1 for m in self.meshes]
         self.N: int | list[int] = counts[0] if n_ph == 1 else counts
 
@@ -201,7 +208,7 @@ class Collocation(Transcription):
         return Collocation(self.problem, degree=self.degree, mesh=meshes,
                            ipopt_options=self.ipopt_options, expand=self.expand,
                            verify=verify or self.verify, verify_tol=self.verify_tol,
-                           verify_points=self.verify_points)
+                           verify_points=self.verify_points, scaling=self.scaling_arg)
 
     def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
                max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
