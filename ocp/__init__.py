@@ -29,8 +29,17 @@ Knows nothing of landing. One file per role:
   the Hamiltonian's minimiser over it;
 * :mod:`ocp.chattering`    -- switches accumulating at a point (Fuller's phenomenon),
   confirmed on a finer grid;
-* :mod:`ocp.pmp`           -- costates, Hamiltonian and switching function: a
-  certificate that proves (or refutes) bang-bang structure, and refuses what it cannot.
+* :mod:`ocp.costates`      -- costates from the multipliers, or integrated backward along
+  the refined arcs; H and the switching functions;
+* the Pontryagin certificate, which proves (or refutes) bang-bang structure and refuses
+  what it cannot, in layers (each imports only those above it):
+  :mod:`ocp.pmp_checks` (the checks on one set of samples: H, sigma, sign agreement,
+  switch gap, singular runs; tolerances, judgement, verdict),
+  :mod:`ocp.pmp_certificate` (:class:`PMPCertificate`, its assembly and refusal),
+  :mod:`ocp.pmp_refined` (from a refined solution) and :mod:`ocp.pmp_transcription`
+  (from a transcription alone, re-checked on a finer grid), :mod:`ocp.phase_pmp`
+  (phase by phase), and :mod:`ocp.pmp` (:func:`certify`, the entry point, which also
+  re-exports the names of the layers below).
 """
 
 from __future__ import annotations

@@ -24,18 +24,9 @@ import numpy as np
 
 from .costates import adjoint_sweep
 from .phase_refinement import RefinedPhases, local_phase
-from .pmp import (
-    CERTIFIED,
-    ERROR_MARGIN,
-    INCONCLUSIVE,
-    NOT_BANG_BANG,
-    PMPCertificate,
-    _certify_refined,
-    _constrained_refined,
-    _Tolerances,
-    not_applicable,
-    refusal,
-)
+from .pmp_certificate import PMPCertificate, not_applicable, refusal
+from .pmp_checks import CERTIFIED, ERROR_MARGIN, INCONCLUSIVE, NOT_BANG_BANG, Tolerances
+from .pmp_refined import certify_refined, constrained_refined
 from .solution import Solution
 
 JUNCTION_TOL = 1e-6
@@ -86,7 +77,7 @@ class PhasesCertificate(PMPCertificate):
 def _junction_gap(r: Any, lam0: np.ndarray, n: int) -> tuple[float, float]:
     """Gap between the adjoint sweep's costate at the phase's start and ``lam0``, and the
     sweep's own error estimate (NaN when a state constraint is active in the phase)."""
-    _, last = _constrained_refined(r, n)
+    _, last = constrained_refined(r, n)
     if last > 0:  # a state constraint before: the costate may jump, no sweep to the start
         return math.nan, 0.0
     sw = adjoint_sweep(r, 0.0, n)
@@ -142,14 +133,14 @@ def certify_phases(sol: Solution | None, refined: RefinedPhases, *,
     for i, r in enumerate(refined.phases):
         loc: Any = local_phase(sol, i) if sol is not None else _NoTranscription(r.T)
         h = loc.T / loc.N
-        tol = _Tolerances(H=1e-6 if tol_H is None else tol_H,
-                          sigma=1e-6 if tol_sigma is None else tol_sigma,
-                          switch=1e-6 * refined.T if tol_switch is None else tol_switch,
-                          singular=2 * h if min_singular is None else min_singular)
+        tol = Tolerances(H=1e-6 if tol_H is None else tol_H,
+                         sigma=1e-6 if tol_sigma is None else tol_sigma,
+                         switch=1e-6 * refined.T if tol_switch is None else tol_switch,
+                         singular=2 * h if min_singular is None else min_singular)
         if r.problem.nu == 0:
             certs.append(_no_control(r))
         else:
-            certs.append(_certify_refined(loc, r, tol, n))
+            certs.append(certify_refined(loc, r, tol, n))
         gap, err = _junction_gap(r, refined.junction_costates[i], n)
         gaps.append(gap)
         if math.isfinite(gap) and gap > JUNCTION_TOL and gap > ERROR_MARGIN * err:

@@ -43,15 +43,15 @@ from .multiphase import MultiPhaseProblem
 from .refinement import (
     DEFAULT_TOL,
     REFINE_IPOPT,
+    ConstraintBlocks,
     SwitchingNLP,
-    _Blocks,
     arc_dynamics,
     build_intervals,
     required_substeps,
     rk8_of,
 )
 from .solution import Solution
-from .switching import RefinedSwitching, _insert_extra_arcs
+from .switching import RefinedSwitching, insert_extra_arcs
 from .trajectory import Trajectory
 
 Modes = tuple[tuple[Mode, ...], ...]
@@ -162,7 +162,7 @@ class PhaseSwitchingNLP(SwitchingNLP):
         p = mp.p
         w = ca.SX.sym("w", self.n_w)
         V = w[self.n_w - mp.nv:]
-        G = _Blocks()
+        G = ConstraintBlocks()
         self.entry_names: list[str] = []
         values: list[dict[str, ca.SX]] = []
         ends_all: list[ca.SX] = []
@@ -210,7 +210,7 @@ class PhaseSwitchingNLP(SwitchingNLP):
             ca.vertcat(*[mp._shared.var_bounds[n][0] for n in mp.var_names]),
             ca.vertcat(*[mp._shared.var_bounds[n][1] for n in mp.var_names])])
 
-    def _boundary(self, G: _Blocks, values: list[dict[str, ca.SX]], p: ca.SX, V: ca.SX,
+    def _boundary(self, G: ConstraintBlocks, values: list[dict[str, ca.SX]], p: ca.SX, V: ca.SX,
                   row_phase: list[int]) -> None:
         """End-point rows, and the boundary function ``B(ends, p, v, nu)`` for the costates."""
         mp = self.multiphase
@@ -830,7 +830,7 @@ def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *
         m, d = list(st.modes), list(st.durations)
         if extra_arcs and len(st.controls) == 1 and any(x[0].kind in ("max", "min")
                                                         for x in m):
-            _insert_extra_arcs(m, d, extra_arcs)
+            insert_extra_arcs(m, d, extra_arcs)
         modes.append(tuple(m))
         durs.append(np.asarray(d, dtype=float))
     x0s = [np.asarray(ph.x[0], dtype=float) for ph in sol.phases]

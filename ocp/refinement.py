@@ -150,8 +150,25 @@ def rk8_of(dyn: ArcDynamics) -> ca.Function:
 
 
 @dataclass
-class _Blocks:
-    """Constraint rows of the NLP, by block name."""
+class ConstraintBlocks:
+    """Constraint rows of a switching-time NLP, by block name.
+
+    Built row block by row block (entry conditions, path samples, law bounds, end
+    points, linkage) by :class:`SwitchingNLP` and the multi-phase
+    :class:`~ocp.phase_refinement.PhaseSwitchingNLP`; the block names let the
+    multipliers be read back (e.g. the path rows' for the costate jumps).
+
+    Attributes
+    ----------
+    exprs, lower, upper : list of casadi.SX
+        Per added block: the rows (a column) and their bounds.
+    index : dict of str to list of int
+        Row numbers of each block name.
+    times : list of (int, int)
+        Per row: (interval, sample) where it is imposed.
+    n : int
+        Number of rows so far.
+    """
 
     exprs: list = field(default_factory=list)
     lower: list = field(default_factory=list)
@@ -161,6 +178,19 @@ class _Blocks:
     n: int = 0
 
     def add(self, name: str, expr: ca.SX, lo: Any, hi: Any, where: tuple[int, int]) -> None:
+        """Append the rows ``lo <= expr <= hi`` under block ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Block name (rows of one name need not be contiguous).
+        expr : casadi.SX
+            The rows (any shape; flattened); nothing is added when empty.
+        lo, hi : casadi.SX or float
+            Bounds, one per row or one for all.
+        where : (int, int)
+            (interval, sample) of these rows.
+        """
         expr = ca.vec(ca.SX(expr))
         k = expr.numel()
         if k == 0:
@@ -218,13 +248,13 @@ class SwitchingNLP:
         nx = pr.nx
         p, tau, x0 = pr.p, ca.SX.sym("tau", K), ca.SX.sym("x0", nx)
         z = ca.vertcat(x0, 0) if self.has_quad else x0
-        G = _Blocks()
+        G = ConstraintBlocks()
         self.entry_names: list[str] = []
         z, ends = build_intervals(G, pr, self.dyns, self.substeps, self.samples, tau, z, p,
                                   self.entry_names)
         self._finish(G, p, tau, x0, z, ends)
 
-    def _finish(self, G: _Blocks, p: ca.SX, tau: ca.SX, x0: ca.SX, z: ca.SX,
+    def _finish(self, G: ConstraintBlocks, p: ca.SX, tau: ca.SX, x0: ca.SX, z: ca.SX,
                 ends: list[ca.SX]) -> None:
         pr = self.problem
         nx = pr.nx
@@ -743,7 +773,7 @@ def interval_flow(d: ArcDynamics, m: int, samples: int, z: ca.SX, tau: ca.SX,
     return out, z
 
 
-def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamics],
+def build_intervals(G: ConstraintBlocks, pr: OptimalControlProblem, dyns: list[ArcDynamics],
                     substeps: tuple[int, ...], samples: int, tau: ca.SX, z: ca.SX, p: ca.SX,
                     entry_names: list[str], check_start: bool = False
                     ) -> tuple[ca.SX, list[ca.SX]]:
@@ -757,7 +787,7 @@ def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamic
 
     Parameters
     ----------
-    G : _Blocks
+    G : ConstraintBlocks
         Constraint rows (appended to).
     pr : OptimalControlProblem
         The phase.
@@ -811,7 +841,7 @@ def build_intervals(G: _Blocks, pr: OptimalControlProblem, dyns: list[ArcDynamic
     return z, ends
 
 
-def _entry_rows(G: _Blocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
+def _entry_rows(G: ConstraintBlocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
                 held_prev: tuple[str, ...], entry_names: list[str]) -> None:
     for (what, e), name in zip(d.entry, _entry_owners(d), strict=True):
         if name in held_prev:
@@ -820,7 +850,7 @@ def _entry_rows(G: _Blocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z
         entry_names.append(what)
 
 
-def _law_rows(G: _Blocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
+def _law_rows(G: ConstraintBlocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
               j: int) -> None:
     for _, e, lo, hi in d.law_bounds:
         G.add("law", ca.substitute(e, pr.x, z[:pr.nx]), lo, hi, (k, j))

@@ -341,9 +341,22 @@ def _as_structure(sol: TranscribedSolution, structure: Any) -> ArcStructure:
     return structure
 
 
-def _insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
+def insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
     """Insert ``extra_arcs`` bang arcs (single control): pairs inside the longest bang arc,
-    an odd one at the end."""
+    an odd one at the end.
+
+    Used by :func:`refine_switching` and :func:`ocp.phase_refinement.refine_phases` to
+    start a refinement with more arcs than the transcription shows.
+
+    Parameters
+    ----------
+    modes : list of tuple of Mode
+        Per interval, its (single) mode; modified in place.
+    durs : list of float
+        Per interval, its duration; modified in place (the total is kept).
+    extra_arcs : int
+        How many arcs to insert.
+    """
     flip = {"max": Mode("min"), "min": Mode("max")}
     for _ in range(extra_arcs // 2):
         bang = [k for k, m in enumerate(modes) if m[0].kind in flip]
@@ -418,7 +431,7 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         if extra_arcs:
             if len(s.controls) != 1:
                 raise ValueError("extra_arcs supports single-control problems")
-            _insert_extra_arcs(modes, durs, extra_arcs)
+            insert_extra_arcs(modes, durs, extra_arcs)
         return refine_structure(tsol.problem, tuple(modes), np.asarray(durs, dtype=float),
                                 np.asarray(tsol.x[0], dtype=float), params, **opts)
 

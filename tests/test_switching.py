@@ -388,7 +388,8 @@ def test_public_docstrings_match_signatures():
 
     checked = 0
     for mn in ("ocp.arcs", "ocp.flows", "ocp.refinement", "ocp.switching", "ocp.costates",
-               "ocp.pmp"):
+               "ocp.pmp", "ocp.pmp_checks", "ocp.pmp_certificate", "ocp.pmp_refined",
+               "ocp.pmp_transcription"):
         mod = importlib.import_module(mn)
         for name, obj in vars(mod).items():
             if name.startswith("_") or getattr(obj, "__module__", None) != mn:
