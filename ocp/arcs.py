@@ -594,6 +594,12 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
         ``max_gap`` nodes (a transcription zig-zags along a constraint of
         relative degree two), unless the control sits at one bound throughout.
 
+    Returns
+    -------
+    SwitchingStructure
+
+    Notes
+    -----
     A collocation solution is read on its mesh (:func:`ocp.gridview.mesh_level`):
     per mesh interval, the quadrature average of the control over its collocation
     points, and the path constraints at the mesh points. Its control polynomials
