@@ -14,6 +14,8 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.mesh`          -- error estimate and h-refinement of a collocation mesh;
 * :mod:`ocp.guess`         -- default initial guesses and non-finite-guess diagnosis;
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
+* :mod:`ocp.multistart`    -- many starts over the bounds' box: the distinct local
+  optima and the best (problems with several extremals);
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.trajectory`    -- the sampled-trajectory type;
 * :mod:`ocp.switching`     -- bang-bang structure detection and switching-time
@@ -37,6 +39,7 @@ _WHERE = {
     "Trajectory": "trajectory", "Collocation": "transcription",
     "MultipleShooting": "transcription", "continuation": "transcription",
     "transcribe": "transcription",
+    "multistart": "multistart", "MultistartResult": "multistart",
 }
 
 __all__ = [
@@ -45,6 +48,7 @@ __all__ = [
     "InfeasibleError",
     "MultiPhaseProblem",
     "MultipleShooting",
+    "MultistartResult",
     "OptimalControlProblem",
     "PMPCertificate",
     "PathViolationError",
@@ -55,6 +59,7 @@ __all__ = [
     "Trajectory",
     "certify",
     "continuation",
+    "multistart",
     "transcribe",
 ]
 
@@ -82,6 +87,7 @@ if TYPE_CHECKING:
         SolveError,
     )
     from .multiphase import MultiPhaseProblem
+    from .multistart import MultistartResult, multistart
     from .pmp import PMPCertificate, certify
     from .problem import OptimalControlProblem
     from .solution import Solution
