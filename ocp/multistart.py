@@ -357,7 +357,9 @@ def _starts(tr: Transcription, params: dict[str, float], coords: list[_Coordinat
             ) -> tuple[list[str], list[dict[str, float]], list[np.ndarray]]:
     """Origins, sampled points and decision vectors of the ``n`` starts."""
     first = tr.default_guess(params) if guess is None else _as_vector(tr, params, guess)
-    origins, points, vectors = ["default" if guess is None else "guess"], [{}], [first]
+    origins = ["default" if guess is None else "guess"]
+    points: list[dict[str, float]] = [{}]
+    vectors = [first]
     if n > 1:
         d = len(coords)
         sampler = qmc.Sobol(d, scramble=True, rng=seed) if method == "sobol" \

@@ -108,3 +108,8 @@ PROBLEM = SuiteProblem(
     bang_bang=True, intervals=INTERVALS, tol=1e-7,
     notes="from the default guess the collocation converges to the five-arc extremal "
           "(T = 17.288); ocp.multistart finds the four-arc optimum")
+
+
+def coarse_transcription() -> Collocation:
+    """A 20-interval collocation: a cheap builder for tests of parallel starts."""
+    return Collocation(build(), intervals=20)
