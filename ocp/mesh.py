@@ -23,7 +23,7 @@ the larger of the last two changes, since one alone can miss an unrefined
 interval), and
 :func:`objective_threshold` picks the intervals to split when the objective,
 not the states, is what misses its tolerance: those whose local estimate is
-within the factor ``target / change`` of the largest (the objective's error
+within the factor ``target / change`` (between 1/100 and 1/2) of the largest (the objective's error
 is assumed to come from where the local errors are largest; measured on
 bang-bang and L1 problems, the switching intervals).
 
@@ -95,8 +95,12 @@ def objective_threshold(max_error: float, change: float, target: float) -> float
     """Local-error threshold above which an interval is split for the objective.
 
     The largest local error is asked to shrink by the factor the objective's
-    error must shrink by (``target / change``, at most 1/2 so that the worst
-    intervals are always split; 1/2 when the change is unknown).
+    error must shrink by (``target / change``), at most 1/2 so that the worst
+    intervals are always split (1/2 when the change is unknown) and at least
+    1/100 so that one round splits only the two decades of intervals with the
+    largest errors: a far-off objective is approached over several rounds
+    rather than by refining everywhere at once (measured: 215 intervals
+    instead of 1998 on a path constraint touched between nodes, same result).
 
     Parameters
     ----------
@@ -108,7 +112,7 @@ def objective_threshold(max_error: float, change: float, target: float) -> float
         The objective's allowed absolute error.
     """
     factor = 0.5 if not math.isfinite(change) or change <= 0 else min(0.5, target / change)
-    return max_error * factor
+    return max_error * max(factor, 1e-2)
 
 
 def integration_matrix(nodes: np.ndarray) -> np.ndarray:

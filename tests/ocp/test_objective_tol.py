@@ -65,4 +65,5 @@ def test_objective_estimate_helpers():
     assert objective_change([1.0, 1.5], 1.5) == 0.5  # the larger of the last two changes
     assert objective_change([0.0, 1.0, 1.5], 1.5) == 0.5
     assert objective_threshold(1e-6, math.inf, 1e-6) == 0.5e-6
-    assert objective_threshold(1e-6, 1e-4, 1e-6) == pytest.approx(1e-8)
+    assert objective_threshold(1e-6, 1e-5, 1e-6) == pytest.approx(1e-7)
+    assert objective_threshold(1e-6, 1.0, 1e-6) == pytest.approx(1e-8)  # at most 2 decades
