@@ -18,9 +18,13 @@ Start 0 is the user's ``guess`` (or the default guess). The others are points
 of a scrambled Sobol' sequence or a Latin hypercube (:mod:`scipy.stats.qmc`,
 seeded: the same seed gives the same starts) in the box of these coordinates:
 
-* every free final or initial time: its bounds, sampled log-uniformly when the
-  lower bound is positive and the upper exceeds ten times it (a box [0.01,
-  100] would otherwise put nearly every start above 10);
+* every free initial time not linked to the previous phase's end (``t0``),
+  and every free final time: ``T`` when the phase starts at a fixed time,
+  its ``duration`` otherwise (a linked phase starts where the previous one
+  ends). Box: the bounds (for a duration, the duration bounds); sampled
+  log-uniformly when the lower bound is positive and the upper exceeds ten
+  times it (a box [0.01, 100] would otherwise put nearly every start above
+  10);
 * every state: its value at mid-phase. The start is the default guess plus
   ``sin(pi s) (z - x_default(1/2))`` (``s`` the normalised time), which keeps
   the guess's end values (fixed boundary values) and passes through the
@@ -31,8 +35,8 @@ seeded: the same seed gives the same starts) in the box of these coordinates:
 A state's or control's box is its bounds; an infinite side is replaced by the
 default guess's value ``-+ spread * max(1, |value|)`` (``spread = 1`` by
 default), and ``box={"name": (lo, hi)}`` sets any coordinate's box by name
-(``"T"`` and ``"t0"`` for the times; ``"phase.name"`` for one phase of a
-multi-phase problem).
+(``"T"``, ``"duration"``, ``"t0"`` for the times; in a multi-phase problem
+every name is prefixed by its phase's, ``"phase.name"``).
 
 Solving on processes or Dask
 ----------------------------
@@ -308,7 +312,8 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
     base = _default_solution(tr, params)
     multi = len(tr.phases) > 1
     out: list[_Coordinate] = []
-    for ps, cp, tm in zip(base.phases, tr.compiled, tr.times, strict=True):
+    linked = {b for _, b in tr.multiphase.time_links}
+    for i, (ps, cp, tm) in enumerate(zip(base.phases, tr.compiled, tr.times, strict=True)):
         pre = f"{ps.problem.name}." if multi else ""
         _, _, xlo, xhi, ulo, uhi, _, _ = (np.array(v, dtype=float).ravel()
                                           for v in cp.bounds(pv))
@@ -316,12 +321,10 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
         for j, name in enumerate(ps.problem.state_names):
             out.append(_coordinate(pre + name, xlo[j], xhi[j], xm[0, j], spread, box))
         for j, name in enumerate(ps.problem.control_names):
-            mid = 0.5 * (ulo[j] + uhi[j]) if np.isfinite(ulo[j] + uhi[j]) else 0.0
-            out.append(_coordinate(pre + name, ulo[j], uhi[j], mid, spread, box))
-        if tm.t0_free:
-            out.append(_time_coordinate(pre + "t0", tm.t0_bounds, tm.t0_guess, spread, box))
-        if tm.T_free:
-            out.append(_time_coordinate(pre + "T", tm.T_bounds, tm.T_guess, spread, box))
+            lo, hi = ulo[j], uhi[j]
+            mid = 0.5 * (lo + hi) if np.isfinite(lo) and np.isfinite(hi) else 0.0
+            out.append(_coordinate(pre + name, lo, hi, mid, spread, box))
+        out.extend(_time_coordinates(pre, tm, i in linked, spread, box))
     if tr.multiphase.var_names:
         lbw, ubw = decision_bounds(tr, params)
         w0 = tr.default_guess(params)
@@ -344,12 +347,24 @@ def _coordinate(name: str, lo: float, hi: float, centre: float, spread: float,
     return _Coordinate(name, float(a), float(b))
 
 
-def _time_coordinate(name: str, bounds: tuple[float, float], guess: float, spread: float,
-                     box: dict[str, tuple[float, float]]) -> _Coordinate:
-    c = _coordinate(name, bounds[0], bounds[1], guess, spread, box)
-    if name not in box and c.lo > 0 and c.hi > 10 * c.lo:
+def _time_coordinates(pre: str, tm: Any, linked: bool, spread: float,
+                      box: dict[str, tuple[float, float]]) -> list[_Coordinate]:
+    """A phase's sampled times: ``t0`` (free and not linked to the previous phase's end),
+    then ``T`` (free, fixed start) or ``duration`` (free, free start)."""
+    out: list[_Coordinate] = []
+    if tm.t0_free and not linked:
+        out.append(_coordinate(pre + "t0", *tm.t0_bounds, tm.t0_guess, spread, box))
+    if not tm.T_free:
+        return out
+    if tm.t0_free:
+        lo, hi = tm.span if tm.span is not None else (0.0, math.inf)
+        c = _coordinate(pre + "duration", max(lo, 0.0), hi, tm.T_guess - tm.t0_guess,
+                        spread, box)
+    else:
+        c = _coordinate(pre + "T", *tm.T_bounds, tm.T_guess, spread, box)
+    if c.name not in box and c.lo > 0 and c.hi > 10 * c.lo:
         c.log = True
-    return c
+    return out + [c]
 
 
 def _starts(tr: Transcription, params: dict[str, float], coords: list[_Coordinate], n: int,
@@ -404,10 +419,13 @@ def _guess_vector(tr: Transcription, params: dict[str, float], base: Solution,
     t_all, x_all, u_all, ph_all = [], [], [], []
     snames = sorted({n for ps in base.phases for n in ps.problem.state_names})
     cnames = sorted({n for ps in base.phases for n in ps.problem.control_names})
+    links = dict((b, a) for a, b in tr.multiphase.time_links)
+    ends: list[float] = []
     for i, ps in enumerate(base.phases):
         pre = f"{ps.problem.name}." if multi else ""
-        t0 = pt.get(pre + "t0", ps.t0)
-        T = pt.get(pre + "T", ps.T)
+        t0 = ends[links[i]] if i in links else pt.get(pre + "t0", ps.t0)
+        T = t0 + pt[pre + "duration"] if pre + "duration" in pt else pt.get(pre + "T", ps.T)
+        ends.append(T)
         x_def, _ = ps.at(ps.t0 + (ps.T - ps.t0) * s)
         x_mid, _ = ps.at(np.array([0.5 * (ps.t0 + ps.T)]))
         z = np.array([pt[pre + n] for n in ps.problem.state_names])

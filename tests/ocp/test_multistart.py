@@ -109,6 +109,16 @@ def test_failures_are_reported_with_ipopt_statuses():
         _ = res.best
 
 
+def test_multi_phase_problem_with_linked_times():
+    from ocp_suite.problems import bryson_denham_phases
+
+    res = multistart(Collocation(bryson_denham_phases(), intervals=[4, 2, 4]), n=3, seed=0)
+    assert res.best.objective == pytest.approx(4.0, rel=1e-9)  # 4 / (9 l), l = 1/9
+    pt = res.starts[1].point
+    assert {"rise.T", "boundary.duration", "fall.u"} <= set(pt)
+    assert "boundary.t0" not in pt and "fall.t0" not in pt  # they start where the last ends
+
+
 def test_bad_arguments():
     with pytest.raises(ProblemDefinitionError, match="builder"):
         multistart(coarse_transcription(), n=2, workers=2)
