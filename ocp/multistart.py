@@ -72,6 +72,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from .errors import PathViolationWarning, ProblemDefinitionError, SolveError
+from .multiphase import PhaseTimes
 from .nlp import Transcription
 from .solution import Solution
 from .trajectory import Trajectory
@@ -347,13 +348,14 @@ def _coordinate(name: str, lo: float, hi: float, centre: float, spread: float,
     return _Coordinate(name, float(a), float(b))
 
 
-def _time_coordinates(pre: str, tm: Any, linked: bool, spread: float,
+def _time_coordinates(pre: str, tm: PhaseTimes, linked: bool, spread: float,
                       box: dict[str, tuple[float, float]]) -> list[_Coordinate]:
     """A phase's sampled times: ``t0`` (free and not linked to the previous phase's end),
     then ``T`` (free, fixed start) or ``duration`` (free, free start)."""
     out: list[_Coordinate] = []
     if tm.t0_free and not linked:
-        out.append(_coordinate(pre + "t0", *tm.t0_bounds, tm.t0_guess, spread, box))
+        lo, hi = tm.t0_bounds
+        out.append(_coordinate(pre + "t0", lo, hi, tm.t0_guess, spread, box))
     if not tm.T_free:
         return out
     if tm.t0_free:
@@ -361,7 +363,8 @@ def _time_coordinates(pre: str, tm: Any, linked: bool, spread: float,
         c = _coordinate(pre + "duration", max(lo, 0.0), hi, tm.T_guess - tm.t0_guess,
                         spread, box)
     else:
-        c = _coordinate(pre + "T", *tm.T_bounds, tm.T_guess, spread, box)
+        lo, hi = tm.T_bounds
+        c = _coordinate(pre + "T", lo, hi, tm.T_guess, spread, box)
     if c.name not in box and c.lo > 0 and c.hi > 10 * c.lo:
         c.log = True
     return out + [c]

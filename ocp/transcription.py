@@ -15,6 +15,7 @@ mesh; the final mesh's transcription is ``sol.transcription``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -162,7 +163,9 @@ class Collocation(Transcription):
 
     Every solution carries ``mesh_error``, the largest interval error
     estimate of :mod:`ocp.mesh` (relative; compare it with the accuracy you
-    need, or call :meth:`refine`).
+    need, or call :meth:`refine`), and ``objective_error``, the estimate of
+    the objective's error (NaN after one solve: it needs two meshes; see
+    :meth:`refine`).
     """
 
     method = "collocation"
@@ -193,6 +196,7 @@ class Collocation(Transcription):
         """Solve, and attach the discretisation error estimate (``sol.mesh_error``)."""
         sol = super()._solve(params, guess, warm_start, verify_mode)
         sol.mesh_error = float(max(interval_errors(ph).max() for ph in sol.phases))
+        sol.objective_error = math.nan  # one mesh: nothing to compare the objective with
         return sol
 
     def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
