@@ -508,6 +508,10 @@ def _reassemble(tr: Transcription, params: dict[str, float],
     """The solution of a worker's raw result, on this process's build (checked between nodes)."""
     if not raw.get("success") or "w" not in raw:
         return None
+    if np.size(raw["w"]) != tr.n_w:
+        raise ProblemDefinitionError(
+            f"a worker's build has {np.size(raw['w'])} decision variables, this process's "
+            f"{tr.n_w}: the builder must return the same transcription every time")
     res = {k: raw[k] for k in ("f", "lam_g", "lam_x")}
     res["x"] = raw["w"]
     stats = {"success": raw["success"], "return_status": raw["status"],

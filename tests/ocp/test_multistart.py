@@ -90,6 +90,13 @@ def test_processes_give_the_same_results():
     assert parallel.best.verified and parallel.best.transcription.N == 20
 
 
+def test_the_users_guess_is_start_zero():
+    best = coarse(0).best
+    res = multistart(coarse_transcription, n=1, guess=best)
+    assert [s.origin for s in res.starts] == ["guess"]
+    assert res.best.objective == pytest.approx(best.objective, rel=1e-9)
+
+
 def test_failures_are_reported_with_ipopt_statuses():
     p = OptimalControlProblem("unreachable")
     x, v = p.state("x"), p.state("v")
