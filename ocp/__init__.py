@@ -17,6 +17,8 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.guess`         -- default initial guesses (moved off non-finite points) and
   non-finite-guess diagnosis;
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
+* :mod:`ocp.multistart`    -- many starts over the bounds' box: the distinct local
+  optima and the best (problems with several extremals);
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.gridview`      -- how a solution's grid is read (collocation on its mesh,
   costates from the Radau defect multipliers);
@@ -59,6 +61,7 @@ _WHERE = {
     "transcribe": "transcription", "detect_arcs": "arcs", "detect_structure": "arcs",
     "refine_switching": "switching", "refine_structure": "switching",
     "refine_phases": "phase_refinement", "certify_phases": "phase_pmp",
+    "multistart": "multistart", "MultistartResult": "multistart",
 }
 
 __all__ = [
@@ -67,6 +70,7 @@ __all__ = [
     "InfeasibleError",
     "MultiPhaseProblem",
     "MultipleShooting",
+    "MultistartResult",
     "OptimalControlProblem",
     "PMPCertificate",
     "PathViolationError",
@@ -80,6 +84,7 @@ __all__ = [
     "continuation",
     "detect_arcs",
     "detect_structure",
+    "multistart",
     "refine_phases",
     "refine_structure",
     "refine_switching",
@@ -111,6 +116,7 @@ if TYPE_CHECKING:
         SolveError,
     )
     from .multiphase import MultiPhaseProblem
+    from .multistart import MultistartResult, multistart
     from .phase_pmp import certify_phases
     from .phase_refinement import refine_phases
     from .pmp import PMPCertificate, certify

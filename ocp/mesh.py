@@ -7,7 +7,25 @@ and integrate them with that higher-degree quadrature from the interval's
 start. The largest difference between this integral and the state polynomial,
 relative to ``1 + max |x_i|`` over the phase, is the interval's error; the
 same comparison of the running cost's and integrals' quadratures (relative to
-``1 + |their total|``) is added, so the objective is refined too.
+``1 + |their total|``) is added.
+
+Objective error: the comparison above sees only quadrature error, and a
+collocated solution can be exact for its own piecewise-polynomial control yet
+sub-optimal: a control that jumps inside an interval (bang-bang, an L1 cost)
+is represented by a polynomial there, the states and the cost quadrature
+agree with it, and the objective is still off by more than the state
+tolerance (measured: 7.9e-6 on the minimum-fuel double integrator with every
+interval's estimate below 1e-6). Only a comparison between meshes sees it,
+so :func:`objective_change` takes the change of the objective between
+successive meshes (a Cauchy estimate: for a converging sequence it bounds the
+error of the coarser mesh's value and usually over-estimates the finer one's;
+the larger of the last two changes, since one alone can miss an unrefined
+interval), and
+:func:`objective_threshold` picks the intervals to split when the objective,
+not the states, is what misses its tolerance: those whose local estimate is
+within the factor ``target / change`` (between 1/100 and 1/2) of the largest (the objective's error
+is assumed to come from where the local errors are largest; measured on
+bang-bang and L1 problems, the switching intervals).
 
 Refinement (h): every interval whose error exceeds the tolerance is split into
 ``n = clip(ceil((e / tol)^(1 / (d + 1))), 2, max_split)`` equal parts (the
@@ -17,6 +35,7 @@ is built on the new mesh and solved from the previous solution resampled.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -27,13 +46,73 @@ from .collocation import CollocationPhase, radau_points
 
 @dataclass
 class MeshRound:
-    """One solve of a mesh-refinement run."""
+    """One solve of a mesh-refinement run.
+
+    ``objective_error`` is the estimate of :func:`objective_change` (``inf``
+    on the first mesh: nothing to compare with); ``refined_for`` says which
+    criterion made the refinement go on after this round: ``"state"`` (an
+    interval's estimate above ``tol``), ``"objective"`` (the states met
+    ``tol``, the objective's estimate did not meet ``objective_tol``) or
+    ``""`` (the last round).
+    """
 
     intervals: list[int]  # per phase
     max_error: float
     objective: float
     iterations: int
     solve_time: float
+    objective_error: float = math.inf
+    refined_for: str = ""
+
+
+def objective_change(previous: list[float], current: float) -> float:
+    """Estimate of the objective's discretisation error from the objectives of the meshes.
+
+    The larger of the last two changes ``|J_r - J_r-1|`` and ``|J_r-1 - J_r-2|``:
+    one change can be small because the last round split only some of the
+    intervals that carry the error (measured: 2.4e-7 for an error of 6.2e-7),
+    two in a row rarely are.
+
+    Parameters
+    ----------
+    previous : list of float
+        The objectives on the earlier (coarser) meshes, in order.
+    current : float
+        The objective on this mesh.
+
+    Returns
+    -------
+    float
+        The estimate; ``inf`` on the first mesh (nothing to compare with).
+    """
+    values = [*previous[-2:], current]
+    if len(values) < 2 or not all(math.isfinite(v) for v in values):
+        return math.inf
+    return float(np.max(np.abs(np.diff(values))))
+
+
+def objective_threshold(max_error: float, change: float, target: float) -> float:
+    """Local-error threshold above which an interval is split for the objective.
+
+    The largest local error is asked to shrink by the factor the objective's
+    error must shrink by (``target / change``), at most 1/2 so that the worst
+    intervals are always split (1/2 when the change is unknown) and at least
+    1/100 so that one round splits only the two decades of intervals with the
+    largest errors: a far-off objective is approached over several rounds
+    rather than by refining everywhere at once (measured: 215 intervals
+    instead of 1998 on a path constraint touched between nodes, same result).
+
+    Parameters
+    ----------
+    max_error : float
+        The largest interval error estimate.
+    change : float
+        The objective's error estimate (:func:`objective_change`).
+    target : float
+        The objective's allowed absolute error.
+    """
+    factor = 0.5 if not math.isfinite(change) or change <= 0 else min(0.5, target / change)
+    return max_error * max(factor, 1e-2)
 
 
 def integration_matrix(nodes: np.ndarray) -> np.ndarray:

@@ -89,6 +89,7 @@ class Solution:
     violations: dict[str, tuple[float, float]]
     mesh_history: list[Any]
     mesh_error: float
+    objective_error: float  # Collocation.refine's estimate of the objective's error
     mesh_converged: bool
     objective_scale: float
 

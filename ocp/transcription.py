@@ -15,6 +15,7 @@ mesh; the final mesh's transcription is ``sol.transcription``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -24,7 +25,13 @@ from .collocation import CollocationPhase
 from .discretization import PhaseDiscretization
 from .errors import ProblemDefinitionError, SolveError
 from .integrators import cvodes_function, rk4_function
-from .mesh import MeshRound, interval_errors, refine_mesh
+from .mesh import (
+    MeshRound,
+    interval_errors,
+    objective_change,
+    objective_threshold,
+    refine_mesh,
+)
 from .multiphase import MultiPhaseProblem
 from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, Transcription
 from .problem import OptimalControlProblem
@@ -34,7 +41,8 @@ from .symbols import positive_int
 from .verify import interval_excess, verify
 
 __all__ = ["DEFAULT_IPOPT", "INFEASIBLE_STATUSES", "Collocation", "MultipleShooting",
-           "Transcription", "continuation", "cvodes_function", "rk4_function", "transcribe"]
+           "Transcription", "continuation", "cvodes_function", "decision_bounds",
+           "rk4_function", "transcribe"]
 
 Problem = OptimalControlProblem | MultiPhaseProblem
 
@@ -160,7 +168,9 @@ class Collocation(Transcription):
 
     Every solution carries ``mesh_error``, the largest interval error
     estimate of :mod:`ocp.mesh` (relative; compare it with the accuracy you
-    need, or call :meth:`refine`).
+    need, or call :meth:`refine`), and ``objective_error``, the estimate of
+    the objective's error (NaN after one solve: it needs two meshes; see
+    :meth:`refine`).
     """
 
     method = "collocation"
@@ -193,6 +203,7 @@ class Collocation(Transcription):
         """Solve, and attach the discretisation error estimate (``sol.mesh_error``)."""
         sol = super()._solve(params, guess, warm_start, verify_mode)
         sol.mesh_error = float(max(interval_errors(ph).max() for ph in sol.phases))
+        sol.objective_error = math.nan  # one mesh: nothing to compare the objective with
         return sol
 
     def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
@@ -212,15 +223,16 @@ class Collocation(Transcription):
 
     def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
                max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
-               max_split: int = 8) -> Solution:
-        """Solve, then refine the mesh until every interval's error estimate is below ``tol``.
+               max_split: int = 8, objective_tol: float | None = None) -> Solution:
+        """Solve, then refine the mesh until the states and the objective are accurate.
 
         Parameters
         ----------
         params : dict, optional
             Parameter values.
         tol : float
-            Requested relative accuracy of the states (and cost quadratures).
+            Requested relative accuracy of the states (and cost quadratures):
+            every interval's error estimate must be below it.
         max_rounds : int
             Most refinements (each builds and solves one NLP).
         max_intervals : int
@@ -229,42 +241,77 @@ class Collocation(Transcription):
             Start of the first solve.
         max_split : int
             Most pieces an interval is split into per round.
+        objective_tol : float, optional
+            Requested accuracy of the objective, relative to ``max(1, |J|)``
+            (default: ``tol``; ``math.inf`` switches the criterion off). The
+            objective's error estimate is its change between the last two
+            meshes (see :mod:`ocp.mesh`): the states' estimate does not see
+            the error of a control that jumps inside an interval (an L1 cost,
+            bang-bang arcs), which can leave the objective ten times less
+            accurate than the states. Meeting it takes at least two solves.
 
         The error of an interval is the larger of its estimate (see
         :mod:`ocp.mesh`) and the path-constraint violation found inside it on
         the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
         relaxes bounds by about 1e-8), so refinement also closes gaps between
-        points.
+        points. While an interval exceeds ``tol`` the rounds are driven by the
+        states; once none does, by the objective, splitting the intervals with
+        the largest estimates (:func:`ocp.mesh.objective_threshold`).
 
         Returns
         -------
         Solution
-            On the last mesh; ``mesh_history`` lists every round,
-            ``mesh_error`` is the final estimate and ``mesh_converged`` tells
-            whether it met ``tol``. ``sol.transcription`` re-solves on that mesh.
+            On the last mesh; ``mesh_history`` lists every round (with its
+            objective estimate and the criterion that drove the next round),
+            ``mesh_error`` is the final state estimate, ``objective_error``
+            the final objective estimate (absolute; ``inf`` if there was one
+            round only) and ``mesh_converged`` tells whether both met their
+            tolerances. ``sol.transcription`` re-solves on that mesh.
         """
+        otol = tol if objective_tol is None else float(objective_tol)
         tr = self  # every round is checked between points by the refinement itself
         sol = tr._solve(params, guess, None, "off")
         history: list[MeshRound] = []
+        previous: list[float] = []  # objectives of the earlier rounds
         for rnd in range(max_rounds + 1):
             errs = [np.maximum(interval_errors(ph), self._gaps(ph, sol.params))
                     for ph in sol.phases]
             emax = float(max(e.max() for e in errs))
+            change = objective_change(previous, sol.objective)
+            target = otol * max(1.0, abs(sol.objective))
+            driver = "state" if emax > tol else "objective" if change > target else ""
             history.append(MeshRound([e.size for e in errs], emax, sol.objective,
-                                     sol.iterations, sol.solve_time))
-            new = [refine_mesh(m, e, tol, self.degree, max_split)
-                   for m, e in zip(tr.meshes, errs, strict=True)]
-            if emax <= tol or rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
+                                     sol.iterations, sol.solve_time, change, driver))
+            if not driver:
+                break
+            new = self._next_meshes(tr.meshes, errs, driver, tol, change, target, max_split)
+            if rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
+                history[-1].refined_for = ""
                 break
             tr = tr.with_mesh(new)
+            previous.append(sol.objective)
             try:
                 sol = tr._solve(params, sol, None, "off")
             except SolveError:  # the previous mesh's solution may mislead: start afresh
                 sol = tr._solve(params, guess, None, "off")
-        sol.mesh_history, sol.mesh_error, sol.mesh_converged = history, emax, emax <= tol
+        sol.mesh_history, sol.mesh_error, sol.objective_error = history, emax, change
+        sol.mesh_converged = emax <= tol and change <= target
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
 
+    def _next_meshes(self, meshes: list[np.ndarray], errs: list[np.ndarray], driver: str,
+                     tol: float, change: float, target: float,
+                     max_split: int) -> list[np.ndarray]:
+        """The refined meshes for a round driven by the states or by the objective."""
+        if driver == "state":
+            return [refine_mesh(m, e, tol, self.degree, max_split)
+                    for m, e in zip(meshes, errs, strict=True)]
+        emax = float(max(e.max() for e in errs))
+        if emax <= 0.0:  # nothing to localise the objective's error by: halve every interval
+            return [refine_mesh(m, np.ones(m.size - 1), 0.5, self.degree, 2) for m in meshes]
+        cut = objective_threshold(emax, change, target)
+        return [refine_mesh(m, e, cut, self.degree, max_split)
+                for m, e in zip(meshes, errs, strict=True)]
 
     def _gaps(self, ph: Solution, params: dict[str, float]) -> np.ndarray:
         excess = interval_excess(ph, params, self.verify_points)
@@ -291,6 +338,22 @@ def transcribe(problem: Problem, method: str = "multiple_shooting", **options: A
         return Collocation(problem, **options)
     raise ProblemDefinitionError(f"method must be 'multiple_shooting' or 'collocation', got "
                                  f"{method!r}")
+
+
+def decision_bounds(transcription: Transcription, params: dict[str, float] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of a transcription's decision vector at these parameter values.
+
+    Parameters
+    ----------
+    transcription : Transcription
+        A multiple-shooting or collocation transcription.
+    params : dict, optional
+        Parameter values (every declared parameter).
+    """
+    pv = transcription.param_vector({} if params is None else params)
+    lbw, ubw = transcription._bounds(pv)[:2]
+    return np.array(lbw, dtype=float).ravel(), np.array(ubw, dtype=float).ravel()
 
 
 def _check_mesh(mesh: Any) -> np.ndarray:
