@@ -17,21 +17,16 @@ from .problems import SuiteProblem
 
 MODULES = (
     "fuller", "rayleigh_min_time", "oscillator_min_time", "thrusters_2d",
-    "modal_double_integrator", "cannonball", "pendulum_swingup", "min_fuel_l1",
+    "modal_double_integrator", "cannonball", "pendulum_swingup", "min_fuel_double_integrator",
 )
-"""Modules of later problems (each defines ``PROBLEM``)."""
+"""Modules of later problems (each defines ``PROBLEM``, or ``PROBLEMS_HERE`` for several)."""
 
 
 def _later() -> list[SuiteProblem]:
     out = []
     for name in MODULES:
-        try:
-            mod = importlib.import_module(f".{name}", __name__)
-        except ModuleNotFoundError as err:  # a module still to come, not a broken one
-            if err.name != f"{__name__}.{name}":
-                raise
-            continue
-        out.append(mod.PROBLEM)
+        mod = importlib.import_module(f".{name}", __name__)
+        out += getattr(mod, "PROBLEMS_HERE", [mod.PROBLEM])
     return out
 
 
