@@ -68,8 +68,9 @@ def pmp_functions(pr: OptimalControlProblem) -> PMPFunctions:
     Raises
     ------
     ValueError
-        If the dynamics are not affine in the controls, or the running cost is
-        neither affine nor quadratic in them.
+        If the dynamics are not affine in the controls, the running cost is
+        neither affine nor quadratic in them, or either depends on time or on a
+        decision variable.
     """
     if pr in _FN_CACHE:
         return _FN_CACHE[pr]
@@ -81,6 +82,14 @@ def pmp_functions(pr: OptimalControlProblem) -> PMPFunctions:
     lam = ca.SX.sym("lam", pr.nx)
     H = pr.lagrange + ca.dot(lam, pr.rhs)
     args = [pr.x, pr.u, lam, pr.p]
+    known = {str(s) for a in args for s in ca.symvar(a)}
+    free = sorted({str(s) for s in ca.symvar(H)} - known)
+    if free:
+        # time (or a decision variable) in f or L: H is no longer constant along an
+        # extremal, and the checks below are those of an autonomous problem
+        raise ValueError(f"the dynamics or running cost depend on {', '.join(free)} (time or "
+                         "decision variables): the certificate covers autonomous problems "
+                         "with parameters only")
     out = PMPFunctions(ca.Function("H", args, [H]),
                        ca.Function("sigma", args, [ca.jacobian(H, pr.u).T]),
                        ca.Function("Hx", args, [ca.gradient(H, pr.x)]),

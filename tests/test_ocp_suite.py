@@ -15,7 +15,8 @@ from functools import cache
 import pytest
 from ocp_suite import PROBLEMS
 
-from ocp import Collocation, MultipleShooting, PathViolationWarning
+from ocp import Collocation, MultipleShooting, PathViolationWarning, certify, refine_switching
+from ocp.pmp import CERTIFIED
 
 BY_NAME = {p.name: p for p in PROBLEMS}
 
@@ -35,8 +36,12 @@ def test_suite_covers_what_the_issue_asks():
     for need in ("state-constrained arc", "singular arc", "bang-bang, one control",
                  "bang-bang, several controls", "mixed state-control", "integral",
                  "free initial times", "free final time", "decision parameters",
-                 "phase constraint active", "between nodes"):
+                 "phase constraint active", "between nodes", "chattering", "SI units",
+                 "control-only coupling constraints (inequality)",
+                 "control-only coupling constraints (equality", "several local optima",
+                 "bang-bang solved by collocation and certified", "objective accuracy"):
         assert need in covers, need
+    assert len(PROBLEMS) >= 20
     assert sum(math.isfinite(p.published) for p in PROBLEMS) >= 10
 
 
@@ -87,3 +92,27 @@ def test_mesh_refinement_builds_once_per_mesh_and_resolves_without_rebuild():
     tr = sol.transcription
     again = tr.solve(guess=sol)
     assert tr.n_builds == 1 and again.objective == pytest.approx(sol.objective, rel=1e-10)
+
+
+# the certificate against the literature's verdict, on every single-phase problem with a
+# control: bang-bang ones are certified from their collocation solution and its refined
+# switching times; the others (singular, chattering, smooth) are never certified
+CERT_SLOW = {"robot_arm"}
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(p.name, marks=pytest.mark.slow) if p.name in CERT_SLOW else p.name
+    for p in PROBLEMS if not p.name.startswith(("bryson_denham_3", "pinene", "cannonball"))])
+def test_certificate_agrees_with_the_literature(name):
+    sp = BY_NAME[name]
+    sol = refined(name)
+    if sp.bang_bang:
+        cert = certify(sol, refine_switching(sol))
+        assert cert.verdict == CERTIFIED, cert.reasons
+        return
+    try:
+        cert = certify(sol)
+    except ValueError as err:  # outside what the certificate covers: said, not guessed
+        assert any(w in str(err) for w in ("affine", "convex", "autonomous")), err
+        return
+    assert cert.verdict != CERTIFIED, cert.reasons
