@@ -86,7 +86,7 @@ def test_non_finite_guess_is_named_before_the_solve():
     h, v = p.state("h"), p.state("v")
     # no fixed value and bounds that allow only 0: no other point can make u/m finite
     # (with room in the bounds, the default guess would move m away from 0: see
-    # tests/ocp/test_scaling_ocp.py)
+    # tests/test_scaling_ocp.py)
     m = p.state("m", lower=0.0, upper=0.0)
     u = p.control("u", 0, 1)
     p.set_dynamics({"h": v, "v": u / m - 1, "m": -u})
