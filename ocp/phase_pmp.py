@@ -52,6 +52,9 @@ class PhasesCertificate(PMPCertificate):
         Joined in absolute time (empty when the phases' states or controls differ).
     numerical_error, checked_from, per_control, elapsed : as PMPCertificate
         Worst errors, earliest checked time, per-control figures, seconds.
+    chattering : None
+        Not looked for phase by phase: a multi-phase certificate stands on a
+        refinement, which a chattering structure (an interior arc) does not have.
     phases : list of PMPCertificate
         One per phase (in the phase's own time).
     phase_names : list of str

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .arcs import control_bounds_at
-from .constraint_kinds import coupled_groups
+from .constraint_kinds import MIXED, controls_in, coupled_groups, path_kinds
 from .control_set import control_polytope, distance_to_vertices, vertex_scores
 from .costates import pmp_functions
 from .problem import OptimalControlProblem
@@ -358,11 +358,19 @@ def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u
     dict
         Per coupled control: ``(agreement, switch gap, vertex-change times, singular runs)``.
         Groups whose polytope cannot be enumerated (unbounded, too large) are left out
-        (their controls get the per-control checks).
+        (their controls get the per-control checks), and so is a single control that a
+        mixed constraint bounds too. A group of several controls that a mixed
+        constraint also bounds is checked on its polytope without that constraint.
     """
     out: dict[str, tuple[float, float, np.ndarray, list[tuple[float, float]]]] = {}
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
+    in_mixed = {n for c, k in zip(pr.path, path_kinds(pr), strict=True) if k == MIXED
+                for n in controls_in(pr, c)}
     for group in coupled_groups(pr, singletons=True):
+        if len(group) == 1 and group[0] in in_mixed:
+            # a mixed constraint moves this control's bounds with the state: the
+            # per-control check with the effective bounds sees both kinds at once
+            continue
         poly = control_polytope(pr, group, pv)
         if poly is None:
             continue
