@@ -22,9 +22,10 @@ from typing import Any
 
 import numpy as np
 
+from .arcs import detect_structure
 from .costates import adjoint_sweep
 from .phase_refinement import RefinedPhases, local_phase
-from .pmp_certificate import PMPCertificate, not_applicable, refusal
+from .pmp_certificate import PMPCertificate, hold_to_structure, not_applicable, refusal
 from .pmp_checks import CERTIFIED, ERROR_MARGIN, INCONCLUSIVE, NOT_BANG_BANG, Tolerances
 from .pmp_refined import certify_refined, constrained_refined
 from .solution import Solution
@@ -144,6 +145,8 @@ def certify_phases(sol: Solution | None, refined: RefinedPhases, *,
             certs.append(_no_control(r))
         else:
             certs.append(certify_refined(loc, r, tol, n))
+            if sol is not None:  # never certify what the phase's own structure doubts
+                hold_to_structure(certs[-1], detect_structure(loc))
         gap, err = _junction_gap(r, refined.junction_costates[i], n)
         gaps.append(gap)
         if math.isfinite(gap) and gap > JUNCTION_TOL and gap > ERROR_MARGIN * err:

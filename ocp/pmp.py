@@ -74,6 +74,7 @@ from .costates import adjoint_along_refined as adjoint_along_refined
 from .costates import costates_from_multipliers as costates_from_multipliers
 from .costates import pmp_functions
 from .pmp_certificate import PMPCertificate as PMPCertificate
+from .pmp_certificate import hold_to_structure
 from .pmp_certificate import not_applicable as not_applicable
 from .pmp_certificate import refusal as refusal
 from .pmp_checks import CERTIFIED as CERTIFIED
@@ -183,13 +184,16 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     PMPCertificate
     """
     if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":
-        from .phase_pmp import certify_phases
+        from .phase_pmp import PhasesCertificate, certify_phases
         from .phase_refinement import RefinedPhases
 
         if not isinstance(refined, RefinedPhases):
+            refused = refusal(sol, refined)
+            if refused is not None:  # a failed solve: refused, whatever else is missing
+                return not_applicable(refused.verdict, refused.reasons, PhasesCertificate)
             raise ValueError("a multi-phase solution is certified with its refinement: "
                              "certify(sol, ocp.phase_refinement.refine_phases(sol))")
-        # (certify_phases refuses a failed solve or refinement itself)
+        # (certify_phases refuses a failed solve or refinement, or another candidate's)
         return certify_phases(sol, refined, tol_H=tol_H, tol_sigma=tol_sigma,  # type: ignore
                               tol_switch=tol_switch, min_singular=min_singular, n=n)
     refused = refusal(sol, refined)
@@ -209,7 +213,7 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     else:
         tol.switch = 1.5 * h if tol_switch is None else tol_switch
         cert = certify_transcription(tsol, tol, verify, tol_switch is None)
-    _against_structure(cert, detect_structure(tsol) if structure is None else structure)
+    hold_to_structure(cert, detect_structure(tsol) if structure is None else structure)
     if chattering:
         found = detect_chattering(tsol, resolve=verify, max_nodes=max_nodes)
         if found is not None:
@@ -218,27 +222,6 @@ def certify(sol: SolutionLike, refined: Any = None, *,
             cert.verdict = CHATTERING
     cert.elapsed = time.process_time() - t0
     return cert
-
-
-def _interior_arcs(structure: ArcStructure) -> list[tuple[str, float, float]]:
-    """``(control, start, end)`` of every interior arc of the structure."""
-    return [(s.control, a.start, a.end) for s in structure.per_control for a in s.arcs
-            if a.kind == "interior"]
-
-
-def _against_structure(cert: PMPCertificate, structure: ArcStructure) -> None:
-    """Never certify what structure detection doubts: an interior arc (singular, free or
-    unresolved by the grid) makes a "bang-bang certified" verdict "inconclusive"."""
-    interior = _interior_arcs(structure)
-    if not interior and structure.refinable:
-        return
-    spans = ", ".join(f"[{a:.6g}, {b:.6g}] ({c})" for c, a, b in interior) or "some control"
-    reason = (f"structure detection finds an interior arc on {spans}: a singular, free or "
-              "unresolved arc (refine_switching refuses it), never certified bang-bang")
-    if cert.verdict == CERTIFIED:
-        cert.verdict = INCONCLUSIVE
-    if cert.verdict != NOT_BANG_BANG:  # a refutation stands on its own checks
-        cert.reasons = [*cert.reasons, reason]
 
 
 def detect_chattering(sol: SolutionLike, *, resolve: bool = True,

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from .arcs import SolutionLike
+from .arcs import ArcStructure, SolutionLike
 from .chattering import ChatteringResult
-from .pmp_checks import CERTIFIED, NOT_APPLICABLE, UNVERIFIED, Figures
+from .pmp_checks import CERTIFIED, INCONCLUSIVE, NOT_APPLICABLE, NOT_BANG_BANG, UNVERIFIED, Figures
 
 
 @dataclass
@@ -170,7 +170,9 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
         A transcribed solution: refused when ``success`` is False (:data:`NOT_APPLICABLE`)
         or, certified alone (no ``refined``), when ``verified`` is False (:data:`UNVERIFIED`).
     refined : RefinedSwitching or RefinedPhases, optional
-        Refused when its ``success`` is False (the iterate of a failed refinement).
+        Refused when its ``success`` is False (the iterate of a failed refinement), or
+        when it is not a refinement of ``sol`` (another problem, other parameter
+        values, or started from a transcription with another objective).
 
     Returns
     -------
@@ -186,6 +188,11 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
             f"the switching refinement did not converge (status "
             f"{getattr(refined, 'status', '?')}): its iterate is no optimum, nothing is "
             "checked"])
+    other = _other_candidate(sol, refined)
+    if other:
+        return not_applicable(NOT_APPLICABLE, [
+            f"the refinement is not this solution's ({other}): a verdict would be about "
+            "another candidate, nothing is checked"])
     if refined is None and sol is not None and getattr(sol, "verified", None) is False:
         # (with a refinement, the candidate is the refined solution: the transcription
         # only started it, and its violation between nodes is the grid's)
@@ -195,6 +202,24 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
             f"{sorted(getattr(sol, 'violations', {}))}): not a verified solution, nothing is "
             "checked"])
     return None
+
+
+def _other_candidate(sol: Any, refined: Any) -> str:
+    """Why ``refined`` is not a refinement of ``sol`` ("" when it may be): another problem,
+    other parameter values, or started from a transcription with another objective."""
+    if sol is None or refined is None:
+        return ""
+    if getattr(refined, "problem", None) is not getattr(sol, "problem", None):
+        return "it belongs to another problem"
+    a, b = getattr(sol, "params", None) or {}, getattr(refined, "params", None) or {}
+    differ = sorted(k for k in set(a) | set(b) if k not in a or k not in b
+                    or abs(float(a[k]) - float(b[k])) > 1e-12 * max(1.0, abs(float(a[k]))))
+    if differ:
+        return f"other values of {', '.join(differ)}"
+    Jt, J = getattr(refined, "transcribed_objective", math.nan), getattr(sol, "objective", math.nan)
+    if math.isfinite(Jt) and math.isfinite(J) and abs(Jt - J) > 1e-9 * max(1.0, abs(J)):
+        return f"it was started from a transcription with objective {Jt:.10g}, not {J:.10g}"
+    return ""
 
 
 def not_applicable(verdict: str, reasons: list[str],
@@ -212,3 +237,37 @@ def not_applicable(verdict: str, reasons: list[str],
     nan = math.nan
     return cls(verdict, reasons, None, nan, nan, nan, nan, nan, [], [], nan,
                "none (refused)")
+
+
+def interior_arcs(structure: ArcStructure) -> list[tuple[str, float, float]]:
+    """``(control, start, end)`` of every interior arc of the structure.
+
+    Parameters
+    ----------
+    structure : ArcStructure
+    """
+    return [(s.control, a.start, a.end) for s in structure.per_control for a in s.arcs
+            if a.kind == "interior"]
+
+
+def hold_to_structure(cert: PMPCertificate, structure: ArcStructure) -> None:
+    """Never certify what structure detection doubts: an interior arc (singular, free or
+    unresolved by the grid) makes a "bang-bang certified" verdict "inconclusive".
+
+    Parameters
+    ----------
+    cert : PMPCertificate
+        Changed in place (verdict and reasons).
+    structure : ArcStructure
+        The structure detected on the candidate's transcription.
+    """
+    interior = interior_arcs(structure)
+    if not interior and structure.refinable:
+        return
+    spans = ", ".join(f"[{a:.6g}, {b:.6g}] ({c})" for c, a, b in interior) or "some control"
+    reason = (f"structure detection finds an interior arc on {spans}: a singular, free or "
+              "unresolved arc (refine_switching refuses it), never certified bang-bang")
+    if cert.verdict == CERTIFIED:
+        cert.verdict = INCONCLUSIVE
+    if cert.verdict != NOT_BANG_BANG:  # a refutation stands on its own checks
+        cert.reasons = [*cert.reasons, reason]

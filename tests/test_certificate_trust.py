@@ -294,3 +294,53 @@ def test_chattering_without_a_re_solve_needs_a_long_run():
     coarse = _solve(1.0, 6.0, False, 40)
     assert detect_chattering(coarse, resolve=False) is None
     assert certify(coarse, verify=False).verdict == INCONCLUSIVE  # the interior arc
+
+
+def test_refinement_of_another_candidate_is_refused():
+    """A refinement belongs to the solution it refined: another parameter value, another
+    problem or another transcription's start gives "not applicable" (before: the minimum-
+    time double integrator at d = 2 was "bang-bang certified" with the refinement of d = 5,
+    final times 2.83 and 4.47), single- and multi-phase alike."""
+    ms = MultipleShooting(_double_integrator(), nodes=40)
+    sol2, sol5 = ms.solve({"d": 2.0}), ms.solve({"d": 5.0})
+    r2, r5 = refine_switching(sol2), refine_switching(sol5)
+    assert certify(sol2, r2).verdict == CERTIFIED
+    cert = certify(sol2, r5)
+    assert cert.verdict == NOT_APPLICABLE and "other values of d" in cert.reasons[0]
+    other = MultipleShooting(_double_integrator(), nodes=40).solve({"d": 2.0})
+    assert "another problem" in certify(other, r2).reasons[0]
+    ms30 = MultipleShooting(fuller(1.0, 5.0), nodes=30)
+    coarse = ms30.solve({})
+    finer = MultipleShooting(ms30.problem, nodes=60).solve({})
+    assert "started from a transcription" in certify(finer, refine_switching(coarse)).reasons[0]
+
+    from ocp.phase_refinement import refine_phases
+
+    tr = MultipleShooting(_two_phase(), nodes=[20, 20])
+    sa, sb = tr.solve({"d": 2.0}), tr.solve({"d": 3.0})
+    assert certify(sa, refine_phases(sb)).verdict == NOT_APPLICABLE
+
+
+def test_failed_multi_phase_solve_is_refused_not_an_error():
+    """A failed multi-phase solve's iterate, certified without a refinement, gets "not
+    applicable" (before: a ValueError asking for a refinement of a failed solve)."""
+    tr = MultipleShooting(_two_phase(), nodes=[20, 20], ipopt_options={"max_iter": 1})
+    with pytest.raises(SolveError) as info:
+        tr.solve({"d": 2.0})
+    assert certify(info.value.iterate).verdict == NOT_APPLICABLE
+
+
+def _double_integrator() -> OptimalControlProblem:
+    """The README's minimum-time double integrator to x = d."""
+    p = OptimalControlProblem("double_integrator")
+    x, v = p.state("x"), p.state("v")
+    u = p.control("u", lower=-1, upper=1)
+    d = p.parameter("d")
+    p.set_dynamics({"x": v, "v": u})
+    p.initial_constraint(x, 0.0)
+    p.initial_constraint(v, 0.0)
+    p.terminal_constraint(x - d, 0.0)
+    p.terminal_constraint(v, 0.0)
+    p.free_final_time(lower=0.01, upper=100)
+    p.minimize_terminal(p.T)
+    return p
