@@ -32,12 +32,13 @@ import json, sys, time, warnings
 from ocp_suite import PROBLEMS
 from ocp import Collocation
 sp = {p.name: p for p in PROBLEMS}[sys.argv[1]]
+extra = json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
 guess = sp.guess() if sp.guess else None
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
     w, c = time.perf_counter(), time.process_time()
     sol = Collocation(sp.build(), intervals=sp.intervals, degree=sp.degree).refine(
-        tol=sp.tol, max_rounds=sp.max_rounds, guess=guess)
+        tol=sp.tol, max_rounds=sp.max_rounds, guess=guess, **extra)
     rw, rc = time.perf_counter() - w, time.process_time() - c
     meshes = [ph.discretization.tau for ph in sol.phases]
     tr = Collocation(sp.build(), mesh=meshes, degree=sp.degree, verify="off")
@@ -68,10 +69,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--baseline", required=True, help="git revision to compare against")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--current-refine", default="{}", metavar="JSON",
+                    help='extra keyword arguments of the current revision\'s refine, e.g. '
+                         '\'{"objective_tol": Infinity}\' for the baseline\'s stopping rule')
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:
         ap.error("--repeats must be at least 1")
+    try:
+        json.loads(args.current_refine)
+    except ValueError as err:
+        ap.error(f"--current-refine is not JSON: {err}")
     with tempfile.TemporaryDirectory(prefix="bench-rev-") as tmp:
         base = Path(tmp) / "baseline"
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base),
@@ -81,7 +89,8 @@ def main() -> None:
             names = [n for n in run_in(ROOT, NAMES) if n in both
                      and (not args.names or n in args.names)]
             print(f"baseline {args.baseline} against the working tree; medians of "
-                  f"{args.repeats} interleaved runs; ratio = current / baseline")
+                  f"{args.repeats} interleaved runs; ratio = current / baseline; current "
+                  f"refine options {args.current_refine}")
             print(f"{'problem':22s} {'refine wall':>11s} {'cpu':>6s} {'ratio':>6s} "
                   f"{'cpu':>6s} | {'solve cpu':>9s} {'ratio':>6s} | objective (both)")
             for name in names:
@@ -89,7 +98,8 @@ def main() -> None:
                 for k in range(args.repeats):
                     order = [("base", base), ("now", ROOT)]
                     for key, tree in order if k % 2 == 0 else order[::-1]:
-                        rows[key].append(run_in(tree, CHILD, name))  # type: ignore[arg-type]
+                        extra = [args.current_refine] if key == "now" else []
+                        rows[key].append(run_in(tree, CHILD, name, *extra))  # type: ignore
 
                 def med(key: str, field: str, rows: dict = rows) -> float:
                     return statistics.median(r[field] for r in rows[key])

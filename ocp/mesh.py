@@ -65,13 +65,18 @@ class MeshRound:
     refined_for: str = ""
 
 
+ONE_CHANGE_MARGIN = 3.0
+"""With two meshes only, the objective's error estimate is this times their change."""
+
+
 def objective_change(previous: list[float], current: float) -> float:
     """Estimate of the objective's discretisation error from the objectives of the meshes.
 
     The larger of the last two changes ``|J_r - J_r-1|`` and ``|J_r-1 - J_r-2|``:
     one change can be small because the last round split only some of the
     intervals that carry the error (measured: 2.4e-7 for an error of 6.2e-7),
-    two in a row rarely are.
+    two in a row rarely are. With two meshes only, :data:`ONE_CHANGE_MARGIN`
+    times their one change.
 
     Parameters
     ----------
@@ -88,6 +93,8 @@ def objective_change(previous: list[float], current: float) -> float:
     values = [*previous[-2:], current]
     if len(values) < 2 or not all(math.isfinite(v) for v in values):
         return math.inf
+    if len(values) == 2:  # one change only: the under-estimate measured above, with margin
+        return ONE_CHANGE_MARGIN * abs(values[1] - values[0])
     return float(np.max(np.abs(np.diff(values))))
 
 

@@ -18,7 +18,7 @@ import pytest
 from ocp_suite.min_fuel_double_integrator import build, exact, exact_by_simulation
 
 from ocp import Collocation
-from ocp.mesh import objective_change, objective_threshold
+from ocp.mesh import ONE_CHANGE_MARGIN, objective_change, objective_threshold
 
 
 def test_the_reference_is_right():
@@ -61,7 +61,7 @@ def test_a_separate_objective_tolerance():
 
 def test_objective_estimate_helpers():
     assert objective_change([], 1.0) == math.inf
-    assert objective_change([1.0], 1.5) == 0.5
+    assert objective_change([1.0], 1.5) == ONE_CHANGE_MARGIN * 0.5  # one change: with margin
     assert objective_change([1.0, 1.5], 1.5) == 0.5  # the larger of the last two changes
     assert objective_change([0.0, 1.0, 1.5], 1.5) == 0.5
     assert objective_threshold(1e-6, math.inf, 1e-6) == 0.5e-6
