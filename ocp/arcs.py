@@ -40,7 +40,7 @@ from .constraint_kinds import (
 )
 from .control_set import control_polytope, vertex_faces
 from .flows import Mode
-from .gridview import is_collocation, mesh_level
+from .gridview import grid_spacing, is_collocation, mesh_level
 from .problem import OptimalControlProblem
 from .solution import Solution
 
@@ -627,8 +627,7 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
     arcs = _arcs_from_runs(tsol, runs, u, h, lo, hi, width)
     arcs[-1].end = float(tsol.N)
     _label_active(tsol, arcs, h, tol)
-    _place_on_grid(arcs, np.asarray(tsol.t, dtype=float))
-    arcs[-1].end = tsol.T
+    _place_on_grid(arcs, np.asarray(tsol.t, dtype=float))  # the last ends at t[N] = T
     return SwitchingStructure(name, arcs, lo, hi)
 
 
@@ -670,7 +669,7 @@ def detect_structure(sol: SolutionLike, tol: float = 1e-4, max_transition: int =
     per = [detect_arcs(tsol, name, tol, max_transition, max_gap, min_boundary_nodes)
            for name in tsol.problem.control_names]
     st = ArcStructure.from_controls(per, merge_tol)
-    return snap_to_control_set(tsol, st, (max_transition + 1) * tsol.T / tsol.N, merge_tol)
+    return snap_to_control_set(tsol, st, (max_transition + 1) * grid_spacing(tsol), merge_tol)
 
 
 def outside_control_set(problem: OptimalControlProblem, modes: tuple[Mode, ...],

@@ -32,6 +32,7 @@ import numpy as np
 
 from .arcs import SolutionLike, TranscribedSolution, transcribed
 from .costates import costates_from_multipliers, pmp_functions
+from .gridview import grid_spacing
 from .solution import along
 
 RATIO_MIN, RATIO_MAX = 0.02, 0.7
@@ -229,9 +230,8 @@ def shrinking_runs(t: np.ndarray, s: np.ndarray, h: float, T0: float,
 
 def _runs_of(sol: TranscribedSolution, samples: Samples) -> dict[str, list[_Run]]:
     t, sigma = _sigma_samples(sol, samples)
-    h = float(sol.T) / int(sol.N)
-    t0 = float(sol.t[0])
-    return {name: shrinking_runs(t, sigma[:, j], h, t0, t0 + float(sol.T))
+    h = grid_spacing(sol)
+    return {name: shrinking_runs(t, sigma[:, j], h, float(sol.t[0]), float(sol.t[-1]))
             for j, name in enumerate(sol.problem.control_names)}
 
 
@@ -295,7 +295,7 @@ def _confirm(sol: TranscribedSolution, name: str, run: _Run,
              samples: Samples) -> ChatteringResult | None:
     """The run as a result if a finer grid gives it more switches or, when no finer grid
     can be solved, if it is long enough on its own; None otherwise."""
-    N, h = int(sol.N), float(sol.T) / int(sol.N)
+    N, h = int(sol.N), grid_spacing(sol)
     counts = {N: len(run.zeros)}
     fine = None
     if resolve is not None and max_nodes >= 2 * N:

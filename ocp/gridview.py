@@ -176,3 +176,20 @@ def mesh_level(sol: Any) -> Any:
     avg = np.einsum("j,kji->ki", np.asarray(sol.discretization.B, dtype=float), U)
     idx = mesh_indices(sol)
     return MeshLevel(sol, np.asarray(sol.t)[idx], np.asarray(sol.x)[idx], avg)
+
+
+def grid_spacing(sol: Any) -> float:
+    """The mean spacing of ``sol``'s grid: shooting intervals, or collocation *mesh*
+    intervals (not collocation points), over the duration ``T - t0``.
+
+    Parameters
+    ----------
+    sol : Solution
+        A single-phase transcribed solution.
+
+    Returns
+    -------
+    float
+    """
+    t0 = float(getattr(sol, "t0", 0.0) or 0.0)
+    return (float(sol.T) - t0) / int(mesh_level(sol).N)

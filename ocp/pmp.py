@@ -73,6 +73,7 @@ from .chattering import detect_chattering as chattering_of
 from .costates import adjoint_along_refined as adjoint_along_refined
 from .costates import costates_from_multipliers as costates_from_multipliers
 from .costates import pmp_functions
+from .gridview import grid_spacing
 from .pmp_certificate import PMPCertificate as PMPCertificate
 from .pmp_certificate import hold_to_structure
 from .pmp_certificate import not_applicable as not_applicable
@@ -203,7 +204,7 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     t0 = time.process_time()
     pr = tsol.problem
     pmp_functions(pr)  # raises early on problems that are not control-affine
-    h = tsol.T / tsol.N
+    h = grid_spacing(tsol)
     tol = Tolerances(H=tol_H if tol_H is not None else (1e-6 if refined else 1e-2),
                      sigma=tol_sigma if tol_sigma is not None else (1e-6 if refined else 1e-2),
                      switch=math.nan, singular=2 * h if min_singular is None else min_singular)

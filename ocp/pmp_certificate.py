@@ -204,12 +204,25 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
     return None
 
 
+def _signature(pr: Any) -> tuple:
+    """What makes two problem objects the same problem (one built twice by the same code
+    is): names, variables, dynamics, running cost, bounds and path constraints, phase by
+    phase."""
+    if pr is None:
+        return ()
+    if hasattr(pr, "phases"):
+        return tuple(_signature(ph) for ph in pr.phases)
+    return (pr.name, tuple(pr.state_names), tuple(pr.control_names), tuple(pr.param_names),
+            str(pr.rhs), str(pr.lagrange), str(pr.state_bounds), str(pr.control_bounds),
+            str([(c.name, c.expr, c.lower, c.upper) for c in pr.path]))
+
+
 def _other_candidate(sol: Any, refined: Any) -> str:
     """Why ``refined`` is not a refinement of ``sol`` ("" when it may be): another problem,
     other parameter values, or started from a transcription with another objective."""
     if sol is None or refined is None:
         return ""
-    if getattr(refined, "problem", None) is not getattr(sol, "problem", None):
+    if _signature(getattr(refined, "problem", None)) != _signature(getattr(sol, "problem", None)):
         return "it belongs to another problem"
     a, b = getattr(sol, "params", None) or {}, getattr(refined, "params", None) or {}
     differ = sorted(k for k in set(a) | set(b) if k not in a or k not in b

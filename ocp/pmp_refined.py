@@ -21,6 +21,7 @@ import numpy as np
 
 from .arcs import TranscribedSolution
 from .costates import adjoint_sweep, costates_from_multipliers
+from .gridview import grid_spacing
 from .pmp_certificate import PMPCertificate, build_certificate
 from .pmp_checks import ERROR_MARGIN, Tolerances, figures, intervals_of, judge, verdict_of
 from .problem import OptimalControlProblem
@@ -234,10 +235,12 @@ def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray,
                  start: float) -> float:
     """Largest difference between the multiplier and the adjoint costates, relative."""
     t_tr, lam_tr = costates_from_multipliers(sol)
-    h = sol.T / sol.N
+    t_tr = t_tr - float(getattr(sol, "t0", 0.0) or 0.0)  # the refinement's time starts at 0
+    h = grid_spacing(sol)
     # common horizon, without the transcription's last interval (where its final
     # time, and any constrained tail, differ from the refined ones)
-    sel = (t_tr <= min(float(np.sum(ref.durations)), sol.T) - h) & (t_tr >= start + h)
+    end = float(sol.T) - float(getattr(sol, "t0", 0.0) or 0.0)
+    sel = (t_tr <= min(float(np.sum(ref.durations)), end) - h) & (t_tr >= start + h)
     if not sel.any() or len(t) < 2:
         return math.nan
     order = np.argsort(t, kind="stable")

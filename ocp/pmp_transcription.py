@@ -27,7 +27,7 @@ from .arcs import (
 )
 from .constraint_kinds import MIXED, STATE
 from .costates import costates_from_multipliers, terminal_costate
-from .gridview import is_collocation, mesh_level
+from .gridview import grid_spacing, is_collocation, mesh_level
 from .pmp_certificate import PMPCertificate, build_certificate
 from .pmp_checks import (
     INCONCLUSIVE,
@@ -85,7 +85,7 @@ def _shortest_interval(sol: TranscribedSolution) -> float:
     interval, or the shortest collocation mesh interval (its d + 1 points)."""
     if is_collocation(sol):
         return float(np.min(np.diff(mesh_level(sol).t)))
-    return sol.T / sol.N
+    return grid_spacing(sol)
 
 
 def _transcription_figures(sol: TranscribedSolution, tol: Tolerances

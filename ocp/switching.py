@@ -49,7 +49,7 @@ from .arcs import (
 )
 from .errors import InfeasibleError, SolveError
 from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
-from .gridview import mesh_level
+from .gridview import grid_spacing
 from .problem import OptimalControlProblem
 from .refinement import (
     DEFAULT_TOL,
@@ -441,7 +441,7 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         if repair_length is None and not repair:
             raise
         # 2.5 shooting intervals, or mesh intervals of a collocation solution
-        short = (2.5 * tsol.T / mesh_level(tsol).N) if repair_length is None else repair_length
+        short = 2.5 * grid_spacing(tsol) if repair_length is None else repair_length
         return _repair(st, attempt, err, short)
 
 

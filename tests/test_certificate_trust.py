@@ -307,7 +307,9 @@ def test_refinement_of_another_candidate_is_refused():
     assert certify(sol2, r2).verdict == CERTIFIED
     cert = certify(sol2, r5)
     assert cert.verdict == NOT_APPLICABLE and "other values of d" in cert.reasons[0]
-    other = MultipleShooting(_double_integrator(), nodes=40).solve({"d": 2.0})
+    rebuilt = MultipleShooting(_double_integrator(), nodes=40).solve({"d": 2.0})
+    assert certify(rebuilt, r2).verdict == CERTIFIED  # the same problem, built twice
+    other = MultipleShooting(_double_integrator(umax=2.0), nodes=40).solve({"d": 2.0})
     assert "another problem" in certify(other, r2).reasons[0]
     ms30 = MultipleShooting(fuller(1.0, 5.0), nodes=30)
     coarse = ms30.solve({})
@@ -330,11 +332,11 @@ def test_failed_multi_phase_solve_is_refused_not_an_error():
     assert certify(info.value.iterate).verdict == NOT_APPLICABLE
 
 
-def _double_integrator() -> OptimalControlProblem:
-    """The README's minimum-time double integrator to x = d."""
+def _double_integrator(umax: float = 1.0) -> OptimalControlProblem:
+    """The README's minimum-time double integrator to x = d (|u| <= umax)."""
     p = OptimalControlProblem("double_integrator")
     x, v = p.state("x"), p.state("v")
-    u = p.control("u", lower=-1, upper=1)
+    u = p.control("u", lower=-umax, upper=umax)
     d = p.parameter("d")
     p.set_dynamics({"x": v, "v": u})
     p.initial_constraint(x, 0.0)
