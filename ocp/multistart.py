@@ -501,6 +501,10 @@ def _solve_here(tr: Transcription, params: dict[str, float], w0: np.ndarray
     except ProblemDefinitionError as e:  # a start that makes the dynamics non-finite
         return {"status": type(e).__name__, "message": str(e), "success": False,
                 "iterations": 0, "solve_time": 0.0}
+    except (RuntimeError, ArithmeticError) as e:  # CasADi's evaluation errors and the like:
+        # one bad start is a failed start, not the end of the run
+        return {"status": type(e).__name__, "message": (str(e).splitlines() or [""])[0][:200],
+                "success": False, "iterations": 0, "solve_time": 0.0}
 
 
 def _reassemble(tr: Transcription, params: dict[str, float],

@@ -173,8 +173,9 @@ def certify(sol: SolutionLike, refined: Any = None, *,
         chattering.
     structure : ArcStructure, optional
         The arc structure to hold the verdict to (default: :func:`detect_structure`
-        of ``sol``); with ``refined`` from a structure of your own, pass that one. An
-        interior arc in it forbids "bang-bang certified".
+        of ``sol``); with ``refined`` from a structure of your own, pass that one
+        (its modes must be the refinement's, else ``ValueError``). An interior arc in
+        it forbids "bang-bang certified".
     chattering : bool
         Look for chattering (:func:`detect_chattering`).
     max_nodes : int
@@ -200,6 +201,12 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     refused = refusal(sol, refined)
     if refused is not None:
         return refused
+    if structure is not None and (refined is None or tuple(structure.modes) != tuple(
+            getattr(refined, "modes", ()))):
+        # a structure of one's own replaces the detected one only as the structure that
+        # was refined: anything else could talk the certificate out of a doubt
+        raise ValueError("structure= is the structure the refinement solved: pass it with "
+                         "that refinement (refined=...), or leave it out")
     tsol = transcribed(sol)
     t0 = time.process_time()
     pr = tsol.problem

@@ -346,3 +346,18 @@ def _double_integrator(umax: float = 1.0) -> OptimalControlProblem:
     p.free_final_time(lower=0.01, upper=100)
     p.minimize_terminal(p.T)
     return p
+
+
+def test_a_structure_of_ones_own_must_be_the_refined_one():
+    """``structure=`` cannot talk the certificate out of a doubt: it must be the structure
+    the refinement solved (before: any structure without interior arcs was accepted, with or
+    without a refinement)."""
+    sol = MultipleShooting(_double_integrator(), nodes=40).solve({"d": 2.0})
+    st = detect_structure(sol)
+    r = refine_switching(sol, st)
+    assert certify(sol, r, structure=st).verdict == CERTIFIED
+    with pytest.raises(ValueError, match="structure the refinement solved"):
+        certify(sol, structure=st)
+    other = detect_structure(_solve(1.0, 5.0, False, 60))  # five bang arcs, not two
+    with pytest.raises(ValueError, match="structure the refinement solved"):
+        certify(sol, r, structure=other)
