@@ -825,10 +825,13 @@ def build_intervals(G: ConstraintBlocks, pr: OptimalControlProblem, dyns: list[A
     for k, d in enumerate(dyns):
         _entry_rows(G, pr, k, d, z, held_prev, entry_names)
         pts, z_end = interval_flow(d, substeps[k], samples, z, tau[k], p)
+        # constant controls meet the control-only constraints once for all
+        # (check_control_set); a control following a boundary law may leave them
+        settled = control_only if not ca.depends_on(d.u, pr.x) else set()
         for j, zj in enumerate(pts):
             if k == 0 and j == 0 and not check_start:
                 continue
-            skip = set(d.held) | control_only | (set(held_prev) if j == 0 else set())
+            skip = set(d.held) | settled | (set(held_prev) if j == 0 else set())
             keep = [i for i, n in enumerate(names) if n not in skip]
             if hfn is not None and keep:
                 hv = hfn(zj[:nx], ca.substitute(d.u, pr.x, zj[:nx]), p)
