@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from numpy.polynomial import Polynomial
 from ocp_suite.fuller import FULLER_C, cost_to_origin, fuller, fuller_value, ratio
+from problems import min_time_double_integrator
 from scipy.optimize import minimize_scalar
 
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, SolveError
@@ -137,18 +138,7 @@ def test_no_chattering_on_genuine_bang_bang():
     assert np.allclose(r.switch_times, switches, atol=1e-6)
     assert certify(sol, r).verdict == CERTIFIED
 
-    p = OptimalControlProblem()
-    x, v = p.state("x"), p.state("v")
-    u = p.control("u", lower=-1, upper=1)
-    d = p.parameter("d")
-    p.set_dynamics({"x": v, "v": u})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x - d, 0.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.01, upper=100)
-    p.minimize_terminal(p.T)
-    sol = MultipleShooting(p, nodes=40).solve({"d": 2.0})
+    sol = MultipleShooting(_readme_di(), nodes=40).solve({"d": 2.0})
     assert detect_chattering(sol) is None
     cert = certify(sol, refine_switching(sol))
     assert cert.verdict == CERTIFIED and cert.chattering is None
@@ -301,15 +291,15 @@ def test_refinement_of_another_candidate_is_refused():
     problem or another transcription's start gives "not applicable" (before: the minimum-
     time double integrator at d = 2 was "bang-bang certified" with the refinement of d = 5,
     final times 2.83 and 4.47), single- and multi-phase alike."""
-    ms = MultipleShooting(_double_integrator(), nodes=40)
+    ms = MultipleShooting(_readme_di(), nodes=40)
     sol2, sol5 = ms.solve({"d": 2.0}), ms.solve({"d": 5.0})
     r2, r5 = refine_switching(sol2), refine_switching(sol5)
     assert certify(sol2, r2).verdict == CERTIFIED
     cert = certify(sol2, r5)
     assert cert.verdict == NOT_APPLICABLE and "other values of d" in cert.reasons[0]
-    rebuilt = MultipleShooting(_double_integrator(), nodes=40).solve({"d": 2.0})
+    rebuilt = MultipleShooting(_readme_di(), nodes=40).solve({"d": 2.0})
     assert certify(rebuilt, r2).verdict == CERTIFIED  # the same problem, built twice
-    other = MultipleShooting(_double_integrator(umax=2.0), nodes=40).solve({"d": 2.0})
+    other = MultipleShooting(_readme_di(umax=2.0), nodes=40).solve({"d": 2.0})
     assert "another problem" in certify(other, r2).reasons[0]
     ms30 = MultipleShooting(fuller(1.0, 5.0), nodes=30)
     coarse = ms30.solve({})
@@ -332,32 +322,6 @@ def test_failed_multi_phase_solve_is_refused_not_an_error():
     assert certify(info.value.iterate).verdict == NOT_APPLICABLE
 
 
-def _double_integrator(umax: float = 1.0) -> OptimalControlProblem:
-    """The README's minimum-time double integrator to x = d (|u| <= umax)."""
-    p = OptimalControlProblem("double_integrator")
-    x, v = p.state("x"), p.state("v")
-    u = p.control("u", lower=-umax, upper=umax)
-    d = p.parameter("d")
-    p.set_dynamics({"x": v, "v": u})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x - d, 0.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.01, upper=100)
-    p.minimize_terminal(p.T)
-    return p
-
-
-def test_a_structure_of_ones_own_must_be_the_refined_one():
-    """``structure=`` cannot talk the certificate out of a doubt: it must be the structure
-    the refinement solved (before: any structure without interior arcs was accepted, with or
-    without a refinement)."""
-    sol = MultipleShooting(_double_integrator(), nodes=40).solve({"d": 2.0})
-    st = detect_structure(sol)
-    r = refine_switching(sol, st)
-    assert certify(sol, r, structure=st).verdict == CERTIFIED
-    with pytest.raises(ValueError, match="structure the refinement solved"):
-        certify(sol, structure=st)
-    other = detect_structure(_solve(1.0, 5.0, False, 60))  # five bang arcs, not two
-    with pytest.raises(ValueError, match="structure the refinement solved"):
-        certify(sol, r, structure=other)
+def _readme_di(umax: float = 1.0) -> OptimalControlProblem:
+    """The README's minimum-time double integrator (its default guess of T)."""
+    return min_time_double_integrator(umax=umax, T_guess=None, name="double_integrator")

@@ -33,6 +33,7 @@ from ocp_suite.rayleigh_min_time import (
     rayleigh_min_time_guess,
     rayleigh_min_time_pmp,
 )
+from problems import min_time_double_integrator
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from switching_problems import ceiling, speed_limited
@@ -65,19 +66,8 @@ def quiet(fn, *a, **k):
 
 # ------------------------------------------------------------ double integrator
 def double_integrator() -> OptimalControlProblem:
-    """The README's minimum-time double integrator."""
-    p = OptimalControlProblem("double_integrator")
-    x, v = p.state("x"), p.state("v")
-    u = p.control("u", lower=-1, upper=1)
-    d = p.parameter("d")
-    p.set_dynamics({"x": v, "v": u})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x - d, 0.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.01, upper=100)
-    p.minimize_terminal(p.T)
-    return p
+    """The README's minimum-time double integrator (its default guess of T)."""
+    return min_time_double_integrator(T_guess=None, name="double_integrator")
 
 
 @pytest.mark.parametrize("refine", [False, True])
