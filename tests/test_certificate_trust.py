@@ -325,3 +325,18 @@ def test_failed_multi_phase_solve_is_refused_not_an_error():
 def _readme_di(umax: float = 1.0) -> OptimalControlProblem:
     """The README's minimum-time double integrator (its default guess of T)."""
     return min_time_double_integrator(umax=umax, T_guess=None, name="double_integrator")
+
+
+def test_a_structure_of_ones_own_must_be_the_refined_one():
+    """``structure=`` cannot talk the certificate out of a doubt: it must be the structure
+    the refinement solved (before: any structure without interior arcs was accepted, with or
+    without a refinement)."""
+    sol = MultipleShooting(_readme_di(), nodes=40).solve({"d": 2.0})
+    st = detect_structure(sol)
+    r = refine_switching(sol, st)
+    assert certify(sol, r, structure=st).verdict == CERTIFIED
+    with pytest.raises(ValueError, match="structure the refinement solved"):
+        certify(sol, structure=st)
+    other = detect_structure(_solve(1.0, 5.0, False, 60))  # five bang arcs, not two
+    with pytest.raises(ValueError, match="structure the refinement solved"):
+        certify(sol, r, structure=other)
