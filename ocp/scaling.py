@@ -20,8 +20,12 @@ Where the numbers come from (``scaling="auto"``, the default):
   numbers and not *loose* (a safety box like ``(1e-3, 1e4)``: spanning more than
   100 guess magnitudes, or two non-zero bounds more than 100 apart),
   ``ref0 = lower`` and ``ref = upper - lower``; else the magnitude of its default
-  guess where that is a non-zero number; else 1. Free times likewise from their
-  bounds or guess;
+  guess where that is a non-zero number; else, for a state (``h >= 0`` with guess
+  0 says nothing by itself), its size from elsewhere in the problem
+  (:mod:`ocp.sizes`): the value at which a boundary constraint on it alone reaches
+  its bound (a muzzle energy ``1/2 m v(0)^2 <= 4e5`` gives v), the size of the
+  state it is linked from, or the change its rate can make over the guessed
+  duration; else 1. Free times likewise from their bounds or guess;
 * defect rows (``continuity``, ``collocation``) are divided by their state's
   ``ref``, so a scaled defect is the defect of the scaled state;
 * other constraint rows by their ``ref=`` if given (``path_constraint(...,
@@ -31,7 +35,9 @@ Where the numbers come from (``scaling="auto"``, the default):
   loose);
 * the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
   starting point of each solve when that exceeds 100 (never up: a small value at
-  the start may be small by accident).
+  the start may be small by accident). Its gradient is left to Ipopt, whose
+  gradient-based scaling divides an objective whose gradient in the *scaled*
+  variables exceeds 100 (``-r(T)`` with ``r`` scaled by 800 has gradient 800).
 
 An automatic number is used only when it is far from 1 (outside
 :data:`AUTO_RANGE`): well-scaled problems -- every problem posed in

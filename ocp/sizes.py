@@ -49,6 +49,8 @@ def _num(e: Any) -> float | None:
     """The float of a constant (or numeric) scalar, else None."""
     if isinstance(e, int | float):
         return float(e)
+    if isinstance(e, ca.SX):  # the fast path (constant() converts through DM)
+        return float(e) if e.numel() == 1 and e.is_constant() else None
     return constant(ca.SX(e))
 
 
@@ -75,8 +77,25 @@ def known_size(lo: Any, hi: Any, guess: Any, loose: Any) -> float | None:
     return g if g > 0 else None
 
 
-def boundary_size(ph: OptimalControlProblem, i: int, values: dict[str, float | None],
-                  lo: float, hi: float) -> float | None:
+def boundary_rows(ph: OptimalControlProblem) -> list[tuple[ca.SX, Any, Any]]:
+    """Every row ``(expression, lower, upper)`` of the phase's initial and terminal
+    constraints, in the end-point symbols.
+
+    Parameters
+    ----------
+    ph : OptimalControlProblem
+        The phase.
+    """
+    rows = []
+    for cs, transform in ((ph.initial, ph.at_t0), (ph.terminal, ph.at_tf)):
+        for c in cs:
+            e = transform(c.expr)
+            rows += [(e[k], c.lower[k], c.upper[k]) for k in range(e.numel())]
+    return rows
+
+
+def boundary_size(ph: OptimalControlProblem, i: int, rows: list[tuple[ca.SX, Any, Any]],
+                  values: dict[str, float | None], lo: float, hi: float) -> float | None:
     """Size of state ``i`` from an initial or terminal constraint on it alone (rule 1).
 
     Parameters
@@ -85,20 +104,19 @@ def boundary_size(ph: OptimalControlProblem, i: int, values: dict[str, float | N
         The phase.
     i : int
         The state.
+    rows : list
+        As returned by :func:`boundary_rows`.
     values : dict
         Numbers (or None: unknown) for the boundary symbols, by symbol name.
     lo, hi : float
         The state's bounds.
     """
     best: float | None = None
-    for cs, transform, ends in ((ph.initial, ph.at_t0, ph._x0), (ph.terminal, ph.at_tf, ph._xT)):
-        target = ends[i]
-        for c in cs:
-            e = transform(c.expr)
-            for row in range(e.numel()):
-                s = _row_size(e[row], c.lower[row], c.upper[row], target, ph, values, lo, hi)
-                if s is not None and (best is None or s < best):
-                    best = s
+    for target in (ph._x0[i], ph._xT[i]):
+        for e, lower, upper in rows:
+            s = _row_size(e, lower, upper, target, ph, values, lo, hi)
+            if s is not None and (best is None or s < best):
+                best = s
     return best
 
 
@@ -112,10 +130,11 @@ def _row_size(e: ca.SX, lower: Any, upper: Any, target: ca.SX, ph: OptimalContro
         return None
     others = [s for s in ph.boundary_symbols() if not ca.is_equal(s, target)]
     subs = [(s, values.get(s.name())) for s in others if ca.depends_on(e, s)]
-    if any(v is None for _, v in subs):
+    nums = [v for _, v in subs if v is not None]
+    if len(nums) < len(subs):
         return None  # depends on a parameter, an integral or another unknown
     if subs:
-        e = ca.substitute(e, ca.vertcat(*[s for s, _ in subs]), ca.DM([v for _, v in subs]))
+        e = ca.substitute(e, ca.vertcat(*[s for s, _ in subs]), ca.DM(nums))
     fn = ca.Function("row", [target], [e])
     b = max(mags)
     sizes = []
@@ -165,9 +184,9 @@ def dynamics_sizes(ph: OptimalControlProblem, points: Sequence[np.ndarray], u: n
     xu = ca.vertcat(ph.x, ph.u)
     jac = ca.jacobian(rhs, xu)
     fn = ca.Function("rate", [ph.x, ph.u, ph.t, ca.vertcat(*fixed)], [rhs, jac])
-    sv = np.array([statics[s.name()] for s in fixed])
+    sv = np.array([statics[s.name()] for s in fixed], dtype=float)
     size = np.r_[sx, su]
-    for x, t in zip(points, (statics[ph.t0.name()], statics[ph.T.name()]), strict=False):
+    for x, t in zip(points, sv[:2], strict=False):  # fixed starts with t0, T
         with np.errstate(all="ignore"):
             f, J = (np.array(a, dtype=float) for a in fn(x, u, t, sv))
         rate = np.abs(f.ravel()) + np.abs(J).reshape(ph.nx, -1) @ size
@@ -198,35 +217,34 @@ def phase_state_sizes(ph: OptimalControlProblem, starts: ca.SX, ends: ca.SX,
     """
     a = [_num(starts[i]) for i in range(ph.nx)]
     b = [_num(ends[i]) for i in range(ph.nx)]
+    known = [known_size(*ph.state_bounds[n], (a[i], b[i]), loose)
+             for i, n in enumerate(ph.state_names)]
+    out: list[float | None] = [None] * ph.nx
+    todo = [i for i, n in enumerate(ph.state_names)
+            if known[i] is None and ph.state_ref.get(n) is None]
+    if not todo:  # the common case: nothing more to evaluate
+        return out
     ug = control_guess(ph)
     u = [_num(ug[k]) for k in range(ph.nu)]
     vg = [_num(var_guess[k]) for k in range(var_guess.numel())]
     statics: dict[str, float | None] = {ph.t0.name(): times[0], ph.T.name(): times[1]}
     statics |= {s.name(): v for s, v in zip(ph._shared.vars, vg, strict=True)}
     values = dict(statics)
-    values |= {s.name(): v for s, v in zip(ph._x0, a, strict=True)}
-    values |= {s.name(): v for s, v in zip(ph._xT, b, strict=True)}
-    values |= {s.name(): v for s, v in zip(ph._u0, u, strict=True)}
-    values |= {s.name(): v for s, v in zip(ph._uT, u, strict=True)}
-    bounds = [tuple(_num(v) for v in ph.state_bounds[n]) for n in ph.state_names]
-    known = [known_size(*ph.state_bounds[n], (a[i], b[i]), loose)
-             for i, n in enumerate(ph.state_names)]
-    out: list[float | None] = [None] * ph.nx
-    for i, n in enumerate(ph.state_names):
-        if known[i] is not None or ph.state_ref.get(n) is not None:
-            continue
-        lo_v = bounds[i][0] if bounds[i][0] is not None else -math.inf
-        hi_v = bounds[i][1] if bounds[i][1] is not None else math.inf
-        out[i] = boundary_size(ph, i, values, lo_v, hi_v)
+    for syms, vals in ((ph._x0, a), (ph._xT, b), (ph._u0, u), (ph._uT, u)):
+        values |= {s.name(): v for s, v in zip(syms, vals, strict=True)}
+    bounds = [_float_bounds(*ph.state_bounds[n]) for n in ph.state_names]
+    rows = boundary_rows(ph)
+    for i in todo:
+        out[i] = boundary_size(ph, i, rows, values, *bounds[i])
         if out[i] is None and linked is not None:
-            out[i] = linked.get(n)
+            out[i] = linked.get(ph.state_names[i])
     _from_dynamics(ph, out, known, (a, b), u, statics, bounds, times[1] - times[0])
     return out
 
 
 def _from_dynamics(ph: OptimalControlProblem, out: list[float | None],
                    known: list[float | None], ends: tuple[list, list], u: list,
-                   statics: dict[str, float | None], bounds: list[tuple],
+                   statics: dict[str, float | None], bounds: list[tuple[float, float]],
                    duration: float) -> None:
     """Rule 3 for the states still without a size (in place), keeping sizes above 1."""
     todo = [i for i in range(ph.nx) if out[i] is None and known[i] is None
@@ -242,15 +260,21 @@ def _from_dynamics(ph: OptimalControlProblem, out: list[float | None],
     for e in ends:
         x = np.array(e, dtype=float)
         for j in range(ph.nx):  # a state at 0 with a size from rules 1-2: at that size
-            if x[j] == 0.0 and out[j] is not None:
-                lo, hi = (v if v is not None else s * math.inf
-                          for v, s in zip(bounds[j], (-1, 1), strict=True))
-                x[j] = min(max(out[j] if hi > 0 else -out[j], lo), hi)  # type: ignore[operator]
+            sj = out[j]
+            if x[j] == 0.0 and sj is not None:
+                lo, hi = bounds[j]
+                x[j] = min(max(sj if hi > 0 else -sj, lo), hi)
         points.append(x)
     sizes = dynamics_sizes(ph, points, np.array(u, dtype=float), statics, sx, su, duration)
     for i in todo:
         if math.isfinite(sizes[i]) and sizes[i] > 1.0:
             out[i] = float(sizes[i])
+
+
+def _float_bounds(lo: Any, hi: Any) -> tuple[float, float]:
+    """Numeric bounds, a symbolic one (a parameter) taken as absent."""
+    lv, hv = _num(lo), _num(hi)
+    return (-math.inf if lv is None else lv), (math.inf if hv is None else hv)
 
 
 def _never(*_: float) -> bool:
