@@ -118,7 +118,7 @@ def test_bare_cannonball_solves_with_both_transcriptions():
     elsewhere in the problem (:mod:`ocp.sizes`): v from the muzzle-energy bound, r and h
     from the dynamics over the guessed duration. On the tree before, multiple shooting
     with its defaults ended in ``Restoration_Failed`` after 26 iterations (every state
-    unscaled) and collocation took 243 iterations on its first mesh."""
+    unscaled) and collocation with its defaults took 807 iterations on its first mesh."""
     rng, radius, angle = cannonball_exact()
     ms = MultipleShooting(cannonball(refs=False))
     lay, sc = ms.layouts[0], ms.scaling
@@ -131,12 +131,13 @@ def test_bare_cannonball_solves_with_both_transcriptions():
     assert sol.success
     assert -sol.objective == pytest.approx(rng, rel=1e-6)
     assert sol.variables["radius"] == pytest.approx(radius, rel=1e-4)
-    col = Collocation(cannonball(refs=False), intervals=[10, 10]).refine(tol=1e-7)
+    col = Collocation(cannonball(refs=False)).refine()  # 20 intervals a phase, tol 1e-6
     assert col.success and col.verified and col.mesh_converged
     assert -col.objective == pytest.approx(rng, rel=1e-7)
     assert col.variables["radius"] == pytest.approx(radius, rel=1e-5)
-    assert col.phases[0].x[0, 2] == pytest.approx(angle, rel=1e-5)
-    assert col.mesh_history[0].iterations < 100
+    # the range is flat at the optimum: the angle is known to about the root of its precision
+    assert col.phases[0].x[0, 2] == pytest.approx(angle, rel=1e-4)
+    assert col.mesh_history[0].iterations < 400  # 807 (30 s) unscaled, 174 scaled
 
 
 def test_sizes_from_boundary_constraints_and_dynamics_only_where_nothing_else_tells():
