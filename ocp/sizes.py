@@ -9,7 +9,7 @@ size through its bounds or its guess. The problem usually does, elsewhere:
    ``1/2 m v(0)^2 <= 4e5``: the size is the smallest ``|value|`` within the
    state's bounds at which the constraint's expression reaches ``|b|``
    (``v = 382`` m/s at the guessed mass), found on a geometric grid
-   (``1e-6 .. 1e8``, 1 % steps). An affine equality ``x(T) = 400`` gives 400,
+   (``1e-6 .. 1e8``, steps of 2.3 %). An affine equality ``x(T) = 400`` gives 400,
    the value the default guess takes already.
 2. **A link**: a state continued from the previous phase (``MultiPhaseProblem.link``,
    by name) has that state's size there.
