@@ -14,6 +14,8 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.mesh`          -- error estimate and h-refinement of a collocation mesh;
 * :mod:`ocp.scaling`       -- scaling of the NLP (references from ``ref=``, bounds,
   guesses), invisible in the solution;
+* :mod:`ocp.sizes`         -- sizes of states that bounds and guess leave unknown (from
+  boundary constraints, links and the dynamics), for the automatic scaling;
 * :mod:`ocp.guess`         -- default initial guesses (moved off non-finite points) and
   non-finite-guess diagnosis;
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;

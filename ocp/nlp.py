@@ -40,7 +40,8 @@ from .guess import (
 )
 from .multiphase import MultiPhaseProblem, as_multiphase
 from .problem import OptimalControlProblem
-from .scaling import Scaling, ScalingBuilder, check_scaling, phase_quantities
+from .scaling import Scaling, ScalingBuilder, check_scaling, loose_bounds, phase_quantities
+from .sizes import phase_state_sizes
 from .solution import Solution
 from .symbols import positive_int
 from .trajectory import Trajectory
@@ -159,10 +160,12 @@ class Transcription:
             raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
                                          "variables of the problem (nor 'objective', 'time')")
         sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
-        for ph, lay, tm, (a, b) in zip(mp.phases, self.layouts, self.times, ends, strict=True):
+        sizes = self._state_sizes(ends)
+        for ph, lay, tm, (a, b), sz in zip(mp.phases, self.layouts, self.times, ends, sizes,
+                                           strict=True):
             states, controls = phase_quantities(ph, a, b)
             for k, (name, user, lo, hi, guess) in enumerate(states):
-                ref = sb.ref(name, user, lo, hi, guess)
+                ref = sb.ref(name, user, lo, hi, guess, sz[k])
                 for sl in (lay.iX, lay.iZ):
                     if sl is not None:
                         sb.set_entries(np.arange(sl.start, sl.stop)[k::ph.nx], ref)
@@ -193,6 +196,24 @@ class Transcription:
         if "objective" not in self.scaling_options["refs"] and sh.objective_ref is not None:
             self.scaling_options["refs"]["objective"] = (0.0, sh.objective_ref)
         return sb.build()
+
+    def _state_sizes(self, ends: list[tuple[ca.SX, ca.SX]]) -> list[list[float | None]]:
+        """Sizes of the states that bounds and guess leave unknown (:mod:`ocp.sizes`)."""
+        mp = self.multiphase
+        if not self.scaling_options["auto"]:
+            return [[None] * ph.nx for ph in mp.phases]
+        vg = variable_guess(mp._shared)
+        out: list[list[float | None]] = []
+        for i, (ph, tm, (a, b)) in enumerate(zip(mp.phases, self.times, ends, strict=True)):
+            prev = next((j for j, k in mp.time_links if k == i and j < i), None)
+            linked = None
+            if prev is not None:
+                pp = mp.phases[prev]
+                linked = {n: s for n, s in zip(pp.state_names, out[prev], strict=True)
+                          if s is not None}
+            out.append(phase_state_sizes(ph, a, b, (tm.t0_guess, tm.T_guess), vg, linked,
+                                         loose_bounds))
+        return out
 
     def _scaled_nlp(self) -> dict[str, ca.MX]:
         """The NLP Ipopt solves: ``w = D w_s + c``, rows times ``r``, objective times ``kf``.

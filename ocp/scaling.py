@@ -20,8 +20,12 @@ Where the numbers come from (``scaling="auto"``, the default):
   numbers and not *loose* (a safety box like ``(1e-3, 1e4)``: spanning more than
   100 guess magnitudes, or two non-zero bounds more than 100 apart),
   ``ref0 = lower`` and ``ref = upper - lower``; else the magnitude of its default
-  guess where that is a non-zero number; else 1. Free times likewise from their
-  bounds or guess;
+  guess where that is a non-zero number; else, for a state (``h >= 0`` with guess
+  0 says nothing by itself), its size from elsewhere in the problem
+  (:mod:`ocp.sizes`): the value at which a boundary constraint on it alone reaches
+  its bound (a muzzle energy ``1/2 m v(0)^2 <= 4e5`` gives v), the size of the
+  state it is linked from, or the change its rate can make over the guessed
+  duration; else 1. Free times likewise from their bounds or guess;
 * defect rows (``continuity``, ``collocation``) are divided by their state's
   ``ref``, so a scaled defect is the defect of the scaled state;
 * other constraint rows by their ``ref=`` if given (``path_constraint(...,
@@ -31,7 +35,9 @@ Where the numbers come from (``scaling="auto"``, the default):
   loose);
 * the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
   starting point of each solve when that exceeds 100 (never up: a small value at
-  the start may be small by accident).
+  the start may be small by accident). Its gradient is left to Ipopt, whose
+  gradient-based scaling divides an objective whose gradient in the *scaled*
+  variables exceeds 100 (``-r(T)`` with ``r`` scaled by 800 has gradient 800).
 
 An automatic number is used only when it is far from 1 (outside
 :data:`AUTO_RANGE`): well-scaled problems -- every problem posed in
@@ -203,7 +209,7 @@ class ScalingBuilder:
         self.r = np.ones(n_g)
 
     def ref(self, name: str, user: tuple[float, float] | None, lo: Any, hi: Any,
-            guess: Any) -> tuple[float, float]:
+            guess: Any, size: float | None = None) -> tuple[float, float]:
         """``(ref0, ref)`` of one quantity (see the module for the rules).
 
         Parameters
@@ -216,6 +222,9 @@ class ScalingBuilder:
             Its bounds.
         guess : SX, float or None
             Its default guess (a number or a pair of numbers, or None).
+        size : float, optional
+            Its size from elsewhere in the problem (:mod:`ocp.sizes`), used when
+            bounds and guess give none.
         """
         if not self.opt["enabled"]:
             return 0.0, 1.0
@@ -224,7 +233,7 @@ class ScalingBuilder:
             return given
         if not self.opt["auto"]:
             return 0.0, 1.0
-        auto = _auto_ref(lo, hi, guess)
+        auto = _auto_ref(lo, hi, guess, size)
         return auto if _far(auto[1]) else (0.0, 1.0)
 
     def set_entries(self, index: Any, ref: tuple[float, float]) -> None:
@@ -290,9 +299,9 @@ def _number(v: Any) -> float | None:
 LOOSE = 1e2  # bounds wider than this many guess magnitudes, or this ratio apart, are loose
 
 
-def _auto_ref(lo: Any, hi: Any, guess: Any) -> tuple[float, float]:
+def _auto_ref(lo: Any, hi: Any, guess: Any, size: float | None = None) -> tuple[float, float]:
     """From finite bounds ``(lo, hi - lo)`` unless they are loose, else from the guess
-    magnitude, else (0, 1).
+    magnitude, else from ``size``, else (0, 1).
 
     Bounds are *loose* -- a safety box such as ``(1e-3, 1e4)``, not a magnitude --
     when they span more than :data:`LOOSE` times the guess magnitude, or when both
@@ -303,9 +312,17 @@ def _auto_ref(lo: Any, hi: Any, guess: Any) -> tuple[float, float]:
     nums = [abs(x) for x in (_number(g) for g in vals) if x is not None and math.isfinite(x)]
     g = max(nums) if nums else 0.0
     if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
-            and hv > lv and not _loose(lv, hv) and not (g > 0 and hv - lv > LOOSE * g):
+            and hv > lv and not loose_bounds(lv, hv, g):
         return lv, hv - lv
-    return (0.0, g) if g > 0 else (0.0, 1.0)
+    if g > 0:
+        return 0.0, g
+    return (0.0, size) if size is not None and size > 0 else (0.0, 1.0)
+
+
+def loose_bounds(lv: float, hv: float, g: float) -> bool:
+    """Finite bounds that say nothing of a magnitude: both non-zero and more than
+    :data:`LOOSE` apart, or spanning more than :data:`LOOSE` guess magnitudes ``g``."""
+    return _loose(lv, hv) or (g > 0 and hv - lv > LOOSE * g)
 
 
 def _loose(a: float, b: float) -> bool:

@@ -19,7 +19,7 @@ import math
 import casadi as ca
 import numpy as np
 import pytest
-from ocp_suite.cannonball import PUBLISHED_RANGE, cannonball, cannonball_exact
+from ocp_suite.cannonball import PUBLISHED_RANGE, cannonball, cannonball_exact, mass
 
 from ocp import (
     Collocation,
@@ -110,6 +110,56 @@ def test_default_guess_avoids_the_non_finite_dynamics():
     p.minimize_integral(u**2)
     with pytest.raises(GuessError, match="dynamics of state 'x'"):
         Collocation(p, intervals=4).solve()
+
+
+def test_bare_cannonball_solves_with_both_transcriptions():
+    """No ref anywhere, only bounds and default guesses: r >= 0, h >= 0, v >= 0 with
+    guesses 0 say nothing of their sizes, which the automatic scaling takes from
+    elsewhere in the problem (:mod:`ocp.sizes`): v from the muzzle-energy bound, r and h
+    from the dynamics over the guessed duration. On the tree before, multiple shooting
+    with its defaults ended in ``Restoration_Failed`` after 26 iterations (every state
+    unscaled) and collocation with its defaults took 807 iterations on its first mesh."""
+    rng, radius, angle = cannonball_exact()
+    ms = MultipleShooting(cannonball(refs=False))
+    lay, sc = ms.layouts[0], ms.scaling
+    d = sc.D[lay.iX][:4]  # r, h, gam, v at the first node
+    # 1/2 m v^2 = 4e5 J at the guessed radius (the bounds' midpoint), to the 2.3 % grid
+    v_energy = math.sqrt(2 * 4e5 / mass(0.055))
+    assert v_energy <= d[3] <= 1.025 * v_energy
+    assert d[0] > 100 and d[1] > 100 and d[2] == 1.0  # scaled; gamma's bounds are O(1)
+    sol = ms.solve()
+    assert sol.success
+    assert -sol.objective == pytest.approx(rng, rel=1e-6)
+    assert sol.variables["radius"] == pytest.approx(radius, rel=1e-4)
+    col = Collocation(cannonball(refs=False)).refine()  # 20 intervals a phase, tol 1e-6
+    assert col.success and col.verified and col.mesh_converged
+    assert -col.objective == pytest.approx(rng, rel=1e-7)
+    assert col.variables["radius"] == pytest.approx(radius, rel=1e-5)
+    # the range is flat at the optimum: the angle is known to about the root of its precision
+    assert col.phases[0].x[0, 2] == pytest.approx(angle, rel=1e-4)
+    assert col.mesh_history[0].iterations < 400  # 807 (30 s) unscaled, 174 scaled
+
+
+def test_sizes_from_boundary_constraints_and_dynamics_only_where_nothing_else_tells():
+    """Rule by rule on a toy problem, against hand computations."""
+    p = OptimalControlProblem()
+    x = p.state("x", lower=0.0)  # one bound, guess 0: size from x' = v over T
+    v = p.state("v", lower=0.0)  # one bound, guess 0: size from 1/2 v(0)^2 <= 5e5
+    w = p.state("w", lower=0.0)  # w' = 0: nothing anywhere, stays unscaled
+    u = p.control("u", lower=-1.0, upper=1.0)
+    p.set_dynamics({"x": v, "v": u, "w": 0 * w})
+    p.initial_constraint(x, 0.0)
+    p.initial_constraint(w, 0.0)
+    p.initial_constraint(0.5 * v**2, 0.0, 5e5)
+    p.fixed_final_time(10.0)
+    p.minimize_terminal(-x)
+    tr = MultipleShooting(p, nodes=5)
+    d = tr.scaling.D[tr.layout.iX][:3]
+    assert 1e3 <= d[1] <= 1.025e3  # v = sqrt(2 * 5e5)
+    # x' = v at v = 1e3, plus |dx'/dv| * size(v): 10 s * (1e3 + 1e3), to the grid
+    assert 2e4 <= d[0] <= 1.025 * 2e4
+    assert d[2] == 1.0
+    assert MultipleShooting(p, nodes=5, scaling="none").scaling.is_identity()
 
 
 # ------------------------------------------------------------------ refs honoured
