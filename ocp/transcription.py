@@ -243,7 +243,8 @@ class Collocation(Transcription):
             Most pieces an interval is split into per round.
         objective_tol : float, optional
             Requested accuracy of the objective, relative to ``max(1, |J|)``
-            (default: ``tol``; ``math.inf`` switches the criterion off). The
+            (default: ``tol``, but not below :meth:`objective_floor`, what the NLP
+            solver itself resolves; ``math.inf`` switches the criterion off). The
             objective's error estimate is its change between the last two
             meshes (see :mod:`ocp.mesh`): the states' estimate does not see
             the error of a control that jumps inside an interval (an L1 cost,
@@ -268,7 +269,8 @@ class Collocation(Transcription):
             round only) and ``mesh_converged`` tells whether both met their
             tolerances. ``sol.transcription`` re-solves on that mesh.
         """
-        otol = tol if objective_tol is None else float(objective_tol)
+        otol = max(tol, self.objective_floor()) if objective_tol is None \
+            else float(objective_tol)
         tr = self  # every round is checked between points by the refinement itself
         sol = tr._solve(params, guess, None, "off")
         history: list[MeshRound] = []
@@ -298,6 +300,20 @@ class Collocation(Transcription):
         sol.mesh_converged = emax <= tol and change <= target
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
+
+    def objective_floor(self) -> float:
+        """The relative objective accuracy below which mesh rounds chase the NLP solver's
+        own tolerance: ten times the larger of Ipopt's ``tol`` and its relaxation of
+        bounds (``bound_relax_factor``, 1e-8 by default), which move the objective of a
+        problem with active bounds by about that much whatever the mesh.
+
+        Returns
+        -------
+        float
+        """
+        opts = self.ipopt_options
+        return 10.0 * max(float(opts.get("tol", 1e-8)),
+                          float(opts.get("bound_relax_factor", 1e-8)))
 
     def _next_meshes(self, meshes: list[np.ndarray], errs: list[np.ndarray], driver: str,
                      tol: float, change: float, target: float,
