@@ -35,7 +35,8 @@ Where the numbers come from (``scaling="auto"``, the default):
   loose);
 * the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
   starting point of each solve when that exceeds 100 (never up: a small value at
-  the start may be small by accident). Its gradient is left to Ipopt, whose
+  the start may be small by accident; at most :data:`OBJECTIVE_AUTO_MAX`: a poor
+  start's value may exceed the optimum's by far). Its gradient is left to Ipopt, whose
   gradient-based scaling divides an objective whose gradient in the *scaled*
   variables exceeds 100 (``-r(T)`` with ``r`` scaled by 800 has gradient 800).
 
@@ -69,6 +70,8 @@ from .symbols import Constraint, constant
 
 AUTO_RANGE = (1e-2, 1e2)  # automatic references inside this range are not applied
 SCALING_MODES = ("auto", "none")
+OBJECTIVE_AUTO_MAX = 1e4
+"""The largest automatic objective scale (a user's ``ref`` may be larger)."""
 
 
 @dataclass
@@ -99,8 +102,10 @@ class Scaling:
             return self.objective_ref
         a = abs(f0)
         # only down: a small objective at the start may be small by accident (a guess
-        # at rest, a cost that vanishes there), and scaling it up would blow it up
-        return a if math.isfinite(a) and a > AUTO_RANGE[1] else 1.0
+        # at rest, a cost that vanishes there), and scaling it up would blow it up; and
+        # at most OBJECTIVE_AUTO_MAX down: a poor start's value can exceed the optimum's
+        # by far, and Ipopt's absolute dual tolerance loosens by the factor applied
+        return min(a, OBJECTIVE_AUTO_MAX) if math.isfinite(a) and a > AUTO_RANGE[1] else 1.0
 
     # ---------------------------------------------------------------- maps
     def x_to_scaled(self, w: np.ndarray) -> np.ndarray:
