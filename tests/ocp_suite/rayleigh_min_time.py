@@ -16,6 +16,8 @@ integrated along the published trajectory, normalised by ``H = -1``.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
@@ -101,7 +103,9 @@ def rayleigh_min_time_pmp() -> dict[str, float]:
         return [y[0], y[1], *sig, H0 + 1.0]
 
     z0 = np.r_[_costate_guess(p["t1"], p["t2"], p["tf"]), p["t1"], p["t2"], p["tf"]]
-    z = fsolve(residual, z0, xtol=1e-14)
+    with warnings.catch_warnings():  # it stalls at rounding level (the residual says so)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        z = fsolve(residual, z0, xtol=1e-14)
     return {"t1": float(z[2]), "t2": float(z[3]), "tf": float(z[4]),
             "residual": float(np.max(np.abs(residual(z))))}
 
