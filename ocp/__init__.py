@@ -19,7 +19,7 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.guess`         -- default initial guesses (moved off non-finite points) and
   non-finite-guess diagnosis;
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
-* :mod:`ocp.multistart`    -- many starts over the bounds' box: the distinct local
+* :mod:`ocp.local_optima` -- many starts over the bounds' box: the distinct local
   optima and the best (problems with several extremals);
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.gridview`      -- how a solution's grid is read (collocation on its mesh,
@@ -63,7 +63,7 @@ _WHERE = {
     "transcribe": "transcription", "detect_arcs": "arcs", "detect_structure": "arcs",
     "refine_switching": "switching", "refine_structure": "switching",
     "refine_phases": "phase_refinement", "certify_phases": "phase_pmp",
-    "multistart": "multistart", "MultistartResult": "multistart",
+    "multistart": "local_optima", "MultistartResult": "local_optima",
 }
 
 __all__ = [
@@ -117,8 +117,8 @@ if TYPE_CHECKING:
         ProblemDefinitionError,
         SolveError,
     )
+    from .local_optima import MultistartResult, multistart
     from .multiphase import MultiPhaseProblem
-    from .multistart import MultistartResult, multistart
     from .phase_pmp import certify_phases
     from .phase_refinement import refine_phases
     from .pmp import PMPCertificate, certify

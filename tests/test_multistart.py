@@ -134,7 +134,7 @@ def test_bad_arguments():
 
 
 def test_start_box():
-    from ocp.multistart import start_coordinates
+    from ocp.local_optima import start_coordinates
 
     coords = start_coordinates(coarse_transcription(), {})
     assert [c.name for c in coords] == ["theta", "omega", "u", "T"]
@@ -157,3 +157,16 @@ def test_reference_value_is_the_best_structure():
     """The independent computation behind REFERENCE (scipy, about 3 minutes)."""
     assert structure_optimum(4, 1.0) == pytest.approx(REFERENCE, rel=1e-9)
     assert exact() == pytest.approx(REFERENCE, rel=1e-9)
+
+
+def test_no_front_door_name_is_a_submodule():
+    """``from ocp import NAME`` must give the function, whatever was imported before: a
+    submodule of the same name would replace it once imported (``ocp.multistart`` did)."""
+    import importlib.util
+
+    import ocp
+
+    clashes = [n for n in ocp.__all__ if importlib.util.find_spec(f"ocp.{n}") is not None]
+    assert clashes == []
+    importlib.import_module("ocp.local_optima")
+    assert callable(ocp.multistart) and not isinstance(ocp.multistart, type(ocp))
