@@ -4,6 +4,7 @@ problem; free, it lowers the depth; replays and the drop's flight are checked ex
 import numpy as np
 import pytest
 
+from ocp.refinement import clear_cache
 from softlanding import PAPER_ROBOT
 from softlanding.errors import ParameterError
 from softlanding.leg_extension import solve_leg_extension, sweep_leg_extension
@@ -31,6 +32,10 @@ def test_free_extension_lowers_the_depth_and_stays_in_the_stroke():
 
 
 def test_a_touch_point_of_the_stroke_is_imposed_exactly():
+    # from a fresh refinement cache: run after other tests' refinements, this landing
+    # has converged to a local optimum worse than the paper's touchdown state (an order
+    # dependence of the cached refinement NLPs, reported in the issue notes)
+    clear_cache()
     r = solve_leg_extension(-1.0)
     assert r.refined is not None
     assert r.refined.path_violation() < 1e-9
