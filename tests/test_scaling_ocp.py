@@ -20,6 +20,7 @@ import casadi as ca
 import numpy as np
 import pytest
 from ocp_suite.cannonball import PUBLISHED_RANGE, cannonball, cannonball_exact, mass
+from problems import min_time_double_integrator
 
 from ocp import (
     Collocation,
@@ -33,19 +34,7 @@ from ocp import (
 
 def double_integrator(**refs: dict) -> OptimalControlProblem:
     """README's minimum-time double integrator, rest to rest over a distance d."""
-    p = OptimalControlProblem("double_integrator")
-    x = p.state("x", **refs.get("x", {}))
-    v = p.state("v", **refs.get("v", {}))
-    u = p.control("u", lower=-1, upper=1, **refs.get("u", {}))
-    d = p.parameter("d")
-    p.set_dynamics({"x": v, "v": u})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x - d, 0.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.01, upper=100)
-    p.minimize_terminal(p.T, **refs.get("objective", {}))
-    return p
+    return min_time_double_integrator(T_guess=None, refs=refs, name="double_integrator")
 
 
 REFS = {"x": {"ref": 1e3, "ref0": 5.0}, "v": {"ref": 30.0}, "u": {"ref": 0.5},
