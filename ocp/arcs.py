@@ -38,7 +38,7 @@ from .constraint_kinds import (
     path_kinds,
     riding_controls,
 )
-from .control_set import control_polytope, vertex_faces
+from .control_set import control_polytope, vertex_faces, violated_control_constraint
 from .flows import Mode
 from .gridview import grid_spacing, is_collocation, mesh_level
 from .problem import OptimalControlProblem
@@ -691,21 +691,14 @@ def outside_control_set(problem: OptimalControlProblem, modes: tuple[Mode, ...],
     bool
         False when some mode is not a bang (its value depends on the state).
     """
-    cons = control_constraints(problem)
-    if not cons or any(m.kind not in BANG for m in modes):
+    if not control_constraints(problem) or any(m.kind not in BANG for m in modes):
         return False
     u = []
     for name, m in zip(problem.control_names, modes, strict=True):
         lo, hi = control_bounds_at(problem, name, params)
         u.append(hi if m.kind == "max" else lo)
-    fn = ca.Function("cc", [problem.x, problem.u, problem.p],
-                     [ca.vertcat(*[c.expr for c in cons]), ca.vertcat(*[c.lower for c in cons]),
-                      ca.vertcat(*[c.upper for c in cons])])
-    pv = [params[k] for k in problem.param_names]
-    v, lo_c, hi_c = (np.array(a, dtype=float).ravel()
-                     for a in fn(np.zeros(problem.nx), u, pv))
-    room = tol * np.maximum(1.0, np.abs(v))
-    return bool(np.any((lo_c - v > room) | (v - hi_c > room)))
+    pv = np.array([params[k] for k in problem.param_names], dtype=float)
+    return violated_control_constraint(problem, np.array(u), pv, tol) is not None
 
 
 def snap_to_control_set(sol: SolutionLike, st: ArcStructure, short: float,

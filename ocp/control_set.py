@@ -290,3 +290,36 @@ def vertex_faces(pr: OptimalControlProblem, poly: ControlPolytope, vertex: np.nd
                 used.add(i)
                 break
     return out
+
+
+def violated_control_constraint(problem: OptimalControlProblem, u: np.ndarray, pv: np.ndarray,
+                                tol: float = 1e-9) -> str | None:
+    """The first control-only path constraint that the control vector ``u`` violates.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem
+    u : ndarray (nu,)
+        One value per control.
+    pv : ndarray
+        Parameter values.
+    tol : float
+        Allowed violation, relative to ``max(1, |value|)``.
+
+    Returns
+    -------
+    str or None
+        Its name; None when ``u`` is in the control set (or there is no such constraint).
+    """
+    cons = control_constraints(problem)
+    if not cons:
+        return None
+    fn = ca.Function("cc", [problem.x, problem.u, problem.p],
+                     [ca.vertcat(*[c.expr for c in cons]), ca.vertcat(*[c.lower for c in cons]),
+                      ca.vertcat(*[c.upper for c in cons])])
+    # control-only: the state does not enter, any value will do
+    v, lo, hi = (np.array(a, dtype=float).ravel()
+                 for a in fn(np.zeros(problem.nx), np.asarray(u, dtype=float), pv))
+    room = tol * np.maximum(1.0, np.abs(v))
+    bad = np.flatnonzero((lo - v > room) | (v - hi > room))
+    return cons[int(bad[0])].name if len(bad) else None

@@ -44,6 +44,7 @@ import numpy as np
 
 from .active_set_newton import ActiveSetNewton
 from .constraint_kinds import control_constraints
+from .control_set import violated_control_constraint
 from .flows import (
     THETA_MAX,
     ArcDynamics,
@@ -891,25 +892,18 @@ def check_control_set(problem: OptimalControlProblem, modes: Modes, pv: np.ndarr
     ValueError
         Naming the interval, its modes and the constraint.
     """
-    cons = control_constraints(problem)
-    if not cons:
+    if not control_constraints(problem):
         return
-    fn = ca.Function("cc", [problem.x, problem.u, problem.p],
-                     [ca.vertcat(*[c.expr for c in cons]), ca.vertcat(*[c.lower for c in cons]),
-                      ca.vertcat(*[c.upper for c in cons])])
     for k, m in enumerate(modes):
         d = arc_dynamics(problem, m)
         if ca.depends_on(d.u, problem.x):
-            continue  # a boundary law: the constraint is a row of the NLP's law checks
+            continue  # a boundary law: the constraints are rows of the refinement NLP
         u = np.array(d.u_fn(np.zeros(problem.nx), pv), dtype=float).ravel()
-        v, lo, hi = (np.array(a, dtype=float).ravel()
-                     for a in fn(np.zeros(problem.nx), u, pv))
-        bad = np.flatnonzero((lo - v > tol * np.maximum(1.0, np.abs(v))) |
-                             (v - hi > tol * np.maximum(1.0, np.abs(v))))
         labels = [mm.label() for mm in m]
-        if len(bad):
+        bad = violated_control_constraint(problem, u, pv, tol)
+        if bad is not None:
             raise ValueError(f"interval {k} ({labels}) violates the control-only constraint "
-                             f"{cons[int(bad[0])].name!r}: not a vertex of the control set")
+                             f"{bad!r}: not a vertex of the control set")
         for j, (name, mm) in enumerate(zip(problem.control_names, m, strict=True)):
             blo, bhi = (float(b) for b in ca.Function("b", [problem.p],
                                                       list(problem.control_bounds[name]))(pv))
