@@ -8,9 +8,9 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from softlanding import _kernel as K
-from softlanding.dynamics import mode_matrices
-from softlanding.kernel.landing import simulate_one
+from softlanding.model.dynamics import mode_matrices
+from softlanding.simulation import kernel as K
+from softlanding.simulation.kernel.landing import simulate_one
 
 how, every = sys.argv[1], int(sys.argv[2])
 g = np.round(np.linspace(0, 1, 101), 12)

@@ -2,7 +2,7 @@
 
 Run:  python benchmarks/bench_batch_threads.py [--every 5] [--repeats 3]
 
-The same compiled landing (``softlanding.kernel.landing.simulate_one``) on a
+The same compiled landing (``softlanding.simulation.kernel.landing.simulate_one``) on a
 sample of the paper's grid (every ``--every``-th landing, k_d = 0 hops
 included), scheduled five ways, each in its own process (numba's threading
 layer is fixed per process), alternating, ``--repeats`` times:

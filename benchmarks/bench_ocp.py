@@ -3,7 +3,7 @@
 Run:  pip install -e ".[bench]" && python benchmarks/bench_ocp.py [--n 20]
 
 Same problem (the paper's, with the body-arrest conditions multiplied by the
-final stroke as in softlanding.landing), same N = 100 multiple-shooting
+final stroke as in softlanding.optimal.landing), same N = 100 multiple-shooting
 intervals with 4 RK4 steps each, same Ipopt options, for ``--n`` values of v0
 in [-10, -0.5] (r_m = 5, s = 20, u_max = 8.2), solved in order (continuation).
 Two interleavings (the machine is shared: interleaving keeps load drift out of
@@ -49,7 +49,7 @@ IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0, "sb": "yes",
 def rockit_problem(N: int):
     from rockit import FreeTime, MultipleShooting, Ocp
 
-    from softlanding.dynamics import stance_dynamics
+    from softlanding.model.dynamics import stance_dynamics
 
     ocp = Ocp(T=FreeTime(0.5))
     xb, vb, xf, vf = (ocp.state() for _ in range(4))
@@ -80,7 +80,7 @@ def rockit_problem(N: int):
 
 def guess_arrays(v0: float, N: int):
     from softlanding import PAPER_ROBOT, Impact
-    from softlanding.landing import landing_transcription, rigid_guess
+    from softlanding.optimal.landing import landing_transcription, rigid_guess
 
     tr = landing_transcription(N)
     w = rigid_guess(tr, PAPER_ROBOT, Impact(v0))
@@ -117,7 +117,7 @@ def contenders(N: int, v0s, guesses):
     from ocp import MultipleShooting
     from ocp.switching import refine_structure
     from softlanding import PAPER_ROBOT, Impact
-    from softlanding.landing import PARAMETERS, build_landing_problem, solve_landing
+    from softlanding.optimal.landing import PARAMETERS, build_landing_problem, solve_landing
 
     par = dict(zip(PARAMETERS, (PAPER_ROBOT.r_m, PAPER_ROBOT.s, 0.0, PAPER_ROBOT.u_max,
                                 PAPER_ROBOT.rest_length), strict=True))

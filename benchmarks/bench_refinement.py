@@ -60,7 +60,7 @@ def timed(fn, *args, **kw):
 def landing(args, old_sw, old_pmp) -> None:
     from ocp.pmp import certify
     from ocp.switching import detect_arcs, refine_switching
-    from softlanding.landing import solve_landing
+    from softlanding.optimal.landing import solve_landing
 
     v0s = np.linspace(-0.5, -10.0, args.n)
     sols = [solve_landing(v, replay=False, refine=False).transcribed for v in v0s]

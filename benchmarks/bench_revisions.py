@@ -29,7 +29,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 CHILD = r"""
 import json, sys, time, warnings
-from ocp_suite import PROBLEMS
+try:
+    from tests.oracles.ocp_suite import PROBLEMS
+except ImportError:  # a revision before the tests were packages
+    from ocp_suite import PROBLEMS
 from ocp import Collocation
 sp = {p.name: p for p in PROBLEMS}[sys.argv[1]]
 extra = json.loads(sys.argv[2]) if len(sys.argv) > 2 else {}
@@ -52,7 +55,10 @@ print(json.dumps({"refine": rw, "refine_cpu": rc, "solve": sw, "solve_cpu": sc,
 
 NAMES = r"""
 import json
-from ocp_suite import PROBLEMS
+try:
+    from tests.oracles.ocp_suite import PROBLEMS
+except ImportError:
+    from ocp_suite import PROBLEMS
 print(json.dumps([p.name for p in PROBLEMS]))
 """
 

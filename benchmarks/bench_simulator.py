@@ -4,7 +4,7 @@ Run:  python benchmarks/bench_simulator.py [--cases 200] [--repeats 5] [--grid-r
                                            [--skip-grid] [--skip-ivp]
 
 Every timing is measured in this run, interleaved: the current kernel
-(``softlanding._kernel``) and the frozen first kernel (``benchmarks/_kernel_v0.py``,
+(``softlanding.simulation.kernel``) and the frozen first kernel (``benchmarks/_kernel_v0.py``,
 the kernel before the split, plugged into the same ``simulate`` wrappers) run
 block by block in alternating order, several repeats; medians are reported in
 CPU time (``time.process_time``: all threads of this process) and in wall time.
@@ -35,16 +35,13 @@ from pathlib import Path
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE.parent / "tests"))
-sys.path.insert(0, str(HERE))
-import _kernel_v0 as K0  # noqa: E402
-from ivp_reference import landing_depth_ivp  # noqa: E402
-
 from softlanding import Impact, Impedance, Robot, simulate, simulate_batch  # noqa: E402
-from softlanding import _kernel as K  # noqa: E402
-from softlanding.controllers import impedance_gains  # noqa: E402
+from softlanding.model.controllers import impedance_gains  # noqa: E402
+from softlanding.simulation import kernel as K  # noqa: E402
+from tests.oracles import kernel_v0 as K0  # noqa: E402
+from tests.oracles.ivp_reference import landing_depth_ivp  # noqa: E402
 
-S = sys.modules["softlanding.simulator"]
+S = sys.modules["softlanding.simulation.simulator"]
 
 KERNELS = {"old": K0, "new": K}
 COMMON_FIELDS = [f for f in S.BATCH_FIELDS if f not in ("depth_limit", "foot_rest")]
@@ -69,7 +66,7 @@ def interleaved(blocks: dict, repeats: int) -> dict:
 
 
 def with_kernel(name, fn):
-    """``fn`` run with ``softlanding.simulator`` wired to kernel ``name``."""
+    """``fn`` run with ``softlanding.simulation.simulator`` wired to kernel ``name``."""
     def run():
         S.K = KERNELS[name]
         try:

@@ -22,18 +22,14 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-from ivp_terrain import landing_ivp  # noqa: E402
-
 from softlanding import PAPER_IMPEDANCE_ROBOT, Impact, Impedance, Robot, simulate, simulate_batch  # noqa: E402  # noqa: E402
-from softlanding.ground import LINEAR_GROUND, DragGround  # noqa: E402
-from softlanding.terrain import paper_rig_units, poppy_seed_added_mass  # noqa: E402
+from softlanding.model.ground import LINEAR_GROUND, DragGround  # noqa: E402
+from softlanding.model.terrain import paper_rig_units, poppy_seed_added_mass  # noqa: E402
+from tests.oracles.ivp_terrain import landing_ivp  # noqa: E402
 
 ROBOT = Robot(5, 20)
 DRAG = DragGround(0.2)

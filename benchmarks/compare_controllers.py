@@ -19,7 +19,7 @@ import time
 import numpy as np
 
 from softlanding import PAPER_ROBOT, Robot
-from softlanding.comparison import compare_controllers, comparison_arrays
+from softlanding.studies.comparison import compare_controllers, comparison_arrays
 
 
 def main() -> None:

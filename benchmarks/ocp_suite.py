@@ -24,22 +24,17 @@ from __future__ import annotations
 import argparse
 import math
 import statistics
-import sys
 import time
 import warnings
-from pathlib import Path
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-
-from ocp_suite import PROBLEMS, SuiteProblem  # noqa: E402
-
 from ocp import Collocation, OptimalControlProblem  # noqa: E402
 from ocp.guess import control_guess, state_ends, variable_guess  # noqa: E402
 from ocp.nlp import DEFAULT_IPOPT  # noqa: E402
+from tests.oracles.ocp_suite import PROBLEMS, SuiteProblem  # noqa: E402
 
 
 def timed(fn: Any) -> tuple[Any, float, float]:

@@ -19,20 +19,22 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.2.0"
+from softlanding._version import __version__ as __version__
 
 _WHERE = {
-    "Controller": "controllers", "FeedbackSchedule": "controllers",
-    "ForceSchedule": "controllers", "Impedance": "controllers", "Rigid": "controllers",
+    "Controller": "model.controllers", "FeedbackSchedule": "model.controllers",
+    "ForceSchedule": "model.controllers", "Impedance": "model.controllers",
+    "Rigid": "model.controllers",
     "InfeasibleLandingError": "errors", "ParameterError": "errors",
     "SoftlandingError": "errors",
-    "LINEAR_GROUND": "ground", "Ground": "ground", "LinearGround": "ground",
-    "AddedMassGround": "ground", "CustomGround": "ground", "DragGround": "ground",
-    "PAPER_IMPEDANCE_ROBOT": "model", "PAPER_ROBOT": "model", "Impact": "model",
-    "Robot": "model", "Units": "model",
-    "PhysicalParams": "scaling", "Scenario": "scaling", "paper_rig": "scaling",
-    "BatchResult": "simulator", "EnergyLedger": "simulator", "LandingResult": "simulator",
-    "simulate": "simulator", "simulate_batch": "simulator",
+    "LINEAR_GROUND": "model.ground", "Ground": "model.ground", "LinearGround": "model.ground",
+    "AddedMassGround": "model.ground", "CustomGround": "model.ground", "DragGround": "model.ground",
+    "PAPER_IMPEDANCE_ROBOT": "model.robot", "PAPER_ROBOT": "model.robot", "Impact": "model.robot",
+    "Robot": "model.robot", "Units": "model.robot",
+    "PhysicalParams": "model.scaling", "Scenario": "model.scaling", "paper_rig": "model.scaling",
+    "BatchResult": "simulation.simulator", "EnergyLedger": "simulation.simulator",
+    "LandingResult": "simulation.simulator",
+    "simulate": "simulation.simulator", "simulate_batch": "simulation.simulator",
 }
 
 __all__ = [
@@ -80,9 +82,15 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # for type checkers and IDEs: the same names, eagerly
-    from .controllers import Controller, FeedbackSchedule, ForceSchedule, Impedance, Rigid
-    from .errors import InfeasibleLandingError, ParameterError, SoftlandingError
-    from .ground import (
+    from softlanding.errors import InfeasibleLandingError, ParameterError, SoftlandingError
+    from softlanding.model.controllers import (
+        Controller,
+        FeedbackSchedule,
+        ForceSchedule,
+        Impedance,
+        Rigid,
+    )
+    from softlanding.model.ground import (
         LINEAR_GROUND,
         AddedMassGround,
         CustomGround,
@@ -90,6 +98,12 @@ if TYPE_CHECKING:  # for type checkers and IDEs: the same names, eagerly
         Ground,
         LinearGround,
     )
-    from .model import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Robot, Units
-    from .scaling import PhysicalParams, Scenario, paper_rig
-    from .simulator import BatchResult, EnergyLedger, LandingResult, simulate, simulate_batch
+    from softlanding.model.robot import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Robot, Units
+    from softlanding.model.scaling import PhysicalParams, Scenario, paper_rig
+    from softlanding.simulation.simulator import (
+        BatchResult,
+        EnergyLedger,
+        LandingResult,
+        simulate,
+        simulate_batch,
+    )

@@ -1,5 +1,5 @@
 """``python -m softlanding``: same as the ``softlanding`` command."""
 
-from .cli import main
+from softlanding.cli.main import main
 
 raise SystemExit(main())

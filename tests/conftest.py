@@ -1,16 +1,10 @@
-import sys
-from pathlib import Path
-
 import pytest
-
-# make tests/ivp_reference.py importable as a plain module
-sys.path.insert(0, str(Path(__file__).parent))
 
 
 @pytest.fixture
 def cli(capsys):
     """Run ``softlanding ARGS`` in-process: returns (exit code, stdout, stderr)."""
-    from softlanding.cli import main
+    from softlanding.cli.main import main
 
     def run(*args):
         try:

@@ -1,0 +1,121 @@
+"""The ground-model options of the ``softlanding`` command, and the model they name.
+
+``--ground linear|drag|added-mass|power`` with its numbers: ``--cd`` (the drag number
+``c_d = b x_s / m_t``; an extra drag on the added-mass ground), ``--pi-a``, ``--radius``,
+``--kappa`` (the accreted cone; default: the poppy-seed preset of the paper's rig), and
+``--exponent`` (the power law ``f = d^n``, a user law compiled from its CasADi
+expression). Bad numbers are one-line errors (exit 2) from the model's own validation.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from softlanding.errors import ParameterError, check
+
+GROUNDS = ("linear", "drag", "added-mass", "power")
+
+
+def ground_args(p: argparse.ArgumentParser) -> None:
+    """Add ``--ground`` and its parameters to a sub-command's parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    g = p.add_argument_group("ground model")
+    g.add_argument("--ground", choices=GROUNDS, default="linear",
+                   help="yielding ground law: the paper's spring (default), inertial drag "
+                        "f = d + c_d v^2, added mass (accreted cone of grains), or the power "
+                        "law f = d^n")
+    g.add_argument("--cd", type=float, default=None,
+                   help="drag number c_d = b x_s / m_t (>= 0; --ground drag, or extra drag "
+                        "with added-mass)")
+    g.add_argument("--pi-a", type=float, default=None,
+                   help="added-mass number Pi_a = pi c_g phi rho_p mu x_s^3 / m_t (default: "
+                        "poppy seeds, the paper's rig)")
+    g.add_argument("--radius", type=float, default=None, help="foot radius R / x_s (added mass)")
+    g.add_argument("--kappa", type=float, default=None,
+                   help="cone shape mu / tan(theta) (added mass)")
+    g.add_argument("--exponent", type=float, default=None,
+                   help="n of the power law f = d^n (> 0)")
+
+
+def _unused(a: argparse.Namespace, names: tuple[str, ...], ground: str) -> None:
+    for n in names:
+        if getattr(a, n, None) is not None:
+            flag = "--" + n.replace("_", "-")
+            raise ParameterError(n, f"{flag} does not apply to --ground {ground}")
+
+
+def ground_of(a: argparse.Namespace) -> Any:
+    """The ground model named by the parsed options.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments with the options of :func:`ground_args`.
+
+    Raises
+    ------
+    ParameterError
+        A number out of range, or an option of another ground model.
+    """
+    from softlanding.model.ground import LINEAR_GROUND, AddedMassGround, DragGround
+
+    kind = getattr(a, "ground", "linear")
+    if kind == "linear":
+        _unused(a, ("cd", "pi_a", "radius", "kappa", "exponent"), kind)
+        return LINEAR_GROUND
+    if kind == "drag":
+        _unused(a, ("pi_a", "radius", "kappa", "exponent"), kind)
+        if a.cd is None:
+            raise ParameterError("cd", "--ground drag needs the drag number --cd VALUE")
+        return DragGround(a.cd)
+    if kind == "added-mass":
+        _unused(a, ("exponent",), kind)
+        from softlanding.model.terrain import paper_rig_units, poppy_seed_added_mass
+
+        base = poppy_seed_added_mass(paper_rig_units())
+        return AddedMassGround(
+            pi_a=base.pi_a if a.pi_a is None else a.pi_a,
+            radius=base.radius if a.radius is None else a.radius,
+            kappa=base.kappa if a.kappa is None else a.kappa,
+            c_d=0.0 if a.cd is None else a.cd)
+    _unused(a, ("cd", "pi_a", "radius", "kappa"), kind)
+    if a.exponent is None:
+        raise ParameterError("exponent", "--ground power needs --exponent N")
+    from softlanding.model.terrain import power_law_ground
+
+    return power_law_ground(check("exponent", a.exponent))
+
+
+
+
+def rft_stiffness_of(a: argparse.Namespace) -> float:
+    """``k_g`` [N/m] of ``--medium`` and ``--foot-diameter`` (resistive force theory).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed ``scale`` arguments.
+
+    Raises
+    ------
+    ParameterError
+        ``--kg`` given too, or ``--foot-diameter`` without ``--medium``.
+    """
+    from softlanding.model.terrain import PAPER_FOOT_DIAMETER, medium, rft_stiffness
+
+    if a.medium is None:
+        raise ParameterError("foot_diameter", "--foot-diameter needs --medium (the granular "
+                                              "medium whose RFT fit gives k_g)")
+    if a.kg is not None:
+        raise ParameterError("kg", "give either --kg or --medium (RFT stiffness), not both")
+    d = PAPER_FOOT_DIAMETER if a.foot_diameter is None else a.foot_diameter
+    return rft_stiffness(medium(a.medium), d)
+
+
+__all__ = ["GROUNDS", "ground_args", "ground_of", "rft_stiffness_of"]

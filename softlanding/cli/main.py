@@ -1,0 +1,618 @@
+"""The ``softlanding`` command.
+
+Every sub-command prints a readable table by default and one JSON object with
+``--json``. The commands only parse, call the API and print: every number
+comes from :mod:`softlanding`. Exit codes: 0 ok, 1 a well-posed run that
+failed (rest not proven, solver failure), 2 bad input, 3 internal error (a
+bug: ``--debug`` shows the traceback), 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from softlanding.errors import ParameterError, SoftlandingError
+from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
+from softlanding.util.jsonable import json_safe
+
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse, but usage errors are one line (exit 2) and ``-1e-3`` is a number."""
+
+    def __init__(self, *args: Any, **kw: Any) -> None:
+        super().__init__(*args, **kw)
+        # argparse reads "-1e-3" or "-inf" as an option; they are values here
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*([eE][-+]?\d+)?|\.\d+([eE][-+]?\d+)?|inf|infinity|nan)$", re.I)
+
+    def error(self, message: str) -> None:  # type: ignore[override]  # noqa: D102
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def _fmt(x: Any) -> str:
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, float):
+        return f"{x:.10g}" if math.isfinite(x) else str(x)
+    return str(x)
+
+
+def _print_table(rows: Sequence[tuple[str, object]]) -> None:
+    w = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:<{w}}  {_fmt(v)}")
+
+
+def _print_json(obj: Any) -> None:
+    print(json.dumps(json_safe(obj)))
+
+
+def _robot(a: argparse.Namespace) -> Robot:
+    """The robot of the model arguments (validated by :class:`Robot`)."""
+    return Robot(r_m=a.rm, s=a.s, u_max=a.umax, l0=a.l0)
+
+
+def _ground(a: argparse.Namespace) -> Any:
+    """The ground model of the ``--ground`` options (validated by the model)."""
+    from softlanding.cli.ground import ground_of
+
+    return ground_of(a)
+
+
+def _target(a: argparse.Namespace, option: str = "plot") -> Any:
+    """The figure or data file an option names, checked before any work (None if not given)."""
+    from softlanding.util.files import output_path
+
+    value = getattr(a, option, None)
+    if value is None:
+        return None
+    suffix = ".png" if option == "plot" or a.command == "demo" else None
+    return output_path(value, option, a.force, suffix)
+
+
+def _savefig(fig: Any, path: Any) -> str:
+    """Write the figure atomically; the path actually written."""
+    from softlanding.util.files import save_figure
+
+    return str(save_figure(fig, path))
+
+
+# ------------------------------------------------------------------- simulate
+_DEPTH_LABEL = {"final": "depth -x_f(T)", "limit": "depth limit (t -> inf)",
+                "reached": "depth reached (rest not proven)"}
+
+
+def _cmd_simulate(a: argparse.Namespace) -> int:
+    from softlanding.model.controllers import Impedance, Rigid
+    from softlanding.simulation.simulator import simulate
+
+    if a.rigid and (a.kp is not None or a.kd is not None):
+        raise ParameterError("rigid", "--rigid takes no --kp/--kd (choose one leg)")
+    if not a.rigid and (a.kp is None or a.kd is None):
+        raise ParameterError("kp", "give both --kp and --kd, or --rigid")
+    controller = Rigid() if a.rigid else Impedance(a.kp, a.kd)
+    plot = _target(a)
+    res = simulate(_robot(a), Impact(a.v0), controller, _ground(a))
+    written = None
+    if plot:
+        from softlanding.plots.paper import plot_trajectory
+
+        written = _savefig(plot_trajectory(res), plot)
+    if a.json:
+        _print_json(res.to_dict())
+    else:
+        e = res.energy
+        _print_table([
+            ("controller", controller.describe()), ("v0", a.v0), ("r_m", a.rm), ("s", a.s),
+            (_DEPTH_LABEL[res.depth_kind], res.depth), ("intrusion steps", res.steps),
+            ("feasible (0<=stroke<=s)", res.feasible), ("status", res.status),
+            ("first foot stop tau", res.t_first_stop), ("final rest tau T", res.T),
+            ("peak |u|", res.u_peak), ("stroke min", res.stroke_min),
+            ("stroke max", res.stroke_max), ("E(0)", e.E0), ("E(T)", e.ET),
+            ("ground loss", e.ground), ("actuator loss", e.actuator), ("CoT", e.cot),
+        ] + ([("ground model", res.ground.name), ("drag loss", e.drag),
+              ("grain loss", e.grains)] if e.integrated else []))
+        if written:
+            print(f"figure written to {written}")
+    return EXIT_OK if res.rest_proven else EXIT_FAILURE
+
+
+# ---------------------------------------------------------------------- solve
+def _solve_rows(res: Any, cert: Any, refined: bool) -> list[tuple[str, object]]:
+    rows: list[tuple[str, object]] = [
+        ("depth -x_f(T)" + (" (refined)" if refined else ""), res.depth),
+        ("depth, transcribed", res.depth_transcribed), ("final time T", res.T),
+        ("arcs", " -> ".join(res.arcs)),
+        ("switch times", ", ".join(f"{t:.12g}" for t in res.switch_times)),
+        ("arrest force u_b", res.u_b), ("arrest condition active", res.arrest_active),
+        ("Ipopt status", res.status), ("Ipopt iterations", res.iterations),
+        ("solve time [s]", res.solve_time_s)]
+    if res.replay is not None:
+        rows += [("simulator replay depth", res.replay.depth),
+                 ("replay difference", res.replay_difference),
+                 ("replay feasible", res.replay.feasible)]
+    if cert is not None:
+        rows += [("PMP verdict", cert.verdict), ("PMP costate source", cert.source),
+                 ("max |H - H_expected| / H_scale", cert.H_max_abs),
+                 ("H variation / H_scale", cert.H_variation),
+                 ("sigma sign agreement", cert.sigma_sign_agreement),
+                 ("switch to sigma-zero gap", cert.switch_sigma_gap),
+                 ("costate estimates gap", cert.costate_estimates_gap),
+                 ("singular intervals", cert.singular_intervals or "none"),
+                 ("state-constrained intervals",
+                  cert.state_constraint_active_intervals or "none")]
+    return rows
+
+
+def _cmd_solve(a: argparse.Namespace) -> int:
+    from softlanding.optimal.landing import solve_landing
+    from softlanding.util.files import output_path
+
+    plot = _target(a)
+    if getattr(a, "variant", "paper") != "paper":  # the hybrid multi-phase landings
+        from softlanding.cli.phased import cmd_solve_variant
+
+        return cmd_solve_variant(a, _robot(a), plot)
+    pmp_plot = None
+    if plot is not None and a.pmp:
+        pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
+    res = solve_landing(Impact(a.v0), _robot(a), _ground(a), nodes=a.nodes,
+                        refine=not a.no_refine,
+                        extra_arcs=a.extra_arcs)
+    cert = None
+    if a.pmp:
+        from ocp import certify
+
+        assert res.transcribed is not None  # a cold solve always transcribes
+        cert = certify(res.transcribed, res.refined)
+    written = []
+    if plot:
+        from softlanding.plots.paper import plot_bang_bang
+
+        written.append(_savefig(plot_bang_bang(res), plot))
+        if cert is not None:
+            from ocp.pmp import plot_certificate
+
+            written.append(_savefig(plot_certificate(cert), pmp_plot))
+    unverified = res.unverified_reasons(cert)
+    if a.json:
+        d = res.to_dict()
+        if cert is not None:
+            d["pmp"] = cert.to_dict()
+        _print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
+    else:
+        status = "yes" if not unverified else "NO: " + "; ".join(unverified)
+        _print_table([("verified", status)] + _solve_rows(res, cert, res.refined is not None))
+        for n in res.notes:
+            print(f"note: {n}")
+        for r_ in (cert.reasons if cert is not None else []):
+            print(f"PMP: {r_}")
+        if written:
+            print(f"figure written to {' and '.join(written)}")
+    return EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
+
+
+def _v0_grid(a: argparse.Namespace) -> Any:
+    """The sweep's impact velocities, from the easy end (continuation)."""
+    import numpy as np
+
+    from softlanding.errors import check_count
+
+    n = check_count("n", a.n, 1, 10_000)
+    for name in ("v0_min", "v0_max"):
+        Impact(getattr(a, name))
+    if a.v0_min > a.v0_max:
+        raise ParameterError("v0_min", f"must not exceed --v0-max ({a.v0_max:g})")
+    return np.linspace(a.v0_max, a.v0_min, n)
+
+
+def _cmd_solve_sweep(a: argparse.Namespace) -> int:
+    import numpy as np
+
+    from softlanding.optimal.landing import sweep_landing
+    from softlanding.studies.comparison import rigid_depth
+
+    v = _v0_grid(a)
+    plot = _target(a)
+    ground = _ground(a)
+    res = sweep_landing(v, _robot(a), ground, nodes=a.nodes, progress=not a.json)
+    rigid = [rigid_depth(x, ground) for x in v]
+    rows: list[dict[str, Any]] = [
+        {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
+         "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
+         "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations,
+         "path": r.path, "unverified_reasons": r.unverified_reasons()}
+        for r, rd in zip(res, rigid, strict=True)]
+    unverified = [r for r in rows if r["unverified_reasons"]]
+    code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
+    written = None
+    if plot:
+        from softlanding.plots.paper import plot_depth_vs_velocity
+
+        written = _savefig(plot_depth_vs_velocity(
+            v, {"rigid leg": np.array(rigid),
+                "bang-bang (refined)": np.array([r.depth for r in res])}), plot)
+    if a.json:
+        _print_json({"verified": not unverified, "sweep": rows})
+        return code
+    if unverified:
+        print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
+            f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
+    print(f"{'v0':>7} {'depth':>14} {'rigid':>10} {'ratio':>7} {'T':>8}  switch   solved by")
+    for r in rows:
+        sw = ",".join(f"{t:.5f}" for t in r["switch_times"])
+        by = ("transcription" if r["path"] == "transcription" else "structure re-solve")
+        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f} {r['rigid_depth']:>10.6f} "
+              f"{r['ratio_to_rigid']:>7.4f} {r['T']:>8.5f}  {sw}  {by} ({r['iterations']} it.)")
+    if written:
+        print(f"figure written to {written}")
+    return code
+
+
+# ------------------------------------------------------------------ impedance
+def _cmd_impedance(a: argparse.Namespace) -> int:
+    from softlanding.studies.impedance import optimize_impedance
+
+    o = optimize_impedance(Impact(a.v0), _robot(a), _ground(a), objective=a.objective,
+                           grid=a.grid)
+    if a.json:
+        _print_json(o.to_dict())
+        return EXIT_OK
+    g = o.grid_best
+    _print_table([
+        ("objective", o.objective), ("v0", o.v0), ("optimal k_p", o.k_p),
+        ("optimal k_d", o.k_d), (f"{o.objective} at the optimum", o.value), ("depth", o.depth),
+        ("intrusion steps", o.steps), ("peak |u|", o.u_peak), ("stroke min", o.stroke_min),
+        ("stroke max", o.stroke_max), ("CoT (dissipative)", o.cot),
+        ("CoT (lossless)", o.cot_lossless), ("on stroke boundary", o.on_stroke_boundary),
+        ("active constraint", o.active_constraint or "none"),
+        ("best grid point", f"k_p={g['k_p']:g}, k_d={g['k_d']:g}, "
+                            f"{o.objective}={g['value']:.10g}"),
+        ("landings simulated", o.evaluations)])
+    return EXIT_OK
+
+
+def _cmd_map(a: argparse.Namespace) -> int:
+    from softlanding.studies.impedance import optimize_impedance
+    from softlanding.studies.sweeps import depth_map, save_dataset
+    from softlanding.util.files import atomic
+
+    robot, impact, ground = _robot(a), Impact(a.v0), _ground(a)
+    out, plot = _target(a, "out"), _target(a)
+    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler)
+    opt = optimize_impedance(impact, robot, ground, grid=a.n)
+    with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
+        save_dataset(ds, tmp)
+    written = None
+    if plot:
+        from softlanding.plots.paper import plot_depth_map
+
+        written = _savefig(plot_depth_map(ds, opt), plot)
+    summary = {"out": str(out), "plot": written, "landings": int(ds.depth.size),
+               "feasible_fraction": float(ds.strictly_feasible.mean()),
+               "optimum": opt.to_dict()}
+    if a.json:
+        _print_json(summary)
+    else:
+        print(f"{summary['landings']} landings, {summary['feasible_fraction']:.1%} feasible; "
+              f"dataset written to {out}")
+        print(f"optimum: k_p = {opt.k_p:.8f}, k_d = {opt.k_d:.8f}, depth {opt.depth:.10f} "
+              f"({opt.steps} step(s), on stroke boundary: {_fmt(opt.on_stroke_boundary)})")
+        if written:
+            print(f"figure written to {written}")
+    return EXIT_OK
+
+
+def _print_curves(curves: Any, objective: str) -> None:
+    for r in curves.r_m.values:
+        for s in curves.s.values:
+            c = curves.sel(r_m=r, s=s)
+            print(f"r_m = {r:g}, s = {s:g}, objective {objective}")
+            print(f"{'v0':>7} {'k_p*':>11} {'k_d*':>11} {'depth':>11} {'steps':>5} "
+                  f"{'peak|u|':>8} {'CoT':>8} boundary")
+            for i in range(c.v0.size):
+                if not bool(c.feasible[i]):
+                    print(f"{float(c.v0[i]):>7.2f}   no gains in [0, 1]^2 keep the stroke")
+                    continue
+                print(f"{float(c.v0[i]):>7.2f} {float(c.k_p[i]):>11.7f} "
+                      f"{float(c.k_d[i]):>11.7f} {float(c.depth[i]):>11.7f} "
+                      f"{int(c.steps[i]):>5d} {float(c.u_peak[i]):>8.4f} "
+                      f"{float(c.cot[i]):>8.4f} {_fmt(bool(c.on_stroke_boundary[i]))}")
+
+
+def _cmd_sweep(a: argparse.Namespace) -> int:
+    from softlanding.studies.sweeps import (
+        optimal_impedance_curves,
+        paper_observations,
+        save_dataset,
+    )
+
+    v0 = _v0_grid(a)
+    if a.objective != "depth":
+        v0 = v0[v0 < 0]
+    from softlanding.util.files import atomic
+
+    robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
+                  u_max=a.umax)
+    out, plot = _target(a, "out"), _target(a)
+    curves = optimal_impedance_curves(v0, robot, _ground(a), r_m=a.rm, s=a.s,
+                                      objective=a.objective,
+                                      grid=a.grid, scheduler=a.scheduler, progress=not a.json)
+    if out:
+        with atomic(out) as tmp:
+            save_dataset(curves, tmp)
+    written = None
+    if plot:
+        from softlanding.plots.paper import plot_optimal_curves
+
+        written = _savefig(plot_optimal_curves(curves), plot)
+    obs = paper_observations(curves, robot)
+    if a.json:
+        c = curves.sel(r_m=robot.r_m, s=robot.s)
+        d: dict[str, Any] = {name: c[name].values.tolist() for name in (
+            "v0", "k_p", "k_d", "depth", "u_peak", "cot", "on_stroke_boundary")}
+        _print_json({**d, "observations": obs, "out": a.out})
+        return EXIT_OK
+    _print_curves(curves, a.objective)
+    print(f"paper's observations at r_m = {robot.r_m:g}, s = {robot.s:g}: {obs}")
+    if a.out:
+        print(f"dataset written to {a.out}")
+    if written:
+        print(f"figure written to {written}")
+    return EXIT_OK
+
+
+def _cmd_compare(a: argparse.Namespace) -> int:
+    from softlanding.studies.comparison import compare_controllers
+
+    robot = _robot(a)
+    v0, plot = _v0_grid(a), _target(a)
+    ground = _ground(a)
+    rows = compare_controllers(v0, robot, ground, grid=a.grid, progress=not a.json)
+    written = None
+    if plot:
+        from softlanding.plots.paper import plot_controller_comparison
+        from softlanding.studies.comparison import comparison_arrays
+
+        written = _savefig(plot_controller_comparison(comparison_arrays(rows), robot), plot)
+    if a.json:
+        _print_json({"rows": rows, "robot": robot.to_dict(), "ground": ground.to_dict()})
+        return EXIT_OK
+    print(f"Depth -x_f(T) at r_m = {robot.r_m:g}, s = {robot.s:g} "
+          f"(bang-bang with u_max = {robot.u_max:g}), ground {ground.name}")
+    print(f"{'v0':>7} {'rigid':>10} {'impedance':>11} {'(k_p*, k_d*)':>22} {'bang-bang':>11} "
+          f"{'imp/rigid':>9} {'bb/rigid':>9}")
+    for r in rows:
+        gains = f"({r['impedance_k_p']:.4f}, {r['impedance_k_d']:.4f})"
+        print(f"{r['v0']:>7.2f} {r['rigid']:>10.5f} {r['impedance']:>11.6f} {gains:>22} "
+              f"{r['bang_bang']:>11.6f} {r['impedance'] / r['rigid']:>9.4f} "
+              f"{r['bang_bang'] / r['rigid']:>9.4f}")
+    if written:
+        print(f"figure written to {written}")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------- scale
+SI_FLAGS = ("mb", "mf", "stroke", "umax_si", "v0_si", "Kp", "Kd")
+TO_SI_FLAGS = ("rm", "s", "v0", "umax", "kp", "kd")
+
+
+def _scale_from_si(a: argparse.Namespace) -> Any:
+    from softlanding.model.scaling import PhysicalParams, paper_rig
+
+    given = {name: getattr(a, flag) for flag, name in
+             (("mb", "m_b"), ("mf", "m_f"), ("kg", "k_g"), ("stroke", "stroke"),
+              ("umax_si", "u_max"), ("Kp", "K_p"), ("Kd", "K_d"), ("g", "g"),
+              ("v0_si", "v0")) if getattr(a, flag) is not None}
+    if getattr(a, "medium", None) is not None or getattr(a, "foot_diameter", None) is not None:
+        from softlanding.cli.ground import rft_stiffness_of
+
+        given["k_g"] = rft_stiffness_of(a)
+    if a.preset == "paper":
+        return paper_rig(**given)  # every flag given overrides the preset
+    missing = [f for f, n in (("mb", "m_b"), ("mf", "m_f"), ("kg", "k_g"),
+                              ("stroke", "stroke")) if n not in given]
+    if missing:
+        raise ParameterError(missing[0], "is required (or use --preset paper)")
+    return PhysicalParams(**given)
+
+
+def _cmd_scale(a: argparse.Namespace) -> int:
+    from softlanding.model.controllers import Impedance
+    from softlanding.model.robot import Units
+    from softlanding.model.scaling import PhysicalParams
+
+    if a.to_si:
+        wrong = [f for f in SI_FLAGS if getattr(a, f) is not None] + (
+            ["preset"] if a.preset else [])
+        if wrong:
+            raise ParameterError(wrong[0], "is an SI input; with --to-si give the "
+                                           "dimensionless numbers and --mt, --kg, --g")
+        if a.kg is None:
+            raise ParameterError("kg", "is required with --to-si (ground stiffness in N/m)")
+        units = Units(a.mt, a.kg, G_EARTH if a.g is None else a.g)
+        gains = None if a.kp is None and a.kd is None else Impedance(
+            0.0 if a.kp is None else a.kp, 0.0 if a.kd is None else a.kd)
+        ph = PhysicalParams.from_dimensionless(
+            Robot(r_m=PAPER_ROBOT.r_m if a.rm is None else a.rm,
+                  s=PAPER_ROBOT.s if a.s is None else a.s, u_max=a.umax),
+            Impact(-1.0 if a.v0 is None else a.v0), units, gains)
+    else:
+        wrong = [f for f in TO_SI_FLAGS if getattr(a, f) is not None]
+        if wrong:
+            raise ParameterError(wrong[0], "is a dimensionless input; use it with --to-si")
+        ph = _scale_from_si(a)
+    robot, impact, controller, _ = ph.to_dimensionless()
+    gain_dict = {} if controller is None else {k: v for k, v in controller.to_dict().items()
+                                               if k in ("k_p", "k_d")}
+    dimensionless = {**robot.to_dict(), **impact.to_dict(), **gain_dict}
+    out = {"physical": ph.to_dict(), "dimensionless": dimensionless,
+           "scales": ph.units.to_dict()}
+    if getattr(a, "medium", None) is not None:
+        from softlanding.model.terrain import PAPER_K_G
+
+        out["rft"] = {"medium": a.medium, "k_g_rft": ph.units.k_g, "k_g_paper": PAPER_K_G,
+                      "ratio": ph.units.k_g / PAPER_K_G}
+    if a.json:
+        _print_json(out)
+    else:
+        rows = [(f"SI {k}", v) for k, v in ph.to_dict().items() if v is not None]
+        if "rft" in out:
+            rows += [("RFT k_g [N/m]", out["rft"]["k_g_rft"]),
+                     ("paper's measured k_g [N/m]", out["rft"]["k_g_paper"]),
+                     ("RFT / measured", out["rft"]["ratio"])]
+        rows += [(f"scale {k}", v) for k, v in ph.units.to_dict().items()]
+        rows += [(f"dimensionless {k}", v) for k, v in dimensionless.items() if v is not None]
+        _print_table(rows)
+    return EXIT_OK
+
+
+# ----------------------------------------------------------------------- demo
+def _cmd_demo(a: argparse.Namespace) -> int:
+    from softlanding.report.demo import (
+        DEMO_GAINS,
+        STEPPED_KD,
+        STEPPED_KP,
+        STEPPED_V0,
+        demo_table,
+        plot_demo,
+        stepped_intrusions,
+    )
+
+    out = _target(a, "out") if a.out else None
+    rows = demo_table()
+    stepped = stepped_intrusions()
+    written = _savefig(plot_demo(stepped=stepped), out) if out else None
+    if a.json:
+        _print_json({"table": rows, "stepped_intrusions": [
+            {"k_d": kd, "steps": s.steps, "depth": s.depth}
+            for kd, s in zip(STEPPED_KD, stepped, strict=True)], "figure": written})
+        return EXIT_OK
+    print(f"Landings at r_m = {PAPER_ROBOT.r_m:g}, s = {PAPER_ROBOT.s:g} (dimensionless units); "
+          f"impedance k_p = {DEMO_GAINS.k_p:g}, k_d = {DEMO_GAINS.k_d:g}")
+    print(f"{'v0':>6} {'rigid depth':>12} {'1+sqrt(1+v0^2)':>15} {'imp. depth':>11} "
+          f"{'steps':>5} {'feasible':>8} {'peak |u|':>9} {'CoT':>7}")
+    for r in rows:
+        print(f"{r['v0']:>6.1f} {r['rigid_depth']:>12.6f} {r['rigid_depth_analytic']:>15.6f} "
+              f"{r['impedance_depth']:>11.6f} {r['impedance_steps']:>5d} "
+              f"{_fmt(r['impedance_feasible']):>8} {r['impedance_u_peak']:>9.4f} "
+              f"{r['impedance_cot']:>7.3f}")
+    print(f"\nStepped intrusions (paper, Fig. 3a): v0 = {STEPPED_V0:g}, k_p = {STEPPED_KP:g}")
+    for kd, s in zip(STEPPED_KD, stepped, strict=True):
+        print(f"  k_d = {kd:<5g} -> {s.steps} step(s), depth {s.depth:.6f}")
+    if written:
+        print(f"\nfigure written to {written}")
+    return EXIT_OK
+
+
+# ------------------------------------------------------------------- reproduce
+def _cmd_reproduce(a: argparse.Namespace) -> int:
+    from softlanding.report.reproduction import reproduce
+    from softlanding.util.files import output_folder
+
+    out = output_folder(a.out, "out", a.force)
+    if not a.json:
+        print(f"Reproducing the paper into {out} ({'quick' if a.quick else 'full'} run)")
+    s = reproduce(out, quick=a.quick, progress=not a.json, log=None if a.json else print)
+    if a.json:
+        _print_json(s)
+        return EXIT_OK
+    bb, cmp = s["bang_bang_example"], s["comparison"]
+    print(f"\nbang-bang at v0 = {bb['v0']:g}: depth {bb['depth']:.9f}, "
+          f"switch {bb['switch_times'][0]:.6f}, PMP: {bb['pmp_verdict']}")
+    print(f"bang-bang / rigid depth {cmp['bang_bang_over_rigid'][0]:.4f} to "
+          f"{cmp['bang_bang_over_rigid'][1]:.4f}; impedance / rigid "
+          f"{cmp['impedance_over_rigid'][0]:.4f} to {cmp['impedance_over_rigid'][1]:.4f}")
+    worst: dict[str, list[float]] = {}
+    for r in s["robustness"]["table"]:
+        if r["margin"] == 0:
+            worst.setdefault(r["controller"], []).append(r["worst_depth_ratio"])
+    print("robustness (+-30 %, no margin), worst depth / redesigned depth: " + ", ".join(
+        f"{c} {max(v):.3f}" for c, v in worst.items()))
+    print(f"{len(s['files'])} files written to {out} (see summary.md); "
+          f"total {s['meta']['elapsed_s']:.1f} s")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------- errors
+def _cmd_hop(a: argparse.Namespace) -> int:
+    from softlanding.cli.phased import cmd_hop
+
+    return cmd_hop(a)
+
+
+HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
+            "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
+            "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
+            "reproduce": _cmd_reproduce, "hop": _cmd_hop}
+
+
+def _report(exc: BaseException) -> int:
+    """One line on stderr for an error; the exit code it means."""
+    from ocp import SolveError
+
+    if isinstance(exc, SoftlandingError):
+        print(f"softlanding: {exc.label}: {exc}", file=sys.stderr)
+        return exc.exit_code
+    if isinstance(exc, SolveError):
+        print(f"softlanding: solver failed: {exc} (Ipopt status {exc.status})", file=sys.stderr)
+        return EXIT_FAILURE
+    if isinstance(exc, OSError):  # a file the user named cannot be written or read
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"softlanding: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"softlanding: internal error (a bug, please report it): {type(exc).__name__}: "
+          f"{exc}; run again with --debug for the traceback", file=sys.stderr)
+    return EXIT_BUG
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``softlanding`` console script.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments (default: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
+    from softlanding.cli.parser import build_parser
+
+    args = build_parser(HANDLERS, _Parser).parse_args(argv)
+    from softlanding.util import progress as _progress
+
+    _progress.FORCE = bool(args.progress)
+    if getattr(args, "plot", None) or getattr(args, "out", None):
+        import matplotlib
+
+        matplotlib.use("Agg")  # files only: no window, also without a display
+    try:
+        return int(args.func(args))
+    except BrokenPipeError:
+        # output piped into e.g. `head`, which closed early: not an error
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+    except KeyboardInterrupt:
+        print("softlanding: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:
+        if args.debug:
+            raise
+        return _report(exc)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,331 @@
+"""The argument parser of the ``softlanding`` command (one small builder per sub-command)."""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from softlanding.cli.ground import ground_args
+from softlanding.errors import LIMITS
+from softlanding.model.robot import PAPER_ROBOT
+
+Handlers = Mapping[str, Callable[[argparse.Namespace], int]]
+
+DESCRIPTION = (
+    "Soft landing of a two-mass legged robot on yielding ground (one-way plastic spring), "
+    "after Lynch, Lynch & Umbanhowar. All quantities are dimensionless unless named "
+    "otherwise: lengths in x_s = m_t g / k_g, time in sqrt(m_t / k_g), force in m_t g. "
+    "Exit codes: 0 ok, 1 a run that failed (rest not proven, solver failure), 2 bad input, "
+    "3 internal error (a bug; --debug shows the traceback), 130 interrupted.")
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("softlanding")
+    except PackageNotFoundError:  # pragma: no cover - running from a source tree
+        from softlanding._version import __version__
+
+        return __version__
+
+
+def _range(name: str) -> str:
+    lo, hi = LIMITS[name]
+    return f"{lo:g} to {hi:g}"
+
+
+def _model_args(p: argparse.ArgumentParser, umax: float | None, umax_help: str) -> None:
+    """The robot's parameters shared by the sub-commands, and --json."""
+    p.add_argument("--rm", type=float, default=PAPER_ROBOT.r_m,
+                   help=f"mass ratio m_b / m_f, {_range('r_m')} (default {PAPER_ROBOT.r_m:g})")
+    p.add_argument("--s", type=float, default=PAPER_ROBOT.s,
+                   help=f"stroke S / x_s, {_range('s')} (default {PAPER_ROBOT.s:g})")
+    p.add_argument("--umax", type=float, default=umax, help=umax_help)
+    p.add_argument("--l0", type=float, default=None,
+                   help="leg length at impact and impedance rest length (default s/2)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _v0_range_args(p: argparse.ArgumentParser, n: int) -> None:
+    """--v0-min, --v0-max, --n: the impact velocities a sweep visits."""
+    p.add_argument("--v0-min", type=float, default=-10.0, help="default -10")
+    p.add_argument("--v0-max", type=float, default=0.0, help="default 0")
+    p.add_argument("--n", type=int, default=n, help=f"number of velocities (default {n})")
+
+
+def _plot_arg(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--plot", metavar="FILE.png", help=f"write {what}")
+    _force_arg(p)
+
+
+def _accept_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--accept-unverified", action="store_true",
+                   help="exit 0 even when a check fails (refinement, exact replay, PMP "
+                        "certificate); the output still says 'verified: no' and why")
+
+
+def _force_arg(p: argparse.ArgumentParser) -> None:
+    if not any("--force" in a.option_strings for a in p._actions):
+        p.add_argument("--force", action="store_true",
+                       help="overwrite existing output files (default: refuse)")
+
+
+def _simulate(sub: Any) -> argparse.ArgumentParser:
+    s = sub.add_parser("simulate", help="simulate one landing exactly (event-driven)",
+                       description="Simulate one landing with a rigid or impedance-controlled "
+                                   "leg. Exact: matrix exponentials and root-found events. "
+                                   "Choose --rigid, or --kp and --kd.")
+    s.add_argument("--v0", type=float, required=True,
+                   help=f"impact velocity, {_range('v0')} (negative = downward)")
+    s.add_argument("--rigid", action="store_true", help="body and foot locked together")
+    s.add_argument("--kp", type=float,
+                   help=f"impedance stiffness k_p = K_p / k_g, {_range('gain')}")
+    s.add_argument("--kd", type=float,
+                   help=f"impedance damping k_d = K_d / sqrt(m_t k_g), {_range('gain')}")
+    _model_args(s, None, "actuator force limit, saturating the leg (default: no limit)")
+    _plot_arg(s, "the trajectory figure (heights, force, ground mode)")
+    ground_args(s)
+    return s
+
+
+def _scale(sub: Any) -> argparse.ArgumentParser:
+    c = sub.add_parser("scale", help="convert a physical robot to dimensionless numbers and back",
+                       description="SI -> dimensionless (default; --preset paper starts from "
+                                   "the paper's rig and any SI flag given overrides it) or "
+                                   "dimensionless -> SI (--to-si, with --mt and --kg). "
+                                   "Velocities are negative when moving down.")
+    c.add_argument("--preset", choices=["paper"], help="the paper's rig (m_b 2.5, m_f 0.5 kg, "
+                                                        "k_g 4.4 kN/m)")
+    for flag, what in (("--mb", "body mass [kg]"), ("--mf", "foot mass [kg]"),
+                       ("--kg", "ground stiffness [N/m]"), ("--stroke", "actuator stroke S [m]"),
+                       ("--umax-si", "actuator force limit [N]"),
+                       ("--v0-si", "impact velocity [m/s] (<= 0)"),
+                       ("--Kp", "leg stiffness [N/m]"), ("--Kd", "leg damping [N s/m]"),
+                       ("--g", "gravity [m/s^2] (default 9.81)")):
+        c.add_argument(flag, type=float, help=what)
+    c.add_argument("--medium", choices=["poppy-lp", "poppy-cp"],
+                   help="instead of --kg: the ground stiffness of a flat foot by resistive "
+                        "force theory, k_g = alpha_z A (poppy seeds, loosely or closely "
+                        "packed), printed beside the paper's measured 4.4 kN/m")
+    c.add_argument("--foot-diameter", type=float,
+                   help="foot diameter for --medium [m] (default 0.130, the paper's foot)")
+    c.add_argument("--to-si", action="store_true", help="convert dimensionless -> SI")
+    c.add_argument("--mt", type=float, default=3.0, help="total mass for --to-si [kg] (3)")
+    for flag, what in (("--rm", "mass ratio"), ("--s", "stroke"), ("--v0", "impact velocity"),
+                       ("--umax", "force limit"), ("--kp", "stiffness"), ("--kd", "damping")):
+        c.add_argument(flag, type=float, help=f"{what} for --to-si")
+    c.add_argument("--json", action="store_true", help="print one JSON object")
+    return c
+
+
+def _solve(sub: Any) -> argparse.ArgumentParser:
+    o = sub.add_parser("solve", help="minimum-depth landing by optimal control (bang-bang)",
+                       description="Solve the paper's soft-landing OCP (min -x_f(T), free T, "
+                                   "|u| <= umax, 0 <= stroke <= s, v_f <= 0, v_f(T) = 0, "
+                                   "body-arrest condition) by multiple shooting and Ipopt, "
+                                   "then refine the switching times with exact arcs and "
+                                   "replay the schedule in the exact simulator.")
+    o.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
+    _model_args(o, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    o.add_argument("--nodes", type=int, default=100,
+                   help="shooting intervals (default 100, at most 5000)")
+    o.add_argument("--no-refine", action="store_true",
+                   help="report the transcribed solution only")
+    o.add_argument("--extra-arcs", type=int, default=0,
+                   help="also try this many more bang arcs (default 0, at most 20)")
+    o.add_argument("--pmp", action="store_true",
+                   help="check Pontryagin's conditions (costates, H, switching function) "
+                        "and give a bang-bang verdict")
+    _plot_arg(o, "the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
+    _accept_arg(o)
+    ground_args(o)
+    _variant_args(o)
+    return o
+
+
+def _variant_args(o: argparse.ArgumentParser) -> None:
+    """``solve --variant``: the hybrid multi-phase landings (softlanding.optimal)."""
+    o.add_argument("--variant", choices=["paper", "two-phase", "leg-extension"],
+                   default="paper",
+                   help="paper: the paper's single-phase OCP (default); two-phase: yielding then "
+                        "static stance until the body stops, the arrest optimised; "
+                        "leg-extension: the leg's state at touchdown optimised (changes the "
+                        "paper's initial condition)")
+    o.add_argument("--steps", type=int, choices=[1, 2], default=1,
+                   help="two-phase: yielding steps allowed (2: yielding, static, yielding, "
+                        "static)")
+    o.add_argument("--mode", choices=["impact", "drop"], default="impact",
+                   help="leg-extension: decide the leg's state at impact directly (both "
+                        "masses at v0), or by a flight phase from the drop height v0^2/2")
+    o.add_argument("--extension", default="free",
+                   help="leg-extension, impact mode: 'free' (within the stroke) or a leg "
+                        "length at impact (s/2 is the paper's)")
+    o.add_argument("--rate-max", type=float, default=None,
+                   help="leg-extension, impact mode: also free the relative velocity at "
+                        "impact within +-RATE_MAX (default: 0, the paper's)")
+
+
+def _hop(sub: Any) -> argparse.ArgumentParser:
+    h = sub.add_parser("hop", help="minimum-energy hop cycle on yielding ground",
+                       description="One vertical hop: touchdown on fresh ground at v0 (apex "
+                                   "v0^2/2, leg at s/2), stance on the crater, lift-off, "
+                                   "flight back to the apex posture. Minimises the energy the "
+                                   "actuator draws per cycle, int (P+ - eta P-) dt, and "
+                                   "evaluates it on the exact replay.")
+    h.add_argument("--v0", type=float, required=True, help="touchdown velocity (< 0)")
+    h.add_argument("--eta", type=float, default=0.0,
+                   help="regenerative efficiency in [0, 1) (default 0: a dissipative actuator)")
+    h.add_argument("--leg", choices=["free", "impedance", "rigid", "all"], default="free",
+                   help="free: the optimum; impedance: the best (k_p, k_d) with a thrust from "
+                        "the body's lowest point to lift-off; rigid: a rigid landing, then "
+                        "the optimal push-off; all: the three")
+    h.add_argument("--grid", type=int, default=9, help="impedance gain grid per axis (9)")
+    _model_args(h, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    _plot_arg(h, "the hop cycle figure (the first leg), phases shaded")
+    _accept_arg(h)
+    return h
+
+
+def _solve_sweep(sub: Any) -> argparse.ArgumentParser:
+    w = sub.add_parser("solve-sweep", help="bang-bang depth against impact velocity",
+                       description="Solve the OCP over v0 from --v0-max down to --v0-min "
+                                   "with continuation (each solve warm-starts the next).")
+    _v0_range_args(w, 21)
+    _model_args(w, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    w.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
+    _plot_arg(w, "depth against v0")
+    _accept_arg(w)
+    ground_args(w)
+    return w
+
+
+def _impedance(sub: Any) -> argparse.ArgumentParser:
+    i = sub.add_parser("impedance", help="optimal impedance gains for one impact velocity",
+                       description="Minimise depth (or CoT) over the gains (k_p, k_d) in "
+                                   "[0, 1]^2, excluding landings that leave the stroke: the "
+                                   "paper's grid, then a zooming feasible-grid refinement "
+                                   "(to 1e-8) and a bisection onto the stroke limit.")
+    i.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
+    _model_args(i, None, "actuator force limit (default none, as in the paper's study)")
+    i.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth",
+                   help="depth; CoT with actuator and ground losses; or ground losses only")
+    i.add_argument("--grid", type=int, default=101,
+                   help="starting grid per axis (default 101, 2 to 2001)")
+    ground_args(i)
+    return i
+
+
+def _map(sub: Any) -> argparse.ArgumentParser:
+    m = sub.add_parser("map", help="the (k_p, k_d) depth map at one impact velocity",
+                       description="Simulate the (k_p, k_d) grid, save every figure of every "
+                                   "landing as a labelled netCDF dataset, and plot depth "
+                                   "normalised by its minimum (infeasible blank, optimum "
+                                   "starred).")
+    m.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
+    m.add_argument("--n", type=int, default=101, help="points per axis (default 101, <= 2001)")
+    _model_args(m, None, "actuator force limit (default none)")
+    m.add_argument("--out", required=True, metavar="FILE.nc", help="netCDF dataset to write")
+    _plot_arg(m, "the map figure")
+    m.add_argument("--scheduler", metavar="tcp://host:port",
+                   help="run on a Dask cluster instead of the local cores")
+    ground_args(m)
+    return m
+
+
+def _sweep(sub: Any) -> argparse.ArgumentParser:
+    w = sub.add_parser("sweep", help="optimal gains against impact velocity (and r_m, s)",
+                       description="Optimal impedance at each v0 from --v0-max to --v0-min, "
+                                   "for every --rm and --s given (repeat the flags for "
+                                   "families), with the paper's observations checked.")
+    _v0_range_args(w, 21)
+    w.add_argument("--rm", type=float, action="append", help="mass ratio (repeatable)")
+    w.add_argument("--s", type=float, action="append", help="stroke (repeatable)")
+    w.add_argument("--umax", type=float, help="actuator force limit (default none)")
+    w.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth")
+    w.add_argument("--grid", type=int, default=101, help="starting grid per axis")
+    w.add_argument("--out", metavar="FILE.nc", help="netCDF dataset to write")
+    _plot_arg(w, "the curves figure")
+    w.add_argument("--scheduler", metavar="tcp://host:port", help="Dask scheduler address")
+    w.add_argument("--json", action="store_true", help="print one JSON object")
+    ground_args(w)
+    return w
+
+
+def _compare(sub: Any) -> argparse.ArgumentParser:
+    cp = sub.add_parser("compare", help="rigid vs optimal impedance vs bang-bang, against v0",
+                        description="The paper's comparison: penetration depth against impact "
+                                    "velocity for a rigid leg (analytic), the depth-optimal "
+                                    "impedance (unsaturated, as in the paper), and optimal "
+                                    "bang-bang force control.")
+    _v0_range_args(cp, 11)
+    _model_args(cp, PAPER_ROBOT.u_max,
+                f"force limit of the bang-bang controller (default {PAPER_ROBOT.u_max:g})")
+    cp.add_argument("--grid", type=int, default=101, help="impedance starting grid per axis")
+    _plot_arg(cp, "depth against v0")
+    ground_args(cp)
+    return cp
+
+
+def _demo(sub: Any) -> argparse.ArgumentParser:
+    d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
+                       description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "
+                                   "-5, -10, print a table (with the analytic rigid depth "
+                                   "as a check) and write a figure.")
+    d.add_argument("--out", default="softlanding-demo.png", metavar="FILE.png",
+                   help="figure path (default softlanding-demo.png; '' for none)")
+    d.add_argument("--json", action="store_true", help="print one JSON object")
+    _force_arg(d)
+    return d
+
+
+def _reproduce(sub: Any) -> argparse.ArgumentParser:
+    r = sub.add_parser("reproduce", help="every figure of the paper, summary tables, robustness",
+                       description="Regenerate every figure of the paper (PNG and PDF), "
+                                   "summary.md and summary.json with the headline numbers, "
+                                   "and a robustness study of the nominal bang-bang and "
+                                   "impedance controllers under +-30 % model error. The full "
+                                   "run takes several minutes on 2 cores; --quick (coarser "
+                                   "grids, fewer velocities) about one.")
+    r.add_argument("--out", required=True, metavar="DIR",
+                   help="folder to write: new or empty, or with --force an existing one whose "
+                        "files of the same names are replaced")
+    _force_arg(r)
+    r.add_argument("--quick", action="store_true", help="coarser grids, about a minute")
+    r.add_argument("--json", action="store_true", help="print summary.json's contents")
+    return r
+
+
+BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
+            "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
+            "demo": _demo, "reproduce": _reproduce, "hop": _hop}
+
+
+def build_parser(handlers: Handlers,
+                 parser_class: type[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+    """The whole parser; each sub-command calls its handler.
+
+    Parameters
+    ----------
+    handlers : dict
+        Sub-command name -> function of the parsed arguments returning the exit code.
+    parser_class : type
+        The ArgumentParser subclass to use (one-line errors).
+    """
+    ap = parser_class(prog="softlanding", description=DESCRIPTION)
+    ap.add_argument("--version", action="version", version=f"softlanding {_version()}")
+    ap.add_argument("--debug", action="store_true",
+                    help="show the traceback of an internal error")
+    ap.add_argument("--progress", action="store_true",
+                    help="draw progress bars even when stderr is not a terminal")
+    sub = ap.add_subparsers(dest="command", required=True, parser_class=parser_class)
+    for name, build in BUILDERS.items():
+        s = build(sub)
+        s.set_defaults(func=handlers[name])
+        # also accepted after the sub-command (without overwriting the value given before it)
+        s.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                       help=argparse.SUPPRESS)
+        s.add_argument("--progress", action="store_true", default=argparse.SUPPRESS,
+                       help=argparse.SUPPRESS)
+    return ap

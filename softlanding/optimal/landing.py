@@ -1,0 +1,588 @@
+"""The paper's soft-landing optimal control problem, posed with :mod:`ocp`.
+
+Minimise the final depth ``-x_f(T)`` over a free final time ``T`` (when the
+foot stops), subject to the yielding-stance dynamics (from
+:mod:`softlanding.model.dynamics`), ``|u| <= u_max``, ``0 <= x_b - x_f <= s`` and
+``v_f <= 0`` on ``[0, T]``, ``v_f(T) = 0`` and the body-arrest condition: the
+ground must hold the constant force ``u_b`` that stops the body in the
+remaining stroke,
+
+    u_b = r_m/(1+r_m) (1 + v_b(T)^2 / (2 (x_b(T) - x_f(T)))),
+    -x_f(T) >= 1/(1+r_m) + u_b,     u_b <= u_max.
+
+(The paper writes the arrest condition as an equality; we pose the inequality
+and report whether it is active.) Both terminal conditions are multiplied by
+the positive final stroke before they go to Ipopt, so no iterate divides by
+zero.
+
+After the transcribed solve, the bang-bang structure is detected and the
+switching times refined with exact (matrix-exponential) arcs; the refined
+schedule, followed by the arrest force ``u_b`` until the body stops and then
+the body's weight, is replayed in the exact hybrid simulator as a check.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
+from ocp.errors import PathViolationWarning
+from ocp.switching import RefinedSwitching, detect_arcs, refine_structure, refine_switching
+from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
+from softlanding.model.controllers import FeedbackSchedule, ForceSchedule, Rigid
+from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
+from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal.verification import certificate_reasons, replay_reasons
+from softlanding.simulation.simulator import LandingResult, simulate
+from softlanding.util.jsonable import json_safe
+from softlanding.util.progress import progress as show_progress
+
+T_MAX = 30.0
+MAX_NODES = 5000
+"""Largest transcription (the NLP grows linearly; 5000 nodes take about a minute)."""
+
+
+STROKE = "stroke limits 0 <= x_b - x_f <= s"
+DESCENDING = "foot descending v_f <= 0"
+ARREST = "body arrest -x_f(T) >= 1/(1+r_m) + u_b"
+ARREST_FORCE = "arrest force u_b <= u_max"
+DIAGNOSABLE = (ARREST_FORCE, ARREST, STROKE, DESCENDING)
+
+
+PARAMETERS = ("r_m", "s", "v0", "u_max", "l0")
+"""The landing OCP's parameters, in order."""
+
+
+def build_landing_problem(omit: tuple[str, ...] = (),
+                          ground: Ground = LINEAR_GROUND) -> OptimalControlProblem:
+    """The soft-landing OCP with parameters ``r_m, s, v0, u_max, l0``.
+
+    Parameters
+    ----------
+    omit : tuple of str
+        Named conditions to drop (used to diagnose infeasible requests).
+    ground : Ground
+        Ground model of the yielding stance.
+    """
+    p = OptimalControlProblem("soft_landing")
+    xb, vb, xf, vf = (p.state(n) for n in STATE_NAMES)
+    r_m, s, v0, u_max, l0 = (p.parameter(n) for n in PARAMETERS)
+    u = p.control("u", lower=-u_max, upper=u_max)
+    x = ca.vertcat(xb, vb, xf, vf)
+    p.set_dynamics(stance_dynamics(x, u, r_m, ground))
+    stroke = xb - xf
+    if STROKE not in omit:
+        p.path_constraint(stroke, 0, s, name=STROKE)
+    if DESCENDING not in omit:
+        p.path_constraint(vf, -ca.inf, 0, name=DESCENDING)
+    p.initial_constraint(xb - l0, 0.0, name="x_b(0) = l0")
+    p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
+    p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
+    p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
+    p.terminal_constraint(vf, 0.0, name="foot stopped v_f(T) = 0")
+    # stroke * (-x_f - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0
+    ub_stroke = arrest_force_times_stroke(x, r_m)
+    if ARREST not in omit:
+        p.terminal_constraint(stroke * (-xf - 1 / (1 + r_m)) - ub_stroke, 0, ca.inf, name=ARREST)
+    if ARREST_FORCE not in omit:
+        p.terminal_constraint(stroke * u_max - ub_stroke, 0, ca.inf, name=ARREST_FORCE)
+    p.free_final_time(lower=1e-3, upper=T_MAX, guess=1.0)
+    p.minimize_terminal(-xf)
+    return p
+
+
+@lru_cache(maxsize=16)
+def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, ...] = (),
+                          ground: Ground = LINEAR_GROUND) -> MultipleShooting:
+    """The transcribed soft-landing NLP, built once per arguments and reused.
+
+    Expanded to SX: slower to build once, faster at every re-solve of a sweep.
+
+    Parameters
+    ----------
+    nodes : int
+        Shooting intervals.
+    substeps : int
+        RK4 steps per interval.
+    omit : tuple of str
+        Conditions dropped (diagnosis of infeasible requests).
+    ground : Ground
+        Ground model.
+    """
+    return MultipleShooting(build_landing_problem(omit, ground), nodes=nodes, integrator="rk4",
+                            substeps=substeps, expand=True)
+
+
+def arrest_force_times_stroke(x, r_m):
+    """``u_b (x_b - x_f)``, where ``u_b = r_m/(1+r_m) (1 + v_b^2 / (2 (x_b - x_f)))`` is the
+    constant force that stops the body in the remaining stroke (symbolic or numeric).
+
+    Parameters
+    ----------
+    x : array or casadi expression of 4
+        State at the foot's stop.
+    r_m : float or expression
+        Mass ratio.
+    """
+    return r_m / (1 + r_m) * ((x[0] - x[2]) + x[1] ** 2 / 2)
+
+
+def arrest_force(r_m: float, x_T: np.ndarray) -> float:
+    """``u_b``: the constant force that stops the body in the remaining stroke.
+
+    Parameters
+    ----------
+    r_m : float
+        Mass ratio.
+    x_T : array of 4
+        State at the foot's stop.
+    """
+    return float(arrest_force_times_stroke(x_T, r_m) / (x_T[0] - x_T[2]))
+
+
+@dataclass
+class BangBangLanding:
+    """A solved soft landing.
+
+    Attributes
+    ----------
+    robot, impact, ground
+        The problem solved.
+    depth : float
+        ``-x_f(T)``, refined (exact arcs) unless refinement was off or failed.
+    depth_transcribed : float
+        From the N-node transcription.
+    T : float
+        Final time (foot stops).
+    arcs : list of str
+        Bang arcs (``"max"``/``"min"``).
+    switch_times : list of float
+        The times between them.
+    u_b : float
+        Body-arrest force at T.
+    arrest_active : bool
+        Whether ``-x_f(T) = 1/(1+r_m) + u_b`` holds (to 1e-8).
+    status : str
+        Ipopt's status of the transcribed solve.
+    iterations : int
+        Ipopt's iterations.
+    solve_time_s : float
+        Wall time of the transcribed solve.
+    refined : RefinedSwitching or None
+        The switching-time refinement (exact arcs).
+    transcribed : ocp.Solution
+        The transcribed solution (a warm start for the next solve).
+    replay : LandingResult or None
+        The refined schedule replayed in the exact simulator.
+    notes : list of str
+        What was dropped or failed on the way.
+    refine_requested : bool
+        Whether the switching times were to be refined.
+    path : str
+        What produced the result: ``"transcription"`` (transcribed NLP, then the
+        switching-time refinement) or ``"structure"`` (the neighbour's arc structure
+        re-solved directly, by Newton or a small NLP: no transcription, so
+        ``transcribed`` is None and ``depth_transcribed`` NaN).
+    """
+
+    robot: Robot
+    impact: Impact
+    ground: Ground
+    depth: float
+    depth_transcribed: float
+    T: float
+    arcs: list[str]
+    switch_times: list[float]
+    u_b: float
+    arrest_active: bool
+    status: str
+    iterations: int
+    solve_time_s: float
+    refined: RefinedSwitching | None
+    transcribed: Solution | None
+    replay: LandingResult | None = None
+    notes: list[str] = field(default_factory=list)
+    refine_requested: bool = True
+    path: str = "transcription"
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why this result cannot be taken as proven (empty: every check passed).
+
+        The checks: the switching times were refined (when asked), the schedule
+        replayed in the exact simulator comes to rest inside the stroke with the
+        same depth (1e-9 refined, 1e-6 transcribed), and the PMP certificate, when
+        given, certifies it.
+
+        Parameters
+        ----------
+        certificate : ocp.PMPCertificate, optional
+            The certificate of this solution.
+        """
+        out = []
+        if self.refine_requested and self.refined is None:
+            out.append("switching times not refined (" + "; ".join(self.notes) + ")")
+        if self.refined is None and self.transcribed is not None and not getattr(
+                self.transcribed, "verified", True):
+            out.append("the transcription violates a path constraint between its nodes")
+        if self.replay is not None:
+            out += replay_reasons(self.replay, self.depth, self.refined is not None)
+        return out + certificate_reasons(certificate)
+
+    @property
+    def replay_difference(self) -> float:
+        """``|replay depth - depth|`` (NaN without a replay)."""
+        return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
+
+    def schedule(self) -> ForceSchedule | FeedbackSchedule:
+        """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,
+        then its weight.
+
+        A bang arc is a constant force; a boundary arc (a stroke limit held) is the state
+        feedback that holds it, so the schedule is then a :class:`FeedbackSchedule`.
+        """
+        r_m = self.robot.r_m
+        if self.refined is not None:
+            keep = [i for i, d in enumerate(self.refined.durations) if d > 1e-14]
+            durs = [float(self.refined.durations[i]) for i in keep]
+            rows = [_law_row(self.refined, i) for i in keep]
+            xT = self.refined.xT
+        else:
+            assert self.transcribed is not None
+            u = self.transcribed.u[:, 0]
+            h = self.transcribed.T / self.transcribed.N
+            durs, rows = [h] * len(u), [_const_row(v) for v in u]
+            xT = self.transcribed.x[-1]
+        stroke = xT[0] - xT[2]
+        if xT[1] < 0:  # the arrest force until the body stops (none if it has stopped)
+            rows.append(_const_row(self.u_b))
+            decel = xT[1] ** 2 / (2 * stroke)
+            durs.append(-xT[1] / decel)
+        rows.append(_const_row(r_m / (1 + r_m)))
+        if all(not any(r[:4]) for r in rows):
+            return ForceSchedule.from_arcs(durs, [r[4] for r in rows])
+        return FeedbackSchedule.from_arcs(durs, rows)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict: the figures, the refined arcs and the replay."""
+        d = {"depth": self.depth, "depth_transcribed": self.depth_transcribed, "T": self.T,
+             "switch_times": self.switch_times, "arcs": self.arcs, "u_b": self.u_b,
+             "arrest_active": self.arrest_active, "status": self.status,
+             "iterations": self.iterations, "solve_time_s": self.solve_time_s,
+             "path": self.path + ("" if self.refined is None else f" ({self.refined.path})"),
+             "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
+             "ground": self.ground.to_dict(), "notes": self.notes}
+        if self.refined is not None:
+            d["refined"] = self.refined.to_dict()
+        if self.replay is not None:
+            d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
+                           "feasible": self.replay.feasible, "status": self.replay.status,
+                           "stroke_min": self.replay.stroke_min,
+                           "stroke_max": self.replay.stroke_max}
+        return json_safe(d)
+
+
+def _const_row(u: float) -> list[float]:
+    return [0.0, 0.0, 0.0, 0.0, float(u)]
+
+
+def _law_row(refined: RefinedSwitching, i: int) -> list[float]:
+    """Interval ``i``'s control as a row of ``u = K . [x, 1]``: its bang value, or the
+    boundary arc's law ``u = K x + k0``."""
+    law = refined.control_laws[i] if refined.control_laws else None
+    if law is None:
+        return _const_row(refined.values[i])
+    return [float(k) for k in np.asarray(law["gain"], float).reshape(-1)[:4]] + [
+        float(np.asarray(law["offset"], float).reshape(-1)[0])]
+
+
+def _validate(robot: Robot) -> float:
+    """The force limit of a landing problem (raises when none can work)."""
+    if robot.u_max is None:
+        raise ParameterError("u_max", "the optimal control problem needs a force limit")
+    if robot.u_max <= robot.body_mass:
+        raise InfeasibleLandingError(
+            f"u_max = {robot.u_max:g} does not exceed the body weight r_m/(1+r_m) = "
+            f"{robot.body_mass:.4g}: the arrest force u_b <= u_max can never hold")
+    return robot.u_max
+
+
+def _ocp_params(robot: Robot, impact: Impact) -> dict[str, float]:
+    return {"r_m": robot.r_m, "s": robot.s, "v0": impact.v0, "u_max": _validate(robot),
+            "l0": robot.rest_length}
+
+
+def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
+                ground: Ground = LINEAR_GROUND) -> np.ndarray:
+    """Initial guess: the rigid-leg landing up to the foot's first stop (nearly feasible).
+
+    Parameters
+    ----------
+    tr : MultipleShooting
+        The transcription the guess is for.
+    robot, impact, ground
+        The problem (the lock is simulated without force limit).
+    """
+    res = simulate(robot.without_force_limit(), impact, Rigid(), ground)
+    T = res.t_first_stop if math.isfinite(res.t_first_stop) else 1.0
+    N = int(tr.N)  # type: ignore[arg-type]  # a one-phase transcription
+    traj = res.trajectory(t_end=T, n=N + 1)
+    t = np.linspace(0, T, N + 1)
+    X = np.column_stack([np.interp(t, traj.t, traj.x[:, i]) for i in range(4)])
+    u_max = _validate(robot)
+    U = np.clip(np.interp(t[:-1], traj.t, traj.u[:, 0]), -u_max, u_max)[:, None]
+    return tr.initial_guess(T=T, x=X, u=U)
+
+
+def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: Ground,
+                        nodes: int) -> InfeasibleLandingError:
+    """Name the condition(s) whose removal makes the request feasible."""
+    params = _ocp_params(robot, impact)
+    culprits = []
+    for name in DIAGNOSABLE:
+        tr = landing_transcription(nodes, omit=(name,), ground=ground)
+        try:
+            tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
+            culprits.append(name)
+        except SolveError:
+            continue
+    if culprits:
+        what = " or ".join(culprits)
+        why = f"{what} cannot be met together with the other conditions"
+    else:
+        why = ("the conditions cannot all be met, and dropping any one of them ("
+               + "; ".join(DIAGNOSABLE) + ") does not help either")
+    return InfeasibleLandingError(
+        f"no landing satisfies the constraints at v0={impact.v0:g}, r_m={robot.r_m:g}, "
+        f"s={robot.s:g}, u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
+
+
+def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Ground,
+                 nodes: int, warm_start: Solution | None, notes: list[str]) -> Solution:
+    """The transcribed solve (warm-started if possible); infeasibility is explained.
+
+    A transcription that violates a path constraint between its nodes is noted (its
+    ``verified`` flag is False); the refined solution and the exact replay are checked
+    instead.
+    """
+    params = _ocp_params(robot, impact)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PathViolationWarning)
+        try:
+            sol = None
+            if warm_start is not None:
+                try:
+                    sol = tr.solve(params, warm_start=warm_start)
+                except SolveError:
+                    pass
+            if sol is None:
+                sol = tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
+        except InfeasibleError as err:
+            raise _explain_infeasible(err, robot, impact, ground, nodes) from None
+    notes += [f"transcription: {w.message}".split("; refine the grid")[0] for w in caught
+              if issubclass(w.category, PathViolationWarning)]
+    return sol
+
+
+def _refined(sol: Solution, extra_arcs: int,
+             notes: list[str]) -> tuple[RefinedSwitching | None, Any]:
+    """Detect the bang-bang structure and refine it (None when not bang-bang or failed)."""
+    st = detect_arcs(sol)
+    trimmed = st.without_trailing_constrained()
+    if trimmed is not st and trimmed.refinable:
+        notes.append(
+            f"dropped the final {st.arcs[-1].duration:.4g}-long arc on which "
+            f"{' and '.join(st.arcs[-1].active)} is active: the foot has already stopped "
+            "and the force holds the crater's yield load, which is the body-arrest phase")
+        st = trimmed
+    if not st.refinable:
+        notes.append(f"structure {st.kinds} has arcs that are neither bang nor on a "
+                     "constraint; not refined")
+        return None, st
+    try:
+        return refine_switching(sol, st, extra_arcs=extra_arcs), st
+    except SolveError as err:
+        notes.append(f"switching-time refinement failed ({err.status}); "
+                     "reporting the transcribed solution")
+        return None, st
+
+
+def build_landing_problem_of(nodes: int, ground: Ground) -> OptimalControlProblem:
+    """The (cached) landing problem of :func:`landing_transcription` (one phase).
+
+    Parameters
+    ----------
+    nodes : int
+        Shooting intervals of the transcription it belongs to.
+    ground : Ground
+        Ground model.
+    """
+    problem = landing_transcription(nodes, ground=ground).problem
+    assert isinstance(problem, OptimalControlProblem)
+    return problem
+
+
+def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, ground: Ground,
+                       nodes: int) -> RefinedSwitching | None:
+    """The neighbour's arc structure re-solved for this landing (None if it does not hold)."""
+    if prev.refined is None or prev.ground != ground:
+        return None
+    problem = build_landing_problem_of(nodes, ground)
+    try:
+        r = refine_structure(problem, prev.refined.modes, prev.refined.durations,
+                             impact.initial_state(robot), _ocp_params(robot, impact))
+    except SolveError:
+        return None
+    # the structure must still be the optimum's: an arc that collapsed sends the solve back
+    # to the transcription (path constraints are checked inside every arc by the re-solve,
+    # and exactly by the replay)
+    if min(r.durations) <= 1e-9 * r.T:
+        return None
+    return r
+
+
+def _landing(robot: Robot, impact: Impact, ground: Ground, sol: Solution | None,
+             refined: RefinedSwitching | None, structure: Any, notes: list[str],
+             refine: bool, path: str) -> BangBangLanding:
+    """Assemble the result (depth, arrest condition, arcs) from what was solved."""
+    assert refined is not None or sol is not None
+    xT = refined.xT if refined is not None else sol.x[-1]  # type: ignore[union-attr]
+    depth = -xT[2]
+    u_b = arrest_force(robot.r_m, xT)
+    gap = depth - robot.foot_mass - u_b
+    src = refined if refined is not None else structure
+    return BangBangLanding(
+        robot=robot, impact=impact, ground=ground, depth=float(depth),
+        depth_transcribed=float(-sol.x[-1, 2]) if sol is not None else math.nan,
+        T=float(refined.T if refined is not None else sol.T),  # type: ignore[union-attr]
+        arcs=list(src.kinds), switch_times=[float(t) for t in src.switch_times],
+        u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
+        status=sol.status if sol is not None else refined.status,  # type: ignore[union-attr]
+        iterations=sol.iterations if sol is not None else refined.iterations,  # type: ignore
+        solve_time_s=sol.solve_time if sol is not None else refined.solve_time,  # type: ignore
+        refined=refined, transcribed=sol, notes=notes, refine_requested=refine, path=path)
+
+
+def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                  ground: Ground = LINEAR_GROUND, *, nodes: int = 100, refine: bool = True,
+                  extra_arcs: int = 0, warm_start: Solution | BangBangLanding | None = None,
+                  replay: bool = True) -> BangBangLanding:
+    """Solve the soft-landing OCP; refine the switching times; replay in the simulator.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot; its force limit ``u_max`` bounds the control (required).
+    ground : Ground
+        Ground model.
+    nodes : int
+        Shooting intervals.
+    refine : bool
+        Refine the switching times with exact arcs.
+    extra_arcs : int
+        Also try this many more bang arcs (>= 0).
+    warm_start : ocp.Solution or BangBangLanding, optional
+        A neighbouring solution (continuation). A refined :class:`BangBangLanding`
+        is first tried as a structure: its arcs are re-solved directly for this
+        landing (no transcription; ``path == "structure"``), and the transcription
+        is solved only if that fails.
+    replay : bool
+        Replay the schedule in the exact simulator.
+
+    Returns
+    -------
+    BangBangLanding
+
+    Raises
+    ------
+    ParameterError
+        Non-finite or out-of-range parameters.
+    InfeasibleLandingError
+        No landing satisfies the constraints (the message names the condition).
+    ocp.SolveError
+        Ipopt failed otherwise (status attached).
+    """
+    impact = Impact.of(impact)
+    _validate(robot)
+    nodes = check_count("nodes", nodes, 2, MAX_NODES)
+    extra_arcs = check_count("extra_arcs", extra_arcs, 0, 20)
+    out = None
+    if isinstance(warm_start, BangBangLanding):
+        if refine and extra_arcs == 0:
+            r = _structure_resolve(warm_start, robot, impact, ground, nodes)
+            if r is not None:
+                out = _landing(robot, impact, ground, None, r, None, [], True, "structure")
+        warm_start = warm_start.transcribed
+    if out is None:
+        tr = landing_transcription(nodes, ground=ground)
+        notes: list[str] = []
+        sol = _transcribed(tr, robot, impact, ground, nodes, warm_start, notes)
+        refined, st = _refined(sol, extra_arcs, notes) if refine else (None, None)
+        out = _landing(robot, impact, ground, sol, refined, st or detect_arcs(sol), notes,
+                       refine, "transcription")
+    if replay:
+        out.replay = simulate(robot, impact, out.schedule(), ground)
+        if out.path == "structure" and out.unverified_reasons():
+            # the neighbour's structure does not hold here: solve it properly
+            return solve_landing(impact, robot, ground, nodes=nodes, refine=refine,
+                                 warm_start=out.transcribed, replay=replay)
+    return out
+
+
+def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR_GROUND, *,
+                  nodes: int = 100, refine: bool = True, progress: bool | None = False,
+                  replay: bool = False) -> list[BangBangLanding]:
+    """Bang-bang depth over impact velocities, by continuation (each solve warm-starts the next).
+
+    The values are solved in the given order; start from the easy end. After the first,
+    each landing re-solves its neighbour's arc structure directly (``path ==
+    "structure"``) and falls back to the transcription when the structure changes.
+
+    Parameters
+    ----------
+    v0_values : sequence of float
+        Impact velocities.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    nodes : int
+        Shooting intervals.
+    refine : bool
+        Refine the switching times.
+    progress : bool, optional
+        Progress bar.
+    replay : bool
+        Replay each schedule in the exact simulator.
+    """
+    impacts = [Impact.of(v) for v in v0_values]  # bad input fails before any work
+    _validate(robot)
+    it = show_progress(impacts, progress, "bang-bang sweep", "solve")
+    out: list[BangBangLanding] = []
+    prev: BangBangLanding | None = None
+    last_transcribed: Solution | None = None
+    for imp in it:
+        res = solve_landing(imp, robot, ground, nodes=nodes, refine=refine, warm_start=prev,
+                            replay=replay)
+        out.append(res)
+        last_transcribed = res.transcribed or last_transcribed
+        prev = res
+        if prev.transcribed is None and last_transcribed is not None:
+            # a structure re-solve has no transcription: keep the last one as warm start
+            prev = dataclasses.replace(prev, transcribed=last_transcribed)
+    return out
+
+
+__all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",
+           "arrest_force", "build_landing_problem", "landing_transcription", "solve_landing",
+           "sweep_landing"]

@@ -1,0 +1,180 @@
+"""A refined multi-phase solution as a controller of the exact simulator.
+
+Every refined interval is an affine law of the augmented state ``z = [x_b, v_b,
+x_f, v_f, 1]``: a bang arc is the constant ``u = value``; a boundary arc is the
+state feedback ``u = K x + k0`` that holds its constraint (read off
+:attr:`ocp.switching.RefinedSwitching.control_laws`). The whole schedule is
+therefore a :class:`~softlanding.model.controllers.FeedbackSchedule` (piecewise-affine
+in time), replayed exactly by :func:`softlanding.simulation.simulator.simulate`. Where every
+feedback law only reads states that its mode keeps constant (the crater-capacity
+arc of a static phase reads the pinned foot's ``x_f``), the law *is* a constant
+force and a :class:`~softlanding.model.controllers.ForceSchedule` replays it exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ocp.phase_refinement import RefinedPhases
+from softlanding.model import controllers as _controllers
+from softlanding.model.controllers import ForceSchedule
+
+TAIL_DAMPING = 1.0
+"""Damping on the body's velocity added to the force held after the last phase."""
+
+TINY = 1e-10
+"""Intervals shorter than this (relative to the horizon) are left out (touch points)."""
+
+
+@dataclass
+class ArcLaw:
+    """One refined interval as an affine law.
+
+    Attributes
+    ----------
+    phase : int
+        Phase index.
+    duration : float
+        Interval length.
+    gain : ndarray (5,)
+        ``u = gain . [x_b, v_b, x_f, v_f, 1]``.
+    constant : float or None
+        The law's value when it is constant along the exact arc (to 1e-13 relative: it
+        only reads states the mode keeps still), None otherwise.
+    kind : str
+        ``"max"``, ``"min"`` or ``"boundary(...)"``.
+    """
+
+    phase: int
+    duration: float
+    gain: np.ndarray
+    constant: float | None
+    kind: str
+
+
+def arc_laws(refined: RefinedPhases, first: int = 0) -> list[ArcLaw]:
+    """The affine law of every interval of every phase (from phase ``first``), in time order.
+
+    Parameters
+    ----------
+    refined : RefinedPhases
+        A refined multi-phase landing (single control ``u``, states ``x_b, v_b, x_f, v_f``).
+    first : int
+        First phase included.
+
+    Raises
+    ------
+    ValueError
+        If a boundary law is not affine in the state.
+    """
+    out: list[ArcLaw] = []
+    horizon = max(refined.T - float(refined.t0[0]), 1.0)
+    for i, r in enumerate(refined.phases):
+        if i < first:
+            continue
+        laws = r.control_laws
+        _, xs, _, ks = r.samples(400)
+        for k, (modes, dur) in enumerate(zip(r.modes, r.durations, strict=True)):
+            if dur <= TINY * horizon:
+                continue
+            gain = np.zeros(5)
+            if laws[k] is None:
+                gain[4] = float(r.values[k])
+            else:
+                law = laws[k]
+                if law is None or "gain" not in law:
+                    raise ValueError(f"phase {r.problem.name!r}: the boundary law of interval "
+                                     f"{k} is not affine in the state")
+                gain[:4] = np.asarray(law["gain"][0], dtype=float)
+                gain[4] = float(law["offset"][0])
+            along = xs[ks == k][:, :4] @ gain[:4] + gain[4]
+            spread = float(np.ptp(along)) if len(along) else 0.0
+            const = float(along[0]) if spread <= 1e-13 * max(1.0, float(np.max(np.abs(
+                along)))) else None
+            out.append(ArcLaw(i, float(dur), gain, const, modes[0].label()))
+    return out
+
+
+def feedback_available() -> bool:
+    """Whether :class:`softlanding.model.controllers.FeedbackSchedule` exists in this version."""
+    return hasattr(_controllers, "FeedbackSchedule")
+
+
+def replay_controller(refined: RefinedPhases, tail: float, first: int = 0) -> tuple[Any, str]:
+    """The refined schedule (from phase ``first``, time counted from its start) as a
+    simulator controller, then ``u = tail`` forever.
+
+    Parameters
+    ----------
+    refined : RefinedPhases
+        A refined multi-phase landing.
+    tail : float
+        Force held after the last phase (e.g. the body's weight at rest).
+    first : int
+        First phase replayed (the simulator starts at touchdown).
+
+    Returns
+    -------
+    controller, str
+        A FeedbackSchedule (the laws, then ``tail`` with a damper on the body's
+        velocity, :data:`TAIL_DAMPING`); without FeedbackSchedule in this version, a
+        ForceSchedule when every law is a constant along its arc. And which one.
+
+    Raises
+    ------
+    NotImplementedError
+        When a feedback law is needed and FeedbackSchedule is not available.
+    """
+    laws = arc_laws(refined, first)
+    durs = [a.duration for a in laws]
+    if not feedback_available():
+        if all(a.constant is not None for a in laws):
+            vals = [float(a.constant) for a in laws] + [tail]  # type: ignore[arg-type]
+            return (ForceSchedule.from_arcs(durs, vals),
+                    "ForceSchedule (every law constant on its arc)")
+        raise NotImplementedError("a boundary arc with state feedback needs softlanding.model."
+                                  "controllers.FeedbackSchedule (not in this version)")
+    # after the last phase: the tail force plus a damper on the body's velocity, so a
+    # rounding-level residual velocity of a body arrested at the stroke limit dies out
+    # instead of carrying it through the limit
+    # a law constant along its arc is replayed as that constant: the crater-capacity law
+    # u = -x_f - 1/(1+r_m) is neutral for a foot that still creeps by a rounding error
+    # when the simulator's foot stop falls just after the switch (it would never stop)
+    gains = [a.gain if a.constant is None else np.r_[0.0, 0.0, 0.0, 0.0, a.constant]
+             for a in laws] + [np.r_[0.0, -TAIL_DAMPING, 0.0, 0.0, tail]]
+    fs = _controllers.FeedbackSchedule
+    kinds = "constant forces" if all(a.constant is not None for a in laws) else \
+        "constant forces and state feedback"
+    return (fs(tuple(np.cumsum(durs)), tuple(tuple(g) for g in gains)),
+            f"FeedbackSchedule ({kinds}; then the tail force with a damper)")
+
+
+def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
+              x0: np.ndarray) -> np.ndarray:
+    """The state after the arcs ``laws`` under one affine mode ``z' = A z + B u`` (exactly:
+    the matrix exponential of each closed loop ``A + B gain``).
+
+    Parameters
+    ----------
+    laws : list of ArcLaw
+        The arcs, in order.
+    A : ndarray (5, 5)
+        Mode matrix of the augmented state (e.g. flight, from
+        :func:`softlanding.model.dynamics.mode_matrices`).
+    B : ndarray (5,)
+        Its control column.
+    x0 : ndarray (4,)
+        State at the start.
+    """
+    from ocp.flows import expm
+
+    z = np.r_[np.asarray(x0, dtype=float), 1.0]
+    for a in laws:
+        z = expm((A + np.outer(B, a.gain)) * a.duration) @ z
+    return z[:4]
+
+
+__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller"]

@@ -1,0 +1,503 @@
+"""The full landing optimised as a hybrid two-phase problem: the body's arrest is optimised
+instead of assumed (see :mod:`softlanding.optimal.two_phase_problem` for the formulation).
+
+:func:`solve_two_phase` transcribes the problem (multiple shooting, both phases),
+starting from the exact-simulator replay of the paper's single-phase optimum;
+refines the switching times of both phases with exact arcs
+(:func:`ocp.phase_refinement.refine_phases`); and replays the whole schedule
+(yielding arcs, the phase-2 arrest law, then the body's weight) in the exact
+simulator. :func:`sweep_two_phase` does this over impact velocities by
+continuation, each landing re-solving its neighbour's arc structure directly.
+
+What it finds (r_m = 5, s = 20, u_max = 8.2): the optimal phase-2 force is the
+crater's capacity minus the foot's weight, ``u = -x_f(T1) - 1/(1+r_m)``, held
+until the body stops at the end of the stroke -- a boundary arc of the mixed
+constraint "the crater holds the support force", which is constant because the
+foot is pinned. That is the paper's constant ``u_b`` with its arrest condition
+active, so the two-phase depth equals the paper's (to rounding).
+:func:`two_step_check` asks whether a second yielding step can do better.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ocp import InfeasibleError, Solution, SolveError, Trajectory
+from ocp.phase_refinement import RefinedPhases
+from softlanding.errors import InfeasibleLandingError
+from softlanding.model.controllers import Rigid
+from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal.landing import BangBangLanding, _ocp_params, _validate, solve_landing
+from softlanding.optimal.phase_schedule import replay_controller
+from softlanding.optimal.phase_solve import (
+    phase_guess,
+    refined_phases,
+    structure_resolve,
+    transcribed_solve,
+)
+from softlanding.optimal.two_phase_problem import OMITTABLE, two_phase_transcription
+from softlanding.optimal.verification import certificate_reasons, refined_result_reasons
+from softlanding.simulation.simulator import LandingResult, simulate
+from softlanding.util.jsonable import json_safe
+from softlanding.util.progress import progress as show_progress
+
+
+@dataclass
+class FullLanding:
+    """A solved full landing (yielding, then static until the body stops).
+
+    Attributes
+    ----------
+    robot, impact, ground
+        The problem solved.
+    steps : int
+        Yielding steps allowed (1: two phases; 2: four).
+    depth : float
+        Final depth ``-x_f``, refined unless refinement was off or failed.
+    depth_transcribed : float
+        From the transcription (NaN on the structure path).
+    paper_depth : float
+        The paper's single-phase optimum (constant-force arrest) for the same landing.
+    T1, T : float
+        When the foot stops and when the body stops.
+    arcs : list of list of str
+        Arc kinds per phase.
+    switch_times : list of list of float
+        Switch times per phase (absolute).
+    phase_times : list of float
+        Start of every phase, then the end of the last.
+    arrest_force : float
+        Mean actuator force of the last (arrest) phase.
+    arrest_force_range : (float, float)
+        Its smallest and largest value (equal: a constant force).
+    status, iterations, solve_time_s
+        Of the solve that produced the result.
+    refined : RefinedPhases or None
+    transcribed : ocp.Solution or None
+    replay : LandingResult or None
+        The whole schedule replayed in the exact simulator. Its ``steps`` may exceed
+        ``steps``: the optimal arrest force equals the crater's capacity, so rounding
+        decides whether the resting foot is static or creeps (by the replay difference,
+        ~1e-14); the depth is what is checked.
+    replay_kind : str
+        The simulator controller used.
+    notes : list of str
+    path : str
+        ``"transcription"`` or ``"structure"`` (the neighbour's arcs re-solved directly).
+    """
+
+    robot: Robot
+    impact: Impact
+    ground: Ground
+    steps: int
+    depth: float
+    depth_transcribed: float
+    paper_depth: float
+    T1: float
+    T: float
+    arcs: list[list[str]]
+    switch_times: list[list[float]]
+    phase_times: list[float]
+    arrest_force: float
+    arrest_force_range: tuple[float, float]
+    status: str
+    iterations: int
+    solve_time_s: float
+    refined: RefinedPhases | None
+    transcribed: Solution | None
+    replay: LandingResult | None = None
+    replay_kind: str = ""
+    notes: list[str] = field(default_factory=list)
+    path: str = "transcription"
+
+    def certify(self) -> Any:
+        """The PMP certificate of the refined phases (None without a refinement)."""
+        from ocp.phase_pmp import certify_phases
+
+        if self.refined is None:
+            return None
+        return certify_phases(self.transcribed, self.refined)
+
+    @property
+    def depth_gain(self) -> float:
+        """``paper_depth - depth``: what optimising the arrest gains (>= 0 up to rounding)."""
+        return self.paper_depth - self.depth
+
+    @property
+    def replay_difference(self) -> float:
+        """``|replay depth - depth|`` (NaN without a replay)."""
+        return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why this result cannot be taken as proven (empty: every check passed).
+
+        Parameters
+        ----------
+        certificate : ocp.phase_pmp.PhasesCertificate, optional
+            The certificate of this solution.
+        """
+        return refined_result_reasons(
+            self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
+            self.depth_gain, "the paper's single-phase optimum by {:.2e}: a local optimum "
+            "(the paper's constant arrest is admissible)") + certificate_reasons(certificate)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict: the figures, the refined phases and the replay."""
+        d: dict[str, Any] = {
+            "variant": "two-phase", "steps": self.steps, "depth": self.depth,
+            "depth_transcribed": self.depth_transcribed, "paper_depth": self.paper_depth,
+            "depth_gain": self.depth_gain, "T1": self.T1, "T": self.T, "arcs": self.arcs,
+            "switch_times": self.switch_times, "phase_times": self.phase_times,
+            "arrest_force": self.arrest_force, "arrest_force_range": list(self.arrest_force_range),
+            "status": self.status, "iterations": self.iterations,
+            "solve_time_s": self.solve_time_s, "path": self.path, "notes": self.notes,
+            "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
+            "ground": self.ground.to_dict()}
+        if self.refined is not None:
+            d["refined"] = self.refined.to_dict()
+        if self.replay is not None:
+            d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
+                           "controller": self.replay_kind, "steps": self.replay.steps,
+                           "feasible": self.replay.feasible, "status": self.replay.status}
+        return json_safe(d)
+
+
+# ------------------------------------------------------------------- guesses
+def _guess(robot: Robot, impact: Impact, ground: Ground, paper: BangBangLanding | None,
+           steps: int) -> Any:
+    """The paper's optimum (its refined arcs, then the constant-force arrest, exactly), or
+    a rigid landing, cut into the phases."""
+    if paper is not None and paper.refined is not None:
+        tr = paper.refined.trajectory(300)
+        T1, xT = paper.T, paper.refined.xT
+        L, v = xT[0] - xT[2], xT[1]
+        a = v * v / (2 * L) if v < 0 else 0.0
+        t2 = np.linspace(0.0, -v / a if a > 0 else 1.0, 200)[1:]
+        x2 = np.column_stack([xT[0] + v * t2 + 0.5 * a * t2**2, v + a * t2,
+                              np.full_like(t2, xT[2]), np.zeros_like(t2)])
+        traj = Trajectory(np.r_[tr.t, T1 + t2], np.vstack([tr.x, x2]),
+                          np.r_[tr.u[:, 0], np.full(len(t2), paper.u_b)][:, None],
+                          tr.state_names, tr.control_names)
+    else:
+        res = simulate(robot.without_force_limit(), impact, Rigid(), ground)
+        T1 = res.t_first_stop if math.isfinite(res.t_first_stop) else 1.0
+        traj = res.trajectory(t_end=T1 + 1.0, n=400)
+    if steps == 1:
+        return phase_guess(traj, [T1])
+    late = traj.t > T1
+    shifted = Trajectory(np.where(late, traj.t + 2e-3, traj.t), traj.x, traj.u,
+                         traj.state_names, traj.control_names)
+    return phase_guess(shifted, [T1, T1 + 1e-3, T1 + 2e-3])
+
+
+def _explain(err: SolveError, robot: Robot, impact: Impact, ground: Ground, steps: int,
+             guess: Any) -> InfeasibleLandingError:
+    """Name the condition(s) whose removal makes the request feasible."""
+    params = _ocp_params(robot, impact)
+    culprits = []
+    for name in OMITTABLE:
+        try:
+            two_phase_transcription(steps, ground=ground, omit=(name,)).solve(params, guess=guess)
+            culprits.append(name)
+        except SolveError:
+            continue
+    why = (" or ".join(culprits) + " cannot be met together with the other conditions"
+           if culprits else "the conditions cannot all be met (dropping the crater or the "
+           "stroke condition of the arrest does not help)")
+    return InfeasibleLandingError(
+        f"no two-phase landing at v0={impact.v0:g}, r_m={robot.r_m:g}, s={robot.s:g}, "
+        f"u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
+
+
+# -------------------------------------------------------------------- solving
+def _assemble(robot: Robot, impact: Impact, ground: Ground, steps: int, sol: Solution | None,
+              ref: RefinedPhases | None, paper_depth: float, notes: list[str],
+              path: str) -> FullLanding:
+    if ref is not None:
+        xT = ref.xT
+        times = [float(t) for t in ref.t0] + [ref.T]
+        arcs = [[str(k) for k in r.kinds] for r in ref.phases]
+        sw = ref.switch_times
+        last = ref.phases[-1]
+        u = last.trajectory(200).u[:, 0]
+    else:
+        assert sol is not None
+        xT = sol.phases[-1].x[-1]
+        times = [float(p.t0) for p in sol.phases] + [float(sol.phases[-1].T)]
+        arcs, sw = [], []
+        u = sol.phases[-1].u[:, 0]
+    src = sol if sol is not None else ref
+    return FullLanding(
+        robot=robot, impact=impact, ground=ground, steps=steps, depth=float(-xT[2]),
+        depth_transcribed=float(-sol.phases[-1].x[-1, 2]) if sol is not None else math.nan,
+        paper_depth=paper_depth, T1=times[1], T=times[-1], arcs=arcs, switch_times=sw,
+        phase_times=times, arrest_force=float(np.mean(u)),
+        arrest_force_range=(float(np.min(u)), float(np.max(u))),
+        status=src.status, iterations=int(src.iterations),  # type: ignore[union-attr]
+        solve_time_s=float(src.solve_time), refined=ref, transcribed=sol,  # type: ignore
+        notes=notes, path=path)
+
+
+def _replay(out: FullLanding) -> None:
+    """Replay the refined (or transcribed) schedule in the exact simulator, in place."""
+    tail = out.robot.body_mass
+    try:
+        if out.refined is not None:
+            ctrl, kind = replay_controller(out.refined, tail)
+        else:
+            from softlanding.model.controllers import ForceSchedule
+
+            assert out.transcribed is not None
+            durs, vals = [], []
+            for ph in out.transcribed.phases:
+                h = (ph.T - ph.t0) / ph.N
+                durs += [h] * ph.N if h > 0 else []
+                vals += list(ph.u[:, 0]) if h > 0 else []
+            ctrl = ForceSchedule.from_arcs(durs, vals + [tail])
+            kind = "ForceSchedule (the transcription's piecewise-constant force)"
+    except NotImplementedError as err:
+        out.replay_kind = str(err)
+        return
+    out.replay_kind = kind
+    out.replay = simulate(out.robot, out.impact, ctrl, out.ground)
+
+
+def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                    ground: Ground = LINEAR_GROUND, *, steps: int = 1, refine: bool = True,
+                    warm_start: FullLanding | None = None, replay: bool = True,
+                    paper: BangBangLanding | None = None) -> FullLanding:
+    """Solve the full landing as a hybrid multi-phase OCP; refine; replay exactly.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    steps : {1, 2}
+        Yielding steps allowed (2: yielding, static, yielding, static).
+    refine : bool
+        Refine the switching times of every phase with exact arcs.
+    warm_start : FullLanding, optional
+        A neighbouring solution: its refined structure is re-solved directly first, then
+        its transcription warm-starts the NLP.
+    replay : bool
+        Replay the whole schedule in the exact simulator.
+    paper : BangBangLanding, optional
+        The paper's single-phase optimum for this landing (solved if not given): the
+        starting guess and the comparison.
+
+    Raises
+    ------
+    ParameterError
+        Bad parameters.
+    InfeasibleLandingError
+        No landing satisfies the constraints (the message names the condition).
+    """
+    impact = Impact.of(impact)
+    _validate(robot)
+    if paper is None:
+        try:
+            paper = solve_landing(impact, robot, ground)
+        except InfeasibleLandingError as err:
+            # the same yielding phases are admissible in both problems: the static phase
+            # stops a descending body inside the stroke with |u| <= u_max and a support
+            # force within the crater's capacity exactly when the paper's arrest force
+            # u_b <= min(u_max, capacity - foot weight) exists
+            raise InfeasibleLandingError(
+                f"no two-phase landing either: {err} (a phase-2 arrest within the force "
+                "limit and the crater's capacity exists exactly when the paper's does)"
+            ) from None
+    paper_depth = paper.depth if paper is not None else math.nan
+    params = _ocp_params(robot, impact)
+    out = None
+    if warm_start is not None and warm_start.refined is not None and refine and \
+            warm_start.steps == steps:
+        r = structure_resolve(warm_start.refined, params, bound=paper_depth
+                              if math.isfinite(paper_depth) else None)
+        if r is not None:
+            out = _assemble(robot, impact, ground, steps, None, r, paper_depth, [], "structure")
+    if out is None:
+        tr = two_phase_transcription(steps, ground=ground)
+        notes: list[str] = []
+        guess = _guess(robot, impact, ground, paper, steps)
+        try:
+            sol = transcribed_solve(tr, params, guess, warm_start.transcribed
+                                    if warm_start is not None else None, notes)
+        except InfeasibleError as err:
+            raise _explain(err, robot, impact, ground, steps, guess) from None
+        ref = refined_phases(sol, notes) if refine else None
+        out = _assemble(robot, impact, ground, steps, sol, ref, paper_depth, notes,
+                        "transcription")
+    if replay:
+        _replay(out)
+    return out
+
+
+def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR_GROUND, *,
+                    progress: bool | None = False, replay: bool = True) -> list[FullLanding]:
+    """The full landing over impact velocities, by continuation (start from the easy end).
+
+    Each velocity also solves the paper's single-phase problem (continuation too) for the
+    comparison ``depth_gain``.
+
+    Parameters
+    ----------
+    v0_values : sequence of float
+        Impact velocities.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    progress : bool, optional
+        Progress bar.
+    replay : bool
+        Replay every schedule in the exact simulator.
+    """
+    impacts = [Impact.of(v) for v in v0_values]
+    _validate(robot)
+    out: list[FullLanding] = []
+    prev: FullLanding | None = None
+    prev_paper: BangBangLanding | None = None
+    last_sol: Solution | None = None
+    for imp in show_progress(impacts, progress, "two-phase sweep", "solve"):
+        paper = solve_landing(imp, robot, ground, warm_start=prev_paper)
+        res = solve_two_phase(imp, robot, ground, warm_start=prev, replay=replay, paper=paper)
+        out.append(res)
+        last_sol = res.transcribed or last_sol
+        if res.transcribed is None and last_sol is not None:
+            res = FullLanding(**{**res.__dict__, "transcribed": last_sol})
+        prev, prev_paper = res, paper
+    return out
+
+
+__all__ = ["FullLanding", "solve_two_phase", "sweep_two_phase"]
+
+
+# ------------------------------------------------------------ a second step
+@dataclass
+class TwoStepCheck:
+    """Whether a second yielding step (yielding, static, yielding, static) lowers the depth.
+
+    Attributes
+    ----------
+    impact : Impact
+    one_step : FullLanding
+        The two-phase optimum.
+    depth : float
+        Best final depth of the four-phase problem over its starts.
+    starts : list of dict
+        Per start (``"collapsed"``: the two-phase optimum with short middle phases;
+        ``"impedance k_p=.., k_d=.."``: a physical two-step landing): its final depth, the
+        phase durations and the depth at the first stop (or the error).
+    collapsed : bool
+        The best four-phase solution's middle phases (static 1, yielding 2) shrank to
+        zero length (< 1e-6) or add no depth: it is the one-step landing.
+    """
+
+    impact: Impact
+    one_step: FullLanding
+    depth: float
+    starts: list[dict[str, Any]]
+    collapsed: bool
+
+    @property
+    def gain(self) -> float:
+        """``one_step.depth - depth``: what the second step gains (> 0 would be a gain)."""
+        return self.one_step.depth - self.depth
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict."""
+        return json_safe({"v0": self.impact.v0, "one_step_depth": self.one_step.depth,
+                          "two_step_depth": self.depth, "gain": self.gain,
+                          "collapsed": self.collapsed, "starts": self.starts})
+
+
+def _two_step_guesses(robot: Robot, impact: Impact, ground: Ground,
+                      paper: BangBangLanding | None, tries: int = 12) -> list[tuple[str, Any]]:
+    """The collapsed start and the shallowest physical two-step impedance landing within
+    the force limit (yielding and static modes only), cut into the four phases."""
+    from softlanding.model.controllers import Impedance
+    from softlanding.simulation.simulator import simulate_batch
+
+    out = [("collapsed", _guess(robot, impact, ground, paper, 2))]
+    g = np.linspace(0.0, 1.0, 41)
+    b = simulate_batch(robot, impact.v0, g[:, None], g[None, :], ground)
+    ok = (b.steps == 2) & b.strictly_feasible
+    order = np.argsort(np.where(ok, b.depth, np.inf), axis=None)[:tries]
+    for flat in order:
+        i, j = np.unravel_index(flat, ok.shape)
+        if not ok[i, j]:
+            break
+        res = simulate(robot, impact, Impedance(float(g[i]), float(g[j])), ground)
+        tr = res.trajectory(n=800)
+        assert tr.mode is not None
+        runs = np.r_[0, np.cumsum(tr.mode[1:] != tr.mode[:-1])]
+        if "flight" in set(tr.mode[runs <= 3]) or runs.max() < 3:
+            continue
+        last = np.flatnonzero((runs == 3) & (tr.x[:, 1] >= 0))
+        if not len(last):
+            continue
+        keep = np.arange(len(tr.t)) <= last[0]
+        edges = [float(tr.t[np.flatnonzero(runs == k)[0]]) for k in (1, 2, 3)]
+        cut = Trajectory(tr.t[keep], tr.x[keep], tr.u[keep], tr.state_names, tr.control_names)
+        out.append((f"impedance k_p={g[i]:g}, k_d={g[j]:g}", phase_guess(cut, edges)))
+        break
+    return out
+
+
+def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                   ground: Ground = LINEAR_GROUND, *,
+                   one_step: FullLanding | None = None) -> TwoStepCheck:
+    """Solve the four-phase landing (two yielding steps) from several starts and compare
+    its depth with the two-phase optimum.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        Ground model.
+    one_step : FullLanding, optional
+        The two-phase optimum (solved if not given).
+    """
+    impact = Impact.of(impact)
+    one = one_step if one_step is not None else solve_two_phase(impact, robot, ground)
+    paper = solve_landing(impact, robot, ground)
+    tr = two_phase_transcription(2, ground=ground)
+    params = _ocp_params(robot, impact)
+    starts: list[dict[str, Any]] = []
+    best: tuple[float, list[float]] | None = None
+    for name, guess in _two_step_guesses(robot, impact, ground, paper):
+        notes: list[str] = []
+        try:
+            sol = transcribed_solve(tr, params, guess, None, notes)
+        except SolveError as err:
+            starts.append({"start": name, "error": err.status})
+            continue
+        durs = [float(p.T - p.t0) for p in sol.phases]
+        d = float(-sol.phases[-1].x[-1, 2])
+        starts.append({"start": name, "depth": d, "durations": durs,
+                       "first_stop_depth": float(-sol.phases[0].x[-1, 2]),
+                       "verified": bool(sol.verified), "notes": notes})
+        if sol.verified and (best is None or d < best[0]):
+            best = (d, durs)
+    if best is None:
+        raise SolveError("no_start_converged", None, "the four-phase landing did not "
+                         "converge from any start")
+    first = [s["first_stop_depth"] for s in starts if "depth" in s and s["depth"] == best[0]]
+    collapsed = (best[1][1] < 1e-6 and best[1][2] < 1e-6) or (
+        bool(first) and best[0] - first[0] < 1e-6)
+    return TwoStepCheck(impact, one, best[0], starts, collapsed)
+
+
+__all__ += ["TwoStepCheck", "two_step_check"]

@@ -1,0 +1,1 @@
+"""Figures: the paper's, the phased landings' and the terrain study's (matplotlib)."""

@@ -1,0 +1,215 @@
+"""A ground model as the compiled kernel takes it: parameter vector and C law.
+
+Built-in models (:class:`~softlanding.model.ground.LinearGround`, :class:`DragGround`,
+:class:`AddedMassGround`) are a few numbers evaluated in closed form inside the kernel
+(:mod:`softlanding.simulation.kernel.groundlaw`). Any other ground model (a :class:`CustomGround`)
+is turned into C by CasADi's code generator from its own ``yield_force`` and
+``added_mass`` expressions, compiled once with the system's C compiler (``cc``, or
+``$CC``), cached on disk by the hash of the generated code (``$SOFTLANDING_CACHE`` or
+``~/.cache/softlanding``), loaded with ctypes and handed to the kernel as a function
+pointer: the kernel is not recompiled per law.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from softlanding.errors import ParameterError
+from softlanding.model.ground import AddedMassGround, DragGround, Ground, LinearGround
+
+_LIBS: dict[str, ctypes.CDLL] = {}  # keep the loaded laws alive
+
+_WRAPPER = """
+void sl_law(double d, double v, double *out) {{
+  const casadi_real *arg[{n_arg}];
+  casadi_real *res[{n_res}];
+  casadi_real w[{n_w}];
+  casadi_int iw[{n_iw}];
+  int i;
+  arg[0] = &d; arg[1] = &v;
+  for (i = 0; i < 5; ++i) res[i] = out + i;
+  sl_law_core(arg, res, iw, w, 0);
+}}
+"""
+
+
+def hold_is_depth(ground: Ground) -> bool:
+    """True if the crater's static hold ``f(d, 0)`` is exactly ``d`` (the exact kernel's rule).
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    """
+    if isinstance(ground, LinearGround | DragGround | AddedMassGround):
+        return True
+    import casadi as ca
+
+    d = ca.SX.sym("d")
+    diff = ca.simplify(ca.SX(ground.yield_force(d, 0.0)) - d)
+    return bool(diff.is_zero())
+
+
+def needs_integration(ground: Ground) -> bool:
+    """True if the ground's landings are integrated (not on the exact matrix-exponential path).
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    """
+    return not ground.is_affine or not hold_is_depth(ground)
+
+
+def law_expressions(ground: Ground) -> Any:
+    """The CasADi function ``(d, v) -> (f, m_a, m_a', f(d, 0), drag)`` of a ground model.
+
+    ``drag = f - f(d, 0) - m_a'(d) v^2``: the bed's rate-dependent force (the grains'
+    momentum flux taken out).
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    """
+    import casadi as ca
+
+    d, v = ca.SX.sym("d"), ca.SX.sym("v")
+    f = ca.SX(ground.yield_force(d, v))
+    ma = ca.SX(ground.added_mass(d))
+    dma = ca.jacobian(ma, d)
+    hold = ca.SX(ground.yield_force(d, 0.0))
+    return ca.Function("sl_law_core", [d, v], [f, ma, dma, hold, f - hold - dma * v**2])
+
+
+def _compiler() -> str:
+    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    if not cc:
+        raise ParameterError("ground", "a user-defined ground law is compiled to C, and no C "
+                                       "compiler was found (install gcc, or set $CC)")
+    return cc
+
+
+def _cache_dir() -> Path:
+    root = os.environ.get("SOFTLANDING_CACHE") or os.path.join(
+        os.path.expanduser("~"), ".cache", "softlanding")
+    path = Path(root) / "laws"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
+    """Generate, compile (once: cached on disk) and load the C law of a ground model.
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model (its ``yield_force`` and ``added_mass`` must accept CasADi
+        symbols).
+
+    Returns
+    -------
+    lib : ctypes.CDLL
+        The loaded library (kept alive by this module).
+    address : int
+        Address of ``void sl_law(double d, double v, double *out)``.
+    """
+    fun = law_expressions(ground)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg_name = "sl_law_gen.c"
+        cwd = os.getcwd()
+        try:
+            os.chdir(tmp)
+            fun.generate(cg_name, {"with_header": False, "casadi_real": "double"})
+        finally:
+            os.chdir(cwd)
+        src = (Path(tmp) / cg_name).read_text() + _WRAPPER.format(
+            n_arg=max(2, fun.sz_arg()), n_res=max(5, fun.sz_res()), n_w=max(1, fun.sz_w()),
+            n_iw=max(1, fun.sz_iw()))
+    key = hashlib.sha256(src.encode()).hexdigest()[:20]
+    so = _cache_dir() / f"law_{key}.so"
+    if not so.exists():
+        c_file = so.with_suffix(".c")
+        c_file.write_text(src)
+        tmp_so = so.with_suffix(f".{os.getpid()}.so")
+        p = subprocess.run([_compiler(), "-O2", "-shared", "-fPIC", "-o", str(tmp_so),
+                            str(c_file), "-lm"], capture_output=True, text=True)
+        if p.returncode != 0:
+            raise ParameterError("ground", f"the C code of the ground law {ground.name!r} did "
+                                           f"not compile: {p.stderr.strip()[:300]}")
+        os.replace(tmp_so, so)
+    lib = _LIBS.get(str(so)) or ctypes.CDLL(str(so))
+    _LIBS[str(so)] = lib
+    return lib, ctypes.cast(lib.sl_law, ctypes.c_void_p).value or 0
+
+
+class _LawPointer:
+    """A C law for the kernel (numba's wrapper-address protocol)."""
+
+    def __init__(self, address: int) -> None:
+        self.address = address
+
+    def __wrapper_address__(self) -> int:
+        return self.address
+
+    def signature(self) -> Any:
+        from softlanding.simulation.kernel.groundlaw import LAW_SIG
+
+        return LAW_SIG
+
+
+def _law_pointer(ground: Ground) -> Any:
+    from numba import types
+
+    class Wap(_LawPointer, types.WrapperAddressProtocol):
+        pass
+
+    return Wap(compile_law(ground)[1])
+
+
+@lru_cache(maxsize=64)
+def _custom_pointer(ground: Ground) -> Any:
+    return _law_pointer(ground)
+
+
+def kernel_law(ground: Ground, r_m: float, *, lock: bool = False,
+               u_max: float = np.inf) -> tuple[np.ndarray, Any]:
+    """``(G, fp)``: the kernel's parameter vector and law pointer of a ground model.
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    r_m : float
+        Mass ratio.
+    lock : bool
+        A rigid leg (see :func:`softlanding.simulation.kernel.groundlaw.pack_ground`).
+    u_max : float
+        The lock's force limit.
+    """
+    from softlanding.simulation.kernel.groundlaw import no_custom_law, pack_ground
+
+    if isinstance(ground, LinearGround):
+        return pack_ground(0.0, 0.0, 0.0, 1.0, r_m, lock=lock, u_max=u_max), no_custom_law
+    if isinstance(ground, DragGround):
+        return pack_ground(ground.c_d, 0.0, 0.0, 1.0, r_m, lock=lock,
+                           u_max=u_max), no_custom_law
+    if isinstance(ground, AddedMassGround):
+        return pack_ground(ground.c_d, ground.pi_a, ground.radius, ground.kappa, r_m,
+                           lock=lock, u_max=u_max), no_custom_law
+    G = pack_ground(0.0, 0.0, 0.0, 1.0, r_m, custom=True, lock=lock, u_max=u_max)
+    return G, _custom_pointer(ground)
+
+
+__all__ = ["compile_law", "hold_is_depth", "kernel_law", "law_expressions",
+           "needs_integration"]

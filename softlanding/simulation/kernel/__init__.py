@@ -1,0 +1,338 @@
+"""Compiled core of the exact event-driven hybrid simulator (entry points).
+
+Each (ground mode, control regime) pair is an affine system ``z' = A z`` in the
+augmented state ``z = [x_b, v_b, x_f, v_f, 1]``. Within a segment the solution
+is ``z(t) = exp(A t) z0``; we march with the exact step map ``exp(A h)`` on a
+grid fine enough (``||A|| h <= 1``) that no event can hide between two grid
+points without a sign change of the event function or of its derivative, then
+locate the event time by safeguarded Newton iteration on the exact solution.
+There is no ODE tolerance anywhere: errors are rounding only.
+
+The compiled parts are this package's modules:
+
+* :mod:`.const` -- codes, the output layout, tolerances;
+* :mod:`.model` -- the mode data packed in one flat array; energy and ground work;
+* :mod:`.linalg` -- matrix exponential, propagation, event-time refinement, Gramians;
+* :mod:`.events` -- control regimes, the ground's mode logic, event functionals and search;
+* :mod:`.rest` -- exact future ranges in the static mode (the rest proof);
+* :mod:`.creep` -- the proof that a yielding foot creeps toward a limit depth forever;
+* :mod:`.landing` -- the segment loop of one landing, its GIL-free entry points.
+
+This module holds the Python entry points :func:`run_landing` and :func:`run_batch` used by
+:mod:`softlanding.simulation.simulator`, and re-exports the output layout and status codes.
+The mode data are read from :func:`softlanding.model.dynamics.mode_matrices`
+(matrices, support force, the energy's quadratic form and the ground work).
+
+Statuses (``out[O_STATUS]``, names in :data:`STATUS_NAMES`): ``REST_PROVEN`` (the
+foot rests forever and so does the body: the stroke stays bounded);
+``BODY_THROUGH_FOOT`` / ``BODY_FLIES_OFF`` (the foot's rest is proven but the
+stroke runs away to -inf / +inf); ``NEVER_RESTS_CREEP`` (proven: the foot creeps
+toward the limit depth ``O_DLIM`` forever); ``HOPS_TO_LIMIT`` (rest not proven: an
+undamped leg's hops shrink toward the lift-off threshold, and ``O_DEPTH`` =
+``O_DLIM`` is their limit by energy balance, :mod:`softlanding.simulation.kernel.hops`);
+``HORIZON``, ``TOO_MANY_SEGMENTS``, ``STEP_BUDGET`` (gave up: nothing proven);
+``OUT_OF_RANGE`` (not simulated). Columns added to the first layout: ``O_DLIM``
+(the depth's limit as t -> inf: the rest depth when the foot rests, a creep's or
+shrinking hops' limit depth, else NaN) and
+``O_FOOT_REST`` (1 if the foot's rest is proven, whatever the body does).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from softlanding.simulation.kernel.const import (  # noqa: F401  (re-exported)
+    BODY_FLIES_OFF,
+    BODY_THROUGH_FOOT,
+    DEFAULT_MAX_STEPS,
+    EV_LAND,
+    EV_LIFT,
+    EV_SAT_HIGH,
+    EV_SAT_LOW,
+    EV_STOP,
+    EV_UNSAT,
+    EV_YIELD,
+    FEAS_TOL,
+    FLIGHT,
+    HOPS_TO_LIMIT,
+    HORIZON,
+    LINEAR,
+    N_OUT,
+    NEVER_RESTS_CREEP,
+    O_DEPTH,
+    O_DLIM,
+    O_E0,
+    O_EACT,
+    O_EGND,
+    O_ET,
+    O_FEAS,
+    O_FOOT_REST,
+    O_NSEG,
+    O_SMAX,
+    O_SMIN,
+    O_STATUS,
+    O_STEPS,
+    O_T,
+    O_TSTOP,
+    O_UMAX,
+    O_UMIN,
+    O_UPEAK,
+    OPEN_LOOP,
+    OUT_OF_RANGE,
+    REST_PROVEN,
+    SAT_HIGH,
+    SAT_LOW,
+    SCALE_MAX,
+    STATIC,
+    STEP_BUDGET,
+    TOO_MANY_SEGMENTS,
+    YIELDING,
+)
+from softlanding.simulation.kernel.landing import batch_range, landing_entry
+from softlanding.simulation.kernel.linalg import flat25, norm_rows4, prop4_t, row5
+from softlanding.simulation.kernel.model import pack_model
+
+# ------------------------------------------------------------ Python entry points
+STATUS_NAMES = {
+    REST_PROVEN: "rest proven",
+    HORIZON: "horizon reached before rest could be proven",
+    TOO_MANY_SEGMENTS: "segment limit reached before rest could be proven",
+    NEVER_RESTS_CREEP: "never rests: the foot creeps toward a limit depth forever",
+    HOPS_TO_LIMIT: "rest not proven: an undamped leg hops on, the hops shrinking toward a "
+                   "limit depth (the depth given, exact by energy balance)",
+    STEP_BUDGET: "step budget exhausted before rest could be proven",
+    BODY_THROUGH_FOOT: "the foot rests but the body passes through it (stroke without bound)",
+    BODY_FLIES_OFF: "the foot rests but the body moves off without bound (stroke without bound)",
+    OUT_OF_RANGE: "not simulated: initial state or stroke beyond 1e8 or not finite (unresolvable "
+                  "in double precision)",
+}
+"""Human-readable name of each status code of ``out[O_STATUS]``."""
+
+
+_PACKED: dict[int, tuple[dict, np.ndarray]] = {}
+_POOL: list = []  # [ThreadPoolExecutor, its size]
+RECORDS_FIRST = 64  # segment records allocated first; a longer landing is re-run with all
+
+
+def packed_model(mats: dict) -> np.ndarray:
+    """The packed mode data of ``mats``, cached by the dict's identity.
+
+    The dicts of :func:`softlanding.model.dynamics.mode_matrices` are cached and
+    treated as immutable; a new dict (``dict(mats, Wg=...)``) is packed anew.
+    """
+    hit = _PACKED.get(id(mats))
+    if hit is not None and hit[0] is mats:
+        return hit[1]
+    P = pack_model(mats)
+    if len(_PACKED) >= 256:
+        _PACKED.clear()
+    _PACKED[id(mats)] = (mats, P)
+    return P
+
+
+def _f64(a) -> np.ndarray:
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def _gain_rows(sched_u) -> np.ndarray:
+    """Open-loop schedule as gain rows (m + 1, 5): a constant force u is [0, 0, 0, 0, u]."""
+    s = np.asarray(sched_u, dtype=np.float64)
+    if s.ndim == 2:
+        return np.ascontiguousarray(s)
+    rows = np.zeros((s.shape[0], 5))
+    rows[:, 4] = s
+    return rows
+
+
+def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, *,
+                max_steps=DEFAULT_MAX_STEPS):
+    """One landing; returns the output row (layout ``O_*``) and the segment records.
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`softlanding.model.dynamics.mode_matrices` of the robot and ground.
+    Kf : (3, 5) array
+        Feedback ``u = Kf[mode] . z`` per ground mode (ignored when open loop).
+    umax : float
+        Force limit (``inf`` for none).
+    sched_t, sched_u : arrays (m,), and (m + 1,) or (m + 1, 5)
+        Open-loop schedule on ``[sched_t[i-1], sched_t[i])``: constant forces
+        ``u = sched_u[i]``, or affine laws ``u = sched_u[i] . [x_b, v_b, x_f, v_f, 1]``;
+        empty ``sched_u`` means feedback.
+    x0 : (4,) array
+        Initial state.
+    s_lim, t_max, max_seg, energy
+        Stroke, horizon, segment limit, whether to compute the energy ledger.
+    max_steps : int
+        Budget of marching steps plus segments: the landing ends with status
+        ``STEP_BUDGET`` when it is spent (bounded work for any input: about 0.1-0.3 s
+        for the default of a million on one core).
+
+    Returns
+    -------
+    out : (N_OUT,) array
+    segments : dict
+        ``t`` (n+1,), ``A`` (n, 5, 5), ``z`` (n, 5), ``cu`` (n, 5), ``mode`` (n,):
+        segment start times (and the end time), closed-loop matrices, start
+        states, control functionals and ground modes.
+    """
+    out, t, A, z, cu, mode = landing_entry(
+        packed_model(mats), _f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u), _f64(x0),
+        float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps), RECORDS_FIRST)
+    return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode}
+
+
+def _pool(threads: int):
+    if not _POOL or _POOL[1] != threads:
+        from concurrent.futures import ThreadPoolExecutor
+
+        if _POOL:
+            _POOL[0].shutdown(wait=False)
+        _POOL[:] = [ThreadPoolExecutor(threads, thread_name_prefix="softlanding"), threads]
+    return _POOL[0]
+
+
+def default_threads() -> int:
+    """Worker threads of a batch: ``NUMBA_NUM_THREADS`` (default: the number of cores)."""
+    import numba
+
+    return max(1, int(numba.config.NUMBA_NUM_THREADS))  # type: ignore[attr-defined]
+
+
+def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out, *,
+              threads=None, chunk=None, max_steps=DEFAULT_MAX_STEPS):
+    """Feedback landings in parallel; row ``i`` uses ``mats_list[ridx[i]]``.
+
+    ``Kf`` (n, 3, 5), ``umax`` (n,), ``x0`` (n, 4), ``s_lim`` (n,); fills ``out`` (n, N_OUT).
+    ``threads`` workers (default :func:`default_threads`) take chunks of ``chunk``
+    landings (default: n / (16 threads), between 16 and 1024) as they finish the
+    previous one, so a busy core or a run of long landings delays no one else.
+    ``max_steps`` bounds each landing's work as in :func:`run_landing`.
+    """
+    import itertools
+
+    Ps = np.stack([packed_model(m) for m in mats_list])
+    args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(Kf), _f64(umax), _f64(x0),
+            _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps))
+    n = len(args[4])
+    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
+    threads = default_threads() if threads is None else max(1, int(threads))
+    chunk = int(chunk) if chunk else min(1024, max(16, n // (16 * threads)))
+    if threads == 1 or n <= chunk:
+        batch_range(*args, res, 0, n)
+    else:
+        counter = itertools.count()
+
+        def work():
+            while (a := next(counter) * chunk) < n:
+                batch_range(*args, res, a, min(n, a + chunk))
+
+        futures = [_pool(threads).submit(work) for _ in range(threads)]
+        for f in futures:
+            f.result()
+    if res is not out:
+        out[...] = res
+
+
+@njit(cache=True)
+def _sample(ts, A, z, grid, idx, out):
+    for i in range(grid.shape[0]):
+        k = idx[i]
+        Ak = flat25(A[k])
+        zk = prop4_t(Ak, norm_rows4(Ak), row5(z[k]), grid[i] - ts[k])
+        for j in range(5):
+            out[i, j] = zk[j]
+
+
+def sample_segments(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
+                                                                np.ndarray]:
+    """The exact solution at the times ``grid`` (non-decreasing), from the segment records,
+    with the kernel's own propagator (a pinned foot keeps exactly zero velocity).
+
+    Returns the augmented states ``z`` (n, 5), the controls ``u`` (n,) and the modes (n,).
+    """
+    ts = segments["t"]
+    nseg = len(ts) - 1
+    idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
+    z = np.empty((len(grid), 5))
+    _sample(ts, segments["A"], segments["z"], np.asarray(grid, float), idx.astype(np.int64), z)
+    u = np.einsum("ij,ij->i", segments["cu"][idx], z)
+    return z, u, segments["mode"][idx]
+
+
+# ------------------------------------------------- non-affine grounds (integrated yielding)
+DEFAULT_RTOL = 1e-12
+"""Relative (and absolute) tolerance of the DOP853 yielding segments of a non-affine ground."""
+
+
+def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy,
+                   rtol=DEFAULT_RTOL, *, max_steps=DEFAULT_MAX_STEPS):
+    """One landing on a non-affine ground (:mod:`softlanding.simulation.kernel.nonaffine`).
+
+    As :func:`run_landing`, with ``law = (G, fp)`` from
+    :func:`softlanding.simulation.groundcode.kernel_law` and the integrator's tolerance ``rtol``;
+    ``mats`` are the mode matrices of the robot on the linear ground (their static and
+    flight modes and body rows are every ground's). The output row has
+    ``N_OUT_NL`` columns (``O_EDRAG``, ``O_EGRAIN`` added).
+    """
+    from softlanding.simulation.kernel.nonaffine import landing_entry_nl
+
+    G, fp = law
+    out, t, A, z, cu, mode = landing_entry_nl(
+        packed_model(mats), _f64(G), fp, _f64(Kf), float(umax), _f64(sched_t),
+        _gain_rows(sched_u), _f64(x0), float(s_lim), float(t_max), int(max_seg), bool(energy),
+        float(max_steps), float(rtol), RECORDS_FIRST)
+    return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode, "law": (G, fp, float(rtol))}
+
+
+def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
+                 rtol=DEFAULT_RTOL, *, threads=None, chunk=None, max_steps=DEFAULT_MAX_STEPS):
+    """Feedback landings on one non-affine ground in parallel (as :func:`run_batch`;
+    ``out`` has ``N_OUT_NL`` columns)."""
+    import itertools
+
+    from softlanding.simulation.kernel.nonaffine import batch_range_nl
+
+    G, fp = law
+    Ps = np.stack([packed_model(m) for m in mats_list])
+    args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(G), fp, _f64(Kf), _f64(umax),
+            _f64(x0), _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps),
+            float(rtol))
+    n = len(args[6])
+    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
+    threads = default_threads() if threads is None else max(1, int(threads))
+    chunk = int(chunk) if chunk else min(256, max(4, n // (16 * threads)))
+    if threads == 1 or n <= chunk:
+        batch_range_nl(*args, res, 0, n)
+    else:
+        counter = itertools.count()
+
+        def work():
+            while (a := next(counter) * chunk) < n:
+                batch_range_nl(*args, res, a, min(n, a + chunk))
+
+        futures = [_pool(threads).submit(work) for _ in range(threads)]
+        for f in futures:
+            f.result()
+    if res is not out:
+        out[...] = res
+
+
+def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
+                                                                   np.ndarray]:
+    """:func:`sample_segments` for a non-affine landing: its yielding segments are integrated
+    again from their recorded starts (same integrator and tolerance)."""
+    from softlanding.simulation.kernel.nonaffine import sample_nl
+
+    G, fp, rtol = segments["law"]
+    ts = segments["t"]
+    nseg = len(ts) - 1
+    grid = np.asarray(grid, float)
+    idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
+    z = np.empty((len(grid), 5))
+    u = np.empty(len(grid))
+    sample_nl(np.zeros(1), _f64(G), fp, rtol, ts, segments["A"], segments["z"], segments["cu"],
+              segments["mode"], grid, idx.astype(np.int64), z, u)
+    return z, u, segments["mode"][idx]

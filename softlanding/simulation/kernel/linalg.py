@@ -1,0 +1,364 @@
+"""Exact linear algebra of the affine modes: matrix exponential, propagation of a
+state, event-time refinement on the exact solution, Van Loan Gramians.
+
+Everything works on the augmented state ``z = [x_b, v_b, x_f, v_f, 1]`` and a
+5x5 closed-loop matrix ``A`` whose last row is zero.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from softlanding.simulation.kernel.const import MAX_SUBSTEPS
+
+
+@njit(cache=True)
+def norm_inf4(A):
+    m = 0.0
+    for i in range(4):
+        r = 0.0
+        for j in range(4):
+            r += abs(A[i, j])
+        m = max(m, r)
+    return m
+
+
+@njit(cache=True)
+def expm(M, h):
+    """exp(M h) by scaling and squaring of a Taylor series (M small and square)."""
+    n = M.shape[0]
+    nrm = 0.0
+    for i in range(n):
+        r = 0.0
+        for j in range(n):
+            r += abs(M[i, j])
+        nrm = max(nrm, r)
+    nrm *= abs(h)
+    if not nrm < 1e300:
+        return np.full((n, n), np.nan)  # no finite step map: the march will run out of budget
+    sq = 0
+    while nrm > 0.5:
+        nrm *= 0.5
+        sq += 1
+    sc = h / 2.0**sq
+    out = np.eye(n)
+    term = np.eye(n)
+    tmp = np.empty((n, n))
+    for k in range(1, 30):
+        for i in range(n):
+            for j in range(n):
+                acc = 0.0
+                for m in range(n):
+                    acc += term[i, m] * M[m, j]
+                tmp[i, j] = acc * sc / k
+        big = 0.0
+        size = 0.0
+        for i in range(n):
+            for j in range(n):
+                term[i, j] = tmp[i, j]
+                out[i, j] += tmp[i, j]
+                big = max(big, abs(tmp[i, j]))
+                size = max(size, abs(out[i, j]))
+        if big <= 1e-17 * size:
+            break
+    for _ in range(sq):
+        for i in range(n):
+            for j in range(n):
+                acc = 0.0
+                for m in range(n):
+                    acc += out[i, m] * out[m, j]
+                tmp[i, j] = acc
+        out[:, :] = tmp
+    return out
+
+
+@njit(cache=True, inline="always")
+def dot(c, z):
+    """``c . z`` for 5-vectors (arrays or tuples), summed in index order."""
+    acc = 0.0
+    acc += c[0] * z[0]
+    acc += c[1] * z[1]
+    acc += c[2] * z[2]
+    acc += c[3] * z[3]
+    acc += c[4] * z[4]
+    return acc
+
+
+@njit(cache=True, inline="always")
+def row(C, k):
+    """Row ``k`` of a (n, 5) array as a tuple (no array view, no reference counting)."""
+    return (C[k, 0], C[k, 1], C[k, 2], C[k, 3], C[k, 4])
+
+
+@njit(cache=True, inline="always")
+def scaled(c, s):
+    """The functional ``s c`` as a tuple."""
+    return (s * c[0], s * c[1], s * c[2], s * c[3], s * c[4])
+
+
+@njit(cache=True, inline="always")
+def _col_dot(c, A, j):
+    acc = 0.0
+    for i in range(5):
+        acc += c[i] * A[i, j]
+    return acc
+
+
+@njit(cache=True, inline="always")
+def covector_times(c, A):
+    """The row vector ``c A`` as a tuple: the functional giving d/dt (c . z) when z' = A z."""
+    return (_col_dot(c, A, 0), _col_dot(c, A, 1), _col_dot(c, A, 2), _col_dot(c, A, 3),
+            _col_dot(c, A, 4))
+
+
+@njit(cache=True, inline="always")
+def hermite_root(g0, d0, g1, d1, h):
+    """Root in (0, h) of the cubic Hermite interpolant of g (g0 <= 0 < g1): a
+    starting guess for Newton on the exact solution (error O(h^4))."""
+    c2 = (3.0 * (g1 - g0) / h - 2.0 * d0 - d1) / h
+    c3 = (d0 + d1 - 2.0 * (g1 - g0) / h) / (h * h)
+    lo, hi = 0.0, h
+    s = -g0 * h / (g1 - g0)
+    for _ in range(30):
+        p = g0 + s * (d0 + s * (c2 + s * c3))
+        if p > 0.0:
+            hi = s
+        else:
+            lo = s
+        dp = d0 + s * (2.0 * c2 + 3.0 * s * c3)
+        sn = s - p / dp if dp != 0.0 else 0.5 * (lo + hi)
+        if not (lo < sn < hi):
+            sn = 0.5 * (lo + hi)
+        if abs(sn - s) <= 1e-14 * h:
+            return sn
+        s = sn
+    return s
+
+
+@njit(cache=True)
+def closed_loop(Am, Bm, cu):
+    """A + B cu^T: the affine closed loop for u = cu . z."""
+    A = Am.copy()
+    for i in range(5):
+        for j in range(5):
+            A[i, j] += Bm[i] * cu[j]
+    return A
+
+
+@njit(cache=True)
+def gram(A, Q, h):
+    """int_0^h exp(A^T t) Q exp(A t) dt by Van Loan's block exponential."""
+    C = np.zeros((10, 10))
+    for i in range(5):
+        for j in range(5):
+            C[i, j] = -A[j, i]
+            C[i, 5 + j] = Q[i, j]
+            C[5 + i, 5 + j] = A[i, j]
+    F = expm(C, h)
+    G = np.zeros((5, 5))
+    for i in range(5):
+        for j in range(5):
+            acc = 0.0
+            for k in range(5):
+                acc += F[5 + k, 5 + i] * F[k, 5 + j]
+            G[i, j] = acc
+    return G
+
+
+@njit(cache=True)
+def hull(lo, hi, v):
+    return min(lo, v), max(hi, v)
+
+
+# ---------------------------------------------------------- the march, on tuples
+# The march and the event refinement run on tuples (a closed-loop matrix as a
+# flat row-major 25-tuple, states and functionals as 5-tuples): numba passes
+# them by value, so the innermost loops do no reference counting (which cost
+# a third of the time when they ran on arrays).
+
+
+@njit(cache=True, inline="always")
+def flat25(A):
+    """A 5x5 array as a flat row-major 25-tuple."""
+    return (A[0, 0], A[0, 1], A[0, 2], A[0, 3], A[0, 4], A[1, 0], A[1, 1], A[1, 2], A[1, 3],
+            A[1, 4], A[2, 0], A[2, 1], A[2, 2], A[2, 3], A[2, 4], A[3, 0], A[3, 1], A[3, 2],
+            A[3, 3], A[3, 4], A[4, 0], A[4, 1], A[4, 2], A[4, 3], A[4, 4])
+
+
+@njit(cache=True, inline="always")
+def row5(v):
+    """A 5-vector (array or tuple) as a 5-tuple."""
+    return (v[0], v[1], v[2], v[3], v[4])
+
+
+@njit(cache=True, inline="always")
+def quad_t(G, z):
+    """``z . G z`` for a flat 25-tuple ``G``."""
+    acc = 0.0
+    for i in range(5):
+        for j in range(5):
+            acc += z[i] * G[5 * i + j] * z[j]
+    return acc
+
+
+@njit(cache=True, inline="always")
+def norm_rows4(A):
+    """Largest absolute row sum (affine column included) of the first four rows of a flat
+    25-tuple: sets the substeps of :func:`prop4_t`."""
+    nrm = 0.0
+    for i in range(4):
+        r = 0.0
+        for j in range(5):
+            r += abs(A[5 * i + j])
+        nrm = max(nrm, r)
+    return nrm
+
+
+@njit(cache=True, inline="always")
+def matvec_t(M, z):
+    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple."""
+    y0 = 0.0
+    y0 += M[0] * z[0]
+    y0 += M[1] * z[1]
+    y0 += M[2] * z[2]
+    y0 += M[3] * z[3]
+    y0 += M[4] * z[4]
+    y1 = 0.0
+    y1 += M[5] * z[0]
+    y1 += M[6] * z[1]
+    y1 += M[7] * z[2]
+    y1 += M[8] * z[3]
+    y1 += M[9] * z[4]
+    y2 = 0.0
+    y2 += M[10] * z[0]
+    y2 += M[11] * z[1]
+    y2 += M[12] * z[2]
+    y2 += M[13] * z[3]
+    y2 += M[14] * z[4]
+    y3 = 0.0
+    y3 += M[15] * z[0]
+    y3 += M[16] * z[1]
+    y3 += M[17] * z[2]
+    y3 += M[18] * z[3]
+    y3 += M[19] * z[4]
+    y4 = 0.0
+    y4 += M[20] * z[0]
+    y4 += M[21] * z[1]
+    y4 += M[22] * z[2]
+    y4 += M[23] * z[3]
+    y4 += M[24] * z[4]
+    return (y0, y1, y2, y3, y4)
+
+
+@njit(cache=True, inline="always")
+def prop4_t(A, nrm, z, h):
+    """the Taylor series on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
+    if not nrm * abs(h) <= MAX_SUBSTEPS:
+        return (np.nan, np.nan, np.nan, np.nan, z[4])  # scales beyond any sensible landing
+    nsub = max(1, int(math.ceil(nrm * abs(h))))
+    dt = h / nsub
+    x0, x1, x2, x3 = z[0], z[1], z[2], z[3]
+    x4 = z[4]
+    for _ in range(nsub):
+        t0, t1, t2, t3 = x0, x1, x2, x3
+        a0, a1, a2, a3 = x0, x1, x2, x3
+        scale = abs(x0) + abs(x1) + abs(x2) + abs(x3) + abs(x4)
+        for k in range(1, 40):
+            f = dt / k
+            n0 = (A[0] * t0 + A[1] * t1 + A[2] * t2 + A[3] * t3
+                  + (A[4] * x4 if k == 1 else 0.0)) * f
+            n1 = (A[5] * t0 + A[6] * t1 + A[7] * t2 + A[8] * t3
+                  + (A[9] * x4 if k == 1 else 0.0)) * f
+            n2 = (A[10] * t0 + A[11] * t1 + A[12] * t2 + A[13] * t3
+                  + (A[14] * x4 if k == 1 else 0.0)) * f
+            n3 = (A[15] * t0 + A[16] * t1 + A[17] * t2 + A[18] * t3
+                  + (A[19] * x4 if k == 1 else 0.0)) * f
+            t0, t1, t2, t3 = n0, n1, n2, n3
+            a0 += t0
+            a1 += t1
+            a2 += t2
+            a3 += t3
+            if abs(t0) + abs(t1) + abs(t2) + abs(t3) <= 1e-17 * scale:
+                break
+        x0, x1, x2, x3 = a0, a1, a2, a3
+    return (x0, x1, x2, x3, x4)
+
+
+@njit(cache=True, inline="always")
+def covector_t(c, A):
+    """``c A`` for a flat 25-tuple ``A`` (the sums of :func:`covector_times`)."""
+    d0 = 0.0
+    d1 = 0.0
+    d2 = 0.0
+    d3 = 0.0
+    d4 = 0.0
+    for i in range(5):
+        d0 += c[i] * A[5 * i]
+    for i in range(5):
+        d1 += c[i] * A[5 * i + 1]
+    for i in range(5):
+        d2 += c[i] * A[5 * i + 2]
+    for i in range(5):
+        d3 += c[i] * A[5 * i + 3]
+    for i in range(5):
+        d4 += c[i] * A[5 * i + 4]
+    return (d0, d1, d2, d3, d4)
+
+
+@njit(cache=True)
+def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
+    """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
+
+    Newton on the exact solution, safeguarded by the bracket, converged to
+    about 1e-15; the returned time lies on the far side of the crossing (the
+    event has happened), so the next segment starts strictly inside its regime.
+    ``A`` is a flat 25-tuple with norm ``nrm``; ``z`` and ``c`` are 5-tuples.
+    """
+    dc = covector_t(c, A)
+    if a < s0 < b:
+        s = s0
+    else:
+        s = a - ga * (b - a) / (gb - ga) if gb != ga else 0.5 * (a + b)
+    for _ in range(100):
+        xs = prop4_t(A, nrm, z, s)
+        g = dot(c, xs)
+        if g > 0.0:
+            b = s
+        else:
+            a = s
+        if b - a <= rtol * max(1.0, abs(b)):
+            break
+        dg = dot(dc, xs)
+        sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
+        if not (a < sn < b):
+            sn = 0.5 * (a + b)
+        if abs(sn - s) <= 0.5 * rtol * max(1.0, abs(s)):
+            # converged: step just past the root to close the bracket
+            step = 1e-15 * max(1.0, abs(sn))
+            sn = sn + step if g <= 0.0 else sn - step
+            sn = min(max(sn, a), b)
+            if sn == s:
+                break
+        s = sn
+    return b
+
+
+@njit(cache=True, inline="always")
+def interior_extremum_t(A, nrm, z, z1, h, c, dc, ddc):
+    """Value of q = c . z at its turning point inside (0, h), or NaN if none.
+
+    A turning point is a sign change of q' = dc . z; its time is refined from a
+    Hermite starting guess (q'' = ddc . z) to 1e-9: the value's error is
+    quadratic in the time's. All arguments are tuples (see :func:`refine_t`).
+    """
+    d0 = dot(dc, z)
+    d1 = dot(dc, z1)
+    if not ((d0 > 0.0 and d1 < 0.0) or (d0 < 0.0 and d1 > 0.0)):
+        return np.nan
+    sg = 1.0 if d0 < 0.0 else -1.0
+    s0 = hermite_root(sg * d0, sg * dot(ddc, z), sg * d1, sg * dot(ddc, z1), h)
+    se = refine_t(A, nrm, z, scaled(dc, sg), 0.0, h, sg * d0, sg * d1, 1e-9, s0)
+    return dot(c, prop4_t(A, nrm, z, se))

@@ -1,0 +1,183 @@
+"""The paper's soft-landing OCP: refinement, simulator replay, the paper's claims."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from softlanding import PAPER_ROBOT, ParameterError, Robot
+from softlanding.optimal.landing import (
+    InfeasibleLandingError,
+    landing_transcription,
+    solve_landing,
+    sweep_landing,
+)
+from softlanding.simulation.simulator import stroke
+
+
+def rigid(v0):
+    return 1 + math.sqrt(1 + v0 * v0)
+
+
+@pytest.mark.parametrize("v0", [0.0, -0.5, -1.0, -3.0, -6.0, -10.0])
+def test_refined_depth_matches_exact_simulator_replay(v0):
+    r = solve_landing(v0)
+    assert r.refined is not None and r.arcs == ["max", "min"]
+    assert r.arrest_active
+    rp = r.replay
+    assert rp.rest_proven and rp.feasible
+    assert abs(rp.depth - r.depth) <= 1e-9
+    # the body ends at rest at the stroke's lower end, inside the stroke
+    t_end = r.schedule().times[-1]  # end of the arrest phase: then the weight is held
+    tail = rp.trajectory(t_end=t_end + 1.0, n=200)
+    assert abs(tail.x[-1, 1]) < 1e-9
+    assert -1e-9 <= stroke(tail)[-1] <= 20.0
+    # the transcription is within its discretisation error of the exact answer
+    assert r.depth <= r.depth_transcribed + 1e-12
+    assert abs(r.depth - r.depth_transcribed) < 1e-4
+
+
+@pytest.fixture(scope="module")
+def sweep():
+    v = np.r_[np.linspace(-0.01, -0.2, 3), np.linspace(-0.5, -10.0, 12)]
+    return v, sweep_landing(v)
+
+
+def test_bang_bang_at_most_half_the_rigid_depth(sweep):
+    v, res = sweep
+    for v0, r in zip(v, res, strict=True):
+        if v0 <= -0.2:
+            assert r.depth <= 0.5 * rigid(v0)
+
+
+def test_depth_decreases_toward_one_and_ratio_toward_half(sweep):
+    v, res = sweep
+    depth = np.array([r.depth for r in res])
+    assert np.all(np.diff(depth) > 0)  # deeper as |v0| grows
+    assert 1.0 < depth[0] < 1.002
+    ratio = depth[0] / rigid(v[0])
+    assert abs(ratio - 0.5) < 2e-3
+
+
+def test_resolving_does_not_rebuild_the_nlp():
+    tr = landing_transcription(100)
+    before = tr.n_builds
+    solve_landing(-2.0, replay=False)
+    solve_landing(-4.0, Robot(r_m=3.0, s=15.0, u_max=7.0), replay=False)
+    assert landing_transcription(100) is tr
+    assert tr.n_builds == before == 1
+
+
+def test_extra_switches_change_depth_by_less_than_one_percent():
+    base = solve_landing(-3.0, replay=False)
+    more = solve_landing(-3.0, extra_arcs=2, replay=False)
+    assert len(more.refined.kinds) == 4
+    assert abs(more.depth - base.depth) <= 0.01 * base.depth
+
+
+@pytest.mark.parametrize("kwargs,match", [
+    ({"v0": -3.0, "u_max": 0.5}, "body weight"),
+    ({"v0": -10.0, "u_max": 2.0}, "arrest force u_b <= u_max"),
+])
+def test_infeasible_requests_name_the_condition(kwargs, match):
+    with pytest.raises(InfeasibleLandingError, match=match):
+        solve_landing(kwargs["v0"], PAPER_ROBOT.replace(u_max=kwargs["u_max"]), replay=False)
+
+
+@pytest.mark.parametrize("kwargs,name", [({"v0": 1.0}, "v0"), ({"v0": -1, "u_max": -2}, "u_max"),
+                                         ({"v0": -1, "s": math.nan}, "s")])
+def test_bad_parameters(kwargs, name):
+    with pytest.raises(ParameterError, match=name):
+        v0 = kwargs.pop("v0")
+        solve_landing(v0, PAPER_ROBOT.replace(**kwargs))
+
+
+def test_cli_solve_json_and_infeasible(tmp_path, cli):
+    png = tmp_path / "bb.png"
+    code, out, err = cli("solve", "--v0", "-3", "--json", "--plot", png)
+    assert code == 0, err
+    d = json.loads(out)
+    for k in ("depth", "depth_transcribed", "T", "switch_times", "arcs", "u_b",
+              "arrest_active", "status", "iterations", "solve_time_s"):
+        assert k in d
+    assert d["arcs"] == ["max", "min"] and len(d["switch_times"]) == 1
+    assert d["replay"]["difference"] <= 1e-9
+    assert png.stat().st_size > 10_000
+    code, _, err = cli("solve", "--v0", "-10", "--umax", "2")
+    assert code == 1  # well-posed but infeasible (2 is for bad input)
+    assert "arrest force u_b <= u_max" in err and "Traceback" not in err
+    assert err.count("\n") == 1
+
+
+def test_cli_compare_orders_the_three_legs(cli):
+    code, out, err = cli("compare", "--n", "3", "--v0-min", "-8", "--grid", "41", "--json")
+    assert code == 0, err
+    rows = json.loads(out)["rows"]
+    assert len(rows) == 3
+    for r in rows:
+        assert r["rigid"] == pytest.approx(rigid(r["v0"]))
+        # bang-bang (|u| <= 8.2) beats the optimal impedance (peak force below 8.2 here),
+        # which beats the rigid leg
+        assert r["bang_bang"] < r["impedance"] < r["rigid"]
+        assert r["impedance_u_peak"] < 8.2
+
+
+def test_an_unverified_result_is_not_a_plain_success(cli, monkeypatch):
+    """A refinement that fails leaves the transcribed answer: JSON says verified false with
+    the reason, the table says so first, and the exit code is 1 unless accepted."""
+    import softlanding.optimal.landing as landing
+    from ocp import SolveError
+
+    def fails(*a, **k):
+        raise SolveError("Search_Direction_Becomes_Too_Small")
+
+    monkeypatch.setattr(landing, "refine_switching", fails)
+    code, out, _ = cli("solve", "--v0", "-3", "--json")
+    d = json.loads(out)
+    assert code == 1 and d["verified"] is False
+    assert any("not refined" in r for r in d["unverified_reasons"])
+    code, out, _ = cli("solve", "--v0", "-3", "--accept-unverified")
+    assert code == 0 and out.splitlines()[0].startswith("verified") and "NO:" in out.splitlines()[0]
+    code, out, _ = cli("solve-sweep", "--n", "2", "--v0-min", "-2", "--json")
+    assert code == 1 and json.loads(out)["verified"] is False
+
+
+@pytest.mark.parametrize("s,v0", [(0.5, -3.0), (1.0, -10.0), (2.0, -1.0), (5.0, -10.0)])
+def test_short_strokes_refine_with_boundary_arcs_and_replay_exactly(s, v0):
+    """At short strokes the stroke limit is held on an interval: the refinement has a
+    boundary arc, and the exact simulator replays its state-feedback law to 1e-9."""
+    r = solve_landing(v0, Robot(r_m=5.0, s=s, u_max=8.2))
+    assert "boundary" in r.arcs
+    assert not r.unverified_reasons(), r.unverified_reasons()
+    assert r.replay.rest_proven and r.replay.feasible
+    assert r.replay_difference <= 1e-9
+    assert r.depth <= r.depth_transcribed + 1e-6  # the transcription relaxes between nodes
+
+
+def test_feedback_schedule_generalises_force_schedule():
+    from softlanding import FeedbackSchedule, ForceSchedule, Impact, simulate
+
+    robot = Robot(5.0, 20.0)
+    const = simulate(robot, Impact(-3.0), ForceSchedule((0.1, 0.3), (8.0, -8.0, 1.0)))
+    rows = [[0, 0, 0, 0, 8.0], [0, 0, 0, 0, -8.0], [0, 0, 0, 0, 1.0]]
+    same = simulate(robot, Impact(-3.0), FeedbackSchedule((0.1, 0.3), rows))
+    assert (same.depth, same.T, same.stroke_min) == (const.depth, const.T, const.stroke_min)
+    # a state-feedback piece (a spring on the leg) against an independent integration
+    from scipy.integrate import solve_ivp
+
+    k = 0.4
+    law = FeedbackSchedule((), [[-k, 0, k, 0, k * 10.0]])  # u = -k (x_b - x_f - 10)
+    r = simulate(robot, Impact(-1.0), law)
+
+    def rhs(t, x):
+        u = -k * (x[0] - x[2] - 10.0)
+        return [x[1], -1 + 6 / 5 * u, x[3], -1 - 6 * (x[2] + u)]
+
+    stop = lambda t, x: x[3]  # noqa: E731
+    stop.terminal, stop.direction = True, 1
+    ref = solve_ivp(rhs, (0, 20), [10.0, -1.0, 0.0, -1.0], events=stop, rtol=1e-12,
+                    atol=1e-12, method="DOP853")
+    assert r.t_first_stop == pytest.approx(ref.t_events[0][0], abs=1e-8)
+    assert -r.trajectory(t_end=r.t_first_stop, n=3).state("x_f")[-1] == pytest.approx(
+        -ref.y_events[0][0][2], abs=1e-8)

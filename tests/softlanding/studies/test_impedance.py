@@ -1,0 +1,142 @@
+"""Impedance layer: maps, the refined optimum, CoT, the Dask path."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from softlanding import PAPER_IMPEDANCE_ROBOT as R
+from softlanding import Impact, Impedance, ParameterError, simulate
+from softlanding.studies.impedance import optimize_impedance
+from softlanding.studies.sweeps import depth_map, impedance_dataset, load_dataset, save_dataset
+
+
+@pytest.fixture(scope="module")
+def map_v1():
+    return depth_map(-1.0, n=101)
+
+
+def test_intrusion_step_map_reproduces_paper_cases(map_v1):
+    steps = map_v1.steps.sel(k_p=0.2, k_d=[0.4, 0.18, 0.0]).values
+    assert steps.tolist() == [1, 2, 3]
+
+
+@pytest.mark.parametrize("v0", [-1.0, -3.0, -10.0])
+def test_refined_optimum_is_feasible_best_and_on_the_boundary(v0):
+    ds = depth_map(v0, n=101)
+    opt = optimize_impedance(v0)
+    grid_best = float(ds.depth.where(ds.strictly_feasible).min())
+    assert opt.depth <= grid_best  # at least as good as every feasible grid point
+    assert opt.value == pytest.approx(opt.depth)
+    # re-simulated: feasible, and on the stroke limit to 1e-6
+    r = simulate(R, Impact(v0), Impedance(opt.k_p, opt.k_d))
+    assert r.rest_proven and r.stroke_min >= 0.0 and r.stroke_max <= 20.0
+    assert r.depth == opt.depth
+    assert opt.on_stroke_boundary and 0.0 <= r.stroke_min <= 1e-6
+    assert opt.active_constraint.startswith("stroke lower limit")
+    # a slightly softer leg leaves the stroke: the limit is really binding
+    softer = simulate(R, Impact(v0), Impedance(opt.k_p - 1e-6, opt.k_d))
+    assert softer.stroke_min < 0.0
+
+
+def test_lossless_cot_is_ground_loss_over_impact_energy(map_v1):
+    ok = map_v1.strictly_feasible
+    expect = 0.5 * map_v1.depth**2 / (0.5 * 1.0**2)
+    np.testing.assert_array_equal(map_v1.cot_lossless.where(ok), expect.where(ok))
+    r = simulate(R, Impact(-4.0), Impedance(0.3, 0.3))
+    assert r.energy.cot_lossless == 0.5 * r.depth**2 / (0.5 * 16.0)
+
+
+def test_min_cot_gains_against_min_depth_gains():
+    # Lossless rendering: CoT is depth^2 / v0^2, so its optimum is the depth optimum.
+    for v0 in (-1.0, -5.0):
+        d = optimize_impedance(v0)
+        lo = optimize_impedance(v0, objective="cot-lossless")
+        assert (lo.k_p, lo.k_d) == (d.k_p, d.k_d)
+    # Dissipative actuator: far apart at v0 = -1 (a stiff, barely damped leg), within
+    # 2e-3 at v0 = -4 (observed 5e-4). They separate again beyond |v0| ~ 7 (0.21 at
+    # v0 = -10), which the paper does not report; see the README.
+    far = optimize_impedance(-1.0, objective="cot")
+    near = optimize_impedance(-4.0, objective="cot")
+    d1, d4 = optimize_impedance(-1.0), optimize_impedance(-4.0)
+    assert math.hypot(far.k_p - d1.k_p, far.k_d - d1.k_d) > 0.5
+    assert math.hypot(near.k_p - d4.k_p, near.k_d - d4.k_d) < 2e-3
+    assert far.cot < d1.cot  # it is a better CoT than the depth optimum's
+
+
+def test_cot_objective_rejects_zero_velocity():
+    with pytest.raises(ParameterError, match="v0"):
+        optimize_impedance(0.0, objective="cot")
+
+
+def test_netcdf_round_trip(tmp_path, map_v1):
+    path = tmp_path / "map.nc"
+    save_dataset(map_v1, path)
+    back = load_dataset(path)
+    xr.testing.assert_equal(back, map_v1.assign(steps=map_v1.steps.astype(np.int32),
+                                                status=map_v1.status.astype(np.int32)))
+
+
+@pytest.mark.dask
+def test_dask_path_returns_the_same_dataset():
+    import distributed  # in the [test] extra
+    g = np.linspace(0.0, 1.0, 11)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1",
+                                  processes=True, dashboard_address=None) as cluster:
+        remote = impedance_dataset([-1.0, -4.0], g, g, scheduler=cluster.scheduler_address,
+                                   chunks=6)
+    local = impedance_dataset([-1.0, -4.0], g, g)
+    xr.testing.assert_identical(remote, local)
+
+
+@pytest.mark.dask
+def test_a_scheduler_without_workers_times_out_with_a_message(monkeypatch):
+    import distributed
+
+    import softlanding.studies.sweeps as sw
+
+    monkeypatch.setattr(sw, "WORKER_TIMEOUT_S", 1.0)
+    with distributed.LocalCluster(n_workers=0, host="127.0.0.1", processes=True,
+                                  dashboard_address=None) as cluster:
+        with pytest.raises(ParameterError, match="no worker joined"):
+            impedance_dataset(-1.0, 0.2, 0.2, scheduler=cluster.scheduler_address)
+
+
+def test_unreachable_scheduler_is_a_clear_error():
+    with pytest.raises(ParameterError, match="scheduler"):
+        impedance_dataset(-1.0, 0.2, 0.2, scheduler="tcp://127.0.0.1:9")
+
+
+def test_cli_impedance_json(cli):
+    code, out, err = cli("impedance", "--v0", "-3", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    for k in ("k_p", "k_d", "depth", "steps", "u_peak", "stroke_min", "stroke_max", "cot",
+              "on_stroke_boundary"):
+        assert k in d
+    assert d["on_stroke_boundary"] is True
+
+
+def test_cli_map_writes_dataset_and_plot(tmp_path, cli):
+    nc, png = tmp_path / "m.nc", tmp_path / "m.png"
+    code, _, err = cli("map", "--v0", "-2", "--n", "41", "--out", nc, "--plot", png, "--json")
+    assert code == 0, err
+    ds = load_dataset(nc)
+    assert ds.depth.shape == (41, 41)
+    assert png.stat().st_size > 10_000
+    code, _, err = cli("impedance", "--v0", "-2", "--objective", "speed")
+    assert code == 2 and "Traceback" not in err
+
+
+def test_cli_sweep_json_and_observations(tmp_path, cli):
+    nc = tmp_path / "curves.nc"
+    code, out, err = cli("sweep", "--v0-min", "-6", "--n", "4", "--grid", "41", "--out", nc,
+                         "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert len(d["k_p"]) == 4 and all(d["on_stroke_boundary"])
+    assert np.all(np.diff(d["k_p"]) >= 0)  # stiffer legs for faster impacts
+    assert d["observations"]["kp_increasing_with_speed"]
+    assert load_dataset(nc).k_p.shape == (1, 1, 4)
