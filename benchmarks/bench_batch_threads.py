@@ -1,6 +1,6 @@
 """How to run a batch of landings on a few (shared) cores: thread pool vs numba prange.
 
-Run:  python benchmarks/bench_batch_threads.py [--every 5] [--repeats 3]
+Run:  python -m benchmarks.bench_batch_threads [--every 5] [--repeats 3]
 
 The same compiled landing (``softlanding.simulation.kernel.landing.simulate_one``) on a
 sample of the paper's grid (every ``--every``-th landing, k_d = 0 hops

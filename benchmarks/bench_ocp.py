@@ -1,6 +1,6 @@
 """The soft-landing OCP with this toolkit and with rockit, in one interleaved run.
 
-Run:  pip install -e ".[bench]" && python benchmarks/bench_ocp.py [--n 20]
+Run:  pip install -e ".[bench]" && python -m benchmarks.bench_ocp [--n 20]
 
 Same problem (the paper's, with the body-arrest conditions multiplied by the
 final stroke as in softlanding.optimal.landing), same N = 100 multiple-shooting

@@ -1,6 +1,6 @@
 """Switching-time refinement and PMP certificate: before vs now, interleaved.
 
-Run:  python benchmarks/bench_refinement.py [--n 12] [--baseline 4d4afb0]
+Run:  python -m benchmarks.bench_refinement [--n 12] [--baseline 4d4afb0]
 
 For ``--n`` impact velocities of the soft landing (r_m = 5, s = 20, u_max =
 8.2) the transcriptions are solved first (not timed); then, v0 by v0 and

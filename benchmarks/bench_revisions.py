@@ -1,6 +1,6 @@
 """The published-problem suite on two revisions of this toolkit, interleaved.
 
-Run:  python benchmarks/bench_revisions.py --baseline REV [--repeats 3] [names...]
+Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git

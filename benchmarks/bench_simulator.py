@@ -1,6 +1,6 @@
 """Exact simulator: current kernel against the frozen first kernel, and against scipy solve_ivp.
 
-Run:  python benchmarks/bench_simulator.py [--cases 200] [--repeats 5] [--grid-repeats 2]
+Run:  python -m benchmarks.bench_simulator [--cases 200] [--repeats 5] [--grid-repeats 2]
                                            [--skip-grid] [--skip-ivp]
 
 Every timing is measured in this run, interleaved: the current kernel

@@ -1,6 +1,6 @@
 """Non-affine grounds: the integrated (DOP853) simulator against the exact path and solve_ivp.
 
-Run:  python benchmarks/bench_terrain.py [--cases 100] [--repeats 3]
+Run:  python -m benchmarks.bench_terrain [--cases 100] [--repeats 3]
 
 In one run, interleaved (contenders alternate block by block, several repeats; medians of
 CPU time, ``time.process_time``, and wall time), on random landings (k_p, k_d in [0, 1],

@@ -1,6 +1,6 @@
 """Rigid leg vs optimal impedance vs bang-bang force control over impact velocity.
 
-Run:  python benchmarks/compare_controllers.py [--n 11] [--grid 101] [--rm 5] [--s 20]
+Run:  python -m benchmarks.compare_controllers [--n 11] [--grid 101] [--rm 5] [--s 20]
 
 The paper's Section V comparison, with numbers. For each v0 in [-10, 0]:
 the rigid-leg depth 1 + sqrt(1 + v0^2) (analytic), the depth of the

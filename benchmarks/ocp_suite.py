@@ -1,6 +1,6 @@
 """The published-problem suite with this toolkit and with rockit, in one run.
 
-Run:  pip install -e ".[bench]" && python benchmarks/ocp_suite.py [--repeats 3] [names...]
+Run:  pip install -e ".[bench]" && python -m benchmarks.ocp_suite [--repeats 3] [names...]
 
 For every problem of ``tests/ocp_suite`` this toolkit runs Radau collocation
 (degree 3) with mesh refinement to the problem's tolerance; the final mesh's

@@ -57,7 +57,8 @@ _WHERE = {
     "GuessError": "errors", "InfeasibleError": "errors", "PathViolationError": "errors",
     "PathViolationWarning": "errors", "ProblemDefinitionError": "errors",
     "SolveError": "errors", "MultiPhaseProblem": "multiphase", "PMPCertificate": "pmp",
-    "certify": "pmp", "OptimalControlProblem": "problem", "Solution": "solution",
+    "certify": "pmp", "plot_certificate": "pmp", "OptimalControlProblem": "problem",
+    "Solution": "solution",
     "Trajectory": "trajectory", "Collocation": "transcription",
     "MultipleShooting": "transcription", "continuation": "transcription",
     "transcribe": "transcription", "detect_arcs": "arcs", "detect_structure": "arcs",
@@ -87,6 +88,7 @@ __all__ = [
     "detect_arcs",
     "detect_structure",
     "multistart",
+    "plot_certificate",
     "refine_phases",
     "refine_structure",
     "refine_switching",
@@ -121,7 +123,7 @@ if TYPE_CHECKING:
     from .multiphase import MultiPhaseProblem
     from .phase_pmp import certify_phases
     from .phase_refinement import refine_phases
-    from .pmp import PMPCertificate, certify
+    from .pmp import PMPCertificate, certify, plot_certificate
     from .problem import OptimalControlProblem
     from .solution import Solution
     from .switching import refine_structure, refine_switching
