@@ -1,6 +1,14 @@
-"""The published-problem suite on two revisions of this toolkit, interleaved.
+"""Two revisions of this toolkit on the same workloads, interleaved.
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
+      python -m benchmarks.bench_revisions --baseline REV --workload simulator|landing
+
+``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
+over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
+velocities); ``--workload landing`` times the landing OCP end to end (bench_ocp's "toolkit
+solve_landing (sweep)": a cold ``solve_landing`` at v0 = -3, then ``sweep_landing`` over 20
+velocities in [-10, -0.5]). Both revisions must return the same numbers (a checksum of every
+depth, printed); each child runs once untimed first (numba's cache, CasADi's code generation).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -63,6 +71,76 @@ print(json.dumps([p.name for p in PROBLEMS]))
 """
 
 
+SIMULATOR = r"""
+import json, time
+import numpy as np
+from softlanding import Impact, Impedance, Robot, simulate, simulate_batch
+robot = Robot(5, 20)
+kp, kd = np.linspace(0.05, 1.0, 150)[:, None], np.linspace(0.05, 1.0, 150)
+simulate_batch(robot, -3.0, k_p=kp[:2], k_d=kd[:2])  # load the compiled kernel
+simulate(robot, Impact(-1.0), Impedance(0.2, 0.18))
+w, c = time.perf_counter(), time.process_time()
+grid = simulate_batch(robot, -3.0, k_p=kp, k_d=kd)
+bw, bc = time.perf_counter() - w, time.process_time() - c
+rng = np.random.default_rng(1)
+cases = [(-rng.uniform(0.5, 5.0), rng.uniform(0.05, 1.0), rng.uniform(0.05, 1.0))
+         for _ in range(300)]
+w, c = time.perf_counter(), time.process_time()
+depths = [simulate(robot, Impact(v), Impedance(p, d)).depth for v, p, d in cases]
+sw, sc = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"batch": bw, "batch_cpu": bc, "single": sw, "single_cpu": sc,
+                  "check": float(np.nansum(grid.depth)) + float(np.nansum(depths))}))
+"""
+
+LANDING = r"""
+import json, time
+import numpy as np
+try:
+    from softlanding import PAPER_ROBOT, solve_landing, sweep_landing
+except ImportError:  # before 0.3.0
+    from softlanding import PAPER_ROBOT
+    from softlanding.landing import solve_landing, sweep_landing
+w, c = time.perf_counter(), time.process_time()
+one = solve_landing(-3.0, PAPER_ROBOT)
+ow, oc = time.perf_counter() - w, time.process_time() - c
+w, c = time.perf_counter(), time.process_time()
+sweep = sweep_landing(np.linspace(-0.5, -10.0, 20), PAPER_ROBOT)
+sw, sc = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"batch": ow, "batch_cpu": oc, "single": sw, "single_cpu": sc,
+                  "check": one.depth + sum(s.depth for s in sweep)}))
+"""
+
+WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
+             "landing": (LANDING, "cold solve", "sweep of 20")}
+
+
+def compare_workload(base: Path, workload: str, repeats: int) -> None:
+    """Time one workload on both trees, alternating, and print medians and ratios."""
+    code, first, second = WORKLOADS[workload]
+    for tree in (base, ROOT):  # untimed: compile and cache
+        run_in(tree, code)
+    rows: dict[str, list[dict]] = {"base": [], "now": []}
+    for k in range(repeats):
+        order = [("base", base), ("now", ROOT)]
+        for key, tree in order if k % 2 == 0 else order[::-1]:
+            rows[key].append(run_in(tree, code))  # type: ignore[arg-type]
+    print(f"{workload}: medians of {repeats} interleaved runs in fresh processes; "
+          f"ratio = current / baseline (below 1: faster now)")
+    print(f"{'':10s} {'wall base':>10s} {'wall now':>9s} {'ratio':>6s} | {'cpu base':>9s} "
+          f"{'cpu now':>8s} {'ratio':>6s}")
+    for field, label in (("batch", first), ("single", second)):
+        b = statistics.median(r[field] for r in rows["base"])
+        n = statistics.median(r[field] for r in rows["now"])
+        bc = statistics.median(r[field + "_cpu"] for r in rows["base"])
+        nc = statistics.median(r[field + "_cpu"] for r in rows["now"])
+        print(f"{label:14s} {b:6.3f} s {n:7.3f} s {n / b:6.2f} | {bc:7.3f} s {nc:6.3f} s "
+              f"{nc / bc:6.2f}")
+    checks = {key: {r["check"] for r in rs} for key, rs in rows.items()}
+    same = checks["base"] == checks["now"] and len(checks["now"]) == 1
+    print(f"checksum of every depth: baseline {sorted(checks['base'])}, now "
+          f"{sorted(checks['now'])}: {'identical' if same else 'DIFFERENT'}")
+
+
 def run_in(tree: Path, code: str, *args: str) -> dict | list:
     """Run ``code`` with ``tree``'s ``ocp`` and ``tests`` first on the path; its JSON."""
     env = dict(os.environ, PYTHONPATH=f"{tree}{os.pathsep}{tree / 'tests'}")
@@ -78,6 +156,9 @@ def main() -> None:
     ap.add_argument("--current-refine", default="{}", metavar="JSON",
                     help='extra keyword arguments of the current revision\'s refine, e.g. '
                          '\'{"objective_tol": Infinity}\' for the baseline\'s stopping rule')
+    ap.add_argument("--workload", choices=["suite", *WORKLOADS], default="suite",
+                    help="suite: the published problems (default); simulator: the exact "
+                         "simulator; landing: the landing OCP end to end")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:
@@ -91,6 +172,11 @@ def main() -> None:
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base),
                         args.baseline], check=True)
         try:
+            if args.workload != "suite":
+                if args.names or args.current_refine != "{}":
+                    ap.error("problem names and --current-refine apply to --workload suite only")
+                compare_workload(base, args.workload, args.repeats)
+                return
             both = set(run_in(base, NAMES)) & set(run_in(ROOT, NAMES))
             names = [n for n in run_in(ROOT, NAMES) if n in both
                      and (not args.names or n in args.names)]
