@@ -48,7 +48,6 @@ from softlanding.simulation import kernel as K
 from softlanding.simulation.groundcode import kernel_law, needs_integration
 from softlanding.util.jsonable import json_safe
 
-_O_DLIM, _O_FOOT_REST = K.O_DLIM, K.O_FOOT_REST
 O_EDRAG, O_EGRAIN = K.N_OUT, K.N_OUT + 1  # the integrated path's extra columns
 N_OUT_NL = K.N_OUT + 2
 
@@ -347,9 +346,7 @@ def simulate(
         T=float(out[K.O_T]), status=STATUS_NAMES[int(out[K.O_STATUS])],
         energy=_ledger(out, integrate),
         n_segments=int(out[K.O_NSEG]), robot=robot, impact=impact, controller=controller,
-        # (a kernel without these columns, e.g. the benchmark's frozen first one: unknown)
-        depth_limit=float(out[_O_DLIM]) if out.size > _O_DLIM else math.nan,
-        foot_rest=bool(out[_O_FOOT_REST]) if out.size > _O_FOOT_REST else False,
+        depth_limit=float(out[K.O_DLIM]), foot_rest=bool(out[K.O_FOOT_REST]),
         ground=ground, _segments=segments)
 
 
@@ -582,8 +579,6 @@ def _batch_data(out: np.ndarray, shape: tuple, integrate: bool) -> dict[str, np.
     data = {}
     cols = dict(_FIELD_COL, drag=O_EDRAG, grains=O_EGRAIN) if integrate else _FIELD_COL
     for name, col in cols.items():
-        if col >= out.shape[1]:  # a kernel without this column (the benchmark's first one)
-            continue
         v_ = out[:, col].reshape(shape)
         if name in ("feasible", "foot_rest"):
             v_ = v_.astype(bool)
