@@ -12,9 +12,13 @@ minimiser would step into the infeasible region. We therefore refine by a
 *zooming feasible grid*: 21 x 21 gains around the incumbent, each level ten
 times finer than the last, infeasible points excluded, until the spacing is
 below 1e-8; a final bisection in ``k_p`` then puts a boundary optimum on the
-stroke limit to 1e-12. The result is never worse than the best grid point
-(the incumbent is kept at every level) and is re-simulated to confirm it is
-feasible.
+stroke limit to 1e-12. A boundary optimum is then followed along the boundary: the
+feasible region can be a thin wedge between the stroke limit and the gains whose
+static rest reaches the stroke's end (under drag, at ``v0 = -10``, lowering ``k_p`` pays
+only with more ``k_d``), which a grid around one point cannot enter. So the lowest
+feasible ``k_p`` is found by bisection at 21 values of ``k_d`` at once, and the best of
+them zoomed in ``k_d`` the same way. The result is never worse than the best grid point
+(the incumbent is kept at every step) and is re-simulated to confirm it is feasible.
 """
 
 from __future__ import annotations
@@ -162,6 +166,59 @@ def _onto_boundary(batch, best: tuple[float, float, float],
     return ((hi, kd_s, v_hi) if v_hi <= val else best), evals + 1
 
 
+def _lowest_feasible_kp(batch, kd: np.ndarray, lo: np.ndarray,
+                        hi: np.ndarray) -> tuple[np.ndarray, int]:
+    """Bisection (32 points per round) of ``k_p`` onto the stroke limit at each ``k_d``.
+
+    ``hi`` must be feasible; returns the lowest feasible ``k_p`` found (to 1e-12) per ``k_d``.
+    """
+    evals = 0
+    while np.max(hi - lo) > 1e-12:
+        frac = np.linspace(0.0, 1.0, 34)[1:-1]
+        mids = lo[:, None] + (hi - lo)[:, None] * frac[None, :]
+        feas = np.isfinite(batch(mids, np.broadcast_to(kd[:, None], mids.shape)))
+        evals += mids.size
+        first = np.argmax(feas, axis=1)
+        any_ = feas.any(axis=1)
+        rows = np.arange(kd.size)
+        new_hi = np.where(any_, mids[rows, first], hi)
+        new_lo = np.where(any_ & (first > 0), mids[rows, np.maximum(first - 1, 0)],
+                          np.where(any_, lo, mids[:, -1]))
+        lo, hi = new_lo, new_hi
+    return hi, evals
+
+
+def _along_boundary(batch, best: tuple[float, float, float], h: float, kp_range, kd_range,
+                    tol: float, n: int = 21) -> tuple[tuple[float, float, float], int]:
+    """Follow a boundary optimum along the stroke limit: zoom in ``k_d`` over the lowest
+    feasible ``k_p`` at each ``k_d`` (see the module docstring)."""
+    evals, moves = 0, 0
+    while h > tol:
+        cd = np.unique(np.clip(np.linspace(best[1] - h, best[1] + h, n), *kd_range))
+        # a feasible upper end per k_d: the incumbent's k_p raised until feasible
+        hi = np.full(cd.size, np.nan)
+        for step in (0.0, h, 4 * h, 16 * h, 64 * h):
+            top = min(best[0] + step, kp_range[1])
+            ok = np.isnan(hi) & np.isfinite(batch(np.full(cd.size, top), cd))
+            evals += cd.size
+            hi[ok] = top
+        have = np.isfinite(hi)
+        if have.any():
+            lo = np.maximum(hi[have] - 4 * max(h, 1e-6), kp_range[0])
+            kp_b, n_b = _lowest_feasible_kp(batch, cd[have], lo, hi[have])
+            J = batch(kp_b, cd[have])
+            evals += n_b + J.size
+            k = int(np.argmin(J))
+            if J[k] < best[2]:
+                best = (float(kp_b[k]), float(cd[have][k]), float(J[k]))
+                at_edge = k in (0, J.size - 1) and cd[have][k] not in kd_range
+                if at_edge and moves < 100:  # still descending: move the window, same width
+                    moves += 1
+                    continue
+        h = 2 * h / (n - 1)
+    return best, evals
+
+
 def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_ROBOT,
                        ground: Ground = LINEAR_GROUND, *, objective: str = "depth",
                        grid: int = 101, kp_range: tuple[float, float] = GAIN_RANGE,
@@ -215,7 +272,10 @@ def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_RO
     grid_best = {"k_p": best[0], "k_d": best[1], "value": best[2]}
     best, n1 = _zoom(batch, best, (kp[1] - kp[0], kd[1] - kd[0]), kp_range, kd_range, tol)
     best, n2 = _onto_boundary(batch, best, tol)
-    return _optimum(objective, robot, impact, ground, best, grid_best, evals + n1 + n2)
+    n3 = 0
+    if np.isinf(batch(np.array([best[0] - 2 * tol]), best[1])[0]):  # k_p at the stroke limit
+        best, n3 = _along_boundary(batch, best, kd[1] - kd[0], kp_range, kd_range, tol)
+    return _optimum(objective, robot, impact, ground, best, grid_best, evals + n1 + n2 + n3 + 1)
 
 
 def _optimum(objective, robot, impact, ground, best, grid_best, evals) -> ImpedanceOptimum:

@@ -140,3 +140,22 @@ def test_cli_sweep_json_and_observations(tmp_path, cli):
     assert np.all(np.diff(d["k_p"]) >= 0)  # stiffer legs for faster impacts
     assert d["observations"]["kp_increasing_with_speed"]
     assert load_dataset(nc).k_p.shape == (1, 1, 4)
+
+
+@pytest.mark.slow
+def test_boundary_optimum_under_drag_is_followed_into_the_wedge():
+    """Under drag (c_d = 1, v0 = -10) the feasible gains near the optimum are a thin wedge
+    between the stroke limit and k_p = m_b g / l0 (the static rest at the stroke's end); a
+    zooming grid around one point stopped at depth 2.99367 (k_p 0.0868, k_d 0.9198). The
+    point (0.0834, 0.9392), checked by a plain simulation, is feasible at 2.98937: the
+    optimiser must do at least as well, with gains that re-simulate feasible."""
+    from softlanding.model.ground import DragGround
+
+    robot, drag = R, DragGround(1.0)
+    witness = simulate(robot, Impact(-10), Impedance(0.0834, 0.9392), drag)
+    assert witness.rest_proven and 0 <= witness.stroke_min and witness.stroke_max <= robot.s
+    opt = optimize_impedance(-10, robot, drag)
+    assert opt.depth <= witness.depth
+    assert opt.k_p >= robot.body_mass / robot.rest_length  # static rest within the stroke
+    again = simulate(robot, Impact(-10), Impedance(opt.k_p, opt.k_d), drag)
+    assert again.rest_proven and again.stroke_min >= 0 and again.depth == pytest.approx(opt.depth)
