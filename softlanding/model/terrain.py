@@ -8,8 +8,11 @@ coefficients are as transcribed by the sources named, and flagged so):
   ``alpha_z = A_00 + A_10 + B_11 + B_01 + B_-11`` of the medium's Fourier fit (the generic
   coefficients sum to 1, the scaling factor ``zeta``). Poppy-seed fits, loosely (LP) and
   closely packed (CP), as transcribed in open robotics code (IsaacLab and hector_mpc soft
-  contact models); ``zeta = 0.488`` for CP poppy seeds is quoted from Li et al.'s
-  supplement by a lunar-RFT report. A flat foot of area ``A`` then has ``k_g = alpha_z A``
+  contact models): their vertical terms sum to ``alpha_z = 0.254`` (LP) and ``0.464``
+  N/cm^3 (CP), and these sums are what is used. A lunar-RFT report quotes ``zeta = 0.488``
+  for CP poppy seeds from Li et al.'s supplement, 5 % above the transcribed fit's sum (it
+  would give 6477 N/m instead of 6159 N/m for the paper's foot): a measure of how far the
+  transcriptions agree, not used. A flat foot of area ``A`` then has ``k_g = alpha_z A``
   (valid to depths of about one foot width, Agarwal et al. 2021).
 * **Inertial drag** of a plate, ``F = lambda rho A v^2`` with ``lambda = 1`` and
   ``rho = 638 kg/m^3`` for poppy seeds (Agarwal, Karsai, Goldman & Kamrin, Sci. Adv. 7,

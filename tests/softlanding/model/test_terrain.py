@@ -191,3 +191,22 @@ def test_open_loop_schedule_and_trajectory_on_drag():
 def test_linear_ground_unchanged():
     r = simulate(ROBOT, Impact(-1), Impedance(0.2, 0.18), LINEAR_GROUND)
     assert r.steps == 2 and abs(r.depth - 1.634469526521306) < 1e-12
+
+
+def test_the_terrain_constants_quoted_agree_with_the_code():
+    """The module docstring quotes each medium's alpha_z and the paper foot's stiffness; they
+    must be the numbers the code computes (it once quoted zeta = 0.488 beside a fit summing
+    to 0.464, i.e. 6477 N/m beside the 6159 N/m reported)."""
+    import math
+    import re
+
+    from softlanding.model import terrain
+
+    doc = terrain.__doc__.replace("\n", " ")
+    lp, cp = (sum(terrain.MEDIA[m].rft) for m in ("poppy-lp", "poppy-cp"))
+    quoted = re.search(r"alpha_z = ([0-9.]+)`` \(LP\) and ``([0-9.]+)``", doc)
+    assert quoted and float(quoted[1]) == round(lp, 3) and float(quoted[2]) == round(cp, 3)
+    area = math.pi * (terrain.PAPER_FOOT_DIAMETER / 2) ** 2
+    k_cp = terrain.rft_stiffness(terrain.medium("poppy-cp"))
+    assert k_cp == pytest.approx(cp * 1e6 * area, rel=1e-12)
+    assert f"{k_cp:.0f} N/m" in doc and f"{0.488e6 * area:.0f} N/m" in doc
