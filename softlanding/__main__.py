@@ -1,5 +1,5 @@
 """``python -m softlanding``: same as the ``softlanding`` command."""
 
-from softlanding.cli.main import main
+from softlanding.cli import main
 
 raise SystemExit(main())

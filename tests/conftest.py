@@ -4,7 +4,7 @@ import pytest
 @pytest.fixture
 def cli(capsys):
     """Run ``softlanding ARGS`` in-process: returns (exit code, stdout, stderr)."""
-    from softlanding.cli.main import main
+    from softlanding.cli import main
 
     def run(*args):
         try:

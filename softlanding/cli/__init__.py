@@ -1,5 +1,10 @@
-"""The ``softlanding`` console script: :func:`main`."""
+"""The ``softlanding`` console script: :func:`main`.
 
-from softlanding.cli.main import main
+Modules: :mod:`.commands` (the sub-commands' handlers and :func:`main`), :mod:`.parser`
+(the argument parser), :mod:`.ground` (the ``--ground`` options), :mod:`.phased` (the
+multi-phase variants and hops), :mod:`.output` (exit codes, tables, JSON, files, errors).
+"""
+
+from softlanding.cli.commands import main
 
 __all__ = ["main"]

@@ -1,7 +1,7 @@
 """Handlers of ``softlanding solve --variant two-phase|leg-extension`` and ``softlanding hop``.
 
 They follow :mod:`softlanding.cli.main`'s conventions: output files are checked before
-any work (``_target``) and written atomically (``_savefig``), ``--json`` prints one
+any work (``target``) and written atomically (``savefig``), ``--json`` prints one
 object with ``verified`` and ``unverified_reasons``, and a result that failed a
 check exits 1 unless ``--accept-unverified``.
 """
@@ -61,7 +61,7 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
         The figure to write (checked already).
     """
     from softlanding.cli.ground import ground_of
-    from softlanding.cli.main import EXIT_FAILURE, EXIT_OK, _print_json, _print_table, _savefig
+    from softlanding.cli.output import EXIT_FAILURE, EXIT_OK, print_json, print_table, savefig
     from softlanding.model.ground import LINEAR_GROUND
 
     ground = ground_of(a)
@@ -85,13 +85,13 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
     if plot:
         from softlanding.plots.phased import plot_full_landing
 
-        written = _savefig(plot_full_landing(res), plot)
+        written = savefig(plot_full_landing(res), plot)
     reasons = res.unverified_reasons(cert)
     if a.json:
         d = res.to_dict()
         if cert is not None:
             d["pmp"] = cert.to_dict()
-        _print_json({"verified": not reasons, "unverified_reasons": reasons, **d})
+        print_json({"verified": not reasons, "unverified_reasons": reasons, **d})
     else:
         status = "yes" if not reasons else "NO: " + "; ".join(reasons)
         rows = [("verified", status)] + _variant_rows(res)
@@ -100,7 +100,7 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
                      ("max |H - H_expected| / H_scale", cert.H_max_abs),
                      ("junction costate gaps", ", ".join(f"{g:.2e}" for g in
                                                          cert.junction_gaps))]
-        _print_table(rows)
+        print_table(rows)
         for n in res.notes:
             print(f"note: {n}")
         for r_ in (cert.reasons if cert is not None else []):
@@ -112,16 +112,16 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
 
 def _two_steps(a: argparse.Namespace, robot: Any) -> int:
     """``--steps 2``: the four-phase landing from several starts against the two-phase one."""
-    from softlanding.cli.main import EXIT_FAILURE, EXIT_OK, _print_json, _print_table
+    from softlanding.cli.output import EXIT_FAILURE, EXIT_OK, print_json, print_table
     from softlanding.optimal.two_phase import two_step_check
 
     c = two_step_check(Impact(a.v0), robot)
     reasons = c.one_step.unverified_reasons()
     if a.json:
-        _print_json({"verified": not reasons, "unverified_reasons": reasons, "depth": c.depth,
+        print_json({"verified": not reasons, "unverified_reasons": reasons, "depth": c.depth,
                      **c.to_dict()})
     else:
-        _print_table([("verified (one-step optimum)", "yes" if not reasons else
+        print_table([("verified (one-step optimum)", "yes" if not reasons else
                        "NO: " + "; ".join(reasons)),
                       ("one-step depth (refined)", c.one_step.depth),
                       ("two-step depth (transcribed, best start)", c.depth),
@@ -155,20 +155,20 @@ def cmd_hop(a: argparse.Namespace) -> int:
     a : argparse.Namespace
         The parsed arguments.
     """
-    from softlanding.cli.main import (
+    from softlanding.cli.output import (
         EXIT_FAILURE,
         EXIT_OK,
-        _print_json,
-        _print_table,
-        _robot,
-        _savefig,
-        _target,
+        print_json,
+        print_table,
+        robot_of,
+        savefig,
+        target,
     )
     from softlanding.errors import InfeasibleLandingError
     from softlanding.optimal.hopping import best_impedance_hop, rigid_hop, solve_hop
 
-    robot = _robot(a)
-    plot = _target(a)
+    robot = robot_of(a)
+    plot = target(a)
     legs = ("free", "impedance", "rigid") if a.leg == "all" else (a.leg,)
     cycles: dict[str, Any] = {}
     for leg in legs:
@@ -189,10 +189,10 @@ def cmd_hop(a: argparse.Namespace) -> int:
     if plot:
         from softlanding.plots.phased import plot_hop
 
-        written = _savefig(plot_hop(cycles[legs[0]]), plot)
+        written = savefig(plot_hop(cycles[legs[0]]), plot)
     if a.json:
         first = cycles[legs[0]]
-        _print_json({"verified": not bad, "unverified_reasons": reasons,
+        print_json({"verified": not bad, "unverified_reasons": reasons,
                      "energy": first.energy, "cot": first.cot, "depth": first.depth,
                      "leg": legs[0], "eta": a.eta, "v0": a.v0, "apex_height": first.apex_height,
                      "cycles": {k: c.to_dict() for k, c in cycles.items()}})
@@ -200,7 +200,7 @@ def cmd_hop(a: argparse.Namespace) -> int:
         for leg, c in cycles.items():
             ok = "yes" if not reasons[leg] else "NO: " + "; ".join(reasons[leg])
             print(f"== {leg} leg, v0 = {a.v0:g} (apex {c.apex_height:.6g}), eta = {a.eta:g}")
-            _print_table([("verified", ok)] + _hop_rows(c))
+            print_table([("verified", ok)] + _hop_rows(c))
             for n in c.notes:
                 print(f"note: {n}")
         if written:

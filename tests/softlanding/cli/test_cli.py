@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from softlanding.cli.main import main
+from softlanding.cli import main
 
 CMD = [sys.executable, "-m", "softlanding"]
 

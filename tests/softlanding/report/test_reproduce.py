@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from softlanding import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT, Impact, Impedance, Robot, simulate
-from softlanding.cli.main import main
+from softlanding.cli import main
 from softlanding.optimal.landing import solve_landing
 from softlanding.studies.impedance import optimize_impedance
 from softlanding.studies.robustness import NOMINAL_UNITS, design, replay, transfer

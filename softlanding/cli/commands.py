@@ -10,80 +10,26 @@ bug: ``--debug`` shows the traceback), 130 interrupted.
 from __future__ import annotations
 
 import argparse
-import json
-import math
-import re
 import sys
 from collections.abc import Sequence
 from typing import Any
 
-from softlanding.errors import ParameterError, SoftlandingError
+from softlanding.cli.output import (
+    EXIT_FAILURE,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    CliParser,
+    fmt,
+    ground_of_args,
+    print_json,
+    print_table,
+    report_error,
+    robot_of,
+    savefig,
+    target,
+)
+from softlanding.errors import ParameterError
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
-from softlanding.util.jsonable import json_safe
-
-EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse, but usage errors are one line (exit 2) and ``-1e-3`` is a number."""
-
-    def __init__(self, *args: Any, **kw: Any) -> None:
-        super().__init__(*args, **kw)
-        # argparse reads "-1e-3" or "-inf" as an option; they are values here
-        self._negative_number_matcher = re.compile(
-            r"^-(\d+\.?\d*([eE][-+]?\d+)?|\.\d+([eE][-+]?\d+)?|inf|infinity|nan)$", re.I)
-
-    def error(self, message: str) -> None:  # type: ignore[override]  # noqa: D102
-        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
-
-
-def _fmt(x: Any) -> str:
-    if isinstance(x, bool):
-        return "yes" if x else "no"
-    if isinstance(x, float):
-        return f"{x:.10g}" if math.isfinite(x) else str(x)
-    return str(x)
-
-
-def _print_table(rows: Sequence[tuple[str, object]]) -> None:
-    w = max(len(k) for k, _ in rows)
-    for k, v in rows:
-        print(f"{k:<{w}}  {_fmt(v)}")
-
-
-def _print_json(obj: Any) -> None:
-    print(json.dumps(json_safe(obj)))
-
-
-def _robot(a: argparse.Namespace) -> Robot:
-    """The robot of the model arguments (validated by :class:`Robot`)."""
-    return Robot(r_m=a.rm, s=a.s, u_max=a.umax, l0=a.l0)
-
-
-def _ground(a: argparse.Namespace) -> Any:
-    """The ground model of the ``--ground`` options (validated by the model)."""
-    from softlanding.cli.ground import ground_of
-
-    return ground_of(a)
-
-
-def _target(a: argparse.Namespace, option: str = "plot") -> Any:
-    """The figure or data file an option names, checked before any work (None if not given)."""
-    from softlanding.util.files import output_path
-
-    value = getattr(a, option, None)
-    if value is None:
-        return None
-    suffix = ".png" if option == "plot" or a.command == "demo" else None
-    return output_path(value, option, a.force, suffix)
-
-
-def _savefig(fig: Any, path: Any) -> str:
-    """Write the figure atomically; the path actually written."""
-    from softlanding.util.files import save_figure
-
-    return str(save_figure(fig, path))
-
 
 # ------------------------------------------------------------------- simulate
 _DEPTH_LABEL = {"final": "depth -x_f(T)", "limit": "depth limit (t -> inf)",
@@ -99,18 +45,18 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
     if not a.rigid and (a.kp is None or a.kd is None):
         raise ParameterError("kp", "give both --kp and --kd, or --rigid")
     controller = Rigid() if a.rigid else Impedance(a.kp, a.kd)
-    plot = _target(a)
-    res = simulate(_robot(a), Impact(a.v0), controller, _ground(a))
+    plot = target(a)
+    res = simulate(robot_of(a), Impact(a.v0), controller, ground_of_args(a))
     written = None
     if plot:
         from softlanding.plots.paper import plot_trajectory
 
-        written = _savefig(plot_trajectory(res), plot)
+        written = savefig(plot_trajectory(res), plot)
     if a.json:
-        _print_json(res.to_dict())
+        print_json(res.to_dict())
     else:
         e = res.energy
-        _print_table([
+        print_table([
             ("controller", controller.describe()), ("v0", a.v0), ("r_m", a.rm), ("s", a.s),
             (_DEPTH_LABEL[res.depth_kind], res.depth), ("intrusion steps", res.steps),
             ("feasible (0<=stroke<=s)", res.feasible), ("status", res.status),
@@ -156,15 +102,15 @@ def _cmd_solve(a: argparse.Namespace) -> int:
     from softlanding.optimal.landing import solve_landing
     from softlanding.util.files import output_path
 
-    plot = _target(a)
+    plot = target(a)
     if getattr(a, "variant", "paper") != "paper":  # the hybrid multi-phase landings
         from softlanding.cli.phased import cmd_solve_variant
 
-        return cmd_solve_variant(a, _robot(a), plot)
+        return cmd_solve_variant(a, robot_of(a), plot)
     pmp_plot = None
     if plot is not None and a.pmp:
         pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
-    res = solve_landing(Impact(a.v0), _robot(a), _ground(a), nodes=a.nodes,
+    res = solve_landing(Impact(a.v0), robot_of(a), ground_of_args(a), nodes=a.nodes,
                         refine=not a.no_refine,
                         extra_arcs=a.extra_arcs)
     cert = None
@@ -177,20 +123,20 @@ def _cmd_solve(a: argparse.Namespace) -> int:
     if plot:
         from softlanding.plots.paper import plot_bang_bang
 
-        written.append(_savefig(plot_bang_bang(res), plot))
+        written.append(savefig(plot_bang_bang(res), plot))
         if cert is not None:
             from ocp.pmp import plot_certificate
 
-            written.append(_savefig(plot_certificate(cert), pmp_plot))
+            written.append(savefig(plot_certificate(cert), pmp_plot))
     unverified = res.unverified_reasons(cert)
     if a.json:
         d = res.to_dict()
         if cert is not None:
             d["pmp"] = cert.to_dict()
-        _print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
+        print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
         status = "yes" if not unverified else "NO: " + "; ".join(unverified)
-        _print_table([("verified", status)] + _solve_rows(res, cert, res.refined is not None))
+        print_table([("verified", status)] + _solve_rows(res, cert, res.refined is not None))
         for n in res.notes:
             print(f"note: {n}")
         for r_ in (cert.reasons if cert is not None else []):
@@ -221,9 +167,9 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     from softlanding.studies.comparison import rigid_depth
 
     v = _v0_grid(a)
-    plot = _target(a)
-    ground = _ground(a)
-    res = sweep_landing(v, _robot(a), ground, nodes=a.nodes, progress=not a.json)
+    plot = target(a)
+    ground = ground_of_args(a)
+    res = sweep_landing(v, robot_of(a), ground, nodes=a.nodes, progress=not a.json)
     rigid = [rigid_depth(x, ground) for x in v]
     rows: list[dict[str, Any]] = [
         {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
@@ -237,11 +183,11 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
     if plot:
         from softlanding.plots.paper import plot_depth_vs_velocity
 
-        written = _savefig(plot_depth_vs_velocity(
+        written = savefig(plot_depth_vs_velocity(
             v, {"rigid leg": np.array(rigid),
                 "bang-bang (refined)": np.array([r.depth for r in res])}), plot)
     if a.json:
-        _print_json({"verified": not unverified, "sweep": rows})
+        print_json({"verified": not unverified, "sweep": rows})
         return code
     if unverified:
         print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
@@ -261,13 +207,13 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
 def _cmd_impedance(a: argparse.Namespace) -> int:
     from softlanding.studies.impedance import optimize_impedance
 
-    o = optimize_impedance(Impact(a.v0), _robot(a), _ground(a), objective=a.objective,
+    o = optimize_impedance(Impact(a.v0), robot_of(a), ground_of_args(a), objective=a.objective,
                            grid=a.grid)
     if a.json:
-        _print_json(o.to_dict())
+        print_json(o.to_dict())
         return EXIT_OK
     g = o.grid_best
-    _print_table([
+    print_table([
         ("objective", o.objective), ("v0", o.v0), ("optimal k_p", o.k_p),
         ("optimal k_d", o.k_d), (f"{o.objective} at the optimum", o.value), ("depth", o.depth),
         ("intrusion steps", o.steps), ("peak |u|", o.u_peak), ("stroke min", o.stroke_min),
@@ -285,8 +231,8 @@ def _cmd_map(a: argparse.Namespace) -> int:
     from softlanding.studies.sweeps import depth_map, save_dataset
     from softlanding.util.files import atomic
 
-    robot, impact, ground = _robot(a), Impact(a.v0), _ground(a)
-    out, plot = _target(a, "out"), _target(a)
+    robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
+    out, plot = target(a, "out"), target(a)
     ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler)
     opt = optimize_impedance(impact, robot, ground, grid=a.n)
     with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
@@ -295,17 +241,17 @@ def _cmd_map(a: argparse.Namespace) -> int:
     if plot:
         from softlanding.plots.paper import plot_depth_map
 
-        written = _savefig(plot_depth_map(ds, opt), plot)
+        written = savefig(plot_depth_map(ds, opt), plot)
     summary = {"out": str(out), "plot": written, "landings": int(ds.depth.size),
                "feasible_fraction": float(ds.strictly_feasible.mean()),
                "optimum": opt.to_dict()}
     if a.json:
-        _print_json(summary)
+        print_json(summary)
     else:
         print(f"{summary['landings']} landings, {summary['feasible_fraction']:.1%} feasible; "
               f"dataset written to {out}")
         print(f"optimum: k_p = {opt.k_p:.8f}, k_d = {opt.k_d:.8f}, depth {opt.depth:.10f} "
-              f"({opt.steps} step(s), on stroke boundary: {_fmt(opt.on_stroke_boundary)})")
+              f"({opt.steps} step(s), on stroke boundary: {fmt(opt.on_stroke_boundary)})")
         if written:
             print(f"figure written to {written}")
     return EXIT_OK
@@ -325,7 +271,7 @@ def _print_curves(curves: Any, objective: str) -> None:
                 print(f"{float(c.v0[i]):>7.2f} {float(c.k_p[i]):>11.7f} "
                       f"{float(c.k_d[i]):>11.7f} {float(c.depth[i]):>11.7f} "
                       f"{int(c.steps[i]):>5d} {float(c.u_peak[i]):>8.4f} "
-                      f"{float(c.cot[i]):>8.4f} {_fmt(bool(c.on_stroke_boundary[i]))}")
+                      f"{float(c.cot[i]):>8.4f} {fmt(bool(c.on_stroke_boundary[i]))}")
 
 
 def _cmd_sweep(a: argparse.Namespace) -> int:
@@ -342,8 +288,8 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 
     robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
                   u_max=a.umax)
-    out, plot = _target(a, "out"), _target(a)
-    curves = optimal_impedance_curves(v0, robot, _ground(a), r_m=a.rm, s=a.s,
+    out, plot = target(a, "out"), target(a)
+    curves = optimal_impedance_curves(v0, robot, ground_of_args(a), r_m=a.rm, s=a.s,
                                       objective=a.objective,
                                       grid=a.grid, scheduler=a.scheduler, progress=not a.json)
     if out:
@@ -353,13 +299,13 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
     if plot:
         from softlanding.plots.paper import plot_optimal_curves
 
-        written = _savefig(plot_optimal_curves(curves), plot)
+        written = savefig(plot_optimal_curves(curves), plot)
     obs = paper_observations(curves, robot)
     if a.json:
         c = curves.sel(r_m=robot.r_m, s=robot.s)
         d: dict[str, Any] = {name: c[name].values.tolist() for name in (
             "v0", "k_p", "k_d", "depth", "u_peak", "cot", "on_stroke_boundary")}
-        _print_json({**d, "observations": obs, "out": a.out})
+        print_json({**d, "observations": obs, "out": a.out})
         return EXIT_OK
     _print_curves(curves, a.objective)
     print(f"paper's observations at r_m = {robot.r_m:g}, s = {robot.s:g}: {obs}")
@@ -373,18 +319,18 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 def _cmd_compare(a: argparse.Namespace) -> int:
     from softlanding.studies.comparison import compare_controllers
 
-    robot = _robot(a)
-    v0, plot = _v0_grid(a), _target(a)
-    ground = _ground(a)
+    robot = robot_of(a)
+    v0, plot = _v0_grid(a), target(a)
+    ground = ground_of_args(a)
     rows = compare_controllers(v0, robot, ground, grid=a.grid, progress=not a.json)
     written = None
     if plot:
         from softlanding.plots.paper import plot_controller_comparison
         from softlanding.studies.comparison import comparison_arrays
 
-        written = _savefig(plot_controller_comparison(comparison_arrays(rows), robot), plot)
+        written = savefig(plot_controller_comparison(comparison_arrays(rows), robot), plot)
     if a.json:
-        _print_json({"rows": rows, "robot": robot.to_dict(), "ground": ground.to_dict()})
+        print_json({"rows": rows, "robot": robot.to_dict(), "ground": ground.to_dict()})
         return EXIT_OK
     print(f"Depth -x_f(T) at r_m = {robot.r_m:g}, s = {robot.s:g} "
           f"(bang-bang with u_max = {robot.u_max:g}), ground {ground.name}")
@@ -462,7 +408,7 @@ def _cmd_scale(a: argparse.Namespace) -> int:
         out["rft"] = {"medium": a.medium, "k_g_rft": ph.units.k_g, "k_g_paper": PAPER_K_G,
                       "ratio": ph.units.k_g / PAPER_K_G}
     if a.json:
-        _print_json(out)
+        print_json(out)
     else:
         rows = [(f"SI {k}", v) for k, v in ph.to_dict().items() if v is not None]
         if "rft" in out:
@@ -471,7 +417,7 @@ def _cmd_scale(a: argparse.Namespace) -> int:
                      ("RFT / measured", out["rft"]["ratio"])]
         rows += [(f"scale {k}", v) for k, v in ph.units.to_dict().items()]
         rows += [(f"dimensionless {k}", v) for k, v in dimensionless.items() if v is not None]
-        _print_table(rows)
+        print_table(rows)
     return EXIT_OK
 
 
@@ -487,12 +433,12 @@ def _cmd_demo(a: argparse.Namespace) -> int:
         stepped_intrusions,
     )
 
-    out = _target(a, "out") if a.out else None
+    out = target(a, "out") if a.out else None
     rows = demo_table()
     stepped = stepped_intrusions()
-    written = _savefig(plot_demo(stepped=stepped), out) if out else None
+    written = savefig(plot_demo(stepped=stepped), out) if out else None
     if a.json:
-        _print_json({"table": rows, "stepped_intrusions": [
+        print_json({"table": rows, "stepped_intrusions": [
             {"k_d": kd, "steps": s.steps, "depth": s.depth}
             for kd, s in zip(STEPPED_KD, stepped, strict=True)], "figure": written})
         return EXIT_OK
@@ -503,7 +449,7 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     for r in rows:
         print(f"{r['v0']:>6.1f} {r['rigid_depth']:>12.6f} {r['rigid_depth_analytic']:>15.6f} "
               f"{r['impedance_depth']:>11.6f} {r['impedance_steps']:>5d} "
-              f"{_fmt(r['impedance_feasible']):>8} {r['impedance_u_peak']:>9.4f} "
+              f"{fmt(r['impedance_feasible']):>8} {r['impedance_u_peak']:>9.4f} "
               f"{r['impedance_cot']:>7.3f}")
     print(f"\nStepped intrusions (paper, Fig. 3a): v0 = {STEPPED_V0:g}, k_p = {STEPPED_KP:g}")
     for kd, s in zip(STEPPED_KD, stepped, strict=True):
@@ -523,7 +469,7 @@ def _cmd_reproduce(a: argparse.Namespace) -> int:
         print(f"Reproducing the paper into {out} ({'quick' if a.quick else 'full'} run)")
     s = reproduce(out, quick=a.quick, progress=not a.json, log=None if a.json else print)
     if a.json:
-        _print_json(s)
+        print_json(s)
         return EXIT_OK
     bb, cmp = s["bang_bang_example"], s["comparison"]
     print(f"\nbang-bang at v0 = {bb['v0']:g}: depth {bb['depth']:.9f}, "
@@ -555,25 +501,6 @@ HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_
             "reproduce": _cmd_reproduce, "hop": _cmd_hop}
 
 
-def _report(exc: BaseException) -> int:
-    """One line on stderr for an error; the exit code it means."""
-    from ocp import SolveError
-
-    if isinstance(exc, SoftlandingError):
-        print(f"softlanding: {exc.label}: {exc}", file=sys.stderr)
-        return exc.exit_code
-    if isinstance(exc, SolveError):
-        print(f"softlanding: solver failed: {exc} (Ipopt status {exc.status})", file=sys.stderr)
-        return EXIT_FAILURE
-    if isinstance(exc, OSError):  # a file the user named cannot be written or read
-        where = f": {exc.filename}" if exc.filename else ""
-        print(f"softlanding: error: {exc.strerror or exc}{where}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    print(f"softlanding: internal error (a bug, please report it): {type(exc).__name__}: "
-          f"{exc}; run again with --debug for the traceback", file=sys.stderr)
-    return EXIT_BUG
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``softlanding`` console script.
 
@@ -589,7 +516,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from softlanding.cli.parser import build_parser
 
-    args = build_parser(HANDLERS, _Parser).parse_args(argv)
+    args = build_parser(HANDLERS, CliParser).parse_args(argv)
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)
@@ -611,7 +538,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         if args.debug:
             raise
-        return _report(exc)
+        return report_error(exc)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,157 @@
+"""Output of the ``softlanding`` command: exit codes, tables, JSON, files, one-line errors.
+
+Exit codes: 0 ok, 1 a well-posed run that failed (rest not proven, solver failure),
+2 bad input, 3 internal error (a bug: ``--debug`` shows the traceback), 130 interrupted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from softlanding.errors import SoftlandingError
+from softlanding.model.robot import Robot
+from softlanding.util.jsonable import json_safe
+
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+
+class CliParser(argparse.ArgumentParser):
+    """argparse, but usage errors are one line (exit 2) and ``-1e-3`` is a number."""
+
+    def __init__(self, *args: Any, **kw: Any) -> None:
+        super().__init__(*args, **kw)
+        # argparse reads "-1e-3" or "-inf" as an option; they are values here
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*([eE][-+]?\d+)?|\.\d+([eE][-+]?\d+)?|inf|infinity|nan)$", re.I)
+
+    def error(self, message: str) -> None:  # type: ignore[override]  # noqa: D102
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
+
+
+def fmt(x: Any) -> str:
+    """A table cell: yes/no for booleans, 10 significant digits for floats.
+
+    Parameters
+    ----------
+    x : object
+        The value.
+    """
+    if isinstance(x, bool):
+        return "yes" if x else "no"
+    if isinstance(x, float):
+        return f"{x:.10g}" if math.isfinite(x) else str(x)
+    return str(x)
+
+
+def print_table(rows: Sequence[tuple[str, object]]) -> None:
+    """Print ``label  value`` rows, labels aligned.
+
+    Parameters
+    ----------
+    rows : sequence of (str, object)
+        The rows.
+    """
+    w = max(len(k) for k, _ in rows)
+    for k, v in rows:
+        print(f"{k:<{w}}  {fmt(v)}")
+
+
+def print_json(obj: Any) -> None:
+    """Print one JSON object (numpy to Python, non-finite floats to null).
+
+    Parameters
+    ----------
+    obj : object
+        A JSON-able structure.
+    """
+    print(json.dumps(json_safe(obj)))
+
+
+def robot_of(a: argparse.Namespace) -> Robot:
+    """The robot of the model arguments (validated by :class:`Robot`).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments with ``rm``, ``s``, ``umax``, ``l0``.
+    """
+    return Robot(r_m=a.rm, s=a.s, u_max=a.umax, l0=a.l0)
+
+
+def ground_of_args(a: argparse.Namespace) -> Any:
+    """The ground model of the ``--ground`` options (validated by the model).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments.
+    """
+    from softlanding.cli.ground import ground_of
+
+    return ground_of(a)
+
+
+def target(a: argparse.Namespace, option: str = "plot") -> Any:
+    """The figure or data file an option names, checked before any work (None if not given).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments (``force`` allows replacing an existing file).
+    option : str
+        The option's attribute name (``"plot"``, ``"out"``).
+    """
+    from softlanding.util.files import output_path
+
+    value = getattr(a, option, None)
+    if value is None:
+        return None
+    suffix = ".png" if option == "plot" or a.command == "demo" else None
+    return output_path(value, option, a.force, suffix)
+
+
+def savefig(fig: Any, path: Any) -> str:
+    """Write the figure atomically; the path actually written.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : pathlib.Path
+        Where (checked by :func:`target`).
+    """
+    from softlanding.util.files import save_figure
+
+    return str(save_figure(fig, path))
+
+
+
+def report_error(exc: BaseException) -> int:
+    """One line on stderr for an error; the exit code it means.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error a command raised.
+    """
+    from ocp import SolveError
+
+    if isinstance(exc, SoftlandingError):
+        print(f"softlanding: {exc.label}: {exc}", file=sys.stderr)
+        return exc.exit_code
+    if isinstance(exc, SolveError):
+        print(f"softlanding: solver failed: {exc} (Ipopt status {exc.status})", file=sys.stderr)
+        return EXIT_FAILURE
+    if isinstance(exc, OSError):  # a file the user named cannot be written or read
+        where = f": {exc.filename}" if exc.filename else ""
+        print(f"softlanding: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"softlanding: internal error (a bug, please report it): {type(exc).__name__}: "
+          f"{exc}; run again with --debug for the traceback", file=sys.stderr)
+    return EXIT_BUG
