@@ -45,13 +45,12 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "simulation": [
             "BatchResult", "EnergyLedger", "LandingResult", "simulate", "simulate_batch",
         ],
-        "optimal.landing": ["BangBangLanding", "solve_landing", "sweep_landing"],
-        "optimal.two_phase": ["FullLanding", "solve_two_phase", "sweep_two_phase"],
-        "optimal.leg_extension": [
-            "LegExtensionLanding", "solve_leg_extension", "sweep_leg_extension",
+        "optimal": [
+            "BangBangLanding", "HopCycle", "LegExtensionLanding", "TwoPhaseLanding",
+            "solve_hop", "solve_landing", "solve_leg_extension", "solve_two_phase",
+            "sweep_hops", "sweep_landing", "sweep_leg_extension", "sweep_two_phase",
         ],
-        "optimal.hopping": ["HopCycle", "solve_hop", "sweep_hops"],
         "studies": ["ImpedanceOptimum", "optimize_impedance"],
-        "report.reproduction": ["reproduce"],
+        "report": ["reproduce"],
     },
 )

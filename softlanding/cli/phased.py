@@ -83,9 +83,9 @@ def cmd_solve_variant(a: argparse.Namespace, robot: Any, plot: Any) -> int:
     cert = res.certify() if a.pmp else None
     written = None
     if plot:
-        from softlanding.plots.phased import plot_full_landing
+        from softlanding.plots.phased import plot_phased_landing
 
-        written = savefig(plot_full_landing(res), plot)
+        written = savefig(plot_phased_landing(res), plot)
     reasons = res.unverified_reasons(cert)
     if a.json:
         d = res.to_dict()

@@ -28,7 +28,7 @@ __getattr__, __dir__, __all__ = _lazy.attach(
             "G_EARTH", "Impact", "PAPER_IMPEDANCE_ROBOT", "PAPER_ROBOT", "Robot", "Units"
         ],
         "scaling": [
-            "PhysicalParams", "Scenario", "paper_rig"
+            "EXPERIMENT_KP", "EXPERIMENT_V0", "PhysicalParams", "Scenario", "paper_rig"
         ],
         "terrain": [
             "MEDIA", "Medium", "PAPER_FOOT_DIAMETER", "PAPER_K_G", "foot_area", "medium",

@@ -23,6 +23,7 @@ from softlanding.errors import ParameterError, check, check_optional
 from softlanding.model.controllers import Controller, Impedance
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot, Units
+from softlanding.model.terrain import paper_rig_units
 
 
 class Scenario(NamedTuple):
@@ -155,7 +156,7 @@ def paper_rig(v0: float = -1.2, **overrides: float) -> PhysicalParams:
     **overrides
         Any :class:`PhysicalParams` field to replace.
     """
-    units = Units(m_t=3.0, k_g=4400.0, g=G_EARTH)
+    units = paper_rig_units()
     fields: dict[str, Any] = PhysicalParams.from_dimensionless(
         PAPER_ROBOT, Impact(0.0), units).to_dict()
     fields["v0"] = v0
@@ -166,4 +167,10 @@ def paper_rig(v0: float = -1.2, **overrides: float) -> PhysicalParams:
     return PhysicalParams(**fields)
 
 
-__all__ = ["G_EARTH", "PhysicalParams", "Scenario", "paper_rig"]
+EXPERIMENT_V0 = (-1.6, -3.2, -4.8)
+"""Impact velocities of the paper's experiments (it gives up to v0 = -4.8, 1.2 m/s; here in
+thirds)."""
+EXPERIMENT_KP = (0.2, 0.5, 0.9)
+"""Stiffness gains of the paper's experiment curves."""
+
+__all__ = ["EXPERIMENT_KP", "EXPERIMENT_V0", "PhysicalParams", "Scenario", "paper_rig"]

@@ -1,3 +1,52 @@
-"""Optimal landings: the stance phases as ``ocp`` problems, the solve pipeline shared by every
-variant, and one module per variant (the paper's single-phase landing, the two-phase landing,
-leg extension, hopping)."""
+"""Optimal landings: one pipeline, one module per variant.
+
+* :mod:`.landing` -- the paper's single-phase landing (:func:`solve_landing`,
+  :func:`sweep_landing`, :class:`BangBangLanding`);
+* :mod:`.two_phase` -- the body's arrest optimised too (:func:`solve_two_phase`,
+  :func:`sweep_two_phase`, :func:`two_step_check`), problem in :mod:`.two_phase_problem`;
+* :mod:`.leg_extension` -- the touchdown leg state optimised (:func:`solve_leg_extension`),
+  problem in :mod:`.leg_extension_problem`;
+* :mod:`.hopping` -- the minimum-energy hop cycle (:func:`solve_hop`), problem in
+  :mod:`.hopping_problem`;
+* :mod:`.pipeline` -- what the phased variants share: :class:`PhasedVariant` (the hooks a
+  variant fills), :func:`solve_phased`, :func:`continuation`;
+* :mod:`.result` -- :class:`PhasedLanding`, the result every phased variant extends;
+* :mod:`.stance_phases` -- the ground modes as phases of an ``ocp.MultiPhaseProblem``;
+* :mod:`.phase_solve`, :mod:`.phase_schedule`, :mod:`.verification` -- transcribe, refine,
+  re-solve; refined arcs to a simulator controller; the checks every result states.
+
+A new variant is one module: its problem, then a :class:`PhasedVariant` subclass and a
+:class:`PhasedLanding` subclass (see ``docs/examples/min_peak_force.py``).
+"""
+
+import lazy_loader as _lazy
+
+__getattr__, __dir__, __all__ = _lazy.attach(
+    __name__,
+    submod_attrs={
+        "landing": [
+            "BangBangLanding", "build_landing_problem", "landing_transcription",
+            "solve_landing", "sweep_landing",
+        ],
+        "two_phase": [
+            "TwoPhase", "TwoPhaseLanding", "TwoStepCheck", "solve_two_phase",
+            "sweep_two_phase", "two_step_check",
+        ],
+        "two_phase_problem": ["build_two_phase_problem", "two_phase_transcription"],
+        "leg_extension": [
+            "LegExtension", "LegExtensionLanding", "solve_leg_extension",
+            "sweep_leg_extension",
+        ],
+        "leg_extension_problem": ["build_leg_extension_problem", "leg_extension_transcription"],
+        "hopping": [
+            "HopCycle", "ThrustImpedance", "best_impedance_hop", "impedance_hop", "rigid_hop",
+            "solve_hop", "sweep_hops",
+        ],
+        "hopping_problem": ["build_hop_problem", "hop_transcription"],
+        "pipeline": [
+            "PhasedVariant", "continuation", "force_limit", "landing_parameters",
+            "solve_phased",
+        ],
+        "result": ["PhasedLanding"],
+    },
+)

@@ -37,8 +37,8 @@ from softlanding.model.controllers import ForceSchedule, Rigid
 from softlanding.model.dynamics import mechanical_energy
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.hopping_problem import START_PARAMETERS, hop_transcription
-from softlanding.optimal.landing import _ocp_params, _validate
 from softlanding.optimal.phase_solve import transcribed_solve
+from softlanding.optimal.pipeline import force_limit, landing_parameters
 from softlanding.simulation.actuator_work import Work, result_work, state_at
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
@@ -167,7 +167,7 @@ class HopCycle:
 # ---------------------------------------------------------------- helpers
 def _params(robot: Robot, impact: Impact, eta: float, start: np.ndarray | None = None
             ) -> dict[str, float]:
-    p = {**_ocp_params(robot, impact), "l0": robot.s / 2, "eta": eta}
+    p = {**landing_parameters(robot, impact), "l0": robot.s / 2, "eta": eta}
     if start is not None:
         p.update(zip(START_PARAMETERS, map(float, start), strict=True))
     return p
@@ -175,7 +175,7 @@ def _params(robot: Robot, impact: Impact, eta: float, start: np.ndarray | None =
 
 def _check(robot: Robot, impact: Impact | float, eta: float) -> tuple[Robot, Impact]:
     impact = Impact.of(impact)
-    _validate(robot)
+    force_limit(robot)
     if not impact.v0 < 0:
         raise ParameterError("v0", "a hop needs a flight: v0 < 0")
     if not 0.0 <= eta < 1.0:

@@ -23,7 +23,6 @@ the body's weight, is replayed in the exact hybrid simulator as a check.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import warnings
 from dataclasses import dataclass, field
@@ -41,10 +40,10 @@ from softlanding.model.controllers import FeedbackSchedule, ForceSchedule, Rigid
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal.pipeline import continuation, force_limit, landing_parameters
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
-from softlanding.util.progress import progress as show_progress
 
 T_MAX = 30.0
 MAX_NODES = 5000
@@ -304,22 +303,6 @@ def _law_row(refined: RefinedSwitching, i: int) -> list[float]:
         float(np.asarray(law["offset"], float).reshape(-1)[0])]
 
 
-def _validate(robot: Robot) -> float:
-    """The force limit of a landing problem (raises when none can work)."""
-    if robot.u_max is None:
-        raise ParameterError("u_max", "the optimal control problem needs a force limit")
-    if robot.u_max <= robot.body_mass:
-        raise InfeasibleLandingError(
-            f"u_max = {robot.u_max:g} does not exceed the body weight r_m/(1+r_m) = "
-            f"{robot.body_mass:.4g}: the arrest force u_b <= u_max can never hold")
-    return robot.u_max
-
-
-def _ocp_params(robot: Robot, impact: Impact) -> dict[str, float]:
-    return {"r_m": robot.r_m, "s": robot.s, "v0": impact.v0, "u_max": _validate(robot),
-            "l0": robot.rest_length}
-
-
 def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
                 ground: Ground = LINEAR_GROUND) -> np.ndarray:
     """Initial guess: the rigid-leg landing up to the foot's first stop (nearly feasible).
@@ -337,7 +320,7 @@ def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
     traj = res.trajectory(t_end=T, n=N + 1)
     t = np.linspace(0, T, N + 1)
     X = np.column_stack([np.interp(t, traj.t, traj.x[:, i]) for i in range(4)])
-    u_max = _validate(robot)
+    u_max = force_limit(robot)
     U = np.clip(np.interp(t[:-1], traj.t, traj.u[:, 0]), -u_max, u_max)[:, None]
     return tr.initial_guess(T=T, x=X, u=U)
 
@@ -345,7 +328,7 @@ def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
 def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: Ground,
                         nodes: int) -> InfeasibleLandingError:
     """Name the condition(s) whose removal makes the request feasible."""
-    params = _ocp_params(robot, impact)
+    params = landing_parameters(robot, impact)
     culprits = []
     for name in DIAGNOSABLE:
         tr = landing_transcription(nodes, omit=(name,), ground=ground)
@@ -373,7 +356,7 @@ def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Gro
     ``verified`` flag is False); the refined solution and the exact replay are checked
     instead.
     """
-    params = _ocp_params(robot, impact)
+    params = landing_parameters(robot, impact)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PathViolationWarning)
         try:
@@ -438,7 +421,7 @@ def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, grou
     problem = build_landing_problem_of(nodes, ground)
     try:
         r = refine_structure(problem, prev.refined.modes, prev.refined.durations,
-                             impact.initial_state(robot), _ocp_params(robot, impact))
+                             impact.initial_state(robot), landing_parameters(robot, impact))
     except SolveError:
         return None
     # the structure must still be the optimum's: an arc that collapsed sends the solve back
@@ -513,7 +496,7 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         Ipopt failed otherwise (status attached).
     """
     impact = Impact.of(impact)
-    _validate(robot)
+    force_limit(robot)
     nodes = check_count("nodes", nodes, 2, MAX_NODES)
     extra_arcs = check_count("extra_arcs", extra_arcs, 0, 20)
     out = None
@@ -566,21 +549,10 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
         Replay each schedule in the exact simulator.
     """
     impacts = [Impact.of(v) for v in v0_values]  # bad input fails before any work
-    _validate(robot)
-    it = show_progress(impacts, progress, "bang-bang sweep", "solve")
-    out: list[BangBangLanding] = []
-    prev: BangBangLanding | None = None
-    last_transcribed: Solution | None = None
-    for imp in it:
-        res = solve_landing(imp, robot, ground, nodes=nodes, refine=refine, warm_start=prev,
-                            replay=replay)
-        out.append(res)
-        last_transcribed = res.transcribed or last_transcribed
-        prev = res
-        if prev.transcribed is None and last_transcribed is not None:
-            # a structure re-solve has no transcription: keep the last one as warm start
-            prev = dataclasses.replace(prev, transcribed=last_transcribed)
-    return out
+    force_limit(robot)
+    return continuation(impacts, lambda imp, prev: solve_landing(
+        imp, robot, ground, nodes=nodes, refine=refine, warm_start=prev, replay=replay),
+        progress, "bang-bang sweep")
 
 
 __all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",

@@ -14,9 +14,10 @@ continuation.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -26,7 +27,6 @@ from softlanding.errors import ParameterError
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.ground import LINEAR_GROUND
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.landing import _ocp_params, _validate
 from softlanding.optimal.leg_extension_problem import (
     MODES,
     leg_extension_transcription,
@@ -35,50 +35,43 @@ from softlanding.optimal.leg_extension_problem import (
 from softlanding.optimal.phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
 from softlanding.optimal.phase_solve import (
     phase_guess,
-    refined_phases,
     second_start,
-    structure_resolve,
-    transcribed_solve,
 )
-from softlanding.optimal.two_phase import FullLanding, solve_two_phase
-from softlanding.optimal.verification import certificate_reasons, refined_result_reasons
-from softlanding.simulation.simulator import LandingResult, simulate
-from softlanding.util.jsonable import json_safe
-from softlanding.util.progress import progress as show_progress
+from softlanding.optimal.pipeline import (
+    PhasedVariant,
+    continuation,
+    force_limit,
+    landing_parameters,
+    solve_phased,
+)
+from softlanding.optimal.result import PhasedLanding
+from softlanding.optimal.two_phase import TwoPhaseLanding, solve_two_phase
+from softlanding.simulation.simulator import simulate
 
 
-@dataclass
-class LegExtensionLanding:
+@dataclass(kw_only=True)
+class LegExtensionLanding(PhasedLanding):
     """A landing whose touchdown leg state was optimised.
+
+    The fields shared by every phased landing are :class:`~softlanding.optimal.result.
+    PhasedLanding`'s (``impact.v0``: the centre of mass's impact velocity in
+    ``mode="impact"``, the unactuated drop's in ``mode="drop"``; ``paper_depth``: the depth
+    with the paper's initial condition, leg ``s/2`` and no relative velocity, i.e. the
+    two-phase optimum, equal to the paper's; ``replay``: the landing replayed in the exact
+    simulator from the touchdown state).
 
     Attributes
     ----------
-    robot, impact : Robot, Impact
-        The problem (``impact.v0``: the centre of mass's impact velocity in
-        ``mode="impact"``, the unactuated drop's in ``mode="drop"``).
     mode : str
         ``"impact"`` or ``"drop"``.
     bounds : dict
         ``l_min, l_max, w_min, w_max`` (``mode="impact"``).
-    depth, depth_transcribed : float
-        Final depth (refined; transcribed).
-    paper_depth : float
-        The depth with the paper's initial condition (leg ``s/2``, no relative velocity):
-        the two-phase optimum, equal to the paper's.
     extension, rate : float
         Leg length ``x_b - x_f`` and relative velocity ``v_b - v_f`` at touchdown.
     touchdown : ndarray (4,)
         State at touchdown.
     com_velocity : float
         Centre of mass's velocity at touchdown.
-    arcs, switch_times, phase_times
-        Per phase, as :class:`softlanding.optimal.two_phase.FullLanding`.
-    status, iterations, solve_time_s, refined, transcribed, notes, path
-        As :class:`softlanding.optimal.two_phase.FullLanding`.
-    replay : LandingResult or None
-        The landing replayed in the exact simulator from the touchdown state.
-    replay_kind : str
-        The simulator controller (or why there is no replay).
     flight_check : float
         ``mode="drop"``: largest difference between the touchdown state of the solution
         and the release state propagated exactly through its flight arcs (NaN otherwise).
@@ -90,89 +83,39 @@ class LegExtensionLanding:
         non-unique flight, the landing's from the reached touchdown state).
     """
 
-    robot: Robot
-    impact: Impact
+    VARIANT: ClassVar[str] = "leg-extension"
+    WORSE_THAN_REFERENCE: ClassVar[str] = (
+        "with the paper's initial condition by {:.2e}: a local optimum (the paper's "
+        "touchdown state is admissible)")
+
     mode: str
     bounds: dict[str, float]
-    depth: float
-    depth_transcribed: float
-    paper_depth: float
     extension: float
     rate: float
     touchdown: np.ndarray
     com_velocity: float
-    arcs: list[list[str]]
-    switch_times: list[list[float]]
-    phase_times: list[float]
-    status: str
-    iterations: int
-    solve_time_s: float
-    refined: RefinedPhases | None
-    transcribed: Solution | None
-    replay: LandingResult | None = None
-    replay_kind: str = ""
     flight_check: float = math.nan
     flight_arcs: list[ArcLaw] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)
-    path: str = "transcription"
     refined_of: Solution | None = None
 
-    def certify(self) -> Any:
-        """The PMP certificate of the refined phases (None without a refinement)."""
-        from ocp.phase_pmp import certify_phases
-
-        if self.refined is None:
-            return None
-        return certify_phases(self.refined_of, self.refined)
-
     @property
-    def gain(self) -> float:
-        """``paper_depth - depth``: the depth gained by the extension."""
-        return self.paper_depth - self.depth
+    def certified_transcription(self) -> Solution | None:
+        """The transcription ``refined`` was refined from (``refined_of``)."""
+        return self.refined_of
 
-    @property
-    def replay_difference(self) -> float:
-        """``|replay depth - depth|`` (NaN without a replay)."""
-        return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
-
-    def unverified_reasons(self, certificate: Any = None) -> list[str]:
-        """Why this result cannot be taken as proven (empty: every check passed).
-
-        Parameters
-        ----------
-        certificate : ocp.phase_pmp.PhasesCertificate, optional
-            The certificate of this solution.
-        """
-        out = refined_result_reasons(
-            self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
-            self.gain, "with the paper's initial condition by {:.2e}: a local optimum (the "
-            "paper's touchdown state is admissible)")
+    def own_reasons(self) -> list[str]:
+        """A drop's flight arcs must reach the touchdown state exactly."""
         if self.mode == "drop" and not self.flight_check <= 1e-9 * max(1.0, abs(
                 self.impact.v0) ** 2):
-            out.append(f"the flight arcs propagated exactly miss the touchdown state by "
-                       f"{self.flight_check:.2e}")
-        return out + certificate_reasons(certificate)
+            return [f"the flight arcs propagated exactly miss the touchdown state by "
+                    f"{self.flight_check:.2e}"]
+        return []
 
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able dict."""
-        d: dict[str, Any] = {
-            "variant": "leg-extension", "mode": self.mode, "bounds": self.bounds,
-            "depth": self.depth, "depth_transcribed": self.depth_transcribed,
-            "paper_depth": self.paper_depth, "gain": self.gain, "extension": self.extension,
-            "rate": self.rate, "touchdown": self.touchdown.tolist(),
-            "com_velocity": self.com_velocity, "arcs": self.arcs,
-            "switch_times": self.switch_times, "phase_times": self.phase_times,
-            "status": self.status, "iterations": self.iterations,
-            "solve_time_s": self.solve_time_s, "path": self.path, "notes": self.notes,
-            "flight_check": self.flight_check, "robot": self.robot.to_dict(),
-            "impact": self.impact.to_dict()}
-        if self.refined is not None:
-            d["refined"] = self.refined.to_dict()
-        if self.replay is not None:
-            d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
-                           "controller": self.replay_kind, "feasible": self.replay.feasible,
-                           "status": self.replay.status}
-        return json_safe(d)
+    def own_dict(self) -> dict[str, Any]:
+        """The leg-extension fields of the JSON."""
+        return {"mode": self.mode, "bounds": self.bounds, "extension": self.extension,
+                "rate": self.rate, "touchdown": self.touchdown.tolist(),
+                "com_velocity": self.com_velocity, "flight_check": self.flight_check}
 
 
 def _bounds(robot: Robot, extension: Any, rate: Any) -> dict[str, float]:
@@ -193,7 +136,7 @@ def _bounds(robot: Robot, extension: Any, rate: Any) -> dict[str, float]:
     return {"l_min": lmin, "l_max": lmax, "w_min": wmin, "w_max": wmax}
 
 
-def _guess(two: FullLanding, mode: str, robot: Robot, impact: Impact) -> Trajectory:
+def _guess(two: TwoPhaseLanding, mode: str, robot: Robot, impact: Impact) -> Trajectory:
     """The paper-condition two-phase optimum (exact arcs), after a free fall in ``drop``."""
     assert two.refined is not None
     tr = two.refined.trajectory(400)
@@ -278,7 +221,7 @@ def _transcribed_flight(sol: Solution) -> list[ArcLaw]:
 
 
 def _fixed_flight(out: LegExtensionLanding, robot: Robot, impact: Impact,
-                  two: FullLanding) -> LegExtensionLanding:
+                  two: TwoPhaseLanding) -> LegExtensionLanding:
     """The landing refined from the touchdown state that the transcription's flight force
     reaches exactly (used when the flight's force is not unique, so not refinable)."""
     assert out.transcribed is not None
@@ -308,10 +251,125 @@ def _fixed_flight(out: LegExtensionLanding, robot: Robot, impact: Impact,
            "flight_arcs": out.flight_arcs})
 
 
+class LegExtension(PhasedVariant):
+    """The leg extension's hooks in the pipeline (:func:`~softlanding.optimal.pipeline.
+    solve_phased`).
+
+    Parameters
+    ----------
+    robot, impact
+        The problem.
+    mode : {"impact", "drop"}
+        See :func:`solve_leg_extension`.
+    bounds : dict
+        ``l_min, l_max, w_min, w_max`` (``mode="impact"``).
+    two : TwoPhaseLanding
+        The two-phase optimum with the paper's initial condition (guess and reference).
+    """
+
+    def __init__(self, robot: Robot, impact: Impact, mode: str, bounds: dict[str, float],
+                 two: TwoPhaseLanding) -> None:
+        super().__init__(robot, impact)
+        self.mode, self.bounds, self.two = mode, bounds, two
+
+    def parameters(self) -> dict[str, float]:
+        """The landing's parameters, the touchdown bounds, the paper's leg in ``impact``."""
+        params = {**landing_parameters(self.robot, self.impact), **self.bounds}
+        if self.mode == "impact":
+            params["l0"] = self.robot.replace(l0=None).rest_length
+        return params
+
+    def transcription(self) -> Any:
+        """The leg-extension transcription of this mode."""
+        return leg_extension_transcription(self.mode)
+
+    def guess(self) -> Any:
+        """The two-phase optimum (after a free fall in ``drop``), see :func:`_guess`."""
+        return _guess(self.two, self.mode, self.robot, self.impact)
+
+    def accepts(self, neighbour: Any) -> bool:
+        """Only a neighbour of the same mode.
+
+        Parameters
+        ----------
+        neighbour : LegExtensionLanding
+            The warm start.
+        """
+        return getattr(neighbour, "mode", None) == self.mode
+
+    def bound(self) -> float | None:
+        """The two-phase depth (the paper's touchdown state is admissible)."""
+        return self.two.depth
+
+    def retry(self, sol: Solution, ref: RefinedPhases | None, guess: Any,
+              notes: list[str]) -> tuple[Solution, RefinedPhases | None]:
+        """A second start from the inner transcription when the refinement failed.
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription.
+        ref : RefinedPhases or None
+            Its refinement.
+        guess : object
+            The guess ``sol`` started from.
+        notes : list of str
+            Receives what happened.
+        """
+        if ref is not None:
+            return sol, ref
+        return second_start(leg_extension_transcription_inner(self.mode),
+                            leg_extension_transcription(self.mode), self.parameters(), guess,
+                            sol, notes)
+
+    def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
+                 path: str) -> LegExtensionLanding:
+        """The result (see :func:`_assemble`).
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription.
+        ref : RefinedPhases or None
+            The refined phases.
+        notes : list of str
+            What the solve noticed.
+        path : str
+            How it was solved.
+        """
+        out = _assemble(self.robot, self.impact, self.mode, self.bounds, sol, ref,
+                        self.two.depth, notes, path)
+        if self.mode == "drop" and ref is not None:
+            out.flight_arcs = [a for a in arc_laws(ref) if a.phase == 0]
+        return out
+
+    def finish(self, result: Any) -> Any:
+        """A drop whose flight force is not unique: fix the flight, refine the landing.
+
+        Parameters
+        ----------
+        result : LegExtensionLanding
+            The assembled result.
+        """
+        if self.mode == "drop" and result.refined is None:
+            return _fixed_flight(result, self.robot, self.impact, self.two)
+        return result
+
+    def replay(self, result: Any) -> None:
+        """See :func:`_replay`.
+
+        Parameters
+        ----------
+        result : LegExtensionLanding
+            The result.
+        """
+        _replay(result)
+
+
 def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
                         mode: str = "impact", extension: Any = None, rate: Any = None,
                         warm_start: LegExtensionLanding | None = None, replay: bool = True,
-                        two_phase: FullLanding | None = None) -> LegExtensionLanding:
+                        two_phase: TwoPhaseLanding | None = None) -> LegExtensionLanding:
     """The minimum-depth landing with the leg's state at touchdown optimised.
 
     Parameters
@@ -332,7 +390,7 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         A neighbouring solution (its structure is re-solved directly first).
     replay : bool
         Replay in the exact simulator.
-    two_phase : FullLanding, optional
+    two_phase : TwoPhaseLanding, optional
         The two-phase optimum with the paper's initial condition (solved if not given).
 
     Raises
@@ -343,42 +401,16 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         No landing satisfies the constraints.
     """
     impact = Impact.of(impact)
-    _validate(robot)
+    force_limit(robot)
     if mode not in MODES:
         raise ParameterError("mode", f"must be one of {MODES}, got {mode!r}")
     if mode == "drop" and impact.v0 >= 0:
         raise ParameterError("v0", "a drop needs a height: v0 < 0")
     bounds = _bounds(robot, extension, rate) if mode == "impact" else {}
-    base = robot.replace(l0=None)
-    two = two_phase if two_phase is not None else solve_two_phase(impact, base)
-    params = {**_ocp_params(robot, impact), **bounds}
-    if mode == "impact":
-        params["l0"] = base.rest_length
-    notes: list[str] = []
-    out = None
-    if warm_start is not None and warm_start.refined is not None and warm_start.mode == mode:
-        r = structure_resolve(warm_start.refined, params, bound=two.depth)
-        if r is not None:
-            out = _assemble(robot, impact, mode, bounds, None, r, two.depth, notes,
-                            "structure")
-    if out is None:
-        tr = leg_extension_transcription(mode)
-        ws = warm_start.transcribed if warm_start is not None else None
-        guess = _guess(two, mode, robot, impact)
-        sol = transcribed_solve(tr, params, guess, ws, notes)
-        ref = refined_phases(sol, notes)
-        if ref is None:
-            sol, ref = second_start(leg_extension_transcription_inner(mode),
-                                    leg_extension_transcription(mode), params, guess, sol,
-                                    notes)
-        out = _assemble(robot, impact, mode, bounds, sol, ref, two.depth, notes,
-                        "transcription")
-        if mode == "drop" and ref is None:
-            out = _fixed_flight(out, robot, impact, two)
-    if mode == "drop" and not out.flight_arcs and out.refined is not None:
-        out.flight_arcs = [a for a in arc_laws(out.refined) if a.phase == 0]
-    if replay:
-        _replay(out)
+    two = two_phase if two_phase is not None else solve_two_phase(impact, robot.replace(l0=None))
+    out = solve_phased(LegExtension(robot, impact, mode, bounds, two), warm_start,
+                       replay=replay)
+    assert isinstance(out, LegExtensionLanding)
     return out
 
 
@@ -401,21 +433,19 @@ def sweep_leg_extension(v0_values, robot: Robot = PAPER_ROBOT, *, mode: str = "i
         Progress bar.
     """
     impacts = [Impact.of(v) for v in v0_values]
-    out: list[LegExtensionLanding] = []
-    prev: LegExtensionLanding | None = None
-    prev_two: FullLanding | None = None
-    last_sol: Solution | None = None
-    for imp in show_progress(impacts, progress, f"leg extension ({mode})", "solve"):
-        two = solve_two_phase(imp, robot.replace(l0=None), warm_start=prev_two, replay=False)
-        res = solve_leg_extension(imp, robot, mode=mode, extension=extension, rate=rate,
-                                  warm_start=prev, two_phase=two)
-        out.append(res)
-        last_sol = res.transcribed or last_sol
-        prev = res if res.transcribed is not None else LegExtensionLanding(
-            **{**res.__dict__, "transcribed": last_sol})
-        prev_two = two if two.transcribed is not None or prev_two is None else FullLanding(
-            **{**two.__dict__, "transcribed": prev_two.transcribed})
-    return out
+    last_two: list[TwoPhaseLanding] = []  # the two-phase sweep alongside, by continuation
+
+    def one(imp: Impact, prev: LegExtensionLanding | None) -> LegExtensionLanding:
+        two = solve_two_phase(imp, robot.replace(l0=None),
+                              warm_start=last_two[-1] if last_two else None, replay=False)
+        keep = two
+        if two.transcribed is None and last_two:
+            keep = dataclasses.replace(two, transcribed=last_two[-1].transcribed)
+        last_two[:] = [keep]
+        return solve_leg_extension(imp, robot, mode=mode, extension=extension, rate=rate,
+                                   warm_start=prev, two_phase=two)
+
+    return continuation(impacts, one, progress, f"leg extension ({mode})")
 
 
-__all__ = ["LegExtensionLanding", "solve_leg_extension", "sweep_leg_extension"]
+__all__ = ["LegExtension", "LegExtensionLanding", "solve_leg_extension", "sweep_leg_extension"]

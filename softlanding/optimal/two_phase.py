@@ -21,150 +21,78 @@ active, so the two-phase depth equals the paper's (to rounding).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 
-from ocp import InfeasibleError, Solution, SolveError, Trajectory
+from ocp import Solution, SolveError, Trajectory
 from ocp.phase_refinement import RefinedPhases
 from softlanding.errors import InfeasibleLandingError
 from softlanding.model.controllers import Rigid
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.landing import BangBangLanding, _ocp_params, _validate, solve_landing
+from softlanding.optimal.landing import BangBangLanding, solve_landing
 from softlanding.optimal.phase_schedule import replay_controller
 from softlanding.optimal.phase_solve import (
     phase_guess,
-    refined_phases,
-    structure_resolve,
     transcribed_solve,
 )
+from softlanding.optimal.pipeline import (
+    PhasedVariant,
+    continuation,
+    force_limit,
+    landing_parameters,
+    solve_phased,
+)
+from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase_problem import OMITTABLE, two_phase_transcription
-from softlanding.optimal.verification import certificate_reasons, refined_result_reasons
-from softlanding.simulation.simulator import LandingResult, simulate
+from softlanding.simulation.simulator import simulate
 from softlanding.util.jsonable import json_safe
-from softlanding.util.progress import progress as show_progress
 
 
-@dataclass
-class FullLanding:
-    """A solved full landing (yielding, then static until the body stops).
+@dataclass(kw_only=True)
+class TwoPhaseLanding(PhasedLanding):
+    """A solved two-phase landing (yielding, then static until the body stops).
+
+    The fields shared by every phased landing are :class:`~softlanding.optimal.result.
+    PhasedLanding`'s (``paper_depth``: the paper's single-phase optimum, constant-force
+    arrest, for the same landing). The replay's ``steps`` may exceed ``steps``: the optimal
+    arrest force equals the crater's capacity, so rounding decides whether the resting foot
+    is static or creeps (by the replay difference, ~1e-14); the depth is what is checked.
 
     Attributes
     ----------
-    robot, impact, ground
-        The problem solved.
+    ground : Ground
+        The ground model.
     steps : int
         Yielding steps allowed (1: two phases; 2: four).
-    depth : float
-        Final depth ``-x_f``, refined unless refinement was off or failed.
-    depth_transcribed : float
-        From the transcription (NaN on the structure path).
-    paper_depth : float
-        The paper's single-phase optimum (constant-force arrest) for the same landing.
     T1, T : float
         When the foot stops and when the body stops.
-    arcs : list of list of str
-        Arc kinds per phase.
-    switch_times : list of list of float
-        Switch times per phase (absolute).
-    phase_times : list of float
-        Start of every phase, then the end of the last.
     arrest_force : float
         Mean actuator force of the last (arrest) phase.
     arrest_force_range : (float, float)
         Its smallest and largest value (equal: a constant force).
-    status, iterations, solve_time_s
-        Of the solve that produced the result.
-    refined : RefinedPhases or None
-    transcribed : ocp.Solution or None
-    replay : LandingResult or None
-        The whole schedule replayed in the exact simulator. Its ``steps`` may exceed
-        ``steps``: the optimal arrest force equals the crater's capacity, so rounding
-        decides whether the resting foot is static or creeps (by the replay difference,
-        ~1e-14); the depth is what is checked.
-    replay_kind : str
-        The simulator controller used.
-    notes : list of str
-    path : str
-        ``"transcription"`` or ``"structure"`` (the neighbour's arcs re-solved directly).
     """
 
-    robot: Robot
-    impact: Impact
+    VARIANT: ClassVar[str] = "two-phase"
+    WORSE_THAN_REFERENCE: ClassVar[str] = (
+        "the paper's single-phase optimum by {:.2e}: a local optimum (the paper's constant "
+        "arrest is admissible)")
+
     ground: Ground
     steps: int
-    depth: float
-    depth_transcribed: float
-    paper_depth: float
     T1: float
     T: float
-    arcs: list[list[str]]
-    switch_times: list[list[float]]
-    phase_times: list[float]
     arrest_force: float
     arrest_force_range: tuple[float, float]
-    status: str
-    iterations: int
-    solve_time_s: float
-    refined: RefinedPhases | None
-    transcribed: Solution | None
-    replay: LandingResult | None = None
-    replay_kind: str = ""
-    notes: list[str] = field(default_factory=list)
-    path: str = "transcription"
 
-    def certify(self) -> Any:
-        """The PMP certificate of the refined phases (None without a refinement)."""
-        from ocp.phase_pmp import certify_phases
-
-        if self.refined is None:
-            return None
-        return certify_phases(self.transcribed, self.refined)
-
-    @property
-    def depth_gain(self) -> float:
-        """``paper_depth - depth``: what optimising the arrest gains (>= 0 up to rounding)."""
-        return self.paper_depth - self.depth
-
-    @property
-    def replay_difference(self) -> float:
-        """``|replay depth - depth|`` (NaN without a replay)."""
-        return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
-
-    def unverified_reasons(self, certificate: Any = None) -> list[str]:
-        """Why this result cannot be taken as proven (empty: every check passed).
-
-        Parameters
-        ----------
-        certificate : ocp.phase_pmp.PhasesCertificate, optional
-            The certificate of this solution.
-        """
-        return refined_result_reasons(
-            self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
-            self.depth_gain, "the paper's single-phase optimum by {:.2e}: a local optimum "
-            "(the paper's constant arrest is admissible)") + certificate_reasons(certificate)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-able dict: the figures, the refined phases and the replay."""
-        d: dict[str, Any] = {
-            "variant": "two-phase", "steps": self.steps, "depth": self.depth,
-            "depth_transcribed": self.depth_transcribed, "paper_depth": self.paper_depth,
-            "depth_gain": self.depth_gain, "T1": self.T1, "T": self.T, "arcs": self.arcs,
-            "switch_times": self.switch_times, "phase_times": self.phase_times,
-            "arrest_force": self.arrest_force, "arrest_force_range": list(self.arrest_force_range),
-            "status": self.status, "iterations": self.iterations,
-            "solve_time_s": self.solve_time_s, "path": self.path, "notes": self.notes,
-            "robot": self.robot.to_dict(), "impact": self.impact.to_dict(),
-            "ground": self.ground.to_dict()}
-        if self.refined is not None:
-            d["refined"] = self.refined.to_dict()
-        if self.replay is not None:
-            d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
-                           "controller": self.replay_kind, "steps": self.replay.steps,
-                           "feasible": self.replay.feasible, "status": self.replay.status}
-        return json_safe(d)
+    def own_dict(self) -> dict[str, Any]:
+        """The two-phase fields of the JSON."""
+        return {"steps": self.steps, "T1": self.T1, "T": self.T,
+                "arrest_force": self.arrest_force,
+                "arrest_force_range": list(self.arrest_force_range),
+                "ground": self.ground.to_dict()}
 
 
 # ------------------------------------------------------------------- guesses
@@ -198,7 +126,7 @@ def _guess(robot: Robot, impact: Impact, ground: Ground, paper: BangBangLanding 
 def _explain(err: SolveError, robot: Robot, impact: Impact, ground: Ground, steps: int,
              guess: Any) -> InfeasibleLandingError:
     """Name the condition(s) whose removal makes the request feasible."""
-    params = _ocp_params(robot, impact)
+    params = landing_parameters(robot, impact)
     culprits = []
     for name in OMITTABLE:
         try:
@@ -214,63 +142,132 @@ def _explain(err: SolveError, robot: Robot, impact: Impact, ground: Ground, step
         f"u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
 
 
-# -------------------------------------------------------------------- solving
-def _assemble(robot: Robot, impact: Impact, ground: Ground, steps: int, sol: Solution | None,
-              ref: RefinedPhases | None, paper_depth: float, notes: list[str],
-              path: str) -> FullLanding:
-    if ref is not None:
-        xT = ref.xT
-        times = [float(t) for t in ref.t0] + [ref.T]
-        arcs = [[str(k) for k in r.kinds] for r in ref.phases]
-        sw = ref.switch_times
-        last = ref.phases[-1]
-        u = last.trajectory(200).u[:, 0]
-    else:
-        assert sol is not None
-        xT = sol.phases[-1].x[-1]
-        times = [float(p.t0) for p in sol.phases] + [float(sol.phases[-1].T)]
-        arcs, sw = [], []
-        u = sol.phases[-1].u[:, 0]
-    src = sol if sol is not None else ref
-    return FullLanding(
-        robot=robot, impact=impact, ground=ground, steps=steps, depth=float(-xT[2]),
-        depth_transcribed=float(-sol.phases[-1].x[-1, 2]) if sol is not None else math.nan,
-        paper_depth=paper_depth, T1=times[1], T=times[-1], arcs=arcs, switch_times=sw,
-        phase_times=times, arrest_force=float(np.mean(u)),
-        arrest_force_range=(float(np.min(u)), float(np.max(u))),
-        status=src.status, iterations=int(src.iterations),  # type: ignore[union-attr]
-        solve_time_s=float(src.solve_time), refined=ref, transcribed=sol,  # type: ignore
-        notes=notes, path=path)
+class TwoPhase(PhasedVariant):
+    """The two-phase landing's hooks in the pipeline (:func:`~softlanding.optimal.pipeline.
+    solve_phased`).
 
+    Parameters
+    ----------
+    robot, impact, ground
+        The problem.
+    steps : {1, 2}
+        Yielding steps allowed.
+    paper : BangBangLanding or None
+        The paper's optimum for the same landing (the guess and the reference).
+    """
 
-def _replay(out: FullLanding) -> None:
-    """Replay the refined (or transcribed) schedule in the exact simulator, in place."""
-    tail = out.robot.body_mass
-    try:
-        if out.refined is not None:
-            ctrl, kind = replay_controller(out.refined, tail)
+    def __init__(self, robot: Robot, impact: Impact, ground: Ground, steps: int,
+                 paper: BangBangLanding | None) -> None:
+        super().__init__(robot, impact)
+        self.ground, self.steps, self.paper = ground, steps, paper
+        self.paper_depth = paper.depth if paper is not None else math.nan
+
+    def transcription(self) -> Any:
+        """The two-phase (or four-phase) transcription on this ground."""
+        return two_phase_transcription(self.steps, ground=self.ground)
+
+    def guess(self) -> Any:
+        """The paper's optimum cut into the phases (see :func:`_guess`)."""
+        return _guess(self.robot, self.impact, self.ground, self.paper, self.steps)
+
+    def accepts(self, neighbour: Any) -> bool:
+        """Only a neighbour with as many steps.
+
+        Parameters
+        ----------
+        neighbour : TwoPhaseLanding
+            The warm start.
+        """
+        return getattr(neighbour, "steps", None) == self.steps
+
+    def bound(self) -> float | None:
+        """The paper's depth (admissible here)."""
+        return self.paper_depth if math.isfinite(self.paper_depth) else None
+
+    def explain(self, err: SolveError, guess: Any) -> Exception:
+        """Name the conditions that make the request infeasible (see :func:`_explain`).
+
+        Parameters
+        ----------
+        err : ocp.SolveError
+            Ipopt's verdict.
+        guess : object
+            The guess it started from.
+        """
+        return _explain(err, self.robot, self.impact, self.ground, self.steps, guess)
+
+    def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
+                 path: str) -> TwoPhaseLanding:
+        """The result from the transcription and/or the refined phases.
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription.
+        ref : RefinedPhases or None
+            The refined phases.
+        notes : list of str
+            What the solve noticed.
+        path : str
+            How it was solved.
+        """
+        if ref is not None:
+            xT = ref.xT
+            times = [float(t) for t in ref.t0] + [ref.T]
+            arcs = [[str(k) for k in r.kinds] for r in ref.phases]
+            sw = ref.switch_times
+            u = ref.phases[-1].trajectory(200).u[:, 0]
         else:
-            from softlanding.model.controllers import ForceSchedule
+            assert sol is not None
+            xT = sol.phases[-1].x[-1]
+            times = [float(p.t0) for p in sol.phases] + [float(sol.phases[-1].T)]
+            arcs, sw = [], []
+            u = sol.phases[-1].u[:, 0]
+        src: Any = sol if sol is not None else ref
+        return TwoPhaseLanding(
+            robot=self.robot, impact=self.impact, ground=self.ground, steps=self.steps,
+            depth=float(-xT[2]),
+            depth_transcribed=float(-sol.phases[-1].x[-1, 2]) if sol is not None else math.nan,
+            paper_depth=self.paper_depth, T1=times[1], T=times[-1], arcs=arcs,
+            switch_times=sw, phase_times=times, arrest_force=float(np.mean(u)),
+            arrest_force_range=(float(np.min(u)), float(np.max(u))), status=src.status,
+            iterations=int(src.iterations), solve_time_s=float(src.solve_time), refined=ref,
+            transcribed=sol, notes=notes, path=path)
 
-            assert out.transcribed is not None
-            durs, vals = [], []
-            for ph in out.transcribed.phases:
-                h = (ph.T - ph.t0) / ph.N
-                durs += [h] * ph.N if h > 0 else []
-                vals += list(ph.u[:, 0]) if h > 0 else []
-            ctrl = ForceSchedule.from_arcs(durs, vals + [tail])
-            kind = "ForceSchedule (the transcription's piecewise-constant force)"
-    except NotImplementedError as err:
-        out.replay_kind = str(err)
-        return
-    out.replay_kind = kind
-    out.replay = simulate(out.robot, out.impact, ctrl, out.ground)
+    def replay(self, result: Any) -> None:
+        """Replay the refined (or transcribed) schedule in the exact simulator, in place.
+
+        Parameters
+        ----------
+        result : TwoPhaseLanding
+            The result.
+        """
+        tail = result.robot.body_mass
+        try:
+            if result.refined is not None:
+                ctrl, kind = replay_controller(result.refined, tail)
+            else:
+                from softlanding.model.controllers import ForceSchedule
+
+                assert result.transcribed is not None
+                durs, vals = [], []
+                for ph in result.transcribed.phases:
+                    h = (ph.T - ph.t0) / ph.N
+                    durs += [h] * ph.N if h > 0 else []
+                    vals += list(ph.u[:, 0]) if h > 0 else []
+                ctrl = ForceSchedule.from_arcs(durs, vals + [tail])
+                kind = "ForceSchedule (the transcription's piecewise-constant force)"
+        except NotImplementedError as err:
+            result.replay_kind = str(err)
+            return
+        result.replay_kind = kind
+        result.replay = simulate(result.robot, result.impact, ctrl, result.ground)
 
 
 def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                     ground: Ground = LINEAR_GROUND, *, steps: int = 1, refine: bool = True,
-                    warm_start: FullLanding | None = None, replay: bool = True,
-                    paper: BangBangLanding | None = None) -> FullLanding:
+                    warm_start: TwoPhaseLanding | None = None, replay: bool = True,
+                    paper: BangBangLanding | None = None) -> TwoPhaseLanding:
     """Solve the full landing as a hybrid multi-phase OCP; refine; replay exactly.
 
     Parameters
@@ -285,7 +282,7 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         Yielding steps allowed (2: yielding, static, yielding, static).
     refine : bool
         Refine the switching times of every phase with exact arcs.
-    warm_start : FullLanding, optional
+    warm_start : TwoPhaseLanding, optional
         A neighbouring solution: its refined structure is re-solved directly first, then
         its transcription warm-starts the NLP.
     replay : bool
@@ -302,7 +299,7 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         No landing satisfies the constraints (the message names the condition).
     """
     impact = Impact.of(impact)
-    _validate(robot)
+    force_limit(robot)
     if paper is None:
         try:
             paper = solve_landing(impact, robot, ground)
@@ -315,38 +312,19 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 f"no two-phase landing either: {err} (a phase-2 arrest within the force "
                 "limit and the crater's capacity exists exactly when the paper's does)"
             ) from None
-    paper_depth = paper.depth if paper is not None else math.nan
-    params = _ocp_params(robot, impact)
-    out = None
-    if warm_start is not None and warm_start.refined is not None and refine and \
-            warm_start.steps == steps:
-        r = structure_resolve(warm_start.refined, params, bound=paper_depth
-                              if math.isfinite(paper_depth) else None)
-        if r is not None:
-            out = _assemble(robot, impact, ground, steps, None, r, paper_depth, [], "structure")
-    if out is None:
-        tr = two_phase_transcription(steps, ground=ground)
-        notes: list[str] = []
-        guess = _guess(robot, impact, ground, paper, steps)
-        try:
-            sol = transcribed_solve(tr, params, guess, warm_start.transcribed
-                                    if warm_start is not None else None, notes)
-        except InfeasibleError as err:
-            raise _explain(err, robot, impact, ground, steps, guess) from None
-        ref = refined_phases(sol, notes) if refine else None
-        out = _assemble(robot, impact, ground, steps, sol, ref, paper_depth, notes,
-                        "transcription")
-    if replay:
-        _replay(out)
+    out = solve_phased(TwoPhase(robot, impact, ground, steps, paper), warm_start,
+                       refine=refine, replay=replay)
+    assert isinstance(out, TwoPhaseLanding)
     return out
 
 
 def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR_GROUND, *,
-                    progress: bool | None = False, replay: bool = True) -> list[FullLanding]:
+                    progress: bool | None = False,
+                    replay: bool = True) -> list[TwoPhaseLanding]:
     """The full landing over impact velocities, by continuation (start from the easy end).
 
     Each velocity also solves the paper's single-phase problem (continuation too) for the
-    comparison ``depth_gain``.
+    comparison ``gain``.
 
     Parameters
     ----------
@@ -362,23 +340,20 @@ def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINE
         Replay every schedule in the exact simulator.
     """
     impacts = [Impact.of(v) for v in v0_values]
-    _validate(robot)
-    out: list[FullLanding] = []
-    prev: FullLanding | None = None
-    prev_paper: BangBangLanding | None = None
-    last_sol: Solution | None = None
-    for imp in show_progress(impacts, progress, "two-phase sweep", "solve"):
-        paper = solve_landing(imp, robot, ground, warm_start=prev_paper)
-        res = solve_two_phase(imp, robot, ground, warm_start=prev, replay=replay, paper=paper)
-        out.append(res)
-        last_sol = res.transcribed or last_sol
-        if res.transcribed is None and last_sol is not None:
-            res = FullLanding(**{**res.__dict__, "transcribed": last_sol})
-        prev, prev_paper = res, paper
-    return out
+    force_limit(robot)
+
+    last_paper: list[BangBangLanding] = []  # the paper's sweep, alongside
+
+    def one(imp: Impact, prev: TwoPhaseLanding | None) -> TwoPhaseLanding:
+        paper = solve_landing(imp, robot, ground,
+                              warm_start=last_paper[-1] if last_paper else None)
+        last_paper[:] = [paper]
+        return solve_two_phase(imp, robot, ground, warm_start=prev, replay=replay, paper=paper)
+
+    return continuation(impacts, one, progress, "two-phase sweep")
 
 
-__all__ = ["FullLanding", "solve_two_phase", "sweep_two_phase"]
+__all__ = ["TwoPhase", "TwoPhaseLanding", "solve_two_phase", "sweep_two_phase"]
 
 
 # ------------------------------------------------------------ a second step
@@ -389,7 +364,7 @@ class TwoStepCheck:
     Attributes
     ----------
     impact : Impact
-    one_step : FullLanding
+    one_step : TwoPhaseLanding
         The two-phase optimum.
     depth : float
         Best final depth of the four-phase problem over its starts.
@@ -403,7 +378,7 @@ class TwoStepCheck:
     """
 
     impact: Impact
-    one_step: FullLanding
+    one_step: TwoPhaseLanding
     depth: float
     starts: list[dict[str, Any]]
     collapsed: bool
@@ -455,7 +430,7 @@ def _two_step_guesses(robot: Robot, impact: Impact, ground: Ground,
 
 def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                    ground: Ground = LINEAR_GROUND, *,
-                   one_step: FullLanding | None = None) -> TwoStepCheck:
+                   one_step: TwoPhaseLanding | None = None) -> TwoStepCheck:
     """Solve the four-phase landing (two yielding steps) from several starts and compare
     its depth with the two-phase optimum.
 
@@ -467,14 +442,14 @@ def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         The robot (with a force limit).
     ground : Ground
         Ground model.
-    one_step : FullLanding, optional
+    one_step : TwoPhaseLanding, optional
         The two-phase optimum (solved if not given).
     """
     impact = Impact.of(impact)
     one = one_step if one_step is not None else solve_two_phase(impact, robot, ground)
     paper = solve_landing(impact, robot, ground)
     tr = two_phase_transcription(2, ground=ground)
-    params = _ocp_params(robot, impact)
+    params = landing_parameters(robot, impact)
     starts: list[dict[str, Any]] = []
     best: tuple[float, list[float]] | None = None
     for name, guess in _two_step_guesses(robot, impact, ground, paper):

@@ -18,7 +18,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
             "plot_stepped_intrusion_figure", "plot_stepped_intrusions", "plot_trajectory"
         ],
         "phased": [
-            "PHASE_COLOURS", "plot_full_landing", "plot_hop", "plot_hybrid_findings", "plot_phases",
+            "PHASE_COLOURS", "plot_hop", "plot_hybrid_findings", "plot_phased_landing",
+            "plot_phases",
             "shade_phases"
         ],
         "terrain": [

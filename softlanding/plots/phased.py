@@ -90,12 +90,12 @@ def _refined_spans(ref: Any) -> list[tuple[float, float, str]]:
                                                       strict=True)]
 
 
-def plot_full_landing(res: Any) -> plt.Figure:
+def plot_phased_landing(res: Any) -> plt.Figure:
     """A two-phase (or leg-extension) landing: the refined exact arcs, phases shaded.
 
     Parameters
     ----------
-    res : FullLanding or LegExtensionLanding
+    res : TwoPhaseLanding or LegExtensionLanding
         With a refinement.
     """
     ref = res.refined
@@ -148,7 +148,7 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
 
     Parameters
     ----------
-    two : sequence of FullLanding
+    two : sequence of TwoPhaseLanding
         The two-phase sweep.
     legs : sequence of LegExtensionLanding
         The leg-extension sweep.
@@ -161,7 +161,7 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     a.plot(v, [r.paper_depth for r in two], "k-", label="paper (constant arrest)")
     a.plot(v, [r.depth for r in two], "C0o", ms=3, label="two-phase (arrest optimised)")
     b = a.twinx()
-    b.semilogy(v, [max(abs(r.depth_gain), 1e-17) for r in two], "C3.", ms=3)
+    b.semilogy(v, [max(abs(r.gain), 1e-17) for r in two], "C3.", ms=3)
     b.set_ylabel("|depth difference|", color="C3")
     a.set_xlabel(r"$v_0$")
     a.set_ylabel("depth")
@@ -196,5 +196,5 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     return fig
 
 
-__all__ = ["PHASE_COLOURS", "plot_full_landing", "plot_hop", "plot_hybrid_findings",
+__all__ = ["PHASE_COLOURS", "plot_phased_landing", "plot_hop", "plot_hybrid_findings",
            "plot_phases", "shade_phases"]

@@ -1,2 +1,19 @@
-"""The reproduction of the paper and beyond: figures, tables and ``summary.md`` written into one
-folder, and the demo."""
+"""The reproduction of the paper and beyond: :func:`reproduce` writes every figure, table,
+dataset and ``summary.md`` into one folder.
+
+Modules: :mod:`.registry` (a section: its run and its Markdown; the run's context and
+settings), :mod:`.paper` (the paper's sections), :mod:`.terrain` (the terrain models),
+:mod:`.phased` (the multi-phase landings and hops), :mod:`.reproduction` (the registry in
+order, :func:`reproduce`, ``summary.md``), :mod:`.markdown` (cells and tables), :mod:`.demo`
+(the ``softlanding demo`` table and figure).
+"""
+
+import lazy_loader as _lazy
+
+__getattr__, __dir__, __all__ = _lazy.attach(
+    __name__,
+    submod_attrs={
+        "registry": ["Context", "Section", "Settings"],
+        "reproduction": ["SECTIONS", "reproduce", "summary_markdown"],
+    },
+)

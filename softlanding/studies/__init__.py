@@ -27,9 +27,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
             "paper_observations", "save_dataset"
         ],
         "terrain_study": [
-            "EXPERIMENT_KP", "EXPERIMENT_V0", "STUDY_CD", "bang_bang_rows", "experiment_curves",
-            "experiment_grounds", "experiment_shift", "model_rows", "study_grounds",
-            "terrain_markdown", "terrain_section"
+            "EXPERIMENT_FASTEST_V0", "STUDY_CD", "bang_bang_rows", "experiment_curves",
+            "experiment_grounds", "experiment_shift", "model_rows", "study_grounds"
         ],
     },
 )

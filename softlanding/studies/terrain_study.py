@@ -26,12 +26,13 @@ import numpy as np
 
 from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground
 from softlanding.model.robot import PAPER_IMPEDANCE_ROBOT, PAPER_ROBOT
+from softlanding.model.scaling import EXPERIMENT_KP, EXPERIMENT_V0
 from softlanding.model.terrain import paper_rig_units, poppy_seed_added_mass, poppy_seed_drag
 
 STUDY_CD = (0.05, 0.2, 1.0)
 """Drag numbers of the study (besides 0, the paper's spring)."""
-EXPERIMENT_V0 = -4.8
-EXPERIMENT_KP = (0.2, 0.5, 0.9)
+EXPERIMENT_FASTEST_V0 = EXPERIMENT_V0[-1]
+"""The experiment curves under the terrain models: the paper's fastest impact."""
 
 
 def study_grounds() -> dict[str, Ground]:
@@ -118,7 +119,8 @@ def experiment_curves(kd: Any, grounds: dict[str, Ground]) -> dict[str, Any]:
     """
     from softlanding.studies.sweeps import impedance_dataset
 
-    return {lab: impedance_dataset(EXPERIMENT_V0, EXPERIMENT_KP, kd, PAPER_IMPEDANCE_ROBOT, g,
+    return {lab: impedance_dataset(EXPERIMENT_FASTEST_V0, EXPERIMENT_KP, kd,
+                                   PAPER_IMPEDANCE_ROBOT, g,
                                    energy=False).squeeze(("v0", "r_m", "s"))
             for lab, g in grounds.items()}
 
@@ -157,68 +159,5 @@ def experiment_shift(curves: dict[str, Any]) -> list[dict]:
     return rows
 
 
-def terrain_section(out: Any, files: list[str], quick: bool) -> dict:
-    """The reproduce section: the study's numbers, figure and dataset.
-
-    Parameters
-    ----------
-    out : Path
-        Output folder.
-    files : list of str
-        Names of the files written (appended to).
-    quick : bool
-        The quick run (3 velocities, coarse grids).
-    """
-    import matplotlib.pyplot as plt
-
-    from softlanding.plots.terrain import plot_experiment_drag, plot_terrain_study
-
-    v0s = (0.0, -4.8, -10.0) if quick else tuple(np.round(np.linspace(0, -10, 11), 12))
-    grid = 21 if quick else 101
-    models = {lab: model_rows(v0s, g, grid) for lab, g in study_grounds().items()}
-    kd = np.round(np.linspace(0.0, 2.5, 26 if quick else 126), 12)
-    curves = experiment_curves(kd, experiment_grounds())
-    for stem, fig in (("fig_terrain_models", plot_terrain_study(models)),
-                      ("fig_terrain_experiment", plot_experiment_drag(curves))):
-        for ext in ("png", "pdf"):
-            fig.savefig(out / f"{stem}.{ext}", dpi=130, bbox_inches="tight")
-            files.append(f"{stem}.{ext}")
-        plt.close(fig)
-    shift = experiment_shift(curves)
-    return {"v0": list(v0s), "grid": grid, "models": models, "experiment_v0": EXPERIMENT_V0,
-            "experiment_shift": shift,
-            "grounds": {lab: g.to_dict() for lab, g in study_grounds().items()}}
-
-
-def terrain_markdown(s: dict) -> list[str]:
-    """The section's tables for ``summary.md``.
-
-    Parameters
-    ----------
-    s : dict
-        The section's summary (:func:`terrain_section`).
-    """
-    out = ["## Terrain models (fig_terrain_models, fig_terrain_experiment)", "",
-           "Bang-bang (refined, PMP-checked), optimal impedance (no force limit) and a rigid "
-           "leg on each ground model; r_m = 5, s = 20, bang-bang u_max = 8.2.", "",
-           "| ground | v0 | bang-bang | switches | PMP verdict | impedance (k_p*, k_d*) | "
-           "rigid | bb/rigid | imp/rigid |", "|---|---|---|---|---|---|---|---|---|"]
-    for lab, rows in s["models"].items():
-        for r in rows:
-            out.append(f"| {lab} | {r['v0']:g} | {r['bang_bang']:.6f} | {r['switches']} | "
-                       f"{r['verdict']} | {r['impedance']:.6f} ({r['k_p']:.4f}, "
-                       f"{r['k_d']:.4f}) | {r['rigid']:.5f} | {r['bb_over_rigid']:.4f} | "
-                       f"{r['imp_over_rigid']:.4f} |")
-    out += ["", f"Experiment curves at v0 = {s['experiment_v0']:g}: depth at the largest k_d "
-                "against the paper's linear spring (negative: shallower).", "",
-            "| ground | k_p | k_d | linear | with the model | change |",
-            "|---|---|---|---|---|---|"]
-    for r in s["experiment_shift"]:
-        out.append(f"| {r['ground']} | {r['k_p']:g} | {r['k_d']:g} | {r['depth_linear']:.4f} |"
-                   f" {r['depth']:.4f} | {100 * r['relative_change']:+.1f} % |")
-    return out + [""]
-
-
-__all__ = ["EXPERIMENT_KP", "EXPERIMENT_V0", "STUDY_CD", "bang_bang_rows", "experiment_curves",
-           "experiment_grounds", "experiment_shift", "model_rows", "study_grounds",
-           "terrain_markdown", "terrain_section"]
+__all__ = ["EXPERIMENT_FASTEST_V0", "STUDY_CD", "bang_bang_rows", "experiment_curves",
+           "experiment_grounds", "experiment_shift", "model_rows", "study_grounds"]

@@ -1,0 +1,263 @@
+"""The solve pipeline every landing variant plugs into.
+
+A variant is a problem (an ``ocp`` multi-phase problem and its transcription) plus a small
+:class:`PhasedVariant` subclass filling these hooks:
+
+* :meth:`PhasedVariant.parameters` -- the NLP's parameter values;
+* :meth:`PhasedVariant.transcription` and :meth:`PhasedVariant.guess` -- what to solve, and
+  from where when no neighbour's solution is at hand;
+* :meth:`PhasedVariant.assemble` -- the result (a :class:`~softlanding.optimal.result.
+  PhasedLanding` subclass) from a transcription and/or refined phases;
+* optionally :meth:`PhasedVariant.accepts` (which neighbours' structures may be re-solved),
+  :meth:`PhasedVariant.bound` (a depth no re-solved structure may exceed),
+  :meth:`PhasedVariant.explain` (an infeasible problem, in words),
+  :meth:`PhasedVariant.retry` (a second attempt when refinement fails),
+  :meth:`PhasedVariant.finish` and :meth:`PhasedVariant.replay`.
+
+:func:`solve_phased` runs the steps they share: re-solve a neighbour's refined structure
+directly (no transcription), else transcribe (warm from the neighbour's transcription),
+refine the switching times of every phase with exact arcs, assemble, replay in the exact
+simulator. :func:`continuation` runs a sweep over impact velocities, each solve warm from
+the last, keeping the last transcription for warm starts across structure re-solves.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Iterable
+from typing import Any, TypeVar
+
+from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
+from ocp.phase_refinement import RefinedPhases
+from softlanding.errors import InfeasibleLandingError, ParameterError
+from softlanding.model.robot import Impact, Robot
+from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve
+from softlanding.optimal.result import PhasedLanding
+from softlanding.util.progress import progress as show_progress
+
+R = TypeVar("R")
+
+
+def force_limit(robot: Robot) -> float:
+    """The force limit of a landing problem (raises when none can work).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+
+    Raises
+    ------
+    ParameterError
+        The robot has no force limit (the OCP needs one).
+    InfeasibleLandingError
+        The limit does not exceed the body's weight: the body can never be arrested.
+    """
+    if robot.u_max is None:
+        raise ParameterError("u_max", "the optimal control problem needs a force limit")
+    if robot.u_max <= robot.body_mass:
+        raise InfeasibleLandingError(
+            f"u_max = {robot.u_max:g} does not exceed the body weight r_m/(1+r_m) = "
+            f"{robot.body_mass:.4g}: the arrest force u_b <= u_max can never hold")
+    return robot.u_max
+
+
+def landing_parameters(robot: Robot, impact: Impact) -> dict[str, float]:
+    """The parameter values every landing OCP takes: ``r_m, s, v0, u_max, l0``.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (with a force limit, see :func:`force_limit`).
+    impact : Impact
+        The impact.
+    """
+    return {"r_m": robot.r_m, "s": robot.s, "v0": impact.v0, "u_max": force_limit(robot),
+            "l0": robot.rest_length}
+
+
+def continuation(impacts: Iterable[Impact], solve_one: Callable[[Impact, R | None], R],
+                 progress: bool | None, desc: str) -> list[R]:
+    """Solve in order, each from the last result (continuation); the results in order.
+
+    A result without a transcription (a structure re-solve) passes the last transcription
+    on, so that the next solve can still warm-start its NLP.
+
+    Parameters
+    ----------
+    impacts : iterable of Impact
+        In the order to solve (start from the easy end).
+    solve_one : callable
+        ``solve_one(impact, previous) -> result``; ``previous`` is None the first time.
+    progress : bool or None
+        Progress bar (None: only on a terminal).
+    desc : str
+        The progress bar's label.
+    """
+    out: list[R] = []
+    prev: Any = None
+    for imp in show_progress(list(impacts), progress, desc, "solve"):
+        res: Any = solve_one(imp, prev)
+        out.append(res)
+        if getattr(res, "transcribed", None) is None and prev is not None and \
+                prev.transcribed is not None:
+            res = dataclasses.replace(res, transcribed=prev.transcribed)
+        prev = res
+    return out
+
+
+class PhasedVariant:
+    """One landing problem to solve through :func:`solve_phased` (fill the hooks).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (with a force limit).
+    impact : Impact
+        The impact.
+    """
+
+    def __init__(self, robot: Robot, impact: Impact) -> None:
+        self.robot, self.impact = robot, impact
+
+    def parameters(self) -> dict[str, float]:
+        """The NLP's parameter values (default: :func:`landing_parameters`)."""
+        return landing_parameters(self.robot, self.impact)
+
+    def transcription(self) -> MultipleShooting:
+        """The (cached) transcription to solve."""
+        raise NotImplementedError
+
+    def guess(self) -> Any:
+        """The cold-start guess (a trajectory cut into the phases)."""
+        raise NotImplementedError
+
+    def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
+                 path: str) -> PhasedLanding:
+        """The result.
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription (None on the structure path).
+        ref : RefinedPhases or None
+            The refined phases (None when refinement was off or failed).
+        notes : list of str
+            What the solve noticed.
+        path : str
+            ``"transcription"`` or ``"structure"``.
+        """
+        raise NotImplementedError
+
+    def accepts(self, neighbour: PhasedLanding) -> bool:
+        """Whether ``neighbour``'s refined structure may be re-solved for this problem.
+
+        Parameters
+        ----------
+        neighbour : PhasedLanding
+            The warm start.
+        """
+        return True
+
+    def bound(self) -> float | None:
+        """A depth that a re-solved structure must not exceed (None: no bound)."""
+        return None
+
+    def explain(self, err: SolveError, guess: Any) -> Exception:
+        """The error to raise for an infeasible transcription (default: ``err`` itself).
+
+        Parameters
+        ----------
+        err : ocp.SolveError
+            Ipopt's verdict.
+        guess : object
+            The guess it started from.
+        """
+        return err
+
+    def retry(self, sol: Solution, ref: RefinedPhases | None, guess: Any,
+              notes: list[str]) -> tuple[Solution, RefinedPhases | None]:
+        """A second attempt when the refinement failed (default: none).
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription.
+        ref : RefinedPhases or None
+            Its refinement.
+        guess : object
+            The guess ``sol`` started from.
+        notes : list of str
+            Receives what happened.
+        """
+        return sol, ref
+
+    def finish(self, result: PhasedLanding) -> PhasedLanding:
+        """Last changes to a transcribed result before the replay (default: none).
+
+        Parameters
+        ----------
+        result : PhasedLanding
+            The assembled result.
+        """
+        return result
+
+    def replay(self, result: PhasedLanding) -> None:
+        """Replay ``result`` in the exact simulator, in place (default: none).
+
+        Parameters
+        ----------
+        result : PhasedLanding
+            The result.
+        """
+
+
+def solve_phased(variant: PhasedVariant, warm_start: PhasedLanding | None = None, *,
+                 refine: bool = True, replay: bool = True) -> PhasedLanding:
+    """Solve a phased landing: structure re-solve or transcription, refinement, replay.
+
+    Parameters
+    ----------
+    variant : PhasedVariant
+        The problem and its hooks.
+    warm_start : PhasedLanding, optional
+        A neighbouring solution: its refined structure is re-solved directly first (when
+        ``variant.accepts`` it), then its transcription warm-starts the NLP.
+    refine : bool
+        Refine the switching times of every phase with exact arcs.
+    replay : bool
+        Replay the result in the exact simulator.
+
+    Raises
+    ------
+    Exception
+        What ``variant.explain`` makes of an infeasible transcription; ``ocp.SolveError``
+        for any other solver failure.
+    """
+    params = variant.parameters()
+    out = None
+    if warm_start is not None and warm_start.refined is not None and refine and \
+            variant.accepts(warm_start):
+        r = structure_resolve(warm_start.refined, params, bound=variant.bound())
+        if r is not None:
+            out = variant.assemble(None, r, [], "structure")
+    if out is None:
+        notes: list[str] = []
+        guess = variant.guess()
+        try:
+            sol = transcribed_solve(variant.transcription(), params, guess,
+                                    warm_start.transcribed if warm_start is not None else None,
+                                    notes)
+        except InfeasibleError as err:
+            raise variant.explain(err, guess) from None
+        ref = refined_phases(sol, notes) if refine else None
+        if refine:
+            sol, ref = variant.retry(sol, ref, guess, notes)
+        out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
+    if replay:
+        variant.replay(out)
+    return out
+
+
+__all__ = ["PhasedVariant", "continuation", "force_limit", "landing_parameters",
+           "solve_phased"]

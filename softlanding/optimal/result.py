@@ -1,0 +1,146 @@
+"""The result of a phased landing: the fields, checks and JSON every variant shares.
+
+Each variant's result (:class:`~softlanding.optimal.two_phase.TwoPhaseLanding`,
+:class:`~softlanding.optimal.leg_extension.LegExtensionLanding`, a user's own) subclasses
+:class:`PhasedLanding`, adds its own fields, and fills three class-level hooks: the variant's
+name in JSON, what its depth is compared with, and any checks of its own.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from ocp import Solution
+from ocp.phase_refinement import RefinedPhases
+from softlanding.model.robot import Impact, Robot
+from softlanding.optimal.verification import certificate_reasons, refined_result_reasons
+from softlanding.simulation.simulator import LandingResult
+from softlanding.util.jsonable import json_safe
+
+
+@dataclass(kw_only=True)
+class PhasedLanding:
+    """A solved phased landing.
+
+    Attributes
+    ----------
+    robot, impact : Robot, Impact
+        The problem solved.
+    depth : float
+        Final depth ``-x_f``, refined unless refinement was off or failed.
+    depth_transcribed : float
+        From the transcription (NaN on the structure path).
+    paper_depth : float
+        The reference the variant improves on (the paper's optimum, or the two-phase one
+        with the paper's initial condition): ``gain = paper_depth - depth``.
+    arcs : list of list of str
+        Arc kinds per phase.
+    switch_times : list of list of float
+        Switch times per phase (absolute).
+    phase_times : list of float
+        Start of every phase, then the end of the last.
+    status, iterations, solve_time_s
+        Of the solve that produced the result.
+    refined : RefinedPhases or None
+        The phases refined with exact arcs.
+    transcribed : ocp.Solution or None
+        The transcription (None on the structure path).
+    replay : LandingResult or None
+        The schedule replayed in the exact simulator.
+    replay_kind : str
+        The simulator controller used (or why there is no replay).
+    notes : list of str
+        What the solve noticed.
+    path : str
+        ``"transcription"`` or ``"structure"`` (the neighbour's arcs re-solved directly).
+    """
+
+    VARIANT: ClassVar[str] = ""
+    """The variant's name in JSON and on the command line."""
+    WORSE_THAN_REFERENCE: ClassVar[str] = "the reference by {:.2e}: a local optimum"
+    """How to say that ``depth`` is worse than ``paper_depth`` ({} is the gap)."""
+
+    robot: Robot
+    impact: Impact
+    depth: float
+    depth_transcribed: float
+    paper_depth: float
+    arcs: list[list[str]]
+    switch_times: list[list[float]]
+    phase_times: list[float]
+    status: str
+    iterations: int
+    solve_time_s: float
+    refined: RefinedPhases | None
+    transcribed: Solution | None
+    replay: LandingResult | None = None
+    replay_kind: str = ""
+    notes: list[str] = field(default_factory=list)
+    path: str = "transcription"
+
+    @property
+    def certified_transcription(self) -> Solution | None:
+        """The transcription ``refined`` was refined from (what the certificate reads)."""
+        return self.transcribed
+
+    def certify(self) -> Any:
+        """The PMP certificate of the refined phases (None without a refinement)."""
+        from ocp.phase_pmp import certify_phases
+
+        if self.refined is None:
+            return None
+        return certify_phases(self.certified_transcription, self.refined)
+
+    @property
+    def gain(self) -> float:
+        """``paper_depth - depth``: what the variant gains (>= 0 up to rounding)."""
+        return self.paper_depth - self.depth
+
+    @property
+    def replay_difference(self) -> float:
+        """``|replay depth - depth|`` (NaN without a replay)."""
+        return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
+
+    def own_reasons(self) -> list[str]:
+        """The variant's own reasons to doubt the result (none by default)."""
+        return []
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why this result cannot be taken as proven (empty: every check passed).
+
+        Parameters
+        ----------
+        certificate : ocp.phase_pmp.PhasesCertificate, optional
+            The certificate of this solution.
+        """
+        return (refined_result_reasons(
+            self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
+            self.gain, self.WORSE_THAN_REFERENCE) + self.own_reasons()
+            + certificate_reasons(certificate))
+
+    def own_dict(self) -> dict[str, Any]:
+        """The variant's own JSON fields (none by default)."""
+        return {}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict: the figures, the refined phases and the replay."""
+        d: dict[str, Any] = {
+            "variant": self.VARIANT, "depth": self.depth,
+            "depth_transcribed": self.depth_transcribed, "paper_depth": self.paper_depth,
+            "gain": self.gain, "arcs": self.arcs, "switch_times": self.switch_times,
+            "phase_times": self.phase_times, "status": self.status,
+            "iterations": self.iterations, "solve_time_s": self.solve_time_s,
+            "path": self.path, "notes": self.notes, "robot": self.robot.to_dict(),
+            "impact": self.impact.to_dict(), **self.own_dict()}
+        if self.refined is not None:
+            d["refined"] = self.refined.to_dict()
+        if self.replay is not None:
+            d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
+                           "controller": self.replay_kind, "steps": self.replay.steps,
+                           "feasible": self.replay.feasible, "status": self.replay.status}
+        return json_safe(d)
+
+
+__all__ = ["PhasedLanding"]
