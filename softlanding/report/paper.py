@@ -252,7 +252,7 @@ def _bang_bang_md(s: Any) -> list[str]:
     out: list[str] = []
     out += ["## Bang-bang landing (fig_bang_bang_trajectory)", "",
             table(["quantity", "ours", "paper"], [
-                ["depth -xcell(T)", cell(bb["depth"], 9), "-"],
+                ["depth -x_f(T)", cell(bb["depth"], 9), "-"],
                 ["arcs", " -> ".join(bb["arcs"]), "max -> min"],
                 ["switch time", ", ".join(cell(t, 6) for t in bb["switch_times"]), "-"],
                 ["foot stops at T", cell(bb["T"], 6), "about 0.5 (caption: the stomp)"],

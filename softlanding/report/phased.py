@@ -150,7 +150,7 @@ def _legs_md(h: dict) -> list[str]:
 def _hops_md(h: dict) -> list[str]:
     rows = h["hopping"]
 
-    def cell(c: Any, key: str, nd: int = 4) -> str:
+    def field(c: Any, key: str, nd: int = 4) -> str:
         return "n/a" if c is None else cell(c[key], nd)
 
     return [f"### 3. Minimum-energy hopping, eta = {h['hop_eta']:g} (fig_hybrid_findings, "
@@ -158,11 +158,11 @@ def _hops_md(h: dict) -> list[str]:
             table(["v0", "apex", "optimum: energy", "crater", "CoT", "impedance: energy",
                     "(k_p, k_d, u_t)", "rigid: energy", "crater"],
                    [[cell(r["free"]["v0"], 2), cell(r["free"]["apex_height"], 3),
-                     cell(r["free"], "energy"), cell(r["free"], "depth"),
-                     cell(r["free"], "cot", 3), cell(r["impedance"], "energy"),
+                     field(r["free"], "energy"), field(r["free"], "depth"),
+                     field(r["free"], "cot", 3), field(r["impedance"], "energy"),
                      "n/a" if r["impedance"] is None else
                      "({k_p:.3g}, {k_d:.3g}, {u_t:.3g})".format(**r["impedance"]["gains"]),
-                     cell(r["rigid"], "energy"), cell(r["rigid"], "depth")] for r in rows]),
+                     field(r["rigid"], "energy"), field(r["rigid"], "depth")] for r in rows]),
             "", "Energies per cycle in m_t g x_s, evaluated on the exact replay of each control.",
             ""]
 
