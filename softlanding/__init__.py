@@ -26,31 +26,8 @@ The names below are imported on first use, so a light command (``softlanding
 --help``, a scale conversion) does not load CasADi or compile anything.
 """
 
-from __future__ import annotations
-
 import lazy_loader as _lazy
 
 from softlanding._version import __version__ as __version__
 
-__getattr__, __dir__, __all__ = _lazy.attach(
-    __name__,
-    submod_attrs={
-        "errors": ["InfeasibleLandingError", "ParameterError", "SoftlandingError"],
-        "model": [
-            "AddedMassGround", "Controller", "CustomGround", "DragGround", "FeedbackSchedule",
-            "ForceSchedule", "Ground", "Impact", "Impedance", "LINEAR_GROUND", "LinearGround",
-            "PAPER_IMPEDANCE_ROBOT", "PAPER_ROBOT", "PhysicalParams", "Rigid", "Robot",
-            "Scenario", "Units", "paper_rig",
-        ],
-        "simulation": [
-            "BatchResult", "EnergyLedger", "LandingResult", "simulate", "simulate_batch",
-        ],
-        "optimal": [
-            "BangBangLanding", "HopCycle", "LegExtensionLanding", "TwoPhaseLanding",
-            "solve_hop", "solve_landing", "solve_leg_extension", "solve_two_phase",
-            "sweep_hops", "sweep_landing", "sweep_leg_extension", "sweep_two_phase",
-        ],
-        "studies": ["ImpedanceOptimum", "optimize_impedance"],
-        "report": ["reproduce"],
-    },
-)
+__getattr__, __dir__, __all__ = _lazy.attach_stub(__name__, __file__)

@@ -21,32 +21,4 @@ A new variant is one module: its problem, then a :class:`PhasedVariant` subclass
 
 import lazy_loader as _lazy
 
-__getattr__, __dir__, __all__ = _lazy.attach(
-    __name__,
-    submod_attrs={
-        "landing": [
-            "BangBangLanding", "build_landing_problem", "landing_transcription",
-            "solve_landing", "sweep_landing",
-        ],
-        "two_phase": [
-            "TwoPhase", "TwoPhaseLanding", "TwoStepCheck", "solve_two_phase",
-            "sweep_two_phase", "two_step_check",
-        ],
-        "two_phase_problem": ["build_two_phase_problem", "two_phase_transcription"],
-        "leg_extension": [
-            "LegExtension", "LegExtensionLanding", "solve_leg_extension",
-            "sweep_leg_extension",
-        ],
-        "leg_extension_problem": ["build_leg_extension_problem", "leg_extension_transcription"],
-        "hopping": [
-            "HopCycle", "ThrustImpedance", "best_impedance_hop", "impedance_hop", "rigid_hop",
-            "solve_hop", "sweep_hops",
-        ],
-        "hopping_problem": ["build_hop_problem", "hop_transcription"],
-        "pipeline": [
-            "PhasedVariant", "continuation", "force_limit", "landing_parameters",
-            "solve_phased",
-        ],
-        "result": ["PhasedLanding"],
-    },
-)
+__getattr__, __dir__, __all__ = _lazy.attach_stub(__name__, __file__)

@@ -10,10 +10,4 @@ order, :func:`reproduce`, ``summary.md``), :mod:`.markdown` (cells and tables), 
 
 import lazy_loader as _lazy
 
-__getattr__, __dir__, __all__ = _lazy.attach(
-    __name__,
-    submod_attrs={
-        "registry": ["Context", "Section", "Settings"],
-        "reproduction": ["SECTIONS", "reproduce", "summary_markdown"],
-    },
-)
+__getattr__, __dir__, __all__ = _lazy.attach_stub(__name__, __file__)

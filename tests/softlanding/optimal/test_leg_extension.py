@@ -80,13 +80,13 @@ def test_second_start_refines_where_the_first_transcription_dives_through_the_st
     """The rescue used when a transcription cannot be refined (its solution dives through
     the stroke limit between the nodes): inner constraints first, then the plain grid."""
     from softlanding.model.robot import Impact
-    from softlanding.optimal.pipeline import landing_parameters as _ocp_params
     from softlanding.optimal.leg_extension import _guess
     from softlanding.optimal.leg_extension_problem import (
         leg_extension_transcription,
         leg_extension_transcription_inner,
     )
     from softlanding.optimal.phase_solve import second_start
+    from softlanding.optimal.pipeline import landing_parameters as _ocp_params
     from softlanding.optimal.two_phase import solve_two_phase
 
     impact = Impact(-0.5)
