@@ -6,7 +6,9 @@ both packages (``pkgutil.walk_packages``; a module whose name starts with ``_`` 
 the names each module exports (its ``__all__``, else every public function and class defined in
 it), and for every public function, class and public method defined on such a class asks for a
 docstring; a callable's "Parameters" section (for a class, "Parameters" or "Attributes") must list
-exactly the parameters of its signature. What is left out is listed in ``EXEMPT`` with the reason.
+exactly the parameters of its signature. A method that overrides a documented one with the
+same parameters may leave them to the base's docstring (numpydoc's inheritance). What is left
+out is listed in ``EXEMPT`` with the reason.
 """
 
 import importlib
@@ -49,7 +51,15 @@ def _public(module_name):
             for mname, member in vars(obj).items():
                 if mname.startswith("_") or not inspect.isfunction(member):
                     continue
+                base = next((getattr(b, mname) for b in obj.__mro__[1:]
+                             if inspect.isfunction(getattr(b, mname, None))), None)
+                if base is not None:
+                    INHERITED[member] = base
                 yield f"{module_name}.{obj.__qualname__}.{mname}", member
+
+
+INHERITED: dict = {}
+"""Overriding method -> the base method whose docstring documents the same parameters."""
 
 
 MODULES = list(_modules())
@@ -99,7 +109,14 @@ def test_public_callable_has_numpydoc_matching_its_signature(qual, obj):
     if not params:
         return
     doc = ClassDoc(obj) if inspect.isclass(obj) else FunctionDoc(obj)
+    base = INHERITED.get(obj)
+    if base is not None and not doc["Parameters"] and _signature_params(base) == params:
+        doc = FunctionDoc(base)  # the override keeps the base's parameters and their docs
     documented = _documented(doc)
+    if inspect.isclass(obj):  # fields documented on a base class of the project are documented
+        for b in obj.__mro__[1:]:
+            if b.__module__.split(".")[0] in ("softlanding", "ocp"):
+                documented += _documented(ClassDoc(b))
     missing = [p for p in params if p.lstrip("*") not in {d.lstrip("*") for d in documented}]
     assert not missing, f"{qual}: parameters {missing} are not documented"
     if not inspect.isclass(obj):

@@ -22,7 +22,13 @@ EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 
 
 
 class CliParser(argparse.ArgumentParser):
-    """argparse, but usage errors are one line (exit 2) and ``-1e-3`` is a number."""
+    """argparse, but usage errors are one line (exit 2) and ``-1e-3`` is a number.
+
+    Parameters
+    ----------
+    *args, **kw
+        As :class:`argparse.ArgumentParser`.
+    """
 
     def __init__(self, *args: Any, **kw: Any) -> None:
         super().__init__(*args, **kw)
@@ -30,7 +36,14 @@ class CliParser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(
             r"^-(\d+\.?\d*([eE][-+]?\d+)?|\.\d+([eE][-+]?\d+)?|inf|infinity|nan)$", re.I)
 
-    def error(self, message: str) -> None:  # type: ignore[override]  # noqa: D102
+    def error(self, message: str) -> None:  # type: ignore[override]
+        """Print the usage error as one line and exit with code 2.
+
+        Parameters
+        ----------
+        message : str
+            argparse's message.
+        """
         self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {message}\n")
 
 

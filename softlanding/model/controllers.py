@@ -80,7 +80,13 @@ class Rigid:
         return rigid_lock_gains(mats), EMPTY, EMPTY
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """No parameter to convert."""
+        """No parameter to convert.
+
+        Parameters
+        ----------
+        units : Units
+            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+        """
         return {}
 
     def to_dict(self) -> dict[str, Any]:
@@ -115,6 +121,11 @@ class Impedance:
     def rest_length(self, robot: Robot) -> float:
         """The spring's rest length on this robot (within its stroke).
 
+        Parameters
+        ----------
+        robot : Robot
+            The robot (its stroke bounds ``l0``).
+
         Raises
         ------
         ParameterError
@@ -128,12 +139,26 @@ class Impedance:
         return self.l0
 
     def gain_vector(self, robot: Robot) -> np.ndarray:
-        """``u = K . [x_b, v_b, x_f, v_f, 1]``."""
+        """``u = K . [x_b, v_b, x_f, v_f, 1]``.
+
+        Parameters
+        ----------
+        robot : Robot
+            The robot (its rest length when ``l0`` is None).
+        """
         return impedance_gains(self.k_p, self.k_d, self.rest_length(robot))
 
     def kernel_arrays(self, mats: dict[str, Any],
                       robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The same feedback in every ground mode (see :meth:`Rigid.kernel_arrays`)."""
+        """The same feedback in every ground mode (see :meth:`Rigid.kernel_arrays`).
+
+        Parameters
+        ----------
+        mats : dict
+            The mode data of :func:`~softlanding.model.dynamics.mode_matrices`.
+        robot : Robot
+            The robot.
+        """
         Kf = np.empty((3, 5))
         Kf[:] = self.gain_vector(robot)
         return Kf, EMPTY, EMPTY
@@ -143,7 +168,13 @@ class Impedance:
         return f"impedance k_p={self.k_p:g}, k_d={self.k_d:g}"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``K_p`` [N/m], ``K_d`` [N s/m], ``rest_length`` [m] (None: the robot's)."""
+        """``K_p`` [N/m], ``K_d`` [N s/m], ``rest_length`` [m] (None: the robot's).
+
+        Parameters
+        ----------
+        units : Units
+            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+        """
         return {"K_p": self.k_p * units.stiffness, "K_d": self.k_d * units.damping,
                 "rest_length": None if self.l0 is None else self.l0 * units.length}
 
@@ -204,6 +235,13 @@ class ForceSchedule:
                       robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """No feedback; the schedule's times and values.
 
+        Parameters
+        ----------
+        mats : dict
+            The mode data of :func:`~softlanding.model.dynamics.mode_matrices`.
+        robot : Robot
+            The robot.
+
         Raises
         ------
         ParameterError
@@ -220,7 +258,13 @@ class ForceSchedule:
         return f"open-loop schedule with {len(self.times)} switches"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``times_s`` [s] and ``forces_N`` [N]."""
+        """``times_s`` [s] and ``forces_N`` [N].
+
+        Parameters
+        ----------
+        units : Units
+            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+        """
         return {"times_s": [t * units.time for t in self.times],
                 "forces_N": [u * units.force for u in self.values]}
 
@@ -302,7 +346,13 @@ class FeedbackSchedule:
         return f"open-loop schedule with {len(self.times)} switches ({n} feedback pieces)"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N)."""
+        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N).
+
+        Parameters
+        ----------
+        units : Units
+            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+        """
         scale = np.array([units.force / units.length, units.force / units.velocity,
                           units.force / units.length, units.force / units.velocity,
                           units.force])

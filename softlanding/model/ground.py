@@ -39,10 +39,24 @@ class Ground(Protocol):
         """Short name (``"linear"``, ``"drag"``, ...)."""
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
-        """Upward force on the foot while it yields (moves down) at ``depth`` >= 0."""
+        """Upward force on the foot while it yields (moves down) at ``depth`` >= 0.
+
+        Parameters
+        ----------
+        depth : float or casadi expression
+            Foot depth ``-x_f`` (>= 0 while yielding).
+        v_f : float or casadi expression
+            Foot velocity (<= 0 while yielding).
+        """
 
     def added_mass(self, depth: Any) -> Any:
-        """Mass of grains moving with a yielding foot at ``depth`` (units of ``m_t``)."""
+        """Mass of grains moving with a yielding foot at ``depth`` (units of ``m_t``).
+
+        Parameters
+        ----------
+        depth : float or casadi expression
+            Foot depth ``-x_f``.
+        """
 
     @property
     def is_affine(self) -> bool:
@@ -100,6 +114,7 @@ class LinearGround:
         return True
 
     def to_dict(self) -> dict[str, Any]:
+        """``{"model": name, **parameters}`` for JSON output."""
         return {"model": self.name}
 
 
@@ -174,6 +189,7 @@ class DragGround:
         return cls(check("b", b) * g / check("k_g", k_g))
 
     def to_dict(self) -> dict[str, Any]:
+        """``{"model": name, **parameters}`` for JSON output."""
         return {"model": self.name, "c_d": self.c_d}
 
 
@@ -264,6 +280,7 @@ class AddedMassGround:
         return self.pi_a == 0.0 and self.c_d == 0.0
 
     def to_dict(self) -> dict[str, Any]:
+        """``{"model": name, **parameters}`` for JSON output."""
         return {"model": self.name, "pi_a": self.pi_a, "radius": self.radius,
                 "kappa": self.kappa, "c_d": self.c_d,
                 "critical_depth": self.critical_depth}
@@ -360,6 +377,7 @@ class CustomGround:
         return self.mass is None and not ca.depends_on(ca.jacobian(f, z), z)
 
     def to_dict(self) -> dict[str, Any]:
+        """``{"model": name, **parameters}`` for JSON output."""
         return {"model": self.label, **self.parameters}
 
 

@@ -151,7 +151,13 @@ class Robot:
         return 1.0 / (1.0 + self.r_m)
 
     def replace(self, **changes: Any) -> Robot:
-        """A copy with some fields changed (validated again)."""
+        """A copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            Fields to change (``r_m``, ``s``, ``u_max``, ``l0``), validated again.
+        """
         return dataclasses.replace(self, **changes)
 
     def without_force_limit(self) -> Robot:
@@ -159,7 +165,13 @@ class Robot:
         return self.replace(u_max=None)
 
     def to_si(self, units: Units) -> dict[str, float | None]:
-        """``m_b, m_f`` [kg], ``stroke``, ``rest_length`` [m], ``U_max`` [N] (None: unlimited)."""
+        """``m_b, m_f`` [kg], ``stroke``, ``rest_length`` [m], ``U_max`` [N] (None: unlimited).
+
+        Parameters
+        ----------
+        units : Units
+            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+        """
         return {"m_b": units.m_t * self.body_mass, "m_f": units.m_t * self.foot_mass,
                 "stroke": self.s * units.length, "rest_length": self.rest_length * units.length,
                 "U_max": None if self.u_max is None else self.u_max * units.force}
@@ -219,7 +231,13 @@ class Impact:
         return value if isinstance(value, Impact) else cls(value)
 
     def initial_state(self, robot: Robot) -> np.ndarray:
-        """``[l0, v0, 0, v0]``: the foot at the surface, the leg at its rest length."""
+        """``[l0, v0, 0, v0]``: the foot at the surface, the leg at its rest length.
+
+        Parameters
+        ----------
+        robot : Robot
+            The robot (its leg length at impact).
+        """
         return np.array([robot.rest_length, self.v0, 0.0, self.v0])
 
     @property
@@ -228,7 +246,13 @@ class Impact:
         return 0.5 * self.v0 * self.v0
 
     def to_si(self, units: Units) -> dict[str, float]:
-        """``V0`` [m/s]."""
+        """``V0`` [m/s].
+
+        Parameters
+        ----------
+        units : Units
+            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+        """
         return {"V0": self.v0 * units.velocity}
 
     @classmethod

@@ -288,13 +288,7 @@ class LegExtension(PhasedVariant):
         return _guess(self.two, self.mode, self.robot, self.impact)
 
     def accepts(self, neighbour: Any) -> bool:
-        """Only a neighbour of the same mode.
-
-        Parameters
-        ----------
-        neighbour : LegExtensionLanding
-            The warm start.
-        """
+        """Only a neighbour of the same mode."""
         return getattr(neighbour, "mode", None) == self.mode
 
     def bound(self) -> float | None:
@@ -303,19 +297,7 @@ class LegExtension(PhasedVariant):
 
     def retry(self, sol: Solution, ref: RefinedPhases | None, guess: Any,
               notes: list[str]) -> tuple[Solution, RefinedPhases | None]:
-        """A second start from the inner transcription when the refinement failed.
-
-        Parameters
-        ----------
-        sol : ocp.Solution
-            The transcription.
-        ref : RefinedPhases or None
-            Its refinement.
-        guess : object
-            The guess ``sol`` started from.
-        notes : list of str
-            Receives what happened.
-        """
+        """A second start from the inner transcription when the refinement failed."""
         if ref is not None:
             return sol, ref
         return second_start(leg_extension_transcription_inner(self.mode),
@@ -324,19 +306,7 @@ class LegExtension(PhasedVariant):
 
     def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
                  path: str) -> LegExtensionLanding:
-        """The result (see :func:`_assemble`).
-
-        Parameters
-        ----------
-        sol : ocp.Solution or None
-            The transcription.
-        ref : RefinedPhases or None
-            The refined phases.
-        notes : list of str
-            What the solve noticed.
-        path : str
-            How it was solved.
-        """
+        """The result (see :func:`_assemble`)."""
         out = _assemble(self.robot, self.impact, self.mode, self.bounds, sol, ref,
                         self.two.depth, notes, path)
         if self.mode == "drop" and ref is not None:
@@ -344,25 +314,13 @@ class LegExtension(PhasedVariant):
         return out
 
     def finish(self, result: Any) -> Any:
-        """A drop whose flight force is not unique: fix the flight, refine the landing.
-
-        Parameters
-        ----------
-        result : LegExtensionLanding
-            The assembled result.
-        """
+        """A drop whose flight force is not unique: fix the flight, refine the landing."""
         if self.mode == "drop" and result.refined is None:
             return _fixed_flight(result, self.robot, self.impact, self.two)
         return result
 
     def replay(self, result: Any) -> None:
-        """See :func:`_replay`.
-
-        Parameters
-        ----------
-        result : LegExtensionLanding
-            The result.
-        """
+        """See :func:`_replay`."""
         _replay(result)
 
 

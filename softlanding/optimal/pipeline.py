@@ -182,13 +182,13 @@ class PhasedVariant:
         Parameters
         ----------
         sol : ocp.Solution
-            The transcription.
+            The first transcription, whose refinement ``ref`` may have failed (None).
         ref : RefinedPhases or None
-            Its refinement.
+            The refinement of ``sol``.
         guess : object
-            The guess ``sol`` started from.
+            The cold-start guess behind ``sol``, for a second start.
         notes : list of str
-            Receives what happened.
+            Receives a line on what the second attempt did.
         """
         return sol, ref
 

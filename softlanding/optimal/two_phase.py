@@ -171,13 +171,7 @@ class TwoPhase(PhasedVariant):
         return _guess(self.robot, self.impact, self.ground, self.paper, self.steps)
 
     def accepts(self, neighbour: Any) -> bool:
-        """Only a neighbour with as many steps.
-
-        Parameters
-        ----------
-        neighbour : TwoPhaseLanding
-            The warm start.
-        """
+        """Only a neighbour with as many steps."""
         return getattr(neighbour, "steps", None) == self.steps
 
     def bound(self) -> float | None:
@@ -185,32 +179,12 @@ class TwoPhase(PhasedVariant):
         return self.paper_depth if math.isfinite(self.paper_depth) else None
 
     def explain(self, err: SolveError, guess: Any) -> Exception:
-        """Name the conditions that make the request infeasible (see :func:`_explain`).
-
-        Parameters
-        ----------
-        err : ocp.SolveError
-            Ipopt's verdict.
-        guess : object
-            The guess it started from.
-        """
+        """Name the conditions that make the request infeasible (see :func:`_explain`)."""
         return _explain(err, self.robot, self.impact, self.ground, self.steps, guess)
 
     def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
                  path: str) -> TwoPhaseLanding:
-        """The result from the transcription and/or the refined phases.
-
-        Parameters
-        ----------
-        sol : ocp.Solution or None
-            The transcription.
-        ref : RefinedPhases or None
-            The refined phases.
-        notes : list of str
-            What the solve noticed.
-        path : str
-            How it was solved.
-        """
+        """The result from the transcription and/or the refined phases."""
         if ref is not None:
             xT = ref.xT
             times = [float(t) for t in ref.t0] + [ref.T]
@@ -235,13 +209,7 @@ class TwoPhase(PhasedVariant):
             transcribed=sol, notes=notes, path=path)
 
     def replay(self, result: Any) -> None:
-        """Replay the refined (or transcribed) schedule in the exact simulator, in place.
-
-        Parameters
-        ----------
-        result : TwoPhaseLanding
-            The result.
-        """
+        """Replay the refined (or transcribed) schedule in the exact simulator, in place."""
         tail = result.robot.body_mass
         try:
             if result.refined is not None:

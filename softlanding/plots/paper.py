@@ -38,6 +38,13 @@ def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figu
 
     The background colour gives the ground mode (red: yielding, green: static,
     blue: flight); the dashed line is the crater bottom.
+
+    Parameters
+    ----------
+    result : LandingResult
+        A simulated landing.
+    title : str, optional
+        Figure title (default: the controller and the impact).
     """
     traj = result.trajectory()
     fig, (ax1, ax2) = plt.subplots(2, 1, sharex=True, figsize=(7.5, 6.0),
@@ -75,7 +82,15 @@ def _axes(ax, figsize):
 
 def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Figure:
     """Foot height against time for several landings (the paper's stepped-intrusion figure),
-    all drawn to the same time (1.2 x the latest foot stop)."""
+    all drawn to the same time (1.2 x the latest foot stop).
+
+    Parameters
+    ----------
+    results : sequence of LandingResult
+        The landings.
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
+    """
     fig, ax = _axes(ax, (6.5, 4.0))
     t_end = 1.2 * max(r.T for r in results)
     for r in results:
@@ -91,7 +106,19 @@ def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Fi
 
 def plot_depth_vs_velocity(v0: np.ndarray, curves: dict[str, np.ndarray], ax=None,
                            colours: dict[str, str] | None = None) -> plt.Figure:
-    """Penetration depth against impact velocity for several policies (label -> depths)."""
+    """Penetration depth against impact velocity for several policies (label -> depths).
+
+    Parameters
+    ----------
+    v0 : ndarray
+        Impact velocities.
+    curves : dict
+        Label -> depths at ``v0``.
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
+    colours : dict, optional
+        Label -> colour.
+    """
     fig, ax = _axes(ax, (6.4, 4.4))
     markers = "os^vD"
     for i, (label, depth) in enumerate(curves.items()):
@@ -112,6 +139,11 @@ def plot_bang_bang(landing) -> plt.Figure:
     one, switches dashed and the foot's stop dash-dotted. Right (when the
     landing was replayed): the whole landing in the exact simulator, through
     the arrest force until the body stops, then the body's weight.
+
+    Parameters
+    ----------
+    landing : BangBangLanding
+        A solved landing (its refined schedule is plotted).
     """
     if landing.refined is not None:
         t, x, u = landing.refined.sample(800)
@@ -190,6 +222,15 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
     """The paper's (k_p, k_d) map: depth normalised by its feasible minimum.
 
     Infeasible gains (the stroke is left) are blank; the optimum is starred.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A depth map (:func:`~softlanding.studies.sweeps.depth_map`).
+    optimum : ImpedanceOptimum, optional
+        Starred on the map.
+    ax : matplotlib Axes, optional
+        Draw into it (default: a new figure).
     """
     fig, ax = _axes(ax, (5.8, 4.6))
     d = ds.depth.where(ds.strictly_feasible)
@@ -210,7 +251,13 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
 
 
 def plot_optimal_curves(curves) -> plt.Figure:
-    """k_p*, k_d* and depth* against |v0| for each (r_m, s) in the dataset."""
+    """k_p*, k_d* and depth* against |v0| for each (r_m, s) in the dataset.
+
+    Parameters
+    ----------
+    curves : xarray.Dataset
+        Optimal gains over v0 (:func:`~softlanding.studies.sweeps.optimal_impedance_curves`).
+    """
     fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
     for r in curves.r_m.values:
         for s in curves.s.values:
@@ -241,7 +288,15 @@ STEP_COLOURS = ["#deebf7", "#9ecae1", "#4292c6", "#08519c", "#08306b"]
 
 
 def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt.Figure:
-    """The paper's Fig. 3: (a) stepped trajectories, (b) step-count regions for several v0."""
+    """The paper's Fig. 3: (a) stepped trajectories, (b) step-count regions for several v0.
+
+    Parameters
+    ----------
+    results : sequence of LandingResult
+        The stepped landings of panel (a).
+    maps : sequence of xarray.Dataset
+        Depth maps whose step counts panel (b) shows.
+    """
     fig = plt.figure(figsize=(14, 6.2))
     sub: Any = fig.subfigures(1, 2, width_ratios=[1, 1.5])
     ax = sub[0].subplots()
@@ -287,7 +342,15 @@ def plot_stepped_intrusion_figure(results: Sequence[LandingResult], maps) -> plt
 
 def plot_depth_maps(maps, optima) -> plt.Figure:
     """The paper's Fig. 4: x_f/x_f* over (k_p, k_d) for several v0, optimum starred
-    (one :func:`plot_depth_map` panel per v0)."""
+    (one :func:`plot_depth_map` panel per v0).
+
+    Parameters
+    ----------
+    maps : sequence of xarray.Dataset
+        Depth maps, one per v0.
+    optima : sequence of ImpedanceOptimum
+        Their optima.
+    """
     n = len(maps)
     cols = 2 if n <= 4 else 3
     rows = -(-n // cols)
@@ -314,7 +377,13 @@ def _on_box_edge(c, lo: float = 0.0, hi: float = 1.0, tol: float = 1e-9) -> np.n
 
 
 def plot_gain_families(curves) -> plt.Figure:
-    """The paper's Fig. 5: k_p*(v0) and k_d*(v0); colour = r_m, line style = s, thick = (5, 20)."""
+    """The paper's Fig. 5: k_p*(v0) and k_d*(v0); colour = r_m, line style = s, thick = (5, 20).
+
+    Parameters
+    ----------
+    curves : xarray.Dataset
+        Optimal gains over v0 for each (r_m, s).
+    """
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.4))
     styles = ["--", "-", ":", "-."]
     for ir, r in enumerate(curves.r_m.values):
@@ -433,7 +502,15 @@ def plot_experiment_curves(ds, si=None) -> plt.Figure:
 
 
 def plot_cot_comparison(v0: np.ndarray, data: dict[str, np.ndarray]) -> plt.Figure:
-    """The paper's Fig. 9: minimum-CoT vs minimum-depth impedance, (a) depth, (b) CoT."""
+    """The paper's Fig. 9: minimum-CoT vs minimum-depth impedance, (a) depth, (b) CoT.
+
+    Parameters
+    ----------
+    v0 : ndarray
+        Impact velocities.
+    data : dict
+        Columns of the CoT study (depth and CoT of each optimum).
+    """
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
     c = CONTROLLER_COLOURS
     a1.plot(v0, data["rigid_depth"], "o-", ms=3, color=c["rigid"], label="rigid leg")
@@ -475,6 +552,11 @@ def plot_robustness(ds) -> plt.Figure:
     """Regret (depth / redesigned depth) against the model error, per parameter.
 
     Filled markers keep the stroke; crosses leave it (at any time).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The robustness study (:func:`~softlanding.studies.robustness.robustness_study`).
     """
     params = list(ds.parameter.values)
     fig, axes = plt.subplots(1, len(params), figsize=(4.0 * len(params), 4.0), sharey=True)

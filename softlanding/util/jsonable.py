@@ -6,7 +6,13 @@ import math
 
 
 def json_safe(obj):
-    """A JSON-able copy: numpy scalars and arrays to Python, non-finite floats to None."""
+    """A JSON-able copy: numpy scalars and arrays to Python, non-finite floats to None.
+
+    Parameters
+    ----------
+    obj : object
+        Nested dicts, lists, tuples, numpy scalars and arrays, numbers.
+    """
     if isinstance(obj, dict):
         return {k: json_safe(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):

@@ -120,6 +120,11 @@ def packed_model(mats: dict) -> np.ndarray:
 
     The dicts of :func:`softlanding.model.dynamics.mode_matrices` are cached and
     treated as immutable; a new dict (``dict(mats, Wg=...)``) is packed anew.
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`softlanding.model.dynamics.mode_matrices` output.
     """
     hit = _PACKED.get(id(mats))
     if hit is not None and hit[0] is mats:
@@ -210,6 +215,31 @@ def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
     landings (default: n / (16 threads), between 16 and 1024) as they finish the
     previous one, so a busy core or a run of long landings delays no one else.
     ``max_steps`` bounds each landing's work as in :func:`run_landing`.
+
+    Parameters
+    ----------
+    mats_list : list of dict
+        :func:`softlanding.model.dynamics.mode_matrices` of each robot in the batch.
+    ridx : (n,) int array
+        Which entry of ``mats_list`` each landing uses.
+    Kf : (n, 3, 5) array
+        Feedback gains per landing and ground mode.
+    umax : (n,) array
+        Force limits (``inf`` for none).
+    x0 : (n, 4) array
+        Initial states.
+    s_lim : (n,) array
+        Strokes.
+    t_max, max_seg, energy
+        Horizon, segment limit, whether to compute the energy ledger.
+    out : (n, N_OUT) array
+        Filled with one output row per landing.
+    threads : int, optional
+        Worker threads (default :func:`default_threads`).
+    chunk : int, optional
+        Landings per chunk (default n / (16 threads), 16 to 1024).
+    max_steps : int
+        Work budget per landing, as in :func:`run_landing`.
     """
     import itertools
 
@@ -252,6 +282,13 @@ def sample_segments(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.nd
     with the kernel's own propagator (a pinned foot keeps exactly zero velocity).
 
     Returns the augmented states ``z`` (n, 5), the controls ``u`` (n,) and the modes (n,).
+
+    Parameters
+    ----------
+    segments : dict
+        The segment records a landing returned.
+    grid : ndarray
+        Times to sample at (non-decreasing).
     """
     ts = segments["t"]
     nseg = len(ts) - 1
@@ -276,6 +313,28 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
     ``mats`` are the mode matrices of the robot on the linear ground (their static and
     flight modes and body rows are every ground's). The output row has
     ``N_OUT_NL`` columns (``O_EDRAG``, ``O_EGRAIN`` added).
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`softlanding.model.dynamics.mode_matrices` of the robot.
+    law : tuple
+        The ground's law as the kernel takes it
+        (:func:`softlanding.simulation.groundcode.kernel_law`).
+    Kf : (3, 5) array
+        Feedback per ground mode (ignored when open loop).
+    umax : float
+        Force limit (``inf`` for none).
+    sched_t, sched_u : arrays
+        Open-loop schedule, as in :func:`run_landing`.
+    x0 : (4,) array
+        Initial state.
+    s_lim, t_max, max_seg, energy
+        Stroke, horizon, segment limit, whether to compute the energy ledger.
+    rtol : float
+        Relative tolerance of the integrator of the yielding segments.
+    max_steps : int
+        Work budget, as in :func:`run_landing`.
     """
     from softlanding.simulation.kernel.nonaffine import landing_entry_nl
 
@@ -290,7 +349,38 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
 def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
                  rtol=DEFAULT_RTOL, *, threads=None, chunk=None, max_steps=DEFAULT_MAX_STEPS):
     """Feedback landings on one non-affine ground in parallel (as :func:`run_batch`;
-    ``out`` has ``N_OUT_NL`` columns)."""
+    ``out`` has ``N_OUT_NL`` columns).
+
+    Parameters
+    ----------
+    mats_list : list of dict
+        :func:`softlanding.model.dynamics.mode_matrices` of each robot in the batch.
+    ridx : (n,) int array
+        Which entry of ``mats_list`` each landing uses.
+    law : tuple
+        The ground's law as the kernel takes it
+        (:func:`softlanding.simulation.groundcode.kernel_law`).
+    Kf : (n, 3, 5) array
+        Feedback gains per landing and ground mode.
+    umax : (n,) array
+        Force limits (``inf`` for none).
+    x0 : (n, 4) array
+        Initial states.
+    s_lim : (n,) array
+        Strokes.
+    t_max, max_seg, energy
+        Horizon, segment limit, whether to compute the energy ledger.
+    out : (n, N_OUT) array
+        Filled with one output row per landing.
+    rtol : float
+        Relative tolerance of the integrator of the yielding segments.
+    threads : int, optional
+        Worker threads (default :func:`default_threads`).
+    chunk : int, optional
+        Landings per chunk (default n / (16 threads), 16 to 1024).
+    max_steps : int
+        Work budget per landing, as in :func:`run_landing`.
+    """
     import itertools
 
     from softlanding.simulation.kernel.nonaffine import batch_range_nl
@@ -323,7 +413,15 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
 def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
                                                                    np.ndarray]:
     """:func:`sample_segments` for a non-affine landing: its yielding segments are integrated
-    again from their recorded starts (same integrator and tolerance)."""
+    again from their recorded starts (same integrator and tolerance).
+
+    Parameters
+    ----------
+    segments : dict
+        The segment records a landing returned.
+    grid : ndarray
+        Times to sample at (non-decreasing).
+    """
     from softlanding.simulation.kernel.nonaffine import sample_nl
 
     G, fp, rtol = segments["law"]

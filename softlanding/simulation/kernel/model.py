@@ -23,7 +23,13 @@ N_MODEL = 127
 
 
 def pack_model(mats: dict) -> np.ndarray:
-    """The flat model vector of a :func:`~softlanding.model.dynamics.mode_matrices` dict."""
+    """The flat model vector of a :func:`~softlanding.model.dynamics.mode_matrices` dict.
+
+    Parameters
+    ----------
+    mats : dict
+        :func:`~softlanding.model.dynamics.mode_matrices` output.
+    """
     P = np.empty(N_MODEL)
     P[M_A:M_B] = np.asarray(mats["A"], dtype=float).reshape(75)
     P[M_B:M_FZ] = np.asarray(mats["B"], dtype=float).reshape(15)
