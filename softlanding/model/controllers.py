@@ -85,7 +85,7 @@ class Rigid:
         Parameters
         ----------
         units : Units
-            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+            The scale (nothing to convert).
         """
         return {}
 
@@ -173,7 +173,7 @@ class Impedance:
         Parameters
         ----------
         units : Units
-            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+            The scale of the gains (stiffness and damping units).
         """
         return {"K_p": self.k_p * units.stiffness, "K_d": self.k_d * units.damping,
                 "rest_length": None if self.l0 is None else self.l0 * units.length}
@@ -263,7 +263,7 @@ class ForceSchedule:
         Parameters
         ----------
         units : Units
-            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+            The scale of the times and forces.
         """
         return {"times_s": [t * units.time for t in self.times],
                 "forces_N": [u * units.force for u in self.values]}
@@ -351,7 +351,7 @@ class FeedbackSchedule:
         Parameters
         ----------
         units : Units
-            The scale (``m_t``, ``k_g``, ``g``) to convert with.
+            The scale of the times and of the gains' rows.
         """
         scale = np.array([units.force / units.length, units.force / units.velocity,
                           units.force / units.length, units.force / units.velocity,

@@ -75,8 +75,22 @@ def _depth_power(depth: Any, n: float) -> Any:
     return depth**n if n != 1.0 else depth
 
 
+class _NoAddedMass:
+    """A ground whose grains do not move with the foot (a mixin)."""
+
+    def added_mass(self, depth: Any) -> Any:
+        """No grains move with the foot.
+
+        Parameters
+        ----------
+        depth : float or expression
+            ``-x_f`` (unused).
+        """
+        return 0.0
+
+
 @dataclass(frozen=True)
-class LinearGround:
+class LinearGround(_NoAddedMass):
     """The paper's one-way plastic spring: ``f_g = -x_f = d`` while the foot yields.
 
     In the paper's units the stiffness is 1 (lengths are scaled by
@@ -99,16 +113,6 @@ class LinearGround:
         """
         return depth
 
-    def added_mass(self, depth: Any) -> Any:
-        """No grains move with the foot.
-
-        Parameters
-        ----------
-        depth : float or expression
-            ``-x_f`` (unused).
-        """
-        return 0.0
-
     @property
     def is_affine(self) -> bool:
         return True
@@ -119,7 +123,7 @@ class LinearGround:
 
 
 @dataclass(frozen=True)
-class DragGround:
+class DragGround(_NoAddedMass):
     """The paper's spring plus inertial drag (Katsuragi & Durian, Nature Physics 3, 420, 2007).
 
     While the foot yields, ``f_g = d + c_d v_f^2``: the granular impact force law
@@ -156,16 +160,6 @@ class DragGround:
             The foot's velocity (< 0 while yielding).
         """
         return depth + self.c_d * v_f**2 if self.c_d else depth
-
-    def added_mass(self, depth: Any) -> Any:
-        """No grains move with the foot.
-
-        Parameters
-        ----------
-        depth : float or expression
-            ``-x_f`` (unused).
-        """
-        return 0.0
 
     @property
     def is_affine(self) -> bool:

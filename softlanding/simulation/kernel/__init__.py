@@ -42,53 +42,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import (  # noqa: F401  (re-exported)
-    BODY_FLIES_OFF,
-    BODY_THROUGH_FOOT,
-    DEFAULT_MAX_STEPS,
-    EV_LAND,
-    EV_LIFT,
-    EV_SAT_HIGH,
-    EV_SAT_LOW,
-    EV_STOP,
-    EV_UNSAT,
-    EV_YIELD,
-    FEAS_TOL,
-    FLIGHT,
-    HOPS_TO_LIMIT,
-    HORIZON,
-    LINEAR,
-    N_OUT,
-    NEVER_RESTS_CREEP,
-    O_DEPTH,
-    O_DLIM,
-    O_E0,
-    O_EACT,
-    O_EGND,
-    O_ET,
-    O_FEAS,
-    O_FOOT_REST,
-    O_NSEG,
-    O_SMAX,
-    O_SMIN,
-    O_STATUS,
-    O_STEPS,
-    O_T,
-    O_TSTOP,
-    O_UMAX,
-    O_UMIN,
-    O_UPEAK,
-    OPEN_LOOP,
-    OUT_OF_RANGE,
-    REST_PROVEN,
-    SAT_HIGH,
-    SAT_LOW,
-    SCALE_MAX,
-    STATIC,
-    STEP_BUDGET,
-    TOO_MANY_SEGMENTS,
-    YIELDING,
-)
+# the output layout, status and event codes, re-exported for the simulator
+from softlanding.simulation.kernel.const import *  # noqa: F403
+
+# ruff: noqa: F405  (the codes used below come from the star import above)
 from softlanding.simulation.kernel.landing import batch_range, landing_entry
 from softlanding.simulation.kernel.linalg import flat25, norm_rows4, prop4_t, row5
 from softlanding.simulation.kernel.model import pack_model
@@ -206,6 +163,33 @@ def default_threads() -> int:
     return max(1, int(numba.config.NUMBA_NUM_THREADS))  # type: ignore[attr-defined]
 
 
+def _in_chunks(run_range, args: tuple, n: int, out: np.ndarray, threads: int | None,
+               chunk: int | None, chunk_range: tuple[int, int]) -> None:
+    """``run_range(*args, out, a, b)`` over ``[0, n)`` in chunks taken by ``threads``
+    workers as they finish the previous one (default chunk: n / (16 threads) within
+    ``chunk_range``), so a busy core or a run of long landings delays no one else."""
+    import itertools
+
+    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
+    threads = default_threads() if threads is None else max(1, int(threads))
+    lo, hi = chunk_range
+    chunk = int(chunk) if chunk else min(hi, max(lo, n // (16 * threads)))
+    if threads == 1 or n <= chunk:
+        run_range(*args, res, 0, n)
+    else:
+        counter = itertools.count()
+
+        def work():
+            while (a := next(counter) * chunk) < n:
+                run_range(*args, res, a, min(n, a + chunk))
+
+        futures = [_pool(threads).submit(work) for _ in range(threads)]
+        for f in futures:
+            f.result()
+    if res is not out:
+        out[...] = res
+
+
 def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out, *,
               threads=None, chunk=None, max_steps=DEFAULT_MAX_STEPS):
     """Feedback landings in parallel; row ``i`` uses ``mats_list[ridx[i]]``.
@@ -241,29 +225,10 @@ def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
     max_steps : int
         Work budget per landing, as in :func:`run_landing`.
     """
-    import itertools
-
     Ps = np.stack([packed_model(m) for m in mats_list])
     args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(Kf), _f64(umax), _f64(x0),
             _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps))
-    n = len(args[4])
-    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
-    threads = default_threads() if threads is None else max(1, int(threads))
-    chunk = int(chunk) if chunk else min(1024, max(16, n // (16 * threads)))
-    if threads == 1 or n <= chunk:
-        batch_range(*args, res, 0, n)
-    else:
-        counter = itertools.count()
-
-        def work():
-            while (a := next(counter) * chunk) < n:
-                batch_range(*args, res, a, min(n, a + chunk))
-
-        futures = [_pool(threads).submit(work) for _ in range(threads)]
-        for f in futures:
-            f.result()
-    if res is not out:
-        out[...] = res
+    _in_chunks(batch_range, args, len(args[4]), out, threads, chunk, (16, 1024))
 
 
 @njit(cache=True)
@@ -316,25 +281,13 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
 
     Parameters
     ----------
-    mats : dict
-        :func:`softlanding.model.dynamics.mode_matrices` of the robot.
+    mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, energy, max_steps
+        As :func:`run_landing`.
     law : tuple
         The ground's law as the kernel takes it
         (:func:`softlanding.simulation.groundcode.kernel_law`).
-    Kf : (3, 5) array
-        Feedback per ground mode (ignored when open loop).
-    umax : float
-        Force limit (``inf`` for none).
-    sched_t, sched_u : arrays
-        Open-loop schedule, as in :func:`run_landing`.
-    x0 : (4,) array
-        Initial state.
-    s_lim, t_max, max_seg, energy
-        Stroke, horizon, segment limit, whether to compute the energy ledger.
     rtol : float
         Relative tolerance of the integrator of the yielding segments.
-    max_steps : int
-        Work budget, as in :func:`run_landing`.
     """
     from softlanding.simulation.kernel.nonaffine import landing_entry_nl
 
@@ -353,33 +306,13 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
 
     Parameters
     ----------
-    mats_list : list of dict
-        :func:`softlanding.model.dynamics.mode_matrices` of each robot in the batch.
-    ridx : (n,) int array
-        Which entry of ``mats_list`` each landing uses.
+    mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out, threads, chunk, max_steps
+        As :func:`run_batch`.
     law : tuple
         The ground's law as the kernel takes it
         (:func:`softlanding.simulation.groundcode.kernel_law`).
-    Kf : (n, 3, 5) array
-        Feedback gains per landing and ground mode.
-    umax : (n,) array
-        Force limits (``inf`` for none).
-    x0 : (n, 4) array
-        Initial states.
-    s_lim : (n,) array
-        Strokes.
-    t_max, max_seg, energy
-        Horizon, segment limit, whether to compute the energy ledger.
-    out : (n, N_OUT) array
-        Filled with one output row per landing.
     rtol : float
         Relative tolerance of the integrator of the yielding segments.
-    threads : int, optional
-        Worker threads (default :func:`default_threads`).
-    chunk : int, optional
-        Landings per chunk (default n / (16 threads), 16 to 1024).
-    max_steps : int
-        Work budget per landing, as in :func:`run_landing`.
     """
     import itertools
 
@@ -390,24 +323,7 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
     args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(G), fp, _f64(Kf), _f64(umax),
             _f64(x0), _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps),
             float(rtol))
-    n = len(args[6])
-    res = out if (out.flags.c_contiguous and out.dtype == np.float64) else _f64(out)
-    threads = default_threads() if threads is None else max(1, int(threads))
-    chunk = int(chunk) if chunk else min(256, max(4, n // (16 * threads)))
-    if threads == 1 or n <= chunk:
-        batch_range_nl(*args, res, 0, n)
-    else:
-        counter = itertools.count()
-
-        def work():
-            while (a := next(counter) * chunk) < n:
-                batch_range_nl(*args, res, a, min(n, a + chunk))
-
-        futures = [_pool(threads).submit(work) for _ in range(threads)]
-        for f in futures:
-            f.result()
-    if res is not out:
-        out[...] = res
+    _in_chunks(batch_range_nl, args, len(args[6]), out, threads, chunk, (4, 256))
 
 
 def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
