@@ -314,7 +314,6 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
     rtol : float
         Relative tolerance of the integrator of the yielding segments.
     """
-    import itertools
 
     from softlanding.simulation.kernel.nonaffine import batch_range_nl
 
