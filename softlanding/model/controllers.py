@@ -237,10 +237,8 @@ class ForceSchedule:
 
         Parameters
         ----------
-        mats : dict
-            The mode data of :func:`~softlanding.model.dynamics.mode_matrices`.
-        robot : Robot
-            The robot.
+        mats, robot
+            The mode data (unused) and the robot, whose force limit bounds the values.
 
         Raises
         ------
@@ -254,7 +252,7 @@ class ForceSchedule:
         return np.zeros((3, 5)), np.asarray(self.times, float), v
 
     def describe(self) -> str:
-        """One line for tables and titles."""
+        """One line for tables and titles (how many switches)."""
         return f"open-loop schedule with {len(self.times)} switches"
 
     def to_si(self, units: Units) -> dict[str, Any]:
@@ -263,7 +261,7 @@ class ForceSchedule:
         Parameters
         ----------
         units : Units
-            The scale of the times and forces.
+            The scale of the times [s] and of the forces [N].
         """
         return {"times_s": [t * units.time for t in self.times],
                 "forces_N": [u * units.force for u in self.values]}

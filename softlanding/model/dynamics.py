@@ -130,7 +130,7 @@ def stance_dynamics(x, u, r_m, ground: Ground = LINEAR_GROUND):
     Parameters
     ----------
     x : casadi expression or array of 4
-        State.
+        State ``[x_b, v_b, x_f, v_f]``.
     u : scalar expression
         Actuator force.
     r_m : float or expression

@@ -154,10 +154,8 @@ class DragGround(_NoAddedMass):
 
         Parameters
         ----------
-        depth : float or expression
-            ``-x_f`` (>= 0).
-        v_f : float or expression
-            The foot's velocity (< 0 while yielding).
+        depth, v_f : float or expression
+            Foot depth ``-x_f`` (>= 0) and velocity (< 0 while yielding).
         """
         return depth + self.c_d * v_f**2 if self.c_d else depth
 
@@ -260,10 +258,8 @@ class AddedMassGround:
 
         Parameters
         ----------
-        depth : float or expression
-            ``-x_f`` (>= 0).
-        v_f : float or expression
-            The foot's velocity (< 0 while yielding).
+        depth, v_f : float or expression
+            Foot depth ``-x_f`` (>= 0) and velocity (< 0 while yielding).
         """
         dd = self._clipped(depth)
         flux = self.pi_a * (self.radius - self.kappa * dd) ** 2

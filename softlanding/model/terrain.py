@@ -143,10 +143,8 @@ def poppy_seed_added_mass(units: Units, diameter: float = PAPER_FOOT_DIAMETER, *
 
     Parameters
     ----------
-    units : Units
-        The robot's mass and ground stiffness.
-    diameter : float
-        Foot diameter, m.
+    units, diameter
+        As :func:`poppy_seed_drag`.
     theta_deg : float
         Shear-band angle of the grain cone, degrees.
     mu : float

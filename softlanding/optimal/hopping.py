@@ -601,12 +601,8 @@ def rigid_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
 
     Parameters
     ----------
-    impact : Impact or float
-        Touchdown velocity.
-    robot : Robot
-        The robot.
-    eta : float
-        Regenerative efficiency.
+    impact, robot, eta
+        Touchdown velocity, robot and regenerative efficiency, as in :func:`solve_hop`.
     """
     robot, impact = _check(robot, impact, eta)
     x0 = impact.initial_state(robot.replace(l0=None))

@@ -27,6 +27,7 @@ from softlanding.errors import ParameterError
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.ground import LINEAR_GROUND
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal import pipeline
 from softlanding.optimal.leg_extension_problem import (
     MODES,
     leg_extension_transcription,
@@ -36,13 +37,6 @@ from softlanding.optimal.phase_schedule import ArcLaw, arc_laws, propagate, repl
 from softlanding.optimal.phase_solve import (
     phase_guess,
     second_start,
-)
-from softlanding.optimal.pipeline import (
-    PhasedVariant,
-    continuation,
-    force_limit,
-    landing_parameters,
-    solve_phased,
 )
 from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase import TwoPhaseLanding, solve_two_phase
@@ -251,7 +245,7 @@ def _fixed_flight(out: LegExtensionLanding, robot: Robot, impact: Impact,
            "flight_arcs": out.flight_arcs})
 
 
-class LegExtension(PhasedVariant):
+class LegExtension(pipeline.PhasedVariant):
     """The leg extension's hooks in the pipeline (:func:`~softlanding.optimal.pipeline.
     solve_phased`).
 
@@ -274,7 +268,7 @@ class LegExtension(PhasedVariant):
 
     def parameters(self) -> dict[str, float]:
         """The landing's parameters, the touchdown bounds, the paper's leg in ``impact``."""
-        params = {**landing_parameters(self.robot, self.impact), **self.bounds}
+        params = {**pipeline.landing_parameters(self.robot, self.impact), **self.bounds}
         if self.mode == "impact":
             params["l0"] = self.robot.replace(l0=None).rest_length
         return params
@@ -359,14 +353,14 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         No landing satisfies the constraints.
     """
     impact = Impact.of(impact)
-    force_limit(robot)
+    pipeline.force_limit(robot)
     if mode not in MODES:
         raise ParameterError("mode", f"must be one of {MODES}, got {mode!r}")
     if mode == "drop" and impact.v0 >= 0:
         raise ParameterError("v0", "a drop needs a height: v0 < 0")
     bounds = _bounds(robot, extension, rate) if mode == "impact" else {}
     two = two_phase if two_phase is not None else solve_two_phase(impact, robot.replace(l0=None))
-    out = solve_phased(LegExtension(robot, impact, mode, bounds, two), warm_start,
+    out = pipeline.solve_phased(LegExtension(robot, impact, mode, bounds, two), warm_start,
                        replay=replay)
     assert isinstance(out, LegExtensionLanding)
     return out
@@ -403,7 +397,7 @@ def sweep_leg_extension(v0_values, robot: Robot = PAPER_ROBOT, *, mode: str = "i
         return solve_leg_extension(imp, robot, mode=mode, extension=extension, rate=rate,
                                    warm_start=prev, two_phase=two)
 
-    return continuation(impacts, one, progress, f"leg extension ({mode})")
+    return pipeline.continuation(impacts, one, progress, f"leg extension ({mode})")
 
 
 __all__ = ["LegExtension", "LegExtensionLanding", "solve_leg_extension", "sweep_leg_extension"]

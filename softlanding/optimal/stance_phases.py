@@ -86,12 +86,8 @@ def support_force(x, u, r_m):
 
     Parameters
     ----------
-    x : casadi expression or array of 4
-        State.
-    u : scalar expression
-        Actuator force.
-    r_m : float or expression
-        Mass ratio.
+    x, u, r_m
+        State (4 entries), actuator force and mass ratio, symbolic or numeric.
     """
     return _support_function()(x, u, r_m)
 
@@ -116,12 +112,9 @@ def add_yielding(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
 
     Parameters
     ----------
-    mp : MultiPhaseProblem
-        The problem to add the phase to.
-    name : str
-        Phase name.
-    par : dict
-        The problem's parameters (:func:`parameters`).
+    mp, name, par
+        The problem to add the phase to, the phase's name, the problem's parameters
+        (:func:`parameters`).
     ground : Ground
         Ground model.
     """
@@ -134,19 +127,13 @@ def add_yielding(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
 
 def add_static(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
                ground: Ground = LINEAR_GROUND, omit: tuple[str, ...] = ()) -> OptimalControlProblem:
-    """A static-stance phase: the foot pinned at the crater bottom, the support force
+    """Add a static-stance phase: the foot pinned at the crater bottom, the support force
     within ``[0, crater capacity]`` (mixed path constraints :data:`NO_PULL`, :data:`CRATER`).
 
     Parameters
     ----------
-    mp : MultiPhaseProblem
-        The problem to add the phase to.
-    name : str
-        Phase name.
-    par : dict
-        The problem's parameters (:func:`parameters`).
-    ground : Ground
-        Ground model.
+    mp, name, par, ground
+        As :func:`add_yielding` (``ground``: whose yield force is the crater's capacity).
     omit : tuple of str
         Conditions to leave out (:data:`STROKE`, :data:`CRATER`; diagnosis only).
     """
@@ -165,12 +152,9 @@ def add_flight(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX]) -> Optim
 
     Parameters
     ----------
-    mp : MultiPhaseProblem
-        The problem to add the phase to.
-    name : str
-        Phase name.
-    par : dict
-        The problem's parameters (:func:`parameters`).
+    mp, name, par
+        The problem to add the phase to, the phase's name, the problem's parameters
+        (:func:`parameters`).
     """
     ph = _phase(mp, name, par)
     ph.set_dynamics(robot_rhs(ph.x, ph.u[0], 0.0, par["r_m"]))

@@ -296,16 +296,9 @@ def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINE
 
     Parameters
     ----------
-    v0_values : sequence of float
-        Impact velocities.
-    robot : Robot
-        The robot (with a force limit).
-    ground : Ground
-        Ground model.
-    progress : bool, optional
-        Progress bar.
-    replay : bool
-        Replay every schedule in the exact simulator.
+    v0_values, robot, ground, progress, replay
+        As :func:`~softlanding.optimal.landing.sweep_landing` (``replay``: every schedule
+        in the exact simulator).
     """
     impacts = [Impact.of(v) for v in v0_values]
     force_limit(robot)
@@ -404,12 +397,8 @@ def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
 
     Parameters
     ----------
-    impact : Impact or float
-        Impact velocity.
-    robot : Robot
-        The robot (with a force limit).
-    ground : Ground
-        Ground model.
+    impact, robot, ground
+        The landing, as in :func:`solve_two_phase`.
     one_step : TwoPhaseLanding, optional
         The two-phase optimum (solved if not given).
     """

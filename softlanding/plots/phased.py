@@ -142,6 +142,14 @@ def plot_hop(cycle: Any) -> plt.Figure:
     return plot_phases(tr.t, tr.x, tr.u[:, 0], merged, title)
 
 
+def _depth_panel(a: Any, title: str) -> None:
+    """Labels of a depth-against-v0 panel."""
+    a.set_xlabel(r"$v_0$")
+    a.set_ylabel("depth")
+    a.legend(fontsize=8, loc="upper right")
+    a.set_title(title, fontsize=9)
+
+
 def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
                          hops: Mapping[str, Sequence[Any]]) -> plt.Figure:
     """The three findings: two-phase vs paper depth; leg extension; hop energy per cycle.
@@ -163,10 +171,7 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     b = a.twinx()
     b.semilogy(v, [max(abs(r.gain), 1e-17) for r in two], "C3.", ms=3)
     b.set_ylabel("|depth difference|", color="C3")
-    a.set_xlabel(r"$v_0$")
-    a.set_ylabel("depth")
-    a.legend(fontsize=8, loc="upper right")
-    a.set_title("1. the body-arrest phase optimised", fontsize=9)
+    _depth_panel(a, "1. the body-arrest phase optimised")
     a = axes[1]
     v = np.array([r.impact.v0 for r in legs])
     a.plot(v, [r.paper_depth for r in legs], "k-", label=r"leg $s/2$ at impact (paper)")
@@ -174,10 +179,7 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     b = a.twinx()
     b.plot(v, [r.extension for r in legs], "C2--", label="optimal leg length")
     b.set_ylabel("leg length at impact", color="C2")
-    a.set_xlabel(r"$v_0$")
-    a.set_ylabel("depth")
-    a.legend(fontsize=8, loc="upper right")
-    a.set_title("2. pre-impact leg extension", fontsize=9)
+    _depth_panel(a, "2. pre-impact leg extension")
     a = axes[2]
     for k, (leg, rows) in enumerate(hops.items()):
         pts = [(r.apex_height, r.energy) for r in rows if r is not None]

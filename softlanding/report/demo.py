@@ -69,10 +69,8 @@ def plot_demo(robot: Robot = PAPER_IMPEDANCE_ROBOT, impedance: Impedance = DEMO_
 
     Parameters
     ----------
-    robot : Robot
-        The robot.
-    impedance : Impedance
-        The leg compared with the rigid one.
+    robot, impedance
+        As :func:`demo_table`.
     stepped : list of LandingResult, optional
         :func:`stepped_intrusions` if already computed.
 
