@@ -119,7 +119,15 @@ class ActiveSetNewton:
     def check(self, w: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray,
                                                             np.ndarray, float, list]:
         """All rows ``g``, the active rows' Jacobian, ``grad f``, ``f`` and the ``extra``
-        outputs (CasADi DM) at ``w``."""
+        outputs (CasADi DM) at ``w``.
+
+        Parameters
+        ----------
+        w : ndarray
+            The refinement NLP's variables.
+        pv : ndarray
+            Parameter values, in the problem's order.
+        """
         g, Jg, gJ, f, *more = self.check_fn.call([w, pv])
         return (g.full().ravel(), np.asarray(ca.DM(Jg).full()), gJ.full().ravel(),
                 float(f), more)

@@ -63,11 +63,23 @@ class TranscribedSolution(Protocol):
     objective: float
 
     def control(self, name: str) -> np.ndarray:
-        """The column of control ``name``."""
+        """The column of control ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Control name.
+        """
         ...
 
     def evaluate(self, expr: ca.SX) -> np.ndarray:
-        """An expression of (x, u, p) at every node."""
+        """An expression of (x, u, p) at every node.
+
+        Parameters
+        ----------
+        expr : casadi.SX
+            An expression of the problem's states, controls and parameters.
+        """
         ...
 
 
@@ -76,7 +88,13 @@ SolutionLike = Solution | TranscribedSolution
 
 
 def transcribed(sol: SolutionLike) -> TranscribedSolution:
-    """``sol`` typed by :class:`TranscribedSolution` (no conversion)."""
+    """``sol`` typed by :class:`TranscribedSolution` (no conversion).
+
+    Parameters
+    ----------
+    sol : Solution or Trajectory-like
+        A solution of a transcription.
+    """
     return cast(TranscribedSolution, sol)
 
 
@@ -124,7 +142,17 @@ class Arc:
 
 @dataclass
 class SwitchingStructure:
-    """Arcs of one control, and whether they are all bang arcs."""
+    """Arcs of one control, and whether they are all bang arcs.
+
+    Attributes
+    ----------
+    control : str
+        The control's name.
+    arcs : list of Arc
+        Its arcs in time order.
+    lower, upper : float
+        Its bounds.
+    """
 
     control: str
     arcs: list[Arc]
@@ -169,7 +197,15 @@ class SwitchingStructure:
 
 @dataclass
 class Interval:
-    """An interval between consecutive switch events of any control, with each control's mode."""
+    """An interval between consecutive switch events of any control, with each control's mode.
+
+    Attributes
+    ----------
+    start, end : float
+        The interval's times.
+    modes : tuple of Mode
+        Each control's mode on it.
+    """
 
     start: float
     end: float

@@ -98,7 +98,13 @@ def is_control_only(pr: OptimalControlProblem, c: Constraint | str | None) -> bo
 
 
 def path_kinds(pr: OptimalControlProblem) -> list[str]:
-    """:func:`constraint_kind` of every path constraint, in ``pr.path`` order."""
+    """:func:`constraint_kind` of every path constraint, in ``pr.path`` order.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+        The problem.
+    """
     return [constraint_kind(pr, c) for c in pr.path]
 
 

@@ -47,6 +47,17 @@ class PMPFunctions:
     ``linear`` says whether H is linear in u (then sigma is the switching function
     and does not depend on u); otherwise H is quadratic in u with Hessian ``Huu(x, p)``
     (a running cost such as ``u^2 / 2``), and sigma is evaluated at the actual control.
+
+    Attributes
+    ----------
+    H, sigma, Hx : casadi.Function
+        Hamiltonian, ``dH/du`` and ``H_x`` of ``(x, u, lam, p)``.
+    linear : bool
+        H is linear in u.
+    Huu : casadi.Function
+        ``d2H/du2`` of ``(x, p)`` (zero when linear).
+    sigma_terms : casadi.Function
+        The size of the terms sigma is made of.
     """
 
     H: ca.Function
@@ -64,6 +75,11 @@ def pmp_functions(pr: OptimalControlProblem) -> PMPFunctions:
     The running cost may be quadratic in u (H convex in u is checked by the
     certificate along the samples): the minimum condition is then the KKT
     condition of ``min_u H`` over the bounds, checked with ``sigma = dH/du``.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+        A control-affine problem.
 
     Raises
     ------
@@ -240,6 +256,8 @@ class AdjointSweep:
         refinement's forward state at the arcs' starts, relative.
     steps : list of int
         RK8 steps per arc of the finer run (0 for exact arcs).
+    coarse : AdjointSweep or None
+        The coarser run the accuracy was measured against.
     """
 
     t: np.ndarray

@@ -23,7 +23,21 @@ from .multiphase import PhaseTimes
 
 @dataclass
 class PhaseNLP:
-    """Symbolic pieces of one phase, in terms of the decision vector ``w`` and ``P``, ``V``."""
+    """Symbolic pieces of one phase, in terms of the decision vector ``w`` and ``P``, ``V``.
+
+    Attributes
+    ----------
+    t0, T, x0, u0, xT, uT : casadi.MX
+        Times, and states and controls at both ends.
+    q : casadi.MX
+        The integrals declared with ``problem.integral()``, in order.
+    lagrange : casadi.MX
+        Integral of the running cost.
+    constraints : list
+        ``(name, expr, lower, upper)`` rows.
+    lbw, ubw, w0 : casadi.SX
+        Bounds and default guess of the block (functions of the parameters).
+    """
 
     t0: ca.MX
     T: ca.MX
@@ -41,7 +55,17 @@ class PhaseNLP:
 
 @dataclass
 class PhaseLayout:
-    """Where a phase lives in ``w`` (absolute indices) and in ``g`` (``blocks``)."""
+    """Where a phase lives in ``w`` (absolute indices) and in ``g`` (``blocks``).
+
+    Attributes
+    ----------
+    iT, it0 : int or None
+        Index of the free final / initial time in ``w``.
+    iX, iU, iZ, iV : slice
+        States, controls, collocation states, phase variables in ``w``.
+    blocks : dict
+        Constraint name -> rows in ``g``.
+    """
 
     iT: int | None
     iX: slice
@@ -54,7 +78,27 @@ class PhaseLayout:
 
 @dataclass
 class PhaseData:
-    """One phase's solved arrays (what :class:`ocp.Solution` exposes)."""
+    """One phase's solved arrays (what :class:`ocp.Solution` exposes).
+
+    Attributes
+    ----------
+    t0, T : float
+        Initial and final time.
+    t : ndarray
+        Every discretisation point.
+    x : ndarray
+        States there, ``(len(t), nx)``.
+    u : ndarray
+        Control on each ``[t_k, t_k+1]``, ``(len(t) - 1, nu)``.
+    u_points : ndarray
+        A control value at each point, ``(len(t), nu)``.
+    mesh : ndarray
+        Mesh (shooting node) times.
+    s : ndarray
+        Static vector ``[p; v; t0; T]``.
+    raw : dict
+        Transcription-specific arrays.
+    """
 
     t0: float
     T: float

@@ -121,7 +121,13 @@ def path_constraint(pr: OptimalControlProblem, name: str) -> Constraint:
 
 
 def has_running_cost(pr: OptimalControlProblem) -> bool:
-    """True when the problem has a Lagrange term."""
+    """True when the problem has a Lagrange term.
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+        The problem.
+    """
     return not (isinstance(pr.lagrange, ca.SX) and pr.lagrange.is_zero())
 
 
@@ -279,16 +285,34 @@ class ArcDynamics:
 
     # --------------------------------------------------------------- numeric
     def affine_numeric(self, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``A`` (nz, nz) and ``b`` (nz,) of ``z' = A z + b`` at parameters ``pv`` (exact only)."""
+        """``A`` (nz, nz) and ``b`` (nz,) of ``z' = A z + b`` at parameters ``pv`` (exact only).
+
+        Parameters
+        ----------
+        pv : ndarray
+            Parameter values, in the problem's order.
+        """
         A, b = self.A_fn(pv)
         return np.array(A, dtype=float), np.array(b, dtype=float).ravel()
 
     def norm_A(self, pv: np.ndarray) -> float:
-        """``||A||_1`` at ``pv`` (exact arcs), which sets the sub-steps of the Taylor flow."""
+        """``||A||_1`` at ``pv`` (exact arcs), which sets the sub-steps of the Taylor flow.
+
+        Parameters
+        ----------
+        pv : ndarray
+            Parameter values, in the problem's order.
+        """
         return float(np.abs(self.affine_numeric(pv)[0]).sum(axis=0).max())
 
     def control_law_affine(self, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(K, k0)`` with ``u = K x + k0`` when the controls are affine in x, else None."""
+        """``(K, k0)`` with ``u = K x + k0`` when the controls are affine in x, else None.
+
+        Parameters
+        ----------
+        pv : ndarray
+            Parameter values, in the problem's order.
+        """
         x = self.problem.x
         if not is_affine(self.u, x):
             return None
@@ -331,6 +355,11 @@ def expm(M: np.ndarray) -> np.ndarray:
     OpenBLAS makes every small LAPACK call take milliseconds on a busy machine
     (measured 16 ms for a 5x5 expm under load, 12 us single-threaded), while
     numpy's matrix products stay at microseconds.
+
+    Parameters
+    ----------
+    M : ndarray
+        A small square matrix.
     """
     M = np.asarray(M, dtype=float)
     nrm = float(np.abs(M).sum(axis=0).max()) if M.size else 0.0

@@ -85,6 +85,17 @@ class DefaultChoices:
     ``val[i]``; its default becomes ``val[i]`` clipped into its bounds when
     ``use[i]`` is 1. The guess function takes ``use`` and ``val`` after the
     parameters, so a replacement needs no rebuild.
+
+    Attributes
+    ----------
+    names : list of str
+        The registered quantities.
+    bounds : list
+        Their bounds.
+    refs : list
+        Their typical sizes (or None).
+    use, val : list of casadi.SX
+        The switch and the replacement value of each.
     """
 
     names: list[str] = field(default_factory=list)

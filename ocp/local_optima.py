@@ -95,6 +95,23 @@ class StartResult:
     ``status`` Ipopt's return status (or the exception's name when the start
     could not be solved); ``optimum`` the index in
     :attr:`MultistartResult.optima` of the optimum it reached.
+
+    Attributes
+    ----------
+    index : int
+        The start's number.
+    origin, point, status
+        As above.
+    success, verified : bool
+        Ipopt converged; the solution passed the checks between nodes.
+    objective : float
+        Its objective (NaN when it failed).
+    iterations, solve_time
+        Ipopt's iterations and time.
+    optimum : int or None
+        Index of the optimum reached.
+    message : str
+        Why it failed, when it did.
     """
 
     index: int
@@ -112,7 +129,17 @@ class StartResult:
 
 @dataclass
 class LocalOptimum:
-    """One distinct local optimum: its objective, a solution, the starts that reached it."""
+    """One distinct local optimum: its objective, a solution, the starts that reached it.
+
+    Attributes
+    ----------
+    objective : float
+        Its objective.
+    solution : Solution
+        A solution that reached it.
+    starts : list of int
+        The starts that reached it.
+    """
 
     objective: float
     solution: Solution

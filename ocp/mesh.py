@@ -54,6 +54,19 @@ class MeshRound:
     interval's estimate above ``tol``), ``"objective"`` (the states met
     ``tol``, the objective's estimate did not meet ``objective_tol``) or
     ``""`` (the last round).
+
+    Attributes
+    ----------
+    intervals : list of int
+        Mesh intervals per phase.
+    max_error : float
+        Largest interval error estimate.
+    objective : float
+        The round's objective.
+    iterations, solve_time
+        Ipopt's iterations and time.
+    objective_error, refined_for
+        As above.
     """
 
     intervals: list[int]  # per phase

@@ -47,7 +47,19 @@ PhaseRef = OptimalControlProblem | int
 
 @dataclass
 class PhaseTimes:
-    """How a phase's initial and final times enter the NLP (resolved over the sequence)."""
+    """How a phase's initial and final times enter the NLP (resolved over the sequence).
+
+    Attributes
+    ----------
+    t0_free, T_free : bool
+        The initial / final time is a decision.
+    t0_bounds, T_bounds : (float, float)
+        Their bounds.
+    t0_guess, T_guess : float
+        Their guesses.
+    span : (float, float) or None
+        Bounds on ``T - t0`` imposed as a constraint.
+    """
 
     t0_free: bool
     t0_bounds: tuple[float, float]

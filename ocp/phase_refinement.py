@@ -252,7 +252,13 @@ class PhaseSwitchingNLP(SwitchingNLP):
 
     # -------------------------------------------------------------- numerics
     def phase_slice(self, i: int) -> slice:
-        """Where phase ``i``'s ``[durations, x0]`` live in ``w``."""
+        """Where phase ``i``'s ``[durations, x0]`` live in ``w``.
+
+        Parameters
+        ----------
+        i : int
+            Phase index.
+        """
         o = self.offsets[i]
         return slice(o, o + self.phase_K[i] + self.multiphase.phases[i].nx)
 

@@ -144,7 +144,13 @@ class _Rk8:
 
 
 def rk8_of(dyn: ArcDynamics) -> ca.Function:
-    """The RK8 step function ``(z, h, p) -> z_next`` of an arc mode (cached on it)."""
+    """The RK8 step function ``(z, h, p) -> z_next`` of an arc mode (cached on it).
+
+    Parameters
+    ----------
+    dyn : ArcDynamics
+        The arc mode.
+    """
     if not hasattr(dyn, "_rk8"):
         dyn._rk8 = _Rk8(dyn)  # type: ignore[attr-defined]
     return dyn._rk8.step  # type: ignore[attr-defined]
@@ -290,7 +296,13 @@ class SwitchingNLP:
     # ------------------------------------------------------------------ solve
     def bounds(self, pv: np.ndarray) -> dict[str, np.ndarray]:
         """Numeric ``lbx, ubx, lbg, ubg`` at parameters ``pv`` (read-only arrays; the
-        last parameter values' bounds are remembered)."""
+        last parameter values' bounds are remembered).
+
+        Parameters
+        ----------
+        pv : ndarray
+            Parameter values, in the problem's order.
+        """
         key = np.asarray(pv, dtype=float).tobytes()
         memo = self.__dict__.get("_bounds_memo")
         if memo is None or memo[0] != key:
@@ -693,7 +705,13 @@ class SwitchingNLP:
         return fn
 
     def row_times(self, w: np.ndarray) -> np.ndarray:
-        """Time of every constraint row at the solution ``w`` (samples, junctions, ends)."""
+        """Time of every constraint row at the solution ``w`` (samples, junctions, ends).
+
+        Parameters
+        ----------
+        w : ndarray
+            A solution of the refinement NLP.
+        """
         edges = np.r_[0.0, np.cumsum(w[:self.K])]
         out = np.empty(self.n_g)
         for r, (k, j) in enumerate(self.row_where):
@@ -1037,7 +1055,13 @@ def solved_nlp(problem: OptimalControlProblem, modes: tuple, samples: int,
 
 
 def clear_cache(problem: OptimalControlProblem | None = None) -> None:
-    """Forget the cached refinement NLPs (of one problem, or all)."""
+    """Forget the cached refinement NLPs (of one problem, or all).
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem, optional
+        Forget only this problem's NLPs (default: all).
+    """
     if problem is None:
         _NLP_CACHE.clear()
         _DYN_CACHE.clear()

@@ -76,7 +76,19 @@ OBJECTIVE_AUTO_MAX = 1e4
 
 @dataclass
 class Scaling:
-    """The constants of the change of variables and row scaling (see the module)."""
+    """The constants of the change of variables and row scaling (see the module).
+
+    Attributes
+    ----------
+    D, c : ndarray
+        ``w = D * w_s + c``.
+    r : ndarray
+        Row scaling ``g_s = r * g``.
+    objective_ref : float or None
+        The objective's scale (None: automatic at each solve).
+    enabled : bool
+        Whether the NLP is scaled.
+    """
 
     D: np.ndarray  # w = D * w_s + c
     c: np.ndarray
@@ -326,7 +338,17 @@ def _auto_ref(lo: Any, hi: Any, guess: Any, size: float | None = None) -> tuple[
 
 def loose_bounds(lv: float, hv: float, g: float) -> bool:
     """Finite bounds that say nothing of a magnitude: both non-zero and more than
-    :data:`LOOSE` apart, or spanning more than :data:`LOOSE` guess magnitudes ``g``."""
+    :data:`LOOSE` apart, or spanning more than :data:`LOOSE` guess magnitudes ``g``.
+
+    Parameters
+    ----------
+    lv : float
+        Lower bound.
+    hv : float
+        Upper bound.
+    g : float
+        The guess' magnitude.
+    """
     return _loose(lv, hv) or (g > 0 and hv - lv > LOOSE * g)
 
 

@@ -120,6 +120,22 @@ class RefinedSwitching:
         None: from this problem's own terminal constraints and Mayer term.
     notes : list of str
         E.g. intervals that shrank to zero length, rebuilds for accuracy.
+    problem, params
+        The problem and parameter values refined.
+    control, controls
+        The (first) control's name and every control's name.
+    lam_g, lam_x : ndarray
+        The refinement NLP's multipliers.
+    blocks : dict
+        Constraint name -> rows of the refinement NLP.
+    end_path_violation : float
+        Path-constraint violation at the arcs' ends.
+    build_time : float
+        Time to build the refinement NLP.
+    nlp : SwitchingNLP
+        The refinement NLP.
+    w : ndarray
+        Its solution.
     """
 
     problem: OptimalControlProblem
@@ -170,7 +186,13 @@ class RefinedSwitching:
         return self.lam_g[np.asarray(idx, dtype=int)] if len(self.lam_g) else np.zeros(0)
 
     def switch_times_of(self, control: str) -> list[float]:
-        """Switch times of one control (its own arc boundaries)."""
+        """Switch times of one control (its own arc boundaries).
+
+        Parameters
+        ----------
+        control : str
+            Control name.
+        """
         j = self.controls.index(control)
         edges = np.cumsum(self.durations)[:-1]
         return [float(edges[k]) for k in range(len(self.modes) - 1)
@@ -252,6 +274,11 @@ class RefinedSwitching:
         """Times, states, controls and interval index, sampled arc by arc (exact arcs exact).
 
         Junction times appear twice: the end of one interval and the start of the next.
+
+        Parameters
+        ----------
+        n : int
+            About how many sample points (default 1000).
         """
         pr = self.problem
         ts, xs, us, ks = [], [], [], []
@@ -272,7 +299,13 @@ class RefinedSwitching:
         return np.concatenate(ts), np.vstack(xs), np.vstack(us), np.concatenate(ks)
 
     def trajectory(self, n: int = 1000) -> Trajectory:
-        """The refined trajectory on about ``n`` points (mode = arc kind per sample)."""
+        """The refined trajectory on about ``n`` points (mode = arc kind per sample).
+
+        Parameters
+        ----------
+        n : int
+            About how many sample points (default 1000).
+        """
         t, x, u, k = self.samples(n)
         labels = ["/".join(m.label() for m in modes) for modes in self.modes]
         pr = self.problem
@@ -280,18 +313,36 @@ class RefinedSwitching:
                           mode=np.array([labels[i] for i in k]))
 
     def sample(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``t, x, u`` on about ``n`` points (``u`` 1-D for a single control)."""
+        """``t, x, u`` on about ``n`` points (``u`` 1-D for a single control).
+
+        Parameters
+        ----------
+        n : int
+            About how many sample points (default 1000).
+        """
         t, x, u, _ = self.samples(n)
         return t, x, (u[:, 0] if u.shape[1] == 1 else u)
 
     def control_at(self, t: np.ndarray) -> np.ndarray:
-        """Bang values at times ``t`` (NaN on boundary intervals, whose control depends on x)."""
+        """Bang values at times ``t`` (NaN on boundary intervals, whose control depends on x).
+
+        Parameters
+        ----------
+        t : ndarray
+            Times.
+        """
         edges = np.cumsum(self.durations)
         idx = np.minimum(np.searchsorted(edges, t, side="right"), len(self.values) - 1)
         return np.asarray(self.values, dtype=float)[idx]
 
     def path_violation(self, n: int = 4000) -> float:
-        """Largest violation of any path constraint or control bound on about ``n`` points."""
+        """Largest violation of any path constraint or control bound on about ``n`` points.
+
+        Parameters
+        ----------
+        n : int
+            About how many sample points (default 4000).
+        """
         pr = self.problem
         t, x, u, _ = self.samples(n)
         viol = 0.0

@@ -16,7 +16,19 @@ INF = float("inf")
 
 @dataclass
 class Constraint:
-    """``lower <= expr <= upper`` (bounds: numbers or parameter expressions)."""
+    """``lower <= expr <= upper`` (bounds: numbers or parameter expressions).
+
+    Attributes
+    ----------
+    expr : casadi.SX
+        The constrained expression.
+    lower, upper : casadi.SX
+        Bounds (numbers or parameter expressions).
+    name : str
+        Name in messages and multipliers.
+    ref : float or None
+        Typical size: the NLP row is divided by it (:mod:`ocp.scaling`).
+    """
 
     expr: ca.SX
     lower: ca.SX

@@ -69,11 +69,23 @@ class Trajectory:
         return self.t.size
 
     def state(self, name: str) -> np.ndarray:
-        """The column of state ``name``."""
+        """The column of state ``name``.
+
+        Parameters
+        ----------
+        name : str
+            State name.
+        """
         return self.x[:, _index(self.state_names, name, "state")]
 
     def control(self, name: str) -> np.ndarray:
-        """The column of control ``name``."""
+        """The column of control ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Control name.
+        """
         return self.u[:, _index(self.control_names, name, "control")]
 
     def __getitem__(self, name: str) -> np.ndarray:

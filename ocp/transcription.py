@@ -251,14 +251,6 @@ class Collocation(Transcription):
             bang-bang arcs), which can leave the objective ten times less
             accurate than the states. Meeting it takes at least two solves.
 
-        The error of an interval is the larger of its estimate (see
-        :mod:`ocp.mesh`) and the path-constraint violation found inside it on
-        the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
-        relaxes bounds by about 1e-8), so refinement also closes gaps between
-        points. While an interval exceeds ``tol`` the rounds are driven by the
-        states; once none does, by the objective, splitting the intervals with
-        the largest estimates (:func:`ocp.mesh.objective_threshold`).
-
         Returns
         -------
         Solution
@@ -268,6 +260,16 @@ class Collocation(Transcription):
             the final objective estimate (absolute; ``inf`` if there was one
             round only) and ``mesh_converged`` tells whether both met their
             tolerances. ``sol.transcription`` re-solves on that mesh.
+
+        Notes
+        -----
+        The error of an interval is the larger of its estimate (see
+        :mod:`ocp.mesh`) and the path-constraint violation found inside it on
+        the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
+        relaxes bounds by about 1e-8), so refinement also closes gaps between
+        points. While an interval exceeds ``tol`` the rounds are driven by the
+        states; once none does, by the objective, splitting the intervals with
+        the largest estimates (:func:`ocp.mesh.objective_threshold`).
         """
         otol = max(tol, self.objective_floor()) if objective_tol is None \
             else float(objective_tol)

@@ -74,8 +74,8 @@ def _signature_params(obj):
     except (TypeError, ValueError):
         return None
     out = []
-    for p in sig.parameters.values():
-        if p.name in ("self", "cls") or p.name.startswith("_"):
+    for i, p in enumerate(sig.parameters.values()):
+        if (i == 0 and p.name in ("self", "cls")) or p.name.startswith("_"):
             continue
         if p.kind is p.VAR_POSITIONAL:
             out.append("*" + p.name)
