@@ -166,6 +166,8 @@ class Collocation(Transcription):
     scaling : {"auto", "none"} or dict
         Scaling of the NLP (see :class:`ocp.nlp.Transcription` and :mod:`ocp.scaling`).
 
+    Notes
+    -----
     Every solution carries ``mesh_error``, the largest interval error
     estimate of :mod:`ocp.mesh` (relative; compare it with the accuracy you
     need, or call :meth:`refine`), and ``objective_error``, the estimate of
