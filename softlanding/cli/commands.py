@@ -28,7 +28,7 @@ from softlanding.cli.output import (
     savefig,
     target,
 )
-from softlanding.errors import ParameterError
+from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
 
 # ------------------------------------------------------------------- simulate
@@ -38,15 +38,16 @@ _DEPTH_LABEL = {"final": "depth -x_f(T)", "limit": "depth limit (t -> inf)",
 
 def _cmd_simulate(a: argparse.Namespace) -> int:
     from softlanding.model.controllers import Impedance, Rigid
-    from softlanding.simulation.simulator import simulate
 
     if a.rigid and (a.kp is not None or a.kd is not None):
         raise ParameterError("rigid", "--rigid takes no --kp/--kd (choose one leg)")
     if not a.rigid and (a.kp is None or a.kd is None):
         raise ParameterError("kp", "give both --kp and --kd, or --rigid")
     controller = Rigid() if a.rigid else Impedance(a.kp, a.kd)
-    plot = target(a)
-    res = simulate(robot_of(a), Impact(a.v0), controller, ground_of_args(a))
+    plot, robot, impact, ground = target(a), robot_of(a), Impact(a.v0), ground_of_args(a)
+    from softlanding.simulation.simulator import simulate
+
+    res = simulate(robot, impact, controller, ground)
     written = None
     if plot:
         from softlanding.plots.paper import plot_trajectory
@@ -72,62 +73,40 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
 
 
 # ---------------------------------------------------------------------- solve
-def _solve_rows(res: Any, cert: Any, refined: bool) -> list[tuple[str, object]]:
-    rows: list[tuple[str, object]] = [
-        ("depth -x_f(T)" + (" (refined)" if refined else ""), res.depth),
-        ("depth, transcribed", res.depth_transcribed), ("final time T", res.T),
-        ("arcs", " -> ".join(res.arcs)),
-        ("switch times", ", ".join(f"{t:.12g}" for t in res.switch_times)),
-        ("arrest force u_b", res.u_b), ("arrest condition active", res.arrest_active),
-        ("Ipopt status", res.status), ("Ipopt iterations", res.iterations),
-        ("solve time [s]", res.solve_time_s)]
-    if res.replay is not None:
-        rows += [("simulator replay depth", res.replay.depth),
-                 ("replay difference", res.replay_difference),
-                 ("replay feasible", res.replay.feasible)]
-    if cert is not None:
-        rows += [("PMP verdict", cert.verdict), ("PMP costate source", cert.source),
-                 ("max |H - H_expected| / H_scale", cert.H_max_abs),
-                 ("H variation / H_scale", cert.H_variation),
-                 ("sigma sign agreement", cert.sigma_sign_agreement),
-                 ("switch to sigma-zero gap", cert.switch_sigma_gap),
-                 ("costate estimates gap", cert.costate_estimates_gap),
-                 ("singular intervals", cert.singular_intervals or "none"),
-                 ("state-constrained intervals",
-                  cert.state_constraint_active_intervals or "none")]
-    return rows
+def _certificate_rows(cert: Any) -> list[tuple[str, object]]:
+    if hasattr(cert, "junction_gaps"):  # the phases' certificate
+        return [("PMP verdict", cert.verdict),
+                ("max |H - H_expected| / H_scale", cert.H_max_abs),
+                ("junction costate gaps", ", ".join(f"{g:.2e}" for g in cert.junction_gaps))]
+    return [("PMP verdict", cert.verdict), ("PMP costate source", cert.source),
+            ("max |H - H_expected| / H_scale", cert.H_max_abs),
+            ("H variation / H_scale", cert.H_variation),
+            ("sigma sign agreement", cert.sigma_sign_agreement),
+            ("switch to sigma-zero gap", cert.switch_sigma_gap),
+            ("costate estimates gap", cert.costate_estimates_gap),
+            ("singular intervals", cert.singular_intervals or "none"),
+            ("state-constrained intervals", cert.state_constraint_active_intervals or "none")]
 
 
 def _cmd_solve(a: argparse.Namespace) -> int:
-    from softlanding.optimal.landing import solve_landing
+    """Every ``--variant`` through one flow: check, solve, certify, plot, print."""
+    from softlanding.cli.variants import variant_of
     from softlanding.util.files import output_path
 
+    robot, ground = robot_of(a), ground_of_args(a)
+    variant = variant_of(a, ground)  # refuses what the variant would ignore
     plot = target(a)
-    if getattr(a, "variant", "paper") != "paper":  # the hybrid multi-phase landings
-        from softlanding.cli.phased import cmd_solve_variant
-
-        return cmd_solve_variant(a, robot_of(a), plot)
     pmp_plot = None
-    if plot is not None and a.pmp:
+    if plot is not None and a.pmp and a.variant == "paper":
         pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
-    res = solve_landing(Impact(a.v0), robot_of(a), ground_of_args(a), nodes=a.nodes,
-                        refine=not a.no_refine,
-                        extra_arcs=a.extra_arcs)
-    cert = None
-    if a.pmp:
-        from ocp import certify
+    from softlanding.optimal.limits import force_limit
 
-        assert res.transcribed is not None  # a cold solve always transcribes
-        cert = certify(res.transcribed, res.refined)
-    written = []
-    if plot:
-        from softlanding.plots.paper import plot_bang_bang
-
-        written.append(savefig(plot_bang_bang(res), plot))
-        if cert is not None:
-            from ocp.pmp import plot_certificate
-
-            written.append(savefig(plot_certificate(cert), pmp_plot))
+    Impact(a.v0), force_limit(robot)  # checked before the solver loads
+    res = variant.solve(a, robot, ground)
+    cert = res.certify() if a.pmp else None
+    written = [savefig(fig, path) for fig, path in
+               zip(variant.figures(res, cert) if plot else [], (plot, pmp_plot), strict=False)
+               if path is not None]
     unverified = res.unverified_reasons(cert)
     if a.json:
         d = res.to_dict()
@@ -136,7 +115,8 @@ def _cmd_solve(a: argparse.Namespace) -> int:
         print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
         status = "yes" if not unverified else "NO: " + "; ".join(unverified)
-        print_table([("verified", status)] + _solve_rows(res, cert, res.refined is not None))
+        print_table([("verified", status)] + variant.rows(res)
+                    + (_certificate_rows(cert) if cert is not None else []))
         for n in res.notes:
             print(f"note: {n}")
         for r_ in (cert.reasons if cert is not None else []):
@@ -150,8 +130,6 @@ def _v0_grid(a: argparse.Namespace) -> Any:
     """The sweep's impact velocities, from the easy end (continuation)."""
     import numpy as np
 
-    from softlanding.errors import check_count
-
     n = check_count("n", a.n, 1, 10_000)
     for name in ("v0_min", "v0_max"):
         Impact(getattr(a, name))
@@ -161,15 +139,14 @@ def _v0_grid(a: argparse.Namespace) -> Any:
 
 
 def _cmd_solve_sweep(a: argparse.Namespace) -> int:
+    v, plot, ground, robot = _v0_grid(a), target(a), ground_of_args(a), robot_of(a)
+    nodes = check_count("nodes", a.nodes, 2, 5000)
     import numpy as np
 
     from softlanding.optimal.landing import sweep_landing
     from softlanding.studies.comparison import rigid_depth
 
-    v = _v0_grid(a)
-    plot = target(a)
-    ground = ground_of_args(a)
-    res = sweep_landing(v, robot_of(a), ground, nodes=a.nodes, progress=not a.json)
+    res = sweep_landing(v, robot, ground, nodes=nodes, progress=not a.json)
     rigid = [rigid_depth(x, ground) for x in v]
     rows: list[dict[str, Any]] = [
         {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
@@ -205,10 +182,11 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ impedance
 def _cmd_impedance(a: argparse.Namespace) -> int:
+    robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
+    grid = check_count("grid", a.grid, 2, 2001)
     from softlanding.studies.impedance import optimize_impedance
 
-    o = optimize_impedance(Impact(a.v0), robot_of(a), ground_of_args(a), objective=a.objective,
-                           grid=a.grid)
+    o = optimize_impedance(impact, robot, ground, objective=a.objective, grid=grid)
     if a.json:
         print_json(o.to_dict())
         return EXIT_OK
@@ -227,12 +205,13 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
 
 
 def _cmd_map(a: argparse.Namespace) -> int:
+    robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
+    out, plot = target(a, "out"), target(a)
+    check_count("n", a.n, 2, 2001)
     from softlanding.studies.impedance import optimize_impedance
     from softlanding.studies.sweeps import depth_map, save_dataset
     from softlanding.util.files import atomic
 
-    robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
-    out, plot = target(a, "out"), target(a)
     ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler)
     opt = optimize_impedance(impact, robot, ground, grid=a.n)
     with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
@@ -275,23 +254,29 @@ def _print_curves(curves: Any, objective: str) -> None:
 
 
 def _cmd_sweep(a: argparse.Namespace) -> int:
+    v0 = _v0_grid(a)
+    if a.objective != "depth":
+        v0 = v0[v0 < 0]
+        if not v0.size:
+            raise ParameterError("v0-min", f"--objective {a.objective} divides by the impact "
+                                           "energy: give velocities below 0")
+    robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
+                  u_max=a.umax)
+    for rm in a.rm or [robot.r_m]:  # every family, before the work
+        for s in a.s or [robot.s]:
+            Robot(r_m=rm, s=s, u_max=a.umax)
+    out, plot, ground = target(a, "out"), target(a), ground_of_args(a)
+    grid = check_count("grid", a.grid, 2, 2001)
     from softlanding.studies.sweeps import (
         optimal_impedance_curves,
         paper_observations,
         save_dataset,
     )
-
-    v0 = _v0_grid(a)
-    if a.objective != "depth":
-        v0 = v0[v0 < 0]
     from softlanding.util.files import atomic
 
-    robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
-                  u_max=a.umax)
-    out, plot = target(a, "out"), target(a)
-    curves = optimal_impedance_curves(v0, robot, ground_of_args(a), r_m=a.rm, s=a.s,
-                                      objective=a.objective,
-                                      grid=a.grid, scheduler=a.scheduler, progress=not a.json)
+    curves = optimal_impedance_curves(v0, robot, ground, r_m=a.rm, s=a.s,
+                                      objective=a.objective, grid=grid, scheduler=a.scheduler,
+                                      progress=not a.json)
     if out:
         with atomic(out) as tmp:
             save_dataset(curves, tmp)
@@ -317,11 +302,10 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 
 
 def _cmd_compare(a: argparse.Namespace) -> int:
+    robot, v0, plot, ground = robot_of(a), _v0_grid(a), target(a), ground_of_args(a)
+    check_count("grid", a.grid, 2, 2001)
     from softlanding.studies.comparison import compare_controllers
 
-    robot = robot_of(a)
-    v0, plot = _v0_grid(a), target(a)
-    ground = ground_of_args(a)
     rows = compare_controllers(v0, robot, ground, grid=a.grid, progress=not a.json)
     written = None
     if plot:
@@ -423,6 +407,7 @@ def _cmd_scale(a: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------- demo
 def _cmd_demo(a: argparse.Namespace) -> int:
+    out = target(a, "out") if a.out else None
     from softlanding.report.demo import (
         DEMO_GAINS,
         STEPPED_KD,
@@ -433,7 +418,6 @@ def _cmd_demo(a: argparse.Namespace) -> int:
         stepped_intrusions,
     )
 
-    out = target(a, "out") if a.out else None
     rows = demo_table()
     stepped = stepped_intrusions()
     written = savefig(plot_demo(stepped=stepped), out) if out else None
@@ -488,11 +472,68 @@ def _cmd_reproduce(a: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-# ---------------------------------------------------------------------- errors
-def _cmd_hop(a: argparse.Namespace) -> int:
-    from softlanding.cli.phased import cmd_hop
+# ------------------------------------------------------------------------ hop
+def _hop_rows(c: Any) -> list[tuple[str, object]]:
+    rows: list[tuple[str, object]] = [
+        ("energy per cycle", c.energy), ("energy / apex height", c.specific_energy),
+        ("positive work", c.work.positive), ("negative work", c.work.negative),
+        ("ground loss d^2/2", c.depth ** 2 / 2), ("crater depth", c.depth),
+        ("paper's CoT of the landing", c.cot), ("energy (optimiser's slack)",
+                                                 c.energy_transcribed),
+        ("apex posture error", c.apex_error), ("energy balance error", c.balance_error)]
+    rows += [(k, v) for k, v in c.gains.items()]
+    rows += [(f"time: {k}", v) for k, v in c.times.items()]
+    return rows
 
-    return cmd_hop(a)
+
+def _cmd_hop(a: argparse.Namespace) -> int:
+    robot, plot = robot_of(a), target(a)
+    legs = ("free", "impedance", "rigid") if a.leg == "all" else (a.leg,)
+    if a.grid is not None and "impedance" not in legs:
+        raise ParameterError("--grid", f"is the impedance gain grid; --leg {a.leg} takes none")
+    grid = check_count("--grid", 9 if a.grid is None else a.grid, 2, 41)
+    from softlanding.optimal.limits import hop_input
+
+    hop_input(robot, a.v0, a.eta)  # checked before the solver loads
+    from softlanding.optimal.hopping import best_impedance_hop, rigid_hop, solve_hop
+
+    cycles: dict[str, Any] = {}
+    for leg in legs:
+        if leg == "free":
+            cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta)
+        elif leg == "rigid":
+            cycles[leg] = rigid_hop(Impact(a.v0), robot, a.eta)
+        else:
+            cycles[leg] = best_impedance_hop(Impact(a.v0), robot, a.eta, grid=grid)
+            if cycles[leg] is None:
+                raise InfeasibleLandingError(
+                    f"no impedance in the {grid} x {grid} gain grid (k_p in [0.05, 2], "
+                    f"k_d in [0, 2]) hops to the apex: no thrust within u_max = "
+                    f"{robot.u_max:g} restores it inside the stroke")
+    reasons = {k: c.unverified_reasons() for k, c in cycles.items()}
+    bad = any(reasons.values())
+    written = None
+    if plot:
+        from softlanding.plots.phased import plot_hop
+
+        written = savefig(plot_hop(cycles[legs[0]]), plot)
+    if a.json:
+        first = cycles[legs[0]]
+        print_json({"verified": not bad, "unverified_reasons": reasons,
+                     "energy": first.energy, "cot": first.cot, "depth": first.depth,
+                     "leg": legs[0], "eta": a.eta, "v0": a.v0, "apex_height": first.apex_height,
+                     "cycles": {k: c.to_dict() for k, c in cycles.items()}})
+    else:
+        for leg, c in cycles.items():
+            ok = "yes" if not reasons[leg] else "NO: " + "; ".join(reasons[leg])
+            print(f"== {leg} leg, v0 = {a.v0:g} (apex {c.apex_height:.6g}), eta = {a.eta:g}")
+            print_table([("verified", ok)] + _hop_rows(c))
+            for n in c.notes:
+                print(f"note: {n}")
+        if written:
+            print(f"figure written to {written}")
+    return EXIT_OK if not bad or a.accept_unverified else EXIT_FAILURE
+
 
 
 HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
@@ -521,9 +562,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     _progress.FORCE = bool(args.progress)
     if getattr(args, "plot", None) or getattr(args, "out", None):
-        import matplotlib
+        import os
 
-        matplotlib.use("Agg")  # files only: no window, also without a display
+        # files only: no window, also without a display (set, not imported: 0.2 s saved
+        # when the arguments turn out bad)
+        os.environ["MPLBACKEND"] = "Agg"
     try:
         return int(args.func(args))
     except BrokenPipeError:

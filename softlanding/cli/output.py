@@ -14,11 +14,16 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
-from softlanding.errors import SoftlandingError
+from softlanding.errors import ParameterError, SoftlandingError
 from softlanding.model.robot import Robot
 from softlanding.util.jsonable import json_safe
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+#: What matplotlib's Agg backend writes (a test keeps this list equal to matplotlib's own,
+#: which it would take a 0.2 s import to ask before the arguments are checked).
+FIGURE_FORMATS = ("avif", "eps", "gif", "jpeg", "jpg", "pdf", "pgf", "png", "ps", "raw",
+                  "rgba", "svg", "svgz", "tif", "tiff", "webp")
 
 
 class CliParser(argparse.ArgumentParser):
@@ -125,8 +130,12 @@ def target(a: argparse.Namespace, option: str = "plot") -> Any:
     value = getattr(a, option, None)
     if value is None:
         return None
-    suffix = ".png" if option == "plot" or a.command == "demo" else None
-    return output_path(value, option, a.force, suffix)
+    figure = option == "plot" or a.command == "demo"
+    path = output_path(value, option, a.force, ".png" if figure else None)
+    if figure and path.suffix.lower().lstrip(".") not in FIGURE_FORMATS:
+        raise ParameterError(option, f"cannot write a figure as {path.suffix!r}; use one of "
+                                     + ", ".join(f".{f}" for f in FIGURE_FORMATS))
+    return path
 
 
 def savefig(fig: Any, path: Any) -> str:

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
 from softlanding.cli.ground import ground_args
+from softlanding.cli.variants import VARIANTS, extension_value
 from softlanding.errors import LIMITS
 from softlanding.model.robot import PAPER_ROBOT
 
@@ -29,6 +31,26 @@ def _version() -> str:
         from softlanding._version import __version__
 
         return __version__
+
+
+def scheduler_address(text: str) -> str:
+    """``--scheduler``: a Dask scheduler address, ``[tcp://]host:port`` (an argparse type).
+
+    Parameters
+    ----------
+    text : str
+        What the user typed.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Not of that form (a one-line usage error, exit 2, before any work).
+    """
+    m = re.fullmatch(r"(?:(?:tcp|tls|ucx|ws|wss)://)?(\[[0-9A-Fa-f:.]+\]|[^\s/:\[\]]+):(\d+)",
+                     text)
+    if m is None or not 0 < int(m.group(2)) < 65536:
+        raise argparse.ArgumentTypeError(f"a scheduler address tcp://host:port, not {text!r}")
+    return text
 
 
 def _range(name: str) -> str:
@@ -126,45 +148,38 @@ def _solve(sub: Any) -> argparse.ArgumentParser:
                                    "|u| <= umax, 0 <= stroke <= s, v_f <= 0, v_f(T) = 0, "
                                    "body-arrest condition) by multiple shooting and Ipopt, "
                                    "then refine the switching times with exact arcs and "
-                                   "replay the schedule in the exact simulator.")
+                                   "replay the schedule in the exact simulator; or one of "
+                                   "the hybrid variants (--variant). An option the chosen "
+                                   "variant does not take is refused (exit 2).")
     o.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
     _model_args(o, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
-    o.add_argument("--nodes", type=int, default=100,
-                   help="shooting intervals (default 100, at most 5000)")
-    o.add_argument("--no-refine", action="store_true",
-                   help="report the transcribed solution only")
-    o.add_argument("--extra-arcs", type=int, default=0,
-                   help="also try this many more bang arcs (default 0, at most 20)")
-    o.add_argument("--pmp", action="store_true",
+    o.add_argument("--variant", choices=list(VARIANTS), default="paper",
+                   help="; ".join(f"{v.name}: {v.summary}" for v in VARIANTS.values()))
+    o.add_argument("--nodes", type=int, help="paper: shooting intervals (default 100, 2 to 5000)")
+    o.add_argument("--no-refine", action="store_true", default=None,
+                   help="paper, two-phase: report the transcribed solution only")
+    o.add_argument("--extra-arcs", type=int,
+                   help="paper: also try this many more bang arcs (default 0, at most 20)")
+    o.add_argument("--pmp", action="store_true", default=None,
                    help="check Pontryagin's conditions (costates, H, switching function) "
-                        "and give a bang-bang verdict")
-    _plot_arg(o, "the bang-bang trajectory figure (and FILE-pmp.png with --pmp)")
-    _accept_arg(o)
-    ground_args(o)
-    _variant_args(o)
-    return o
-
-
-def _variant_args(o: argparse.ArgumentParser) -> None:
-    """``solve --variant``: the hybrid multi-phase landings (softlanding.optimal)."""
-    o.add_argument("--variant", choices=["paper", "two-phase", "leg-extension"],
-                   default="paper",
-                   help="paper: the paper's single-phase OCP (default); two-phase: yielding then "
-                        "static stance until the body stops, the arrest optimised; "
-                        "leg-extension: the leg's state at touchdown optimised (changes the "
-                        "paper's initial condition)")
-    o.add_argument("--steps", type=int, choices=[1, 2], default=1,
-                   help="two-phase: yielding steps allowed (2: yielding, static, yielding, "
-                        "static)")
-    o.add_argument("--mode", choices=["impact", "drop"], default="impact",
-                   help="leg-extension: decide the leg's state at impact directly (both "
-                        "masses at v0), or by a flight phase from the drop height v0^2/2")
-    o.add_argument("--extension", default="free",
-                   help="leg-extension, impact mode: 'free' (within the stroke) or a leg "
-                        "length at impact (s/2 is the paper's)")
+                        "and give a bang-bang verdict (not with two-phase --steps 2)")
+    o.add_argument("--steps", type=int, choices=[1, 2],
+                   help="two-phase: yielding steps allowed (default 1; 2: yielding, static, "
+                        "yielding, static, compared with one step)")
+    o.add_argument("--mode", choices=["impact", "drop"],
+                   help="leg-extension: decide the leg's state at impact directly (impact, "
+                        "the default: both masses at v0), or by a flight phase from the drop "
+                        "height v0^2/2 (drop)")
+    o.add_argument("--extension", type=extension_value,
+                   help="leg-extension, impact mode: 'free' (within the stroke; default) or "
+                        "a leg length at impact (s/2 is the paper's)")
     o.add_argument("--rate-max", type=float, default=None,
                    help="leg-extension, impact mode: also free the relative velocity at "
                         "impact within +-RATE_MAX (default: 0, the paper's)")
+    _plot_arg(o, "the trajectory figure (paper --pmp: also FILE-pmp.png, the certificate)")
+    _accept_arg(o)
+    ground_args(o)
+    return o
 
 
 def _hop(sub: Any) -> argparse.ArgumentParser:
@@ -181,7 +196,8 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
                    help="free: the optimum; impedance: the best (k_p, k_d) with a thrust from "
                         "the body's lowest point to lift-off; rigid: a rigid landing, then "
                         "the optimal push-off; all: the three")
-    h.add_argument("--grid", type=int, default=9, help="impedance gain grid per axis (9)")
+    h.add_argument("--grid", type=int, default=None,
+                   help="--leg impedance or all: gain grid per axis (default 9, 2 to 41)")
     _model_args(h, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
     _plot_arg(h, "the hop cycle figure (the first leg), phases shaded")
     _accept_arg(h)
@@ -228,7 +244,7 @@ def _map(sub: Any) -> argparse.ArgumentParser:
     _model_args(m, None, "actuator force limit (default none)")
     m.add_argument("--out", required=True, metavar="FILE.nc", help="netCDF dataset to write")
     _plot_arg(m, "the map figure")
-    m.add_argument("--scheduler", metavar="tcp://host:port",
+    m.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address,
                    help="run on a Dask cluster instead of the local cores")
     ground_args(m)
     return m
@@ -247,7 +263,8 @@ def _sweep(sub: Any) -> argparse.ArgumentParser:
     w.add_argument("--grid", type=int, default=101, help="starting grid per axis")
     w.add_argument("--out", metavar="FILE.nc", help="netCDF dataset to write")
     _plot_arg(w, "the curves figure")
-    w.add_argument("--scheduler", metavar="tcp://host:port", help="Dask scheduler address")
+    w.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address,
+                   help="Dask scheduler address")
     w.add_argument("--json", action="store_true", help="print one JSON object")
     ground_args(w)
     return w

@@ -21,8 +21,13 @@ from .leg_extension_problem import (
     build_leg_extension_problem as build_leg_extension_problem,
     leg_extension_transcription as leg_extension_transcription,
 )
+from .limits import (
+    MIN_HOP_SPEED as MIN_HOP_SPEED,
+    force_limit as force_limit,
+    hop_input as hop_input,
+)
 from .pipeline import (
-    PhasedVariant as PhasedVariant, continuation as continuation, force_limit as force_limit,
+    PhasedVariant as PhasedVariant, continuation as continuation,
     landing_parameters as landing_parameters, solve_phased as solve_phased,
 )
 from .result import PhasedLanding as PhasedLanding

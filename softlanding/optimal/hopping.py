@@ -32,13 +32,13 @@ from typing import Any
 import numpy as np
 
 from ocp import Solution, SolveError, Trajectory
-from softlanding.errors import ParameterError
 from softlanding.model.controllers import ForceSchedule, Rigid
 from softlanding.model.dynamics import mechanical_energy
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.hopping_problem import START_PARAMETERS, hop_transcription
+from softlanding.optimal.limits import hop_input
 from softlanding.optimal.phase_solve import transcribed_solve
-from softlanding.optimal.pipeline import force_limit, landing_parameters
+from softlanding.optimal.pipeline import landing_parameters
 from softlanding.simulation.actuator_work import Work, result_work, state_at
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
@@ -173,19 +173,6 @@ def _params(robot: Robot, impact: Impact, eta: float, start: np.ndarray | None =
     return p
 
 
-def _check(robot: Robot, impact: Impact | float, eta: float) -> tuple[Robot, Impact]:
-    impact = Impact.of(impact)
-    force_limit(robot)
-    if not impact.v0 < 0:
-        raise ParameterError("v0", "a hop needs a flight: v0 < 0")
-    if not 0.0 <= eta < 1.0:
-        raise ParameterError("eta", f"the regenerative efficiency must lie in [0, 1), got "
-                                    f"{eta!r}")
-    if robot.l0 is not None and robot.l0 != robot.s / 2:
-        raise ParameterError("l0", "the hop's apex posture is the paper's leg length s/2")
-    return robot, impact
-
-
 def _apex_target(robot: Robot, impact: Impact) -> np.ndarray:
     """Centre of mass height and velocity, leg length and rate, at the apex."""
     return np.array([impact.energy + robot.body_mass * robot.s / 2, 0.0, robot.s / 2, 0.0])
@@ -241,7 +228,9 @@ def _hop_guess(robot: Robot, impact: Impact) -> Trajectory:
     from softlanding.optimal.two_phase import solve_two_phase
 
     two = solve_two_phase(impact, robot.replace(l0=None), replay=False)
-    assert two.refined is not None
+    if two.refined is None:  # its exact arcs are the stance of the start
+        raise SolveError(two.status, message="no start for the hop: the two-phase landing it "
+                         "mirrors was not refined (" + "; ".join(two.notes) + ")")
     tr = two.refined.trajectory(300)
     y, s = tr.phase == 0, tr.phase == 1
     ts, xs, us = tr.t[s], tr.x[s], tr.u[s, 0]
@@ -289,7 +278,7 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     ocp.SolveError
         When the transcription fails (InfeasibleError: no such hop).
     """
-    robot, impact = _check(robot, impact, eta)
+    robot, impact = hop_input(robot, impact, eta)
     notes: list[str] = []
     tr = hop_transcription("touchdown")
     ws = warm_start.transcribed[0] if warm_start is not None and warm_start.transcribed \
@@ -511,7 +500,7 @@ def impedance_hop(impact: Impact | float, k_p: float, k_d: float,
     flight_guess : ocp.Solution, optional
         A neighbouring flight's transcription (starting guess).
     """
-    robot, impact = _check(robot, impact, eta)
+    robot, impact = hop_input(robot, impact, eta)
     u_t = _thrust_for(robot, impact, k_p, k_d)
     if u_t is None:
         return None
@@ -570,7 +559,7 @@ def best_impedance_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: 
     flight_guess : ocp.Solution, optional
         A neighbouring flight's transcription (starting guess).
     """
-    robot, impact = _check(robot, impact, eta)
+    robot, impact = hop_input(robot, impact, eta)
     cands = []
     for kp in np.linspace(0.05, 2.0, grid):
         for kd in np.linspace(0.0, 2.0, grid):
@@ -604,7 +593,7 @@ def rigid_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     impact, robot, eta
         Touchdown velocity, robot and regenerative efficiency, as in :func:`solve_hop`.
     """
-    robot, impact = _check(robot, impact, eta)
+    robot, impact = hop_input(robot, impact, eta)
     x0 = impact.initial_state(robot.replace(l0=None))
     land = simulate(robot.without_force_limit(), impact, Rigid(), x0=x0)
     t_rest = land.t_first_stop

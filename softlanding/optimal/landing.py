@@ -40,7 +40,8 @@ from softlanding.model.controllers import FeedbackSchedule, ForceSchedule, Rigid
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.pipeline import continuation, force_limit, landing_parameters
+from softlanding.optimal.limits import force_limit
+from softlanding.optimal.pipeline import continuation, landing_parameters
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
@@ -240,6 +241,15 @@ class BangBangLanding:
     def replay_difference(self) -> float:
         """``|replay depth - depth|`` (NaN without a replay)."""
         return abs(self.replay.depth - self.depth) if self.replay is not None else math.nan
+
+    def certify(self) -> Any:
+        """The PMP certificate of the transcription and its refinement (None when the
+        result came from a structure re-solve, which has no transcription to read)."""
+        if self.transcribed is None:
+            return None
+        from ocp import certify
+
+        return certify(self.transcribed, self.refined)
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,

@@ -33,6 +33,7 @@ from softlanding.optimal.leg_extension_problem import (
     leg_extension_transcription,
     leg_extension_transcription_inner,
 )
+from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
 from softlanding.optimal.phase_solve import (
     phase_guess,
@@ -353,7 +354,7 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         No landing satisfies the constraints.
     """
     impact = Impact.of(impact)
-    pipeline.force_limit(robot)
+    force_limit(robot)
     if mode not in MODES:
         raise ParameterError("mode", f"must be one of {MODES}, got {mode!r}")
     if mode == "drop" and impact.v0 >= 0:

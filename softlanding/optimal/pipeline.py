@@ -29,37 +29,13 @@ from typing import Any, TypeVar
 
 from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
 from ocp.phase_refinement import RefinedPhases
-from softlanding.errors import InfeasibleLandingError, ParameterError
 from softlanding.model.robot import Impact, Robot
+from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve
 from softlanding.optimal.result import PhasedLanding
 from softlanding.util.progress import progress as show_progress
 
 R = TypeVar("R")
-
-
-def force_limit(robot: Robot) -> float:
-    """The force limit of a landing problem (raises when none can work).
-
-    Parameters
-    ----------
-    robot : Robot
-        The robot.
-
-    Raises
-    ------
-    ParameterError
-        The robot has no force limit (the OCP needs one).
-    InfeasibleLandingError
-        The limit does not exceed the body's weight: the body can never be arrested.
-    """
-    if robot.u_max is None:
-        raise ParameterError("u_max", "the optimal control problem needs a force limit")
-    if robot.u_max <= robot.body_mass:
-        raise InfeasibleLandingError(
-            f"u_max = {robot.u_max:g} does not exceed the body weight r_m/(1+r_m) = "
-            f"{robot.body_mass:.4g}: the arrest force u_b <= u_max can never hold")
-    return robot.u_max
 
 
 def landing_parameters(robot: Robot, impact: Impact) -> dict[str, float]:
@@ -259,5 +235,5 @@ def solve_phased(variant: PhasedVariant, warm_start: PhasedLanding | None = None
     return out
 
 
-__all__ = ["PhasedVariant", "continuation", "force_limit", "landing_parameters",
+__all__ = ["PhasedVariant", "continuation", "landing_parameters",
            "solve_phased"]

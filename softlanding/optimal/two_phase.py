@@ -33,6 +33,7 @@ from softlanding.model.controllers import Rigid
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
+from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_schedule import replay_controller
 from softlanding.optimal.phase_solve import (
     phase_guess,
@@ -41,7 +42,6 @@ from softlanding.optimal.phase_solve import (
 from softlanding.optimal.pipeline import (
     PhasedVariant,
     continuation,
-    force_limit,
     landing_parameters,
     solve_phased,
 )
@@ -349,9 +349,25 @@ class TwoStepCheck:
         """``one_step.depth - depth``: what the second step gains (> 0 would be a gain)."""
         return self.one_step.depth - self.depth
 
+    @property
+    def notes(self) -> list[str]:
+        """The one-step optimum's notes."""
+        return self.one_step.notes
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why the one-step optimum this check compares with is not proven (empty: it is).
+
+        Parameters
+        ----------
+        certificate : ocp.phase_pmp.PhasesCertificate, optional
+            A certificate of the one-step optimum.
+        """
+        return self.one_step.unverified_reasons(certificate)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict."""
-        return json_safe({"v0": self.impact.v0, "one_step_depth": self.one_step.depth,
+        return json_safe({"v0": self.impact.v0, "depth": self.depth,
+                          "one_step_depth": self.one_step.depth,
                           "two_step_depth": self.depth, "gain": self.gain,
                           "collapsed": self.collapsed, "starts": self.starts})
 

@@ -273,6 +273,8 @@ def paper_observations(curves: xr.Dataset, robot: Robot = PAPER_IMPEDANCE_ROBOT)
     """
     c = curves.sel(r_m=robot.r_m, s=robot.s)
     c = c.isel(v0=np.flatnonzero(c.feasible.values.astype(bool)))
+    if c.v0.size == 0:  # no gains keep the stroke at any velocity: nothing to observe
+        return {"feasible_velocities": 0}
     order = np.argsort(np.abs(c.v0.values))
     speed = np.abs(c.v0.values[order])
     kp = c.k_p.values[order]
@@ -280,6 +282,7 @@ def paper_observations(curves: xr.Dataset, robot: Robot = PAPER_IMPEDANCE_ROBOT)
     dkp = np.diff(kp)
     i_min = int(np.argmin(kd))
     return {
+        "feasible_velocities": int(c.v0.size),
         "kp_increasing_with_speed": bool(np.all(dkp >= -1e-9)),
         "kp_decreases": [(float(speed[i]), float(speed[i + 1])) for i in
                          np.flatnonzero(dkp < -1e-9)],
