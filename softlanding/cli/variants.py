@@ -186,17 +186,13 @@ VARIANTS: Mapping[str, SolveVariant] = {v.name: v for v in (
 
 
 def extension_value(text: str) -> str | float:
-    """``--extension``: ``free`` or a finite leg length (an argparse ``type``).
+    """``--extension``: ``free`` or a finite leg length (an argparse ``type``, like
+    :func:`softlanding.cli.parser.scheduler_address`: a bad value is a usage error).
 
     Parameters
     ----------
     text : str
         What the user typed.
-
-    Raises
-    ------
-    argparse.ArgumentTypeError
-        Neither ``free`` nor a finite number (a one-line usage error, exit 2).
     """
     if text == "free":
         return text

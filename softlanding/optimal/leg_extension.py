@@ -27,18 +27,11 @@ from softlanding.errors import ParameterError
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.ground import LINEAR_GROUND
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal import leg_extension_problem as problem
 from softlanding.optimal import pipeline
-from softlanding.optimal.leg_extension_problem import (
-    MODES,
-    leg_extension_transcription,
-    leg_extension_transcription_inner,
-)
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
-from softlanding.optimal.phase_solve import (
-    phase_guess,
-    second_start,
-)
+from softlanding.optimal.phase_solve import phase_guess, second_start
 from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase import TwoPhaseLanding, solve_two_phase
 from softlanding.simulation.simulator import simulate
@@ -276,7 +269,7 @@ class LegExtension(pipeline.PhasedVariant):
 
     def transcription(self) -> Any:
         """The leg-extension transcription of this mode."""
-        return leg_extension_transcription(self.mode)
+        return problem.leg_extension_transcription(self.mode)
 
     def guess(self) -> Any:
         """The two-phase optimum (after a free fall in ``drop``), see :func:`_guess`."""
@@ -295,9 +288,9 @@ class LegExtension(pipeline.PhasedVariant):
         """A second start from the inner transcription when the refinement failed."""
         if ref is not None:
             return sol, ref
-        return second_start(leg_extension_transcription_inner(self.mode),
-                            leg_extension_transcription(self.mode), self.parameters(), guess,
-                            sol, notes)
+        return second_start(problem.leg_extension_transcription_inner(self.mode),
+                            problem.leg_extension_transcription(self.mode), self.parameters(),
+                            guess, sol, notes)
 
     def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
                  path: str) -> LegExtensionLanding:
@@ -355,8 +348,8 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
     """
     impact = Impact.of(impact)
     force_limit(robot)
-    if mode not in MODES:
-        raise ParameterError("mode", f"must be one of {MODES}, got {mode!r}")
+    if mode not in problem.MODES:
+        raise ParameterError("mode", f"must be one of {problem.MODES}, got {mode!r}")
     if mode == "drop" and impact.v0 >= 0:
         raise ParameterError("v0", "a drop needs a height: v0 < 0")
     bounds = _bounds(robot, extension, rate) if mode == "impact" else {}

@@ -35,10 +35,7 @@ from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_schedule import replay_controller
-from softlanding.optimal.phase_solve import (
-    phase_guess,
-    transcribed_solve,
-)
+from softlanding.optimal.phase_solve import phase_guess, transcribed_solve
 from softlanding.optimal.pipeline import (
     PhasedVariant,
     continuation,
@@ -55,11 +52,11 @@ from softlanding.util.jsonable import json_safe
 class TwoPhaseLanding(PhasedLanding):
     """A solved two-phase landing (yielding, then static until the body stops).
 
-    The fields shared by every phased landing are :class:`~softlanding.optimal.result.
-    PhasedLanding`'s (``paper_depth``: the paper's single-phase optimum, constant-force
-    arrest, for the same landing). The replay's ``steps`` may exceed ``steps``: the optimal
-    arrest force equals the crater's capacity, so rounding decides whether the resting foot
-    is static or creeps (by the replay difference, ~1e-14); the depth is what is checked.
+    It has the fields of every :class:`~softlanding.optimal.result.PhasedLanding`
+    (``paper_depth``: the paper's single-phase optimum, constant-force arrest, for the same
+    landing). The replay's ``steps`` may exceed ``steps``: the optimal arrest force equals
+    the crater's capacity, so rounding decides whether the resting foot is static or creeps
+    (by the replay difference, ~1e-14); the depth is what is checked.
 
     Attributes
     ----------
@@ -240,12 +237,8 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
 
     Parameters
     ----------
-    impact : Impact or float
-        Impact velocity.
-    robot : Robot
-        The robot (with a force limit).
-    ground : Ground
-        Ground model.
+    impact, robot, ground
+        The landing, as in :func:`~softlanding.optimal.landing.solve_landing`.
     steps : {1, 2}
         Yielding steps allowed (2: yielding, static, yielding, static).
     refine : bool
