@@ -28,7 +28,7 @@ import numpy as np
 
 from .compiled import CompiledPhase
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
-from .errors import InfeasibleError, ProblemDefinitionError, SolveError
+from .errors import GuessError, InfeasibleError, ProblemDefinitionError, SolveError
 from .guess import (
     DefaultChoices,
     control_guess,
@@ -399,8 +399,15 @@ class Transcription:
         if isinstance(sol, Trajectory):
             return self._guess_from_trajectory(sol)
         if len(sol.phases) != len(self.phases):
-            raise ValueError(f"the solution has {len(sol.phases)} phases, this problem "
+            raise GuessError(f"the solution has {len(sol.phases)} phases, this problem "
                              f"{len(self.phases)}")
+        for i, (ps, ph) in enumerate(zip(sol.phases, self.multiphase.phases, strict=True)):
+            theirs = (ps.problem.state_names, ps.problem.control_names)
+            if theirs != (ph.state_names, ph.control_names):  # a solution of another problem
+                raise GuessError(
+                    f"phase {i}: the solution's states and controls {theirs[0] + theirs[1]} "
+                    f"are not this problem's {ph.state_names + ph.control_names}; pass a "
+                    "Trajectory to start from states matched by name")
         parts = [d.guess_from(ps.at, ps.t0, ps.T) for d, ps in zip(self.phases, sol.phases,
                                                                    strict=True)]
         parts.append(np.array([sol.variables[k] for k in self.multiphase.var_names]))

@@ -229,7 +229,8 @@ class OptimalControlProblem:
         self.duration_guess: float | None = None
 
     # ----------------------------------------------------------- declarations
-    def state(self, name: str, lower: Bound = -INF, upper: Bound = INF,
+    def state(self, name: str, lower: Bound | None = -INF,
+              upper: Bound | None = INF,
               guess: Any = None, *, ref: float | None = None,
               ref0: float | None = None) -> ca.SX:
         """Declare a state; returns its symbol.
@@ -238,8 +239,8 @@ class OptimalControlProblem:
         ----------
         name : str
             Unique within the phase (phases may share state names; links use them).
-        lower, upper : float or parameter expression
-            Bounds on the state along the whole trajectory.
+        lower, upper : float, parameter expression or None
+            Bounds on the state along the whole trajectory (None: unbounded).
         guess : float, parameter expression or (start, end) pair, optional
             Initial guess (a pair is interpolated linearly in time). Default:
             the fixed initial/final values where the constraints fix them, else
@@ -263,7 +264,8 @@ class OptimalControlProblem:
         self.state_ref[name] = sref
         return s
 
-    def control(self, name: str, lower: Bound = -INF, upper: Bound = INF,
+    def control(self, name: str, lower: Bound | None = -INF,
+                upper: Bound | None = INF,
                 guess: Any = None, *, ref: float | None = None,
                 ref0: float | None = None) -> ca.SX:
         """Declare a control with optional bounds (numbers or parameter expressions).
@@ -272,7 +274,7 @@ class OptimalControlProblem:
         ----------
         name : str
             Unique within the phase.
-        lower, upper : float or parameter expression
+        lower, upper : float, parameter expression or None
             Control bounds.
         guess : float or parameter expression, optional
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
@@ -306,7 +308,8 @@ class OptimalControlProblem:
         self._shared.params.append(s)
         return s
 
-    def variable(self, name: str, lower: Bound = -INF, upper: Bound = INF,
+    def variable(self, name: str, lower: Bound | None = -INF,
+                 upper: Bound | None = INF,
                  guess: Bound | None = None, *, ref: float | None = None,
                  ref0: float | None = None) -> ca.SX:
         """Declare a decision parameter: a constant optimised with the trajectory.
@@ -315,8 +318,8 @@ class OptimalControlProblem:
         ----------
         name : str
             Unique among parameters and variables (shared by all phases).
-        lower, upper : float or parameter expression
-            Bounds.
+        lower, upper : float, parameter expression or None
+            Bounds (None: unbounded).
         guess : float or parameter expression, optional
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
         ref, ref0 : float, optional
@@ -325,8 +328,7 @@ class OptimalControlProblem:
         self._check_new(name, phase=False)
         sh = self._shared
         what = f"variable {name!r}"
-        lo, hi = sh.bound(lower, f"{what} lower bound"), sh.bound(upper, f"{what} upper bound")
-        check_bounds(lo, hi, what)
+        lo, hi = self._checked_bounds(lower, upper, what)
         sref = scale_ref(ref, ref0, what)
         s = ca.SX.sym(name)
         sh.var_names.append(name)
@@ -336,35 +338,41 @@ class OptimalControlProblem:
         sh.var_ref[name] = sref
         return s
 
-    def bound_control(self, name: str, lower: Bound = -INF, upper: Bound = INF) -> None:
+    def bound_control(self, name: str, lower: Bound | None = -INF,
+                      upper: Bound | None = INF) -> None:
         """Set or change a control's bounds.
 
         Parameters
         ----------
         name : str
             A declared control.
-        lower, upper : float or parameter expression
+        lower, upper : float, parameter expression or None
             The bounds (``lower <= upper`` where both are numbers).
         """
         if name not in self.control_names:
             raise ProblemDefinitionError(f"unknown control {name!r}")
         self.control_bounds[name] = self._checked_bounds(lower, upper, f"control {name!r}")
 
-    def bound_state(self, name: str, lower: Bound = -INF, upper: Bound = INF) -> None:
+    def bound_state(self, name: str, lower: Bound | None = -INF,
+                    upper: Bound | None = INF) -> None:
         """Set or change a state's bounds (imposed along the whole trajectory).
 
         Parameters
         ----------
         name : str
             A declared state.
-        lower, upper : float or parameter expression
+        lower, upper : float, parameter expression or None
             The bounds (``lower <= upper`` where both are numbers).
         """
         if name not in self.state_names:
             raise ProblemDefinitionError(f"unknown state {name!r}")
         self.state_bounds[name] = self._checked_bounds(lower, upper, f"state {name!r}")
 
-    def _checked_bounds(self, lower: Bound, upper: Bound, what: str) -> tuple[ca.SX, ca.SX]:
+    def _checked_bounds(self, lower: Bound | None, upper: Bound | None,
+                        what: str) -> tuple[ca.SX, ca.SX]:
+        # None is Python's "no value": no bound on that side (as scipy's Bounds reads it)
+        lower = -INF if lower is None else lower
+        upper = INF if upper is None else upper
         lo = self._shared.bound(lower, f"{what} lower bound")
         hi = self._shared.bound(upper, f"{what} upper bound")
         check_bounds(lo, hi, what)

@@ -194,6 +194,29 @@ def check_optional(name: str, value: float | None) -> float | None:
     return None if value is None else check(name, value)
 
 
+def expect(name: str, value: Any, kind: Any, what: str | None = None) -> Any:
+    """``value`` if it is an instance of ``kind``, else a :class:`ParameterError` naming
+    ``name`` (the API's answer to a wrong type, instead of an AttributeError deep inside).
+
+    Parameters
+    ----------
+    name : str
+        The argument's name.
+    value : Any
+        What was passed.
+    kind : type or tuple of types
+        What is accepted (a ``runtime_checkable`` Protocol works too).
+    what : str, optional
+        How to name the accepted kinds in the message (default: their class names).
+    """
+    if isinstance(value, kind):
+        return value
+    if what is None:
+        kinds = kind if isinstance(kind, tuple) else (kind,)
+        what = " or ".join(k.__name__ for k in kinds)
+    raise ParameterError(name, f"must be a {what}, got {type(value).__name__} {value!r:.60}")
+
+
 def check_count(name: str, value: Any, lower: int = 1, upper: int | None = None) -> int:
     """An integer size the user typed, within ``[lower, upper]``.
 

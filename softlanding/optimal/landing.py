@@ -35,12 +35,12 @@ import numpy as np
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
 from ocp.errors import PathViolationWarning
 from ocp.switching import RefinedSwitching, detect_arcs, refine_structure, refine_switching
-from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
+from softlanding.errors import InfeasibleLandingError, ParameterError, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule, Rigid
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.limits import force_limit
+from softlanding.optimal.limits import force_limit, landing_input
 from softlanding.optimal.pipeline import continuation, landing_parameters
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
@@ -506,9 +506,12 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         Ipopt failed otherwise (status attached).
     """
     impact = Impact.of(impact)
-    force_limit(robot)
+    landing_input(robot, ground)
     nodes = check_count("nodes", nodes, 2, MAX_NODES)
     extra_arcs = check_count("extra_arcs", extra_arcs, 0, 20)
+    if warm_start is not None:
+        expect("warm_start", warm_start, (Solution, BangBangLanding),
+               "BangBangLanding or ocp.Solution of this landing problem")
     out = None
     if isinstance(warm_start, BangBangLanding):
         if refine and extra_arcs == 0:
@@ -559,7 +562,7 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
         Replay each schedule in the exact simulator.
     """
     impacts = [Impact.of(v) for v in v0_values]  # bad input fails before any work
-    force_limit(robot)
+    landing_input(robot, ground)
     return continuation(impacts, lambda imp, prev: solve_landing(
         imp, robot, ground, nodes=nodes, refine=refine, warm_start=prev, replay=replay),
         progress, "bang-bang sweep")

@@ -23,7 +23,7 @@ import numpy as np
 
 from ocp import Solution, Trajectory
 from ocp.phase_refinement import RefinedPhases
-from softlanding.errors import ParameterError
+from softlanding.errors import ParameterError, expect
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.ground import LINEAR_GROUND
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -348,6 +348,9 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
     """
     impact = Impact.of(impact)
     force_limit(robot)
+    if warm_start is not None:
+        expect("warm_start", warm_start, LegExtensionLanding,
+               "LegExtensionLanding (solve_leg_extension's)")
     if mode not in problem.MODES:
         raise ParameterError("mode", f"must be one of {problem.MODES}, got {mode!r}")
     if mode == "drop" and impact.v0 >= 0:

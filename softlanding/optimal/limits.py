@@ -6,7 +6,10 @@ bad input in a fraction of a second.
 
 from __future__ import annotations
 
-from softlanding.errors import InfeasibleLandingError, ParameterError
+from typing import Any
+
+from softlanding.errors import InfeasibleLandingError, ParameterError, expect
+from softlanding.model.ground import Ground
 from softlanding.model.robot import Impact, Robot
 
 #: The slowest touchdown of a hop: its apex ``v0^2/2`` must stay far above rounding (at
@@ -29,6 +32,7 @@ def force_limit(robot: Robot) -> float:
     InfeasibleLandingError
         The limit does not exceed the body's weight: the body can never be arrested.
     """
+    expect("robot", robot, Robot)
     if robot.u_max is None:
         raise ParameterError("u_max", "the optimal control problem needs a force limit")
     if robot.u_max <= robot.body_mass:
@@ -37,6 +41,25 @@ def force_limit(robot: Robot) -> float:
             f"{robot.body_mass:.4g}: the arrest force u_b <= u_max can never hold")
     return robot.u_max
 
+
+
+def landing_input(robot: Robot, ground: Any) -> float:
+    """The force limit of a landing on ``ground``, both checked (see :func:`force_limit`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot.
+    ground : Ground
+        The ground model.
+
+    Raises
+    ------
+    ParameterError
+        ``ground`` is not a ground model, or the robot has no force limit.
+    """
+    expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
+    return force_limit(robot)
 
 
 def hop_input(robot: Robot, impact: Impact | float, eta: float) -> tuple[Robot, Impact]:
@@ -58,8 +81,8 @@ def hop_input(robot: Robot, impact: Impact | float, eta: float) -> tuple[Robot, 
     InfeasibleLandingError
         The force limit cannot arrest the body.
     """
-    impact = Impact.of(impact)
     force_limit(robot)
+    impact = Impact.of(impact)
     if not impact.v0 <= -MIN_HOP_SPEED:
         raise ParameterError("v0", f"a hop needs a flight: v0 <= -{MIN_HOP_SPEED:g} (apex "
                                    f"v0^2/2 resolvable in double precision), got "
@@ -74,4 +97,4 @@ def hop_input(robot: Robot, impact: Impact | float, eta: float) -> tuple[Robot, 
     return robot, impact
 
 
-__all__ = ["MIN_HOP_SPEED", "force_limit", "hop_input"]
+__all__ = ["MIN_HOP_SPEED", "force_limit", "hop_input", "landing_input"]

@@ -28,12 +28,12 @@ import numpy as np
 
 from ocp import Solution, SolveError, Trajectory
 from ocp.phase_refinement import RefinedPhases
-from softlanding.errors import InfeasibleLandingError
+from softlanding.errors import InfeasibleLandingError, expect
 from softlanding.model.controllers import Rigid
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
-from softlanding.optimal.limits import force_limit
+from softlanding.optimal.limits import landing_input
 from softlanding.optimal.phase_schedule import replay_controller
 from softlanding.optimal.phase_solve import phase_guess, transcribed_solve
 from softlanding.optimal.pipeline import (
@@ -260,7 +260,9 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         No landing satisfies the constraints (the message names the condition).
     """
     impact = Impact.of(impact)
-    force_limit(robot)
+    landing_input(robot, ground)
+    if warm_start is not None:
+        expect("warm_start", warm_start, TwoPhaseLanding, "TwoPhaseLanding (solve_two_phase's)")
     if paper is None:
         try:
             paper = solve_landing(impact, robot, ground)
@@ -294,7 +296,7 @@ def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINE
         in the exact simulator).
     """
     impacts = [Impact.of(v) for v in v0_values]
-    force_limit(robot)
+    landing_input(robot, ground)
 
     last_paper: list[BangBangLanding] = []  # the paper's sweep, alongside
 

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ocp.trajectory import Trajectory
-from softlanding.errors import ParameterError, RestNotProvenError, check, check_count
+from softlanding.errors import ParameterError, RestNotProvenError, check, check_count, expect
 from softlanding.model.controllers import (
     Controller,
     ForceSchedule,
@@ -322,7 +322,11 @@ def simulate(
     LandingResult
     """
     impact = Impact.of(impact)
-    controller = Rigid() if controller is None else controller
+    expect("robot", robot, Robot)
+    controller = Rigid() if controller is None else expect(
+        "controller", controller, Controller, "controller (Rigid, Impedance, ForceSchedule or "
+                                              "FeedbackSchedule)")
+    expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
     integrate = integrated(ground, method)
     mats = mode_matrices(robot.r_m, LINEAR_GROUND if integrate else ground)
     Kf, st, su = controller.kernel_arrays(mats, robot)
@@ -539,6 +543,8 @@ def simulate_batch(
     -------
     BatchResult
     """
+    expect("robot", robot, Robot)
+    expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
     arrays = _broadcast(v0, k_p, k_d)
     shape = arrays[0].shape
     v, kp, kd = (check(name, np.array(a.ravel(), dtype=float))

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from softlanding.errors import ParameterError, check_count
+from softlanding.errors import ParameterError, check_count, expect
 from softlanding.model.controllers import Impedance
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_IMPEDANCE_ROBOT, Impact, Robot
@@ -254,6 +254,7 @@ def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_RO
     """
     impact = Impact.of(impact)
     _check(impact, objective, grid)
+    expect("robot", robot, Robot)
     energy = objective != "depth"
 
     def batch(kp, kd) -> np.ndarray:

@@ -1,0 +1,48 @@
+"""Misusing the Python API gives the package's own errors naming the argument (issue 23,
+item 9), never an AttributeError or a CasADi shape error from deep inside."""
+
+import pytest
+
+from softlanding import (
+    PAPER_ROBOT,
+    optimize_impedance,
+    simulate,
+    solve_hop,
+    solve_landing,
+    solve_leg_extension,
+    solve_two_phase,
+)
+from softlanding.errors import ParameterError
+from softlanding.model import Rigid
+from softlanding.simulation.simulator import simulate_batch
+
+CASES = [
+    ("ground", lambda: simulate(PAPER_ROBOT, -1, Rigid(), "drag")),
+    ("controller", lambda: simulate(PAPER_ROBOT, -1, "rigid")),
+    ("robot", lambda: simulate(None, -1, Rigid())),
+    ("robot", lambda: simulate_batch("robot", -1, 0.1, 0.1)),
+    ("robot", lambda: solve_landing(-3, robot=None)),
+    ("ground", lambda: solve_landing(-3, ground="drag")),
+    ("robot", lambda: solve_two_phase(-3, robot=None)),
+    ("ground", lambda: solve_two_phase(-3, ground=1.0)),
+    ("robot", lambda: solve_leg_extension(-3, robot=None)),
+    ("eta", lambda: solve_hop(-3, eta="0.5")),
+    ("robot", lambda: solve_hop(-3, robot=None)),
+    ("robot", lambda: optimize_impedance(-3, robot="x")),
+    ("warm_start", lambda: solve_landing(-3, warm_start="previous")),
+    ("warm_start", lambda: solve_two_phase(-3, warm_start=object())),
+    ("warm_start", lambda: solve_leg_extension(-3, warm_start=object())),
+]
+
+
+@pytest.mark.parametrize("name,call", CASES, ids=[f"{n}-{i}" for i, (n, _) in enumerate(CASES)])
+def test_wrong_argument_is_a_parameter_error_naming_it(name, call):
+    with pytest.raises(ParameterError) as e:
+        call()
+    assert e.value.parameter == name
+
+
+def test_a_warm_start_of_another_variant_is_refused():
+    two = solve_two_phase(-1.0)
+    with pytest.raises(ParameterError, match="warm_start"):
+        solve_landing(-1.0, warm_start=two)
