@@ -60,7 +60,8 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
         print_table([
             ("controller", controller.describe()), ("v0", a.v0), ("r_m", a.rm), ("s", a.s),
             (_DEPTH_LABEL[res.depth_kind], res.depth), ("intrusion steps", res.steps),
-            ("feasible (0<=stroke<=s)", res.feasible), ("status", res.status),
+            ("stroke held (0<=stroke<=s)", res.stroke_held), ("rest proven", res.rest_proven),
+            ("feasible (held and at rest)", res.feasible), ("status", res.status),
             ("first foot stop tau", res.t_first_stop), ("final rest tau T", res.T),
             ("peak |u|", res.u_peak), ("stroke min", res.stroke_min),
             ("stroke max", res.stroke_max), ("E(0)", e.E0), ("E(T)", e.ET),
@@ -312,7 +313,8 @@ def _cmd_compare(a: argparse.Namespace) -> int:
         from softlanding.plots.paper import plot_controller_comparison
         from softlanding.studies.comparison import comparison_arrays
 
-        written = savefig(plot_controller_comparison(comparison_arrays(rows), robot), plot)
+        written = savefig(plot_controller_comparison(comparison_arrays(rows), robot, ground),
+                          plot)
     if a.json:
         print_json({"rows": rows, "robot": robot.to_dict(), "ground": ground.to_dict()})
         return EXIT_OK

@@ -383,5 +383,48 @@ def _mass_slope(mass: Callable[[Any], Any]) -> Any:
 LINEAR_GROUND = LinearGround()
 """The paper's ground (the default everywhere)."""
 
+_SYMBOLS = {"c_d": "$c_d$", "pi_a": r"$\Pi_a$", "radius": "$R$", "kappa": r"$\kappa$"}
+
+
+def ground_label(ground: Ground | dict[str, Any]) -> str:
+    """The ground model and its numbers, for a figure title: ``"ground: drag, $c_d$=0.2"``.
+
+    Parameters
+    ----------
+    ground : Ground or dict
+        A ground model, or its :meth:`~Ground.to_dict` (as read back from a dataset by
+        :func:`ground_attrs`' inverse).
+    """
+    d = ground if isinstance(ground, dict) else ground.to_dict()
+    params = [f"{_SYMBOLS.get(k, k)}={v:.4g}" for k, v in d.items()  # derived ones left out
+              if k not in ("model", "critical_depth") and isinstance(v, (int, float))]
+    return "ground: " + ", ".join([str(d["model"])] + params)
+
+
+def ground_attrs(ground: Ground) -> dict[str, Any]:
+    """The ground as netCDF attributes: ``ground`` (its name) and ``ground_<parameter>``.
+
+    Parameters
+    ----------
+    ground : Ground
+        The model.
+    """
+    d = ground.to_dict()
+    return {"ground": str(d.pop("model")),
+            **{f"ground_{k}": float(v) for k, v in d.items() if isinstance(v, (int, float))}}
+
+
+def ground_of_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
+    """The inverse of :func:`ground_attrs`: the ground's dict (for :func:`ground_label`).
+
+    Parameters
+    ----------
+    attrs : dict
+        A dataset's attributes.
+    """
+    return {"model": attrs.get("ground", "linear"),
+            **{k[7:]: v for k, v in attrs.items() if k.startswith("ground_")}}
+
+
 __all__ = ["AddedMassGround", "CustomGround", "DragGround", "Ground", "LINEAR_GROUND",
-           "LinearGround"]
+           "LinearGround", "ground_attrs", "ground_label", "ground_of_attrs"]

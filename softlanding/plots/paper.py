@@ -13,6 +13,7 @@ import matplotlib.patches
 import matplotlib.pyplot as plt
 import numpy as np
 
+from softlanding.model.ground import LINEAR_GROUND, Ground, ground_label, ground_of_attrs
 from softlanding.model.robot import PAPER_ROBOT, Robot
 from softlanding.simulation.simulator import LandingResult
 
@@ -68,7 +69,8 @@ def plot_trajectory(result: LandingResult, title: str | None = None) -> plt.Figu
                             f"$r_m$={r.r_m:g}, $s$={r.s:g}: "
                             + _DEPTH_PHRASE[result.depth_kind].format(result.depth)
                             + f", {result.steps} step(s)"
-                            + ("" if result.depth_kind == "final" else " simulated")),
+                            + ("" if result.depth_kind == "final" else " simulated")
+                            + f"; {ground_label(result.ground)}"),
                   fontsize=9)
     fig.tight_layout()
     return fig
@@ -201,7 +203,8 @@ def plot_bang_bang(landing) -> plt.Figure:
     sw = ", ".join(f"{ts:.4f}" for ts in landing.switch_times)
     kind = "bang-bang" if not _boundary_spans(landing) else "optimal"
     fig.suptitle(f"{kind} landing, $v_0$={landing.impact.v0:g}, $r_m$={p.r_m:g}, "
-                 f"$s$={p.s:g}, $u_{{max}}$={p.u_max:g}: depth {landing.depth:.6f}, "
+                 f"$s$={p.s:g}, $u_{{max}}$={p.u_max:g}, {ground_label(landing.ground)}: "
+                 f"depth {landing.depth:.6f}, "
                  f"switch at {sw}, "
                  f"foot stops at {landing.T:.4f}", fontsize=10)
     fig.tight_layout()
@@ -246,7 +249,8 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
     ax.set_xlabel(r"stiffness $k_p = K_p / k_g$")
     ax.set_ylabel(r"damping $k_d = K_d / \sqrt{m_t k_g}$")
     ax.set_title(f"$v_0$={float(ds.v0):g}, $r_m$={float(ds.r_m):g}, $s$={float(ds.s):g}; "
-                 f"blank: stroke limit exceeded", fontsize=9)
+                 f"{ground_label(ground_of_attrs(ds.attrs))}\nblank: stroke limit exceeded",
+                 fontsize=9)
     return fig
 
 
@@ -274,8 +278,8 @@ def plot_optimal_curves(curves) -> plt.Figure:
         ax.set_ylabel(lab)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
-    fig.suptitle(f"optimal impedance (objective: {curves.attrs.get('objective', 'depth')})",
-                 fontsize=10)
+    fig.suptitle(f"optimal impedance (objective: {curves.attrs.get('objective', 'depth')}; "
+                 f"{ground_label(ground_of_attrs(curves.attrs))})", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -361,7 +365,8 @@ def plot_depth_maps(maps, optima) -> plt.Figure:
                                                      if opt is not None else ""), fontsize=10)
     for ax in axes.flat[n:]:
         ax.set_visible(False)
-    fig.suptitle(f"Normalised depth, $r_m$={float(maps[0].r_m):g}, $s$={float(maps[0].s):g} "
+    fig.suptitle(f"Normalised depth, $r_m$={float(maps[0].r_m):g}, $s$={float(maps[0].s):g}, "
+                 f"{ground_label(ground_of_attrs(maps[0].attrs))} "
                  "(blank: stroke limit exceeded; $\\star$: optimum)", fontsize=11)
     fig.tight_layout()
     return fig
@@ -416,8 +421,8 @@ def plot_gain_families(curves) -> plt.Figure:
     return fig
 
 
-def plot_controller_comparison(cmp: dict[str, np.ndarray],
-                               robot: Robot = PAPER_ROBOT) -> plt.Figure:
+def plot_controller_comparison(cmp: dict[str, np.ndarray], robot: Robot = PAPER_ROBOT,
+                               ground: Ground = LINEAR_GROUND) -> plt.Figure:
     """The paper's Fig. 6: depth against v0 for rigid, optimal impedance and bang-bang.
 
     Parameters
@@ -426,6 +431,8 @@ def plot_controller_comparison(cmp: dict[str, np.ndarray],
         The columns of :func:`softlanding.studies.comparison.compare_controllers`.
     robot : Robot
         The robot compared (its force limit bounds the bang-bang force).
+    ground : Ground
+        The ground they landed on (named in the title).
     """
     r_m, s, u_max = robot.r_m, robot.s, robot.u_max
     bb = f"bang-bang force control ($u_{{max}}$={u_max:g})"
@@ -435,8 +442,8 @@ def plot_controller_comparison(cmp: dict[str, np.ndarray],
         colours={"rigid leg": CONTROLLER_COLOURS["rigid"],
                  "optimal impedance": CONTROLLER_COLOURS["impedance"],
                  bb: CONTROLLER_COLOURS["bang-bang"]})
-    fig.axes[0].set_title(f"Depth against impact velocity, $r_m$={r_m:g}, $s$={s:g}",
-                          fontsize=10)
+    fig.axes[0].set_title(f"Depth against impact velocity, $r_m$={r_m:g}, $s$={s:g}, "
+                          f"{ground_label(ground)}", fontsize=10)
     fig.tight_layout()
     return fig
 

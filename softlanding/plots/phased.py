@@ -12,6 +12,8 @@ from typing import Any
 import matplotlib.pyplot as plt
 import numpy as np
 
+from softlanding.model.ground import LINEAR_GROUND, ground_label
+
 PHASE_COLOURS = {"yielding": "#f4c7a1", "static": "#b9d7ea", "flight": "#d9ead3",
                  "flight up": "#d9ead3", "flight down": "#d9ead3"}
 
@@ -107,8 +109,8 @@ def plot_phased_landing(res: Any) -> plt.Figure:
     head = "leg extension (" + kind + ")" if kind else "two-phase landing"
     p = res.robot
     title = (f"{head}, $v_0$={res.impact.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
-             f"$u_{{max}}$={p.u_max:g}: depth {res.depth:.6f} (paper's: "
-             f"{res.paper_depth:.6f})")
+             f"$u_{{max}}$={p.u_max:g}, {ground_label(getattr(res, 'ground', LINEAR_GROUND))}: "
+             f"depth {res.depth:.6f} (paper's: {res.paper_depth:.6f})")
     return plot_phases(tr.t, tr.x, tr.u[:, 0], _refined_spans(ref), title, sw)
 
 

@@ -146,7 +146,8 @@ class LandingResult:
     steps : int
         Number of intrusion (yielding) phases (those simulated, if rest is not proven).
     feasible : bool
-        Rest proven and ``0 <= x_b - x_f <= s`` throughout (to 1e-9 s).
+        Rest proven and ``0 <= x_b - x_f <= s`` throughout (to 1e-9 s): the landing is
+        proven to succeed. Its two halves apart: :attr:`stroke_held`, :attr:`rest_proven`.
     u_peak : float
         ``max |u|`` over the whole run, including after the foot stops.
     stroke_min, stroke_max : float
@@ -192,6 +193,13 @@ class LandingResult:
     depth_limit: float = math.nan
     foot_rest: bool = False
     _segments: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+
+    @property
+    def stroke_held(self) -> bool:
+        """``0 <= x_b - x_f <= s`` held over the run simulated (to the kernel's tolerance),
+        whether or not rest was proven: ``feasible`` is this and :attr:`rest_proven`."""
+        tol = K.FEAS_TOL * max(1.0, self.robot.s)
+        return bool(self.stroke_min >= -tol and self.stroke_max <= self.robot.s + tol)
 
     @property
     def rest_proven(self) -> bool:
@@ -262,6 +270,7 @@ class LandingResult:
         """
         d = {
             "depth": self.depth, "steps": self.steps, "feasible": self.feasible,
+            "stroke_held": self.stroke_held,
             "u_peak": self.u_peak, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "t_first_stop": self.t_first_stop,
             "T": self.T, "status": self.status, "rest_proven": self.rest_proven,

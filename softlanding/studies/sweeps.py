@@ -19,7 +19,7 @@ import numpy as np
 import xarray as xr
 
 from softlanding.errors import ParameterError, check_count
-from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.ground import LINEAR_GROUND, Ground, ground_attrs
 from softlanding.model.robot import PAPER_IMPEDANCE_ROBOT, Impact, Robot
 from softlanding.simulation.simulator import BATCH_FIELDS, check_batch_size, simulate_batch
 from softlanding.studies.impedance import MAX_GRID, optimize_impedance
@@ -126,7 +126,7 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
     ds = xr.Dataset(data, coords={**coords, "r_m": rr, "s": ss})
     ds.attrs.update(title="soft landing, impedance control (exact simulation)",
                     u_max=-1.0 if robot.u_max is None else float(robot.u_max),
-                    l0=-1.0 if robot.l0 is None else float(robot.l0), ground=ground.name,
+                    l0=-1.0 if robot.l0 is None else float(robot.l0), **ground_attrs(ground),
                     note="u_max = -1 means unlimited, l0 = -1 means s/2; feasible allows "
                          "1e-9 s rounding at a stroke limit, strictly_feasible none")
     _describe(ds)
@@ -256,7 +256,7 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
     data = {k: (("r_m", "s", "v0"), np.array([row[k] for row in rows]).reshape(shape))
             for k in CURVE_VARIABLES}
     ds = xr.Dataset(data, coords={"r_m": rr, "s": ss, "v0": v0s})
-    ds.attrs.update(objective=objective, grid=grid, ground=ground.name,
+    ds.attrs.update(objective=objective, grid=grid, **ground_attrs(ground),
                     title=f"optimal impedance (objective: {objective})")
     return ds
 
