@@ -28,6 +28,10 @@ def test_notebook_executes_and_shows_its_figures(path, tmp_path):
     for c in drawing:  # inline figures: the library must not switch the backend away
         pngs = [o for o in c.outputs if "image/png" in o.get("data", {})]
         assert pngs, f"no figure shown by the cell:\n{c.source[:200]}"
+    for c in code:  # each figure once (a cell ending in a figure shows it a second time)
+        shown = [o["data"]["image/png"] for o in c.get("outputs", [])
+                 if "image/png" in o.get("data", {})]
+        assert len(shown) == len(set(shown)), f"a figure shown twice by:\n{c.source[:200]}"
 
 
 def test_there_is_a_notebook():

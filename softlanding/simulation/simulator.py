@@ -332,9 +332,10 @@ def simulate(
     """
     impact = Impact.of(impact)
     expect("robot", robot, Robot)
-    controller = Rigid() if controller is None else expect(
-        "controller", controller, Controller, "controller (Rigid, Impedance, ForceSchedule or "
-                                              "FeedbackSchedule)")
+    controller = Rigid() if controller is None else controller
+    if not hasattr(controller, "kernel_arrays"):  # duck-typed: variants bring their own laws
+        raise ParameterError("controller", f"must be a controller (Rigid, Impedance, "
+                                           f"ForceSchedule, ...), got {controller!r:.60}")
     expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
     integrate = integrated(ground, method)
     mats = mode_matrices(robot.r_m, LINEAR_GROUND if integrate else ground)
