@@ -271,14 +271,14 @@ class ScenarioResult:
         self._check(i)
         tr = self.solution.trajectory(n)
         x = np.column_stack([tr[f"{k}[{i}]"] for k in self.maps.state_names])
-        cols = []
+        cols: list[np.ndarray] = []
         for k in self.maps.control_names:
-            shared = tr[k] if k in tr.control_names else None
-            own = tr[f"{k}[{i}]"] if f"{k}[{i}]" in tr.control_names else None
-            if shared is None or own is None:
-                cols.append(shared if own is None else own)
-            else:
-                cols.append(np.where(np.isnan(shared), own, shared))
+            # the shared column before the branching, the scenario's own after it
+            parts = [tr[c] for c in (k, f"{k}[{i}]") if c in tr.control_names]
+            col = parts[0]
+            for other in parts[1:]:
+                col = np.where(np.isnan(col), other, col)
+            cols.append(col)
         u = np.column_stack(cols) if cols else np.zeros((len(tr), 0))
         return Trajectory(self._time(i, tr.t), x, u, tuple(self.maps.state_names),
                           tuple(self.maps.control_names), phase=tr.phase)
