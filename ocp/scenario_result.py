@@ -161,7 +161,8 @@ class ScenarioResult:
 
     @property
     def objective(self) -> float:
-        """The minimised objective: the worst-case value or the expected cost."""
+        """What Ipopt minimised: the epigraph variable ``z`` (worst case; within Ipopt's
+        bound relaxation, about 1e-8, below :attr:`worst`) or the expected cost."""
         return float(self.solution.objective)
 
     @property
@@ -171,7 +172,7 @@ class ScenarioResult:
 
     @property
     def worst(self) -> float:
-        """The largest scenario cost."""
+        """The largest scenario cost (recomputed from the end points)."""
         return float(np.max(self.costs))
 
     @property

@@ -53,7 +53,9 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -357,3 +359,11 @@ def test_bad_problems_and_solve_arguments_raise(robust):
         tr.solve(weights=[0.5, 0.5])
     with pytest.raises(ProblemDefinitionError, match="refine: only a collocation"):
         tr.refine()
+
+
+def test_the_guide_example_runs(capsys):
+    guide = Path(__file__).resolve().parents[2] / "docs" / "guides" / "ocp_scenarios.md"
+    code = re.findall(r"```python\n(.*?)```", guide.read_text(), re.S)[0]
+    exec(compile(code, str(guide), "exec"), {})
+    out = capsys.readouterr().out.split("\n")
+    assert out[0].startswith("0.1244444444") and out[0].endswith("[0, 1] True")
