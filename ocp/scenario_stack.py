@@ -9,7 +9,7 @@ multiplied by ``T_i - t0`` and its time is ``t = t0 + tau (T_i - t0)``, where
 are shared (same names) in the phase before the branching and per scenario
 (``"u[i]"``) after it. The running cost and the declared integrals of each
 scenario are carried by states that start at 0 (``"running_cost[i]"``,
-``"integral0[i]"``), so every scenario's cost and boundary constraints are
+``"integral0[i]"``; one per distinct integrand), so every scenario's cost and boundary constraints are
 expressions of end-point values. A constraint whose copies do not differ
 between scenarios (one on the shared control only) is posted once: its
 copies would be the same row ``S`` times, which Ipopt cannot tell apart.
@@ -68,12 +68,26 @@ class _Stacker:
         self.S = n_scenarios
         self.mp = MultiPhaseProblem(f"{pr.name}_scenarios")
         self.t0c = float(pr.t0_bounds[0]) if pr.t0_mode == "fixed" else 0.0
-        self.acc = (["running_cost"] if pr.has_running_cost() else []) + \
-            [str(q.name()) for q, _ in pr.integrals]
-        self.acc_rhs = ([pr.lagrange] if pr.has_running_cost() else []) + \
-            [e for _, e in pr.integrals]
-        self.integral_states = [str(q.name()) for q, _ in pr.integrals]
+        # one accumulator state per distinct integrand: the running cost, then the
+        # declared integrals (an integral constraint and a cost term on the same
+        # integrand share one; two identical states make Ipopt's KKT systems hard)
+        self.acc: list[str] = []
+        self.acc_rhs: list[ca.SX] = []
+        named = ([("running_cost", pr.lagrange)] if pr.has_running_cost() else []) + \
+            [(str(q.name()), e) for q, e in pr.integrals]
+        where = [self._accumulator(k, e) for k, e in named]
+        self.running_state = where[0] if pr.has_running_cost() else None
+        self.integral_states = where[1:] if pr.has_running_cost() else where
         self._spec0: ca.SX | None = None  # scenario 0's own symbols, once the phases exist
+
+    def _accumulator(self, name: str, integrand: ca.SX) -> str:
+        """The accumulator state of ``integrand`` (a new one unless it repeats one)."""
+        for k, e in zip(self.acc, self.acc_rhs, strict=True):
+            if ca.is_equal(e, integrand, 64):
+                return k
+        self.acc.append(name)
+        self.acc_rhs.append(integrand)
+        return name
 
     # ------------------------------------------------------------ symbols
     def _declare_symbols(self) -> None:
@@ -116,7 +130,7 @@ class _Stacker:
                 new.append(self.scen[i][n])
             else:
                 new.append(ca.SX.nan())
-        old += ca.vertsplit(self.pr.v)
+        old += ca.vertsplit(self.pr.v)[:len(self.vars)]  # all, once they are declared
         new += self.vars
         return old, new
 
@@ -248,9 +262,9 @@ class _Stacker:
         for i in range(S):
             old, new = self._boundary(i)
             J = self._sub(pr.at_tf(pr.mayer) + pr.boundary_cost, old, new)
-            if pr.has_running_cost():
+            if self.running_state is not None:
                 J = J + self.phases[-1].at_tf(self._state(self.phases[-1],
-                                                          f"running_cost[{i}]"))
+                                                          f"{self.running_state}[{i}]"))
             costs.append(J)
         ref = pr._shared.objective_ref
         if self.objective == "worst":

@@ -63,11 +63,13 @@ from scipy.optimize import minimize_scalar
 
 from ocp import (
     MultiPhaseProblem,
+    MultipleShooting,
     OptimalControlProblem,
     PathViolationWarning,
     ProblemDefinitionError,
     ScenarioProblem,
     ScenarioResult,
+    transcribe,
 )
 
 RHO = 0.01
@@ -312,6 +314,68 @@ def test_result_reads_like_the_other_results(robust):
     assert "ScenarioResult" in repr(res) and "ScenarioTranscription" in repr(robust["collocation"])
     with pytest.raises(IndexError):
         res.nodes(2)
+
+
+def rich() -> OptimalControlProblem:
+    """Every kind of term: a common parameter in a state bound, a decision variable,
+    path constraints on the control only and on the state, an initial time of 1, a free
+    duration, a boundary constraint over both ends, an integral constraint and a cost
+    integral on the same integrand."""
+    p = OptimalControlProblem("rich")
+    vmax, m = p.parameter("vmax"), p.parameter("m")
+    x, v = p.state("x"), p.state("v", upper=vmax)
+    u = p.control("u", -1, 1)
+    k = p.variable("k", 0, 2)
+    p.set_dynamics({"x": v, "v": u / m - 0.1 * k * v})
+    p.path_constraint(u, upper=0.9, name="u_cap")
+    p.path_constraint(x + v, upper=3.0, name="xv")
+    p.fixed_initial_time(1.0)
+    p.initial_constraint(x, 0.0)
+    p.initial_constraint(v, 0.0)
+    p.terminal_constraint(v, 0.0)
+    p.boundary_constraint(p.at_tf(x) - p.at_t0(x), 1.0, name="dist")
+    p.integral_constraint(u**2, -math.inf, 2.0, name="energy")
+    p.free_duration(0.5, 10, guess=3)
+    p.minimize(p.T - p.t0 + (k - 1) ** 2 + 0.1 * p.integral(u**2))
+    return p
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("branching", [None, 0.5])
+def test_one_scenario_reproduces_the_problem_itself(method, branching):
+    """The stacking (normalised time, integrals carried by states, phases at the
+    branching) changes nothing but the bookkeeping: one scenario is the problem."""
+    par = {"vmax": 0.8, "m": 1.2}
+    with warnings.catch_warnings():  # collocation leaves v above vmax between its points
+        warnings.simplefilter("ignore", PathViolationWarning)
+        ref = transcribe(rich(), method, **{"intervals" if method == "collocation"
+                                            else "nodes": N}).solve(par)
+        res = ScenarioProblem(rich(), [{"m": 1.2}], branching=branching).transcribe(
+            method, nodes=N).solve(params={"vmax": 0.8})
+    assert res.worst == pytest.approx(ref.objective, abs=1e-8)
+    assert res.final_times[0] == pytest.approx(ref.T, abs=1e-7)
+    assert res.solution.variables["k"] == pytest.approx(ref.variables["k"], abs=1e-6)
+    assert res.success == bool(ref.success and ref.verified)
+    assert res.iterations < 60
+
+
+def test_collocation_from_a_shooting_guess_on_a_hard_tree():
+    """Two masses, rest at each T_i, v <= vmax active: collocation from its default
+    guess can stall on such a stacked problem; from the shooting solution it converges
+    in a few iterations to the same optimum (within the two grids' difference)."""
+    sp = ScenarioProblem(rich(), [{"m": 1.2}, {"m": 2.0}], branching=0.5)
+    ms = sp.transcribe("multiple_shooting", nodes=N).solve(params={"vmax": 0.8})
+    assert ms.success
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PathViolationWarning)
+        col = sp.transcribe("collocation", nodes=N).solve(params={"vmax": 0.8}, guess=ms)
+    assert col.status == "Solve_Succeeded" and col.iterations < 60
+    assert col.worst == pytest.approx(ms.worst, rel=2e-3)
+    assert col.active == ms.active == [1]
+    # the heavier body rests later; sharing the control never beats its own optimum
+    assert col.final_times[1] > col.final_times[0]
+    alone = MultipleShooting(rich(), nodes=N).solve({"vmax": 0.8, "m": 2.0})
+    assert ms.worst >= alone.objective - 1e-9
 
 
 # ------------------------------------------------------------- bad inputs
