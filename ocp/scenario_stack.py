@@ -9,8 +9,8 @@ multiplied by ``T_i - t0`` and its time is ``t = t0 + tau (T_i - t0)``, where
 are shared (same names) in the phase before the branching and per scenario
 (``"u[i]"``) after it. The running cost and the declared integrals of each
 scenario are carried by states that start at 0 (``"running_cost[i]"``,
-``"integral0[i]"``; one per distinct integrand), so every scenario's cost and boundary constraints are
-expressions of end-point values. A constraint whose copies do not differ
+``"integral0[i]"``; one per distinct integrand), so every scenario's cost and
+boundary constraints are expressions of end-point values. A constraint whose copies do not differ
 between scenarios (one on the shared control only) is posted once: its
 copies would be the same row ``S`` times, which Ipopt cannot tell apart.
 """
