@@ -21,6 +21,10 @@ Knows nothing of landing. One file per role:
 * :mod:`ocp.verify`        -- post-solve check of path constraints between nodes;
 * :mod:`ocp.local_optima` -- many starts over the bounds' box: the distinct local
   optima and the best (problems with several extremals);
+* :mod:`ocp.scenario`      -- scenario problems: copies of a problem with other parameter
+  values sharing one control (open-loop robust, or up to a branching time: a two-stage
+  tree), worst-case or expected objective (:mod:`ocp.scenario_stack` builds the stacked
+  problem, :mod:`ocp.scenario_result` splits and checks its solution by scenario);
 * :mod:`ocp.solution`      -- trajectories, multipliers, sampling, export, plots;
 * :mod:`ocp.gridview`      -- how a solution's grid is read (collocation on its mesh,
   costates from the Radau defect multipliers);
@@ -65,6 +69,8 @@ _WHERE = {
     "refine_switching": "switching", "refine_structure": "switching",
     "refine_phases": "phase_refinement", "certify_phases": "phase_pmp",
     "multistart": "local_optima", "MultistartResult": "local_optima",
+    "ScenarioProblem": "scenario", "ScenarioTranscription": "scenario",
+    "ScenarioResult": "scenario_result",
 }
 
 __all__ = [
@@ -79,6 +85,9 @@ __all__ = [
     "PathViolationError",
     "PathViolationWarning",
     "ProblemDefinitionError",
+    "ScenarioProblem",
+    "ScenarioResult",
+    "ScenarioTranscription",
     "Solution",
     "SolveError",
     "Trajectory",
@@ -125,6 +134,8 @@ if TYPE_CHECKING:
     from .phase_refinement import refine_phases
     from .pmp import PMPCertificate, certify, plot_certificate
     from .problem import OptimalControlProblem
+    from .scenario import ScenarioProblem, ScenarioTranscription
+    from .scenario_result import ScenarioResult
     from .solution import Solution
     from .switching import refine_structure, refine_switching
     from .trajectory import Trajectory
