@@ -235,6 +235,7 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
     ax : matplotlib Axes, optional
         Draw into it (default: a new figure).
     """
+    own = ax is None
     fig, ax = _axes(ax, (5.8, 4.6))
     d = ds.depth.where(ds.strictly_feasible)
     dmin = optimum.depth if optimum is not None else float(d.min())
@@ -251,6 +252,8 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
     ax.set_title(f"$v_0$={float(ds.v0):g}, $r_m$={float(ds.r_m):g}, $s$={float(ds.s):g}; "
                  f"{ground_label(ground_of_attrs(ds.attrs))}\nblank: stroke limit exceeded",
                  fontsize=9)
+    if own:  # a figure of its own: keep every label (and the optimum's line) inside it
+        fig.tight_layout()
     return fig
 
 

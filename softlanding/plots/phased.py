@@ -39,9 +39,11 @@ def shade_phases(axes: Sequence[Any], spans: list[tuple[float, float, str]]) -> 
         for a, b, name in spans:
             ax.axvspan(a, b, color=_colour(name), alpha=0.55, lw=0, zorder=0)
     top = axes[0]
+    lo, hi = top.get_xlim()
     for a, b, name in spans:
-        top.text(0.5 * (a + b), 1.0, name, transform=top.get_xaxis_transform(),
-                 ha="center", va="bottom", fontsize=8)
+        if b - a >= 0.06 * (hi - lo):  # a sliver's label would overprint its neighbours'
+            top.text(0.5 * (a + b), 1.0, name, transform=top.get_xaxis_transform(),
+                     ha="center", va="bottom", fontsize=8)
 
 
 def plot_phases(t: np.ndarray, x: np.ndarray, u: np.ndarray,
@@ -123,7 +125,11 @@ def plot_hop(cycle: Any) -> plt.Figure:
         A solved cycle.
     """
     tr = cycle.trajectory(1500)
-    modes = tr.mode
+    # shade what the foot does: a "yielding" foot held still at exactly the crater's
+    # capacity (the optimum pushes with just that force; it creeps by rounding, ~1e-9) is
+    # at rest, not sinking
+    still = np.abs(tr.x[:, 3]) <= 1e-6 * max(1.0, abs(cycle.impact.v0))
+    modes = np.where((np.asarray(tr.mode) == "yielding") & still, "static", tr.mode)
     spans = []
     k = 0
     for i in range(1, len(tr.t) + 1):
@@ -183,15 +189,22 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     b.set_ylabel("leg length at impact", color="C2")
     _depth_panel(a, "2. pre-impact leg extension")
     a = axes[2]
-    for k, (leg, rows) in enumerate(hops.items()):
-        pts = [(r.apex_height, r.energy) for r in rows if r is not None]
-        if pts:
-            h, e = np.array(pts).T
-            a.plot(h, e / h, f"C{k}o-", ms=3, label=leg)
-    a.set_xscale("log")
-    a.set_xlabel(r"apex height $v_0^2/2$")
+    pts = {leg: np.array([(r.apex_height, r.energy) for r in rows if r is not None]).reshape(
+        -1, 2) for leg, rows in hops.items()}
+    heights = np.unique(np.concatenate([p[:, 0] for p in pts.values()]))
+    if len(heights) > 1:  # a curve over apex heights
+        for k, (leg, p) in enumerate(pts.items()):
+            if len(p):
+                a.plot(p[:, 0], p[:, 1] / p[:, 0], f"C{k}o-", ms=3, label=leg)
+        a.set_xscale("log" if heights[-1] > 10 * heights[0] else "linear")
+        a.set_xlabel(r"apex height $v_0^2/2$")
+        a.legend(fontsize=8)
+    else:  # one apex height: a bar per leg, not one point on an empty axis
+        legs_ = [leg for leg, p in pts.items() if len(p)]
+        a.bar(legs_, [pts[leg][0, 1] / pts[leg][0, 0] for leg in legs_],
+              color=[f"C{k}" for k, leg in enumerate(pts) if len(pts[leg])])
+        a.set_xlabel(f"leg (apex height {heights[0]:.3g})" if len(heights) else "leg")
     a.set_ylabel("energy per cycle / apex height")
-    a.legend(fontsize=8)
     eta = next((r.eta for rows in hops.values() for r in rows if r is not None), 0.0)
     a.set_title(f"3. minimum-energy hopping ($\\eta$ = {eta:g})", fontsize=9)
     for ax in axes:
