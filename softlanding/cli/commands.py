@@ -483,6 +483,10 @@ def _hop_rows(c: Any) -> list[tuple[str, object]]:
         ("paper's CoT of the landing", c.cot), ("energy (optimiser's slack)",
                                                  c.energy_transcribed),
         ("apex posture error", c.apex_error), ("energy balance error", c.balance_error)]
+    if c.starts:  # a non-convex problem: how far apart its local optima are
+        rows += [("starts (energy each)", ", ".join(
+                    f"{st['energy']:.6g}" if "energy" in st else st["error"] for st in c.starts)),
+                 ("local optima spread", c.local_optima_spread)]
     rows += [(k, v) for k, v in c.gains.items()]
     rows += [(f"time: {k}", v) for k, v in c.times.items()]
     return rows

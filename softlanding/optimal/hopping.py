@@ -27,11 +27,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
 from ocp import Solution, SolveError, Trajectory
+from softlanding.errors import expect
 from softlanding.model.controllers import ForceSchedule, Rigid
 from softlanding.model.dynamics import mechanical_energy
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -92,6 +94,11 @@ class HopCycle:
         The exact simulations the cycle is made of, with the cycle times each covers
         (each simulation starts at its own time 0).
     notes : list of str
+    starts : list of dict
+        ``solve_hop``'s deterministic starts (``stretch``: the push-off and flight of the
+        start stretched in time) with the energy each converged to (or its error): the
+        cycle is the best of them, and their spread shows whether the optimum found is
+        unique (local optima of a non-convex problem).
     """
 
     leg: str
@@ -111,6 +118,14 @@ class HopCycle:
     transcribed: list[Solution] = field(default_factory=list)
     pieces: list[tuple[LandingResult, float, float]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    starts: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def local_optima_spread(self) -> float:
+        """Largest minus smallest replayed energy over the converged starts (0: one
+        optimum found from every start; NaN: fewer than two converged)."""
+        e = [s["energy"] for s in self.starts if "energy" in s]
+        return max(e) - min(e) if len(e) > 1 else math.nan
 
     def trajectory(self, n: int = 1500) -> Trajectory:
         """The whole cycle from its exact simulations (``mode`` = ground mode).
@@ -161,6 +176,7 @@ class HopCycle:
             "balance_error": self.balance_error, "gains": self.gains, "times": self.times,
             "verified": not self.unverified_reasons(),
             "unverified_reasons": self.unverified_reasons(), "notes": self.notes,
+            "starts": self.starts, "local_optima_spread": self.local_optima_spread,
             "robot": self.robot.to_dict()})
 
 
@@ -223,23 +239,36 @@ def _evaluate(leg: str, robot: Robot, impact: Impact, eta: float, res: LandingRe
 
 
 # -------------------------------------------------------------- the optimum
-def _hop_guess(robot: Robot, impact: Impact) -> Trajectory:
-    """The landing optimum, its arrest mirrored into a push-off, a flight to the apex."""
+@lru_cache(maxsize=8)
+def _two_phase_landing(robot: Robot, impact: Impact) -> Any:
+    """The two-phase landing every start mirrors (solved once per landing)."""
     from softlanding.optimal.two_phase import solve_two_phase
 
-    two = solve_two_phase(impact, robot.replace(l0=None), replay=False)
+    return solve_two_phase(impact, robot.replace(l0=None), replay=False)
+
+
+#: Time stretches of the push-off and flight of ``solve_hop``'s starts (the first is the
+#: plain mirror); deterministic, so the best of them is reproducible.
+HOP_STARTS = (1.0, 0.7, 1.4)
+
+
+def _hop_guess(robot: Robot, impact: Impact, stretch: float = 1.0) -> Trajectory:
+    """The landing optimum, its arrest mirrored into a push-off, a flight to the apex; the
+    push-off and the flight stretched in time by ``stretch`` (other starts)."""
+    two = _two_phase_landing(robot, impact)
     if two.refined is None:  # its exact arcs are the stance of the start
         raise SolveError(two.status, message="no start for the hop: the two-phase landing it "
                          "mirrors was not refined (" + "; ".join(two.notes) + ")")
     tr = two.refined.trajectory(300)
     y, s = tr.phase == 0, tr.phase == 1
     ts, xs, us = tr.t[s], tr.x[s], tr.u[s, 0]
-    tm = 2 * ts[-1] - ts[::-1]
+    tm = ts[-1] + stretch * (ts[-1] - ts[::-1])
     xm = xs[::-1].copy()
-    xm[:, 1] *= -1
+    xm[:, 1] *= -1 / stretch
+    xm[:, 3] /= stretch
     t_st, x_st = np.r_[ts, tm[1:]], np.vstack([xs, xm[1:]])
     u_st = np.r_[us, us[::-1][1:]]
-    tf = abs(impact.v0) + 1.0
+    tf = stretch * (abs(impact.v0) + 1.0)
     t = np.linspace(0.0, tf, 60)
     a = np.sin(np.pi * t / (2 * tf))
     da = np.pi / (2 * tf) * np.cos(np.pi * t / (2 * tf))
@@ -260,6 +289,11 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
               warm_start: HopCycle | None = None) -> HopCycle:
     """The minimum-energy hop cycle (free actuator), replayed exactly.
 
+    The problem is not convex: it is solved from the deterministic starts of
+    :data:`HOP_STARTS` (the mirrored landing, its push-off and flight stretched in time)
+    and the best verified cycle is returned, with every start's energy in ``starts`` and
+    their ``local_optima_spread``. With ``warm_start`` (continuation) only that start.
+
     Parameters
     ----------
     impact : Impact or float
@@ -279,12 +313,40 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         When the transcription fails (InfeasibleError: no such hop).
     """
     robot, impact = hop_input(robot, impact, eta)
-    notes: list[str] = []
+    if warm_start is not None:
+        expect("warm_start", warm_start, HopCycle, "HopCycle (solve_hop's)")
     tr = hop_transcription("touchdown")
     ws = warm_start.transcribed[0] if warm_start is not None and warm_start.transcribed \
         else None
-    sol = transcribed_solve(tr, _params(robot, impact, eta), _hop_guess(robot, impact)
-                            if ws is None else None, ws, notes)
+    if ws is not None:  # continuation: the neighbour's optimum is the start
+        return _hop_from(tr, robot, impact, eta, None, ws)
+    best: HopCycle | None = None
+    starts: list[dict[str, Any]] = []
+    last_error: SolveError | None = None
+    for stretch in HOP_STARTS:
+        try:
+            c = _hop_from(tr, robot, impact, eta, _hop_guess(robot, impact, stretch), None)
+        except SolveError as err:
+            starts.append({"stretch": stretch, "error": err.status})
+            last_error = err
+            continue
+        starts.append({"stretch": stretch, "energy": c.energy, "depth": c.depth,
+                       "verified": not c.unverified_reasons()})
+        if best is None or (not c.unverified_reasons(), -c.energy) > (
+                not best.unverified_reasons(), -best.energy):
+            best = c
+    if best is None:
+        assert last_error is not None
+        raise last_error
+    best.starts = starts
+    return best
+
+
+def _hop_from(tr: Any, robot: Robot, impact: Impact, eta: float, guess: Trajectory | None,
+              ws: Solution | None) -> HopCycle:
+    """One solve of the free hop from a start, replayed and evaluated."""
+    notes: list[str] = []
+    sol = transcribed_solve(tr, _params(robot, impact, eta), guess, ws, notes)
     sched, t_apex = _schedule([sol])
     x0 = impact.initial_state(robot.replace(l0=None))
     res = simulate(robot, impact, sched, x0=x0, t_max=t_apex + 1.0)
