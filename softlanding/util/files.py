@@ -87,8 +87,8 @@ def _check_folder(folder: Path, name: str, option: str, what: str) -> None:
     if not folder.is_dir():
         raise ParameterError(option, f"folder {folder} does not exist")
     if len(os.fsencode(name)) > _name_max(folder):
-        raise ParameterError(option, f"{what} name {name[:40]}... is longer than the file "
-                                     f"system allows ({_name_max(folder)} bytes)")
+        raise ParameterError(option, f"{what} name {name[:20]}...{name[-8:]} is longer than "
+                                     f"the file system allows ({_name_max(folder)} bytes)")
     if not os.access(folder, os.W_OK | os.X_OK):
         raise ParameterError(option, f"folder {folder} is not writable")
     # os.access says yes to root everywhere, even in /proc or on a read-only mount: a real
@@ -265,11 +265,13 @@ def output_path(path: str | os.PathLike[str], option: str, force: bool,
     if not str(path):
         raise ParameterError(option, "needs a file name")
     p = Path(path)
-    if p.is_dir() or not p.name:
+    if not p.name:
         raise ParameterError(option, f"{p} is a folder; give a file name")
     if default_suffix and not p.suffix:
         p = p.with_name(p.name + default_suffix)
-    _check_folder(p.parent, p.name, option, "file")
+    _check_folder(p.parent, p.name, option, "file")  # first: a long name fails stat() too
+    if p.is_dir():
+        raise ParameterError(option, f"{p} is a folder; give a file name")
     if p.exists() and not force:
         raise ParameterError(option, f"{p} exists; pass --force to overwrite it")
     run = active_run()
@@ -299,11 +301,11 @@ def output_folder(path: str | os.PathLike[str], option: str, force: bool) -> Pat
     if not str(path):
         raise ParameterError(option, "needs a folder name")
     p = Path(path)
+    _check_folder(p.absolute().parent, p.absolute().name, option, "folder")
     if p.exists() and not p.is_dir():
         raise ParameterError(option, f"{p} exists and is not a folder")
     if p.is_dir() and any(p.iterdir()) and not force:
         raise ParameterError(option, f"{p} is not empty; pass --force to replace its files")
-    _check_folder(p.absolute().parent, p.absolute().name, option, "folder")
     return p
 
 
