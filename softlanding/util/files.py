@@ -127,8 +127,8 @@ class OutputRun:
     """
 
     force: bool
-    claimed: dict[str, str] = field(default_factory=dict)
-    _placed: list[_Placed] = field(default_factory=list)
+    claimed: dict[str, str] = field(default_factory=dict, init=False)
+    _placed: list[_Placed] = field(default_factory=list, init=False)
 
     def claim(self, path: Path, option: str) -> None:
         """Reserve ``path`` for ``option``; a second option naming the same file is refused.

@@ -24,7 +24,13 @@ EXIT_TERMINATED = 143
 
 
 class Terminated(KeyboardInterrupt):
-    """The process received SIGTERM (raised in the main thread, like Ctrl-C's exception)."""
+    """The process received SIGTERM (raised in the main thread, like Ctrl-C's exception).
+
+    Parameters
+    ----------
+    *args, **kwargs
+        As :class:`KeyboardInterrupt`.
+    """
 
 
 _deferring = 0
