@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from softlanding.errors import ParameterError
-from softlanding.util.signals import deferred_signals
+from softlanding.util.signals import deferred_signals, raise_if_interrupted
 
 _TMP_STEM = 24
 """Characters of the final name kept in a temporary name (keeps it short: NAME_MAX)."""
@@ -217,6 +217,7 @@ def output_run(force: bool = False) -> Iterator[OutputRun]:
     _ACTIVE.append(run)
     try:
         yield run
+        raise_if_interrupted()  # a signal swallowed on the way (a failed solve) still fails
     except BrokenPipeError:
         run.commit()
         raise

@@ -35,11 +35,17 @@ class Terminated(KeyboardInterrupt):
 
 _deferring = 0
 _pending: list[int] = []
+_received: list[int] = []
 _terminated = False
+
+
+def _interruption(signum: int) -> KeyboardInterrupt:
+    return Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
 
 def _raise_for(signum: int) -> None:
     global _terminated
+    _received.append(signum)
     if signum == signal.SIGTERM:
         if _terminated:  # a repeated SIGTERM must not cut the cleanup of the first short
             return
@@ -73,6 +79,21 @@ def deferred_signals() -> Iterator[None]:
             _raise_for(signum)
 
 
+def raise_if_interrupted() -> None:
+    """Raise the interruption again if one was received and swallowed on its way up.
+
+    CasADi, for one, turns the exception raised inside a solve into a failed solve; a caller
+    may then carry on. Call this before keeping a run's results.
+
+    Raises
+    ------
+    KeyboardInterrupt
+        :class:`Terminated` after SIGTERM, :class:`KeyboardInterrupt` after SIGINT.
+    """
+    if _received:
+        raise _interruption(_received[0])
+
+
 @contextlib.contextmanager
 def handle_signals() -> Iterator[None]:
     """Within the body, SIGTERM raises :class:`Terminated` and SIGINT :class:`KeyboardInterrupt`.
@@ -91,12 +112,18 @@ def handle_signals() -> Iterator[None]:
         if signal.getsignal(signum) is default:
             previous[signum] = signal.signal(signum, _handler)
     _terminated = False
+    _received.clear()
     try:
         yield
+    except Exception as exc:  # an interruption swallowed and turned into another error
+        if _received:
+            raise _interruption(_received[0]) from exc
+        raise
     finally:
         for signum, old in previous.items():
             signal.signal(signum, old)
         _pending.clear()
+        _received.clear()
 
 
 def report_interrupt(exc: KeyboardInterrupt, prog: str = "softlanding") -> int:

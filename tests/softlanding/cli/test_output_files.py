@@ -141,9 +141,10 @@ def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, 
         time.sleep(0.05)
     time.sleep(0.5)
     p.send_signal(signum)
-    assert p.wait(timeout=30) == code
+    returncode = p.wait(timeout=30)
     err = p.stderr.read()
     p.stderr.close()
+    assert returncode == code, err
     assert err == line + "\n"
     assert os.listdir(tmp_path) == []  # no hidden .D.*.partial folder
 
