@@ -59,6 +59,13 @@ class RestNotProvenError(SoftlandingError):
     """A landing whose rest could not be proven was asked for a figure that needs rest."""
 
 
+class ClusterError(SoftlandingError):
+    """A Dask cluster stopped delivering results (no worker left, or none for too long)."""
+
+    exit_code = 1
+    label = "cluster"
+
+
 def plain(value: Any) -> str:
     """A number as a user typed it (no numpy repr such as ``np.float64(nan)``).
 

@@ -4,7 +4,7 @@ Every sub-command prints a readable table by default and one JSON object with
 ``--json``. The commands only parse, call the API and print: every number
 comes from :mod:`softlanding`. Exit codes: 0 ok, 1 a well-posed run that
 failed (rest not proven, solver failure), 2 bad input, 3 internal error (a
-bug: ``--debug`` shows the traceback), 130 interrupted.
+bug: ``--debug`` shows the traceback), 130 interrupted, 143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
@@ -16,7 +16,6 @@ from typing import Any
 
 from softlanding.cli.output import (
     EXIT_FAILURE,
-    EXIT_INTERRUPTED,
     EXIT_OK,
     CliParser,
     fmt,
@@ -213,7 +212,8 @@ def _cmd_map(a: argparse.Namespace) -> int:
     from softlanding.studies.sweeps import depth_map, save_dataset
     from softlanding.util.files import atomic
 
-    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler)
+    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler,
+                   dask_timeout=a.dask_timeout)
     opt = optimize_impedance(impact, robot, ground, grid=a.n)
     with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
         save_dataset(ds, tmp)
@@ -277,7 +277,7 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 
     curves = optimal_impedance_curves(v0, robot, ground, r_m=a.rm, s=a.s,
                                       objective=a.objective, grid=grid, scheduler=a.scheduler,
-                                      progress=not a.json)
+                                      progress=not a.json, dask_timeout=a.dask_timeout)
     if out:
         with atomic(out) as tmp:
             save_dataset(curves, tmp)
@@ -453,7 +453,8 @@ def _cmd_reproduce(a: argparse.Namespace) -> int:
     out = output_folder(a.out, "out", a.force)
     if not a.json:
         print(f"Reproducing the paper into {out} ({'quick' if a.quick else 'full'} run)")
-    s = reproduce(out, quick=a.quick, progress=not a.json, log=None if a.json else print)
+    s = reproduce(out, quick=a.quick, progress=not a.json, log=None if a.json else print,
+                  force=a.force)
     if a.json:
         print_json(s)
         return EXIT_OK
@@ -573,17 +574,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         # files only: no window, also without a display (set, not imported: 0.2 s saved
         # when the arguments turn out bad)
         os.environ["MPLBACKEND"] = "Agg"
-    try:
-        return int(args.func(args))
+    from softlanding.util.files import output_run
+    from softlanding.util.signals import handle_signals, report_interrupt
+
+    try:  # SIGTERM cleans up like Ctrl-C; a failed run leaves none of its outputs
+        with handle_signals(), output_run(force=bool(getattr(args, "force", False))):
+            return int(args.func(args))
     except BrokenPipeError:
         # output piped into e.g. `head`, which closed early: not an error
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
-    except KeyboardInterrupt:
-        print("softlanding: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        return report_interrupt(exc)
     except Exception as exc:
         if args.debug:
             raise

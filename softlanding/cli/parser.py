@@ -88,6 +88,18 @@ def _accept_arg(p: argparse.ArgumentParser) -> None:
                         "certificate); the output still says 'verified: no' and why")
 
 
+DASK_TIMEOUT_S = 600.0
+"""Default of ``--dask-timeout`` (that of :mod:`softlanding.studies.sweeps`, not imported: slow)."""
+
+
+def _dask_args(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address, help=what)
+    p.add_argument("--dask-timeout", type=float, default=DASK_TIMEOUT_S, metavar="SECONDS",
+                   help="with --scheduler: fail (exit 1, nothing written) when no result has "
+                        "arrived for this long, or no worker is left for "
+                        f"min(this, 30) s (default {DASK_TIMEOUT_S:g})")
+
+
 def _force_arg(p: argparse.ArgumentParser) -> None:
     if not any("--force" in a.option_strings for a in p._actions):
         p.add_argument("--force", action="store_true",
@@ -244,8 +256,7 @@ def _map(sub: Any) -> argparse.ArgumentParser:
     _model_args(m, None, "actuator force limit (default none)")
     m.add_argument("--out", required=True, metavar="FILE.nc", help="netCDF dataset to write")
     _plot_arg(m, "the map figure")
-    m.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address,
-                   help="run on a Dask cluster instead of the local cores")
+    _dask_args(m, "run on a Dask cluster instead of the local cores")
     ground_args(m)
     return m
 
@@ -263,8 +274,7 @@ def _sweep(sub: Any) -> argparse.ArgumentParser:
     w.add_argument("--grid", type=int, default=101, help="starting grid per axis")
     w.add_argument("--out", metavar="FILE.nc", help="netCDF dataset to write")
     _plot_arg(w, "the curves figure")
-    w.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address,
-                   help="Dask scheduler address")
+    _dask_args(w, "Dask scheduler address")
     w.add_argument("--json", action="store_true", help="print one JSON object")
     ground_args(w)
     return w

@@ -28,7 +28,7 @@ SECTIONS: tuple[Section, ...] = (*PAPER_SECTIONS, TERRAIN_SECTION, PHASED_SECTIO
 
 
 def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True,
-              log: Callable[[str], None] | None = print) -> dict:
+              log: Callable[[str], None] | None = print, force: bool = True) -> dict:
     """Regenerate every figure of the paper, the summary files and the robustness study.
 
     Parameters
@@ -42,6 +42,11 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         Progress bars for the long sweeps.
     log : callable or None
         Receives one line per finished section (None: silent).
+    force : bool
+        Allow a folder that is not empty when the run ends (its files of the same names are
+        replaced). With False a missing or empty folder is filled in one atomic rename, and
+        a folder a concurrent run filled meanwhile is refused
+        (:class:`~softlanding.errors.ParameterError`).
 
     Returns
     -------
@@ -53,7 +58,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         final.parent.mkdir(parents=True)
     # written into a temporary folder and moved into place at the end: an interrupted or
     # failed run leaves nothing half-written in out_dir
-    with atomic_folder(final) as out:
+    with atomic_folder(final, force) as out:
         (out / "data").mkdir()
         summary = _run_sections(out, Settings.make(quick), progress, log)
     return summary

@@ -11,6 +11,7 @@ cluster's workers, which must have this package installed.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -18,22 +19,25 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from softlanding.errors import ParameterError, check_count
+from softlanding.errors import ClusterError, ParameterError, check_count
 from softlanding.model.ground import LINEAR_GROUND, Ground, ground_attrs
 from softlanding.model.robot import PAPER_IMPEDANCE_ROBOT, Impact, Robot
 from softlanding.simulation.simulator import BATCH_FIELDS, check_batch_size, simulate_batch
 from softlanding.studies.impedance import MAX_GRID, optimize_impedance
 from softlanding.util.progress import progress as show_progress
+from softlanding.util.progress import progress_bar
 
 CURVE_VARIABLES = ("feasible", "k_p", "k_d", "depth", "steps", "u_peak", "stroke_min",
                    "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "value")
 WORKER_TIMEOUT_S = 30.0
 """How long a Dask scheduler may go without a worker before the run gives up."""
+DASK_TIMEOUT_S = 600.0
+"""Default of ``dask_timeout``: how long a Dask run may go without any result arriving."""
 MAX_LANDINGS = 50_000_000
 """Largest dataset (about 6 GiB of results); larger requests are refused up front."""
 
 
-def _client(scheduler: str | None):
+def _client(scheduler: str | None, timeout: float = DASK_TIMEOUT_S):
     if scheduler is None:
         return None
     try:
@@ -45,12 +49,13 @@ def _client(scheduler: str | None):
         client = Client(scheduler, timeout="10s")
     except (OSError, TimeoutError) as exc:
         raise ParameterError("scheduler", f"cannot reach {scheduler}: {exc}") from None
+    wait = min(WORKER_TIMEOUT_S, timeout)
     try:
-        client.wait_for_workers(1, timeout=WORKER_TIMEOUT_S)
+        client.wait_for_workers(1, timeout=wait)
     except TimeoutError:
         client.close()
         raise ParameterError("scheduler", f"no worker joined {scheduler} within "
-                                          f"{WORKER_TIMEOUT_S:g} s; start one with "
+                                          f"{wait:g} s; start one with "
                                           f"'dask worker {scheduler}'") from None
     return client
 
@@ -76,7 +81,7 @@ def _family(robot: Robot, r_m, s) -> tuple[np.ndarray, np.ndarray, list[Robot]]:
 def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
                       ground: Ground = LINEAR_GROUND, *, r_m=None, s=None, energy: bool = True,
                       scheduler: str | None = None, progress: bool | None = None,
-                      chunks: int = 32) -> xr.Dataset:
+                      chunks: int = 32, dask_timeout: float = DASK_TIMEOUT_S) -> xr.Dataset:
     """Landings on the outer product of the given coordinates, as a labelled dataset.
 
     Parameters
@@ -98,6 +103,9 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
         Progress bar (default: for more than 50,000 landings).
     chunks : int
         Number of chunks per robot sent to a Dask cluster.
+    dask_timeout : float
+        Seconds a Dask run may go without a result arriving (or without any worker) before
+        it fails with :class:`~softlanding.errors.ClusterError`.
 
     Returns
     -------
@@ -114,11 +122,14 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
     check_batch_size(2 * size)  # the results, and the dataset built from them
     grids = np.meshgrid(*coords.values(), indexing="ij")
     kp, kd, v = (g.ravel() for g in grids)
-    client = _client(scheduler)
+    dask_timeout = _check_timeout(dask_timeout)
+    client = _client(scheduler, dask_timeout)
     if client is None:
         parts = [_batch_chunk(r, ground, v, kp, kd, energy, progress) for r in robots]
     else:
-        parts = _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress)
+        with client:  # closed also when the run fails or is interrupted
+            parts = _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress,
+                                dask_timeout)
     shape = grids[0].shape + (len(rr), len(ss))
     data = {k: (("k_p", "k_d", "v0", "r_m", "s"),
                 np.stack([p[k].reshape(grids[0].shape) for p in parts], axis=-1).reshape(shape))
@@ -133,24 +144,75 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
     return ds
 
 
-def _gather(client, futures: list, progress: bool | None, desc: str, unit: str) -> list:
+def _check_timeout(timeout: float) -> float:
+    if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
+        raise ParameterError("dask_timeout", f"must be a positive number of seconds, "
+                                             f"got {timeout!r}")
+    return float(timeout)
+
+
+def _completed(client, futures: list, timeout: float) -> Any:
+    """Yield futures as they finish; fail when none has for ``timeout`` s or no worker is left.
+
+    A sweep whose only worker died would otherwise wait for ever: the scheduler keeps the
+    tasks until a worker joins.
+    """
+    from distributed import wait
+
+    pending = set(futures)
+    last = time.monotonic()
+    no_worker_since: float | None = None
+    while pending:
+        try:
+            done, pending = wait(pending, timeout=min(1.0, timeout), return_when="FIRST_COMPLETED")
+        except TimeoutError:
+            done = set()
+        now = time.monotonic()
+        if done:
+            last, no_worker_since = now, None
+            yield from done
+            continue
+        try:
+            workers = len(client.nthreads())
+        except Exception:  # the scheduler itself is gone or unreachable
+            workers = 0
+        if workers:
+            no_worker_since = None
+        elif no_worker_since is None:
+            no_worker_since = now
+        where = f"{len(pending)} of {len(futures)} tasks unfinished"
+        if no_worker_since is not None and now - no_worker_since >= min(timeout,
+                                                                        WORKER_TIMEOUT_S):
+            raise ClusterError(f"no Dask worker left ({where}); start one with 'dask worker "
+                               f"{client.scheduler.address}' and run again")
+        if now - last >= timeout:
+            raise ClusterError(f"no result from the Dask cluster for {timeout:g} s ({where}); "
+                               "see --dask-timeout")
+
+
+def _gather(client, futures: list, progress: bool | None, desc: str, unit: str,
+            timeout: float = DASK_TIMEOUT_S) -> list:
     """Results of the futures in order, with a progress bar as they complete."""
-    from distributed import as_completed
+    from distributed import KilledWorker
 
-    for _ in show_progress(as_completed(futures), progress, desc, unit):
-        pass
-    return client.gather(futures)
+    try:
+        with progress_bar(len(futures) if progress else 0, desc, unit) as bar:
+            for _ in _completed(client, futures, timeout):
+                bar.update()
+        return client.gather(futures)
+    except KilledWorker as exc:  # a task that kept killing its workers
+        raise ClusterError(f"Dask workers died running a task ({exc})") from None
 
 
-def _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress) -> list[dict]:
+def _on_cluster(client, robots, ground, v, kp, kd, energy, chunks, progress,
+                timeout: float = DASK_TIMEOUT_S) -> list[dict]:
     """Map the chunks of every robot over a Dask cluster; one result dict per robot."""
     n = min(chunks, kp.size)
     pieces = [np.array_split(a, n) for a in (v, kp, kd)]
     futures = [f for r in robots for f in client.map(
         _batch_chunk, [r] * n, [ground] * n, *pieces, [energy] * n, pure=False)]
     show = progress or (progress is None and kp.size * len(robots) > 50_000)
-    got = _gather(client, futures, show, "simulating (Dask)", "chunk")
-    client.close()
+    got = _gather(client, futures, show, "simulating (Dask)", "chunk", timeout)
     return [{k: np.concatenate([g[k] for g in got[i * n:(i + 1) * n]]) for k in got[0]}
             for i in range(len(robots))]
 
@@ -209,7 +271,8 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
                              ground: Ground = LINEAR_GROUND, *, r_m=None, s=None,
                              objective: str = "depth", grid: int = 101,
                              scheduler: str | None = None,
-                             progress: bool | None = True) -> xr.Dataset:
+                             progress: bool | None = True,
+                             dask_timeout: float = DASK_TIMEOUT_S) -> xr.Dataset:
     """Optimal gains against impact velocity, for the robot or a family of robots.
 
     Parameters
@@ -230,6 +293,9 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
         Dask scheduler address (one task per problem).
     progress : bool, optional
         Progress bar.
+    dask_timeout : float
+        Seconds a Dask run may go without a result arriving (or without any worker) before
+        it fails with :class:`~softlanding.errors.ClusterError`.
 
     Returns
     -------
@@ -243,15 +309,18 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
     check_count("grid", grid, 2, MAX_GRID)
     rr, ss, robots = _family(robot, r_m, s)
     tasks = [(float(v), r) for r in robots for v in v0s]
-    client = _client(scheduler)
+    dask_timeout = _check_timeout(dask_timeout)
+    client = _client(scheduler, dask_timeout)
     if client is None:
         rows = [_optimum_row(v, r, ground, objective, grid) for v, r in
                 show_progress(tasks, progress, "optimal gains", "landing problem")]
     else:
-        futures = client.map(_optimum_row, *zip(*tasks, strict=True), [ground] * len(tasks),
-                             [objective] * len(tasks), [grid] * len(tasks), pure=False)
-        rows = _gather(client, futures, progress, "optimal gains (Dask)", "landing problem")
-        client.close()
+        with client:  # closed also when the run fails or is interrupted
+            futures = client.map(_optimum_row, *zip(*tasks, strict=True),
+                                 [ground] * len(tasks), [objective] * len(tasks),
+                                 [grid] * len(tasks), pure=False)
+            rows = _gather(client, futures, progress, "optimal gains (Dask)",
+                           "landing problem", dask_timeout)
     shape = (len(rr), len(ss), len(v0s))
     data = {k: (("r_m", "s", "v0"), np.array([row[k] for row in rows]).reshape(shape))
             for k in CURVE_VARIABLES}

@@ -1,0 +1,211 @@
+"""Output files of the console script: races, checks before any work, signals, modes, Dask.
+
+In-process through ``main(argv)`` (the ``cli`` fixture) where a monkeypatch stages the race
+deterministically; real subprocesses for concurrency, signals and the umask.
+"""
+
+import os
+import signal
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import softlanding.studies.sweeps as sweeps
+
+CMD = [sys.executable, "-m", "softlanding"]
+ROOT = Path(__file__).resolve().parents[3]
+ENV = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+
+
+def _appears_meanwhile(monkeypatch, path, content=b"the other run's"):
+    """A concurrent run writes ``path`` while this one computes its depth map."""
+    real = sweeps.depth_map
+
+    def depth_map(*a, **k):
+        path.write_bytes(content)
+        return real(*a, **k)
+
+    monkeypatch.setattr(sweeps, "depth_map", depth_map)
+
+
+def test_map_whose_out_file_appeared_meanwhile_exits_2_and_leaves_nothing(tmp_path, cli,
+                                                                          monkeypatch):
+    out, png = tmp_path / "same.nc", tmp_path / "same.png"
+    _appears_meanwhile(monkeypatch, out)
+    code, stdout, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", png)
+    assert code == 2 and err.count("\n") == 1
+    assert err.strip() == f"softlanding: error: out: {out} exists; pass --force to overwrite it"
+    assert out.read_bytes() == b"the other run's" and not png.exists()
+    assert os.listdir(tmp_path) == ["same.nc"]  # no temporary file either
+    assert "written" not in stdout
+
+
+def test_a_later_output_failing_removes_the_earlier_one(tmp_path, cli, monkeypatch):
+    out, png = tmp_path / "m5.nc", tmp_path / "m5.png"
+    _appears_meanwhile(monkeypatch, png)
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", png)
+    assert code == 2 and "plot: " in err and "exists; pass --force" in err
+    assert os.listdir(tmp_path) == ["m5.png"]  # the dataset placed first is rolled back
+    assert png.read_bytes() == b"the other run's"
+
+
+def test_with_force_a_failed_run_restores_the_file_it_replaced(tmp_path, cli, monkeypatch):
+    import softlanding.plots.paper as figures
+
+    out = tmp_path / "m.nc"
+    out.write_bytes(b"yesterday's")
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(figures, "plot_depth_map", interrupted)  # after the dataset is placed
+    code, _, _ = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot",
+                     tmp_path / "m.png", "--force")
+    assert code == 130
+    assert out.read_bytes() == b"yesterday's" and os.listdir(tmp_path) == ["m.nc"]
+
+
+@pytest.mark.slow
+def test_two_concurrent_runs_onto_one_file_exactly_one_wins(tmp_path):
+    out = tmp_path / "same.nc"
+    runs = [subprocess.Popen([*CMD, "map", "--v0", v0, "--n", "151", "--out", str(out)],
+                             env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            for v0 in ("-3", "-5")]
+    results = [(p.wait(timeout=120), p.stderr.read()) for p in runs]
+    for p in runs:
+        p.stdout.close(), p.stderr.close()
+    assert sorted(code for code, _ in results) == [0, 2], results
+    loser = [err for code, err in results if code == 2][0]
+    assert loser.count("\n") == 1 and "exists; pass --force to overwrite it" in loser
+    winner_v0 = -3.0 if results[0][0] == 0 else -5.0
+    ds = sweeps.load_dataset(out)
+    assert float(ds.v0) == winner_v0 and ds.depth.shape == (151, 151)
+    assert os.listdir(tmp_path) == ["same.nc"]
+
+
+# ------------------------------------------------------------ checked before any work
+def _no_work(monkeypatch):
+    def depth_map(*a, **k):
+        raise AssertionError("the work started before the outputs were checked")
+
+    monkeypatch.setattr(sweeps, "depth_map", depth_map)
+
+
+@pytest.mark.parametrize(("out", "plot", "option", "message"), [
+    ("m.nc", "/proc/x.png", "plot", "cannot create files in /proc"),
+    ("/sys/m.nc", "m.png", "out", "cannot create files in /sys"),
+    ("x" * 300 + ".nc", "m.png", "out", "longer than the file system allows"),
+    ("m.nc", "y" * 252, "plot", "longer than the file system allows"),  # with .png added
+    ("same.nc", "same.nc", "plot", "also the --out file"),
+    ("same.png", "./same", "plot", "also the --out file"),  # the same once .png is added
+])
+def test_unusable_outputs_exit_2_before_any_work(tmp_path, cli, monkeypatch, out, plot, option,
+                                                 message):
+    _no_work(monkeypatch)
+    monkeypatch.chdir(tmp_path)
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", plot)
+    assert code == 2 and err.count("\n") == 1, err
+    assert err.startswith(f"softlanding: error: {option}: ") and message in err
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into any folder")
+def test_an_unwritable_folder_exits_2_before_any_work(tmp_path, cli, monkeypatch):
+    _no_work(monkeypatch)
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o500)
+    code, _, err = cli("map", "--v0", "-3", "--out", locked / "m.nc")
+    assert code == 2 and "out: folder" in err and "not writable" in err
+
+
+def test_reproduce_into_an_unusable_folder_exits_2_before_any_work(cli):
+    code, _, err = cli("reproduce", "--quick", "--out", "/proc/D")
+    assert code == 2 and err.strip() == ("softlanding: error: out: cannot create files in "
+                                         "/proc: No such file or directory")
+
+
+# ------------------------------------------------------------------------- signals
+@pytest.mark.parametrize(("signum", "code", "line"), [
+    (signal.SIGTERM, 143, "softlanding: terminated (SIGTERM)"),
+    (signal.SIGINT, 130, "softlanding: interrupted")])
+def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, code, line):
+    p = subprocess.Popen([*CMD, "reproduce", "--quick", "--out", str(tmp_path / "D")], env=ENV,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 30
+    while not any(n.endswith(".partial") for n in os.listdir(tmp_path)):  # the work started
+        assert p.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)
+    time.sleep(0.5)
+    p.send_signal(signum)
+    returncode = p.wait(timeout=30)
+    err = p.stderr.read()
+    p.stderr.close()
+    assert returncode == code, err
+    assert err == line + "\n"
+    assert os.listdir(tmp_path) == []  # no hidden .D.*.partial folder
+
+
+# --------------------------------------------------------------------------- modes
+@pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600)])
+def test_files_get_the_modes_of_the_umask(tmp_path, umask, mode):
+    png = tmp_path / "t.png"
+    p = subprocess.run([*CMD, "simulate", "--v0", "-1", "--rigid", "--plot", str(png)], env=ENV,
+                       capture_output=True, text=True, timeout=60,
+                       preexec_fn=lambda: os.umask(umask))
+    assert p.returncode == 0, p.stderr
+    assert stat.S_IMODE(png.stat().st_mode) == mode
+
+
+# ---------------------------------------------------------------------------- Dask
+@pytest.fixture
+def lone_worker():
+    """A scheduler and its only worker (a separate process, no nanny to restart it)."""
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=0, host="127.0.0.1", processes=True,
+                                  dashboard_address=None) as cluster:
+        w = subprocess.Popen(["dask", "worker", cluster.scheduler_address, "--no-nanny",
+                              "--nthreads", "1", "--no-dashboard"], env=ENV,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        try:
+            with distributed.Client(cluster.scheduler_address) as c:
+                c.wait_for_workers(1, timeout=30)
+            yield cluster.scheduler_address, w
+        finally:
+            w.kill()
+            w.wait()
+
+
+@pytest.mark.dask
+def test_a_stalled_worker_fails_after_the_dask_timeout(tmp_path, cli, lone_worker):
+    address, worker = lone_worker
+    worker.send_signal(signal.SIGSTOP)  # alive to the scheduler, but never answers
+    t0 = time.monotonic()
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", tmp_path / "m.nc",
+                       "--scheduler", address, "--dask-timeout", "2")
+    assert code == 1 and err.count("\n") == 1
+    assert err.startswith("softlanding: cluster: no result from the Dask cluster for 2 s")
+    assert time.monotonic() - t0 < 20 and os.listdir(tmp_path) == []
+
+
+@pytest.mark.dask
+def test_a_sweep_whose_only_worker_dies_fails(tmp_path, lone_worker, monkeypatch):
+    import threading
+
+    from softlanding.errors import ClusterError
+
+    monkeypatch.setattr(sweeps, "WORKER_TIMEOUT_S", 1.0)
+    address, worker = lone_worker
+    worker.send_signal(signal.SIGSTOP)  # holds the tasks until it is killed
+    threading.Timer(1.0, worker.kill).start()
+    with pytest.raises(ClusterError, match="no Dask worker left"):
+        sweeps.depth_map(-3.0, n=11, scheduler=address, dask_timeout=60)
+
+
+def test_the_dask_timeout_default_is_the_library_default():
+    from softlanding.cli.parser import DASK_TIMEOUT_S
+
+    assert DASK_TIMEOUT_S == sweeps.DASK_TIMEOUT_S
