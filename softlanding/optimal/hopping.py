@@ -44,6 +44,7 @@ from softlanding.optimal.pipeline import landing_parameters
 from softlanding.simulation.actuator_work import Work, result_work, state_at
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
+from softlanding.util.signals import raise_if_interrupted
 
 SLACK_NOTE = ("the transcription meets its power slack p >= u (v_b - v_f) at its nodes and "
               "RK4 steps only (p is piecewise constant), so its own energy figure is "
@@ -327,6 +328,7 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         try:
             c = _hop_from(tr, robot, impact, eta, _hop_guess(robot, impact, stretch), None)
         except SolveError as err:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             starts.append({"stretch": stretch, "error": err.status})
             last_error = err
             continue
