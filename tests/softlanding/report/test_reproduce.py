@@ -12,6 +12,10 @@ from softlanding.optimal.landing import solve_landing
 from softlanding.studies.impedance import optimize_impedance
 from softlanding.studies.robustness import NOMINAL_UNITS, design, replay, transfer
 
+# the quick reproduction alone takes about two minutes: it runs with the long studies (the
+# README's second test command, which CI runs too), keeping the default command fast
+pytestmark = pytest.mark.slow
+
 FIGURES = ("fig_bang_bang_trajectory", "fig_stepped_intrusions", "fig_depth_maps",
            "fig_optimal_gains", "fig_depth_vs_velocity", "fig_experiment",
            "fig_experiment_si", "fig_cot", "fig_robustness")
