@@ -294,8 +294,7 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
     progress : bool, optional
         Progress bar.
     dask_timeout : float
-        Seconds a Dask run may go without a result arriving (or without any worker) before
-        it fails with :class:`~softlanding.errors.ClusterError`.
+        As :func:`impedance_dataset`'s.
 
     Returns
     -------
