@@ -131,6 +131,7 @@ FIELDS: dict[str, Rule] = {
     # ground models
     "c_d": within(0.0, 1e3, why="drag number b x_s / m_t"), "pi_a": within(0.0, 1e3),
     "radius": POSITIVE, "kappa": POSITIVE, "b": NONNEGATIVE,
+    "stiffness": within(1e-3, 1e3, why="ground stiffness factor K (f = K d; 1: the paper's)"),
     # SI (their dimensionless images are checked against the limits above)
     "m_b": POSITIVE, "m_f": POSITIVE, "m_t": POSITIVE, "k_g": POSITIVE, "stroke": POSITIVE,
     "g": POSITIVE, "U_max": POSITIVE, "V0": (lambda x: x <= 0.0, "must be <= 0 (downward)"),

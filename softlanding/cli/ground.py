@@ -1,6 +1,7 @@
 """The ground-model options of the ``softlanding`` command, and the model they name.
 
-``--ground linear|drag|added-mass|power`` with its numbers: ``--cd`` (the drag number
+``--ground linear|drag|added-mass|power`` with its numbers: ``--stiffness`` (the factor ``K``
+of ``f = K d`` on the linear and drag grounds), ``--cd`` (the drag number
 ``c_d = b x_s / m_t``; an extra drag on the added-mass ground), ``--pi-a``, ``--radius``,
 ``--kappa`` (the accreted cone; default: the poppy-seed preset of the paper's rig), and
 ``--exponent`` (the power law ``f = d^n``, a user law compiled from its CasADi
@@ -30,6 +31,9 @@ def ground_args(p: argparse.ArgumentParser) -> None:
                    help="yielding ground law: the paper's spring (default), inertial drag "
                         "f = d + c_d v^2, added mass (accreted cone of grains), or the power "
                         "law f = d^n")
+    g.add_argument("--stiffness", type=float, default=None, metavar="K",
+                   help="ground stiffness factor K > 0: f = K d on --ground linear or drag "
+                        "(default 1, the paper's measured ground)")
     g.add_argument("--cd", type=float, default=None,
                    help="drag number c_d = b x_s / m_t (>= 0; --ground drag, or extra drag "
                         "with added-mass)")
@@ -63,19 +67,20 @@ def ground_of(a: argparse.Namespace) -> Any:
     ParameterError
         A number out of range, or an option of another ground model.
     """
-    from softlanding.model.ground import LINEAR_GROUND, AddedMassGround, DragGround
+    from softlanding.model.ground import LINEAR_GROUND, AddedMassGround, DragGround, LinearGround
 
     kind = getattr(a, "ground", "linear")
+    k = 1.0 if getattr(a, "stiffness", None) is None else a.stiffness
     if kind == "linear":
         _unused(a, ("cd", "pi_a", "radius", "kappa", "exponent"), kind)
-        return LINEAR_GROUND
+        return LINEAR_GROUND if k == 1.0 else LinearGround(k)
     if kind == "drag":
         _unused(a, ("pi_a", "radius", "kappa", "exponent"), kind)
         if a.cd is None:
             raise ParameterError("cd", "--ground drag needs the drag number --cd VALUE")
-        return DragGround(a.cd)
+        return DragGround(a.cd, k)
     if kind == "added-mass":
-        _unused(a, ("exponent",), kind)
+        _unused(a, ("exponent", "stiffness"), kind)
         from softlanding.model.terrain import paper_rig_units, poppy_seed_added_mass
 
         base = poppy_seed_added_mass(paper_rig_units())
@@ -84,7 +89,7 @@ def ground_of(a: argparse.Namespace) -> Any:
             radius=base.radius if a.radius is None else a.radius,
             kappa=base.kappa if a.kappa is None else a.kappa,
             c_d=0.0 if a.cd is None else a.cd)
-    _unused(a, ("cd", "pi_a", "radius", "kappa"), kind)
+    _unused(a, ("cd", "pi_a", "radius", "kappa", "stiffness"), kind)
     if a.exponent is None:
         raise ParameterError("exponent", "--ground power needs --exponent N")
     from softlanding.model.terrain import power_law_ground

@@ -75,6 +75,11 @@ def _depth_power(depth: Any, n: float) -> Any:
     return depth**n if n != 1.0 else depth
 
 
+def _stiffness_entry(k: float) -> dict[str, float]:
+    """The JSON entry of a stiffness factor: none for the paper's 1 (outputs unchanged)."""
+    return {} if k == 1.0 else {"stiffness": k}
+
+
 class _NoAddedMass:
     """A ground whose grains do not move with the foot (a mixin)."""
 
@@ -91,18 +96,28 @@ class _NoAddedMass:
 
 @dataclass(frozen=True)
 class LinearGround(_NoAddedMass):
-    """The paper's one-way plastic spring: ``f_g = -x_f = d`` while the foot yields.
+    """The paper's one-way plastic spring: ``f_g = K d`` (``d = -x_f``) while the foot yields.
 
-    In the paper's units the stiffness is 1 (lengths are scaled by
-    ``x_s = m_t g / k_g``), so the model has no parameter. The crater of depth
-    ``d`` holds support forces up to ``d``; the work done on the ground by a
-    foot that dug to depth ``d`` is ``d^2 / 2``.
+    In the paper's units the measured stiffness is 1 (lengths are scaled by
+    ``x_s = m_t g / k_g``); ``stiffness`` ``K`` is a ground ``K`` times as stiff as the one the
+    units are made of (an unknown or mismatched ground: ``K k_g`` in SI). The crater of depth
+    ``d`` holds support forces up to ``K d``; the work done on the ground by a foot that dug
+    to depth ``d`` is ``K d^2 / 2``.
+
+    Parameters
+    ----------
+    stiffness : float
+        ``K > 0`` (default 1: the paper's ground).
     """
 
+    stiffness: float = 1.0
     name: ClassVar[str] = "linear"
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "stiffness", check("stiffness", self.stiffness))
+
     def yield_force(self, depth: Any, v_f: Any) -> Any:
-        """``f_g = d`` (independent of the foot's velocity).
+        """``f_g = K d`` (independent of the foot's velocity).
 
         Parameters
         ----------
@@ -111,15 +126,15 @@ class LinearGround(_NoAddedMass):
         v_f : float or expression
             The foot's velocity (unused).
         """
-        return depth
+        return depth if self.stiffness == 1.0 else self.stiffness * depth
 
     @property
     def is_affine(self) -> bool:
         return True
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"model": name, **parameters}`` for JSON output."""
-        return {"model": self.name}
+        """``{"model": name, **parameters}`` for JSON output (``stiffness`` when not 1)."""
+        return {"model": self.name, **_stiffness_entry(self.stiffness)}
 
 
 @dataclass(frozen=True)
@@ -144,20 +159,23 @@ class DragGround(_NoAddedMass):
     """
 
     c_d: float
+    stiffness: float = 1.0
     name: ClassVar[str] = "drag"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "c_d", check("c_d", self.c_d))
+        object.__setattr__(self, "stiffness", check("stiffness", self.stiffness))
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
-        """``f_g = d + c_d v_f^2``.
+        """``f_g = K d + c_d v_f^2``.
 
         Parameters
         ----------
         depth, v_f : float or expression
             Foot depth ``-x_f`` (>= 0) and velocity (< 0 while yielding).
         """
-        return depth + self.c_d * v_f**2 if self.c_d else depth
+        spring = depth if self.stiffness == 1.0 else self.stiffness * depth
+        return spring + self.c_d * v_f**2 if self.c_d else spring
 
     @property
     def is_affine(self) -> bool:
@@ -181,8 +199,8 @@ class DragGround(_NoAddedMass):
         return cls(check("b", b) * g / check("k_g", k_g))
 
     def to_dict(self) -> dict[str, Any]:
-        """``{"model": name, **parameters}`` for JSON output."""
-        return {"model": self.name, "c_d": self.c_d}
+        """``{"model": name, **parameters}`` for JSON output (``stiffness`` when not 1)."""
+        return {"model": self.name, "c_d": self.c_d, **_stiffness_entry(self.stiffness)}
 
 
 @dataclass(frozen=True)
@@ -383,7 +401,8 @@ def _mass_slope(mass: Callable[[Any], Any]) -> Any:
 LINEAR_GROUND = LinearGround()
 """The paper's ground (the default everywhere)."""
 
-_SYMBOLS = {"c_d": "$c_d$", "pi_a": r"$\Pi_a$", "radius": "$R$", "kappa": r"$\kappa$"}
+_SYMBOLS = {"stiffness": "$K$", "c_d": "$c_d$", "pi_a": r"$\Pi_a$", "radius": "$R$",
+            "kappa": r"$\kappa$"}
 
 
 def ground_label(ground: Ground | dict[str, Any]) -> str:

@@ -42,6 +42,7 @@ from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.limits import force_limit, landing_input
 from softlanding.optimal.pipeline import continuation, landing_parameters
+from softlanding.optimal.stance_phases import crater_capacity
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
@@ -89,10 +90,12 @@ def build_landing_problem(omit: tuple[str, ...] = (),
     p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
     p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
     p.terminal_constraint(vf, 0.0, name="foot stopped v_f(T) = 0")
-    # stroke * (-x_f - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0
+    # stroke * (hold - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0, with the
+    # crater's hold f(-x_f, 0) (-x_f on the paper's spring)
     ub_stroke = arrest_force_times_stroke(x, r_m)
     if ARREST not in omit:
-        p.terminal_constraint(stroke * (-xf - 1 / (1 + r_m)) - ub_stroke, 0, ca.inf, name=ARREST)
+        p.terminal_constraint(stroke * (crater_capacity(x, ground) - 1 / (1 + r_m)) - ub_stroke,
+                              0, ca.inf, name=ARREST)
     if ARREST_FORCE not in omit:
         p.terminal_constraint(stroke * u_max - ub_stroke, 0, ca.inf, name=ARREST_FORCE)
     p.free_final_time(lower=1e-3, upper=T_MAX, guess=1.0)
@@ -450,7 +453,7 @@ def _landing(robot: Robot, impact: Impact, ground: Ground, sol: Solution | None,
     xT = refined.xT if refined is not None else sol.x[-1]  # type: ignore[union-attr]
     depth = -xT[2]
     u_b = arrest_force(robot.r_m, xT)
-    gap = depth - robot.foot_mass - u_b
+    gap = float(crater_capacity(xT, ground)) - robot.foot_mass - u_b
     src = refined if refined is not None else structure
     return BangBangLanding(
         robot=robot, impact=impact, ground=ground, depth=float(depth),

@@ -51,7 +51,8 @@ def hold_is_depth(ground: Ground) -> bool:
     ground : Ground
         The ground model.
     """
-    if isinstance(ground, LinearGround | DragGround | AddedMassGround):
+    if isinstance(ground, AddedMassGround) or (
+            isinstance(ground, LinearGround | DragGround) and ground.stiffness == 1.0):
         return True
     import casadi as ca
 
@@ -199,6 +200,11 @@ def kernel_law(ground: Ground, r_m: float, *, lock: bool = False,
     """
     from softlanding.simulation.kernel.groundlaw import no_custom_law, pack_ground
 
+    if isinstance(ground, LinearGround | DragGround) and ground.stiffness != 1.0:
+        # the kernel's built-in laws are the paper's spring: another stiffness is compiled
+        # from the ground's own law, like a user's
+        G = pack_ground(0.0, 0.0, 0.0, 1.0, r_m, custom=True, lock=lock, u_max=u_max)
+        return G, _custom_pointer(ground)
     if isinstance(ground, LinearGround):
         return pack_ground(0.0, 0.0, 0.0, 1.0, r_m, lock=lock, u_max=u_max), no_custom_law
     if isinstance(ground, DragGround):
