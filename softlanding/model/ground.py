@@ -156,6 +156,9 @@ class DragGround(_NoAddedMass):
         Agarwal et al., Sci. Adv. 7, eabe0631, 2021): the paper's 130 mm foot in
         poppy seeds (``rho = 638 kg/m^3``) has ``b ~ 8.5 kg/m``, ``c_d ~ 0.019``
         (see :func:`softlanding.model.terrain.poppy_seed_drag`).
+    stiffness : float
+        The spring's factor ``K`` (``f_g = K d + c_d v_f^2``; default 1, the paper's; see
+        :class:`LinearGround`).
     """
 
     c_d: float

@@ -77,18 +77,40 @@ def build_landing_problem(omit: tuple[str, ...] = (),
     p = OptimalControlProblem("soft_landing")
     xb, vb, xf, vf = (p.state(n) for n in STATE_NAMES)
     r_m, s, v0, u_max, l0 = (p.parameter(n) for n in PARAMETERS)
+    landing_stance(p, r_m, s, u_max, ground, omit)
+    p.initial_constraint(xb - l0, 0.0, name="x_b(0) = l0")
+    p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
+    p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
+    p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
+    return p
+
+
+def landing_stance(p: OptimalControlProblem, r_m: Any, s: Any, u_max: Any, ground: Any,
+                   omit: tuple[str, ...] = ()) -> None:
+    """Everything of the landing OCP but its start: the force, the yielding stance's
+    dynamics, the stroke and descent limits, the foot's stop, the body-arrest conditions,
+    the free final time and the depth objective (on ``p``'s states ``x_b, v_b, x_f, v_f``).
+
+    Parameters
+    ----------
+    p : OptimalControlProblem
+        A problem with the four states declared.
+    r_m, s, u_max : float or parameter expression
+        Mass ratio, stroke, force limit.
+    ground : Ground
+        Ground model (its law may hold parameter expressions).
+    omit : tuple of str
+        Named conditions to drop.
+    """
+    x = p.x
+    xb, xf, vf = x[0], x[2], x[3]
     u = p.control("u", lower=-u_max, upper=u_max)
-    x = ca.vertcat(xb, vb, xf, vf)
     p.set_dynamics(stance_dynamics(x, u, r_m, ground))
     stroke = xb - xf
     if STROKE not in omit:
         p.path_constraint(stroke, 0, s, name=STROKE)
     if DESCENDING not in omit:
         p.path_constraint(vf, -ca.inf, 0, name=DESCENDING)
-    p.initial_constraint(xb - l0, 0.0, name="x_b(0) = l0")
-    p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
-    p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
-    p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
     p.terminal_constraint(vf, 0.0, name="foot stopped v_f(T) = 0")
     # stroke * (hold - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0, with the
     # crater's hold f(-x_f, 0) (-x_f on the paper's spring)
@@ -100,7 +122,6 @@ def build_landing_problem(omit: tuple[str, ...] = (),
         p.terminal_constraint(stroke * u_max - ub_stroke, 0, ca.inf, name=ARREST_FORCE)
     p.free_final_time(lower=1e-3, upper=T_MAX, guess=1.0)
     p.minimize_terminal(-xf)
-    return p
 
 
 @lru_cache(maxsize=16)
@@ -256,32 +277,14 @@ class BangBangLanding:
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,
-        then its weight.
-
-        A bang arc is a constant force; a boundary arc (a stroke limit held) is the state
-        feedback that holds it, so the schedule is then a :class:`FeedbackSchedule`.
-        """
-        r_m = self.robot.r_m
+        then its weight (see :func:`landing_schedule`)."""
         if self.refined is not None:
-            keep = [i for i, d in enumerate(self.refined.durations) if d > 1e-14]
-            durs = [float(self.refined.durations[i]) for i in keep]
-            rows = [_law_row(self.refined, i) for i in keep]
-            xT = self.refined.xT
-        else:
-            assert self.transcribed is not None
-            u = self.transcribed.u[:, 0]
-            h = self.transcribed.T / self.transcribed.N
-            durs, rows = [h] * len(u), [_const_row(v) for v in u]
-            xT = self.transcribed.x[-1]
-        stroke = xT[0] - xT[2]
-        if xT[1] < 0:  # the arrest force until the body stops (none if it has stopped)
-            rows.append(_const_row(self.u_b))
-            decel = xT[1] ** 2 / (2 * stroke)
-            durs.append(-xT[1] / decel)
-        rows.append(_const_row(r_m / (1 + r_m)))
-        if all(not any(r[:4]) for r in rows):
-            return ForceSchedule.from_arcs(durs, [r[4] for r in rows])
-        return FeedbackSchedule.from_arcs(durs, rows)
+            return landing_schedule(self.refined, self.robot.r_m)
+        assert self.transcribed is not None
+        u = self.transcribed.u[:, 0]
+        h = self.transcribed.T / self.transcribed.N
+        return _with_arrest([h] * len(u), [_const_row(v) for v in u], self.transcribed.x[-1],
+                            self.robot.r_m)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined arcs and the replay."""
@@ -300,6 +303,40 @@ class BangBangLanding:
                            "stroke_min": self.replay.stroke_min,
                            "stroke_max": self.replay.stroke_max}
         return json_safe(d)
+
+
+def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | FeedbackSchedule:
+    """A refined landing's open-loop control: its arcs, then ``u_b`` until the body stops,
+    then the body's weight.
+
+    A bang arc is a constant force; a boundary arc (a stroke limit held) is the state
+    feedback that holds it, so the schedule is then a :class:`FeedbackSchedule`.
+
+    Parameters
+    ----------
+    refined : RefinedSwitching
+        The refined arcs (of the landing OCP or of one started mid-landing).
+    r_m : float
+        Mass ratio.
+    """
+    keep = [i for i, d in enumerate(refined.durations) if d > 1e-14]
+    durs = [float(refined.durations[i]) for i in keep]
+    rows = [_law_row(refined, i) for i in keep]
+    return _with_arrest(durs, rows, refined.xT, r_m)
+
+
+def _with_arrest(durs: list[float], rows: list[list[float]], xT: np.ndarray,
+                 r_m: float) -> ForceSchedule | FeedbackSchedule:
+    """``durs, rows`` then the arrest force until the body stops, then the body's weight."""
+    stroke = xT[0] - xT[2]
+    if xT[1] < 0:  # the arrest force until the body stops (none if it has stopped)
+        rows.append(_const_row(arrest_force(r_m, xT)))
+        decel = xT[1] ** 2 / (2 * stroke)
+        durs.append(-xT[1] / decel)
+    rows.append(_const_row(r_m / (1 + r_m)))
+    if all(not any(r[:4]) for r in rows):
+        return ForceSchedule.from_arcs(durs, [r[4] for r in rows])
+    return FeedbackSchedule.from_arcs(durs, rows)
 
 
 def _const_row(u: float) -> list[float]:
@@ -572,5 +609,7 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
 
 
 __all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",
-           "arrest_force", "build_landing_problem", "landing_transcription", "solve_landing",
+           "arrest_force", "build_landing_problem", "landing_schedule", "landing_stance",
+           "landing_transcription",
+           "solve_landing",
            "sweep_landing"]

@@ -1,0 +1,132 @@
+"""Ground estimation from what a landing robot measures: recursive least squares.
+
+While the foot yields, the ground force follows from the foot's equation of motion
+(:func:`softlanding.model.dynamics.robot_rhs`, affine in the ground force): from the foot's
+measured acceleration and the robot's own force, ``f_g = (a_f - alpha - beta u) / gamma``.
+The force is linear in the unknowns of ``f = K d + c_d v_f^2``: ``f = theta . phi`` with
+``phi = (d, v_f^2)``, ``theta = (K, c_d)``, which recursive least squares fits sample by
+sample, with the covariance of the estimate (its uncertainty given the measurement noise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from softlanding.errors import ParameterError, check
+from softlanding.model.dynamics import VF, robot_rhs
+from softlanding.model.ground import DragGround, Ground, LinearGround
+from softlanding.model.robot import Robot
+
+
+@dataclass(frozen=True)
+class GroundEstimate:
+    """The current fit.
+
+    Attributes
+    ----------
+    stiffness, c_d : float
+        ``K`` and the drag number (``c_d`` is 0 when the drag is not fitted).
+    stiffness_std, c_d_std : float
+        Their standard deviations (from the covariance and the noise level).
+    samples : int
+        Measurements used.
+    """
+
+    stiffness: float
+    c_d: float
+    stiffness_std: float
+    c_d_std: float
+    samples: int
+
+    def ground(self) -> Ground:
+        """The ground model of the estimate (drag clipped at 0, stiffness at 1e-3)."""
+        k = max(self.stiffness, 1e-3)
+        return DragGround(self.c_d, k) if self.c_d > 0 else LinearGround(k)
+
+
+class GroundEstimator:
+    """Recursive least squares for ``f = K d + c_d v_f^2`` from the foot's equation.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (its mass ratio relates acceleration and force).
+    drag : bool
+        Fit the drag number too (else ``f = K d``).
+    prior : (float, float)
+        Prior ``(K, c_d)`` (the paper's ground by default).
+    prior_std : (float, float)
+        Prior standard deviations (how little the prior is trusted).
+    noise_std : float
+        Standard deviation of the ground force inferred from one measurement.
+    """
+
+    def __init__(self, robot: Robot, *, drag: bool = True, prior: tuple[float, float] = (1.0, 0.0),
+                 prior_std: tuple[float, float] = (1.0, 1.0), noise_std: float = 1e-6) -> None:
+        self.drag = bool(drag)
+        n = 2 if self.drag else 1
+        self.theta = np.array(prior[:n], float)
+        std = np.array([check("prior_std", v, (lambda x: x > 0, "must be > 0"))
+                        for v in prior_std[:n]])
+        self.noise = check("noise_std", noise_std, (lambda x: x > 0, "must be > 0"))
+        self.P = np.diag((std / self.noise) ** 2)  # covariance in units of the noise variance
+        self.samples = 0
+        # the foot's acceleration is affine in (u, f_g), with coefficients from robot_rhs
+        x = np.zeros(4)
+        a0 = float(robot_rhs(x, 0.0, 0.0, robot.r_m)[VF])
+        self._alpha = a0
+        self._beta = float(robot_rhs(x, 1.0, 0.0, robot.r_m)[VF]) - a0
+        self._gamma = float(robot_rhs(x, 0.0, 1.0, robot.r_m)[VF]) - a0
+
+    def ground_force(self, a_f: float, u: float) -> float:
+        """The ground force the foot's acceleration and the robot's force imply.
+
+        Parameters
+        ----------
+        a_f : float
+            Measured foot acceleration.
+        u : float
+            The actuator force applied.
+        """
+        return (a_f - self._alpha - self._beta * u) / self._gamma
+
+    def update(self, x: np.ndarray, a_f: float, u: float) -> GroundEstimate:
+        """One measurement of a yielding foot (``v_f < 0``; other modes carry no law).
+
+        Parameters
+        ----------
+        x : array of 4
+            Measured state ``[x_b, v_b, x_f, v_f]``.
+        a_f : float
+            Measured foot acceleration.
+        u : float
+            The actuator force.
+
+        Raises
+        ------
+        ParameterError
+            The foot is not yielding (``v_f >= 0``).
+        """
+        if not x[3] < 0:
+            raise ParameterError("x", "ground estimation needs a yielding foot (v_f < 0)")
+        phi = np.array([-x[2], x[3] ** 2][: len(self.theta)])
+        y = self.ground_force(a_f, u)
+        Pphi = self.P @ phi
+        k = Pphi / (1.0 + phi @ Pphi)
+        self.theta = self.theta + k * (y - phi @ self.theta)
+        self.P = self.P - np.outer(k, Pphi)
+        self.samples += 1
+        return self.estimate
+
+    @property
+    def estimate(self) -> GroundEstimate:
+        """The current fit and its uncertainty."""
+        std = np.sqrt(np.maximum(np.diag(self.P), 0.0)) * self.noise
+        c_d, c_std = (self.theta[1], std[1]) if self.drag else (0.0, 0.0)
+        return GroundEstimate(float(self.theta[0]), float(c_d), float(std[0]), float(c_std),
+                              self.samples)
+
+
+__all__ = ["GroundEstimate", "GroundEstimator"]

@@ -1,0 +1,292 @@
+"""Model-predictive control of the landing, with the ground estimated on line.
+
+Every sample (period ``P``) the controller measures the state and the foot's acceleration,
+updates its ground estimate (:class:`~softlanding.control.estimation.GroundEstimator`),
+re-solves the landing from the measured state for the estimated ground
+(:func:`~softlanding.control.state_landing.state_landing_problem`, through
+:func:`ocp.refine_structure`: the last plan's arc structure re-solved, Newton first) and
+applies the new plan for one period. The plan's tail (the arrest force until the body stops,
+then its weight) is applied once the foot has stopped. The plant is the exact simulator on
+the true ground (:class:`~softlanding.control.plant.SteppingPlant`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+
+from ocp import MultipleShooting, SolveError, Trajectory, refine_structure
+from ocp.switching import detect_arcs, refine_switching
+from softlanding.control.estimation import GroundEstimate, GroundEstimator
+from softlanding.control.plant import SteppingPlant
+from softlanding.control.state_landing import state_landing_problem, state_parameters
+from softlanding.errors import check, check_count, expect
+from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
+from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal.landing import arrest_force, landing_schedule, solve_landing
+from softlanding.simulation.simulator import LandingResult
+from softlanding.util.jsonable import json_safe
+
+#: The default sample period, in the paper's time unit ``sqrt(m_t / k_g)`` (about 2.6 ms on
+#: the paper's rig): a tenth of the shortest bang arc of the paper's landings.
+DEFAULT_PERIOD = 0.01
+
+
+@dataclass
+class MPCLanding:
+    """A landing under model-predictive control.
+
+    Attributes
+    ----------
+    robot, impact, ground
+        The landing, and the true ground.
+    model : Ground
+        The ground the first plan assumed.
+    period : float
+        The sample period.
+    result : LandingResult
+        The final simulation (from the foot's stop to rest).
+    depth : float
+        The final depth.
+    stroke_min, stroke_max, u_peak : float
+        Over the whole landing (every step and the end).
+    step_times_ms : list of float
+        The computation of each sample (estimate and re-plan), in ms.
+    estimates : list of GroundEstimate
+        The ground estimate after each sample.
+    replans : int
+        Samples whose arc structure changed (re-planned by a transcription).
+    fallbacks : int
+        Samples whose re-plan failed (the previous plan was kept).
+    samples : int
+        Samples taken while the foot yielded.
+    """
+
+    robot: Robot
+    impact: Impact
+    ground: Ground
+    model: Ground
+    period: float
+    result: LandingResult
+    depth: float
+    stroke_min: float
+    stroke_max: float
+    u_peak: float
+    step_times_ms: list[float] = field(default_factory=list)
+    estimates: list[GroundEstimate] = field(default_factory=list)
+    replans: int = 0
+    fallbacks: int = 0
+    samples: int = 0
+
+    @property
+    def stroke_held(self) -> bool:
+        """``0 <= x_b - x_f <= s`` over the whole landing (to 1e-9)."""
+        tol = 1e-9 * max(1.0, self.robot.s)
+        return bool(self.stroke_min >= -tol and self.stroke_max <= self.robot.s + tol)
+
+    @property
+    def feasible(self) -> bool:
+        """The stroke held and rest proven at the end."""
+        return self.stroke_held and self.result.rest_proven
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict."""
+        t = np.array(self.step_times_ms) if self.step_times_ms else np.array([np.nan])
+        return json_safe({
+            "depth": self.depth, "feasible": self.feasible, "stroke_held": self.stroke_held,
+            "rest_proven": self.result.rest_proven, "stroke_min": self.stroke_min,
+            "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
+            "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
+            "step_time_median_ms": float(np.median(t)),
+            "step_time_p99_ms": float(np.percentile(t, 99)),
+            "estimate": None if not self.estimates else self.estimates[-1].__dict__,
+            "ground": self.ground.to_dict(), "model_ground": self.model.to_dict(),
+            "robot": self.robot.to_dict(), "impact": self.impact.to_dict()})
+
+
+def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                ground: Ground = LINEAR_GROUND, *, model: Ground = LINEAR_GROUND,
+                period: float = DEFAULT_PERIOD, estimate: bool = True,
+                max_samples: int = 100_000) -> MPCLanding:
+    """Land on ``ground`` under MPC whose first plan assumes ``model``.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        The impact velocity.
+    robot : Robot
+        The robot (with a force limit).
+    ground : Ground
+        The true ground (the plant's).
+    model : LinearGround or DragGround
+        What the controller assumes before its first measurement (the paper's ground).
+    period : float
+        The sample period (> 0).
+    estimate : bool
+        Update the ground estimate from the measurements (else keep ``model``).
+    max_samples : int
+        A bound on the samples while the foot yields.
+
+    Raises
+    ------
+    ParameterError
+        Bad arguments.
+    ocp.SolveError
+        The first plan cannot be made.
+    """
+    impact = Impact.of(impact)
+    expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
+    period = check("period", period, (lambda v: v > 0, "must be > 0"))
+    max_samples = check_count("max_samples", max_samples, 1, 10**7)
+    first = solve_landing(impact, robot, model, replay=False)
+    if first.refined is None:
+        raise SolveError(first.status, message="the first plan was not refined: "
+                         + "; ".join(first.notes))
+    plan = first.refined
+    problem = state_landing_problem()
+    est = GroundEstimator(robot, drag=True, prior=_prior(model))
+    plant = SteppingPlant(robot, impact, ground)
+    out_times: list[float] = []
+    estimates: list[GroundEstimate] = []
+    fallbacks, replans, elapsed, samples = 0, 0, 0.0, 0
+    believed = model
+    # the foot has stopped when it is static, or creeps by rounding at the crater's exact
+    # capacity (the optimal arrest uses all of it)
+    stop = 1e-9 * max(1.0, abs(impact.v0))
+    while plant.x[3] < -stop and samples < max_samples:
+        schedule = _shifted(landing_schedule(plan, robot.r_m), elapsed)
+        plant.step(schedule, period)  # the schedule's time starts at the step
+        samples += 1
+        if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
+            elapsed += period
+            break
+        t0 = time.perf_counter()
+        u_end = _force_at_end(schedule, plant.x, period)
+        if estimate:
+            e = est.update(plant.x, plant.foot_acceleration(u_end), u_end)
+            estimates.append(e)
+            if e.samples >= 2:
+                believed = e.ground()
+        try:
+            plan = _replan(problem, plan, elapsed + period, robot, believed, plant.x)
+            elapsed = 0.0
+        except SolveError:  # the structure changed: transcribe and refine anew
+            try:
+                plan = _transcribed_plan(plan, elapsed + period, robot, believed, plant.x)
+                elapsed = 0.0
+                replans += 1
+            except SolveError:  # keep the last plan for this sample
+                fallbacks += 1
+                elapsed += period
+        out_times.append(1e3 * (time.perf_counter() - t0))
+    final = plant.finish(_arrest(plant.x, robot) if plant.x[3] >= -stop else
+                         _shifted(landing_schedule(plan, robot.r_m), elapsed))
+    stroke = [r.stroke_min for _, r in plant.history], [r.stroke_max for _, r in plant.history]
+    return MPCLanding(robot=robot, impact=impact, ground=ground, model=model, period=period,
+                      result=final, depth=final.depth, stroke_min=min(stroke[0]),
+                      stroke_max=max(stroke[1]),
+                      u_peak=max(r.u_peak for _, r in plant.history),
+                      step_times_ms=out_times, estimates=estimates, replans=replans,
+                      fallbacks=fallbacks, samples=samples)
+
+
+def _prior(model: Ground) -> tuple[float, float]:
+    from softlanding.control.state_landing import ground_numbers
+
+    return ground_numbers(model)
+
+
+def _shifted(schedule: Any, skip: float) -> Any:
+    """``schedule`` from ``skip`` on (its time restarted at 0)."""
+    if skip <= 0:
+        return schedule
+    times = np.asarray(schedule.times, float)
+    i = int(np.searchsorted(times, skip, side="right"))
+    rest = tuple(float(t - skip) for t in times[i:])
+    if isinstance(schedule, ForceSchedule):
+        return ForceSchedule(rest, tuple(schedule.values[i:]))
+    return FeedbackSchedule(rest, tuple(schedule.gains[i:]))
+
+
+def _arrest(x: np.ndarray, robot: Robot) -> ForceSchedule:
+    """The foot at rest: the constant force that stops the body in the stroke left (read off
+    the measured state), then the body's weight."""
+    stroke, v = x[0] - x[2], x[1]
+    if v >= 0 or stroke <= 0:
+        return ForceSchedule((), (robot.body_mass,))
+    return ForceSchedule((float(-2 * stroke / v),), (arrest_force(robot.r_m, x),
+                                                      robot.body_mass))
+
+
+def _force_at_end(schedule: Any, x: np.ndarray, t: float) -> float:
+    return _force(schedule, t * (1 - 1e-12), x)
+
+
+def _force(schedule: Any, t: float, x: np.ndarray) -> float:
+    """The schedule's force at time ``t`` in state ``x``."""
+    i = int(np.searchsorted(np.asarray(schedule.times), t, side="right"))
+    if isinstance(schedule, ForceSchedule):
+        return float(schedule.values[i])
+    row = np.asarray(schedule.gains[i], float)
+    return float(row[:4] @ x + row[4])
+
+
+def _replan(problem: Any, plan: Any, applied: float, robot: Robot, believed: Ground,
+            x: np.ndarray) -> Any:
+    """The last plan's structure re-solved from ``x`` for the believed ground."""
+    durs = np.asarray(plan.durations, float).copy()
+    keep = list(range(len(durs)))
+    while applied > 0 and keep:
+        i = keep[0]
+        if durs[i] > applied:
+            durs[i] -= applied
+            break
+        applied -= durs[i]
+        keep.pop(0)
+    if not keep:
+        raise SolveError("no_arcs_left", message="the plan has run out")
+    r = refine_structure(problem, tuple(plan.modes[i] for i in keep), durs[keep], x,
+                         state_parameters(robot, believed, x))
+    return _checked(r)
+
+
+def _checked(r: Any) -> Any:
+    """A re-plan that keeps its structure (no arc collapsed) and is finite."""
+    if not (np.all(np.isfinite(r.durations)) and np.all(np.isfinite(r.xT))):
+        raise SolveError("not_finite", message="the re-plan is not finite")
+    if min(r.durations) <= 1e-9 * r.T:
+        raise SolveError("arc_collapsed", message="an arc of the structure collapsed")
+    return r
+
+
+@lru_cache(maxsize=1)
+def _state_transcription() -> MultipleShooting:
+    return MultipleShooting(state_landing_problem(), nodes=60, integrator="rk4", substeps=4,
+                            expand=True)
+
+
+def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
+                      x: np.ndarray) -> Any:
+    """The landing from ``x`` transcribed (from the rest of the last plan) and refined."""
+    tr = _state_transcription()
+    rest = plan.trajectory(200)
+    keep = rest.t >= applied
+    guess = Trajectory(rest.t[keep] - applied, rest.x[keep], rest.u[keep], rest.state_names,
+                       rest.control_names)
+    params = state_parameters(robot, believed, x)
+    try:
+        sol = tr.solve(params, guess=guess)
+    except SolveError:
+        sol = tr.solve(params)
+    try:
+        return _checked(refine_switching(sol, detect_arcs(sol).without_trailing_constrained()))
+    except ValueError as err:  # not a bang-bang structure: nothing to refine
+        raise SolveError("not_bang_bang", message=str(err)) from None
+
+
+__all__ = ["DEFAULT_PERIOD", "MPCLanding", "mpc_landing"]

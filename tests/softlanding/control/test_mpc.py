@@ -1,0 +1,29 @@
+"""MPC with ground estimation on a mismatched ground: within 2 % of the clairvoyant optimum,
+never below it, every limit held; the open-loop plan replayed there is worse or breaks."""
+
+import pytest
+
+from softlanding import PAPER_ROBOT, simulate, solve_landing
+from softlanding.control import mpc_landing
+from softlanding.model.ground import DragGround, LinearGround
+
+
+@pytest.mark.parametrize("ground,v0", [(LinearGround(2.0), -3), (LinearGround(0.5), -10),
+                                       (DragGround(0.2), -3)])
+def test_mpc_lands_near_the_clairvoyant_optimum(ground, v0):
+    m = mpc_landing(v0, PAPER_ROBOT, ground)
+    clair = solve_landing(v0, PAPER_ROBOT, ground)
+    assert clair.unverified_reasons() == []
+    assert m.feasible and m.u_peak <= PAPER_ROBOT.u_max * (1 + 1e-9)
+    assert m.depth >= clair.depth * (1 - 1e-9)  # below the optimum would be a bug
+    assert m.depth <= 1.02 * clair.depth
+    assert m.estimates[-1].ground().yield_force(1.0, -1.0) == pytest.approx(
+        ground.yield_force(1.0, -1.0), rel=1e-6)
+    open_loop = simulate(PAPER_ROBOT, v0, solve_landing(v0).schedule(), ground)
+    assert not open_loop.feasible or open_loop.depth > m.depth * (1 + 1e-3)
+
+
+def test_without_estimation_it_is_the_nominal_plan_re_solved():
+    m = mpc_landing(-3, PAPER_ROBOT, LinearGround(), estimate=False)
+    assert m.depth == pytest.approx(solve_landing(-3).depth, rel=1e-10) and m.fallbacks == 0
+    assert m.to_dict()["step_time_median_ms"] > 0
