@@ -10,8 +10,10 @@ bug: ``--debug`` shows the traceback), 130 interrupted, 143 terminated (SIGTERM)
 from __future__ import annotations
 
 import argparse
+import contextlib
+import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 from softlanding.cli.output import (
@@ -568,12 +570,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)
-    if getattr(args, "plot", None) or getattr(args, "out", None):
-        import os
+    with _files_backend(bool(getattr(args, "plot", None) or getattr(args, "out", None))):
+        return _run(args)
 
-        # files only: no window, also without a display (set, not imported: 0.2 s saved
-        # when the arguments turn out bad)
-        os.environ["MPLBACKEND"] = "Agg"
+
+@contextlib.contextmanager
+def _files_backend(files: bool) -> Iterator[None]:
+    """Figures to files only: no window, also without a display. Set for matplotlib's first
+    import (importing it here would cost 0.2 s even when the arguments turn out bad), and
+    undone after, so that a caller's later figures (a notebook's kernel) stay inline."""
+    if not files:
+        yield
+        return
+    if "matplotlib" in sys.modules:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        yield
+        return
+    old = os.environ.get("MPLBACKEND")
+    os.environ["MPLBACKEND"] = "Agg"
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop("MPLBACKEND", None)
+        else:
+            os.environ["MPLBACKEND"] = old
+
+
+def _run(args: argparse.Namespace) -> int:
+    """Run the parsed command: its exit code, every error one line."""
     from softlanding.util.files import output_run
     from softlanding.util.signals import handle_signals, report_interrupt
 
@@ -582,8 +609,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             return int(args.func(args))
     except BrokenPipeError:
         # output piped into e.g. `head`, which closed early: not an error
-        import os
-
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
     except KeyboardInterrupt as exc:

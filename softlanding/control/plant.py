@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from softlanding.errors import ParameterError, check
+from softlanding.model.controllers import Controller
 from softlanding.model.dynamics import VF, robot_rhs
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import Impact, Robot
@@ -51,7 +52,7 @@ class SteppingPlant:
         self.crater = 0.0
         self.history: list[tuple[float, LandingResult]] = []
 
-    def step(self, control: object, duration: float) -> np.ndarray:
+    def step(self, control: Controller, duration: float) -> np.ndarray:
         """Apply ``control`` (its time from this step's start) for ``duration``; the new state.
 
         Parameters
@@ -72,7 +73,7 @@ class SteppingPlant:
         self.crater = max(self.crater, -self.x[2])
         return self.x
 
-    def finish(self, control: object) -> LandingResult:
+    def finish(self, control: Controller) -> LandingResult:
         """Run ``control`` from the current state until the landing ends (rest proven).
 
         Parameters
