@@ -12,6 +12,7 @@ the true ground (:class:`~softlanding.control.plant.SteppingPlant`).
 
 from __future__ import annotations
 
+import contextlib
 import time
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -19,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp import MultipleShooting, SolveError, Trajectory, refine_structure
+from ocp import MultipleShooting, Solution, SolveError, Trajectory, refine_structure
 from ocp.switching import detect_arcs, refine_switching
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
@@ -28,7 +29,12 @@ from softlanding.errors import check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.landing import arrest_force, landing_schedule, solve_landing
+from softlanding.optimal.landing import (
+    arrest_force,
+    landing_schedule,
+    solve_landing,
+    transcribed_schedule,
+)
 from softlanding.simulation.simulator import LandingResult
 from softlanding.util.jsonable import json_safe
 
@@ -63,6 +69,8 @@ class MPCLanding:
         Samples whose arc structure changed (re-planned by a transcription).
     fallbacks : int
         Samples whose re-plan failed (the previous plan was kept).
+    setup_ms : float
+        The re-solve's one-time build before the landing (not a step's time).
     samples : int
         Samples taken while the foot yielded.
     """
@@ -82,6 +90,7 @@ class MPCLanding:
     replans: int = 0
     fallbacks: int = 0
     samples: int = 0
+    setup_ms: float = 0.0
 
     @property
     def stroke_held(self) -> bool:
@@ -103,7 +112,7 @@ class MPCLanding:
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
             "step_time_median_ms": float(np.median(t)),
-            "step_time_p99_ms": float(np.percentile(t, 99)),
+            "step_time_p99_ms": float(np.percentile(t, 99)), "setup_ms": self.setup_ms,
             "estimate": None if not self.estimates else self.estimates[-1].__dict__,
             "ground": self.ground.to_dict(), "model_ground": self.model.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict()})
@@ -144,13 +153,15 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     period = check("period", period, (lambda v: v > 0, "must be > 0"))
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
     first = solve_landing(impact, robot, model, replay=False)
-    if first.refined is None:
-        raise SolveError(first.status, message="the first plan was not refined: "
-                         + "; ".join(first.notes))
-    plan = first.refined
+    plan: Any = first.refined if first.refined is not None else first.transcribed
     problem = state_landing_problem()
     est = GroundEstimator(robot, drag=True, prior=_prior(model))
     plant = SteppingPlant(robot, impact, ground)
+    t0 = time.perf_counter()
+    if not isinstance(plan, Solution):  # build the re-solve once, before the landing starts
+        with contextlib.suppress(SolveError):
+            _replan(problem, plan, 0.0, robot, model, plant.x)
+    setup_ms = 1e3 * (time.perf_counter() - t0)
     out_times: list[float] = []
     estimates: list[GroundEstimate] = []
     fallbacks, replans, elapsed, samples = 0, 0, 0.0, 0
@@ -159,7 +170,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
     while plant.x[3] < -stop and samples < max_samples:
-        schedule = _shifted(landing_schedule(plan, robot.r_m), elapsed)
+        schedule = _shifted(_schedule(plan, robot.r_m), elapsed)
         plant.step(schedule, period)  # the schedule's time starts at the step
         samples += 1
         if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
@@ -185,14 +196,14 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 elapsed += period
         out_times.append(1e3 * (time.perf_counter() - t0))
     final = plant.finish(_arrest(plant.x, robot) if plant.x[3] >= -stop else
-                         _shifted(landing_schedule(plan, robot.r_m), elapsed))
+                         _shifted(_schedule(plan, robot.r_m), elapsed))
     stroke = [r.stroke_min for _, r in plant.history], [r.stroke_max for _, r in plant.history]
     return MPCLanding(robot=robot, impact=impact, ground=ground, model=model, period=period,
                       result=final, depth=final.depth, stroke_min=min(stroke[0]),
                       stroke_max=max(stroke[1]),
                       u_peak=max(r.u_peak for _, r in plant.history),
                       step_times_ms=out_times, estimates=estimates, replans=replans,
-                      fallbacks=fallbacks, samples=samples)
+                      fallbacks=fallbacks, samples=samples, setup_ms=setup_ms)
 
 
 def _prior(model: Ground) -> tuple[float, float]:
@@ -236,9 +247,19 @@ def _force(schedule: Any, t: float, x: np.ndarray) -> float:
     return float(row[:4] @ x + row[4])
 
 
+def _schedule(plan: Any, r_m: float) -> ForceSchedule | FeedbackSchedule:
+    """A plan's open-loop control: refined arcs, or a transcription's steps (a structure that
+    is not bang-bang, e.g. a singular creep to the depth that holds the robot's weight)."""
+    if isinstance(plan, Solution):
+        return transcribed_schedule(plan, r_m)
+    return landing_schedule(plan, r_m)
+
+
 def _replan(problem: Any, plan: Any, applied: float, robot: Robot, believed: Ground,
             x: np.ndarray) -> Any:
     """The last plan's structure re-solved from ``x`` for the believed ground."""
+    if isinstance(plan, Solution):
+        raise SolveError("transcribed", message="a transcribed plan has no structure to re-solve")
     durs = np.asarray(plan.durations, float).copy()
     keep = list(range(len(durs)))
     while applied > 0 and keep:
@@ -274,19 +295,25 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
                       x: np.ndarray) -> Any:
     """The landing from ``x`` transcribed (from the rest of the last plan) and refined."""
     tr = _state_transcription()
-    rest = plan.trajectory(200)
-    keep = rest.t >= applied
-    guess = Trajectory(rest.t[keep] - applied, rest.x[keep], rest.u[keep], rest.state_names,
-                       rest.control_names)
     params = state_parameters(robot, believed, x)
+    if isinstance(plan, Solution) and plan.transcription is tr:
+        sol = tr.solve(params, warm_start=plan)
+    else:
+        rest = plan.trajectory(200)
+        keep = rest.t >= applied
+        guess = Trajectory(rest.t[keep] - applied, rest.x[keep], rest.u[keep],
+                           rest.state_names, rest.control_names)
+        try:
+            sol = tr.solve(params, guess=guess)
+        except SolveError:
+            sol = tr.solve(params)
+    st = detect_arcs(sol).without_trailing_constrained()
+    if not st.refinable:  # not bang-bang (a singular creep): the transcription is the plan
+        return sol
     try:
-        sol = tr.solve(params, guess=guess)
+        return _checked(refine_switching(sol, st))
     except SolveError:
-        sol = tr.solve(params)
-    try:
-        return _checked(refine_switching(sol, detect_arcs(sol).without_trailing_constrained()))
-    except ValueError as err:  # not a bang-bang structure: nothing to refine
-        raise SolveError("not_bang_bang", message=str(err)) from None
+        return sol
 
 
 __all__ = ["DEFAULT_PERIOD", "MPCLanding", "mpc_landing"]

@@ -281,10 +281,7 @@ class BangBangLanding:
         if self.refined is not None:
             return landing_schedule(self.refined, self.robot.r_m)
         assert self.transcribed is not None
-        u = self.transcribed.u[:, 0]
-        h = self.transcribed.T / self.transcribed.N
-        return _with_arrest([h] * len(u), [_const_row(v) for v in u], self.transcribed.x[-1],
-                            self.robot.r_m)
+        return transcribed_schedule(self.transcribed, self.robot.r_m)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined arcs and the replay."""
@@ -323,6 +320,22 @@ def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | F
     durs = [float(refined.durations[i]) for i in keep]
     rows = [_law_row(refined, i) for i in keep]
     return _with_arrest(durs, rows, refined.xT, r_m)
+
+
+def transcribed_schedule(sol: Solution, r_m: float) -> ForceSchedule | FeedbackSchedule:
+    """A transcribed landing's open-loop control: its piecewise-constant force, then ``u_b``
+    until the body stops, then the body's weight (see :func:`landing_schedule`).
+
+    Parameters
+    ----------
+    sol : ocp.Solution
+        A one-phase transcription of the landing OCP (or of one started mid-landing).
+    r_m : float
+        Mass ratio.
+    """
+    u = sol.u[:, 0]
+    h = sol.T / sol.N
+    return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m)
 
 
 def _with_arrest(durs: list[float], rows: list[list[float]], xT: np.ndarray,
@@ -610,6 +623,6 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
 
 __all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",
            "arrest_force", "build_landing_problem", "landing_schedule", "landing_stance",
-           "landing_transcription",
+           "landing_transcription", "transcribed_schedule",
            "solve_landing",
            "sweep_landing"]
