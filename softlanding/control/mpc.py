@@ -35,6 +35,7 @@ from softlanding.optimal.landing import (
     solve_landing,
     transcribed_schedule,
 )
+from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult
 from softlanding.util.jsonable import json_safe
 
@@ -170,7 +171,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
     while plant.x[3] < -stop and samples < max_samples:
-        schedule = _shifted(_schedule(plan, robot.r_m), elapsed)
+        schedule = _shifted(_schedule(plan, robot), elapsed)
         plant.step(schedule, period)  # the schedule's time starts at the step
         samples += 1
         if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
@@ -196,7 +197,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 elapsed += period
         out_times.append(1e3 * (time.perf_counter() - t0))
     final = plant.finish(_arrest(plant.x, robot) if plant.x[3] >= -stop else
-                         _shifted(_schedule(plan, robot.r_m), elapsed))
+                         _shifted(_schedule(plan, robot), elapsed))
     stroke = [r.stroke_min for _, r in plant.history], [r.stroke_max for _, r in plant.history]
     return MPCLanding(robot=robot, impact=impact, ground=ground, model=model, period=period,
                       result=final, depth=final.depth, stroke_min=min(stroke[0]),
@@ -247,12 +248,12 @@ def _force(schedule: Any, t: float, x: np.ndarray) -> float:
     return float(row[:4] @ x + row[4])
 
 
-def _schedule(plan: Any, r_m: float) -> ForceSchedule | FeedbackSchedule:
+def _schedule(plan: Any, robot: Robot) -> ForceSchedule | FeedbackSchedule:
     """A plan's open-loop control: refined arcs, or a transcription's steps (a structure that
     is not bang-bang, e.g. a singular creep to the depth that holds the robot's weight)."""
     if isinstance(plan, Solution):
-        return transcribed_schedule(plan, r_m)
-    return landing_schedule(plan, r_m)
+        return transcribed_schedule(plan, robot.r_m, force_limit(robot))
+    return landing_schedule(plan, robot.r_m)
 
 
 def _replan(problem: Any, plan: Any, applied: float, robot: Robot, believed: Ground,

@@ -281,7 +281,7 @@ class BangBangLanding:
         if self.refined is not None:
             return landing_schedule(self.refined, self.robot.r_m)
         assert self.transcribed is not None
-        return transcribed_schedule(self.transcribed, self.robot.r_m)
+        return transcribed_schedule(self.transcribed, self.robot.r_m, force_limit(self.robot))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined arcs and the replay."""
@@ -322,7 +322,8 @@ def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | F
     return _with_arrest(durs, rows, refined.xT, r_m)
 
 
-def transcribed_schedule(sol: Solution, r_m: float) -> ForceSchedule | FeedbackSchedule:
+def transcribed_schedule(sol: Solution, r_m: float,
+                         u_max: float = math.inf) -> ForceSchedule | FeedbackSchedule:
     """A transcribed landing's open-loop control: its piecewise-constant force, then ``u_b``
     until the body stops, then the body's weight (see :func:`landing_schedule`).
 
@@ -332,8 +333,11 @@ def transcribed_schedule(sol: Solution, r_m: float) -> ForceSchedule | FeedbackS
         A one-phase transcription of the landing OCP (or of one started mid-landing).
     r_m : float
         Mass ratio.
+    u_max : float
+        The force limit: Ipopt meets its bounds to its tolerance (~1e-8), the actuator
+        exactly, so the forces are clipped to it.
     """
-    u = sol.u[:, 0]
+    u = np.clip(sol.u[:, 0], -u_max, u_max)
     h = sol.T / sol.N
     return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m)
 
