@@ -545,10 +545,76 @@ def _cmd_hop(a: argparse.Namespace) -> int:
 
 
 
+# ------------------------------------------------------------------------ mpc
+def _cmd_mpc(a: argparse.Namespace) -> int:
+    from softlanding.model.ground import DragGround, LinearGround
+
+    robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
+    if a.model_ground == "linear" and a.model_cd is not None:
+        raise ParameterError("--model-cd", "applies to --model-ground drag")
+    k = 1.0 if a.model_stiffness is None else a.model_stiffness
+    model = (LinearGround(k) if a.model_ground == "linear" else
+             DragGround(0.0 if a.model_cd is None else a.model_cd, k))
+    from softlanding.errors import check
+
+    period = 0.01 if a.period is None else check("period", a.period,
+                                                  (lambda v: v > 0, "must be > 0"))
+    from softlanding.optimal.limits import force_limit
+
+    force_limit(robot)
+    if not impact.v0 < 0:
+        raise ParameterError("v0", "a landing under control needs v0 < 0")
+    from softlanding.control.mpc import mpc_landing
+    from softlanding.optimal.landing import solve_landing
+    from softlanding.simulation.simulator import simulate
+
+    m = mpc_landing(impact, robot, ground, model=model, period=period,
+                    estimate=not a.no_estimate)
+    clair = solve_landing(impact, robot, ground)
+    nominal = solve_landing(impact, robot, model)
+    ol = simulate(robot, impact, nominal.schedule(), ground)
+    d = m.to_dict()
+    out = {"depth": m.depth, "clairvoyant_depth": clair.depth,
+           "ratio_to_clairvoyant": m.depth / clair.depth,
+           "clairvoyant_verified": not clair.unverified_reasons(),
+           "open_loop_depth": ol.depth if ol.feasible else None,
+           "open_loop_feasible": ol.feasible, "open_loop_status": ol.status,
+           "feasible": m.feasible, **{k_: d[k_] for k_ in (
+               "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak", "period",
+               "samples", "replans", "fallbacks", "step_time_median_ms", "step_time_p99_ms",
+               "setup_ms", "estimate", "ground", "model_ground")}}
+    written = None
+    if plot:
+        from softlanding.plots.control import plot_mpc_landing
+
+        written = savefig(plot_mpc_landing(m, clair.replay, ol), plot)
+    if a.json:
+        print_json(out)
+    else:
+        e = out["estimate"] or {}
+        print_table([
+            ("true ground", m.ground.to_dict()), ("model ground", m.model.to_dict()),
+            ("depth (MPC)", m.depth), ("clairvoyant depth", clair.depth),
+            ("MPC / clairvoyant", out["ratio_to_clairvoyant"]),
+            ("clairvoyant verified", out["clairvoyant_verified"]),
+            ("open-loop depth (nominal plan)", ol.depth),
+            ("open-loop feasible", ol.feasible), ("feasible (MPC)", m.feasible),
+            ("stroke min .. max", f"{m.stroke_min:.6g} .. {m.stroke_max:.6g}"),
+            ("peak |u|", m.u_peak), ("samples (period)", f"{m.samples} ({m.period:g})"),
+            ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
+            ("step time median / p99 [ms]",
+             f"{out['step_time_median_ms']:.3g} / {out['step_time_p99_ms']:.3g}"),
+            ("estimate K, c_d", f"{e.get('stiffness', float('nan')):.6g}, "
+                                f"{e.get('c_d', float('nan')):.6g}")])
+        if written:
+            print(f"figure written to {written}")
+    return EXIT_OK if m.feasible else EXIT_FAILURE
+
+
 HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
             "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
-            "reproduce": _cmd_reproduce, "hop": _cmd_hop}
+            "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -324,9 +324,37 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
     return r
 
 
+def _mpc(sub: Any) -> argparse.ArgumentParser:
+    m = sub.add_parser("mpc", help="model-predictive landing on ground the robot does not know",
+                       description="Land on the true ground (the ground options) under MPC: "
+                                   "every --period the controller measures the state and the "
+                                   "foot's acceleration, updates a least-squares estimate of "
+                                   "the ground (f = K d + c_d v^2), re-solves the landing from "
+                                   "the measured state and applies it for one period. Compared "
+                                   "with the clairvoyant optimum (knows the ground) and the "
+                                   "nominal open-loop plan replayed on the true ground.")
+    m.add_argument("--v0", type=float, required=True, help="impact velocity (< 0)")
+    _model_args(m, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    m.add_argument("--period", type=float, default=None,
+                   help="sample period in sqrt(m_t/k_g) (default 0.01, about 2.6 ms on the "
+                        "paper's rig)")
+    m.add_argument("--model-ground", choices=["linear", "drag"], default="linear",
+                   help="the ground the controller assumes before measuring (default: the "
+                        "paper's linear ground)")
+    m.add_argument("--model-stiffness", type=float, default=None, metavar="K",
+                   help="its stiffness factor (default 1)")
+    m.add_argument("--model-cd", type=float, default=None, metavar="C",
+                   help="its drag number (--model-ground drag)")
+    m.add_argument("--no-estimate", action="store_true",
+                   help="keep the model ground (no on-line estimation)")
+    _plot_arg(m, "the landing's depth and force against time")
+    ground_args(m)
+    return m
+
+
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
-            "demo": _demo, "reproduce": _reproduce, "hop": _hop}
+            "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc}
 
 
 def build_parser(handlers: Handlers,

@@ -74,6 +74,8 @@ class MPCLanding:
         The re-solve's one-time build before the landing (not a step's time).
     samples : int
         Samples taken while the foot yielded.
+    pieces : list of (float, LandingResult)
+        The plant's simulations and their start times (the last one runs to rest).
     """
 
     robot: Robot
@@ -92,6 +94,27 @@ class MPCLanding:
     fallbacks: int = 0
     samples: int = 0
     setup_ms: float = 0.0
+    pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
+
+    def trajectory(self, n: int = 1500) -> Trajectory:
+        """The whole landing from the plant's exact simulations (``mode``: ground mode).
+
+        Parameters
+        ----------
+        n : int
+            About how many samples.
+        """
+        end = self.pieces[-1][0] + 1.2 * max(self.result.T, 1e-9)
+        parts = []
+        for k, (t0, r) in enumerate(self.pieces):
+            t1 = self.pieces[k + 1][0] if k + 1 < len(self.pieces) else end
+            tr = r.trajectory(t_end=t1 - t0, n=max(20, int(n * (t1 - t0) / end)))
+            parts.append((tr, t0))
+        return Trajectory(np.concatenate([tr.t + t0 for tr, t0 in parts]),
+                          np.vstack([tr.x for tr, _ in parts]),
+                          np.vstack([tr.u for tr, _ in parts]), parts[0][0].state_names,
+                          parts[0][0].control_names,
+                          mode=np.concatenate([tr.mode for tr, _ in parts]))
 
     @property
     def stroke_held(self) -> bool:
@@ -204,7 +227,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       stroke_max=max(stroke[1]),
                       u_peak=max(r.u_peak for _, r in plant.history),
                       step_times_ms=out_times, estimates=estimates, replans=replans,
-                      fallbacks=fallbacks, samples=samples, setup_ms=setup_ms)
+                      fallbacks=fallbacks, samples=samples, setup_ms=setup_ms,
+                      pieces=list(plant.history))
 
 
 def _prior(model: Ground) -> tuple[float, float]:

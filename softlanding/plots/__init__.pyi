@@ -1,5 +1,6 @@
 """Type stub of the front door: the names it loads on first use (lazy_loader reads it)."""
 
+from .control import plot_mpc_landing as plot_mpc_landing
 from .paper import (
     plot_bang_bang as plot_bang_bang, plot_controller_comparison as plot_controller_comparison,
     plot_cot_comparison as plot_cot_comparison, plot_depth_map as plot_depth_map,

@@ -27,3 +27,24 @@ def test_without_estimation_it_is_the_nominal_plan_re_solved():
     m = mpc_landing(-3, PAPER_ROBOT, LinearGround(), estimate=False)
     assert m.depth == pytest.approx(solve_landing(-3).depth, rel=1e-10) and m.fallbacks == 0
     assert m.to_dict()["step_time_median_ms"] > 0
+
+
+def test_cli_mpc_json_and_plot(cli, tmp_path):
+    import json
+
+    png = tmp_path / "mpc.png"
+    code, out, err = cli("mpc", "--v0", "-3", "--ground", "linear", "--stiffness", "2",
+                         "--json", "--plot", png)
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["feasible"] and d["open_loop_feasible"] is False and d["open_loop_depth"] is None
+    assert d["depth"] == pytest.approx(d["clairvoyant_depth"], rel=1e-8)
+    assert d["step_time_median_ms"] > 0 and png.stat().st_size > 0
+
+
+@pytest.mark.parametrize("args", [["--v0", "0"], ["--v0", "-3", "--period", "0"],
+                                  ["--v0", "-3", "--model-cd", "1"],
+                                  ["--v0", "-3", "--stiffness", "-1"]])
+def test_cli_mpc_bad_input(cli, args):
+    code, _, err = cli("mpc", *args)
+    assert code == 2 and err.count("\n") == 1
