@@ -39,8 +39,9 @@ from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult
 from softlanding.util.jsonable import json_safe
 
-#: The default sample period, in the paper's time unit ``sqrt(m_t / k_g)`` (about 2.6 ms on
-#: the paper's rig): a tenth of the shortest bang arc of the paper's landings.
+#: The default sample period, in the paper's time unit ``sqrt(m_t / k_g)`` (26 ms on the
+#: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
+#: paper's landings.
 DEFAULT_PERIOD = 0.01
 
 
@@ -195,10 +196,13 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     stop = 1e-9 * max(1.0, abs(impact.v0))
     while plant.x[3] < -stop and samples < max_samples:
         schedule = _shifted(_schedule(plan, robot), elapsed)
-        plant.step(schedule, period)  # the schedule's time starts at the step
+        # a sample that would pass the planned stop of the foot ends there: the arrest is
+        # then computed from the measured state, not from the plan's prediction of it
+        h = min(period, _plan_time(plan) - elapsed)
+        h = h if h > 1e-9 * period else period
+        plant.step(schedule, h)  # the schedule's time starts at the step
         samples += 1
         if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
-            elapsed += period
             break
         t0 = time.perf_counter()
         u_end = _force_at_end(schedule, plant.x, period)
@@ -208,16 +212,16 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             if e.samples >= 2:
                 believed = e.ground()
         try:
-            plan = _replan(problem, plan, elapsed + period, robot, believed, plant.x)
+            plan = _replan(problem, plan, elapsed + h, robot, believed, plant.x)
             elapsed = 0.0
         except SolveError:  # the structure changed: transcribe and refine anew
             try:
-                plan = _transcribed_plan(plan, elapsed + period, robot, believed, plant.x)
+                plan = _transcribed_plan(plan, elapsed + h, robot, believed, plant.x)
                 elapsed = 0.0
                 replans += 1
             except SolveError:  # keep the last plan for this sample
                 fallbacks += 1
-                elapsed += period
+                elapsed += h
         out_times.append(1e3 * (time.perf_counter() - t0))
     final = plant.finish(_arrest(plant.x, robot) if plant.x[3] >= -stop else
                          _shifted(_schedule(plan, robot), elapsed))
@@ -235,6 +239,11 @@ def _prior(model: Ground) -> tuple[float, float]:
     from softlanding.control.state_landing import ground_numbers
 
     return ground_numbers(model)
+
+
+def _plan_time(plan: Any) -> float:
+    """When the plan has the foot stop (from its start)."""
+    return float(plan.T if isinstance(plan, Solution) else np.sum(plan.durations))
 
 
 def _shifted(schedule: Any, skip: float) -> Any:
