@@ -125,7 +125,7 @@ def write_api_pages() -> None:
             obj = getattr(mod, name)
             home.setdefault(id(obj), f"{modname}.{name}")
     out = DOCS / "api"
-    for modname, blurb in FRONT_DOORS.items():
+    for modname in FRONT_DOORS:
         mod = importlib.import_module(modname)
         own, elsewhere, data = [], [], []
         for name in _exports(modname):

@@ -7,8 +7,8 @@ optimal gains found by the zooming grid search. Blank: gains that leave the stro
 """
 
 from softlanding import Impact, Robot, optimize_impedance
-from softlanding.studies import depth_map
 from softlanding.plots import plot_depth_map
+from softlanding.studies import depth_map
 
 robot = Robot(r_m=5, s=20)
 ds = depth_map(Impact(-3), robot, n=101)
