@@ -78,7 +78,8 @@ sphinx_gallery_conf = {
     "gallery_dirs": ["auto_examples"],
     "filename_pattern": r".*\.py$",  # every example is executed
     "plot_gallery": "True" if RUN_GALLERY else "False",
-    "within_subsection_order": "FileNameSortKey",
+    "within_subsection_order": "conf._gallery_order",
+    "capture_repr": (),  # no "<Figure ...>" under the output
     "download_all_examples": False,
     "remove_config_comments": True,
     "show_memory": False,
@@ -86,6 +87,11 @@ sphinx_gallery_conf = {
     "image_scrapers": ("matplotlib",),
     "abort_on_example_error": True,
 }
+
+def _gallery_order(filename: str) -> tuple[bool, str]:
+    """The short plot_* examples first, in their numbered order; the worked variant last."""
+    return (not filename.startswith("plot_"), filename)
+
 
 # -- API pages from the front doors ----------------------------------------------------------
 FRONT_DOORS = {
