@@ -21,6 +21,7 @@ matplotlib.use("Agg")
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(DOCS / "_ext"))
 
 from softlanding._version import __version__  # noqa: E402
 
@@ -78,7 +79,7 @@ sphinx_gallery_conf = {
     "gallery_dirs": ["auto_examples"],
     "filename_pattern": r".*\.py$",  # every example is executed
     "plot_gallery": "True" if RUN_GALLERY else "False",
-    "within_subsection_order": "conf._gallery_order",
+    "within_subsection_order": "gallery_order.gallery_order",
     "capture_repr": (),  # no "<Figure ...>" under the output
     "download_all_examples": False,
     "remove_config_comments": True,
@@ -87,11 +88,6 @@ sphinx_gallery_conf = {
     "image_scrapers": ("matplotlib",),
     "abort_on_example_error": True,
 }
-
-def _gallery_order(filename: str) -> tuple[bool, str]:
-    """The short plot_* examples first, in their numbered order; the worked variant last."""
-    return (not filename.startswith("plot_"), filename)
-
 
 # -- API pages from the front doors ----------------------------------------------------------
 FRONT_DOORS = {
