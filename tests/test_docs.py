@@ -1,8 +1,10 @@
 """The documentation site builds with warnings as errors (``make -C docs html``).
 
-The full build executes the gallery (docs/examples, about a minute with the API pages), so it
-is ``slow``; the fast check reads every page, docstring and cross-reference with the
-gallery's execution off and the ``dummy`` builder (no HTML written).
+The full build executes the gallery (docs/examples; about 50 s with the API pages on 2
+cores, numba's kernels already compiled), so it is ``slow`` (CI runs it with the second test
+command). A structural check of every page, docstring and cross-reference without executing
+the gallery takes about 15 s, too much for the fast suite; run it locally with
+``SOFTLANDING_DOCS_GALLERY=0 make -C docs dummy``.
 """
 
 import os
@@ -38,8 +40,3 @@ def test_the_site_builds_with_its_gallery_executed(tmp_path):
     api = (html / "api" / "generated" / "softlanding.model.Robot.html").read_text()
     assert "r_m" in api and "Parameters" in api
 
-
-def test_every_page_and_reference_reads_without_warnings(tmp_path):
-    """Every page, docstring and cross-reference, the gallery not executed."""
-    res = _build("dummy", tmp_path, gallery=False)
-    assert res.returncode == 0, res.stderr[-4000:]
