@@ -1,4 +1,6 @@
-"""A new landing variant in one module: the fastest arrest within a depth budget.
+"""
+A new landing variant in one module: the fastest arrest within a depth budget
+=============================================================================
 
 The paper minimises the depth. A robot that must be ready to move again soon may rather
 bring its body to rest as early as possible, as long as the foot sinks no deeper than a

@@ -240,8 +240,8 @@ def _fixed_flight(out: LegExtensionLanding, robot: Robot, impact: Impact,
 
 
 class LegExtension(pipeline.PhasedVariant):
-    """The leg extension's hooks in the pipeline (:func:`~softlanding.optimal.pipeline.
-    solve_phased`).
+    """The leg extension's hooks in the pipeline
+    (:func:`~softlanding.optimal.pipeline.solve_phased`).
 
     Parameters
     ----------

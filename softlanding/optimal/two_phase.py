@@ -140,8 +140,8 @@ def _explain(err: SolveError, robot: Robot, impact: Impact, ground: Ground, step
 
 
 class TwoPhase(PhasedVariant):
-    """The two-phase landing's hooks in the pipeline (:func:`~softlanding.optimal.pipeline.
-    solve_phased`).
+    """The two-phase landing's hooks in the pipeline
+    (:func:`~softlanding.optimal.pipeline.solve_phased`).
 
     Parameters
     ----------

@@ -258,7 +258,7 @@ def plot_depth_map(ds, optimum=None, ax=None) -> plt.Figure:
 
 
 def plot_optimal_curves(curves) -> plt.Figure:
-    """k_p*, k_d* and depth* against |v0| for each (r_m, s) in the dataset.
+    """k_p*, k_d* and depth* against ``|v0|`` for each (r_m, s) in the dataset.
 
     Parameters
     ----------

@@ -1,0 +1,181 @@
+"""Sphinx configuration of the softlanding documentation (``make -C docs html``).
+
+Offline and reproducible: no intersphinx, no remote assets. The API reference is generated
+from the front doors' ``__all__`` (see :func:`write_api_pages`), the gallery executes
+``docs/examples/*.py`` (sphinx-gallery), the teaching notebooks are rendered as stored
+(myst-nb, not executed: the test suite executes them). ``SOFTLANDING_DOCS_GALLERY=0`` skips
+the gallery's execution (a fast structural build).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(DOCS / "_ext"))
+
+from softlanding._version import __version__  # noqa: E402
+
+project = "softlanding"
+author = "softlanding developers"
+copyright = "2026, softlanding developers"
+version = release = __version__
+
+extensions = [
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.mathjax",
+    "sphinx.ext.viewcode",
+    "numpydoc",
+    "myst_nb",
+    "sphinx_gallery.gen_gallery",
+]
+
+source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "**.ipynb_checkpoints",
+                    "auto_examples/*.ipynb", "auto_examples/*.py", "auto_examples/*.zip",
+                    "auto_examples/*.json", "auto_examples/*.md5", "examples",
+                    "sg_execution_times.rst"]
+templates_path = ["_templates"]
+suppress_warnings = ["config.cache"]  # sphinx-gallery's callables in the config
+
+# -- HTML ------------------------------------------------------------------------------------
+html_theme = "furo"
+html_title = f"softlanding {release}"
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]
+html_show_sourcelink = False
+mathjax_path = "https://cdn.jsdelivr.net/npm/mathjax@3/es5/tex-mml-chtml.js"  # used only if online
+
+# -- MyST / myst-nb --------------------------------------------------------------------------
+myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_heading_anchors = 3
+nb_execution_mode = "off"  # the notebooks are stored without outputs; tests execute them
+
+# -- autodoc / numpydoc ----------------------------------------------------------------------
+autosummary_generate = True
+autosummary_imported_members = True
+autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_member_order = "bysource"
+autodoc_typehints = "none"  # numpydoc's Parameters sections say the types
+numpydoc_show_class_members = False
+numpydoc_class_members_toctree = False
+numpydoc_attributes_as_param_list = True
+numpydoc_xref_param_type = False
+
+# -- sphinx-gallery --------------------------------------------------------------------------
+RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
+sphinx_gallery_conf = {
+    "examples_dirs": ["examples"],
+    "gallery_dirs": ["auto_examples"],
+    "filename_pattern": r".*\.py$",  # every example is executed
+    "plot_gallery": "True" if RUN_GALLERY else "False",
+    "within_subsection_order": "gallery_order.gallery_order",
+    "capture_repr": (),  # no "<Figure ...>" under the output
+    "download_all_examples": False,
+    "remove_config_comments": True,
+    "show_memory": False,
+    "matplotlib_animations": False,
+    "image_scrapers": ("matplotlib",),
+    "abort_on_example_error": True,
+}
+
+# -- API pages from the front doors ----------------------------------------------------------
+FRONT_DOORS = {
+    # module: one line for the API index
+    "softlanding": "The package's front door: value objects, simulate, every variant's solve.",
+    "softlanding.model": "Robot, ground, terrain, controllers, the dynamics, scaling.",
+    "softlanding.simulation": "The exact event-driven simulator.",
+    "softlanding.optimal": "Optimal landings: the paper's, two-phase, leg extension, hopping.",
+    "softlanding.studies": "Impedance optimisation, sweeps, comparison, robustness, terrain.",
+    "softlanding.plots": "Figures.",
+    "softlanding.report": "The reproduction of the paper (every figure and table).",
+    "softlanding.errors": "Every exception of the package.",
+    "ocp": "Generic optimal control on CasADi and Ipopt.",
+}
+HOME_ORDER = ["softlanding.model", "softlanding.simulation", "softlanding.optimal",
+              "softlanding.studies", "softlanding.plots", "softlanding.report",
+              "softlanding.errors", "ocp", "softlanding"]
+"""An object exported by several front doors is documented once, under the first here."""
+
+
+def _exports(modname: str) -> list[str]:
+    mod = importlib.import_module(modname)
+    names = getattr(mod, "__all__", None)
+    if names is None:
+        names = [n for n, v in vars(mod).items() if not n.startswith("_")
+                 and getattr(v, "__module__", None) == modname]
+    return sorted(names, key=lambda n: (n.upper() != n, n.lower()))
+
+
+def write_api_pages() -> None:
+    """One page per front door: its docstring, and a table of its names; each object gets
+    its own page under the front door that owns it (the first in ``HOME_ORDER``)."""
+    home: dict[int, str] = {}
+    for modname in HOME_ORDER:
+        mod = importlib.import_module(modname)
+        for name in _exports(modname):
+            obj = getattr(mod, name)
+            home.setdefault(id(obj), f"{modname}.{name}")
+    out = DOCS / "api"
+    for modname in FRONT_DOORS:
+        mod = importlib.import_module(modname)
+        own, elsewhere, data = [], [], []
+        for name in _exports(modname):
+            obj = getattr(mod, name)
+            if not (callable(obj) or isinstance(obj, type)):
+                data.append(name)
+            elif home[id(obj)] == f"{modname}.{name}":
+                own.append(name)
+            else:
+                elsewhere.append(home[id(obj)])
+        title = f"``{modname}``"
+        lines = [f".. This page is written by docs/conf.py from {modname}.__all__.", "",
+                 title, "=" * len(title), "", f".. automodule:: {modname}",
+                 "   :no-members:", "", f".. currentmodule:: {modname}", ""]
+        if own:
+            lines += [".. autosummary::", "   :toctree: generated/", "   :nosignatures:", ""]
+            lines += [f"   {n}" for n in own] + [""]
+        if elsewhere:
+            lines += ["Also exported here (documented where they are defined):", "",
+                      ".. autosummary::", "   :nosignatures:", ""]
+            lines += [f"   ~{q.removeprefix(modname + '.')}" for q in elsewhere] + [""]
+        if data:
+            lines += ["Constants", "---------", ""]
+            for n in data:
+                value = getattr(mod, n)
+                lines += [f".. data:: {n}"]
+                if home[id(value)] != f"{modname}.{n}":
+                    lines += ["   :no-index:"]
+                lines += ["", f"   ``{_short_repr(value)}``", ""]
+        text = "\n".join(lines)
+        path = out / f"{modname}.rst"
+        if not path.exists() or path.read_text() != text:
+            path.write_text(text)
+
+
+def _short_repr(value) -> str:
+    text = repr(value).replace("`", "'")
+    return text if len(text) <= 90 else text[:87] + "..."
+
+
+write_api_pages()
+
+
+def _dot_products(app, what, name, obj, options, lines) -> None:
+    """Docstrings write a dot product as ``a . b``; autosummary's one-line summaries end a
+    sentence at ". ", which would cut such a literal in two: render it as ``a · b``."""
+    lines[:] = [ln.replace(" . ", " · ") for ln in lines]
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _dot_products, priority=100)
