@@ -24,3 +24,7 @@ from .terrain_study import (
     experiment_grounds as experiment_grounds, experiment_shift as experiment_shift,
     model_rows as model_rows, study_grounds as study_grounds,
 )
+from .unknown_ground import (
+    study_summary as study_summary, true_ground as true_ground,
+    unknown_ground_case as unknown_ground_case, unknown_ground_study as unknown_ground_study,
+)

@@ -1,0 +1,66 @@
+"""The unknown-ground study (issue 25): every controller on every true ground, against the
+clairvoyant optimum; MPC step times in the paper's units and on the paper's rig.
+
+Run:  python -m benchmarks.study_unknown_ground [--quick] [--period P] [--json FILE]
+
+Prints one row per case (true ground K, c_d and v0): depth / clairvoyant depth for the
+nominal open-loop plan, the impedance tuned for the paper's ground and the MPC with
+estimation (``!`` marks a controller that broke a limit or whose rest is not proven), and the
+MPC's step times; then the goals checked. Timings are wall time of each sample's estimate
+and re-plan (``time.perf_counter``), on whatever else the machine runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+
+from softlanding.model.terrain import paper_rig_units
+from softlanding.studies.unknown_ground import (
+    STUDY_DRAG,
+    STUDY_STIFFNESS,
+    STUDY_V0,
+    study_summary,
+    unknown_ground_study,
+)
+
+
+def _cell(c: dict) -> str:
+    return f"{c['ratio']:8.4f}{' ' if c['feasible'] else '!'}"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="v0 in {-3, -10}, K in {0.5, 2}, "
+                                                         "c_d in {0, 1}")
+    ap.add_argument("--period", type=float, default=0.01)
+    ap.add_argument("--json", help="write every row to this file")
+    a = ap.parse_args()
+    grid = ((-3.0, -10.0), (0.5, 2.0), (0.0, 1.0)) if a.quick else (STUDY_V0, STUDY_STIFFNESS,
+                                                                    STUDY_DRAG)
+    t0 = time.perf_counter()
+    rows = unknown_ground_study(*grid, period=a.period)
+    tau = paper_rig_units().time
+    print(f"sample period {a.period:g} (= {1e3 * a.period * tau:.3g} ms on the paper's rig); "
+          f"{len(rows)} cases in {time.perf_counter() - t0:.0f} s")
+    print(f"{'v0':>6} {'K':>5} {'c_d':>4} {'clairvoyant':>12} {'open-loop':>10} "
+          f"{'impedance':>10} {'MPC':>10} {'median ms':>10} {'p99 ms':>8}  re-plans")
+    for r in rows:
+        g = r["ground"]
+        print(f"{r['v0']:>6.1f} {g.get('stiffness', 1.0):>5.2f} {g.get('c_d', 0.0):>4.1f} "
+              f"{r['clairvoyant_depth']:>11.5f}{' ' if r['clairvoyant_verified'] else '?'} "
+              f"{_cell(r['open_loop'])} {_cell(r['impedance_nominal'])} {_cell(r['mpc'])} "
+              f"{r['mpc']['step_time_median_ms']:>10.3f} {r['mpc']['step_time_p99_ms']:>8.2f}"
+              f"  {r['mpc']['replans']}")
+    s = study_summary(rows)
+    print("\n" + json.dumps(s, indent=1))
+    print(f"step time median on the rig: {s['step_time_median_ms']:.3g} ms against a period "
+          f"of {1e3 * a.period * tau:.3g} ms")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(rows, f, default=float)
+
+
+if __name__ == "__main__":
+    main()

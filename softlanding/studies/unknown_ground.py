@@ -1,0 +1,144 @@
+"""How close a controller that does not know the ground comes to one that does.
+
+For every true ground (stiffness factor ``K``, drag number ``c_d``) and impact velocity: the
+clairvoyant optimum (the landing OCP solved for the true ground), the nominal open-loop
+bang-bang plan (solved for the paper's ground) replayed on the true ground, the best fixed
+impedance tuned for the paper's ground, and model-predictive control with on-line ground
+estimation (:func:`softlanding.control.mpc_landing`). Depths are divided by the clairvoyant
+depth; a controller that breaks a limit (stroke, force) or whose rest is not proven is
+flagged, not hidden.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
+from softlanding.model.controllers import Impedance
+from softlanding.model.ground import DragGround, Ground, LinearGround
+from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal.landing import solve_landing
+from softlanding.simulation.simulator import simulate
+from softlanding.studies.impedance import optimize_impedance
+from softlanding.util.progress import progress as show_progress
+
+STUDY_STIFFNESS = (0.5, 0.75, 1.0, 1.5, 2.0)
+"""The true grounds' stiffness factors of the study."""
+STUDY_DRAG = (0.0, 0.2, 1.0)
+"""The true grounds' drag numbers of the study."""
+STUDY_V0 = (-1.0, -3.0, -6.0, -10.0)
+"""The study's impact velocities."""
+
+
+def true_ground(stiffness: float, c_d: float) -> Ground:
+    """The ground ``f = K d + c_d v^2`` (linear when ``c_d = 0``).
+
+    Parameters
+    ----------
+    stiffness, c_d : float
+        ``K`` and the drag number.
+    """
+    return LinearGround(stiffness) if c_d == 0 else DragGround(c_d, stiffness)
+
+
+def _replayed(res: Any) -> dict[str, Any]:
+    return {"depth": res.depth, "feasible": bool(res.feasible), "status": res.status,
+            "u_peak": res.u_peak, "stroke_min": res.stroke_min, "stroke_max": res.stroke_max}
+
+
+def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
+                        period: float = DEFAULT_PERIOD, nominal: Any = None,
+                        gains: Impedance | None = None) -> dict[str, Any]:
+    """One true ground and impact velocity: every controller's landing.
+
+    Parameters
+    ----------
+    v0 : float
+        Impact velocity.
+    ground : Ground
+        The true ground.
+    robot : Robot
+        The robot (with a force limit; the impedance is saturated by it).
+    period : float
+        The MPC's sample period.
+    nominal : BangBangLanding, optional
+        The nominal plan (solved for the paper's ground if not given).
+    gains : Impedance, optional
+        The impedance tuned for the paper's ground (optimised if not given).
+    """
+    impact = Impact(v0)
+    clair = solve_landing(impact, robot, ground)
+    nominal = nominal if nominal is not None else solve_landing(impact, robot)
+    if gains is None:
+        o = optimize_impedance(impact, robot)
+        gains = Impedance(o.k_p, o.k_d)
+    m = mpc_landing(impact, robot, ground, period=period)
+    row: dict[str, Any] = {
+        "v0": v0, "ground": ground.to_dict(), "clairvoyant_depth": clair.depth,
+        "clairvoyant_verified": not clair.unverified_reasons(),
+        "open_loop": _replayed(simulate(robot, impact, nominal.schedule(), ground)),
+        "impedance_nominal": _replayed(simulate(robot, impact, gains, ground)),
+        "mpc": {**m.to_dict(), "depth": m.depth}}
+    for key in ("open_loop", "impedance_nominal", "mpc"):
+        row[key]["ratio"] = row[key]["depth"] / clair.depth
+    return row
+
+
+def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
+                         stiffness: Sequence[float] = STUDY_STIFFNESS,
+                         drag: Sequence[float] = STUDY_DRAG, robot: Robot = PAPER_ROBOT, *,
+                         period: float = DEFAULT_PERIOD,
+                         progress: bool | None = None) -> list[dict[str, Any]]:
+    """Every case of the study (see :func:`unknown_ground_case`), velocity-major.
+
+    Parameters
+    ----------
+    v0_values, stiffness, drag : sequences of float
+        The grid.
+    robot : Robot
+        The robot.
+    period : float
+        The MPC's sample period.
+    progress : bool, optional
+        A progress bar.
+    """
+    plans = {v: solve_landing(v, robot) for v in v0_values}
+    tuned = {}
+    for v in v0_values:
+        o = optimize_impedance(v, robot)
+        tuned[v] = Impedance(o.k_p, o.k_d)
+    cases = list(itertools.product(v0_values, stiffness, drag))
+    return [unknown_ground_case(v, true_ground(k, c), robot, period=period, nominal=plans[v],
+                                gains=tuned[v])
+            for v, k, c in show_progress(cases, progress, desc="unknown ground", unit="case")]
+
+
+def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The study's goals checked: MPC within 2 % of the clairvoyant depth and never below it,
+    every limit held; the step times' median and 99th percentile.
+
+    Parameters
+    ----------
+    rows : list of dict
+        From :func:`unknown_ground_study`.
+    """
+    ratios = np.array([r["mpc"]["ratio"] for r in rows])
+    verified = np.array([r["clairvoyant_verified"] for r in rows])
+    return {
+        "cases": len(rows), "clairvoyant_verified": int(verified.sum()),
+        "mpc_max_ratio": float(ratios.max()), "mpc_min_ratio": float(ratios.min()),
+        "mpc_within_2_percent": int((ratios <= 1.02).sum()),
+        "mpc_feasible": int(sum(r["mpc"]["feasible"] for r in rows)),
+        "open_loop_feasible": int(sum(r["open_loop"]["feasible"] for r in rows)),
+        "impedance_feasible": int(sum(r["impedance_nominal"]["feasible"] for r in rows)),
+        "step_time_median_ms": float(np.median([r["mpc"]["step_time_median_ms"]
+                                                for r in rows])),
+        "step_time_p99_ms": float(np.max([r["mpc"]["step_time_p99_ms"] for r in rows]))}
+
+
+__all__ = ["STUDY_DRAG", "STUDY_STIFFNESS", "STUDY_V0", "study_summary", "true_ground",
+           "unknown_ground_case", "unknown_ground_study"]
