@@ -96,15 +96,17 @@ FRONT_DOORS = {
     "softlanding.model": "Robot, ground, terrain, controllers, the dynamics, scaling.",
     "softlanding.simulation": "The exact event-driven simulator.",
     "softlanding.optimal": "Optimal landings: the paper's, two-phase, leg extension, hopping.",
-    "softlanding.studies": "Impedance optimisation, sweeps, comparison, robustness, terrain.",
+    "softlanding.control": "Feedback on an unknown ground: stepping plant, estimation, MPC.",
+    "softlanding.studies": "Impedance optimisation, sweeps, comparison, robustness, terrain, "
+                           "unknown ground.",
     "softlanding.plots": "Figures.",
     "softlanding.report": "The reproduction of the paper (every figure and table).",
     "softlanding.errors": "Every exception of the package.",
     "ocp": "Generic optimal control on CasADi and Ipopt.",
 }
 HOME_ORDER = ["softlanding.model", "softlanding.simulation", "softlanding.optimal",
-              "softlanding.studies", "softlanding.plots", "softlanding.report",
-              "softlanding.errors", "ocp", "softlanding"]
+              "softlanding.control", "softlanding.studies", "softlanding.plots",
+              "softlanding.report", "softlanding.errors", "ocp", "softlanding"]
 """An object exported by several front doors is documented once, under the first here."""
 
 
