@@ -122,7 +122,7 @@ def build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes):
     return ne
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def due_event(C, dC, ne, z):
     """Index of an event already due at the start of a segment, or -1."""
     for k in range(ne):
@@ -132,13 +132,13 @@ def due_event(C, dC, ne, z):
     return -1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def rows4(C):
     """The four rows of a (4, 5) array as a tuple of 5-tuples."""
     return (row(C, 0), row(C, 1), row(C, 2), row(C, 3))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _crossing_time(A, nrm, z, z1, h, c, dc):
     """First time in (0, h] at which ``c . z`` turns positive, or -1 if it does not.
 
@@ -155,14 +155,14 @@ def _crossing_time(A, nrm, z, z1, h, c, dc):
         # a maximum inside the step: does it poke above zero?
         dg0 = dot(dc, z)
         dg1 = dot(dc, z1)
-        se = refine_t(A, nrm, z, scaled(dc, -1.0), 0.0, h, -dg0, -dg1)
+        se = refine_t(A, nrm, z, scaled(dc, -1.0), 0.0, h, -dg0, -dg1, 2e-15, -1.0)
         ge = dot(c, prop4_t(A, nrm, z, se))
         if ge > 0.0:
-            return refine_t(A, nrm, z, c, 0.0, se, g0, ge)
+            return refine_t(A, nrm, z, c, 0.0, se, g0, ge, 2e-15, -1.0)
     return -1.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def earliest_event(A, nrm, z, z1, h, C, dC, ne):
     """Earliest event in (0, h] of a marching step: ``(time, index)``; index -1 if none.
 

@@ -44,8 +44,8 @@ import numpy as np
 from numba import njit
 
 from softlanding.simulation.kernel.const import EV_LAND, EV_LIFT, FLIGHT, THETA, TIE
-from softlanding.simulation.kernel.linalg import closed_loop, expm
-from softlanding.simulation.kernel.model import M_FU, M_FZ, energy_rel, ground_work, mode_A, mode_B
+from softlanding.simulation.kernel.linalg import expm, row
+from softlanding.simulation.kernel.model import M_FU, M_FZ, closed_loop, energy_rel, ground_work
 from softlanding.simulation.kernel.rest import future_range
 
 RHO = 0.05
@@ -149,12 +149,15 @@ def first_symmetric_hop(P, cu, s_lift, T):
     is not translation-invariant or too long to scan. ``Delta`` is scanned with the exact
     step map, eight points per unit of ``||A|| tau``.
     """
-    Af = closed_loop(mode_A(P, FLIGHT), mode_B(P, FLIGHT), cu)
+    Af = closed_loop(P, FLIGHT, cu)
     nrm = 0.0
     for i in range(4):
         if Af[i, 0] + Af[i, 2] != 0.0:
             return np.nan
-        nrm = max(nrm, np.abs(Af[i]).sum())
+        r = 0.0
+        for j in range(5):
+            r += abs(Af[i, j])
+        nrm = max(nrm, r)
     half = 0.5 * T
     n = max(8, int(math.ceil(8.0 * half * nrm / THETA)))
     if n > 100_000:
@@ -199,7 +202,7 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     """
     if hk[H_EREF] == np.inf or hk[H_T] != hk[H_T]:
         return False  # the balance failed once, or no flight yet
-    lo, hi = future_range(A, z, C[0])
+    lo, hi = future_range(A, z, row(C, 0))
     if hi > 0.0:
         hk[H_N], hk[H_EPS] = 0.0, np.nan
         return False  # the stance itself may yield

@@ -83,9 +83,7 @@ from softlanding.simulation.kernel.hops import (
     hops_settled,
 )
 from softlanding.simulation.kernel.linalg import (
-    closed_loop,
     covector_t,
-    covector_times,
     dot,
     expm,
     flat25,
@@ -99,7 +97,7 @@ from softlanding.simulation.kernel.linalg import (
     row,
     row5,
 )
-from softlanding.simulation.kernel.model import energy_rel, ground_work, mode_A, mode_B
+from softlanding.simulation.kernel.model import closed_loop, energy_rel, ground_work
 from softlanding.simulation.kernel.rest import future_range
 
 # ext: extrema and actuator work
@@ -119,7 +117,7 @@ def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     Returns ``(cu, A, shift)``.
     """
     cu = control_vector(mode, regime, Kf, umax, k_ol)
-    A = closed_loop(mode_A(P, mode), mode_B(P, mode), cu)
+    A = closed_loop(P, mode, cu)
     if mode == FLIGHT and shift == 0.0 and d > 0.0:
         invariant = True
         for i in range(4):
@@ -159,9 +157,9 @@ def rest_proof(A, z, C, ne, cs, cu, ext):
         lo, hi = future_range(A, z, row(C, k))
         if hi > 0.0:
             return False
-    lo, hi = future_range(A, z, cs)
+    lo, hi = future_range(A, z, row5(cs))
     ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
-    lo, hi = future_range(A, z, cu)
+    lo, hi = future_range(A, z, row5(cu))
     ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
     return True
 
@@ -179,7 +177,7 @@ def step_size(A, mode):
     return THETA / max(norm_inf4(A), 1e-3)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, forceinline=True)
 def _fold_step(A, nrm, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
     """Fold the stroke and force extrema over (0, h] into ``ext`` (tuples, see march)."""
     se_v = interior_extremum_t(A, nrm, z, z1, h, cs, dcs, ddcs)
@@ -206,8 +204,10 @@ def step_map(A, mode, key, Qe, energy, phic, gc, hc):
     G = gram(A, Qe, hstep) if energy else Qe
     if key >= 0:
         hc[key] = hstep
-        phic[key] = Phi
-        gc[key] = G
+        for i in range(5):
+            for j in range(5):
+                phic[key, i, j] = Phi[i, j]
+                gc[key, i, j] = G[i, j]
     return hstep, Phi, G
 
 
@@ -449,19 +449,35 @@ def workspace():
 def derivative_functionals(C, A, ne, dC):
     """``dC[k] = C[k] A``: d/dt of each event function."""
     for k in range(ne):
-        dk = covector_times(row(C, k), A)
+        dk = covector_t(row(C, k), flat25(A))
         for j in range(5):
             dC[k, j] = dk[j]
 
 
 @njit(cache=True)
-def schedule_switch(P, z, d, mode, steps, k_ol):
-    """An open-loop schedule switch: a pinned foot may yield or lift off under the new force."""
+def schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol):
+    """An open-loop schedule switch (``open_loop`` is then true): a pinned foot may yield or
+    lift off under the new force."""
     if mode == STATIC:
-        mode = contact_mode(P, z, d, np.zeros((3, 5)), np.inf, True, k_ol)
+        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
         if mode == YIELDING:
             steps += 1
     return mode, steps
+
+
+@njit(cache=True)
+def fresh_landing(x0, sched_K):
+    """The start of a landing: the augmented state ``z`` and a copy ``z0``, whether the
+    control is an open-loop schedule and its first gain row, the extrema ``ext`` and the
+    bookkeeping ``bk``."""
+    z = np.empty(5)
+    for i in range(4):
+        z[i] = x0[i]
+    z[4] = 1.0
+    open_loop = sched_K.shape[0] > 0
+    k_ol = sched_K[0] if open_loop else np.zeros(5)
+    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
+    return z, z.copy(), open_loop, k_ol, ext, np.full(4, np.nan)
 
 
 @njit(cache=True)
@@ -490,16 +506,9 @@ def simulate_one(P, pol, x0, lim, out, rec):
     s_lim, t_max, max_seg, energy, max_steps = lim
     if not in_range(x0, s_lim):
         return reject(out)
-    open_loop = sched_K.shape[0] > 0
-    z = np.empty(5)
-    z[:4] = x0[:4]
-    z[4] = 1.0
-    z0 = z.copy()
+    z, z0, open_loop, k_ol, ext, bk = fresh_landing(x0, sched_K)
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
-    k_ol = sched_K[0] if open_loop else np.zeros(5)
-    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
-    bk = np.full(4, np.nan)
     mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk,
                                        energy_rel(P, z, z0))
     ws = workspace()
@@ -511,8 +520,8 @@ def simulate_one(P, pol, x0, lim, out, rec):
             status = STEP_BUDGET
             break
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift)
-        record_segment(rec, nseg, t, mode, z, cu, A, shift)
         nseg += 1
+        record_segment(rec, nseg - 1, t, mode, z, cu, A, shift)
         u_now = dot(cu, z)
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], u_now), max(ext[X_UMAX], u_now)
         t_next = sched_t[sidx] if (open_loop and sidx < sched_t.shape[0]) else np.inf
@@ -538,7 +547,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
             if time_event:
                 sidx += 1
                 k_ol = sched_K[sidx]
-                mode, steps = schedule_switch(P, z, d, mode, steps, k_ol)
+                mode, steps = schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol)
                 continue
         if hops:
             hop_event(codes[hit], z, t, hk)

@@ -42,15 +42,14 @@ def pack_model(mats: dict) -> np.ndarray:
 
 
 @njit(cache=True)
-def mode_A(P, mode):
-    """View of the open-loop matrix of a ground mode."""
-    return P[M_A + 25 * mode:M_A + 25 * mode + 25].reshape((5, 5))
-
-
-@njit(cache=True)
-def mode_B(P, mode):
-    """View of the control column of a ground mode."""
-    return P[M_B + 5 * mode:M_B + 5 * mode + 5]
+def closed_loop(P, mode, cu):
+    """``A + B cu^T`` of a ground mode: the affine closed loop for ``u = cu . z``."""
+    A = np.empty((5, 5))
+    a, b = M_A + 25 * mode, M_B + 5 * mode
+    for i in range(5):
+        for j in range(5):
+            A[i, j] = P[a + 5 * i + j] + P[b + i] * cu[j]
+    return A
 
 
 @njit(cache=True)

@@ -65,6 +65,7 @@ from softlanding.simulation.kernel.landing import (
     derivative_functionals,
     energy_form,
     final_status,
+    fresh_landing,
     in_range,
     initial_mode,
     march,
@@ -201,17 +202,10 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
         out[O_EDRAG] = out[O_EGRAIN] = np.nan
         return
     G, fp, buf = law_args
-    open_loop = sched_K.shape[0] > 0
-    z = np.empty(5)
-    z[:4] = x0[:4]
-    z[4] = 1.0
-    z0 = z.copy()
+    z, z0, open_loop, k_ol, ext, bk = fresh_landing(x0, sched_K)
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
-    k_ol = sched_K[0] if open_loop else np.zeros(5)
-    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
     acc = np.zeros(3)
-    bk = np.full(4, np.nan)
     initial_grains(G, fp, buf, z, acc)
     mode, regime, steps = initial_mode(P, z, hold_force(G, fp, buf, d), Kf, umax, open_loop,
                                        k_ol, bk, energy_rel(P, z, z0))
@@ -226,8 +220,8 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
         if locked:
             regime = LINEAR  # the lock's own force, saturated in the vector field
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift)
-        record_segment(rec, nseg, t, mode, z, cu, A, shift)
         nseg += 1
+        record_segment(rec, nseg - 1, t, mode, z, cu, A, shift)
         u_now = control_at(G, fp, buf, cu, z) if mode == YIELDING else dot(cu, z)
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], u_now), max(ext[X_UMAX], u_now)
         t_next = sched_t[sidx] if (open_loop and sidx < sched_t.shape[0]) else np.inf
@@ -258,7 +252,8 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
             if time_event:
                 sidx += 1
                 k_ol = sched_K[sidx]
-                mode, steps = schedule_switch(P, z, hold, mode, steps, k_ol)
+                mode, steps = schedule_switch(P, z, hold, mode, steps, Kf, umax, open_loop,
+                                              k_ol)
                 continue
         mode, regime, d, shift, steps = apply_event_nl(P, law_args, codes[hit], z, z0, t, d,
                                                        shift, mode, regime, steps, Kf, umax,
