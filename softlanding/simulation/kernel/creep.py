@@ -32,16 +32,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from softlanding.simulation.kernel.const import JIT
+
 MARGIN = 1e-12  # relative margin per unit condition number of the eigenvectors
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _lt(a, b):
     """NumPy's sort order of floats (NaN last)."""
     return a < b or (np.isnan(b) and not np.isnan(a))
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _slowest_first(lam):
     """``np.argsort(-lam.real)`` of three eigenvalues, as NumPy's and numba's quicksort
     orders three items (an insertion sort)."""
@@ -58,7 +60,7 @@ def _slowest_first(lam):
     return order[0], order[1], order[2]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _norm_inf3(M):
     """``np.abs(M).sum(axis=1).max()`` of a complex 3 x 3 matrix (same sums, NaN first)."""
     big = 0.0
@@ -73,7 +75,7 @@ def _norm_inf3(M):
     return big
 
 
-@njit(cache=True)
+@njit(**JIT)
 def creep_setup(A, cu, C, ne, data):
     """Eigen-data of the ``x_b``-free yielding subsystem; returns False if not applicable.
 
@@ -138,7 +140,7 @@ def creep_setup(A, cu, C, ne, data):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _coeffs(data, z):
     """Modal coordinates ``V^-1 (y - y*)`` of the current state."""
     w0 = z[1] - data[0, 7].real
@@ -150,7 +152,7 @@ def _coeffs(data, z):
     return alpha
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _terms(data, alpha, c1, c2, c3):
     """Modal amplitudes ``a_i`` of the functional ``c1 v_b + c2 x_f + c3 v_f``."""
     a = np.empty(3, dtype=np.complex128)
@@ -159,12 +161,12 @@ def _terms(data, alpha, c1, c2, c3):
     return a
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _equilibrium_value(data, c):
     return c[1] * data[0, 7].real + c[2] * data[1, 7].real + c[4]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def creep_proof(data, z, C, ne, cu, ext_u, smin_smax):
     """True if, from ``z``, the foot creeps forever (see the module docstring).
 
@@ -220,7 +222,7 @@ def creep_proof(data, z, C, ne, cu, ext_u, smin_smax):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def creep_limit_depth(data):
     """The limit depth ``L = -x_f*`` of a proven creep."""
     return -data[1, 7].real

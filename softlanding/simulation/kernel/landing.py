@@ -32,6 +32,7 @@ from softlanding.simulation.kernel.const import (
     FLIGHT,
     HOPS_TO_LIMIT,
     HORIZON,
+    JIT,
     LINEAR,
     N_OUT,
     NEVER_RESTS_CREEP,
@@ -106,7 +107,7 @@ X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT, X_WORK = range(6)
 B_TSTOP, B_T, B_ET, B_ACT = range(4)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     """Control functional and closed-loop matrix of a segment; in flight, shift heights.
 
@@ -130,7 +131,7 @@ def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     return cu, A, shift
 
 
-@njit(cache=True)
+@njit(**JIT)
 def record_segment(rec, n, t, mode, z, cu, A, shift):
     """Store segment ``n`` (start time, mode, start state, control, matrix) if room."""
     rec_t, rec_A, rec_z, rec_cu, rec_mode = rec
@@ -147,7 +148,7 @@ def record_segment(rec, n, t, mode, z, cu, A, shift):
     rec_z[n, 2] -= shift
 
 
-@njit(cache=True)
+@njit(**JIT)
 def rest_proof(A, z, C, ne, cs, cu, ext):
     """Static mode, no schedule switch ahead: True if no event can ever fire.
 
@@ -164,7 +165,7 @@ def rest_proof(A, z, C, ne, cs, cu, ext):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def step_size(A, mode):
     """Marching step: ``||A|| h <= THETA`` (in the static mode ``omega h <= THETA``).
 
@@ -177,7 +178,7 @@ def step_size(A, mode):
     return THETA / max(norm_inf4(A), 1e-3)
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def _fold_step(A, nrm, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
     """Fold the stroke and force extrema over (0, h] into ``ext`` (tuples, see march)."""
     se_v = interior_extremum_t(A, nrm, z, z1, h, cs, dcs, ddcs)
@@ -192,7 +193,7 @@ def _fold_step(A, nrm, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
     ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], uv), max(ext[X_UMAX], uv)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def step_map(A, mode, key, Qe, energy, phic, gc, hc):
     """Marching step ``h``, ``exp(A h)`` and the Gramian of ``Qe`` over ``h`` (``Qe`` itself
     if no energy), from the cache slot ``key`` if filled (a closed loop is fixed by
@@ -211,7 +212,7 @@ def step_map(A, mode, key, Qe, energy, phic, gc, hc):
     return hstep, Phi, G
 
 
-@njit(cache=True)
+@njit(**JIT)
 def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext, creep, ws):
     """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
 
@@ -270,7 +271,7 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
             return t, hit, time_event, stop
 
 
-@njit(cache=True)
+@njit(**JIT)
 def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open_loop, k_ol,
                 ext, bk):
     """The transition at an event; updates ``z`` and ``bk`` in place.
@@ -308,7 +309,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
     return mode, regime, d, shift, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop, ext, bk):
     """Bookkeeping of a ground-mode change: count a new intrusion step, note the foot's
     (latest) rest, re-classify the feedback's regime. Returns ``(steps, regime)``."""
@@ -324,7 +325,7 @@ def mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop, ex
     return steps, regime
 
 
-@njit(cache=True)
+@njit(**JIT)
 def initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk, E0):
     """Ground mode at impact (from the foot's velocity); returns ``(mode, regime, steps)``."""
     if z[3] < 0.0:
@@ -344,7 +345,7 @@ def initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk, E0):
     return mode, regime, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def energy_form(cu, energy):
     """Symmetric form of the actuator power ``u (v_b - v_f)`` (zero if not wanted)."""
     Qe = np.zeros((5, 5))
@@ -357,7 +358,7 @@ def energy_form(cu, energy):
     return Qe
 
 
-@njit(cache=True)
+@njit(**JIT)
 def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     """Fill the output row (layout ``O_*``)."""
     # the foot may still be creeping down if rest is unproven; a proven creep's d is its
@@ -386,7 +387,7 @@ def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     out[O_FOOT_REST] = 1.0 if foot_rests else 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def final_status(status, d, ext, cdata, cres):
     """A proven creep's limits; a proven rest of the foot under a body that does not rest
     (stroke without bound) is not a rest. Returns ``(status, d)``."""
@@ -400,7 +401,7 @@ def final_status(status, d, ext, cdata, cres):
     return status, d
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fold_creep(ext, cres):
     """Fold a proven creep's future stroke range and force limit into ``ext``."""
     if cres[0] == cres[0]:
@@ -411,7 +412,7 @@ def fold_creep(ext, cres):
     ext[X_UMAX] = max(ext[X_UMAX], cres[2])
 
 
-@njit(cache=True)
+@njit(**JIT)
 def in_range(x0, s_lim):
     """False if an initial state component or the stroke is not finite or exceeds
     ``SCALE_MAX``: in double precision the events of such a landing (foot speeds of
@@ -425,7 +426,7 @@ def in_range(x0, s_lim):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def reject(out):
     """Output row of a landing not simulated (``OUT_OF_RANGE``): NaN but the counts."""
     out[:] = np.nan
@@ -433,7 +434,7 @@ def reject(out):
     out[O_STEPS] = out[O_NSEG] = out[O_FEAS] = out[O_FOOT_REST] = 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def workspace():
     """Per-landing work arrays: the stroke functional, event functionals and their
     derivatives, event codes, a creep proof's eigen-data and results, and the cache of
@@ -445,7 +446,7 @@ def workspace():
             np.empty((12, 5, 5)), np.full(12, np.nan))
 
 
-@njit(cache=True)
+@njit(**JIT)
 def derivative_functionals(C, A, ne, dC):
     """``dC[k] = C[k] A``: d/dt of each event function."""
     for k in range(ne):
@@ -454,7 +455,7 @@ def derivative_functionals(C, A, ne, dC):
             dC[k, j] = dk[j]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol):
     """An open-loop schedule switch (``open_loop`` is then true): a pinned foot may yield or
     lift off under the new force."""
@@ -465,7 +466,7 @@ def schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol):
     return mode, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fresh_landing(x0, sched_K):
     """The start of a landing: the augmented state ``z`` and a copy ``z0``, whether the
     control is an open-loop schedule and its first gain row, the extrema ``ext`` and the
@@ -480,7 +481,7 @@ def fresh_landing(x0, sched_K):
     return z, z.copy(), open_loop, k_ol, ext, np.full(4, np.nan)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def simulate_one(P, pol, x0, lim, out, rec):
     """Simulate one landing; fill ``out`` (layout ``O_*``) and the segment records.
 
@@ -562,7 +563,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy, max_steps,
                   nrec):
     """One landing with its segment records (``nrec`` rows first; re-run with as many
@@ -585,7 +586,7 @@ def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, ener
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps, out, i0,
                 i1):
     """Feedback-policy landings ``i0 <= i < i1``; row i uses the packed model ``Ps[ridx[i]]``.

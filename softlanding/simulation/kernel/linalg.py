@@ -12,10 +12,10 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import MAX_SUBSTEPS
+from softlanding.simulation.kernel.const import JIT, MAX_SUBSTEPS
 
 
-@njit(cache=True)
+@njit(**JIT)
 def norm_inf4(A):
     m = 0.0
     for i in range(4):
@@ -26,7 +26,7 @@ def norm_inf4(A):
     return m
 
 
-@njit(cache=True)
+@njit(**JIT)
 def expm(M, h):
     """exp(M h) by scaling and squaring of a Taylor series (M small and square)."""
     n = M.shape[0]
@@ -79,7 +79,7 @@ def expm(M, h):
     return out
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def dot(c, z):
     """``c . z`` for 5-vectors (arrays or tuples), summed in index order."""
     acc = 0.0
@@ -91,19 +91,19 @@ def dot(c, z):
     return acc
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def row(C, k):
     """Row ``k`` of a (n, 5) array as a tuple (no array view, no reference counting)."""
     return (C[k, 0], C[k, 1], C[k, 2], C[k, 3], C[k, 4])
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def scaled(c, s):
     """The functional ``s c`` as a tuple."""
     return (s * c[0], s * c[1], s * c[2], s * c[3], s * c[4])
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def hermite_root(g0, d0, g1, d1, h):
     """Root in (0, h) of the cubic Hermite interpolant of g (g0 <= 0 < g1): a
     starting guess for Newton on the exact solution (error O(h^4))."""
@@ -127,7 +127,7 @@ def hermite_root(g0, d0, g1, d1, h):
     return s
 
 
-@njit(cache=True)
+@njit(**JIT)
 def gram(A, Q, h):
     """int_0^h exp(A^T t) Q exp(A t) dt by Van Loan's block exponential."""
     C = np.zeros((10, 10))
@@ -147,7 +147,7 @@ def gram(A, Q, h):
     return G
 
 
-@njit(cache=True)
+@njit(**JIT)
 def hull(lo, hi, v):
     return min(lo, v), max(hi, v)
 
@@ -159,7 +159,7 @@ def hull(lo, hi, v):
 # a third of the time when they ran on arrays).
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def flat25(A):
     """A 5x5 array as a flat row-major 25-tuple."""
     return (A[0, 0], A[0, 1], A[0, 2], A[0, 3], A[0, 4], A[1, 0], A[1, 1], A[1, 2], A[1, 3],
@@ -167,13 +167,13 @@ def flat25(A):
             A[3, 3], A[3, 4], A[4, 0], A[4, 1], A[4, 2], A[4, 3], A[4, 4])
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def row5(v):
     """A 5-vector (array or tuple) as a 5-tuple."""
     return (v[0], v[1], v[2], v[3], v[4])
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def quad_t(G, z):
     """``z . G z`` for a flat 25-tuple ``G``."""
     acc = 0.0
@@ -183,7 +183,7 @@ def quad_t(G, z):
     return acc
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def norm_rows4(A):
     """Largest absolute row sum (affine column included) of the first four rows of a flat
     25-tuple: sets the substeps of :func:`prop4_t`."""
@@ -196,7 +196,7 @@ def norm_rows4(A):
     return nrm
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def matvec_t(M, z):
     """``M z`` for a flat 25-tuple ``M``, as a 5-tuple."""
     y0 = 0.0
@@ -232,7 +232,7 @@ def matvec_t(M, z):
     return (y0, y1, y2, y3, y4)
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def prop4_t(A, nrm, z, h):
     """the Taylor series on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
     if not nrm * abs(h) <= MAX_SUBSTEPS:
@@ -266,7 +266,7 @@ def prop4_t(A, nrm, z, h):
     return (x0, x1, x2, x3, x4)
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def covector_t(c, A):
     """The row vector ``c A`` for a flat 25-tuple ``A`` (:func:`flat25`), as a tuple: the
     functional giving d/dt (c . z) when z' = A z."""
@@ -288,7 +288,7 @@ def covector_t(c, A):
     return (d0, d1, d2, d3, d4)
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
     """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
 
@@ -326,7 +326,7 @@ def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
     return b
 
 
-@njit(cache=True, forceinline=True)
+@njit(**JIT, forceinline=True)
 def interior_extremum_t(A, nrm, z, z1, h, c, dc, ddc):
     """Value of q = c . z at its turning point inside (0, h), or NaN if none.
 

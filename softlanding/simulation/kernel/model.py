@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from softlanding.simulation.kernel.const import JIT
+
 # layout of the packed model
 M_A = 0  # (3, 5, 5) open-loop mode matrices: yielding, static, flight
 M_B = 75  # (3, 5) control columns
@@ -41,7 +43,7 @@ def pack_model(mats: dict) -> np.ndarray:
     return P
 
 
-@njit(cache=True)
+@njit(**JIT)
 def closed_loop(P, mode, cu):
     """``A + B cu^T`` of a ground mode: the affine closed loop for ``u = cu . z``."""
     A = np.empty((5, 5))
@@ -52,13 +54,13 @@ def closed_loop(P, mode, cu):
     return A
 
 
-@njit(cache=True)
+@njit(**JIT)
 def support_Fz(P):
     """View of ``Fz`` (support force ``Fz . z + Fu u`` of the static mode)."""
     return P[M_FZ:M_FU]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def energy_rel(P, z, z0):
     """Mechanical energy at ``z`` relative to the potential energy at ``z0``.
 
@@ -79,7 +81,7 @@ def energy_rel(P, z, z0):
     return acc
 
 
-@njit(cache=True)
+@njit(**JIT)
 def ground_work(P, d):
     """Work done on the ground by a foot that dug to depth ``d`` (from the surface)."""
     return P[M_WG] * d * d

@@ -32,6 +32,7 @@ from softlanding.simulation.kernel.const import (
     EV_STOP,
     EV_YIELD,
     FLIGHT,
+    JIT,
     LINEAR,
     N_OUT,
     O_EGND,
@@ -93,7 +94,7 @@ O_EDRAG, O_EGRAIN = N_OUT, N_OUT + 1
 N_OUT_NL = N_OUT + 2
 
 
-@njit(cache=True)
+@njit(**JIT)
 def cone_event(G, z, C, codes, ne):
     """Add the cone-completion event ``-x_f - d_c`` to a yielding segment still above it."""
     dc = G[G_DC]
@@ -106,7 +107,7 @@ def cone_event(G, z, C, codes, ne):
     return ne
 
 
-@njit(cache=True)
+@njit(**JIT)
 def collide(G, fp, buf, z, d, acc):
     """A foot landing at ``z[3] < 0`` on the cone's grains at rest: inelastic collision."""
     ma = added_mass_at(G, fp, buf, d)
@@ -118,7 +119,7 @@ def collide(G, fp, buf, z, d, acc):
         z[3] = vp
 
 
-@njit(cache=True)
+@njit(**JIT)
 def apply_event_nl(P, law_args, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax,
                    open_loop, k_ol, ext, bk, acc):
     """The transition at an event (as :func:`.landing.apply_event`, with the law's hold and
@@ -156,7 +157,7 @@ def apply_event_nl(P, law_args, code, z, z0, t, d, shift, mode, regime, steps, K
     return mode, regime, d, shift, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def initial_grains(G, fp, buf, z, acc):
     """Grains already moving with a foot that starts below the surface: their kinetic energy
     is an input to the ledger (counted against the grain loss)."""
@@ -164,7 +165,7 @@ def initial_grains(G, fp, buf, z, acc):
         acc[A_GRAIN] -= 0.5 * added_mass_at(G, fp, buf, -z[2]) * z[3] * z[3]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _segment_events(P, G, mode, regime, cu, d, hold, shift, Kf, umax, open_loop, z, C, codes):
     """Event functionals of a segment (the hold in the static mode, the cone if yielding)."""
     ne = build_events(P, mode, regime, cu, hold if mode == STATIC else d, shift, Kf, umax,
@@ -174,12 +175,13 @@ def _segment_events(P, G, mode, regime, cu, d, hold, shift, Kf, umax, open_loop,
     return ne
 
 
-@njit(cache=True)
+@njit(**JIT)
 def due_event_yield(A, cu, G, fp, buf, C, ne, z, K):
     """Index of an event already due at the start of a yielding segment (slopes from the
     non-affine vector field), or -1."""
     y = np.zeros(NY)
-    y[:5] = z[:5]
+    for i in range(5):
+        y[i] = z[i]
     yield_rhs(flat25(A), row5(cu), G, fp, buf, y, K, 0)
     for k in range(ne):
         g0 = dot(row(C, k), z)
@@ -188,7 +190,7 @@ def due_event_yield(A, cu, G, fp, buf, C, ne, z, K):
     return -1
 
 
-@njit(cache=True)
+@njit(**JIT)
 def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
     """Simulate one landing on a non-affine ground; fill ``out`` (:data:`N_OUT_NL` columns).
 
@@ -265,7 +267,7 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
     write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk, acc)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk, acc):
     """:func:`.landing.write_output`, with the integrated plastic work and the drag and grain
     losses (NaN unless the foot's rest is proven)."""
@@ -276,7 +278,7 @@ def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, b
     out[O_EGRAIN] = acc[A_GRAIN] if foot_rests else np.nan
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy,
                      max_steps, rtol, nrec):
     """One non-affine landing with its segment records (as :func:`.landing.landing_entry`).
@@ -298,7 +300,7 @@ def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def batch_range_nl(Ps, ridx, G, fp, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps,
                    rtol, out, i0, i1):
     """Feedback landings ``i0 <= i < i1`` on one non-affine ground (as
@@ -314,7 +316,7 @@ def batch_range_nl(Ps, ridx, G, fp, Kfs, umaxs, x0s, s_lims, t_max, max_seg, ene
                         rec)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def sample_nl(P, G, fp, rtol, ts, A, z, cu, mode, grid, idx, out, uout):
     """States ``out`` (n, 5) and forces ``uout`` at the sorted times ``grid`` (segment
     ``idx[i]``): exact propagation in the affine modes, DOP853 in the yielding ones."""
