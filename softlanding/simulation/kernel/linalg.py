@@ -198,38 +198,9 @@ def norm_rows4(A):
 
 @njit(**JIT, forceinline=True)
 def matvec_t(M, z):
-    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple."""
-    y0 = 0.0
-    y0 += M[0] * z[0]
-    y0 += M[1] * z[1]
-    y0 += M[2] * z[2]
-    y0 += M[3] * z[3]
-    y0 += M[4] * z[4]
-    y1 = 0.0
-    y1 += M[5] * z[0]
-    y1 += M[6] * z[1]
-    y1 += M[7] * z[2]
-    y1 += M[8] * z[3]
-    y1 += M[9] * z[4]
-    y2 = 0.0
-    y2 += M[10] * z[0]
-    y2 += M[11] * z[1]
-    y2 += M[12] * z[2]
-    y2 += M[13] * z[3]
-    y2 += M[14] * z[4]
-    y3 = 0.0
-    y3 += M[15] * z[0]
-    y3 += M[16] * z[1]
-    y3 += M[17] * z[2]
-    y3 += M[18] * z[3]
-    y3 += M[19] * z[4]
-    y4 = 0.0
-    y4 += M[20] * z[0]
-    y4 += M[21] * z[1]
-    y4 += M[22] * z[2]
-    y4 += M[23] * z[3]
-    y4 += M[24] * z[4]
-    return (y0, y1, y2, y3, y4)
+    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple (each row summed as :func:`dot`)."""
+    return (dot(M[0:5], z), dot(M[5:10], z), dot(M[10:15], z), dot(M[15:20], z),
+            dot(M[20:25], z))
 
 
 @njit(**JIT, forceinline=True)
