@@ -15,3 +15,13 @@ def cli(capsys):
         return code, out.out, out.err
 
     return run
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _no_compile_notice():
+    """The simulator's first-compile notice (stderr, once per process, cold cache only) would
+    land in whichever test compiles first; tests/softlanding/simulation/test_first_run.py runs
+    it in subprocesses of its own."""
+    from softlanding.simulation import kernel
+
+    kernel._CHECKED.update({"affine", "non-affine"})

@@ -67,6 +67,66 @@ STATUS_NAMES = {
 """Human-readable name of each status code of ``out[O_STATUS]``."""
 
 
+# ------------------------------------------------------------------ the first compile
+_CHECKED: set[str] = set()
+
+
+def compiled_before(dispatcher) -> bool:
+    """True if ``dispatcher`` needs no compile: it has machine code in this process, or an
+    up-to-date entry in numba's on-disk cache (its index exists and matches the source).
+
+    Parameters
+    ----------
+    dispatcher : numba Dispatcher
+        A compiled kernel function.
+    """
+    if dispatcher.signatures:
+        return True
+    try:
+        return bool(dispatcher._cache._cache_file._load_index())
+    except Exception:  # no on-disk cache (NUMBA_DISABLE_JIT, another numba): assume compiled
+        return True
+
+
+def compile_notice(kind: str = "affine") -> str | None:
+    """Say on stderr, once per process and only on a cold cache, that the simulator is about
+    to be compiled (numba, then cached on disk): the first landing of a fresh install waits
+    while it compiles, and would otherwise print nothing.
+
+    Parameters
+    ----------
+    kind : {"affine", "non-affine"}
+        Which simulator is about to run: the exact one, or the one that integrates the
+        yielding segments of a non-affine ground.
+
+    Returns
+    -------
+    str or None
+        The notice printed, if any.
+    """
+    if kind in _CHECKED:
+        return None
+    _CHECKED.add(kind)
+    from softlanding.simulation.kernel import landing
+
+    if kind == "affine":
+        entries, inner, seconds, what = (landing_entry, batch_range), landing.simulate_one, 8, ""
+    else:
+        from softlanding.simulation.kernel import nonaffine
+
+        entries = (nonaffine.landing_entry_nl, nonaffine.batch_range_nl)
+        inner, seconds, what = nonaffine.simulate_one_nl, 12, " for non-affine grounds"
+    if compiled_before(inner) or all(compiled_before(e) for e in entries):
+        return None
+    if not compiled_before(landing.march):  # the parts both simulators share
+        seconds += 8
+    notice = f"softlanding: compiling the simulator{what} (once, about {seconds} s)..."
+    import sys
+
+    print(notice, file=sys.stderr, flush=True)
+    return notice
+
+
 _PACKED: dict[int, tuple[dict, np.ndarray]] = {}
 _POOL: list = []  # [ThreadPoolExecutor, its size]
 RECORDS_FIRST = 64  # segment records allocated first; a longer landing is re-run with all
@@ -140,6 +200,7 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
         segment start times (and the end time), closed-loop matrices, start
         states, control functionals and ground modes.
     """
+    compile_notice("affine")
     out, t, A, z, cu, mode = landing_entry(
         packed_model(mats), _f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u), _f64(x0),
         float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps), RECORDS_FIRST)
@@ -225,13 +286,14 @@ def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
     max_steps : int
         Work budget per landing, as in :func:`run_landing`.
     """
+    compile_notice("affine")
     Ps = np.stack([packed_model(m) for m in mats_list])
     args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(Kf), _f64(umax), _f64(x0),
             _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps))
     _in_chunks(batch_range, args, len(args[4]), out, threads, chunk, (16, 1024))
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _sample(ts, A, z, grid, idx, out):
     for i in range(grid.shape[0]):
         k = idx[i]
@@ -292,6 +354,7 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
     from softlanding.simulation.kernel.nonaffine import landing_entry_nl
 
     G, fp = law
+    compile_notice("non-affine")
     out, t, A, z, cu, mode = landing_entry_nl(
         packed_model(mats), _f64(G), fp, _f64(Kf), float(umax), _f64(sched_t),
         _gain_rows(sched_u), _f64(x0), float(s_lim), float(t_max), int(max_seg), bool(energy),
@@ -318,6 +381,7 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
     from softlanding.simulation.kernel.nonaffine import batch_range_nl
 
     G, fp = law
+    compile_notice("non-affine")
     Ps = np.stack([packed_model(m) for m in mats_list])
     args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(G), fp, _f64(Kf), _f64(umax),
             _f64(x0), _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps),

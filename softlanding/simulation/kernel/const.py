@@ -1,6 +1,8 @@
-"""Codes, output layout and tolerances shared by the kernel's modules."""
+"""Codes, output layout, tolerances and compile options shared by the kernel's modules."""
 
 from __future__ import annotations
+
+from typing import Any
 
 # ground modes
 YIELDING, STATIC, FLIGHT = 0, 1, 2
@@ -28,3 +30,7 @@ THETA = 1.0  # ||A|| h (or omega h in the static mode) bound for the marching gr
 TIE = 1e-12  # relative tolerance on the ground's yield threshold
 FEAS_TOL = 1e-9  # tolerance on the stroke limits (rounding at an exact boundary)
 SMALL = 1e-12  # what counts as zero drift in the rest proof
+
+# compile options of every compiled function: cached on disk, and no C-callable wrapper
+# (nothing takes a kernel function's C address; the wrappers were a tenth of the first compile)
+JIT: dict[str, Any] = {"cache": True, "no_cfunc_wrapper": True}

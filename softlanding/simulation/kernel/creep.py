@@ -32,10 +32,50 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from softlanding.simulation.kernel.const import JIT
+
 MARGIN = 1e-12  # relative margin per unit condition number of the eigenvectors
 
 
-@njit(cache=True)
+@njit(**JIT)
+def _lt(a, b):
+    """NumPy's sort order of floats (NaN last)."""
+    return a < b or (np.isnan(b) and not np.isnan(a))
+
+
+@njit(**JIT)
+def _slowest_first(lam):
+    """``np.argsort(-lam.real)`` of three eigenvalues, as NumPy's and numba's quicksort
+    orders three items (an insertion sort)."""
+    order = np.zeros(3, dtype=np.int64)
+    order[1], order[2] = 1, 2
+    for i in range(1, 3):
+        k = order[i]
+        v = -lam[k].real
+        j = i
+        while j > 0 and _lt(v, -lam[order[j - 1]].real):
+            order[j] = order[j - 1]
+            j -= 1
+        order[j] = k
+    return order[0], order[1], order[2]
+
+
+@njit(**JIT)
+def _norm_inf3(M):
+    """``np.abs(M).sum(axis=1).max()`` of a complex 3 x 3 matrix (same sums, NaN first)."""
+    big = 0.0
+    for i in range(3):
+        r = 0.0
+        for j in range(3):
+            r += abs(M[i, j])
+        if np.isnan(r):
+            return r
+        if i == 0 or r > big:
+            big = r
+    return big
+
+
+@njit(**JIT)
 def creep_setup(A, cu, C, ne, data):
     """Eigen-data of the ``x_b``-free yielding subsystem; returns False if not applicable.
 
@@ -64,18 +104,22 @@ def creep_setup(A, cu, C, ne, data):
         for j in range(3):
             if not np.isfinite(A[1 + i, 1 + j]):
                 return False
-    lam, V = np.linalg.eig(M)
-    order = np.argsort(-lam.real)
+    lam0, V0 = np.linalg.eig(M)
     for i in range(3):
-        if not lam[i].real < 0.0:
+        if not lam0[i].real < 0.0:
             return False
-    lam = lam[order]
-    V = V[:, order]
+    order = _slowest_first(lam0)
+    lam = np.empty(3, dtype=np.complex128)
+    V = np.empty((3, 3), dtype=np.complex128)
+    for k in range(3):
+        lam[k] = lam0[order[k]]
+        for i in range(3):
+            V[i, k] = V0[i, order[k]]
     det = np.linalg.det(V)
     if not abs(det) > 1e-8:
         return False
     Vi = np.linalg.inv(V)
-    kappa = np.abs(V).sum(axis=1).max() * np.abs(Vi).sum(axis=1).max()
+    kappa = _norm_inf3(V) * _norm_inf3(Vi)
     # equilibrium: v_f* = 0 exactly (x_f' = v_f); then v_b*, x_f* from the other two rows
     # M[0,0] vb + M[0,1] xf = -b0 ; M[2,0] vb + M[2,1] xf = -b2
     a00, a01, a20, a21 = A[1, 1], A[1, 2], A[3, 1], A[3, 2]
@@ -96,7 +140,7 @@ def creep_setup(A, cu, C, ne, data):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _coeffs(data, z):
     """Modal coordinates ``V^-1 (y - y*)`` of the current state."""
     w0 = z[1] - data[0, 7].real
@@ -108,7 +152,7 @@ def _coeffs(data, z):
     return alpha
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _terms(data, alpha, c1, c2, c3):
     """Modal amplitudes ``a_i`` of the functional ``c1 v_b + c2 x_f + c3 v_f``."""
     a = np.empty(3, dtype=np.complex128)
@@ -117,12 +161,12 @@ def _terms(data, alpha, c1, c2, c3):
     return a
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _equilibrium_value(data, c):
     return c[1] * data[0, 7].real + c[2] * data[1, 7].real + c[4]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def creep_proof(data, z, C, ne, cu, ext_u, smin_smax):
     """True if, from ``z``, the foot creeps forever (see the module docstring).
 
@@ -178,7 +222,7 @@ def creep_proof(data, z, C, ne, cu, ext_u, smin_smax):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def creep_limit_depth(data):
     """The limit depth ``L = -x_f*`` of a proven creep."""
     return -data[1, 7].real

@@ -20,6 +20,7 @@ from softlanding.simulation.kernel.const import (
     EV_UNSAT,
     EV_YIELD,
     FLIGHT,
+    JIT,
     LINEAR,
     OPEN_LOOP,
     SAT_HIGH,
@@ -32,7 +33,7 @@ from softlanding.simulation.kernel.linalg import dot, hermite_root, prop4_t, ref
 from softlanding.simulation.kernel.model import M_FU, support_Fz
 
 
-@njit(cache=True)
+@njit(**JIT)
 def control_vector(mode, regime, Kf, umax, k_ol):
     """The functional cu with u = cu . z for the current mode and regime (``k_ol``: the
     open-loop schedule's current gain row, a constant force ``u`` being ``[0, 0, 0, 0, u]``)."""
@@ -50,7 +51,7 @@ def control_vector(mode, regime, Kf, umax, k_ol):
     return cu
 
 
-@njit(cache=True)
+@njit(**JIT)
 def classify(mode, z, Kf, umax):
     """Control regime of the feedback at ``z``: linear or saturated high or low."""
     ul = dot(row(Kf, mode), z)
@@ -61,7 +62,7 @@ def classify(mode, z, Kf, umax):
     return LINEAR
 
 
-@njit(cache=True)
+@njit(**JIT)
 def contact_mode(P, z, d, Kf, umax, open_loop, k_ol):
     """Foot at rest at the crater bottom: static, yielding again, or lifting off."""
     if open_loop:
@@ -78,7 +79,7 @@ def contact_mode(P, z, d, Kf, umax, open_loop, k_ol):
     return STATIC
 
 
-@njit(cache=True)
+@njit(**JIT)
 def build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes):
     """Fill ``C`` and ``codes`` with the segment's event functionals; returns their count."""
     ne = 0
@@ -122,7 +123,7 @@ def build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes):
     return ne
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def due_event(C, dC, ne, z):
     """Index of an event already due at the start of a segment, or -1."""
     for k in range(ne):
@@ -132,13 +133,13 @@ def due_event(C, dC, ne, z):
     return -1
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def rows4(C):
     """The four rows of a (4, 5) array as a tuple of 5-tuples."""
     return (row(C, 0), row(C, 1), row(C, 2), row(C, 3))
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def _crossing_time(A, nrm, z, z1, h, c, dc):
     """First time in (0, h] at which ``c . z`` turns positive, or -1 if it does not.
 
@@ -155,14 +156,14 @@ def _crossing_time(A, nrm, z, z1, h, c, dc):
         # a maximum inside the step: does it poke above zero?
         dg0 = dot(dc, z)
         dg1 = dot(dc, z1)
-        se = refine_t(A, nrm, z, scaled(dc, -1.0), 0.0, h, -dg0, -dg1)
+        se = refine_t(A, nrm, z, scaled(dc, -1.0), 0.0, h, -dg0, -dg1, 2e-15, -1.0)
         ge = dot(c, prop4_t(A, nrm, z, se))
         if ge > 0.0:
-            return refine_t(A, nrm, z, c, 0.0, se, g0, ge)
+            return refine_t(A, nrm, z, c, 0.0, se, g0, ge, 2e-15, -1.0)
     return -1.0
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def earliest_event(A, nrm, z, z1, h, C, dC, ne):
     """Earliest event in (0, h] of a marching step: ``(time, index)``; index -1 if none.
 

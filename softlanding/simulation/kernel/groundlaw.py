@@ -28,6 +28,8 @@ from numba import carray, cfunc, njit, types
 from numba.core import cgutils  # noqa: F401  (imported for the intrinsic's context)
 from numba.extending import intrinsic
 
+from softlanding.simulation.kernel.const import JIT
+
 # parameter vector layout
 G_KIND, G_CD, G_PIA, G_R, G_KAPPA, G_DC, G_MF, G_MB, G_LOCK, G_UMAX = range(10)
 N_G = 10
@@ -89,7 +91,7 @@ def pack_ground(c_d: float, pi_a: float, radius: float, kappa: float, r_m: float
     return G
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def law(G, fp, buf, d, v):
     """``(f, m_a, m_a', hold, drag)`` at depth ``d``, foot velocity ``v``."""
     if G[G_KIND] == LAW_CUSTOM:
@@ -107,7 +109,7 @@ def law(G, fp, buf, d, v):
     return d + (G[G_CD] + dma) * v * v, ma, dma, d, drag
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def hold_force(G, fp, buf, d):
     """The crater's static hold ``f(d, 0)``: the largest support force it takes unyielding."""
     if G[G_KIND] == LAW_CUSTOM:
@@ -116,7 +118,7 @@ def hold_force(G, fp, buf, d):
     return d
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def added_mass_at(G, fp, buf, d):
     """``m_a(d)``."""
     if G[G_KIND] == LAW_CUSTOM:
@@ -125,14 +127,14 @@ def added_mass_at(G, fp, buf, d):
     return law(G, fp, buf, d, 0.0)[1]
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def lock_force(G, f, ma):
     """The rigid lock's force ``m_b (f + m_a) / (1 + m_a)`` (``v_b' = v_f'``), saturated."""
     u = G[G_MB] * (f + ma) / (1.0 + ma)
     return min(G[G_UMAX], max(-G[G_UMAX], u))
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def control_at(G, fp, buf, cu, Y):
     """The actuator force at ``Y`` in a yielding segment (the lock's, or ``cu . z``)."""
     if G[G_LOCK] == 1.0:
@@ -141,7 +143,7 @@ def control_at(G, fp, buf, cu, Y):
     return cu[0] * Y[0] + cu[1] * Y[1] + cu[2] * Y[2] + cu[3] * Y[3] + cu[4] * Y[4]
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def yield_rhs(A, cu, G, fp, buf, Y, K, s):
     """The yielding vector field at ``Y`` into row ``s`` of ``K`` (``A``: the closed loop as a
     flat 25-tuple, its body rows used; ``cu``: the control functional, a 5-tuple)."""

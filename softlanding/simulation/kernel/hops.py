@@ -43,9 +43,9 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import EV_LAND, EV_LIFT, FLIGHT, THETA, TIE
-from softlanding.simulation.kernel.linalg import closed_loop, expm
-from softlanding.simulation.kernel.model import M_FU, M_FZ, energy_rel, ground_work, mode_A, mode_B
+from softlanding.simulation.kernel.const import EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
+from softlanding.simulation.kernel.linalg import expm, row
+from softlanding.simulation.kernel.model import M_FU, M_FZ, closed_loop, energy_rel, ground_work
 from softlanding.simulation.kernel.rest import future_range
 
 RHO = 0.05
@@ -61,7 +61,7 @@ ENERGY_TOL = 1e-9
 N_H = 12
 
 
-@njit(cache=True)
+@njit(**JIT)
 def hop_state():
     """Fresh hop-tracking array (see the ``H_*`` slots)."""
     hk = np.full(N_H, np.nan)
@@ -69,7 +69,7 @@ def hop_state():
     return hk
 
 
-@njit(cache=True)
+@njit(**JIT)
 def hop_eligible(Kf, umax, open_loop):
     """True if the leg is a conservative spring ``u = k (l0 - s)`` in every ground mode."""
     if open_loop or umax < np.inf:
@@ -82,7 +82,7 @@ def hop_eligible(Kf, umax, open_loop):
     return k[1] == 0.0 and k[3] == 0.0 and k[2] == -k[0] and k[0] < 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def hop_event(code, z, t, hk):
     """Note a lift-off (time, stroke) or a landing (flight time) for :func:`hops_settled`."""
     if code == EV_LIFT:
@@ -91,14 +91,14 @@ def hop_event(code, z, t, hk):
         hk[H_TPREV], hk[H_T] = hk[H_T], t - hk[H_TLIFT]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def total_energy(P, z, z0, cu, d):
     """``E_mech + V_leg + W_g``: mechanical energy, the leg's potential, ground work."""
     s = z[0] - z[2]
     return energy_rel(P, z, z0) - (0.5 * cu[0] * s * s + cu[4] * s) + ground_work(P, d)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def threshold_energy(P, A, cu, z0, depth):
     """``E_tot`` of the body at rest at the lift-off threshold's turning point, foot at ``depth``.
 
@@ -123,7 +123,7 @@ def threshold_energy(P, A, cu, z0, depth):
     return total_energy(P, z, z0, cu, depth)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def limit_depth(P, A, cu, z0, d, energy):
     """Root ``D >= d`` of ``E_thr(D) = energy`` (a quadratic in ``D``); NaN if none."""
     h = max(1.0, d)
@@ -142,19 +142,22 @@ def limit_depth(P, A, cu, z0, d, energy):
     return d + x
 
 
-@njit(cache=True)
+@njit(**JIT)
 def first_symmetric_hop(P, cu, s_lift, T):
     """Lower bound of the first root of ``Delta(tau)`` on ``(0, T/2]`` (the half-flight time of
     the shortest symmetric hop), ``inf`` if ``Delta`` keeps its sign there, NaN if the flight
     is not translation-invariant or too long to scan. ``Delta`` is scanned with the exact
     step map, eight points per unit of ``||A|| tau``.
     """
-    Af = closed_loop(mode_A(P, FLIGHT), mode_B(P, FLIGHT), cu)
+    Af = closed_loop(P, FLIGHT, cu)
     nrm = 0.0
     for i in range(4):
         if Af[i, 0] + Af[i, 2] != 0.0:
             return np.nan
-        nrm = max(nrm, np.abs(Af[i]).sum())
+        r = 0.0
+        for j in range(5):
+            r += abs(Af[i, j])
+        nrm = max(nrm, r)
     half = 0.5 * T
     n = max(8, int(math.ceil(8.0 * half * nrm / THETA)))
     if n > 100_000:
@@ -175,7 +178,7 @@ def first_symmetric_hop(P, cu, s_lift, T):
     return np.inf
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _toward_threshold(P, cu, hk):
     """True if no symmetric hop is shorter than the last flight (the scan of ``(0, T/2]``
     is kept while the flight time does not grow beyond the one scanned)."""
@@ -186,7 +189,7 @@ def _toward_threshold(P, cu, hk):
     return hk[H_SYM] > 0.5 * T
 
 
-@njit(cache=True)
+@njit(**JIT)
 def hops_settled(P, A, z, z0, d, C, cu, hk):
     """At a stance entry of an eligible landing: True once the hops are settled.
 
@@ -199,7 +202,7 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     """
     if hk[H_EREF] == np.inf or hk[H_T] != hk[H_T]:
         return False  # the balance failed once, or no flight yet
-    lo, hi = future_range(A, z, C[0])
+    lo, hi = future_range(A, z, row(C, 0))
     if hi > 0.0:
         hk[H_N], hk[H_EPS] = 0.0, np.nan
         return False  # the stance itself may yield

@@ -32,6 +32,7 @@ from softlanding.simulation.kernel.const import (
     FLIGHT,
     HOPS_TO_LIMIT,
     HORIZON,
+    JIT,
     LINEAR,
     N_OUT,
     NEVER_RESTS_CREEP,
@@ -83,9 +84,7 @@ from softlanding.simulation.kernel.hops import (
     hops_settled,
 )
 from softlanding.simulation.kernel.linalg import (
-    closed_loop,
     covector_t,
-    covector_times,
     dot,
     expm,
     flat25,
@@ -99,7 +98,7 @@ from softlanding.simulation.kernel.linalg import (
     row,
     row5,
 )
-from softlanding.simulation.kernel.model import energy_rel, ground_work, mode_A, mode_B
+from softlanding.simulation.kernel.model import closed_loop, energy_rel, ground_work
 from softlanding.simulation.kernel.rest import future_range
 
 # ext: extrema and actuator work
@@ -108,7 +107,7 @@ X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT, X_WORK = range(6)
 B_TSTOP, B_T, B_ET, B_ACT = range(4)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     """Control functional and closed-loop matrix of a segment; in flight, shift heights.
 
@@ -119,7 +118,7 @@ def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     Returns ``(cu, A, shift)``.
     """
     cu = control_vector(mode, regime, Kf, umax, k_ol)
-    A = closed_loop(mode_A(P, mode), mode_B(P, mode), cu)
+    A = closed_loop(P, mode, cu)
     if mode == FLIGHT and shift == 0.0 and d > 0.0:
         invariant = True
         for i in range(4):
@@ -132,7 +131,7 @@ def begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift):
     return cu, A, shift
 
 
-@njit(cache=True)
+@njit(**JIT)
 def record_segment(rec, n, t, mode, z, cu, A, shift):
     """Store segment ``n`` (start time, mode, start state, control, matrix) if room."""
     rec_t, rec_A, rec_z, rec_cu, rec_mode = rec
@@ -149,7 +148,7 @@ def record_segment(rec, n, t, mode, z, cu, A, shift):
     rec_z[n, 2] -= shift
 
 
-@njit(cache=True)
+@njit(**JIT)
 def rest_proof(A, z, C, ne, cs, cu, ext):
     """Static mode, no schedule switch ahead: True if no event can ever fire.
 
@@ -159,14 +158,14 @@ def rest_proof(A, z, C, ne, cs, cu, ext):
         lo, hi = future_range(A, z, row(C, k))
         if hi > 0.0:
             return False
-    lo, hi = future_range(A, z, cs)
+    lo, hi = future_range(A, z, row5(cs))
     ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], lo), max(ext[X_SMAX], hi)
-    lo, hi = future_range(A, z, cu)
+    lo, hi = future_range(A, z, row5(cu))
     ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], lo), max(ext[X_UMAX], hi)
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def step_size(A, mode):
     """Marching step: ``||A|| h <= THETA`` (in the static mode ``omega h <= THETA``).
 
@@ -179,7 +178,7 @@ def step_size(A, mode):
     return THETA / max(norm_inf4(A), 1e-3)
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def _fold_step(A, nrm, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
     """Fold the stroke and force extrema over (0, h] into ``ext`` (tuples, see march)."""
     se_v = interior_extremum_t(A, nrm, z, z1, h, cs, dcs, ddcs)
@@ -194,7 +193,7 @@ def _fold_step(A, nrm, z, z1, h, cs, dcs, ddcs, cu, dcu, ddcu, ext):
     ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], uv), max(ext[X_UMAX], uv)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def step_map(A, mode, key, Qe, energy, phic, gc, hc):
     """Marching step ``h``, ``exp(A h)`` and the Gramian of ``Qe`` over ``h`` (``Qe`` itself
     if no energy), from the cache slot ``key`` if filled (a closed loop is fixed by
@@ -206,12 +205,14 @@ def step_map(A, mode, key, Qe, energy, phic, gc, hc):
     G = gram(A, Qe, hstep) if energy else Qe
     if key >= 0:
         hc[key] = hstep
-        phic[key] = Phi
-        gc[key] = G
+        for i in range(5):
+            for j in range(5):
+                phic[key, i, j] = Phi[i, j]
+                gc[key, i, j] = G[i, j]
     return hstep, Phi, G
 
 
-@njit(cache=True)
+@njit(**JIT)
 def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext, creep, ws):
     """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
 
@@ -270,7 +271,7 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
             return t, hit, time_event, stop
 
 
-@njit(cache=True)
+@njit(**JIT)
 def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open_loop, k_ol,
                 ext, bk):
     """The transition at an event; updates ``z`` and ``bk`` in place.
@@ -308,7 +309,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
     return mode, regime, d, shift, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop, ext, bk):
     """Bookkeeping of a ground-mode change: count a new intrusion step, note the foot's
     (latest) rest, re-classify the feedback's regime. Returns ``(steps, regime)``."""
@@ -324,7 +325,7 @@ def mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop, ex
     return steps, regime
 
 
-@njit(cache=True)
+@njit(**JIT)
 def initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk, E0):
     """Ground mode at impact (from the foot's velocity); returns ``(mode, regime, steps)``."""
     if z[3] < 0.0:
@@ -344,7 +345,7 @@ def initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk, E0):
     return mode, regime, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def energy_form(cu, energy):
     """Symmetric form of the actuator power ``u (v_b - v_f)`` (zero if not wanted)."""
     Qe = np.zeros((5, 5))
@@ -357,7 +358,7 @@ def energy_form(cu, energy):
     return Qe
 
 
-@njit(cache=True)
+@njit(**JIT)
 def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     """Fill the output row (layout ``O_*``)."""
     # the foot may still be creeping down if rest is unproven; a proven creep's d is its
@@ -386,7 +387,7 @@ def write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk):
     out[O_FOOT_REST] = 1.0 if foot_rests else 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def final_status(status, d, ext, cdata, cres):
     """A proven creep's limits; a proven rest of the foot under a body that does not rest
     (stroke without bound) is not a rest. Returns ``(status, d)``."""
@@ -400,7 +401,7 @@ def final_status(status, d, ext, cdata, cres):
     return status, d
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fold_creep(ext, cres):
     """Fold a proven creep's future stroke range and force limit into ``ext``."""
     if cres[0] == cres[0]:
@@ -411,7 +412,7 @@ def fold_creep(ext, cres):
     ext[X_UMAX] = max(ext[X_UMAX], cres[2])
 
 
-@njit(cache=True)
+@njit(**JIT)
 def in_range(x0, s_lim):
     """False if an initial state component or the stroke is not finite or exceeds
     ``SCALE_MAX``: in double precision the events of such a landing (foot speeds of
@@ -425,7 +426,7 @@ def in_range(x0, s_lim):
     return True
 
 
-@njit(cache=True)
+@njit(**JIT)
 def reject(out):
     """Output row of a landing not simulated (``OUT_OF_RANGE``): NaN but the counts."""
     out[:] = np.nan
@@ -433,7 +434,7 @@ def reject(out):
     out[O_STEPS] = out[O_NSEG] = out[O_FEAS] = out[O_FOOT_REST] = 0.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def workspace():
     """Per-landing work arrays: the stroke functional, event functionals and their
     derivatives, event codes, a creep proof's eigen-data and results, and the cache of
@@ -445,26 +446,42 @@ def workspace():
             np.empty((12, 5, 5)), np.full(12, np.nan))
 
 
-@njit(cache=True)
+@njit(**JIT)
 def derivative_functionals(C, A, ne, dC):
     """``dC[k] = C[k] A``: d/dt of each event function."""
     for k in range(ne):
-        dk = covector_times(row(C, k), A)
+        dk = covector_t(row(C, k), flat25(A))
         for j in range(5):
             dC[k, j] = dk[j]
 
 
-@njit(cache=True)
-def schedule_switch(P, z, d, mode, steps, k_ol):
-    """An open-loop schedule switch: a pinned foot may yield or lift off under the new force."""
+@njit(**JIT)
+def schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol):
+    """An open-loop schedule switch (``open_loop`` is then true): a pinned foot may yield or
+    lift off under the new force."""
     if mode == STATIC:
-        mode = contact_mode(P, z, d, np.zeros((3, 5)), np.inf, True, k_ol)
+        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
         if mode == YIELDING:
             steps += 1
     return mode, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
+def fresh_landing(x0, sched_K):
+    """The start of a landing: the augmented state ``z`` and a copy ``z0``, whether the
+    control is an open-loop schedule and its first gain row, the extrema ``ext`` and the
+    bookkeeping ``bk``."""
+    z = np.empty(5)
+    for i in range(4):
+        z[i] = x0[i]
+    z[4] = 1.0
+    open_loop = sched_K.shape[0] > 0
+    k_ol = sched_K[0] if open_loop else np.zeros(5)
+    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
+    return z, z.copy(), open_loop, k_ol, ext, np.full(4, np.nan)
+
+
+@njit(**JIT)
 def simulate_one(P, pol, x0, lim, out, rec):
     """Simulate one landing; fill ``out`` (layout ``O_*``) and the segment records.
 
@@ -490,16 +507,9 @@ def simulate_one(P, pol, x0, lim, out, rec):
     s_lim, t_max, max_seg, energy, max_steps = lim
     if not in_range(x0, s_lim):
         return reject(out)
-    open_loop = sched_K.shape[0] > 0
-    z = np.empty(5)
-    z[:4] = x0[:4]
-    z[4] = 1.0
-    z0 = z.copy()
+    z, z0, open_loop, k_ol, ext, bk = fresh_landing(x0, sched_K)
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
-    k_ol = sched_K[0] if open_loop else np.zeros(5)
-    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
-    bk = np.full(4, np.nan)
     mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk,
                                        energy_rel(P, z, z0))
     ws = workspace()
@@ -511,8 +521,8 @@ def simulate_one(P, pol, x0, lim, out, rec):
             status = STEP_BUDGET
             break
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift)
-        record_segment(rec, nseg, t, mode, z, cu, A, shift)
         nseg += 1
+        record_segment(rec, nseg - 1, t, mode, z, cu, A, shift)
         u_now = dot(cu, z)
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], u_now), max(ext[X_UMAX], u_now)
         t_next = sched_t[sidx] if (open_loop and sidx < sched_t.shape[0]) else np.inf
@@ -538,7 +548,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
             if time_event:
                 sidx += 1
                 k_ol = sched_K[sidx]
-                mode, steps = schedule_switch(P, z, d, mode, steps, k_ol)
+                mode, steps = schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol)
                 continue
         if hops:
             hop_event(codes[hit], z, t, hk)
@@ -553,7 +563,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy, max_steps,
                   nrec):
     """One landing with its segment records (``nrec`` rows first; re-run with as many
@@ -576,7 +586,7 @@ def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, ener
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps, out, i0,
                 i1):
     """Feedback-policy landings ``i0 <= i < i1``; row i uses the packed model ``Ps[ridx[i]]``.

@@ -12,10 +12,10 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import MAX_SUBSTEPS
+from softlanding.simulation.kernel.const import JIT, MAX_SUBSTEPS
 
 
-@njit(cache=True)
+@njit(**JIT)
 def norm_inf4(A):
     m = 0.0
     for i in range(4):
@@ -26,7 +26,7 @@ def norm_inf4(A):
     return m
 
 
-@njit(cache=True)
+@njit(**JIT)
 def expm(M, h):
     """exp(M h) by scaling and squaring of a Taylor series (M small and square)."""
     n = M.shape[0]
@@ -38,14 +38,18 @@ def expm(M, h):
         nrm = max(nrm, r)
     nrm *= abs(h)
     if not nrm < 1e300:
-        return np.full((n, n), np.nan)  # no finite step map: the march will run out of budget
+        out = np.empty((n, n))
+        out[:, :] = np.nan
+        return out  # no finite step map: the march will run out of budget
     sq = 0
     while nrm > 0.5:
         nrm *= 0.5
         sq += 1
     sc = h / 2.0**sq
-    out = np.eye(n)
-    term = np.eye(n)
+    out = np.zeros((n, n))
+    term = np.zeros((n, n))
+    for i in range(n):
+        out[i, i] = term[i, i] = 1.0
     tmp = np.empty((n, n))
     for k in range(1, 30):
         for i in range(n):
@@ -71,11 +75,11 @@ def expm(M, h):
                 for m in range(n):
                     acc += out[i, m] * out[m, j]
                 tmp[i, j] = acc
-        out[:, :] = tmp
+        out, tmp = tmp, out
     return out
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def dot(c, z):
     """``c . z`` for 5-vectors (arrays or tuples), summed in index order."""
     acc = 0.0
@@ -87,34 +91,19 @@ def dot(c, z):
     return acc
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def row(C, k):
     """Row ``k`` of a (n, 5) array as a tuple (no array view, no reference counting)."""
     return (C[k, 0], C[k, 1], C[k, 2], C[k, 3], C[k, 4])
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def scaled(c, s):
     """The functional ``s c`` as a tuple."""
     return (s * c[0], s * c[1], s * c[2], s * c[3], s * c[4])
 
 
-@njit(cache=True, inline="always")
-def _col_dot(c, A, j):
-    acc = 0.0
-    for i in range(5):
-        acc += c[i] * A[i, j]
-    return acc
-
-
-@njit(cache=True, inline="always")
-def covector_times(c, A):
-    """The row vector ``c A`` as a tuple: the functional giving d/dt (c . z) when z' = A z."""
-    return (_col_dot(c, A, 0), _col_dot(c, A, 1), _col_dot(c, A, 2), _col_dot(c, A, 3),
-            _col_dot(c, A, 4))
-
-
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def hermite_root(g0, d0, g1, d1, h):
     """Root in (0, h) of the cubic Hermite interpolant of g (g0 <= 0 < g1): a
     starting guess for Newton on the exact solution (error O(h^4))."""
@@ -138,17 +127,7 @@ def hermite_root(g0, d0, g1, d1, h):
     return s
 
 
-@njit(cache=True)
-def closed_loop(Am, Bm, cu):
-    """A + B cu^T: the affine closed loop for u = cu . z."""
-    A = Am.copy()
-    for i in range(5):
-        for j in range(5):
-            A[i, j] += Bm[i] * cu[j]
-    return A
-
-
-@njit(cache=True)
+@njit(**JIT)
 def gram(A, Q, h):
     """int_0^h exp(A^T t) Q exp(A t) dt by Van Loan's block exponential."""
     C = np.zeros((10, 10))
@@ -168,7 +147,7 @@ def gram(A, Q, h):
     return G
 
 
-@njit(cache=True)
+@njit(**JIT)
 def hull(lo, hi, v):
     return min(lo, v), max(hi, v)
 
@@ -180,7 +159,7 @@ def hull(lo, hi, v):
 # a third of the time when they ran on arrays).
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def flat25(A):
     """A 5x5 array as a flat row-major 25-tuple."""
     return (A[0, 0], A[0, 1], A[0, 2], A[0, 3], A[0, 4], A[1, 0], A[1, 1], A[1, 2], A[1, 3],
@@ -188,13 +167,13 @@ def flat25(A):
             A[3, 3], A[3, 4], A[4, 0], A[4, 1], A[4, 2], A[4, 3], A[4, 4])
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def row5(v):
     """A 5-vector (array or tuple) as a 5-tuple."""
     return (v[0], v[1], v[2], v[3], v[4])
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def quad_t(G, z):
     """``z . G z`` for a flat 25-tuple ``G``."""
     acc = 0.0
@@ -204,7 +183,7 @@ def quad_t(G, z):
     return acc
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def norm_rows4(A):
     """Largest absolute row sum (affine column included) of the first four rows of a flat
     25-tuple: sets the substeps of :func:`prop4_t`."""
@@ -217,43 +196,14 @@ def norm_rows4(A):
     return nrm
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def matvec_t(M, z):
-    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple."""
-    y0 = 0.0
-    y0 += M[0] * z[0]
-    y0 += M[1] * z[1]
-    y0 += M[2] * z[2]
-    y0 += M[3] * z[3]
-    y0 += M[4] * z[4]
-    y1 = 0.0
-    y1 += M[5] * z[0]
-    y1 += M[6] * z[1]
-    y1 += M[7] * z[2]
-    y1 += M[8] * z[3]
-    y1 += M[9] * z[4]
-    y2 = 0.0
-    y2 += M[10] * z[0]
-    y2 += M[11] * z[1]
-    y2 += M[12] * z[2]
-    y2 += M[13] * z[3]
-    y2 += M[14] * z[4]
-    y3 = 0.0
-    y3 += M[15] * z[0]
-    y3 += M[16] * z[1]
-    y3 += M[17] * z[2]
-    y3 += M[18] * z[3]
-    y3 += M[19] * z[4]
-    y4 = 0.0
-    y4 += M[20] * z[0]
-    y4 += M[21] * z[1]
-    y4 += M[22] * z[2]
-    y4 += M[23] * z[3]
-    y4 += M[24] * z[4]
-    return (y0, y1, y2, y3, y4)
+    """``M z`` for a flat 25-tuple ``M``, as a 5-tuple (each row summed as :func:`dot`)."""
+    return (dot(M[0:5], z), dot(M[5:10], z), dot(M[10:15], z), dot(M[15:20], z),
+            dot(M[20:25], z))
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def prop4_t(A, nrm, z, h):
     """the Taylor series on a flat 25-tuple ``A`` with its :func:`norm_rows4` ``nrm``."""
     if not nrm * abs(h) <= MAX_SUBSTEPS:
@@ -287,9 +237,10 @@ def prop4_t(A, nrm, z, h):
     return (x0, x1, x2, x3, x4)
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def covector_t(c, A):
-    """``c A`` for a flat 25-tuple ``A`` (the sums of :func:`covector_times`)."""
+    """The row vector ``c A`` for a flat 25-tuple ``A`` (:func:`flat25`), as a tuple: the
+    functional giving d/dt (c . z) when z' = A z."""
     d0 = 0.0
     d1 = 0.0
     d2 = 0.0
@@ -308,7 +259,7 @@ def covector_t(c, A):
     return (d0, d1, d2, d3, d4)
 
 
-@njit(cache=True)
+@njit(**JIT, forceinline=True)
 def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
     """First time s in (a, b] with g(s) = c . exp(A s) z > 0, given g(a) <= 0 < g(b).
 
@@ -346,7 +297,7 @@ def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
     return b
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, forceinline=True)
 def interior_extremum_t(A, nrm, z, z1, h, c, dc, ddc):
     """Value of q = c . z at its turning point inside (0, h), or NaN if none.
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from softlanding.simulation.kernel.const import JIT
+
 # layout of the packed model
 M_A = 0  # (3, 5, 5) open-loop mode matrices: yielding, static, flight
 M_B = 75  # (3, 5) control columns
@@ -41,25 +43,24 @@ def pack_model(mats: dict) -> np.ndarray:
     return P
 
 
-@njit(cache=True)
-def mode_A(P, mode):
-    """View of the open-loop matrix of a ground mode."""
-    return P[M_A + 25 * mode:M_A + 25 * mode + 25].reshape((5, 5))
+@njit(**JIT)
+def closed_loop(P, mode, cu):
+    """``A + B cu^T`` of a ground mode: the affine closed loop for ``u = cu . z``."""
+    A = np.empty((5, 5))
+    a, b = M_A + 25 * mode, M_B + 5 * mode
+    for i in range(5):
+        for j in range(5):
+            A[i, j] = P[a + 5 * i + j] + P[b + i] * cu[j]
+    return A
 
 
-@njit(cache=True)
-def mode_B(P, mode):
-    """View of the control column of a ground mode."""
-    return P[M_B + 5 * mode:M_B + 5 * mode + 5]
-
-
-@njit(cache=True)
+@njit(**JIT)
 def support_Fz(P):
     """View of ``Fz`` (support force ``Fz . z + Fu u`` of the static mode)."""
     return P[M_FZ:M_FU]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def energy_rel(P, z, z0):
     """Mechanical energy at ``z`` relative to the potential energy at ``z0``.
 
@@ -80,7 +81,7 @@ def energy_rel(P, z, z0):
     return acc
 
 
-@njit(cache=True)
+@njit(**JIT)
 def ground_work(P, d):
     """Work done on the ground by a foot that dug to depth ``d`` (from the surface)."""
     return P[M_WG] * d * d

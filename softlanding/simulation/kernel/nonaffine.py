@@ -32,6 +32,7 @@ from softlanding.simulation.kernel.const import (
     EV_STOP,
     EV_YIELD,
     FLIGHT,
+    JIT,
     LINEAR,
     N_OUT,
     O_EGND,
@@ -65,6 +66,7 @@ from softlanding.simulation.kernel.landing import (
     derivative_functionals,
     energy_form,
     final_status,
+    fresh_landing,
     in_range,
     initial_mode,
     march,
@@ -92,7 +94,7 @@ O_EDRAG, O_EGRAIN = N_OUT, N_OUT + 1
 N_OUT_NL = N_OUT + 2
 
 
-@njit(cache=True)
+@njit(**JIT)
 def cone_event(G, z, C, codes, ne):
     """Add the cone-completion event ``-x_f - d_c`` to a yielding segment still above it."""
     dc = G[G_DC]
@@ -105,7 +107,7 @@ def cone_event(G, z, C, codes, ne):
     return ne
 
 
-@njit(cache=True)
+@njit(**JIT)
 def collide(G, fp, buf, z, d, acc):
     """A foot landing at ``z[3] < 0`` on the cone's grains at rest: inelastic collision."""
     ma = added_mass_at(G, fp, buf, d)
@@ -117,7 +119,7 @@ def collide(G, fp, buf, z, d, acc):
         z[3] = vp
 
 
-@njit(cache=True)
+@njit(**JIT)
 def apply_event_nl(P, law_args, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax,
                    open_loop, k_ol, ext, bk, acc):
     """The transition at an event (as :func:`.landing.apply_event`, with the law's hold and
@@ -155,7 +157,7 @@ def apply_event_nl(P, law_args, code, z, z0, t, d, shift, mode, regime, steps, K
     return mode, regime, d, shift, steps
 
 
-@njit(cache=True)
+@njit(**JIT)
 def initial_grains(G, fp, buf, z, acc):
     """Grains already moving with a foot that starts below the surface: their kinetic energy
     is an input to the ledger (counted against the grain loss)."""
@@ -163,7 +165,7 @@ def initial_grains(G, fp, buf, z, acc):
         acc[A_GRAIN] -= 0.5 * added_mass_at(G, fp, buf, -z[2]) * z[3] * z[3]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _segment_events(P, G, mode, regime, cu, d, hold, shift, Kf, umax, open_loop, z, C, codes):
     """Event functionals of a segment (the hold in the static mode, the cone if yielding)."""
     ne = build_events(P, mode, regime, cu, hold if mode == STATIC else d, shift, Kf, umax,
@@ -173,12 +175,13 @@ def _segment_events(P, G, mode, regime, cu, d, hold, shift, Kf, umax, open_loop,
     return ne
 
 
-@njit(cache=True)
+@njit(**JIT)
 def due_event_yield(A, cu, G, fp, buf, C, ne, z, K):
     """Index of an event already due at the start of a yielding segment (slopes from the
     non-affine vector field), or -1."""
     y = np.zeros(NY)
-    y[:5] = z[:5]
+    for i in range(5):
+        y[i] = z[i]
     yield_rhs(flat25(A), row5(cu), G, fp, buf, y, K, 0)
     for k in range(ne):
         g0 = dot(row(C, k), z)
@@ -187,7 +190,7 @@ def due_event_yield(A, cu, G, fp, buf, C, ne, z, K):
     return -1
 
 
-@njit(cache=True)
+@njit(**JIT)
 def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
     """Simulate one landing on a non-affine ground; fill ``out`` (:data:`N_OUT_NL` columns).
 
@@ -201,17 +204,10 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
         out[O_EDRAG] = out[O_EGRAIN] = np.nan
         return
     G, fp, buf = law_args
-    open_loop = sched_K.shape[0] > 0
-    z = np.empty(5)
-    z[:4] = x0[:4]
-    z[4] = 1.0
-    z0 = z.copy()
+    z, z0, open_loop, k_ol, ext, bk = fresh_landing(x0, sched_K)
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
-    k_ol = sched_K[0] if open_loop else np.zeros(5)
-    ext = np.array([z[0] - z[2], z[0] - z[2], np.inf, -np.inf, 0.0, 0.0])
     acc = np.zeros(3)
-    bk = np.full(4, np.nan)
     initial_grains(G, fp, buf, z, acc)
     mode, regime, steps = initial_mode(P, z, hold_force(G, fp, buf, d), Kf, umax, open_loop,
                                        k_ol, bk, energy_rel(P, z, z0))
@@ -226,8 +222,8 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
         if locked:
             regime = LINEAR  # the lock's own force, saturated in the vector field
         cu, A, shift = begin_segment(P, mode, regime, Kf, umax, k_ol, z, d, shift)
-        record_segment(rec, nseg, t, mode, z, cu, A, shift)
         nseg += 1
+        record_segment(rec, nseg - 1, t, mode, z, cu, A, shift)
         u_now = control_at(G, fp, buf, cu, z) if mode == YIELDING else dot(cu, z)
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], u_now), max(ext[X_UMAX], u_now)
         t_next = sched_t[sidx] if (open_loop and sidx < sched_t.shape[0]) else np.inf
@@ -258,7 +254,8 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
             if time_event:
                 sidx += 1
                 k_ol = sched_K[sidx]
-                mode, steps = schedule_switch(P, z, hold, mode, steps, k_ol)
+                mode, steps = schedule_switch(P, z, hold, mode, steps, Kf, umax, open_loop,
+                                              k_ol)
                 continue
         mode, regime, d, shift, steps = apply_event_nl(P, law_args, codes[hit], z, z0, t, d,
                                                        shift, mode, regime, steps, Kf, umax,
@@ -270,7 +267,7 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
     write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk, acc)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk, acc):
     """:func:`.landing.write_output`, with the integrated plastic work and the drag and grain
     losses (NaN unless the foot's rest is proven)."""
@@ -281,7 +278,7 @@ def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, b
     out[O_EGRAIN] = acc[A_GRAIN] if foot_rests else np.nan
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy,
                      max_steps, rtol, nrec):
     """One non-affine landing with its segment records (as :func:`.landing.landing_entry`).
@@ -303,7 +300,7 @@ def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
-@njit(cache=True, nogil=True)
+@njit(**JIT, nogil=True)
 def batch_range_nl(Ps, ridx, G, fp, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps,
                    rtol, out, i0, i1):
     """Feedback landings ``i0 <= i < i1`` on one non-affine ground (as
@@ -319,7 +316,7 @@ def batch_range_nl(Ps, ridx, G, fp, Kfs, umaxs, x0s, s_lims, t_max, max_seg, ene
                         rec)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def sample_nl(P, G, fp, rtol, ts, A, z, cu, mode, grid, idx, out, uout):
     """States ``out`` (n, 5) and forces ``uout`` at the sorted times ``grid`` (segment
     ``idx[i]``): exact propagation in the affine modes, DOP853 in the yielding ones."""

@@ -16,11 +16,11 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import SMALL
+from softlanding.simulation.kernel.const import JIT, SMALL
 from softlanding.simulation.kernel.linalg import hull
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _range_underdamped(w0, w1, beta, disc):
     """Range over t >= 0 of a damped oscillation ``w`` with ``w(0) = w0``, ``w'(0) = w1``."""
     lo, hi = w0, w0
@@ -38,7 +38,7 @@ def _range_underdamped(w0, w1, beta, disc):
     return lo, hi
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _range_overdamped(w0, w1, beta, disc):
     """Range over t >= 0 of an over-damped (or critically damped) decay to 0."""
     lo, hi = w0, w0
@@ -65,7 +65,7 @@ def _range_overdamped(w0, w1, beta, disc):
     return lo, hi
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _range_stiff(alpha, beta, gamma, xb, p1, p0, q0, q1, acc, vb):
     """Range when the body has a spring (``alpha != 0``)."""
     inf = np.inf
@@ -84,7 +84,7 @@ def _range_stiff(alpha, beta, gamma, xb, p1, p0, q0, q1, acc, vb):
     return qeq + lo, qeq + hi
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _range_damper(beta, gamma, xb, vb, p1, p2, p0, q0):
     """Range with damping but no spring: drift toward a terminal velocity."""
     inf = np.inf
@@ -108,7 +108,7 @@ def _range_damper(beta, gamma, xb, vb, p1, p2, p0, q0):
     return min(q0, qinf), max(q0, qinf)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _range_parabola(gamma, vb, p1, p2, q0):
     """Range under constant acceleration: ``q = q0 + a1 t + a2 t^2``."""
     inf = np.inf
@@ -127,7 +127,7 @@ def _range_parabola(gamma, vb, p1, p2, q0):
     return q0, q0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def future_range(A, z, c):
     """Exact range ``(lo, hi)`` of ``q(t) = c . z(t)`` over ``t >= 0`` in the static mode.
 

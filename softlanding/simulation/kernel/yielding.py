@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import HORIZON, STEP_BUDGET
+from softlanding.simulation.kernel.const import HORIZON, JIT, STEP_BUDGET
 from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
@@ -50,7 +50,7 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 ERR_EXP = -1.0 / 8.0  # DOP853's error estimator is of order 7
 
 
-@njit(cache=True)
+@njit(**JIT)
 def workspace_nl(rtol):
     """Work arrays of the yielding march: stages ``K`` and ``K2`` (trial steps), states, the
     law's output buffer, and cells ``[last step, rtol]``."""
@@ -58,7 +58,7 @@ def workspace_nl(rtol):
             np.zeros(NY), np.zeros(5), np.array([np.nan, rtol]))
 
 
-@njit(cache=True)
+@njit(**JIT)
 def dop_step(A, cu, G, fp, buf, y, h, K, Yt, ynew):
     """One DOP853 step of size ``h`` from ``y`` (``K[0]`` must hold ``f(y)``); ``ynew`` gets the
     result and ``K[12]`` its slope ``f(ynew)``."""
@@ -79,7 +79,7 @@ def dop_step(A, cu, G, fp, buf, y, h, K, Yt, ynew):
     yield_rhs(A, cu, G, fp, buf, ynew, K, 12)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def error_norm(K, y, ynew, h, rtol):
     """Hairer's DOP853 error norm of the step just taken (``K`` its 13 slopes)."""
     e5 = 0.0
@@ -103,18 +103,18 @@ def error_norm(K, y, ynew, h, rtol):
     return abs(h) * e5 / math.sqrt(den * n)
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def cdot(c, y):
     """``c . z`` of a 5-tuple functional on the state part of ``y``."""
     return c[0] * y[0] + c[1] * y[1] + c[2] * y[2] + c[3] * y[3] + c[4] * y[4]
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def _g(c, y, K2, slope):
     return cdot(c, K2[12]) if slope else cdot(c, y)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def trial(sysd, y, K, s, K2, Yt, yt):
     """``yt = Phi_s(y)`` (one DOP853 step of size ``s``; ``K2[12]`` gets its slope)."""
     A, cu, G, fp, buf = sysd
@@ -123,7 +123,7 @@ def trial(sysd, y, K, s, K2, Yt, yt):
     dop_step(A, cu, G, fp, buf, y, s, K2, Yt, yt)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def refine_nl(sysd, y, K, c, slope, a, b, ga, gb, rtol, s0, K2, Yt, yt):
     """First ``s`` in ``(a, b]`` with ``g(s) > 0``, given ``g(a) <= 0 < g(b)``, where
     ``g(s) = c . Phi_s(y)`` (``slope``: ``c . f(Phi_s(y))``). Newton on the integrator
@@ -166,7 +166,7 @@ def refine_nl(sysd, y, K, c, slope, a, b, ga, gb, rtol, s0, K2, Yt, yt):
     return b
 
 
-@njit(cache=True, inline="always")
+@njit(**JIT, inline="always")
 def hermite_guess(g0, d0, g1, d1, h):
     """Root of the cubic Hermite interpolant in (0, h) (a starting guess), by bisection."""
     c2 = (3.0 * (g1 - g0) / h - 2.0 * d0 - d1) / h
@@ -181,7 +181,7 @@ def hermite_guess(g0, d0, g1, d1, h):
     return 0.5 * (lo + hi)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def crossing_nl(sysd, y, K, ynew, h, c, rtol, K2, Yt, yt):
     """First time in (0, h] at which ``c . z`` turns positive over the accepted step
     ``y -> ynew`` (slopes ``K[0]``, ``K[12]``), or -1."""
@@ -199,7 +199,7 @@ def crossing_nl(sysd, y, K, ynew, h, c, rtol, K2, Yt, yt):
     return -1.0
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fold_extrema(sysd, y, K, yend, fend, h, ext, K2, Yt, yt):
     """Fold the stroke's and the force's values over ``(0, h]`` of a step into ``ext``
     (interior turning points located on the integrator, to 1e-10 in time)."""
@@ -227,7 +227,7 @@ def fold_extrema(sysd, y, K, yend, fend, h, ext, K2, Yt, yt):
     ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], uv), max(ext[X_UMAX], uv)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def initial_step(sysd, y, K, rtol, K2, Yt, yt):
     """Hairer's starting step for order 8 (as SciPy's ``select_initial_step``)."""
     d0 = 0.0
@@ -254,7 +254,7 @@ def initial_step(sysd, y, K, rtol, K2, Yt, yt):
     return min(100.0 * h0, h1)
 
 
-@njit(cache=True)
+@njit(**JIT)
 def _event_in_step(sysd, y, K, ynew, h, C, ne, rtol, K2, Yt, yt):
     """Earliest event over an accepted step: ``(time, index)`` (index -1 if none)."""
     sbest = np.inf
@@ -267,7 +267,7 @@ def _event_in_step(sysd, y, K, ynew, h, C, ne, rtol, K2, Yt, yt):
     return sbest, hit
 
 
-@njit(cache=True)
+@njit(**JIT)
 def march_yield(sysd, z, t, t_next, t_max, max_steps, C, ne, ext, acc, wsn):
     """Integrate a yielding segment from ``z`` (updated in place) to its first event, the
     schedule switch ``t_next`` or the horizon.
@@ -347,7 +347,7 @@ def march_yield(sysd, z, t, t_next, t_max, max_steps, C, ne, ext, acc, wsn):
     return t, hit, time_event, stop
 
 
-@njit(cache=True)
+@njit(**JIT)
 def advance(sysd, y, span, wsn):
     """Integrate ``y`` (in place) over ``span`` >= 0 with the adaptive DOP853 steps (no events;
     used to sample a yielding segment between its recorded ends)."""
@@ -379,7 +379,7 @@ def advance(sysd, y, span, wsn):
         cells[H_LAST] = h
 
 
-@njit(cache=True)
+@njit(**JIT)
 def fixed_steps(sysd, y, span, n, wsn):
     """``n`` equal DOP853 steps over ``span`` (no error control): the method's order shows in
     the error's decrease with ``n`` (used by the tests and the benchmark)."""

@@ -1,0 +1,87 @@
+"""A new user's first ``softlanding demo``: compile on an empty numba cache, then cached.
+
+Run:  python -m benchmarks.bench_first_run [--baseline REV] [--repeats 3]
+
+Each run is a fresh process of ``softlanding demo --out FILE.png`` timed from outside
+(``resource.getrusage`` of the child: user + system CPU, and wall time). A cold run gets an
+empty ``NUMBA_CACHE_DIR`` of its own, as a fresh install has; a cached run reuses the cache
+of a cold run. With ``--baseline REV`` the revision ``REV`` is checked out into a temporary
+git worktree and the two trees alternate run by run (the other one first every second
+repeat), so a drift of the shared machine's load falls on both. The depths printed by both
+must agree.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_demo(tree: Path, cache: Path, out: Path) -> tuple[float, float, str, str]:
+    """CPU and wall seconds, stdout and stderr of one ``softlanding demo`` with ``tree`` first
+    on the path and numba's cache in ``cache``."""
+    env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=str(cache))
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    wall = time.perf_counter()
+    p = subprocess.run([sys.executable, "-m", "softlanding", "demo", "--out", str(out),
+                        "--force"], env=env, cwd=tree, capture_output=True, text=True,
+                       check=True)
+    wall = time.perf_counter() - wall
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return cpu, wall, p.stdout, p.stderr
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--baseline", help="git revision to compare against (default: none)")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="bench-first-run-") as tmp:
+        trees = {"now": ROOT}
+        if args.baseline:
+            trees = {"base": Path(tmp) / "baseline", "now": ROOT}
+            subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q",
+                            str(trees["base"]), args.baseline], check=True)
+        try:
+            rows: dict[str, dict[str, list]] = {k: {"cold": [], "cached": []} for k in trees}
+            tables: dict[str, set[str]] = {k: set() for k in trees}
+            for r in range(args.repeats):
+                order = list(trees) if r % 2 == 0 else list(trees)[::-1]
+                for key in order:
+                    cache = Path(tmp) / f"cache-{key}-{r}"
+                    png = Path(tmp) / f"demo-{key}.png"
+                    cpu, wall, out, err = run_demo(trees[key], cache, png)
+                    rows[key]["cold"].append((cpu, wall))
+                    tables[key].add(out.split("\nStepped")[0])
+                    print(f"{key:5s} cold   cpu {cpu:6.2f} s  wall {wall:6.2f} s  "
+                          f"stderr {err.strip()!r}", flush=True)
+                    cpu, wall, out, err = run_demo(trees[key], cache, png)
+                    rows[key]["cached"].append((cpu, wall))
+                    print(f"{key:5s} cached cpu {cpu:6.2f} s  wall {wall:6.2f} s  "
+                          f"stderr {err.strip()!r}", flush=True)
+            print(f"medians of {args.repeats} ({os.cpu_count()} cores, load average "
+                  f"{os.getloadavg()[0]:.1f})")
+            for key, kinds in rows.items():
+                for kind, xs in kinds.items():
+                    print(f"  {key:5s} {kind:6s} cpu {statistics.median(x[0] for x in xs):6.2f} s"
+                          f"  wall {statistics.median(x[1] for x in xs):6.2f} s")
+            same = len(set().union(*tables.values())) == 1
+            print(f"demo tables of all runs: {'identical' if same else 'DIFFERENT'}")
+        finally:
+            if args.baseline:
+                subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force",
+                                str(trees["base"])], check=False)
+
+
+if __name__ == "__main__":
+    main()
