@@ -36,7 +36,7 @@ from softlanding.optimal.landing import (
     transcribed_schedule,
 )
 from softlanding.optimal.limits import force_limit
-from softlanding.simulation.simulator import LandingResult
+from softlanding.simulation.simulator import LandingResult, joined_trajectory
 from softlanding.util.jsonable import json_safe
 
 #: The default sample period, in the paper's time unit ``sqrt(m_t / k_g)`` (26 ms on the
@@ -106,16 +106,9 @@ class MPCLanding:
             About how many samples.
         """
         end = self.pieces[-1][0] + 1.2 * max(self.result.T, 1e-9)
-        parts = []
-        for k, (t0, r) in enumerate(self.pieces):
-            t1 = self.pieces[k + 1][0] if k + 1 < len(self.pieces) else end
-            tr = r.trajectory(t_end=t1 - t0, n=max(20, int(n * (t1 - t0) / end)))
-            parts.append((tr, t0))
-        return Trajectory(np.concatenate([tr.t + t0 for tr, t0 in parts]),
-                          np.vstack([tr.x for tr, _ in parts]),
-                          np.vstack([tr.u for tr, _ in parts]), parts[0][0].state_names,
-                          parts[0][0].control_names,
-                          mode=np.concatenate([tr.mode for tr, _ in parts]))
+        starts = [t0 for t0, _ in self.pieces] + [end]
+        return joined_trajectory([(r, starts[k], starts[k + 1])
+                                  for k, (_, r) in enumerate(self.pieces)], n)
 
     @property
     def stroke_held(self) -> bool:

@@ -42,7 +42,7 @@ from softlanding.optimal.limits import hop_input
 from softlanding.optimal.phase_solve import transcribed_solve
 from softlanding.optimal.pipeline import landing_parameters
 from softlanding.simulation.actuator_work import Work, result_work, state_at
-from softlanding.simulation.simulator import LandingResult, simulate
+from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
 
@@ -136,14 +136,7 @@ class HopCycle:
         n : int
             About how many samples.
         """
-        total = max(sum(b - a for _, a, b in self.pieces), 1e-300)
-        parts = [(r.trajectory(t_end=b - a, n=max(50, int(n * (b - a) / total))), a)
-                 for r, a, b in self.pieces]
-        return Trajectory(np.concatenate([tr.t + a for tr, a in parts]),
-                          np.vstack([tr.x for tr, _ in parts]),
-                          np.vstack([tr.u for tr, _ in parts]), parts[0][0].state_names,
-                          parts[0][0].control_names,
-                          mode=np.concatenate([tr.mode for tr, _ in parts]))
+        return joined_trajectory(self.pieces, n)
 
     @property
     def apex_height(self) -> float:

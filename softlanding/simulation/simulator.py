@@ -27,6 +27,7 @@ Example
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -604,6 +605,28 @@ def _batch_data(out: np.ndarray, shape: tuple, integrate: bool) -> dict[str, np.
     return data
 
 
+def joined_trajectory(pieces: Sequence[tuple[LandingResult, float, float]],
+                      n: int = 1500) -> Trajectory:
+    """One trajectory from simulations that continue each other: ``(result, a, b)`` covers
+    times ``[a, b]`` of the whole with the result's own times ``[0, b - a]``.
+
+    Parameters
+    ----------
+    pieces : sequence of (LandingResult, float, float)
+        The simulations and the spans they cover, in order.
+    n : int
+        About how many samples in all (at least 20 a piece).
+    """
+    total = max(sum(b - a for _, a, b in pieces), 1e-300)
+    parts = [(r.trajectory(t_end=b - a, n=max(20, int(n * (b - a) / total))), a)
+             for r, a, b in pieces]
+    return Trajectory(np.concatenate([tr.t + a for tr, a in parts]),
+                      np.vstack([tr.x for tr, _ in parts]),
+                      np.vstack([tr.u for tr, _ in parts]), parts[0][0].state_names,
+                      parts[0][0].control_names,
+                      mode=np.concatenate([tr.mode for tr, _ in parts]))
+
+
 __all__ = ["BATCH_FIELDS", "BatchResult", "EnergyLedger", "ForceSchedule", "Impedance",
-           "LandingResult", "MODE_NAMES", "Rigid", "STATUS_NAMES", "simulate", "simulate_batch",
-           "stroke"]
+           "LandingResult", "MODE_NAMES", "Rigid", "STATUS_NAMES", "joined_trajectory",
+           "simulate", "simulate_batch", "stroke"]
