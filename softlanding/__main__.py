@@ -1,5 +1,5 @@
 """``python -m softlanding``: same as the ``softlanding`` command."""
 
-from softlanding.cli import main
+from softlanding.cli import console_main
 
-raise SystemExit(main())
+raise SystemExit(console_main())

@@ -13,6 +13,7 @@ import argparse
 import contextlib
 import os
 import sys
+import threading
 from collections.abc import Iterator, Sequence
 from typing import Any
 
@@ -638,6 +639,33 @@ def main(argv: Sequence[str] | None = None) -> int:
     _progress.FORCE = bool(args.progress)
     with _files_backend(bool(getattr(args, "plot", None) or getattr(args, "out", None))):
         return _run(args)
+
+
+def console_main() -> int:
+    """The ``softlanding`` console script and ``python -m softlanding``: :func:`main`, made
+    safe against a second signal while the process winds down.
+
+    A signal that arrives after the interruption was reported (a repeated Ctrl-C, or one
+    that a solver library re-raises on its way out) would end the process with the signal's
+    own status instead of 130 or 143; once :func:`main` has reported, both are ignored.
+
+    Returns
+    -------
+    int
+        The exit code.
+    """
+    import signal
+
+    from softlanding.util.signals import EXIT_INTERRUPTED
+
+    try:
+        code = main()
+    except KeyboardInterrupt:  # a second interruption before main returned
+        code = EXIT_INTERRUPTED
+    if code >= EXIT_INTERRUPTED and threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(signum, signal.SIG_IGN)
+    return code
 
 
 @contextlib.contextmanager

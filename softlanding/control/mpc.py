@@ -38,6 +38,7 @@ from softlanding.optimal.landing import (
 from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult, joined_trajectory
 from softlanding.util.jsonable import json_safe
+from softlanding.util.signals import raise_if_interrupted
 
 #: The default sample period, in the paper's time unit ``sqrt(m_t / k_g)`` (26 ms on the
 #: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
@@ -208,11 +209,13 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             plan = _replan(problem, plan, elapsed + h, robot, believed, plant.x)
             elapsed = 0.0
         except SolveError:  # the structure changed: transcribe and refine anew
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             try:
                 plan = _transcribed_plan(plan, elapsed + h, robot, believed, plant.x)
                 elapsed = 0.0
                 replans += 1
             except SolveError:  # keep the last plan for this sample
+                raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 fallbacks += 1
                 elapsed += h
         out_times.append(1e3 * (time.perf_counter() - t0))
@@ -333,6 +336,7 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
         try:
             sol = tr.solve(params, guess=guess)
         except SolveError:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             sol = tr.solve(params)
     st = detect_arcs(sol).without_trailing_constrained()
     if not st.refinable:  # not bang-bang (a singular creep): the transcription is the plan
@@ -340,6 +344,7 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     try:
         return _checked(refine_switching(sol, st))
     except SolveError:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         return sol
 
 

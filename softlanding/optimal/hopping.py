@@ -364,6 +364,7 @@ def _flight(robot: Robot, impact: Impact, eta: float, start: np.ndarray,
         try:
             return transcribed_solve(tr, p, guess_from, None, notes)
         except SolveError:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             pass
     mb, mf = robot.body_mass, robot.foot_mass
     vc = mb * start[1] + mf * start[3]
@@ -566,6 +567,7 @@ def impedance_hop(impact: Impact | float, k_p: float, k_d: float,
     try:
         fl = _flight(robot, impact, eta, st.z_lift, flight_guess)
     except SolveError:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         return None
     sched, t_f = _schedule([fl])
     fres = simulate(robot, impact, sched, x0=st.z_lift, t_max=t_f + 1.0)

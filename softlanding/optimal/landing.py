@@ -46,6 +46,7 @@ from softlanding.optimal.stance_phases import crater_capacity
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
+from softlanding.util.signals import raise_if_interrupted
 
 T_MAX = 30.0
 MAX_NODES = 5000
@@ -403,6 +404,7 @@ def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: G
             tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
             culprits.append(name)
         except SolveError:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             continue
     if culprits:
         what = " or ".join(culprits)
@@ -432,10 +434,12 @@ def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Gro
                 try:
                     sol = tr.solve(params, warm_start=warm_start)
                 except SolveError:
+                    raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                     pass
             if sol is None:
                 sol = tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
         except InfeasibleError as err:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             raise _explain_infeasible(err, robot, impact, ground, nodes) from None
     notes += [f"transcription: {w.message}".split("; refine the grid")[0] for w in caught
               if issubclass(w.category, PathViolationWarning)]
@@ -460,6 +464,7 @@ def _refined(sol: Solution, extra_arcs: int,
     try:
         return refine_switching(sol, st, extra_arcs=extra_arcs), st
     except SolveError as err:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         notes.append(f"switching-time refinement failed ({err.status}); "
                      "reporting the transcribed solution")
         return None, st
@@ -490,6 +495,7 @@ def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, grou
         r = refine_structure(problem, prev.refined.modes, prev.refined.durations,
                              impact.initial_state(robot), landing_parameters(robot, impact))
     except SolveError:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         return None
     # the structure must still be the optimum's: an arc that collapsed sends the solve back
     # to the transcription (path constraints are checked inside every arc by the re-solve,

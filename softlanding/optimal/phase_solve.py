@@ -29,6 +29,7 @@ from ocp.phase_refinement import (
     refine_phases,
 )
 from softlanding.optimal.stance_phases import CRATER, STROKE
+from softlanding.util.signals import raise_if_interrupted
 
 
 def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any,
@@ -60,6 +61,7 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
             try:
                 sol = tr.solve(params, warm_start=warm_start)
             except (SolveError, ValueError):  # failed, or a solution of another problem
+                raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 sol = None
         if sol is None:
             sol = tr.solve(params, guess=guess)
@@ -96,6 +98,7 @@ def refined_phases(sol: Solution, notes: list[str],
             why = f"not refined: {err}"
             continue
         except SolveError as err:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             why = f"switching-time refinement failed ({err.status})"
             continue
         viol = r.path_violation(4000)
@@ -141,6 +144,7 @@ def second_start(inner: MultipleShooting, tr: MultipleShooting, params: dict[str
         again: list[str] = []
         sol2 = transcribed_solve(tr, params, start, None, again)
     except SolveError:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         return sol, None
     ref2 = refined_phases(sol2, again)
     if ref2 is None:
@@ -269,6 +273,7 @@ def structure_resolve(prev: RefinedPhases, params: dict[str, float],
         r = refine_phase_structure(prev.problem, prev.modes, prev.durations, starts, params,
                                    variables=prev.variables)
     except SolveError:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         return None
     tiny = 1e-9 * max(r.T, 1.0)
     for new, old in zip(r.durations, prev.durations, strict=True):

@@ -34,6 +34,7 @@ from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve
 from softlanding.optimal.result import PhasedLanding
 from softlanding.util.progress import progress as show_progress
+from softlanding.util.signals import raise_if_interrupted
 
 R = TypeVar("R")
 
@@ -225,6 +226,7 @@ def solve_phased(variant: PhasedVariant, warm_start: PhasedLanding | None = None
                                     warm_start.transcribed if warm_start is not None else None,
                                     notes)
         except InfeasibleError as err:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             raise variant.explain(err, guess) from None
         ref = refined_phases(sol, notes) if refine else None
         if refine:

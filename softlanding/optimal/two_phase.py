@@ -46,6 +46,7 @@ from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase_problem import OMITTABLE, two_phase_transcription
 from softlanding.simulation.simulator import simulate
 from softlanding.util.jsonable import json_safe
+from softlanding.util.signals import raise_if_interrupted
 
 
 @dataclass(kw_only=True)
@@ -130,6 +131,7 @@ def _explain(err: SolveError, robot: Robot, impact: Impact, ground: Ground, step
             two_phase_transcription(steps, ground=ground, omit=(name,)).solve(params, guess=guess)
             culprits.append(name)
         except SolveError:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             continue
     why = (" or ".join(culprits) + " cannot be met together with the other conditions"
            if culprits else "the conditions cannot all be met (dropping the crater or the "
@@ -425,6 +427,7 @@ def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         try:
             sol = transcribed_solve(tr, params, guess, None, notes)
         except SolveError as err:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             starts.append({"start": name, "error": err.status})
             continue
         durs = [float(p.T - p.t0) for p in sol.phases]
