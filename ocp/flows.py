@@ -462,6 +462,22 @@ def rk8_step_function(f: ca.Function, nz: int, np_: int) -> ca.Function:
     return ca.Function("rk8", [z, h, p], [rk8_step(f, z, h, p)], ["z", "h", "p"], ["zf"])
 
 
+_ACCUMULATED: dict[tuple[int, int], tuple[ca.Function, ca.Function]] = {}
+
+
+def _mapaccum(step: ca.Function, n: int) -> ca.Function:
+    """``step.mapaccum(n)``, built once per step function and count: building it costs more
+    than a short flow's evaluation, and re-solves ask for the same flows sample after sample
+    (the step is kept beside its key, so the id cannot be reused while cached)."""
+    key = (id(step), n)
+    hit = _ACCUMULATED.get(key)
+    if hit is None or hit[0] is not step:
+        if len(_ACCUMULATED) > 512:
+            _ACCUMULATED.clear()
+        hit = _ACCUMULATED[key] = (step, step.mapaccum(n))
+    return hit[1]
+
+
 def numeric_rk8_flow(step: ca.Function, z0: np.ndarray, tau: float, n: int,
                      pv: np.ndarray) -> np.ndarray:
     """States at the ``n + 1`` step points of ``n`` RK8 steps over ``[0, tau]``.
@@ -482,8 +498,7 @@ def numeric_rk8_flow(step: ca.Function, z0: np.ndarray, tau: float, n: int,
     -------
     ndarray (n+1, nz)
     """
-    acc = step.mapaccum(n)
-    Z = np.array(acc(z0, tau / n, pv), dtype=float)
+    Z = np.array(_mapaccum(step, n)(z0, tau / n, pv), dtype=float)
     return np.vstack([np.asarray(z0, dtype=float)[None, :], Z.T])
 
 
