@@ -24,13 +24,17 @@ from ocp import MultipleShooting, Solution, SolveError, Trajectory, refine_struc
 from ocp.switching import detect_arcs, refine_switching
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
-from softlanding.control.state_landing import state_landing_problem, state_parameters
+from softlanding.control.state_landing import (
+    ground_numbers,
+    state_landing_problem,
+    state_parameters,
+)
 from softlanding.errors import check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import (
-    arrest_force,
+    arrest_schedule,
     landing_schedule,
     solve_landing,
     transcribed_schedule,
@@ -174,7 +178,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     first = solve_landing(impact, robot, model, replay=False)
     plan: Any = first.refined if first.refined is not None else first.transcribed
     problem = state_landing_problem()
-    est = GroundEstimator(robot, drag=True, prior=_prior(model))
+    est = GroundEstimator(robot, drag=True, prior=ground_numbers(model))
     plant = SteppingPlant(robot, impact, ground)
     t0 = time.perf_counter()
     if not isinstance(plan, Solution):  # build the re-solve once, before the landing starts
@@ -199,7 +203,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
             break
         t0 = time.perf_counter()
-        u_end = _force_at_end(schedule, plant.x, period)
+        u_end = _force_at_end(schedule, plant.x, h)  # the force the sample ended under
         if estimate:
             e = est.update(plant.x, plant.foot_acceleration(u_end), u_end)
             estimates.append(e)
@@ -219,7 +223,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 fallbacks += 1
                 elapsed += h
         out_times.append(1e3 * (time.perf_counter() - t0))
-    final = plant.finish(_arrest(plant.x, robot) if plant.x[3] >= -stop else
+    final = plant.finish(arrest_schedule(plant.x, robot.r_m) if plant.x[3] >= -stop else
                          _shifted(_schedule(plan, robot), elapsed))
     stroke = [r.stroke_min for _, r in plant.history], [r.stroke_max for _, r in plant.history]
     return MPCLanding(robot=robot, impact=impact, ground=ground, model=model, period=period,
@@ -229,12 +233,6 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       step_times_ms=out_times, estimates=estimates, replans=replans,
                       fallbacks=fallbacks, samples=samples, setup_ms=setup_ms,
                       pieces=list(plant.history))
-
-
-def _prior(model: Ground) -> tuple[float, float]:
-    from softlanding.control.state_landing import ground_numbers
-
-    return ground_numbers(model)
 
 
 def _plan_time(plan: Any) -> float:
@@ -252,16 +250,6 @@ def _shifted(schedule: Any, skip: float) -> Any:
     if isinstance(schedule, ForceSchedule):
         return ForceSchedule(rest, tuple(schedule.values[i:]))
     return FeedbackSchedule(rest, tuple(schedule.gains[i:]))
-
-
-def _arrest(x: np.ndarray, robot: Robot) -> ForceSchedule:
-    """The foot at rest: the constant force that stops the body in the stroke left (read off
-    the measured state), then the body's weight."""
-    stroke, v = x[0] - x[2], x[1]
-    if v >= 0 or stroke <= 0:
-        return ForceSchedule((), (robot.body_mass,))
-    return ForceSchedule((float(-2 * stroke / v),), (arrest_force(robot.r_m, x),
-                                                      robot.body_mass))
 
 
 def _force_at_end(schedule: Any, x: np.ndarray, t: float) -> float:

@@ -343,11 +343,25 @@ def transcribed_schedule(sol: Solution, r_m: float,
     return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m)
 
 
+def arrest_schedule(x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
+    """From a foot at rest in state ``x``: the constant force that stops the body in the
+    stroke left, then the body's weight (the tail of :func:`landing_schedule`).
+
+    Parameters
+    ----------
+    x : array of 4
+        The state (the foot stopped).
+    r_m : float
+        Mass ratio.
+    """
+    return _with_arrest([], [], np.asarray(x, float), r_m)
+
+
 def _with_arrest(durs: list[float], rows: list[list[float]], xT: np.ndarray,
                  r_m: float) -> ForceSchedule | FeedbackSchedule:
     """``durs, rows`` then the arrest force until the body stops, then the body's weight."""
     stroke = xT[0] - xT[2]
-    if xT[1] < 0:  # the arrest force until the body stops (none if it has stopped)
+    if xT[1] < 0 and stroke > 0:  # the arrest force until the body stops (none if stopped)
         rows.append(_const_row(arrest_force(r_m, xT)))
         decel = xT[1] ** 2 / (2 * stroke)
         durs.append(-xT[1] / decel)
@@ -632,7 +646,6 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
 
 
 __all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",
-           "arrest_force", "build_landing_problem", "landing_schedule", "landing_stance",
-           "landing_transcription", "transcribed_schedule",
-           "solve_landing",
-           "sweep_landing"]
+           "arrest_force", "arrest_schedule", "build_landing_problem", "landing_schedule",
+           "landing_stance", "landing_transcription", "solve_landing", "sweep_landing",
+           "transcribed_schedule"]
