@@ -16,12 +16,18 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ocp import OptimalControlProblem
+from ocp import MultipleShooting, OptimalControlProblem, SolveError, Trajectory
+from ocp.switching import detect_arcs, refine_switching
+from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.dynamics import STATE_NAMES
 from softlanding.model.ground import DragGround, Ground, LinearGround
 from softlanding.model.robot import Robot
-from softlanding.optimal.landing import landing_stance
+from softlanding.optimal.landing import landing_schedule, landing_stance, transcribed_schedule
 from softlanding.optimal.limits import force_limit
+from softlanding.util.signals import raise_if_interrupted
+
+STATE_NODES = 60
+"""Shooting intervals of :func:`plan_from_state`'s transcription."""
 
 STATE_PARAMETERS = ("r_m", "s", "u_max", "stiffness", "c_d", "x_b0", "v_b0", "x_f0", "v_f0")
 """The parameters of :func:`state_landing_problem`, in order."""
@@ -114,5 +120,57 @@ def state_parameters(robot: Robot, ground: Ground, x: np.ndarray) -> dict[str, f
                                        *map(float, x)), strict=True))
 
 
-__all__ = ["STATE_PARAMETERS", "ParametricGround", "ground_numbers", "state_landing_problem",
-           "state_parameters"]
+@lru_cache(maxsize=1)
+def state_transcription() -> MultipleShooting:
+    """The transcription of :func:`state_landing_problem` (:data:`STATE_NODES` intervals,
+    RK4), built once."""
+    return MultipleShooting(state_landing_problem(), nodes=STATE_NODES, integrator="rk4",
+                            substeps=4, expand=True)
+
+
+def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
+                    guess: Trajectory | None = None) -> ForceSchedule | FeedbackSchedule:
+    """The optimal landing from a mid-landing state on a known ground, as a schedule.
+
+    Transcribed (:func:`state_transcription`), then refined to exact arcs when the structure
+    is bang-bang (else the transcription's steps are the plan); the schedule ends with the
+    arrest force and the body's weight (:func:`~softlanding.optimal.landing.landing_schedule`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (with a force limit).
+    ground : LinearGround or DragGround
+        The ground.
+    x : array of 4
+        The state (a yielding foot, ``v_f < 0``).
+    guess : ocp.Trajectory, optional
+        A start for the solver (times from the state's instant); Ipopt's default start if
+        it is not given or fails.
+
+    Raises
+    ------
+    ocp.SolveError
+        No plan from this state.
+    """
+    tr = state_transcription()
+    params = state_parameters(robot, ground, np.asarray(x, float))
+    sol = None
+    if guess is not None:
+        try:
+            sol = tr.solve(params, guess=guess)
+        except SolveError:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+    if sol is None:
+        sol = tr.solve(params)
+    structure = detect_arcs(sol).without_trailing_constrained()
+    if structure.refinable:
+        try:
+            return landing_schedule(refine_switching(sol, structure), robot.r_m)
+        except SolveError:
+            raise_if_interrupted()
+    return transcribed_schedule(sol, robot.r_m, force_limit(robot))
+
+
+__all__ = ["STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "ground_numbers",
+           "plan_from_state", "state_landing_problem", "state_parameters", "state_transcription"]
