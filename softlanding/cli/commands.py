@@ -30,6 +30,7 @@ from softlanding.cli.output import (
     savefig,
     target,
 )
+from softlanding.cli.robust import robust_command
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
 
@@ -615,7 +616,8 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
 HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
             "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
-            "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc}
+            "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc,
+            "robust": robust_command}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import re
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -352,9 +353,62 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
     return m
 
 
+def number_list(text: str) -> tuple[float, ...]:
+    """``--stiffness 0.5,1,2``: comma-separated finite numbers (an argparse type).
+
+    Parameters
+    ----------
+    text : str
+        What the user typed.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Not such a list (a one-line usage error, exit 2, before any work).
+    """
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"comma-separated numbers, e.g. 0.5,1,2, not {text!r}") from None
+    if not all(map(math.isfinite, values)):
+        raise argparse.ArgumentTypeError(f"finite numbers, not {text!r}")
+    return values
+
+
+def _robust(sub: Any) -> argparse.ArgumentParser:
+    r = sub.add_parser("robust", help="one landing plan for a set of grounds (robust, tree)",
+                       description="Plan the landing for every ground of a set (the products "
+                                   "of --stiffness and --cd: f = K d + c_d v^2) at once: the "
+                                   "robust open-loop schedule minimises the worst depth over "
+                                   "the set with the stroke held and the body at rest on every "
+                                   "ground (exact replays); --tree shares it only until "
+                                   "--branch-time, then re-plans on each ground. Compared per "
+                                   "ground with the nominal plan (solved for the paper's ground) "
+                                   "and the clairvoyant optimum (knows the ground).")
+    r.add_argument("--v0", type=float, required=True, help="impact velocity (< 0)")
+    _model_args(r, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    r.add_argument("--stiffness", type=number_list, default=(1.0,), metavar="K1,K2,...",
+                   help="the grounds' stiffness factors K > 0 (default 1)")
+    r.add_argument("--cd", type=number_list, default=(0.0,), metavar="C1,C2,...",
+                   help="the grounds' drag numbers c_d >= 0 (default 0: linear grounds)")
+    r.add_argument("--tree", action="store_true",
+                   help="also the two-stage tree: the robust schedule until --branch-time, "
+                        "then a plan for each ground")
+    r.add_argument("--branch-time", type=float, default=None, metavar="T",
+                   help="when the tree branches, in sqrt(m_t/k_g) (default 0.05: 1.3 ms on "
+                        "the paper's rig; with --tree only)")
+    r.add_argument("--extra-pieces", type=int, default=0, metavar="N",
+                   help="force pieces added to the nominal plan's before the search (0 to 4, "
+                        "default 0)")
+    _plot_arg(r, "the depth on every ground")
+    return r
+
+
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
-            "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc}
+            "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc,
+            "robust": _robust}
 
 
 def build_parser(handlers: Handlers,

@@ -1,0 +1,119 @@
+"""``softlanding robust``: one landing plan for a set of grounds (open-loop, and the tree)."""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+
+from softlanding.cli.output import (
+    EXIT_FAILURE,
+    EXIT_OK,
+    print_json,
+    print_table,
+    robot_of,
+    savefig,
+    target,
+)
+from softlanding.errors import ParameterError, check, check_count
+from softlanding.model.ground import DragGround, Ground, LinearGround
+from softlanding.model.robot import Impact
+
+
+def grounds_of(stiffness: tuple[float, ...], drag: tuple[float, ...]) -> list[Ground]:
+    """The grounds ``f = K d + c_d v^2`` of every ``K`` and ``c_d`` (linear when ``c_d = 0``).
+
+    Parameters
+    ----------
+    stiffness, drag : tuple of float
+        The factors ``K`` (> 0) and drag numbers (>= 0).
+
+    Raises
+    ------
+    ParameterError
+        A bad value or a repeated ground.
+    """
+    for k in stiffness:
+        check("stiffness", k, (lambda v: v > 0, "must be > 0"))
+    for c in drag:
+        check("cd", c, (lambda v: v >= 0, "must be >= 0"))
+    if len(set(stiffness)) < len(stiffness) or len(set(drag)) < len(drag):
+        raise ParameterError("stiffness" if len(set(stiffness)) < len(stiffness) else "cd",
+                             "lists a value twice")
+    return [LinearGround(k) if c == 0 else DragGround(c, k)
+            for k, c in itertools.product(stiffness, drag)]
+
+
+def robust_command(a: argparse.Namespace) -> int:
+    """Run ``softlanding robust`` (the parsed arguments; the exit code).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments.
+    """
+    robot, impact, plot = robot_of(a), Impact(a.v0), target(a)
+    grounds = grounds_of(a.stiffness, a.cd)
+    if a.branch_time is not None and not a.tree:
+        raise ParameterError("--branch-time", "applies to --tree")
+    branch = 0.05 if a.branch_time is None else check(
+        "branch_time", a.branch_time, (lambda v: v > 0, "must be > 0"))
+    extra = check_count("extra_pieces", a.extra_pieces, 0, 4)
+    from softlanding.optimal.limits import force_limit
+
+    force_limit(robot)
+    if not impact.v0 < 0:
+        raise ParameterError("v0", "a landing under control needs v0 < 0")
+    from softlanding.control.robust import robust_landing, two_stage_landing
+    from softlanding.optimal.landing import solve_landing
+
+    nominal = solve_landing(impact, robot, replay=False)
+    robust = robust_landing(impact, grounds, robot, nominal=nominal, extra_pieces=extra)
+    tree = two_stage_landing(robust, branch) if a.tree else None
+    clair = [solve_landing(impact, robot, g) for g in grounds]
+    clair_depth = [c.depth for c in clair]
+    chosen = tree if tree is not None else robust
+    written = None
+    if plot:
+        from softlanding.plots.control import plot_robust_landing
+
+        written = savefig(plot_robust_landing(robust, tree, clair_depth), plot)
+    if a.json:
+        print_json({
+            "worst_depth": chosen.worst, "feasible": chosen.feasible,
+            "robust_worst_depth": robust.worst, "robust_feasible": robust.feasible,
+            "tree_worst_depth": None if tree is None else tree.worst,
+            "tree_feasible": None if tree is None else tree.feasible,
+            "nominal_worst_depth": robust.nominal_worst,
+            "nominal_feasible": robust.nominal_feasible,
+            "clairvoyant_worst_depth": max(clair_depth),
+            "clairvoyant_depths": clair_depth,
+            "clairvoyant_verified": [not c.unverified_reasons() for c in clair],
+            "robust": robust.to_dict(), "tree": None if tree is None else tree.to_dict()})
+    else:
+        rows: list[tuple[str, object]] = []
+        names = [f"K = {k:g}, c_d = {c:g}" for k, c in itertools.product(a.stiffness, a.cd)]
+        for i, name in enumerate(names):
+            nom, rob = robust.nominal[i], robust.landings[i]
+            cells = [f"nominal {nom.depth:.5g}{'' if nom.feasible else ' (limit broken)'}",
+                     f"robust {rob.depth:.5g}{'' if rob.feasible else ' (limit broken)'}"]
+            if tree is not None:
+                t = tree.landings[i]
+                cells.append(f"tree {t.depth:.5g}{'' if t.feasible else ' (limit broken)'}")
+            cells.append(f"clairvoyant {clair_depth[i]:.5g}")
+            rows.append((name, ", ".join(cells)))
+        rows += [("worst: nominal / robust", f"{robust.nominal_worst:.6g} / {robust.worst:.6g}"),
+                 ("worst: clairvoyant (a bound)", f"{max(clair_depth):.6g}"),
+                 ("robust feasible on every ground", robust.feasible),
+                 ("nominal feasible on every ground", robust.nominal_feasible),
+                 ("search", f"{robust.message} ({robust.evaluations} points, "
+                            f"{robust.solve_time_s:.3g} s)")]
+        if tree is not None:
+            rows += [(f"worst: tree (branch at {branch:g})", f"{tree.worst:.6g}"),
+                     ("tree feasible on every ground", tree.feasible)]
+        print_table(rows)
+        if written:
+            print(f"figure written to {written}")
+    return EXIT_OK if chosen.feasible else EXIT_FAILURE
+
+
+__all__ = ["grounds_of", "robust_command"]
