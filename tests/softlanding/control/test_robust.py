@@ -1,0 +1,120 @@
+"""One plan for a set of grounds: the robust open-loop schedule and the two-stage tree, checked
+by exact replays, against the nominal plan and the clairvoyant optima."""
+
+import json
+
+import numpy as np
+import pytest
+
+from softlanding import PAPER_ROBOT, simulate, solve_landing
+from softlanding.control import robust_landing, two_stage_landing
+from softlanding.errors import ParameterError
+from softlanding.model.ground import DragGround, LinearGround
+
+GROUNDS = [LinearGround(0.5), DragGround(1.0, 0.5), LinearGround(2.0), DragGround(1.0, 2.0)]
+
+
+@pytest.fixture(scope="module")
+def robust():
+    return robust_landing(-3, GROUNDS)
+
+
+@pytest.fixture(scope="module")
+def tree(robust):
+    return two_stage_landing(robust)
+
+
+@pytest.fixture(scope="module")
+def clairvoyant():
+    return [solve_landing(-3, PAPER_ROBOT, g) for g in GROUNDS]
+
+
+def test_the_body_moves_alike_on_every_ground(robust):
+    """The premise: the body's motion depends on the force only."""
+    for t in np.linspace(0.1, robust.schedule.times[-2], 5):
+        body = [g.pieces[0][1].trajectory(t_end=t, n=2).x[-1][:2] for g in robust.landings]
+        for other in body[1:]:  # exact on the paper's ground, to the integrator's tolerance
+            assert np.max(np.abs(other - body[0])) < 1e-8  # on the others
+
+
+def test_robust_open_loop_holds_every_limit_and_beats_the_nominal_worst_case(robust,
+                                                                               clairvoyant):
+    assert robust.feasible and not robust.nominal_feasible
+    assert robust.worst < robust.nominal_worst
+    # no controller lands deeper than nothing can: each ground's clairvoyant optimum bounds it
+    for landing, c in zip(robust.landings, clairvoyant, strict=True):
+        assert landing.depth >= c.depth * (1 - 1e-9)
+    assert max(abs(v) for v in robust.schedule.values) <= PAPER_ROBOT.u_max
+    for g, landing in zip(GROUNDS, robust.landings, strict=True):  # the reported figure is
+        again = simulate(PAPER_ROBOT, -3, robust.schedule, g)     # the exact replay
+        assert again.depth == pytest.approx(landing.depth, rel=1e-12)
+        assert again.feasible
+    assert robust.active == [int(np.argmax(robust.depths))] or len(robust.active) > 1
+
+
+def test_on_one_ground_it_is_the_optimum():
+    r = robust_landing(-3, [LinearGround()])
+    clair = solve_landing(-3)
+    assert r.feasible
+    assert clair.depth * (1 - 1e-9) <= r.worst <= clair.depth * (1 + 1e-6)
+
+
+def test_the_tree_is_never_worse_than_the_robust_open_loop(robust, tree, clairvoyant):
+    assert tree.kind == "tree" and tree.branch_time == pytest.approx(0.05)
+    assert tree.feasible and tree.worst <= robust.worst
+    for a, b, c, how in zip(robust.landings, tree.landings, clairvoyant, tree.second_stage,
+                            strict=True):
+        assert b.depth <= a.depth * (1 + 1e-12)
+        if how == "re-planned":
+            assert [t0 for t0, _ in b.pieces] == [0.0, pytest.approx(0.05)]
+            if not c.unverified_reasons():
+                assert b.depth >= c.depth * (1 - 1e-7)
+        else:
+            assert b is a
+    assert "re-planned" in tree.second_stage
+
+
+def test_json_of_both(robust, tree):
+    d = json.loads(json.dumps(tree.to_dict()))
+    assert d["kind"] == "tree" and len(d["grounds"]) == 4
+    assert {"depth", "feasible", "nominal_depth", "second_stage"} <= set(d["grounds"][0])
+    assert d["worst_depth"] == pytest.approx(tree.worst)
+    assert json.loads(json.dumps(robust.to_dict()))["branch_time"] is None
+
+
+@pytest.mark.parametrize("call,name", [
+    (lambda: robust_landing(-3, []), "grounds"),
+    (lambda: robust_landing(-3, [LinearGround(), "soft"]), "grounds"),
+    (lambda: robust_landing(-3, [LinearGround()], tree=True, branch_time=0.0), "branch_time"),
+])
+def test_bad_input(call, name):
+    with pytest.raises(ParameterError, match=name):
+        call()
+
+
+def test_a_tree_does_not_branch_twice(tree):
+    with pytest.raises(ParameterError, match="already"):
+        two_stage_landing(tree)
+
+
+def test_cli_robust(cli, tmp_path):
+    png = tmp_path / "robust.png"
+    code, out, err = cli("robust", "--v0", "-3", "--stiffness", "0.5,2", "--cd", "0,1",
+                         "--tree", "--json", "--plot", png)
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["feasible"] and d["robust_feasible"] and d["nominal_feasible"] is False
+    assert d["tree_worst_depth"] <= d["robust_worst_depth"] < d["nominal_worst_depth"]
+    assert d["clairvoyant_worst_depth"] <= d["tree_worst_depth"] * (1 + 1e-9)
+    assert len(d["clairvoyant_depths"]) == 4 and png.stat().st_size > 10_000
+
+
+@pytest.mark.parametrize("args,message", [
+    (("--v0", "-3", "--stiffness", "0,1"), "stiffness: must be > 0"),
+    (("--v0", "-3", "--cd", "x"), "comma-separated numbers"),
+    (("--v0", "-3", "--branch-time", "0.1"), "--branch-time: applies to --tree"),
+    (("--v0", "0"), "v0 < 0"),
+])
+def test_cli_robust_bad_input(cli, args, message):
+    code, out, err = cli("robust", *args)
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
