@@ -4,9 +4,10 @@ clairvoyant optimum; MPC step times in the paper's units and on the paper's rig.
 Run:  python -m benchmarks.study_unknown_ground [--quick] [--period P] [--json FILE]
 
 Prints one row per case (true ground K, c_d and v0): depth / clairvoyant depth for the
-nominal open-loop plan, the impedance tuned for the paper's ground and the MPC with
-estimation (``!`` marks a controller that broke a limit or whose rest is not proven), and the
-MPC's step times; then the goals checked. Timings are wall time of each sample's estimate
+nominal open-loop plan, the robust open-loop schedule and the two-stage tree (planned for all
+the grounds at once), the impedance tuned for the paper's ground and the MPC with estimation
+(``!`` marks a controller that broke a limit or whose rest is not proven), and the MPC's step
+times; then per v0 the worst depth over the grounds of each, and the goals checked. Timings are wall time of each sample's estimate
 and re-plan (``time.perf_counter``), on whatever else the machine runs.
 """
 
@@ -45,16 +46,24 @@ def main() -> None:
     print(f"sample period {a.period:g} (= {1e3 * a.period * tau:.3g} ms on the paper's rig); "
           f"{len(rows)} cases in {time.perf_counter() - t0:.0f} s")
     print(f"{'v0':>6} {'K':>5} {'c_d':>4} {'clairvoyant':>12} {'open-loop':>10} "
-          f"{'impedance':>10} {'MPC':>10} {'median ms':>10} {'p99 ms':>8}  re-plans")
+          f"{'robust':>10} {'tree':>10} {'impedance':>10} {'MPC':>10} {'median ms':>10} "
+          f"{'p99 ms':>8}  re-plans")
     for r in rows:
         g = r["ground"]
         print(f"{r['v0']:>6.1f} {g.get('stiffness', 1.0):>5.2f} {g.get('c_d', 0.0):>4.1f} "
               f"{r['clairvoyant_depth']:>11.5f}{' ' if r['clairvoyant_verified'] else '?'} "
-              f"{_cell(r['open_loop'])} {_cell(r['impedance_nominal'])} {_cell(r['mpc'])} "
+              f"{_cell(r['open_loop'])} {_cell(r['robust'])} {_cell(r['tree'])} "
+              f"{_cell(r['impedance_nominal'])} {_cell(r['mpc'])} "
               f"{r['mpc']['step_time_median_ms']:>10.3f} {r['mpc']['step_time_p99_ms']:>8.2f}"
               f"  {r['mpc']['replans']}")
     s = study_summary(rows)
-    print("\n" + json.dumps(s, indent=1))
+    keys = ("clairvoyant", "open_loop", "robust", "tree", "impedance_nominal", "mpc")
+    print(f"\nworst depth over the grounds ('!': a limit broken on one of them)\n{'v0':>6} "
+          + " ".join(f"{k:>18}" for k in keys))
+    for v, w in s["worst_case"].items():
+        print(f"{v:>6} " + " ".join(
+            f"{w[k]:>17.5f}{' ' if w.get(k + '_feasible', True) else '!'}" for k in keys))
+    print("\n" + json.dumps({k: v for k, v in s.items() if k != "worst_case"}, indent=1))
     print(f"step time median on the rig: {s['step_time_median_ms']:.3g} ms against a period "
           f"of {1e3 * a.period * tau:.3g} ms")
     if a.json:

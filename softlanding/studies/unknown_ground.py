@@ -2,11 +2,13 @@
 
 For every true ground (stiffness factor ``K``, drag number ``c_d``) and impact velocity: the
 clairvoyant optimum (the landing OCP solved for the true ground), the nominal open-loop
-bang-bang plan (solved for the paper's ground) replayed on the true ground, the best fixed
-impedance tuned for the paper's ground, and model-predictive control with on-line ground
-estimation (:func:`softlanding.control.mpc_landing`). Depths are divided by the clairvoyant
-depth; a controller that breaks a limit (stroke, force) or whose rest is not proven is
-flagged, not hidden.
+bang-bang plan (solved for the paper's ground) replayed on the true ground, the robust
+open-loop schedule and the two-stage tree planned for the whole set of grounds
+(:func:`softlanding.control.robust_landing`), the best fixed impedance tuned for the paper's
+ground, and model-predictive control with on-line ground estimation
+(:func:`softlanding.control.mpc_landing`). Depths are divided by the clairvoyant depth; a
+controller that breaks a limit (stroke, force) or whose rest is not proven is flagged, not
+hidden.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
+from softlanding.control.robust import GroundLanding, robust_landing, two_stage_landing
 from softlanding.model.controllers import Impedance
 from softlanding.model.ground import DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -50,9 +53,16 @@ def _replayed(res: Any) -> dict[str, Any]:
             "u_peak": res.u_peak, "stroke_min": res.stroke_min, "stroke_max": res.stroke_max}
 
 
+def _planned(landing: GroundLanding) -> dict[str, Any]:
+    return {"depth": landing.depth, "feasible": landing.feasible,
+            "stroke_min": landing.stroke_min, "stroke_max": landing.stroke_max}
+
+
 def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                         period: float = DEFAULT_PERIOD, nominal: Any = None,
-                        gains: Impedance | None = None) -> dict[str, Any]:
+                        gains: Impedance | None = None,
+                        robust: GroundLanding | None = None,
+                        tree: GroundLanding | None = None) -> dict[str, Any]:
     """One true ground and impact velocity: every controller's landing.
 
     Parameters
@@ -69,6 +79,9 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
         The nominal plan (solved for the paper's ground if not given).
     gains : Impedance, optional
         The impedance tuned for the paper's ground (optimised if not given).
+    robust, tree : GroundLanding, optional
+        This ground's landing under the robust open-loop schedule and the two-stage tree of
+        a set of grounds (rows ``"robust"`` and ``"tree"``; none if not given).
     """
     impact = Impact(v0)
     clair = solve_landing(impact, robot, ground)
@@ -83,8 +96,12 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
         "open_loop": _replayed(simulate(robot, impact, nominal.schedule(), ground)),
         "impedance_nominal": _replayed(simulate(robot, impact, gains, ground)),
         "mpc": {**m.to_dict(), "depth": m.depth}}
-    for key in ("open_loop", "impedance_nominal", "mpc"):
-        row[key]["ratio"] = row[key]["depth"] / clair.depth
+    for key, planned in (("robust", robust), ("tree", tree)):
+        if planned is not None:
+            row[key] = _planned(planned)
+    for key in ("open_loop", "robust", "tree", "impedance_nominal", "mpc"):
+        if key in row:
+            row[key]["ratio"] = row[key]["depth"] / clair.depth
     return row
 
 
@@ -107,19 +124,25 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
         A progress bar.
     """
     plans = {v: solve_landing(v, robot) for v in v0_values}
-    tuned = {}
+    grounds = [true_ground(k, c) for k, c in itertools.product(stiffness, drag)]
+    tuned, robust, trees = {}, {}, {}
     for v in v0_values:
         o = optimize_impedance(v, robot)
         tuned[v] = Impedance(o.k_p, o.k_d)
-    cases = list(itertools.product(v0_values, stiffness, drag))
-    return [unknown_ground_case(v, true_ground(k, c), robot, period=period, nominal=plans[v],
-                                gains=tuned[v])
-            for v, k, c in show_progress(cases, progress, desc="unknown ground", unit="case")]
+        robust[v] = robust_landing(v, grounds, robot, nominal=plans[v])
+        trees[v] = two_stage_landing(robust[v])
+    cases = [(v, i) for v in v0_values for i in range(len(grounds))]
+    return [unknown_ground_case(v, grounds[i], robot, period=period, nominal=plans[v],
+                                gains=tuned[v], robust=robust[v].landings[i],
+                                tree=trees[v].landings[i])
+            for v, i in show_progress(cases, progress, desc="unknown ground", unit="case")]
 
 
 def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The study's goals checked: MPC within 2 % of the clairvoyant depth and never below it,
-    every limit held; the step times' median and 99th percentile.
+    every limit held; the step times' median and 99th percentile; per impact velocity, the
+    worst depth over the grounds of the nominal plan, the robust open-loop schedule, the
+    tree and the clairvoyant optima (robust <= nominal and tree <= robust are goals).
 
     Parameters
     ----------
@@ -137,7 +160,26 @@ def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "impedance_feasible": int(sum(r["impedance_nominal"]["feasible"] for r in rows)),
         "step_time_median_ms": float(np.median([r["mpc"]["step_time_median_ms"]
                                                 for r in rows])),
-        "step_time_p99_ms": float(np.max([r["mpc"]["step_time_p99_ms"] for r in rows]))}
+        "step_time_p99_ms": float(np.max([r["mpc"]["step_time_p99_ms"] for r in rows])),
+        "worst_case": _worst_cases(rows)}
+
+
+def _worst_cases(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per impact velocity: each controller's worst depth over the grounds and whether it held
+    every limit on all of them."""
+    out: dict[str, dict[str, Any]] = {}
+    for v in dict.fromkeys(r["v0"] for r in rows):
+        mine = [r for r in rows if r["v0"] == v]
+        d: dict[str, Any] = {"clairvoyant": max(r["clairvoyant_depth"] for r in mine)}
+        for key in ("open_loop", "robust", "tree", "impedance_nominal", "mpc"):
+            if all(key in r for r in mine):
+                d[key] = max(r[key]["depth"] for r in mine)
+                d[key + "_feasible"] = all(r[key]["feasible"] for r in mine)
+        if "robust" in d:
+            d["robust_le_nominal"] = d["robust"] <= d["open_loop"]
+            d["tree_le_robust"] = d["tree"] <= d["robust"]
+        out[f"{v:g}"] = d
+    return out
 
 
 __all__ = ["STUDY_DRAG", "STUDY_STIFFNESS", "STUDY_V0", "study_summary", "true_ground",

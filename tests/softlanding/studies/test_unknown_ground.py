@@ -18,3 +18,17 @@ def test_one_case_of_the_study():
 def test_true_ground_is_linear_without_drag():
     assert true_ground(1.5, 0.0).to_dict() == {"model": "linear", "stiffness": 1.5}
     assert true_ground(1.0, 0.2).to_dict() == {"model": "drag", "c_d": 0.2}
+
+
+def test_a_small_study_checks_the_worst_case_goals():
+    from softlanding.studies.unknown_ground import unknown_ground_study
+
+    rows = unknown_ground_study((-3.0,), (0.5, 2.0), (0.0, 1.0), progress=False)
+    assert len(rows) == 4 and all({"robust", "tree"} <= set(r) for r in rows)
+    w = study_summary(rows)["worst_case"]["-3"]
+    assert w["robust_feasible"] and w["tree_feasible"] and not w["open_loop_feasible"]
+    assert w["clairvoyant"] <= w["tree"] <= w["robust"] <= w["open_loop"]
+    assert w["robust_le_nominal"] and w["tree_le_robust"]
+    for r in rows:  # a plan for the set never beats the optimum for the ground it meets
+        assert r["tree"]["depth"] >= r["clairvoyant_depth"] * (1 - 1e-7) or not r[
+            "clairvoyant_verified"]
