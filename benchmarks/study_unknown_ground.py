@@ -7,8 +7,9 @@ Prints one row per case (true ground K, c_d and v0): depth / clairvoyant depth f
 nominal open-loop plan, the robust open-loop schedule and the two-stage tree (planned for all
 the grounds at once), the impedance tuned for the paper's ground and the MPC with estimation
 (``!`` marks a controller that broke a limit or whose rest is not proven), and the MPC's step
-times; then per v0 the worst depth over the grounds of each, and the goals checked. Timings are wall time of each sample's estimate
-and re-plan (``time.perf_counter``), on whatever else the machine runs.
+times; then per v0 the worst depth over the grounds of each, and the goals checked. Timings
+are wall time of each sample's estimate and re-plan (``time.perf_counter``), on whatever else
+the machine runs.
 """
 
 from __future__ import annotations
