@@ -533,7 +533,8 @@ def rk8_steps_for(step: ca.Function, z0: np.ndarray, tau: float, pv: np.ndarray,
     zn = numeric_rk8_flow(step, z0, tau, n, pv)[-1]
     while True:
         z2 = numeric_rk8_flow(step, z0, tau, 2 * n, pv)[-1]
-        err = float(np.max(np.abs(zn - z2)) / max(1.0, float(np.max(np.abs(z2)))))
+        with np.errstate(invalid="ignore"):  # a non-finite flow ends the loop below
+            err = float(np.max(np.abs(zn - z2)) / max(1.0, float(np.max(np.abs(z2)))))
         if err <= tol or 2 * n > maximum or not np.all(np.isfinite(z2)):
             return n, err
         n, zn = 2 * n, z2
