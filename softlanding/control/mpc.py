@@ -13,7 +13,6 @@ the true ground (:class:`~softlanding.control.plant.SteppingPlant`).
 from __future__ import annotations
 
 import contextlib
-import os
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -60,7 +59,8 @@ DEFAULT_PERIOD = 0.01
 
 #: Shooting nodes of the transcription that re-plans when no structure near the last one
 #: fits (a creep to the crater's capacity is not bang-bang: the transcription is the plan).
-TRANSCRIPTION_NODES = int(os.environ.get("SOFTLANDING_MPC_NODES", "60"))
+#: 30 nodes are hardly faster (Ipopt's iterations dominate) and land one creep 15 % deeper.
+TRANSCRIPTION_NODES = 60
 
 
 @dataclass
