@@ -79,6 +79,7 @@ def baseline_module(rev: str) -> types.ModuleType:
     spec = importlib.util.spec_from_file_location(f"mpc_baseline_{rev}", path)
     assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # (its dataclasses look their module up)
     spec.loader.exec_module(mod)
     return mod
 
