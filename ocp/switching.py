@@ -542,7 +542,8 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
                      x0: np.ndarray, params: dict[str, float], *,
                      transcribed_objective: float = math.nan, interior_samples: int = 16,
                      ipopt_options: dict | None = None, tol: float = DEFAULT_TOL,
-                     fast: bool = True, max_rebuilds: int = 4) -> RefinedSwitching:
+                     fast: bool = True, max_rebuilds: int = 4,
+                     ipopt: bool = True) -> RefinedSwitching:
     """Refine a given interval structure from a guess of durations and initial state.
 
     The workhorse of :func:`refine_switching`, usable without a transcription
@@ -571,6 +572,10 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
         Try the Newton fast path first (see :meth:`SwitchingNLP.newton`).
     max_rebuilds : int
         How often the step counts may be doubled to meet ``tol``.
+    ipopt : bool
+        False: the Newton re-solve of an NLP of this structure solved before, and nothing
+        else (no build, no Ipopt): about a millisecond, or a :class:`SolveError` with status
+        ``"newton_failed"`` (a controller trying several structures within a sample).
 
     Returns
     -------
@@ -593,6 +598,9 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
             if ok:
                 return _result(problem, solved, quick, pv, params, transcribed_objective,
                                err, [])
+    if not ipopt:
+        raise SolveError("newton_failed", message="no Newton re-solve of this structure "
+                         "(none solved before, or its active set changed)")
     need = required_substeps(problem, modes, pv, durations, x0, interior_samples, tol)
     notes: list[str] = []
     warm: tuple[np.ndarray, np.ndarray] | tuple[None, None] = (None, None)

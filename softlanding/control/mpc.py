@@ -14,14 +14,22 @@ from __future__ import annotations
 
 import contextlib
 import time
+import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
 
-from ocp import MultipleShooting, Solution, SolveError, Trajectory, refine_structure
-from ocp.switching import detect_arcs, refine_switching
+from ocp import (
+    MultipleShooting,
+    OptimalControlProblem,
+    Solution,
+    SolveError,
+    Trajectory,
+    refine_structure,
+)
+from ocp.switching import Mode, RefinedSwitching, detect_arcs, refine_switching
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
@@ -48,6 +56,11 @@ from softlanding.util.signals import raise_if_interrupted
 #: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
 #: paper's landings.
 DEFAULT_PERIOD = 0.01
+
+#: Shooting nodes of the transcription that re-plans when no structure near the last one
+#: fits (a creep to the crater's capacity is not bang-bang: the transcription is the plan).
+#: 30 nodes are hardly faster (Ipopt's iterations dominate) and land one creep 15 % deeper.
+TRANSCRIPTION_NODES = 60
 
 
 @dataclass
@@ -76,8 +89,15 @@ class MPCLanding:
         Samples whose arc structure changed (re-planned by a transcription).
     fallbacks : int
         Samples whose re-plan failed (the previous plan was kept).
+    structure_changes : int
+        Samples re-planned by Newton on a neighbouring structure (an arc dropped or added).
+    step_paths : list of str
+        What re-planned each sample: ``"newton"`` (the plan's structure), ``"structure"``
+        (a neighbouring structure, Newton), ``"ipopt"`` (the plan's structure, Ipopt),
+        ``"transcription"`` or ``"kept"`` (every re-plan failed).
     setup_ms : float
-        The re-solve's one-time build before the landing (not a step's time).
+        The one-time builds before the landing (not a step's time): the re-solves of the
+        plan's structure and its suffixes, and the transcription of the last resort.
     samples : int
         Samples taken while the foot yielded.
     pieces : list of (float, LandingResult)
@@ -98,6 +118,8 @@ class MPCLanding:
     estimates: list[GroundEstimate] = field(default_factory=list)
     replans: int = 0
     fallbacks: int = 0
+    structure_changes: int = 0
+    step_paths: list[str] = field(default_factory=list)
     samples: int = 0
     setup_ms: float = 0.0
     pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
@@ -134,6 +156,7 @@ class MPCLanding:
             "rest_proven": self.result.rest_proven, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
+            "structure_changes": self.structure_changes,
             "step_time_median_ms": float(np.median(t)),
             "step_time_p99_ms": float(np.percentile(t, 99)), "setup_ms": self.setup_ms,
             "estimate": None if not self.estimates else self.estimates[-1].__dict__,
@@ -181,12 +204,11 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     est = GroundEstimator(robot, drag=True, prior=ground_numbers(model))
     plant = SteppingPlant(robot, impact, ground)
     t0 = time.perf_counter()
-    if not isinstance(plan, Solution):  # build the re-solve once, before the landing starts
-        with contextlib.suppress(SolveError):
-            _replan(problem, plan, 0.0, robot, model, plant.x)
+    _prepare(problem, plan, robot, model, plant.x)  # the builds, before the landing starts
     setup_ms = 1e3 * (time.perf_counter() - t0)
     out_times: list[float] = []
     estimates: list[GroundEstimate] = []
+    paths: list[str] = []
     fallbacks, replans, elapsed, samples = 0, 0, 0.0, 0
     believed = model
     # the foot has stopped when it is static, or creeps by rounding at the crater's exact
@@ -210,18 +232,19 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             if e.samples >= 2:
                 believed = e.ground()
         try:
-            plan = _replan(problem, plan, elapsed + h, robot, believed, plant.x)
+            plan, path = _replan(problem, plan, elapsed + h, robot, believed, plant.x)
             elapsed = 0.0
-        except SolveError:  # the structure changed: transcribe and refine anew
+        except SolveError:  # no structure near the last one fits: transcribe and refine anew
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             try:
                 plan = _transcribed_plan(plan, elapsed + h, robot, believed, plant.x)
-                elapsed = 0.0
+                elapsed, path = 0.0, "transcription"
                 replans += 1
             except SolveError:  # keep the last plan for this sample
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 fallbacks += 1
-                elapsed += h
+                elapsed, path = elapsed + h, "kept"
+        paths.append(path)
         out_times.append(1e3 * (time.perf_counter() - t0))
     final = plant.finish(arrest_schedule(plant.x, robot.r_m) if plant.x[3] >= -stop else
                          _shifted(_schedule(plan, robot), elapsed))
@@ -232,6 +255,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       u_peak=max(r.u_peak for _, r in plant.history),
                       step_times_ms=out_times, estimates=estimates, replans=replans,
                       fallbacks=fallbacks, samples=samples, setup_ms=setup_ms,
+                      structure_changes=paths.count("structure"), step_paths=paths,
                       pieces=list(plant.history))
 
 
@@ -273,40 +297,134 @@ def _schedule(plan: Any, robot: Robot) -> ForceSchedule | FeedbackSchedule:
     return landing_schedule(plan, robot.r_m)
 
 
-def _replan(problem: Any, plan: Any, applied: float, robot: Robot, believed: Ground,
-            x: np.ndarray) -> Any:
-    """The last plan's structure re-solved from ``x`` for the believed ground."""
+def _replan(problem: OptimalControlProblem, plan: Any, applied: float, robot: Robot,
+            believed: Ground, x: np.ndarray) -> tuple[RefinedSwitching, str]:
+    """The last plan's structure re-solved from ``x`` for the believed ground, and how.
+
+    Newton on the plan's structure (less the arcs already applied) first, then Newton on
+    its neighbours (an arc dropped, e.g. one that collapsed, or one added at the end), each
+    about a millisecond; Ipopt on the plan's structure last.
+    """
     if isinstance(plan, Solution):
         raise SolveError("transcribed", message="a transcribed plan has no structure to re-solve")
+    modes, durs = _remaining(plan, applied)
+    params = state_parameters(robot, believed, x)
+    try:
+        return _checked(refine_structure(problem, modes, durs, x, params, ipopt=False)), "newton"
+    except SolveError as err:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+        collapsed = err.iterate if err.status == "arc_collapsed" else None
+    for m, d in _neighbours(modes, durs, collapsed):
+        try:
+            return _checked(refine_structure(problem, m, d, x, params, ipopt=False)), "structure"
+        except (SolveError, ValueError):  # (ValueError: a mode outside the control set)
+            raise_if_interrupted()
+    return _checked(refine_structure(problem, modes, durs, x, params, fast=False)), "ipopt"
+
+
+def _remaining(plan: RefinedSwitching, applied: float) -> tuple[tuple, np.ndarray]:
+    """The plan's modes and durations left after ``applied`` (finished arcs dropped)."""
     durs = np.asarray(plan.durations, float).copy()
-    keep = list(range(len(durs)))
-    while applied > 0 and keep:
-        i = keep[0]
-        if durs[i] > applied:
-            durs[i] -= applied
+    first = 0
+    while applied > 0 and first < len(durs):
+        if durs[first] > applied:
+            durs[first] -= applied
             break
-        applied -= durs[i]
-        keep.pop(0)
-    if not keep:
+        applied -= durs[first]
+        first += 1
+    if first == len(durs):
         raise SolveError("no_arcs_left", message="the plan has run out")
-    r = refine_structure(problem, tuple(plan.modes[i] for i in keep), durs[keep], x,
-                         state_parameters(robot, believed, x))
-    return _checked(r)
+    return tuple(plan.modes[first:]), durs[first:]
 
 
-def _checked(r: Any) -> Any:
+def _neighbours(modes: tuple, durs: np.ndarray,
+                collapsed: RefinedSwitching | None) -> list[tuple[tuple, np.ndarray]]:
+    """Structures next to ``modes``: without an arc that collapsed (from the re-solve's
+    durations), without the first or the last arc, without any other arc, and with a bang
+    arc added at the end (short ones first: an arc that appears starts short)."""
+    out: list[tuple[tuple, np.ndarray]] = []
+    if collapsed is not None:
+        tiny = np.flatnonzero(collapsed.durations <= 1e-9 * collapsed.T)
+        out += [_without(modes, np.asarray(collapsed.durations, float), int(i)) for i in tiny]
+    k = len(modes)
+    order = [0, k - 1, *range(1, k - 1)] if k > 1 else []
+    out += [_without(modes, durs, i) for i in dict.fromkeys(order)]
+    last = modes[-1][0].kind
+    if len(modes[-1]) == 1 and last in _FLIP:
+        out.append((modes + ((_FLIP[last],),), np.r_[durs[:-1], 0.99 * durs[-1],
+                                                      0.01 * durs[-1]]))
+    seen: set[tuple] = set()
+    unique = []
+    for m, d in out:
+        if m and m not in seen:
+            seen.add(m)
+            unique.append((m, d))
+    return unique
+
+
+_FLIP = {"max": Mode("min"), "min": Mode("max")}
+
+
+def _without(modes: tuple, durs: np.ndarray, i: int) -> tuple[tuple, np.ndarray]:
+    """``modes`` without arc ``i``, its time given to its neighbours (one arc if they then
+    repeat a mode)."""
+    m, d = list(modes), [float(v) for v in durs]
+    gone = d.pop(i)
+    m.pop(i)
+    if 0 < i < len(m) and m[i - 1] == m[i]:
+        d[i - 1] += gone + d.pop(i)
+        m.pop(i)
+    elif 0 < i < len(m):
+        d[i - 1] += 0.5 * gone
+        d[i] += 0.5 * gone
+    elif m:
+        d[min(i, len(m) - 1)] += gone
+    return tuple(m), np.asarray(d)
+
+
+def _checked(r: RefinedSwitching) -> RefinedSwitching:
     """A re-plan that keeps its structure (no arc collapsed) and is finite."""
     if not (np.all(np.isfinite(r.durations)) and np.all(np.isfinite(r.xT))):
         raise SolveError("not_finite", message="the re-plan is not finite")
     if min(r.durations) <= 1e-9 * r.T:
-        raise SolveError("arc_collapsed", message="an arc of the structure collapsed")
+        raise SolveError("arc_collapsed", r, message="an arc of the structure collapsed")
     return r
+
+
+def _prepare(problem: OptimalControlProblem, plan: Any, robot: Robot, model: Ground,
+             x: np.ndarray) -> None:
+    """Build, before the landing, what a sample may need: the Newton re-solves of the plan's
+    structure and of its suffixes (the structures left as its arcs end, each solved once
+    from the plan's state where it starts) and the transcription of the last resort."""
+    _warm_transcription()
+    if isinstance(plan, Solution):
+        return
+    starts = plan.junctions()[:, :problem.nx]
+    for j in range(len(plan.modes)):
+        x_j = x if j == 0 else starts[j]
+        params = state_parameters(robot, model, x_j)
+        modes, durs = tuple(plan.modes[j:]), np.asarray(plan.durations[j:], float)
+        for ipopt in (True, False):  # an Ipopt solve for the active set, then its Newton
+            with contextlib.suppress(SolveError, ValueError):
+                refine_structure(problem, modes, durs, x_j, params, ipopt=ipopt)
 
 
 @lru_cache(maxsize=1)
 def _state_transcription() -> MultipleShooting:
-    return MultipleShooting(state_landing_problem(), nodes=60, integrator="rk4", substeps=4,
-                            expand=True)
+    return MultipleShooting(state_landing_problem(), nodes=TRANSCRIPTION_NODES, integrator="rk4",
+                            substeps=4, expand=True)
+
+
+@lru_cache(maxsize=1)
+def _warm_transcription() -> None:
+    """Build the transcription and its solvers (cold and warm-started) once per process: the
+    first solves cost seconds, which no sample can afford."""
+    tr = _state_transcription()
+    x = SteppingPlant(PAPER_ROBOT, Impact(-3.0), LINEAR_GROUND).x  # the paper's impact
+    params = state_parameters(PAPER_ROBOT, LINEAR_GROUND, x)
+    with contextlib.suppress(SolveError), warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a coarse grid's path warning: only builds count
+        tr.solve(params, warm_start=tr.solve(params))
 
 
 def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,

@@ -17,6 +17,7 @@ from ocp import MultipleShooting, SolveError
 from ocp.costates import costates_from_multipliers
 from ocp.flows import expm
 from ocp.pmp import CERTIFIED, INCONCLUSIVE, NOT_BANG_BANG, certify
+from ocp.refinement import cached_nlps
 from ocp.switching import (
     Mode,
     clear_cache,
@@ -320,6 +321,26 @@ def test_newton_fast_path_square_active_set_and_its_checks():
     assert r.nlp.newton(np.array([0.5, 1.0]), r.w) is None
     with pytest.raises(SolveError):
         refine_structure(sol.problem, r.modes, r.durations, r.x0, {"d": 0.5, "vmax": 1.0})
+
+
+def test_newton_only_re_solve_never_builds_nor_runs_ipopt():
+    ms = MultipleShooting(speed_limited(), nodes=80)
+    sol = ms.solve({"d": 3.0, "vmax": 1.0}, guess=ms.initial_guess(T=4, x=lambda s: [3 * s, 0.5],
+                                                                    u=[0.0]))
+    r = refine_switching(sol)
+    moved = refine_structure(sol.problem, r.modes, r.durations, r.x0, {"d": 5.0, "vmax": 1.0},
+                             ipopt=False)
+    assert moved.path == "newton" and moved.T == pytest.approx(6.0, abs=1e-12)
+    solves = r.nlp.n_solves
+    with pytest.raises(SolveError) as err:  # Newton's result rejected: no Ipopt after it
+        refine_structure(sol.problem, r.modes, r.durations, r.x0, {"d": 0.5, "vmax": 1.0},
+                         ipopt=False)
+    assert err.value.status == "newton_failed" and r.nlp.n_solves == solves
+    other = r.modes[:1] + r.modes[2:]  # a structure never solved: nothing to re-solve
+    with pytest.raises(SolveError, match="no Newton re-solve"):
+        refine_structure(sol.problem, other, r.durations[[0, 2]], r.x0, {"d": 3.0, "vmax": 1.0},
+                         ipopt=False)
+    assert len(cached_nlps(sol.problem, other)) == 0
 
 
 # ------------------------------------------------------------------ pieces

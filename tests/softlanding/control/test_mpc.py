@@ -48,3 +48,39 @@ def test_cli_mpc_json_and_plot(cli, tmp_path):
 def test_cli_mpc_bad_input(cli, args):
     code, _, err = cli("mpc", *args)
     assert code == 2 and err.count("\n") == 1
+
+
+def _counted(m):
+    """The counters agree with the per-sample paths."""
+    paths = m.step_paths
+    assert len(paths) == len(m.step_times_ms)
+    assert set(paths) <= {"newton", "structure", "ipopt", "transcription", "kept"}
+    assert m.replans == paths.count("transcription") and m.fallbacks == paths.count("kept")
+    assert m.structure_changes == paths.count("structure")
+    d = m.to_dict()
+    assert d["structure_changes"] == m.structure_changes
+    assert {"replans", "fallbacks", "step_time_median_ms", "step_time_p99_ms",
+            "setup_ms"} <= set(d)
+
+
+def test_an_arc_ending_within_a_sample_is_dropped_and_newton_goes_on():
+    # the first (max) arc ends between two samples: the next re-solve is the one-arc
+    # structure, by Newton (its NLP solved in the setup), with no transcription
+    ground = LinearGround(1.5)
+    m = mpc_landing(-3, PAPER_ROBOT, ground)
+    _counted(m)
+    assert m.step_paths == ["newton"] * len(m.step_paths) and m.replans == m.fallbacks == 0
+    clair = solve_landing(-3, PAPER_ROBOT, ground)
+    assert m.feasible and m.depth == pytest.approx(clair.depth, rel=1e-9)
+
+
+def test_a_failed_re_solve_is_transcribed_and_lands_as_before():
+    # the first drag estimate (c_d 0 -> 1) is too far for the plan's re-solve: a
+    # transcription re-plans once, then Newton again; the depth is 865cfde's
+    m = mpc_landing(-3, PAPER_ROBOT, DragGround(1.0))
+    _counted(m)
+    assert m.replans == 1 and m.step_paths[1] == "transcription" and m.fallbacks == 0
+    assert m.step_paths[2:] == ["newton"] * (len(m.step_paths) - 2)
+    assert m.feasible and m.depth == pytest.approx(1.0081282148868798, rel=1e-9)
+    clair = solve_landing(-3, PAPER_ROBOT, DragGround(1.0))
+    assert clair.depth * (1 - 1e-9) <= m.depth <= 1.02 * clair.depth
