@@ -48,7 +48,7 @@ from softlanding.optimal.landing import (
     transcribed_schedule,
 )
 from softlanding.optimal.limits import force_limit
-from softlanding.simulation.simulator import LandingResult, joined_trajectory
+from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
 
@@ -92,7 +92,9 @@ class MPCLanding:
     structure_changes : int
         Samples re-planned by Newton on a neighbouring structure (an arc dropped or added).
     step_paths : list of str
-        What re-planned each sample: ``"newton"`` (the plan's structure), ``"structure"``
+        What re-planned each sample: ``"plan holds"`` (no re-solve: the sample went as the
+        plan predicted on its ground, which is still the estimate), ``"newton"`` (the plan's
+        structure), ``"structure"``
         (a neighbouring structure, Newton), ``"ipopt"`` (the plan's structure, Ipopt),
         ``"transcription"`` or ``"kept"`` (every re-plan failed).
     setup_ms : float
@@ -210,7 +212,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     estimates: list[GroundEstimate] = []
     paths: list[str] = []
     fallbacks, replans, elapsed, samples = 0, 0, 0.0, 0
-    believed = model
+    believed = planned_for = model
     # the foot has stopped when it is static, or creeps by rounding at the crater's exact
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
@@ -220,6 +222,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         # then computed from the measured state, not from the plan's prediction of it
         h = min(period, _plan_time(plan) - elapsed)
         h = h if h > 1e-9 * period else period
+        x_before = plant.x
         plant.step(schedule, h)  # the schedule's time starts at the step
         samples += 1
         if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
@@ -231,14 +234,21 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             estimates.append(e)
             if e.samples >= 2:
                 believed = e.ground()
+        if _plan_holds(robot, impact, schedule, h, x_before, plant.x, planned_for, believed):
+            # the plan's own ground explains the sample and is still believed: by the
+            # principle of optimality the plan's rest is the optimum from here, no re-solve
+            paths.append("plan holds")
+            elapsed += h
+            out_times.append(1e3 * (time.perf_counter() - t0))
+            continue
         try:
             plan, path = _replan(problem, plan, elapsed + h, robot, believed, plant.x)
-            elapsed = 0.0
+            elapsed, planned_for = 0.0, believed
         except SolveError:  # no structure near the last one fits: transcribe and refine anew
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             try:
                 plan = _transcribed_plan(plan, elapsed + h, robot, believed, plant.x)
-                elapsed, path = 0.0, "transcription"
+                elapsed, path, planned_for = 0.0, "transcription", believed
                 replans += 1
             except SolveError:  # keep the last plan for this sample
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
@@ -257,6 +267,25 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       fallbacks=fallbacks, samples=samples, setup_ms=setup_ms,
                       structure_changes=paths.count("structure"), step_paths=paths,
                       pieces=list(plant.history))
+
+
+PLAN_HOLDS_TOL = 1e-8
+"""Relative agreement of the measured state with the plan's prediction, and of the estimate
+with the plan's ground, under which a sample keeps the plan (no re-solve)."""
+
+
+def _plan_holds(robot: Robot, impact: Impact, schedule: Any, h: float, x_before: np.ndarray,
+                x: np.ndarray, planned_for: Ground, believed: Ground) -> bool:
+    """Whether the sample went as the plan predicted, on the ground it was planned for, and
+    that ground is still what the controller believes."""
+    k0, c0 = ground_numbers(planned_for)
+    k1, c1 = ground_numbers(believed)
+    if abs(k1 - k0) > PLAN_HOLDS_TOL * k0 or abs(c1 - c0) > PLAN_HOLDS_TOL * max(1.0, c0):
+        return False
+    predicted = simulate(robot, impact, schedule, planned_for, x0=x_before, t_max=h,
+                         energy=False).trajectory(t_end=h, n=2).x[-1]
+    scale = max(1.0, float(np.max(np.abs(x))))
+    return bool(np.max(np.abs(predicted - x)) <= PLAN_HOLDS_TOL * scale)
 
 
 def _plan_time(plan: Any) -> float:
