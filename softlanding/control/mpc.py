@@ -95,7 +95,8 @@ class MPCLanding:
         What re-planned each sample: ``"plan holds"`` (no re-solve: the sample went as the
         plan predicted on its ground, which is still the estimate), ``"newton"`` (the plan's
         structure), ``"structure"``
-        (a neighbouring structure, Newton), ``"ipopt"`` (the plan's structure, Ipopt),
+        (a neighbouring structure, Newton), ``"continuation"`` (Newton along grounds from the
+        plan's to the estimate), ``"ipopt"`` (the plan's structure, Ipopt),
         ``"transcription"`` or ``"kept"`` (every re-plan failed).
     setup_ms : float
         The one-time builds before the landing (not a step's time): the re-solves of the
@@ -234,7 +235,10 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             estimates.append(e)
             if e.samples >= 2:
                 believed = e.ground()
-        if _plan_holds(robot, impact, schedule, h, x_before, plant.x, planned_for, believed):
+        # (not at the plan's foot stop: a foot still creeping there needs a new plan, the
+        # rest of this one assumes it stopped)
+        if elapsed + h < _plan_time(plan) - 1e-12 * period and _plan_holds(
+                robot, impact, schedule, h, x_before, plant.x, planned_for, believed):
             # the plan's own ground explains the sample and is still believed: by the
             # principle of optimality the plan's rest is the optimum from here, no re-solve
             paths.append("plan holds")
@@ -242,7 +246,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             out_times.append(1e3 * (time.perf_counter() - t0))
             continue
         try:
-            plan, path = _replan(problem, plan, elapsed + h, robot, believed, plant.x)
+            plan, path = _replan(problem, plan, elapsed + h, robot, believed, plant.x,
+                                 planned_for)
             elapsed, planned_for = 0.0, believed
         except SolveError:  # no structure near the last one fits: transcribe and refine anew
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
@@ -327,12 +332,15 @@ def _schedule(plan: Any, robot: Robot) -> ForceSchedule | FeedbackSchedule:
 
 
 def _replan(problem: OptimalControlProblem, plan: Any, applied: float, robot: Robot,
-            believed: Ground, x: np.ndarray) -> tuple[RefinedSwitching, str]:
+            believed: Ground, x: np.ndarray,
+            planned_for: Ground | None = None) -> tuple[RefinedSwitching, str]:
     """The last plan's structure re-solved from ``x`` for the believed ground, and how.
 
-    Newton on the plan's structure (less the arcs already applied) first, then Newton on
-    its neighbours (an arc dropped, e.g. one that collapsed, or one added at the end), each
-    about a millisecond; Ipopt on the plan's structure last.
+    Newton on the plan's structure (less the arcs already applied) first; when the estimate
+    moved far from the plan's ground, Newton along a path of grounds from that one to the
+    believed one (a first drag estimate moves ``c_d`` from 0 to 1 at once); then Newton on
+    the structure's neighbours (an arc dropped, e.g. one that collapsed, or one added at the
+    end), each about a millisecond; Ipopt on the plan's structure last.
     """
     if isinstance(plan, Solution):
         raise SolveError("transcribed", message="a transcribed plan has no structure to re-solve")
@@ -343,12 +351,37 @@ def _replan(problem: OptimalControlProblem, plan: Any, applied: float, robot: Ro
     except SolveError as err:
         raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
         collapsed = err.iterate if err.status == "arc_collapsed" else None
+    if planned_for is not None and planned_for != believed:
+        try:
+            return _continued(problem, modes, durs, x, params,
+                              state_parameters(robot, planned_for, x)), "continuation"
+        except SolveError:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
     for m, d in _neighbours(modes, durs, collapsed):
         try:
             return _checked(refine_structure(problem, m, d, x, params, ipopt=False)), "structure"
         except (SolveError, ValueError):  # (ValueError: a mode outside the control set)
             raise_if_interrupted()
     return _checked(refine_structure(problem, modes, durs, x, params, fast=False)), "ipopt"
+
+
+CONTINUATION_STEPS = 4
+"""Grounds on the path from the plan's ground to the believed one (Newton at each)."""
+
+
+def _continued(problem: OptimalControlProblem, modes: tuple, durs: np.ndarray, x: np.ndarray,
+               params: dict[str, float], start: dict[str, float]) -> RefinedSwitching:
+    """Newton along ``K`` and ``c_d`` from ``start``'s values to ``params``', each re-solve
+    starting from the last one's durations."""
+    r = None
+    for lam in np.linspace(0.0, 1.0, CONTINUATION_STEPS + 1)[1:]:
+        p = dict(params)
+        for name in ("stiffness", "c_d"):
+            p[name] = start[name] + lam * (params[name] - start[name])
+        r = _checked(refine_structure(problem, modes, durs, x, p, ipopt=False))
+        durs = np.asarray(r.durations, float)
+    assert r is not None
+    return r
 
 
 def _remaining(plan: RefinedSwitching, applied: float) -> tuple[tuple, np.ndarray]:
