@@ -96,7 +96,8 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
         "clairvoyant_verified": not clair.unverified_reasons(),
         "open_loop": _replayed(simulate(robot, impact, nominal.schedule(), ground)),
         "impedance_nominal": _replayed(simulate(robot, impact, gains, ground)),
-        "mpc": {**m.to_dict(), "depth": m.depth, "step_times_ms": list(m.step_times_ms)}}
+        "mpc": {**m.to_dict(), "depth": m.depth, "step_times_ms": list(m.step_times_ms),
+                "step_cpu_ms": list(m.step_cpu_ms)}}
     for key, planned in (("robust", robust), ("tree", tree)):
         if planned is not None:
             row[key] = _planned(planned)
@@ -152,8 +153,8 @@ def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         From :func:`unknown_ground_study`.
     """
     ratios = np.array([r["mpc"]["ratio"] for r in rows])
-    steps = np.concatenate([np.asarray(r["mpc"].get("step_times_ms", []), float)
-                            for r in rows] + [np.zeros(0)])
+    steps, cpu = (np.concatenate([np.asarray(r["mpc"].get(key, []), float) for r in rows]
+                                 + [np.zeros(0)]) for key in ("step_times_ms", "step_cpu_ms"))
     verified = np.array([r["clairvoyant_verified"] for r in rows])
     return {
         "cases": len(rows), "clairvoyant_verified": int(verified.sum()),
@@ -167,6 +168,8 @@ def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "step_time_p99_ms": float(np.percentile(steps, 99)) if steps.size else math.nan,
         "step_time_p99_worst_case_ms": float(np.max([r["mpc"]["step_time_p99_ms"]
                                                      for r in rows])),
+        "step_cpu_median_ms": float(np.median(cpu)) if cpu.size else math.nan,
+        "step_cpu_p99_ms": float(np.percentile(cpu, 99)) if cpu.size else math.nan,
         "steps": int(steps.size),
         "worst_case": _worst_cases(rows)}
 
