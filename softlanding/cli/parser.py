@@ -234,14 +234,18 @@ def _impedance(sub: Any) -> argparse.ArgumentParser:
                        description="Minimise depth (or CoT) over the gains (k_p, k_d) in "
                                    "[0, 1]^2, excluding landings that leave the stroke: the "
                                    "paper's grid, then a zooming feasible-grid refinement "
-                                   "(to 1e-8) and a bisection onto the stroke limit.")
+                                   "(to 1e-8) and a bisection onto the stroke limit. With "
+                                   "comma lists of --stiffness or --cd (e.g. --ground drag "
+                                   "--stiffness 0.5,1,2 --cd 0,0.2,1), the gains minimise "
+                                   "the worst case over every ground named, feasible on all "
+                                   "of them.")
     i.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
     _model_args(i, None, "actuator force limit (default none, as in the paper's study)")
     i.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth",
                    help="depth; CoT with actuator and ground losses; or ground losses only")
     i.add_argument("--grid", type=int, default=101,
                    help="starting grid per axis (default 101, 2 to 2001)")
-    ground_args(i)
+    ground_args(i, several=True)
     return i
 
 

@@ -103,3 +103,47 @@ def test_bad_grounds_are_parameter_errors(bad, match):
     with pytest.raises(ParameterError, match=match) as e:
         optimize_impedance(-3.0, R, bad, grid=3)
     assert e.value.parameter == "ground"
+
+
+def _ground_options(*args):
+    import argparse
+
+    from softlanding.cli.ground import ground_args, grounds_of
+
+    p = argparse.ArgumentParser()
+    ground_args(p, several=True)
+    return grounds_of(p.parse_args(list(args)))
+
+
+def test_cli_ground_lists_name_every_combination():
+    assert _ground_options() == LINEAR_GROUND
+    assert _ground_options("--stiffness", "0.5") == LinearGround(0.5)  # one ground, as before
+    assert _ground_options("--stiffness", "0.5,2") == [SOFT, STIFF]
+    assert _ground_options("--ground", "drag", "--stiffness", "0.5,1", "--cd", "0,0.2") == [
+        DragGround(0.0, 0.5), DragGround(0.2, 0.5), DragGround(0.0, 1.0), DragGround(0.2, 1.0)]
+
+
+def test_cli_impedance_worst_case_json(cli, optima):
+    code, out, err = cli("impedance", "--v0", V0, "--umax", R.u_max, "--grid", GRID,
+                         "--stiffness", "0.5,2", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d == json.loads(json.dumps(optima[2].to_dict()))  # the API's worst-case optimum
+    code, out, err = cli("impedance", "--v0", V0, "--umax", R.u_max, "--grid", GRID,
+                         "--stiffness", "0.5,2")
+    assert code == 0, err
+    assert "worst ground(s)" in out and "depth on linear stiffness=2" in out
+
+
+@pytest.mark.parametrize("args, match", [
+    (["--stiffness", "0.5,x"], "comma-separated numbers"),
+    (["--stiffness", "0.5,,1"], "comma-separated numbers"),
+    (["--cd", "nan"], "comma-separated numbers"),
+    (["--stiffness", "0.5,-1"], "stiffness"),
+    (["--cd", "0,1"], "--cd does not apply to --ground linear"),
+    (["--ground", "drag", "--stiffness", "1,2"], "needs the drag number --cd"),
+])
+def test_cli_bad_ground_lists_are_one_line_errors(cli, args, match):
+    code, out, err = cli("impedance", "--v0", "-3", "--grid", "3", *args)
+    assert code == 2 and "Traceback" not in err
+    assert match in err and len(err.strip().splitlines()) == 1
