@@ -213,7 +213,7 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
                                                      for i in o.worst)))
         rows += [(f"depth on {_ground_text(gr)}", f"{d:.10g} (stroke margin {m:.3g})")
                  for gr, d, m in zip(o.grounds, o.ground_depths, o.ground_margins,
-                                         strict=True)]
+                                     strict=True)]
     print_table(rows)
     return EXIT_OK
 
