@@ -186,7 +186,9 @@ def _cmd_solve_sweep(a: argparse.Namespace) -> int:
 
 # ------------------------------------------------------------------ impedance
 def _cmd_impedance(a: argparse.Namespace) -> int:
-    robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
+    from softlanding.cli.ground import grounds_of
+
+    robot, impact, ground = robot_of(a), Impact(a.v0), grounds_of(a)
     grid = check_count("grid", a.grid, 2, 2001)
     from softlanding.studies.impedance import optimize_impedance
 
@@ -195,8 +197,10 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
         print_json(o.to_dict())
         return EXIT_OK
     g = o.grid_best
-    print_table([
-        ("objective", o.objective), ("v0", o.v0), ("optimal k_p", o.k_p),
+    several = len(o.grounds) > 1
+    rows: list[tuple[str, Any]] = [
+        ("objective", o.objective + (" (worst case over the grounds)" if several else "")),
+        ("v0", o.v0), ("optimal k_p", o.k_p),
         ("optimal k_d", o.k_d), (f"{o.objective} at the optimum", o.value), ("depth", o.depth),
         ("intrusion steps", o.steps), ("peak |u|", o.u_peak), ("stroke min", o.stroke_min),
         ("stroke max", o.stroke_max), ("CoT (dissipative)", o.cot),
@@ -204,8 +208,21 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
         ("active constraint", o.active_constraint or "none"),
         ("best grid point", f"k_p={g['k_p']:g}, k_d={g['k_d']:g}, "
                             f"{o.objective}={g['value']:.10g}"),
-        ("landings simulated", o.evaluations)])
+        ("landings simulated", o.evaluations)]
+    if several:
+        rows.insert(6, ("worst ground(s)", "; ".join(_ground_text(o.grounds[i])
+                                                     for i in o.worst)))
+        rows += [(f"depth on {_ground_text(gr)}", f"{d:.10g} (stroke margin {m:.3g})")
+                 for gr, d, m in zip(o.grounds, o.ground_depths, o.ground_margins,
+                                     strict=True)]
+    print_table(rows)
     return EXIT_OK
+
+
+def _ground_text(ground: Any) -> str:
+    d = ground.to_dict()
+    params = [f"{k}={v:g}" for k, v in d.items() if k != "model" and isinstance(v, (int, float))]
+    return " ".join([str(d["model"])] + params)
 
 
 def _cmd_map(a: argparse.Namespace) -> int:

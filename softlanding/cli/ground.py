@@ -6,11 +6,17 @@ of ``f = K d`` on the linear and drag grounds), ``--cd`` (the drag number
 ``--kappa`` (the accreted cone; default: the poppy-seed preset of the paper's rig), and
 ``--exponent`` (the power law ``f = d^n``, a user law compiled from its CasADi
 expression). Bad numbers are one-line errors (exit 2) from the model's own validation.
+
+A command that tunes for an unknown ground (``impedance``) takes comma lists instead:
+``--stiffness 0.5,1,2 --cd 0,0.2,1`` names every ``K`` with every ``c_d``
+(:func:`grounds_of`).
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
+import math
 from typing import Any
 
 from softlanding.errors import ParameterError, check
@@ -18,25 +24,56 @@ from softlanding.errors import ParameterError, check
 GROUNDS = ("linear", "drag", "added-mass", "power")
 
 
-def ground_args(p: argparse.ArgumentParser) -> None:
+def numbers(text: str) -> list[float]:
+    """``--stiffness`` and ``--cd`` of a worst-case command: one number or a comma list
+    (an argparse type).
+
+    Parameters
+    ----------
+    text : str
+        What the user typed, e.g. ``0.5,1,2``.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        Not finite numbers separated by commas (a one-line usage error, exit 2).
+    """
+    try:
+        values = [float(t) for t in text.split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"a number or comma-separated numbers (e.g. 0.5,1,2), "
+                                         f"not {text!r}")
+    return values
+
+
+def ground_args(p: argparse.ArgumentParser, several: bool = False) -> None:
     """Add ``--ground`` and its parameters to a sub-command's parser.
 
     Parameters
     ----------
     p : argparse.ArgumentParser
         The sub-command's parser.
+    several : bool
+        ``--stiffness`` and ``--cd`` take comma lists: the command tunes for the worst case
+        over every ground they name (read them with :func:`grounds_of`).
     """
     g = p.add_argument_group("ground model")
     g.add_argument("--ground", choices=GROUNDS, default="linear",
                    help="yielding ground law: the paper's spring (default), inertial drag "
                         "f = d + c_d v^2, added mass (accreted cone of grains), or the power "
                         "law f = d^n")
-    g.add_argument("--stiffness", type=float, default=None, metavar="K",
+    worst = (": a comma list (e.g. 0.5,1,2) tunes for the worst case over every value, with "
+             "every value of the other" if several else "")
+    g.add_argument("--stiffness", type=numbers if several else float, default=None,
+                   metavar="K[,K...]" if several else "K",
                    help="ground stiffness factor K > 0: f = K d on --ground linear or drag "
-                        "(default 1, the paper's measured ground)")
-    g.add_argument("--cd", type=float, default=None,
+                        f"(default 1, the paper's measured ground){worst}")
+    g.add_argument("--cd", type=numbers if several else float, default=None,
+                   metavar="CD[,CD...]" if several else "CD",
                    help="drag number c_d = b x_s / m_t (>= 0; --ground drag, or extra drag "
-                        "with added-mass)")
+                        f"with added-mass){worst}")
     g.add_argument("--pi-a", type=float, default=None,
                    help="added-mass number Pi_a = pi c_g phi rho_p mu x_s^3 / m_t (default: "
                         "poppy seeds, the paper's rig)")
@@ -99,6 +136,32 @@ def ground_of(a: argparse.Namespace) -> Any:
 
 
 
+def grounds_of(a: argparse.Namespace) -> Any:
+    """The ground, or the grounds, named by options parsed with ``ground_args(several=True)``.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments; ``stiffness`` and ``cd`` are lists of numbers or None.
+
+    Returns
+    -------
+    Ground or list of Ground
+        One ground when every list has one value (the same model :func:`ground_of` gives),
+        else every ``--stiffness`` value with every ``--cd`` value.
+
+    Raises
+    ------
+    ParameterError
+        As :func:`ground_of`, for any of the grounds.
+    """
+    ks = a.stiffness if a.stiffness is not None else [None]
+    cds = a.cd if a.cd is not None else [None]
+    grounds = [ground_of(argparse.Namespace(**{**vars(a), "stiffness": k, "cd": cd}))
+               for k, cd in itertools.product(ks, cds)]
+    return grounds[0] if len(grounds) == 1 else grounds
+
+
 def rft_stiffness_of(a: argparse.Namespace) -> float:
     """``k_g`` [N/m] of ``--medium`` and ``--foot-diameter`` (resistive force theory).
 
@@ -123,4 +186,4 @@ def rft_stiffness_of(a: argparse.Namespace) -> float:
     return rft_stiffness(medium(a.medium), d)
 
 
-__all__ = ["GROUNDS", "ground_args", "ground_of", "rft_stiffness_of"]
+__all__ = ["GROUNDS", "ground_args", "ground_of", "grounds_of", "numbers", "rft_stiffness_of"]

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import math
 import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from softlanding.cli.ground import ground_args
+from softlanding.cli.ground import ground_args, numbers
 from softlanding.cli.variants import VARIANTS, extension_value
 from softlanding.errors import LIMITS
 from softlanding.model.robot import PAPER_ROBOT
@@ -235,14 +234,18 @@ def _impedance(sub: Any) -> argparse.ArgumentParser:
                        description="Minimise depth (or CoT) over the gains (k_p, k_d) in "
                                    "[0, 1]^2, excluding landings that leave the stroke: the "
                                    "paper's grid, then a zooming feasible-grid refinement "
-                                   "(to 1e-8) and a bisection onto the stroke limit.")
+                                   "(to 1e-8) and a bisection onto the stroke limit. With "
+                                   "comma lists of --stiffness or --cd (e.g. --ground drag "
+                                   "--stiffness 0.5,1,2 --cd 0,0.2,1), the gains minimise "
+                                   "the worst case over every ground named, feasible on all "
+                                   "of them.")
     i.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
     _model_args(i, None, "actuator force limit (default none, as in the paper's study)")
     i.add_argument("--objective", choices=["depth", "cot", "cot-lossless"], default="depth",
                    help="depth; CoT with actuator and ground losses; or ground losses only")
     i.add_argument("--grid", type=int, default=101,
                    help="starting grid per axis (default 101, 2 to 2001)")
-    ground_args(i)
+    ground_args(i, several=True)
     return i
 
 
@@ -353,29 +356,6 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
     return m
 
 
-def number_list(text: str) -> tuple[float, ...]:
-    """``--stiffness 0.5,1,2``: comma-separated finite numbers (an argparse type).
-
-    Parameters
-    ----------
-    text : str
-        What the user typed.
-
-    Raises
-    ------
-    argparse.ArgumentTypeError
-        Not such a list (a one-line usage error, exit 2, before any work).
-    """
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"comma-separated numbers, e.g. 0.5,1,2, not {text!r}") from None
-    if not all(map(math.isfinite, values)):
-        raise argparse.ArgumentTypeError(f"finite numbers, not {text!r}")
-    return values
-
-
 def _robust(sub: Any) -> argparse.ArgumentParser:
     r = sub.add_parser("robust", help="one landing plan for a set of grounds (robust, tree)",
                        description="Plan the landing for every ground of a set (the products "
@@ -388,9 +368,9 @@ def _robust(sub: Any) -> argparse.ArgumentParser:
                                    "and the clairvoyant optimum (knows the ground).")
     r.add_argument("--v0", type=float, required=True, help="impact velocity (< 0)")
     _model_args(r, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
-    r.add_argument("--stiffness", type=number_list, default=(1.0,), metavar="K1,K2,...",
+    r.add_argument("--stiffness", type=numbers, default=[1.0], metavar="K1,K2,...",
                    help="the grounds' stiffness factors K > 0 (default 1)")
-    r.add_argument("--cd", type=number_list, default=(0.0,), metavar="C1,C2,...",
+    r.add_argument("--cd", type=numbers, default=[0.0], metavar="C1,C2,...",
                    help="the grounds' drag numbers c_d >= 0 (default 0: linear grounds)")
     r.add_argument("--tree", action="store_true",
                    help="also the two-stage tree: the robust schedule until --branch-time, "

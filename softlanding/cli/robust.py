@@ -19,12 +19,12 @@ from softlanding.model.ground import DragGround, Ground, LinearGround
 from softlanding.model.robot import Impact
 
 
-def grounds_of(stiffness: tuple[float, ...], drag: tuple[float, ...]) -> list[Ground]:
+def ground_set(stiffness: list[float], drag: list[float]) -> list[Ground]:
     """The grounds ``f = K d + c_d v^2`` of every ``K`` and ``c_d`` (linear when ``c_d = 0``).
 
     Parameters
     ----------
-    stiffness, drag : tuple of float
+    stiffness, drag : list of float
         The factors ``K`` (> 0) and drag numbers (>= 0).
 
     Raises
@@ -52,7 +52,7 @@ def robust_command(a: argparse.Namespace) -> int:
         Parsed arguments.
     """
     robot, impact, plot = robot_of(a), Impact(a.v0), target(a)
-    grounds = grounds_of(a.stiffness, a.cd)
+    grounds = ground_set(a.stiffness, a.cd)
     if a.branch_time is not None and not a.tree:
         raise ParameterError("--branch-time", "applies to --tree")
     branch = 0.05 if a.branch_time is None else check(
@@ -116,4 +116,4 @@ def robust_command(a: argparse.Namespace) -> int:
     return EXIT_OK if chosen.feasible else EXIT_FAILURE
 
 
-__all__ = ["grounds_of", "robust_command"]
+__all__ = ["ground_set", "robust_command"]

@@ -19,10 +19,19 @@ only with more ``k_d``), which a grid around one point cannot enter. So the lowe
 feasible ``k_p`` is found by bisection at 21 values of ``k_d`` at once, and the best of
 them zoomed in ``k_d`` the same way. The result is never worse than the best grid point
 (the incumbent is kept at every step) and is re-simulated to confirm it is feasible.
+
+Gains for an unknown ground: given a sequence of grounds, :func:`optimize_impedance` tunes
+for the worst case. The objective of a gain pair is its largest value over the grounds,
+and it is feasible only if it is strictly feasible on every ground; the same grid, zoom
+and boundary search then run on that function (the stroke boundary is now that of the
+intersection of the feasible sets, and the optimum may also sit on a kink where two
+grounds' values cross, which the derivative-free grid handles alike). The result names
+the worst (active) grounds and gives every ground's value and depth.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -39,6 +48,10 @@ OBJECTIVES = ("depth", "cot", "cot-lossless")
 GAIN_RANGE = (0.0, 1.0)
 MAX_GRID = 2001
 """Largest starting grid per axis (4 million landings)."""
+ACTIVE_TOL = 1e-6
+"""A ground is among the worst (active) when its value is within this (absolute, or
+relative above 1) of the largest; the refinement resolves the gains to ``tol``, so the
+values of grounds balanced at a worst-case optimum agree to about that."""
 
 
 def _objective_values(b: BatchResult, objective: str) -> np.ndarray:
@@ -76,7 +89,21 @@ class ImpedanceOptimum:
     grid_best : dict
         ``k_p, k_d, value`` of the best point of the starting grid.
     evaluations : int
-        Landings simulated.
+        Landings simulated (over all grounds).
+    ground : Ground
+        The ground of the landing described (``depth``, ``steps``, ...): the one given, or
+        with several grounds the worst one (the first of ``worst``).
+    grounds : tuple of Ground
+        Every ground the gains were tuned for (``(ground,)`` for one).
+    worst : tuple of int
+        Indices into ``grounds`` of the worst (active) grounds: those whose value is within
+        :data:`ACTIVE_TOL` of ``value``.
+    ground_values, ground_depths : tuple of float
+        The objective and the depth on each ground, re-simulated at the optimal gains
+        (``value`` is the largest of ``ground_values``).
+    ground_margins : tuple of float
+        The stroke margin ``min(stroke_min, s - stroke_max)`` on each ground
+        (``on_stroke_boundary`` and ``active_constraint`` are those of the smallest).
     """
 
     objective: str
@@ -97,6 +124,15 @@ class ImpedanceOptimum:
     grid_best: dict[str, float]
     evaluations: int
     ground: Ground = field(default=LINEAR_GROUND)
+    grounds: tuple[Ground, ...] = ()
+    worst: tuple[int, ...] = (0,)
+    ground_values: tuple[float, ...] = ()
+    ground_depths: tuple[float, ...] = ()
+    ground_margins: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        if not self.grounds:
+            self.grounds = (self.ground,)
 
     @property
     def v0(self) -> float:
@@ -114,7 +150,11 @@ class ImpedanceOptimum:
             "objective", "v0", "k_p", "k_d", "value", "depth", "steps", "u_peak", "stroke_min",
             "stroke_max", "cot", "cot_lossless", "on_stroke_boundary", "active_constraint",
             "grid_best", "evaluations")}
-        d.update(robot=self.robot.to_dict(), ground=self.ground.to_dict())
+        d.update(robot=self.robot.to_dict(), ground=self.ground.to_dict(),
+                 grounds=[g.to_dict() for g in self.grounds], worst=list(self.worst),
+                 ground_values=list(self.ground_values),
+                 ground_depths=list(self.ground_depths),
+                 ground_margins=list(self.ground_margins))
         return json_safe(d)
 
 
@@ -219,12 +259,30 @@ def _along_boundary(batch, best: tuple[float, float, float], h: float, kp_range,
     return best, evals
 
 
+def _grounds_of(ground: Any) -> tuple[Ground, ...]:
+    """One ground, or a non-empty list or tuple of grounds, as a tuple (else ParameterError)."""
+    if isinstance(ground, Ground):
+        return (ground,)
+    if isinstance(ground, (str, bytes, Mapping)) or not isinstance(ground, Sequence):
+        raise ParameterError("ground", "must be a Ground or a non-empty list or tuple of "
+                                       f"Grounds, got {type(ground).__name__} {ground!r:.60}")
+    if len(ground) == 0:
+        raise ParameterError("ground", "an empty sequence of grounds: give at least one")
+    for i, g in enumerate(ground):
+        if not isinstance(g, Ground):
+            raise ParameterError("ground", f"item {i} of the sequence must be a Ground, got "
+                                           f"{type(g).__name__} {g!r:.60}")
+    return tuple(ground)
+
+
 def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_ROBOT,
-                       ground: Ground = LINEAR_GROUND, *, objective: str = "depth",
-                       grid: int = 101, kp_range: tuple[float, float] = GAIN_RANGE,
+                       ground: Ground | Sequence[Ground] = LINEAR_GROUND, *,
+                       objective: str = "depth", grid: int = 101,
+                       kp_range: tuple[float, float] = GAIN_RANGE,
                        kd_range: tuple[float, float] = GAIN_RANGE,
                        tol: float = 1e-8) -> ImpedanceOptimum:
-    """Minimise depth (or CoT) over the gains, subject to the stroke limits.
+    """Minimise depth (or CoT) over the gains, subject to the stroke limits; with several
+    grounds, minimise the worst case over them.
 
     Parameters
     ----------
@@ -232,8 +290,11 @@ def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_RO
         Impact velocity.
     robot : Robot
         The robot (its force limit saturates the impedance; the paper's study has none).
-    ground : Ground
-        Ground model.
+    ground : Ground or sequence of Ground
+        Ground model, or a non-empty list or tuple of them (the true ground unknown among
+        them): then the objective is the largest over the grounds, and gains are feasible
+        only if they are on every ground (see the module docstring). One ground in a
+        sequence gives the same result as that ground alone.
     objective : {"depth", "cot", "cot-lossless"}
         ``cot`` counts ground and actuator losses, ``cot-lossless`` the ground only.
     grid : int
@@ -250,24 +311,37 @@ def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_RO
     Raises
     ------
     ParameterError
-        Bad parameters, or no feasible gains in the box.
+        Bad parameters (an empty sequence of grounds, or an item that is not a Ground), or
+        no gains in the box feasible (on every ground).
     """
     impact = Impact.of(impact)
     _check(impact, objective, grid)
     expect("robot", robot, Robot)
+    grounds = _grounds_of(ground)
     energy = objective != "depth"
 
+    def one(g: Ground) -> Callable[[Any, Any], np.ndarray]:
+        def batch(kp, kd) -> np.ndarray:
+            b = simulate_batch(robot, impact.v0, kp, kd, g, energy=energy)
+            return _objective_values(b, objective)
+        return batch
+
+    batches = [one(g) for g in grounds]
+
     def batch(kp, kd) -> np.ndarray:
-        b = simulate_batch(robot, impact.v0, kp, kd, ground, energy=energy)
-        return _objective_values(b, objective)
+        J = batches[0](kp, kd)
+        for f in batches[1:]:  # the worst case; inf (infeasible) on any ground stays inf
+            J = np.maximum(J, f(kp, kd))
+        return J
 
     kp = np.linspace(*kp_range, grid)
     kd = np.linspace(*kd_range, grid)
     J = batch(kp[:, None], kd[None, :])
     evals = J.size
     if not np.isfinite(J).any():
-        raise ParameterError("k_p", "no feasible gains in the box: every landing leaves the "
-                                    "stroke limits or never comes to rest")
+        where = "on every ground " if len(grounds) > 1 else ""
+        raise ParameterError("k_p", f"no feasible gains {where}in the box: every landing leaves "
+                                    "the stroke limits or never comes to rest")
     i, j = np.unravel_index(np.argmin(J), J.shape)
     best = (float(kp[i]), float(kd[j]), float(J[i, j]))
     grid_best = {"k_p": best[0], "k_d": best[1], "value": best[2]}
@@ -276,28 +350,51 @@ def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_RO
     n3 = 0
     if np.isinf(batch(np.array([best[0] - 2 * tol]), best[1])[0]):  # k_p at the stroke limit
         best, n3 = _along_boundary(batch, best, kd[1] - kd[0], kp_range, kd_range, tol)
-    return _optimum(objective, robot, impact, ground, best, grid_best, evals + n1 + n2 + n3 + 1)
+    evals = (evals + n1 + n2 + n3 + 1) * len(grounds)
+    return _optimum(objective, robot, impact, grounds, best, grid_best, evals)
 
 
-def _optimum(objective, robot, impact, ground, best, grid_best, evals) -> ImpedanceOptimum:
-    """Re-simulate the optimum (never report infeasible gains) and describe it."""
+def _value_of(res: Any, objective: str) -> float:
+    if objective == "depth":
+        return float(res.depth)
+    return float(res.energy.cot if objective == "cot" else res.energy.cot_lossless)
+
+
+def _optimum(objective: str, robot: Robot, impact: Impact, grounds: tuple[Ground, ...],
+             best: tuple[float, float, float], grid_best: dict[str, float],
+             evals: int) -> ImpedanceOptimum:
+    """Re-simulate the optimum on every ground (never report gains infeasible on any) and
+    describe it: the landing on the worst ground, and every ground's figures."""
     kp_s, kd_s, val = best
-    res = simulate(robot, impact, Impedance(kp_s, kd_s), ground)
-    if not (res.rest_proven and res.stroke_min >= 0 and res.stroke_max <= robot.s):
-        raise RuntimeError("refined gains are infeasible on re-simulation; please report")
-    margin = min(res.stroke_min, robot.s - res.stroke_max)
-    on_boundary = margin <= 1e-6
+    results = []
+    for g in grounds:
+        res = simulate(robot, impact, Impedance(kp_s, kd_s), g)
+        if not (res.rest_proven and res.stroke_min >= 0 and res.stroke_max <= robot.s):
+            where = f" on ground {g.to_dict()}" if len(grounds) > 1 else ""
+            raise RuntimeError(f"refined gains are infeasible on re-simulation{where}; "
+                               "please report")
+        results.append(res)
+    values = tuple(_value_of(r, objective) for r in results)
+    top = max(values)
+    worst = tuple(i for i, v in enumerate(values) if v >= top - ACTIVE_TOL * max(1.0, abs(top)))
+    worst = tuple(sorted(worst, key=lambda i: -values[i]))  # the largest first
+    margins = tuple(min(r.stroke_min, robot.s - r.stroke_max) for r in results)
+    res = results[worst[0]]
+    tight = results[int(np.argmin(margins))]
+    on_boundary = min(margins) <= 1e-6
     active = None
     if on_boundary:
         active = ("stroke lower limit x_b - x_f >= 0"
-                  if res.stroke_min <= robot.s - res.stroke_max
+                  if tight.stroke_min <= robot.s - tight.stroke_max
                   else "stroke upper limit x_b - x_f <= s")
     return ImpedanceOptimum(
-        objective=objective, robot=robot, impact=impact, ground=ground, k_p=kp_s, k_d=kd_s,
-        value=val, depth=res.depth, steps=res.steps, u_peak=res.u_peak,
+        objective=objective, robot=robot, impact=impact, ground=grounds[worst[0]], k_p=kp_s,
+        k_d=kd_s, value=val, depth=res.depth, steps=res.steps, u_peak=res.u_peak,
         stroke_min=res.stroke_min, stroke_max=res.stroke_max, cot=res.energy.cot,
         cot_lossless=res.energy.cot_lossless, on_stroke_boundary=on_boundary,
-        active_constraint=active, grid_best=grid_best, evaluations=evals)
+        active_constraint=active, grid_best=grid_best, evaluations=evals, grounds=grounds,
+        worst=worst, ground_values=values, ground_depths=tuple(r.depth for r in results),
+        ground_margins=margins)
 
 
-__all__ = ["GAIN_RANGE", "ImpedanceOptimum", "OBJECTIVES", "optimize_impedance"]
+__all__ = ["ACTIVE_TOL", "GAIN_RANGE", "ImpedanceOptimum", "OBJECTIVES", "optimize_impedance"]
