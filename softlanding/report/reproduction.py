@@ -20,10 +20,12 @@ from softlanding.report.paper import PAPER_SECTIONS
 from softlanding.report.phased import PHASED_SECTION
 from softlanding.report.registry import Context, Section, Settings
 from softlanding.report.terrain import TERRAIN_SECTION
+from softlanding.report.unknown_ground import UNKNOWN_GROUND_SECTION
 from softlanding.util.files import atomic_folder
 from softlanding.util.jsonable import json_safe
 
-SECTIONS: tuple[Section, ...] = (*PAPER_SECTIONS, TERRAIN_SECTION, PHASED_SECTION)
+SECTIONS: tuple[Section, ...] = (*PAPER_SECTIONS, TERRAIN_SECTION, PHASED_SECTION,
+                                 UNKNOWN_GROUND_SECTION)
 """The registry: every section of the reproduction, in the order run and reported."""
 
 
