@@ -199,8 +199,10 @@ def plot_unknown_ground_study(rows: Sequence[Mapping[str, Any]],
         ax.margins(y=0.08)
         ax.set_title(f"impact velocity $v_0$ = {v0:g}", fontsize=9, loc="left")
         ax.grid(axis="y", alpha=0.3)
-        for i in range(1, len(grounds)):
-            ax.axvline(i - 0.5, color="0.8", lw=0.6, zorder=0)
+        for i in range(1, len(grounds)):  # darker where K changes
+            new_k = grounds[i][0] != grounds[i - 1][0]
+            ax.axvline(i - 0.5, color="0.55" if new_k else "0.85", lw=0.8 if new_k else 0.6,
+                       zorder=0)
     bottom = axes[-1, 0]
     bottom.set_xticks(x, [f"$K$={k:g}\n$c_d$={c:g}" for k, c in grounds], fontsize=8)
     bottom.set_xlim(-0.5, len(grounds) - 0.5)

@@ -4,7 +4,7 @@
 PDF, ``summary.json`` (every headline number, machine-readable), ``summary.md``
 (the same as tables, with the paper's values beside ours where it gives them)
 and the computed datasets as netCDF under ``data/``. ``quick=True`` uses
-coarser grids and fewer impact velocities (about a minute on 2 cores); the
+coarser grids and fewer impact velocities (about three minutes on 2 cores); the
 numbers it reports are still exact for the grids it uses, and each of them is
 what the public API returns for the same arguments (the test suite checks).
 """
@@ -39,7 +39,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         Folder to write into (created if missing; files of the same names are replaced,
         and only once the whole run has succeeded).
     quick : bool
-        Coarser grids and fewer impact velocities (about a minute on 2 cores).
+        Coarser grids and fewer impact velocities (about three minutes on 2 cores).
     progress : bool
         Progress bars for the long sweeps.
     log : callable or None
