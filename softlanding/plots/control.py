@@ -174,7 +174,7 @@ def plot_unknown_ground_study(rows: Sequence[Mapping[str, Any]],
     grounds = sorted({study_ground(r) for r in rows})
     fig, axes = plt.subplots(len(v0s), 1, sharex=True, squeeze=False, layout="constrained",
                              figsize=(max(7.5, 0.2 * len(grounds) * max(3, len(keys)) + 1.5),
-                                      1.4 + 2.2 * len(v0s)))
+                                      max(4.6, 1.4 + 2.2 * len(v0s))))
     x = np.arange(len(grounds))
     width = 0.8 / max(1, len(keys))
     colours = iter(f"C{i}" for i in range(5, 10))
