@@ -3,7 +3,8 @@
 :func:`reproduce` writes, into one folder, each figure of the paper as PNG and
 PDF, ``summary.json`` (every headline number, machine-readable), ``summary.md``
 (the same as tables, with the paper's values beside ours where it gives them)
-and the computed datasets as netCDF under ``data/``. ``quick=True`` uses
+and the computed datasets under ``data/`` (netCDF; the unknown-ground study's rows as
+JSON and CSV). ``quick=True`` uses
 coarser grids and fewer impact velocities (about three minutes on 2 cores); the
 numbers it reports are still exact for the grids it uses, and each of them is
 what the public API returns for the same arguments (the test suite checks).
