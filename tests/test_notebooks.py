@@ -7,6 +7,9 @@ import pytest
 from nbclient import NotebookClient
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "notebooks").glob("*.ipynb"))
+FIGURES = {"05_terrain_models.ipynb": 3, "06_hybrid_landing_and_hopping.ipynb": 4,
+           "07_unknown_ground.ipynb": 4}
+"""How many figures a notebook shows (each once): none lost, none shown twice."""
 
 
 def _plots(source: str) -> bool:
@@ -32,6 +35,9 @@ def test_notebook_executes_and_shows_its_figures(path, tmp_path):
         shown = [o["data"]["image/png"] for o in c.get("outputs", [])
                  if "image/png" in o.get("data", {})]
         assert len(shown) == len(set(shown)), f"a figure shown twice by:\n{c.source[:200]}"
+    if path.name in FIGURES:
+        pngs = [o for c in code for o in c.get("outputs", []) if "image/png" in o.get("data", {})]
+        assert len(pngs) == FIGURES[path.name]
 
 
 def test_there_is_a_notebook():

@@ -323,7 +323,7 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
                    help="folder to write: new or empty, or with --force an existing one whose "
                         "files of the same names are replaced")
     _force_arg(r)
-    r.add_argument("--quick", action="store_true", help="coarser grids, about a minute")
+    r.add_argument("--quick", action="store_true", help="coarser grids, about three minutes")
     r.add_argument("--json", action="store_true", help="print summary.json's contents")
     return r
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import matplotlib.pyplot as plt
@@ -47,8 +47,6 @@ def plot_mpc_landing(mpc: Any, clairvoyant: Any = None, open_loop: Any = None) -
     fig.tight_layout()
     return fig
 
-
-__all__ = ["plot_mpc_landing"]
 
 
 def plot_robust_landing(robust: Any, tree: Any = None,
@@ -96,3 +94,133 @@ def plot_robust_landing(robust: Any, tree: Any = None,
                  f"$s$={p.s:g}, $u_{{max}}$={p.u_max:g}", fontsize=10)
     fig.tight_layout()
     return fig
+
+
+#: The unknown-ground study's controllers (keys of its rows) in the order drawn and tabled,
+#: with their labels; a key a row has and this lacks is drawn after these, labelled by its key.
+STUDY_CONTROLLERS: Mapping[str, str] = {
+    "open_loop": "nominal open-loop plan",
+    "robust": "robust open-loop schedule",
+    "tree": "two-stage tree",
+    "impedance_nominal": "impedance tuned for the paper's ground",
+    "impedance_worst": "impedance tuned for the worst case",
+    "mpc": "MPC with estimation",
+}
+_STUDY_STYLE = {"open_loop": ("C3", "v"), "robust": ("C0", "s"), "tree": ("C2", "D"),
+                "impedance_nominal": ("C1", "^"), "impedance_worst": ("C4", "<"),
+                "mpc": ("k", "o")}
+
+
+def study_controllers(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The controllers every row of the unknown-ground study has, in the order of
+    :data:`STUDY_CONTROLLERS` (then any other, in the rows' order).
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        From :func:`softlanding.studies.unknown_ground_study`.
+    """
+    def is_controller(key: str) -> bool:
+        return all(isinstance(r.get(key), Mapping) and "ratio" in r[key] for r in rows)
+
+    seen = [k for k in STUDY_CONTROLLERS if rows and is_controller(k)]
+    extra = [k for k in (rows[0] if rows else {}) if k not in seen and is_controller(k)]
+    return seen + extra
+
+
+def study_ground(row: Mapping[str, Any]) -> tuple[float, float]:
+    """A study row's true ground as ``(K, c_d)``.
+
+    Parameters
+    ----------
+    row : dict
+        One row of :func:`softlanding.studies.unknown_ground_study`.
+    """
+    g = row["ground"]
+    return float(g.get("stiffness", 1.0)), float(g.get("c_d", 0.0))
+
+
+def _robot_title(rows: Sequence[Mapping[str, Any]]) -> str:
+    robot = next((r["mpc"].get("robot") for r in rows if isinstance(r.get("mpc"), Mapping)),
+                 None)
+    if not robot:
+        return "the robot"
+    from softlanding.model.robot import PAPER_ROBOT
+
+    name = "the paper's robot" if robot == PAPER_ROBOT.to_dict() else "the robot"
+    return (f"{name} ($r_m$={robot['r_m']:g}, $s$={robot['s']:g}, "
+            f"$u_{{max}}$={robot.get('u_max', float('inf')):g})")
+
+
+def plot_unknown_ground_study(rows: Sequence[Mapping[str, Any]],
+                              controllers: Sequence[str] | None = None) -> plt.Figure:
+    """The unknown-ground study: each controller's depth over the clairvoyant depth on every
+    true ground, one panel per impact velocity; a hollow marker broke a limit or its rest is
+    not proven, a grey band is a ground whose clairvoyant optimum is not verified.
+
+    Parameters
+    ----------
+    rows : sequence of dict
+        From :func:`softlanding.studies.unknown_ground_study` (or read back from its JSON).
+    controllers : sequence of str, optional
+        The controllers drawn (keys of the rows); every one the rows have by default
+        (:func:`study_controllers`).
+    """
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    keys = list(controllers) if controllers is not None else study_controllers(rows)
+    v0s = list(dict.fromkeys(r["v0"] for r in rows))
+    grounds = sorted({study_ground(r) for r in rows})
+    fig, axes = plt.subplots(len(v0s), 1, sharex=True, squeeze=False, layout="constrained",
+                             figsize=(max(7.5, 0.2 * len(grounds) * max(3, len(keys)) + 1.5),
+                                      max(4.6, 1.4 + 2.2 * len(v0s))))
+    x = np.arange(len(grounds))
+    width = 0.8 / max(1, len(keys))
+    colours = iter(f"C{i}" for i in range(5, 10))
+    style = {k: _STUDY_STYLE.get(k) or (next(colours, "0.5"), "P") for k in keys}
+    for ax, v0 in zip(axes[:, 0], v0s, strict=True):
+        mine = {study_ground(r): r for r in rows if r["v0"] == v0}
+        ax.axhline(1.0, color="0.4", lw=0.8, ls="--", zorder=1)
+        for i, g in enumerate(grounds):
+            if g in mine and not mine[g].get("clairvoyant_verified", True):
+                ax.axvspan(i - 0.5, i + 0.5, color="0.88", zorder=0, lw=0)
+        for k, key in enumerate(keys):
+            colour, marker = style[key]
+            at = [(i, mine[g][key]) for i, g in enumerate(grounds) if g in mine]
+            xs = np.array([i for i, _ in at]) + (k - (len(keys) - 1) / 2) * width
+            ys = np.array([c["ratio"] for _, c in at])
+            ok = np.array([bool(c["feasible"]) for _, c in at])
+            ax.vlines(xs, 1.0, ys, colors=colour, lw=1.0, alpha=0.5, zorder=2)
+            ax.scatter(xs[ok], ys[ok], s=34, marker=marker, color=colour, zorder=3)
+            ax.scatter(xs[~ok], ys[~ok], s=40, marker=marker, facecolors="white",
+                       edgecolors=colour, linewidths=1.4, zorder=3)
+        ax.set_ylabel(r"depth / clairvoyant depth $d/d^*$", fontsize=9)
+        ax.margins(y=0.08)
+        ax.set_title(f"impact velocity $v_0$ = {v0:g}", fontsize=9, loc="left")
+        ax.grid(axis="y", alpha=0.3)
+        for i in range(1, len(grounds)):  # darker where K changes
+            new_k = grounds[i][0] != grounds[i - 1][0]
+            ax.axvline(i - 0.5, color="0.55" if new_k else "0.85", lw=0.8 if new_k else 0.6,
+                       zorder=0)
+    bottom = axes[-1, 0]
+    bottom.set_xticks(x, [f"$K$={k:g}\n$c_d$={c:g}" for k, c in grounds], fontsize=8)
+    bottom.set_xlim(-0.5, len(grounds) - 0.5)
+    bottom.set_xlabel(r"true ground $f = K d + c_d \dot{x}_f^2$ (paper's ground: $K$=1, $c_d$=0)")
+    handles: list[Any] = [Line2D([], [], ls="", marker=style[k][1], color=style[k][0],
+                                 label=STUDY_CONTROLLERS.get(k, k.replace("_", " ")))
+                          for k in keys]
+    handles += [Line2D([], [], ls="", marker="o", markerfacecolor="white",
+                       markeredgecolor="0.3", label="hollow: a limit broken or rest not proven"),
+                Line2D([], [], ls="--", color="0.4", lw=0.8,
+                       label="1: the clairvoyant optimum (knows the ground)"),
+                Patch(color="0.88", label="grey: clairvoyant optimum not verified")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8,
+               frameon=False)
+    fig.suptitle(f"Landing on a ground the controller does not know: {_robot_title(rows)}",
+                 fontsize=10)
+    return fig
+
+
+__all__ = ["STUDY_CONTROLLERS", "plot_mpc_landing", "plot_robust_landing",
+           "plot_unknown_ground_study", "study_controllers", "study_ground"]

@@ -33,6 +33,8 @@ class Settings:
         Damping values of the experiment curves.
     robustness_n : int
         Factors of the robustness study.
+    unknown_v0, unknown_stiffness, unknown_drag : tuple of float
+        The unknown-ground study's impact velocities and true grounds' ``K`` and ``c_d``.
     """
 
     quick: bool
@@ -43,6 +45,9 @@ class Settings:
     cot_v0: tuple[float, ...]
     experiment_kd_n: int
     robustness_n: int
+    unknown_v0: tuple[float, ...]
+    unknown_stiffness: tuple[float, ...]
+    unknown_drag: tuple[float, ...]
 
     @classmethod
     def make(cls, quick: bool) -> Settings:
@@ -55,9 +60,12 @@ class Settings:
         """
         if quick:
             return cls(True, 41, 41, _grid(0.0, -10.0, 6), _grid(0.0, -10.0, 6),
-                       _grid(-1.0, -10.0, 5), 51, 5)
+                       _grid(-1.0, -10.0, 5), 51, 5, (-3.0, -10.0), (0.5, 2.0), (0.0, 1.0))
+        from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, STUDY_V0
+
         return cls(False, 101, 101, _grid(0.0, -10.0, 41), _grid(0.0, -10.0, 21),
-                   _grid(-0.5, -10.0, 20), 251, 13)
+                   _grid(-0.5, -10.0, 20), 251, 13, tuple(STUDY_V0), tuple(STUDY_STIFFNESS),
+                   tuple(STUDY_DRAG))
 
 
 def _grid(a: float, b: float, n: int) -> tuple[float, ...]:

@@ -3,8 +3,9 @@
 :func:`reproduce` writes, into one folder, each figure of the paper as PNG and
 PDF, ``summary.json`` (every headline number, machine-readable), ``summary.md``
 (the same as tables, with the paper's values beside ours where it gives them)
-and the computed datasets as netCDF under ``data/``. ``quick=True`` uses
-coarser grids and fewer impact velocities (about a minute on 2 cores); the
+and the computed datasets under ``data/`` (netCDF; the unknown-ground study's rows as
+JSON and CSV). ``quick=True`` uses
+coarser grids and fewer impact velocities (about three minutes on 2 cores); the
 numbers it reports are still exact for the grids it uses, and each of them is
 what the public API returns for the same arguments (the test suite checks).
 """
@@ -20,10 +21,12 @@ from softlanding.report.paper import PAPER_SECTIONS
 from softlanding.report.phased import PHASED_SECTION
 from softlanding.report.registry import Context, Section, Settings
 from softlanding.report.terrain import TERRAIN_SECTION
+from softlanding.report.unknown_ground import UNKNOWN_GROUND_SECTION
 from softlanding.util.files import atomic_folder
 from softlanding.util.jsonable import json_safe
 
-SECTIONS: tuple[Section, ...] = (*PAPER_SECTIONS, TERRAIN_SECTION, PHASED_SECTION)
+SECTIONS: tuple[Section, ...] = (*PAPER_SECTIONS, TERRAIN_SECTION, PHASED_SECTION,
+                                 UNKNOWN_GROUND_SECTION)
 """The registry: every section of the reproduction, in the order run and reported."""
 
 
@@ -37,7 +40,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         Folder to write into (created if missing; files of the same names are replaced,
         and only once the whole run has succeeded).
     quick : bool
-        Coarser grids and fewer impact velocities (about a minute on 2 cores).
+        Coarser grids and fewer impact velocities (about three minutes on 2 cores).
     progress : bool
         Progress bars for the long sweeps.
     log : callable or None
