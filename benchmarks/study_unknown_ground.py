@@ -47,24 +47,29 @@ def main() -> None:
     print(f"sample period {a.period:g} (= {1e3 * a.period * tau:.3g} ms on the paper's rig); "
           f"{len(rows)} cases in {time.perf_counter() - t0:.0f} s")
     print(f"{'v0':>6} {'K':>5} {'c_d':>4} {'clairvoyant':>12} {'open-loop':>10} "
-          f"{'robust':>10} {'tree':>10} {'impedance':>10} {'MPC':>10} {'median ms':>10} "
+          f"{'robust':>10} {'tree':>10} {'imp. nom':>10} {'imp. worst':>10} {'MPC':>10} "
+          f"{'median ms':>10} "
           f"{'p99 ms':>8}  re-plans")
     for r in rows:
         g = r["ground"]
         print(f"{r['v0']:>6.1f} {g.get('stiffness', 1.0):>5.2f} {g.get('c_d', 0.0):>4.1f} "
               f"{r['clairvoyant_depth']:>11.5f}{' ' if r['clairvoyant_verified'] else '?'} "
               f"{_cell(r['open_loop'])} {_cell(r['robust'])} {_cell(r['tree'])} "
-              f"{_cell(r['impedance_nominal'])} {_cell(r['mpc'])} "
+              f"{_cell(r['impedance_nominal'])} {_cell(r['impedance_worst'])} {_cell(r['mpc'])} "
               f"{r['mpc']['step_time_median_ms']:>10.3f} {r['mpc']['step_time_p99_ms']:>8.2f}"
               f"  {r['mpc']['replans']}")
     s = study_summary(rows)
-    keys = ("clairvoyant", "open_loop", "robust", "tree", "impedance_nominal", "mpc")
+    keys = ("clairvoyant", "open_loop", "robust", "tree", "impedance_nominal",
+            "impedance_worst", "mpc")
     print(f"\nworst depth over the grounds ('!': a limit broken on one of them)\n{'v0':>6} "
           + " ".join(f"{k:>18}" for k in keys))
     for v, w in s["worst_case"].items():
         print(f"{v:>6} " + " ".join(
             f"{w[k]:>17.5f}{' ' if w.get(k + '_feasible', True) else '!'}" for k in keys))
     print("\n" + json.dumps({k: v for k, v in s.items() if k != "worst_case"}, indent=1))
+    print(f"goals: robust <= nominal worst case at every v0: "
+          f"{all(w['robust_le_nominal'] for w in s['worst_case'].values())}; tree <= robust: "
+          f"{all(w['tree_le_robust'] for w in s['worst_case'].values())}")
     print(f"step time over all {s['steps']} steps: median {s['step_time_median_ms']:.3g} ms, "
           f"99th percentile {s['step_time_p99_ms']:.3g} ms wall; CPU median "
           f"{s['step_cpu_median_ms']:.3g} ms, 99th percentile {s['step_cpu_p99_ms']:.3g} ms "

@@ -5,10 +5,10 @@ clairvoyant optimum (the landing OCP solved for the true ground), the nominal op
 bang-bang plan (solved for the paper's ground) replayed on the true ground, the robust
 open-loop schedule and the two-stage tree planned for the whole set of grounds
 (:func:`softlanding.control.robust_landing`), the best fixed impedance tuned for the paper's
-ground, and model-predictive control with on-line ground estimation
-(:func:`softlanding.control.mpc_landing`). Depths are divided by the clairvoyant depth; a
-controller that breaks a limit (stroke, force) or whose rest is not proven is flagged, not
-hidden.
+ground and the one tuned for the worst case over the set, and model-predictive control with
+on-line ground estimation (:func:`softlanding.control.mpc_landing`). Depths are divided by
+the clairvoyant depth; a controller that breaks a limit (stroke, force) or whose rest is not
+proven is flagged, not hidden.
 """
 
 from __future__ import annotations
@@ -62,6 +62,7 @@ def _planned(landing: GroundLanding) -> dict[str, Any]:
 def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                         period: float = DEFAULT_PERIOD, nominal: Any = None,
                         gains: Impedance | None = None,
+                        worst_gains: Impedance | None = None,
                         robust: GroundLanding | None = None,
                         tree: GroundLanding | None = None) -> dict[str, Any]:
     """One true ground and impact velocity: every controller's landing.
@@ -80,6 +81,9 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
         The nominal plan (solved for the paper's ground if not given).
     gains : Impedance, optional
         The impedance tuned for the paper's ground (optimised if not given).
+    worst_gains : Impedance, optional
+        The impedance tuned for the worst case over a set of grounds (row
+        ``"impedance_worst"``; none if not given).
     robust, tree : GroundLanding, optional
         This ground's landing under the robust open-loop schedule and the two-stage tree of
         a set of grounds (rows ``"robust"`` and ``"tree"``; none if not given).
@@ -101,7 +105,9 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
     for key, planned in (("robust", robust), ("tree", tree)):
         if planned is not None:
             row[key] = _planned(planned)
-    for key in ("open_loop", "robust", "tree", "impedance_nominal", "mpc"):
+    if worst_gains is not None:
+        row["impedance_worst"] = _replayed(simulate(robot, impact, worst_gains, ground))
+    for key in ("open_loop", "robust", "tree", "impedance_nominal", "impedance_worst", "mpc"):
         if key in row:
             row[key]["ratio"] = row[key]["depth"] / clair.depth
     return row
@@ -110,7 +116,7 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
 def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
                          stiffness: Sequence[float] = STUDY_STIFFNESS,
                          drag: Sequence[float] = STUDY_DRAG, robot: Robot = PAPER_ROBOT, *,
-                         period: float = DEFAULT_PERIOD,
+                         period: float = DEFAULT_PERIOD, impedance_grid: int = 41,
                          progress: bool | None = None) -> list[dict[str, Any]]:
     """Every case of the study (see :func:`unknown_ground_case`), velocity-major.
 
@@ -122,20 +128,26 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
         The robot.
     period : float
         The MPC's sample period.
+    impedance_grid : int
+        The starting grid per axis of the impedance tuned for the worst case over the grounds
+        (every grid point is one landing per ground).
     progress : bool, optional
         A progress bar.
     """
     plans = {v: solve_landing(v, robot) for v in v0_values}
     grounds = [true_ground(k, c) for k, c in itertools.product(stiffness, drag)]
-    tuned, robust, trees = {}, {}, {}
+    tuned, worst, robust, trees = {}, {}, {}, {}
     for v in v0_values:
         o = optimize_impedance(v, robot)
         tuned[v] = Impedance(o.k_p, o.k_d)
+        w = optimize_impedance(v, robot, grounds, grid=impedance_grid)
+        worst[v] = Impedance(w.k_p, w.k_d)
         robust[v] = robust_landing(v, grounds, robot, nominal=plans[v])
         trees[v] = two_stage_landing(robust[v])
     cases = [(v, i) for v in v0_values for i in range(len(grounds))]
     return [unknown_ground_case(v, grounds[i], robot, period=period, nominal=plans[v],
-                                gains=tuned[v], robust=robust[v].landings[i],
+                                gains=tuned[v], worst_gains=worst[v],
+                                robust=robust[v].landings[i],
                                 tree=trees[v].landings[i])
             for v, i in show_progress(cases, progress, desc="unknown ground", unit="case")]
 
@@ -163,6 +175,8 @@ def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "mpc_feasible": int(sum(r["mpc"]["feasible"] for r in rows)),
         "open_loop_feasible": int(sum(r["open_loop"]["feasible"] for r in rows)),
         "impedance_feasible": int(sum(r["impedance_nominal"]["feasible"] for r in rows)),
+        **{f"{key}_feasible": int(sum(r[key]["feasible"] for r in rows))
+           for key in ("robust", "tree", "impedance_worst") if all(key in r for r in rows)},
         # over every step of every case (the goals), and the worst case's own percentile
         "step_time_median_ms": float(np.median(steps)) if steps.size else math.nan,
         "step_time_p99_ms": float(np.percentile(steps, 99)) if steps.size else math.nan,
@@ -181,7 +195,8 @@ def _worst_cases(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     for v in dict.fromkeys(r["v0"] for r in rows):
         mine = [r for r in rows if r["v0"] == v]
         d: dict[str, Any] = {"clairvoyant": max(r["clairvoyant_depth"] for r in mine)}
-        for key in ("open_loop", "robust", "tree", "impedance_nominal", "mpc"):
+        for key in ("open_loop", "robust", "tree", "impedance_nominal", "impedance_worst",
+                    "mpc"):
             if all(key in r for r in mine):
                 d[key] = max(r[key]["depth"] for r in mine)
                 d[key + "_feasible"] = all(r[key]["feasible"] for r in mine)
