@@ -77,6 +77,7 @@ def test_worst_case_gains_are_feasible_on_every_ground_and_described(optima):
     assert d["ground"] == d["grounds"][d["worst"][0]] and len(d["ground_depths"]) == 2
 
 
+@pytest.mark.slow  # ~13 s: in the second test command
 def test_no_point_of_a_fine_grid_beats_the_worst_case_optimum(optima):
     """Brute force: the worst case over both grounds on a 201 x 201 grid (10x finer than the
     starting grid); the refined optimum is at least as good as every feasible point."""
@@ -123,6 +124,7 @@ def test_cli_ground_lists_name_every_combination():
         DragGround(0.0, 0.5), DragGround(0.2, 0.5), DragGround(0.0, 1.0), DragGround(0.2, 1.0)]
 
 
+@pytest.mark.slow  # ~13 s: in the second test command
 def test_cli_impedance_worst_case_json(cli, optima):
     code, out, err = cli("impedance", "--v0", V0, "--umax", R.u_max, "--grid", GRID,
                          "--stiffness", "0.5,2", "--json")
