@@ -363,26 +363,34 @@ def _search(pieces: _Pieces, grounds: tuple[Ground, ...], theta0: np.ndarray,
     u_max = force_limit(robot)
     s = robot.s
     cache: dict[bytes, np.ndarray] = {}
+    holds: dict[bytes, bool] = {}  # every ground's landing feasible (the reported test)
     n = pieces.n
     scale_d = max(1.0, abs(impact.v0))
+    nowhere = np.array([math.inf, -s, -s] * len(grounds))
 
     def measures(theta: np.ndarray) -> np.ndarray:
-        """Per ground: depth, stroke margins, rest; then the last force's margin."""
+        """Per ground: depth, stroke margins (inf, -s, -s without a proven rest); then the
+        last force's margin."""
         key = np.asarray(theta, float).tobytes()
         if key not in cache:
+            holds[key] = False
+            if not np.all(np.isfinite(theta)):
+                cache[key] = np.r_[nowhere, -u_max]
+                return cache[key]
             d, u = pieces.split(theta)
             u_last = pieces.last_force(d, u)
             if not abs(u_last) <= u_max:  # the actuator cannot stop the body in time
-                cache[key] = np.array([math.inf, -s, -s] * len(grounds) + [u_max - abs(u_last)])
+                cache[key] = np.r_[nowhere, u_max - abs(u_last)]
                 return cache[key]
             rows = []
             sched = pieces.schedule(theta)
-            for g in grounds:
-                r = simulate(robot, impact, sched, g, energy=False)
+            results = [simulate(robot, impact, sched, g, energy=False) for g in grounds]
+            for r in results:
                 ok = r.rest_proven and math.isfinite(r.stroke_min)
                 rows += [r.depth if ok else math.inf, r.stroke_min if ok else -s,
                          s - r.stroke_max if ok else -s]
             cache[key] = np.array(rows + [u_max - abs(u_last)])
+            holds[key] = all(r.stroke_held and r.rest_proven for r in results)
         return cache[key]
 
     def cons(x: np.ndarray) -> np.ndarray:
@@ -393,13 +401,12 @@ def _search(pieces: _Pieces, grounds: tuple[Ground, ...], theta0: np.ndarray,
         return np.concatenate([depth_margin / scale_d, m[1:-1:3] / s, m[2:-1:3] / s,
                                [m[-1] / u_max]])
 
-    def worst(theta: np.ndarray) -> tuple[float, float]:
-        c = cons(np.concatenate([theta, [0.0]]))
-        viol = float(-min(0.0, np.min(c[len(grounds):])))
-        m = measures(theta)
-        return float(np.max(m[:-1:3])), viol
+    def violation(key: bytes) -> float:
+        m = cache[key]
+        return float(-min(0.0, np.min(m[1:-1:3]), np.min(m[2:-1:3]), m[-1]))
 
-    z0 = worst(theta0)[0]
+    measures(theta0)
+    z0 = float(np.max(cache[theta0.tobytes()][:-1:3]))
     x0 = np.concatenate([theta0, [z0 if math.isfinite(z0) else 10 * scale_d]])
     lo = np.concatenate([np.full(n, 1e-6), np.full(n - 1, -u_max), [0.0]])
     hi = np.concatenate([np.full(n, np.inf), np.full(n - 1, u_max), [np.inf]])
@@ -411,16 +418,14 @@ def _search(pieces: _Pieces, grounds: tuple[Ground, ...], theta0: np.ndarray,
                    bounds=list(zip(lo, hi, strict=True)),
                    constraints=[{"type": "ineq", "fun": cons}],
                    options={"maxiter": max_iterations, "ftol": 1e-12, "eps": FD_STEP})
-    # keep the best point seen that holds every limit (the search's last point may not)
-    best, best_val = theta0, math.inf
-    for key in cache:
-        th = np.frombuffer(key)
-        val, viol = worst(th)
-        if viol <= 1e-12 and val < best_val:
-            best, best_val = th.copy(), val
-    if not math.isfinite(best_val):  # nothing feasible: the least violating point
-        best = min((np.frombuffer(k) for k in cache), key=lambda th: worst(th)[1]).copy()
-    return best, len(cache), str(res.message)
+    # the best point seen whose landings all hold (the search's last point may not)
+    feasible = [k for k in cache if holds[k]]
+    if feasible:
+        best = min(feasible, key=lambda k: float(np.max(cache[k][:-1:3])))
+        return np.frombuffer(best).copy(), len(cache), str(res.message)
+    best = min(cache, key=violation)  # nothing holds: the least violating point
+    return (np.frombuffer(best).copy(), len(cache),
+            f"{res.message}; no schedule of the family held every limit on every ground")
 
 
 def _second_stages(robot: Robot, impact: Impact, schedule: ForceSchedule,
