@@ -118,3 +118,12 @@ def test_cli_robust(cli, tmp_path):
 def test_cli_robust_bad_input(cli, args, message):
     code, out, err = cli("robust", *args)
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_set_no_schedule_can_hold_is_reported_not_hidden(cli):
+    # stiffness 0.1 and 10 at v0 = -10: the stroke cannot absorb both feet's stops
+    r = robust_landing(-10, [LinearGround(0.1), LinearGround(10.0)], max_iterations=30)
+    assert not r.feasible and "no schedule" in r.message
+    assert json.loads(json.dumps(r.to_dict()))["feasible"] is False
+    code, out, _ = cli("robust", "--v0", "-10", "--stiffness", "0.1,10", "--json")
+    assert code == 1 and json.loads(out)["feasible"] is False
