@@ -22,7 +22,7 @@ M_FU = 95
 M_EQ = 96  # (5, 5) Hessian of the mechanical energy
 M_EC = 121  # (5,) gradient of the mechanical energy at z = 0
 M_WG = 126  # ground work Wg d^2
-M_HOLD = 127  # the crater's hold: support forces up to hold * d (a separate slot: Wg is the ledger's)
+M_HOLD = 127  # the crater holds support forces up to hold * d (apart from Wg: the ledger's)
 N_MODEL = 128
 
 
