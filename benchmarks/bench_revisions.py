@@ -1,7 +1,7 @@
 """Two revisions of this toolkit on the same workloads, interleaved.
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
-      python -m benchmarks.bench_revisions --baseline REV --workload simulator|landing
+      python -m benchmarks.bench_revisions --baseline REV --workload simulator|landing|stiffness
 
 ``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
 over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
@@ -9,6 +9,9 @@ velocities); ``--workload landing`` times the landing OCP end to end (bench_ocp'
 solve_landing (sweep)": a cold ``solve_landing`` at v0 = -3, then ``sweep_landing`` over 20
 velocities in [-10, -0.5]). Both revisions must return the same numbers (a checksum of every
 depth, printed); each child runs once untimed first (numba's cache, CasADi's code generation).
+``--workload stiffness`` times the simulator on the ground ``LinearGround(2.0)``: a 101 x 101
+gain map on all cores and 300 runs of one landing (integrated before the kernel took ``K``,
+exact after: the checksums then agree to the integrator's tolerance, not bit for bit).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -110,8 +113,29 @@ print(json.dumps({"batch": ow, "batch_cpu": oc, "single": sw, "single_cpu": sc,
                   "check": one.depth + sum(s.depth for s in sweep)}))
 """
 
+STIFFNESS = r"""
+import json, time
+import numpy as np
+from softlanding import Impact, Impedance, Robot, simulate, simulate_batch
+from softlanding.model.ground import LinearGround
+robot, ground = Robot(5, 20), LinearGround(2.0)
+kp, kd = np.linspace(0.05, 1.0, 101)[:, None], np.linspace(0.05, 1.0, 101)
+simulate_batch(robot, -3.0, k_p=kp[:2], k_d=kd[:2], ground=ground)  # load the compiled kernel
+simulate(robot, Impact(-1.0), Impedance(0.2, 0.18), ground)
+w, c = time.perf_counter(), time.process_time()
+grid = simulate_batch(robot, -3.0, k_p=kp, k_d=kd, ground=ground)
+bw, bc = time.perf_counter() - w, time.process_time() - c
+w, c = time.perf_counter(), time.process_time()
+depths = [simulate(robot, Impact(-3.0), Impedance(0.2, 0.18), ground).depth
+          for _ in range(300)]
+sw, sc = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"batch": bw, "batch_cpu": bc, "single": sw, "single_cpu": sc,
+                  "check": float(np.nansum(grid.depth)) + float(np.nansum(depths))}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
-             "landing": (LANDING, "cold solve", "sweep of 20")}
+             "landing": (LANDING, "cold solve", "sweep of 20"),
+             "stiffness": (STIFFNESS, "batch 101x101", "300 x one")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
@@ -139,6 +163,9 @@ def compare_workload(base: Path, workload: str, repeats: int) -> None:
     same = checks["base"] == checks["now"] and len(checks["now"]) == 1
     print(f"checksum of every depth: baseline {sorted(checks['base'])}, now "
           f"{sorted(checks['now'])}: {'identical' if same else 'DIFFERENT'}")
+    if not same:  # e.g. a workload moved from the integrated path to the exact one
+        b, n = min(checks["base"]), min(checks["now"])
+        print(f"relative difference of the checksums: {abs(n - b) / abs(b):.1e}")
 
 
 def run_in(tree: Path, code: str, *args: str) -> dict | list:
@@ -158,7 +185,8 @@ def main() -> None:
                          '\'{"objective_tol": Infinity}\' for the baseline\'s stopping rule')
     ap.add_argument("--workload", choices=["suite", *WORKLOADS], default="suite",
                     help="suite: the published problems (default); simulator: the exact "
-                         "simulator; landing: the landing OCP end to end")
+                         "simulator; stiffness: the simulator on LinearGround(2.0); landing: "
+                         "the landing OCP end to end")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:

@@ -188,8 +188,12 @@ def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.nd
         ``A`` (3, 5, 5) and ``B`` (3, 5) indexed by mode (0 yielding, 1 static,
         2 flight), ``Fz`` (5,), ``Fu`` (float); the mechanical energy as the
         quadratic form ``E(z) = z . EQ z / 2 + Ec . z`` (``EQ`` (5, 5), ``Ec`` (5,));
-        and ``Wg``, the ground work ``Wg d^2`` done by a foot that dug to depth
-        ``d`` (``Wg = f'(d) / 2`` for the affine ground law ``f``).
+        ``Wg``, the ground work ``Wg d^2`` done by a foot that dug to depth
+        ``d`` (``Wg = f'(d) / 2`` for the affine ground law ``f``); and ``hold``, the
+        crater's stiffness ``f(d, 0) / d`` (``K`` of ``f = K d``: the crater of depth ``d``
+        holds support forces up to ``hold * d``; for a law whose ``f(d, 0)`` is not
+        proportional to ``d`` it is the slope at the surface, and the simulator
+        integrates, see :func:`softlanding.simulation.groundcode.needs_integration`).
     """
     r_m = check("r_m", r_m, POSITIVE)  # the Robot holds the range; any mass ratio > 0 here
     if not ground.is_affine:
@@ -227,6 +231,7 @@ def mode_matrices(r_m: float, ground: Ground = LINEAR_GROUND) -> dict[str, np.nd
     Ec = np.zeros(5)
     Ec[:4] = dE
     return {"A": A, "B": B, "Fz": Fz, "Fu": Fu, "EQ": EQ, "Ec": Ec, "Wg": 0.5 * kg.item(),
+            "hold": kg.item(),
             # gravitational weights of body and foot (dE/dx_b, dE/dx_f): the mass fractions
             "E": np.array([dE[XB], dE[XF]])}
 

@@ -43,33 +43,40 @@ void sl_law(double d, double v, double *out) {{
 """
 
 
-def hold_is_depth(ground: Ground) -> bool:
-    """True if the crater's static hold ``f(d, 0)`` is exactly ``d`` (the exact kernel's rule).
+def hold_stiffness(ground: Ground) -> float | None:
+    """``K`` if the crater's static hold is ``f(d, 0) = K d`` with a constant ``K > 0`` (the
+    exact kernel's rule: it holds support forces up to ``K d``), else None.
 
     Parameters
     ----------
     ground : Ground
         The ground model.
     """
-    if isinstance(ground, AddedMassGround) or (
-            isinstance(ground, LinearGround | DragGround) and ground.stiffness == 1.0):
-        return True
+    if isinstance(ground, LinearGround | DragGround):
+        return ground.stiffness
+    if isinstance(ground, AddedMassGround):
+        return 1.0
     import casadi as ca
 
     d = ca.SX.sym("d")
-    diff = ca.simplify(ca.SX(ground.yield_force(d, 0.0)) - d)
-    return bool(diff.is_zero())
+    hold = ca.SX(ground.yield_force(d, 0.0))
+    slope = ca.jacobian(hold, d)
+    if ca.depends_on(slope, d) or not ca.simplify(hold - slope * d).is_zero():
+        return None
+    k = float(ca.evalf(slope))
+    return k if k > 0.0 else None
 
 
 def needs_integration(ground: Ground) -> bool:
-    """True if the ground's landings are integrated (not on the exact matrix-exponential path).
+    """True if the ground's landings are integrated (not on the exact matrix-exponential path):
+    its law is not affine, or its crater's hold is not proportional to the depth.
 
     Parameters
     ----------
     ground : Ground
         The ground model.
     """
-    return not ground.is_affine or not hold_is_depth(ground)
+    return not ground.is_affine or hold_stiffness(ground) is None
 
 
 def law_expressions(ground: Ground) -> Any:
@@ -201,8 +208,9 @@ def kernel_law(ground: Ground, r_m: float, *, lock: bool = False,
     from softlanding.simulation.kernel.groundlaw import no_custom_law, pack_ground
 
     if isinstance(ground, LinearGround | DragGround) and ground.stiffness != 1.0:
-        # the kernel's built-in laws are the paper's spring: another stiffness is compiled
-        # from the ground's own law, like a user's
+        # the integrator's built-in laws are the paper's spring: another stiffness is
+        # compiled from the ground's own law, like a user's (the exact path reads K off
+        # the mode matrices)
         G = pack_ground(0.0, 0.0, 0.0, 1.0, r_m, custom=True, lock=lock, u_max=u_max)
         return G, _custom_pointer(ground)
     if isinstance(ground, LinearGround):
@@ -217,5 +225,5 @@ def kernel_law(ground: Ground, r_m: float, *, lock: bool = False,
     return G, _custom_pointer(ground)
 
 
-__all__ = ["compile_law", "hold_is_depth", "kernel_law", "law_expressions",
+__all__ = ["compile_law", "hold_stiffness", "kernel_law", "law_expressions",
            "needs_integration"]

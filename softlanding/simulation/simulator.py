@@ -385,7 +385,7 @@ def integrated(ground: Ground, method: str = "auto") -> bool:
     need = needs_integration(ground)
     if method == "exact" and need:
         raise ParameterError("method", f"the {ground.name} ground is not affine (or its "
-                                       "crater holds other than f(d, 0) = d): no exact path")
+                                       "crater holds other than f(d, 0) = K d): no exact path")
     return need or method == "integrate"
 
 

@@ -21,7 +21,8 @@ The compiled parts are this package's modules:
 This module holds the Python entry points :func:`run_landing` and :func:`run_batch` used by
 :mod:`softlanding.simulation.simulator`, and re-exports the output layout and status codes.
 The mode data are read from :func:`softlanding.model.dynamics.mode_matrices`
-(matrices, support force, the energy's quadratic form and the ground work).
+(matrices, support force, the energy's quadratic form, the ground work and the crater's
+hold ``K d``).
 
 Statuses (``out[O_STATUS]``, names in :data:`STATUS_NAMES`): ``REST_PROVEN`` (the
 foot rests forever and so does the body: the stroke stays bounded);

@@ -63,16 +63,17 @@ def classify(mode, z, Kf, umax):
 
 
 @njit(**JIT)
-def contact_mode(P, z, d, Kf, umax, open_loop, k_ol):
-    """Foot at rest at the crater bottom: static, yielding again, or lifting off."""
+def contact_mode(P, z, hold, Kf, umax, open_loop, k_ol):
+    """Foot at rest at the crater bottom: static, yielding again (support force above the
+    crater's ``hold``), or lifting off (below zero)."""
     if open_loop:
         u = dot(k_ol, z)
     else:
         u = dot(row(Kf, STATIC), z)
         u = min(umax, max(-umax, u))
     freq = dot(support_Fz(P), z) + P[M_FU] * u
-    tol = TIE * max(1.0, d)
-    if freq > d + tol:
+    tol = TIE * max(1.0, hold)
+    if freq > hold + tol:
         return YIELDING
     if freq < -tol:
         return FLIGHT
@@ -80,8 +81,12 @@ def contact_mode(P, z, d, Kf, umax, open_loop, k_ol):
 
 
 @njit(**JIT)
-def build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes):
-    """Fill ``C`` and ``codes`` with the segment's event functionals; returns their count."""
+def build_events(P, mode, regime, cu, d, hold, shift, Kf, umax, open_loop, C, codes):
+    """Fill ``C`` and ``codes`` with the segment's event functionals; returns their count.
+
+    ``d``: the crater's depth (where a flying foot lands); ``hold``: the largest support
+    force it takes unyielding (the static mode's yield event).
+    """
     ne = 0
     C[:, :] = 0.0
     if mode == YIELDING:
@@ -91,11 +96,11 @@ def build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes):
     elif mode == STATIC:
         Fz = support_Fz(P)
         Fu = P[M_FU]
-        tol = TIE * max(1.0, d)
+        tol = TIE * max(1.0, hold)
         for j in range(5):
             C[ne, j] = Fz[j] + Fu * cu[j]
             C[ne + 1, j] = -(Fz[j] + Fu * cu[j])
-        C[ne, 4] -= d + tol
+        C[ne, 4] -= hold + tol
         C[ne + 1, 4] -= tol
         codes[ne], codes[ne + 1] = EV_YIELD, EV_LIFT
         ne += 2

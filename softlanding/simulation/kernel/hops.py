@@ -45,7 +45,14 @@ from numba import njit
 
 from softlanding.simulation.kernel.const import EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
 from softlanding.simulation.kernel.linalg import expm, row
-from softlanding.simulation.kernel.model import M_FU, M_FZ, closed_loop, energy_rel, ground_work
+from softlanding.simulation.kernel.model import (
+    M_FU,
+    M_FZ,
+    closed_loop,
+    crater_hold,
+    energy_rel,
+    ground_work,
+)
 from softlanding.simulation.kernel.rest import future_range
 
 RHO = 0.05
@@ -116,7 +123,7 @@ def threshold_energy(P, A, cu, z0, depth):
     q_eq = 0.0
     for j in range(5):
         q_eq += (Fz[j] + Fu * cu[j]) * z[j]
-    tol = TIE * max(1.0, depth)  # the lift-off event fires below -tol
+    tol = TIE * max(1.0, crater_hold(P, depth))  # the lift-off event fires below -tol
     if not q_eq > 0.0:
         return np.nan
     z[0] += (q_eq + tol) / abs(c0)

@@ -98,7 +98,7 @@ from softlanding.simulation.kernel.linalg import (
     row,
     row5,
 )
-from softlanding.simulation.kernel.model import closed_loop, energy_rel, ground_work
+from softlanding.simulation.kernel.model import closed_loop, crater_hold, energy_rel, ground_work
 from softlanding.simulation.kernel.rest import future_range
 
 # ext: extrema and actuator work
@@ -284,7 +284,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
         d = max(d, -z[2])
         if bk[B_TSTOP] != bk[B_TSTOP]:
             bk[B_TSTOP] = t
-        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
+        mode = contact_mode(P, z, crater_hold(P, d), Kf, umax, open_loop, k_ol)
     elif code == EV_YIELD:
         mode = YIELDING
     elif code == EV_LIFT:
@@ -297,7 +297,7 @@ def apply_event(P, code, z, z0, t, d, shift, mode, regime, steps, Kf, umax, open
             mode = YIELDING
         else:
             z[3] = 0.0
-            mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
+            mode = contact_mode(P, z, crater_hold(P, d), Kf, umax, open_loop, k_ol)
     elif code == EV_SAT_HIGH:
         regime = SAT_HIGH
     elif code == EV_SAT_LOW:
@@ -326,14 +326,15 @@ def mode_changed(P, mode, prev, z, z0, t, steps, regime, Kf, umax, open_loop, ex
 
 
 @njit(**JIT)
-def initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk, E0):
-    """Ground mode at impact (from the foot's velocity); returns ``(mode, regime, steps)``."""
+def initial_mode(P, z, hold, Kf, umax, open_loop, k_ol, bk, E0):
+    """Ground mode at impact (from the foot's velocity; at rest, from the support force
+    against the crater's ``hold``); returns ``(mode, regime, steps)``."""
     if z[3] < 0.0:
         mode = YIELDING
     elif z[3] > 0.0:
         mode = FLIGHT
     else:
-        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
+        mode = contact_mode(P, z, hold, Kf, umax, open_loop, k_ol)
     steps = 0
     if mode == YIELDING:
         steps = 1
@@ -456,11 +457,11 @@ def derivative_functionals(C, A, ne, dC):
 
 
 @njit(**JIT)
-def schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol):
-    """An open-loop schedule switch (``open_loop`` is then true): a pinned foot may yield or
-    lift off under the new force."""
+def schedule_switch(P, z, hold, mode, steps, Kf, umax, open_loop, k_ol):
+    """An open-loop schedule switch (``open_loop`` is then true): a pinned foot may yield
+    (beyond the crater's ``hold``) or lift off under the new force."""
     if mode == STATIC:
-        mode = contact_mode(P, z, d, Kf, umax, open_loop, k_ol)
+        mode = contact_mode(P, z, hold, Kf, umax, open_loop, k_ol)
         if mode == YIELDING:
             steps += 1
     return mode, steps
@@ -510,7 +511,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
     z, z0, open_loop, k_ol, ext, bk = fresh_landing(x0, sched_K)
     t, d, shift, sidx, nseg = 0.0, max(0.0, -z[2]), 0.0, 0, 0
     status = TOO_MANY_SEGMENTS
-    mode, regime, steps = initial_mode(P, z, d, Kf, umax, open_loop, k_ol, bk,
+    mode, regime, steps = initial_mode(P, z, crater_hold(P, d), Kf, umax, open_loop, k_ol, bk,
                                        energy_rel(P, z, z0))
     ws = workspace()
     cs, C, dC, codes, cdata, cres = ws[0], ws[1], ws[2], ws[3], ws[4], ws[5]
@@ -526,7 +527,8 @@ def simulate_one(P, pol, x0, lim, out, rec):
         u_now = dot(cu, z)
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], u_now), max(ext[X_UMAX], u_now)
         t_next = sched_t[sidx] if (open_loop and sidx < sched_t.shape[0]) else np.inf
-        ne = build_events(P, mode, regime, cu, d, shift, Kf, umax, open_loop, C, codes)
+        ne = build_events(P, mode, regime, cu, d, crater_hold(P, d), shift, Kf, umax, open_loop,
+                          C, codes)
         if mode == STATIC and t_next == np.inf and rest_proof(A, z, C, ne, cs, cu, ext):
             status = REST_PROVEN
             break
@@ -548,7 +550,8 @@ def simulate_one(P, pol, x0, lim, out, rec):
             if time_event:
                 sidx += 1
                 k_ol = sched_K[sidx]
-                mode, steps = schedule_switch(P, z, d, mode, steps, Kf, umax, open_loop, k_ol)
+                mode, steps = schedule_switch(P, z, crater_hold(P, d), mode, steps, Kf, umax,
+                                              open_loop, k_ol)
                 continue
         if hops:
             hop_event(codes[hit], z, t, hk)

@@ -3,7 +3,8 @@
 :func:`pack_model` lays out the dict of :func:`softlanding.model.dynamics.mode_matrices`
 in a contiguous float64 vector; the compiled code reads views of it (no
 copies). Energies are read off the quadratic form ``E(z) = z . EQ z / 2 + Ec . z``
-and the ground work off ``Wg d^2``, as :mod:`softlanding.model.dynamics` defines them.
+and the ground work off ``Wg d^2``, as :mod:`softlanding.model.dynamics` defines them; the
+crater's hold off ``hold d`` (the ground's stiffness ``K``: 1 for the paper's ground).
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ M_FU = 95
 M_EQ = 96  # (5, 5) Hessian of the mechanical energy
 M_EC = 121  # (5,) gradient of the mechanical energy at z = 0
 M_WG = 126  # ground work Wg d^2
-N_MODEL = 127
+M_HOLD = 127  # the crater holds support forces up to hold * d (apart from Wg: the ledger's)
+N_MODEL = 128
 
 
 def pack_model(mats: dict) -> np.ndarray:
@@ -40,6 +42,7 @@ def pack_model(mats: dict) -> np.ndarray:
     P[M_EQ:M_EC] = np.asarray(mats["EQ"], dtype=float).reshape(25)
     P[M_EC:M_WG] = mats["Ec"]
     P[M_WG] = mats["Wg"]
+    P[M_HOLD] = mats["hold"]
     return P
 
 
@@ -79,6 +82,13 @@ def energy_rel(P, z, z0):
         if e != 0.0:
             acc += e * (z[i] - z0[i])
     return acc
+
+
+@njit(**JIT)
+def crater_hold(P, d):
+    """The largest support force a crater of depth ``d`` takes without yielding, ``K d``
+    (``d`` itself, bit for bit, on the paper's ground ``K = 1``)."""
+    return P[M_HOLD] * d
 
 
 @njit(**JIT)

@@ -168,8 +168,7 @@ def initial_grains(G, fp, buf, z, acc):
 @njit(**JIT)
 def _segment_events(P, G, mode, regime, cu, d, hold, shift, Kf, umax, open_loop, z, C, codes):
     """Event functionals of a segment (the hold in the static mode, the cone if yielding)."""
-    ne = build_events(P, mode, regime, cu, hold if mode == STATIC else d, shift, Kf, umax,
-                      open_loop, C, codes)
+    ne = build_events(P, mode, regime, cu, d, hold, shift, Kf, umax, open_loop, C, codes)
     if mode == YIELDING:
         ne = cone_event(G, z, C, codes, ne)
     return ne
