@@ -43,13 +43,17 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from softlanding.simulation.kernel.freshness import drop_stale_cache
+
+drop_stale_cache()  # before any compiled module is loaded (numba misses inlined edits)
+
 # the output layout, status and event codes, re-exported for the simulator
-from softlanding.simulation.kernel.const import *  # noqa: F403
+from softlanding.simulation.kernel.const import *  # noqa: E402, F403
 
 # ruff: noqa: F405  (the codes used below come from the star import above)
-from softlanding.simulation.kernel.landing import batch_range, landing_entry
-from softlanding.simulation.kernel.linalg import flat25, norm_rows4, prop4_t, row5
-from softlanding.simulation.kernel.model import pack_model
+from softlanding.simulation.kernel.landing import batch_range, landing_entry  # noqa: E402
+from softlanding.simulation.kernel.linalg import flat25, norm_rows4, prop4_t, row5  # noqa: E402
+from softlanding.simulation.kernel.model import pack_model  # noqa: E402
 
 # ------------------------------------------------------------ Python entry points
 STATUS_NAMES = {

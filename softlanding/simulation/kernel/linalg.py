@@ -307,6 +307,14 @@ def interior_extremum_t(A, nrm, z, z1, h, c, dc, ddc):
     """
     d0 = dot(dc, z)
     d1 = dot(dc, z1)
+    if d0 == 0.0 and h > 0.0:
+        # q' is exactly 0 at the step's start (the stroke rate at impact, v_b = v_f); a
+        # turning point inside the step is bracketed from a hair inside it instead (the
+        # start's own value the caller counts already)
+        e = 1e-9 * h
+        z = prop4_t(A, nrm, z, e)
+        h = h - e
+        d0 = dot(dc, z)
     if not ((d0 > 0.0 and d1 < 0.0) or (d0 < 0.0 and d1 > 0.0)):
         return np.nan
     sg = 1.0 if d0 < 0.0 else -1.0
