@@ -67,7 +67,7 @@ def main() -> None:
         print(f"{v:>6} " + " ".join(
             f"{w[k]:>17.5f}{' ' if w.get(k + '_feasible', True) else '!'}" for k in keys))
     print("\n" + json.dumps({k: v for k, v in s.items() if k != "worst_case"}, indent=1))
-    print(f"goals: robust <= nominal worst case at every v0: "
+    print(f"goals (limits held, then worst depth): robust <= nominal at every v0: "
           f"{all(w['robust_le_nominal'] for w in s['worst_case'].values())}; tree <= robust: "
           f"{all(w['tree_le_robust'] for w in s['worst_case'].values())}")
     print(f"step time over all {s['steps']} steps: median {s['step_time_median_ms']:.3g} ms, "

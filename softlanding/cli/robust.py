@@ -55,19 +55,20 @@ def robust_command(a: argparse.Namespace) -> int:
     grounds = ground_set(a.stiffness, a.cd)
     if a.branch_time is not None and not a.tree:
         raise ParameterError("--branch-time", "applies to --tree")
-    branch = 0.05 if a.branch_time is None else check(
-        "branch_time", a.branch_time, (lambda v: v > 0, "must be > 0"))
+    if a.branch_time is not None:
+        check("branch_time", a.branch_time, (lambda v: v > 0, "must be > 0"))
     extra = check_count("extra_pieces", a.extra_pieces, 0, 4)
     from softlanding.optimal.limits import force_limit
 
     force_limit(robot)
     if not impact.v0 < 0:
         raise ParameterError("v0", "a landing under control needs v0 < 0")
-    from softlanding.control.robust import robust_landing, two_stage_landing
+    from softlanding.control.robust import DEFAULT_BRANCH_TIME, robust_landing, two_stage_landing
     from softlanding.optimal.landing import solve_landing
 
     nominal = solve_landing(impact, robot, replay=False)
     robust = robust_landing(impact, grounds, robot, nominal=nominal, extra_pieces=extra)
+    branch = DEFAULT_BRANCH_TIME if a.branch_time is None else a.branch_time
     tree = two_stage_landing(robust, branch) if a.tree else None
     clair = [solve_landing(impact, robot, g) for g in grounds]
     clair_depth = [c.depth for c in clair]

@@ -22,26 +22,28 @@ from typing import Any
 import numpy as np
 
 from ocp import (
-    MultipleShooting,
     OptimalControlProblem,
     Solution,
     SolveError,
     Trajectory,
     refine_structure,
 )
-from ocp.switching import Mode, RefinedSwitching, detect_arcs, refine_switching
+from ocp.switching import Mode, RefinedSwitching
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
     ground_numbers,
+    solve_from_state,
     state_landing_problem,
     state_parameters,
+    state_transcription,
 )
 from softlanding.errors import check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import (
+    affine_laws,
     arrest_schedule,
     landing_schedule,
     solve_landing,
@@ -56,12 +58,6 @@ from softlanding.util.signals import raise_if_interrupted
 #: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
 #: paper's landings.
 DEFAULT_PERIOD = 0.01
-
-#: Shooting nodes of the transcription that re-plans when no structure near the last one
-#: fits (a creep to the crater's capacity is not bang-bang: the transcription is the plan).
-#: 30 nodes are hardly faster (Ipopt's iterations dominate) and land one creep 15 % deeper.
-TRANSCRIPTION_NODES = 60
-
 
 @dataclass
 class MPCLanding:
@@ -460,6 +456,8 @@ def _checked(r: RefinedSwitching) -> RefinedSwitching:
         raise SolveError("not_finite", message="the re-plan is not finite")
     if min(r.durations) <= 1e-9 * r.T:
         raise SolveError("arc_collapsed", r, message="an arc of the structure collapsed")
+    if not affine_laws(r):  # a stroke held under drag: no exact schedule of this plan
+        raise SolveError("law_not_affine", message="a boundary arc's law is not affine")
     return r
 
 
@@ -482,16 +480,10 @@ def _prepare(problem: OptimalControlProblem, plan: Any, robot: Robot, model: Gro
 
 
 @lru_cache(maxsize=1)
-def _state_transcription() -> MultipleShooting:
-    return MultipleShooting(state_landing_problem(), nodes=TRANSCRIPTION_NODES, integrator="rk4",
-                            substeps=4, expand=True)
-
-
-@lru_cache(maxsize=1)
 def _warm_transcription() -> None:
     """Build the transcription and its solvers (cold and warm-started) once per process: the
     first solves cost seconds, which no sample can afford."""
-    tr = _state_transcription()
+    tr = state_transcription()
     x = SteppingPlant(PAPER_ROBOT, Impact(-3.0), LINEAR_GROUND).x  # the paper's impact
     params = state_parameters(PAPER_ROBOT, LINEAR_GROUND, x)
     with contextlib.suppress(SolveError), warnings.catch_warnings():
@@ -502,28 +494,14 @@ def _warm_transcription() -> None:
 def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
                       x: np.ndarray) -> Any:
     """The landing from ``x`` transcribed (from the rest of the last plan) and refined."""
-    tr = _state_transcription()
-    params = state_parameters(robot, believed, x)
-    if isinstance(plan, Solution) and plan.transcription is tr:
-        sol = tr.solve(params, warm_start=plan)
-    else:
-        rest = plan.trajectory(200)
-        keep = rest.t >= applied
-        guess = Trajectory(rest.t[keep] - applied, rest.x[keep], rest.u[keep],
-                           rest.state_names, rest.control_names)
-        try:
-            sol = tr.solve(params, guess=guess)
-        except SolveError:
-            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-            sol = tr.solve(params)
-    st = detect_arcs(sol).without_trailing_constrained()
-    if not st.refinable:  # not bang-bang (a singular creep): the transcription is the plan
-        return sol
-    try:
-        return _checked(refine_switching(sol, st))
-    except SolveError:
-        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-        return sol
+    if isinstance(plan, Solution):
+        return solve_from_state(robot, believed, x, warm_start=plan)
+    rest = plan.trajectory(200)
+    keep = rest.t >= applied
+    guess = Trajectory(rest.t[keep] - applied, rest.x[keep], rest.u[keep], rest.state_names,
+                       rest.control_names)
+    found = solve_from_state(robot, believed, x, guess=guess)
+    return found if isinstance(found, Solution) else _checked(found)
 
 
 __all__ = ["DEFAULT_PERIOD", "MPCLanding", "mpc_landing"]

@@ -15,14 +15,18 @@ schedule is then:
 * **two-stage tree**: that schedule until a branching time ``t_b`` (nobody knows the ground
   yet), then on each ground the better of its remainder and the landing re-solved from the
   state at ``t_b`` for that ground (:func:`~softlanding.control.state_landing.plan_from_state`:
-  the ground has revealed itself through the foot's deceleration). Its worst depth is never
-  above the robust open-loop one, since the remainder stays a choice.
+  the ground has revealed itself through the foot's deceleration). Where the robust landing
+  holds every limit, the tree's is never deeper, since the remainder stays a choice (a
+  re-plan that holds the limits is preferred to a remainder that does not, even if deeper).
 
-The optimisation is derivative-free (``scipy.optimize.minimize``, COBYQA) over a handful of
-numbers on the epigraph form ``min z`` s.t. ``depth_i <= z``; each evaluation is one exact
-simulation per ground. It finds a local optimum within the nominal plan's piece structure and
-is started from the nominal plan, so the robust worst depth is never above the nominal plan's
-worst depth among feasible schedules; every figure reported is an exact replay.
+The search is SLSQP (``scipy.optimize.minimize``) with finite-difference gradients over a
+handful of numbers, on the epigraph form ``min z`` s.t. ``depth_i <= z``; each evaluation is
+one exact simulation per ground. Started from the nominal plan, it keeps the best schedule
+it evaluated that holds every limit on every ground, so where the nominal plan holds them its
+worst depth is never above the nominal one. It is a local search within the nominal plan's
+piece structure, stopped after ``max_iterations`` (``message`` says whether SLSQP
+converged): an improvement on the nominal plan, not a proven optimum. Every figure reported
+is an exact replay.
 """
 
 from __future__ import annotations
@@ -38,8 +42,8 @@ from scipy.optimize import minimize
 
 from ocp import SolveError, Trajectory
 from softlanding.control.plant import SteppingPlant
-from softlanding.control.state_landing import plan_from_state
-from softlanding.errors import ParameterError, check, expect
+from softlanding.control.state_landing import ground_numbers, plan_from_state
+from softlanding.errors import InfeasibleLandingError, ParameterError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -139,7 +143,8 @@ class RobustLanding:
         For a tree: what each ground's second stage ran (``"re-planned"`` or
         ``"remainder"``).
     evaluations : int
-        Points the search evaluated (one exact simulation per ground each).
+        Points the search evaluated (one exact simulation per ground each, unless the
+        point's last force was beyond the actuator).
     solve_time_s : float
         Wall time.
     message : str
@@ -246,9 +251,10 @@ class _Pieces:
 
 def _nominal_theta(schedule: ForceSchedule | FeedbackSchedule) -> np.ndarray:
     """The durations and forces (but the last) of a nominal plan's constant pieces."""
-    if not isinstance(schedule, ForceSchedule):
-        raise ParameterError("nominal", "the robust landing starts from a bang-bang plan; "
-                                        "this one holds a stroke limit (a feedback arc)")
+    if not isinstance(schedule, ForceSchedule):  # well posed, beyond this method
+        raise InfeasibleLandingError("the robust landing starts from a bang-bang plan of "
+                                     "constant forces; the nominal one holds a stroke limit "
+                                     "(a feedback arc), which the search does not vary")
     d = np.diff((0.0,) + schedule.times)
     return np.concatenate([d, np.asarray(schedule.values[:len(d) - 1], float)])
 
@@ -288,13 +294,19 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
     Raises
     ------
     ParameterError
-        Bad arguments, or a nominal plan that is not bang-bang.
+        Bad arguments (a nominal plan of another landing; with ``tree``, a ground whose law
+        is not ``K d + c_d v^2``).
+    InfeasibleLandingError
+        The nominal plan holds a stroke limit (a feedback arc): not a family of constant
+        forces this search varies.
     ocp.SolveError
         The nominal landing cannot be solved.
     """
     t_start = time.perf_counter()
     impact = Impact.of(impact)
     expect("robot", robot, Robot)
+    max_iterations = check_count("max_iterations", max_iterations, 1, 100_000)
+    extra_pieces = check_count("extra_pieces", extra_pieces, 0, 16)
     grounds = tuple(grounds) if not isinstance(grounds, Ground) else (grounds,)
     if not grounds:
         raise ParameterError("grounds", "needs at least one ground")
@@ -302,7 +314,17 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
         expect("grounds", g, Ground, "ground model (softlanding.model.ground)")
     if tree:
         branch_time = check("branch_time", branch_time, (lambda v: v > 0, "must be > 0"))
-    nominal = nominal if nominal is not None else solve_landing(impact, robot, replay=False)
+        for g in grounds:  # the second stage plans on K d + c_d v^2 grounds only
+            try:
+                ground_numbers(g)
+            except TypeError as err:
+                raise ParameterError("grounds", f"with tree=True: {err}") from None
+    if nominal is None:
+        nominal = solve_landing(impact, robot, replay=False)
+    expect("nominal", nominal, BangBangLanding)
+    if nominal.impact != impact or nominal.robot != robot:
+        raise ParameterError("nominal", f"was solved for {nominal.impact} and {nominal.robot}, "
+                                        f"not {impact} and {robot}")
     nominal_schedule = nominal.schedule()
     replays = [GroundLanding(g, [(0.0, simulate(robot, impact, nominal_schedule, g,
                                                 energy=False))]) for g in grounds]
@@ -328,9 +350,11 @@ def two_stage_landing(robust: RobustLanding,
     the schedule's remainder and the landing re-planned from there for that ground
     (:func:`~softlanding.control.state_landing.plan_from_state`).
 
-    Since the remainder stays a choice, no ground lands deeper than under ``robust``, and the
-    tree's worst depth is at most the robust one. The first stage is the robust schedule's
-    start, not re-optimised for the tree: a joint optimum of both stages can only be lower.
+    Since the remainder stays a choice, no ground whose robust landing holds the limits lands
+    deeper than under ``robust``: where ``robust`` holds them on every ground, the tree's
+    worst depth is at most the robust one (where it does not, a re-plan that holds them wins
+    even if deeper). The first stage is the robust schedule's start, not re-optimised for the
+    tree: a joint optimum of both stages can only be lower.
 
     Parameters
     ----------
@@ -425,7 +449,8 @@ def _search(pieces: _Pieces, grounds: tuple[Ground, ...], theta0: np.ndarray,
         return np.frombuffer(best).copy(), len(cache), str(res.message)
     best = min(cache, key=violation)  # nothing holds: the least violating point
     return (np.frombuffer(best).copy(), len(cache),
-            f"{res.message}; no schedule of the family held every limit on every ground")
+            f"{res.message}; none of the {len(cache)} schedules evaluated held every limit on "
+            f"every ground")
 
 
 def _second_stages(robot: Robot, impact: Impact, schedule: ForceSchedule,

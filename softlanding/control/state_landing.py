@@ -21,20 +21,29 @@ from ocp import (
     MultipleShooting,
     OptimalControlProblem,
     PathViolationWarning,
+    Solution,
     SolveError,
     Trajectory,
 )
-from ocp.switching import detect_arcs, refine_switching
+from ocp.switching import RefinedSwitching, detect_arcs, refine_switching
+from softlanding.errors import ParameterError
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.dynamics import STATE_NAMES
 from softlanding.model.ground import DragGround, Ground, LinearGround
 from softlanding.model.robot import Robot
-from softlanding.optimal.landing import landing_schedule, landing_stance, transcribed_schedule
+from softlanding.optimal.landing import (
+    affine_laws,
+    landing_schedule,
+    landing_stance,
+    transcribed_schedule,
+)
 from softlanding.optimal.limits import force_limit
 from softlanding.util.signals import raise_if_interrupted
 
 STATE_NODES = 60
-"""Shooting intervals of :func:`plan_from_state`'s transcription."""
+"""Shooting intervals of :func:`state_transcription` (the MPC's re-plan of last resort and
+:func:`plan_from_state`): 30 are hardly faster (Ipopt's iterations dominate) and land one
+creep 15 % deeper."""
 
 STATE_PARAMETERS = ("r_m", "s", "u_max", "stiffness", "c_d", "x_b0", "v_b0", "x_f0", "v_f0")
 """The parameters of :func:`state_landing_problem`, in order."""
@@ -135,13 +144,12 @@ def state_transcription() -> MultipleShooting:
                             substeps=4, expand=True)
 
 
-def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
-                    guess: Trajectory | None = None) -> ForceSchedule | FeedbackSchedule:
-    """The optimal landing from a mid-landing state on a known ground, as a schedule.
-
-    Transcribed (:func:`state_transcription`), then refined to exact arcs when the structure
-    is bang-bang (else the transcription's steps are the plan); the schedule ends with the
-    arrest force and the body's weight (:func:`~softlanding.optimal.landing.landing_schedule`).
+def solve_from_state(robot: Robot, ground: Ground, x: np.ndarray, *,
+                     guess: Trajectory | None = None,
+                     warm_start: Solution | None = None) -> RefinedSwitching | Solution:
+    """The optimal landing from a mid-landing state on a known ground: refined arcs when the
+    transcription's structure is bang-bang and every arc's law is affine (an exact schedule),
+    else the transcription itself.
 
     Parameters
     ----------
@@ -154,19 +162,30 @@ def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
     guess : ocp.Trajectory, optional
         A start for the solver (times from the state's instant); Ipopt's default start if
         it is not given or fails.
+    warm_start : ocp.Solution, optional
+        A solution of :func:`state_transcription` to start from (instead of ``guess``).
 
     Raises
     ------
+    ParameterError
+        Not a state of a yielding foot.
     ocp.SolveError
         No plan from this state.
     """
+    x = np.asarray(x, float)
+    if x.shape != (4,) or not np.all(np.isfinite(x)):
+        raise ParameterError("x", f"needs 4 finite numbers (x_b, v_b, x_f, v_f), got {x!r}")
+    if not x[3] < 0:
+        raise ParameterError("x", "the foot must still yield (v_f < 0) to plan its landing")
     tr = state_transcription()
-    params = state_parameters(robot, ground, np.asarray(x, float))
+    params = state_parameters(robot, ground, x)
     sol = None
     with warnings.catch_warnings():
         # the plan is judged by its exact replay, not by the transcription's nodes
         warnings.simplefilter("ignore", PathViolationWarning)
-        if guess is not None:
+        if warm_start is not None and warm_start.transcription is tr:
+            sol = tr.solve(params, warm_start=warm_start)
+        elif guess is not None:
             try:
                 sol = tr.solve(params, guess=guess)
             except SolveError:
@@ -174,13 +193,48 @@ def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
         if sol is None:
             sol = tr.solve(params)
     structure = detect_arcs(sol).without_trailing_constrained()
-    if structure.refinable:
+    if structure.refinable:  # else not bang-bang (a singular creep): the transcription
         try:
-            return landing_schedule(refine_switching(sol, structure), robot.r_m)
+            refined = refine_switching(sol, structure)
+            # finite, no arc collapsed, an exact schedule: else the transcription is the plan
+            if (np.all(np.isfinite(refined.durations)) and np.all(np.isfinite(refined.xT))
+                    and np.min(refined.durations) > 1e-9 * refined.T and affine_laws(refined)):
+                return refined
         except SolveError:
             raise_if_interrupted()
-    return transcribed_schedule(sol, robot.r_m, force_limit(robot))
+    return sol
+
+
+def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
+                    guess: Trajectory | None = None) -> ForceSchedule | FeedbackSchedule:
+    """The optimal landing from a mid-landing state on a known ground, as a schedule
+    (:func:`solve_from_state`): the arcs (or the transcription's steps), then the arrest
+    force and the body's weight (:func:`~softlanding.optimal.landing.landing_schedule`).
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (with a force limit).
+    ground : LinearGround or DragGround
+        The ground.
+    x : array of 4
+        The state (a yielding foot, ``v_f < 0``).
+    guess : ocp.Trajectory, optional
+        A start for the solver (times from the state's instant).
+
+    Raises
+    ------
+    ParameterError
+        Not a state of a yielding foot.
+    ocp.SolveError
+        No plan from this state.
+    """
+    plan = solve_from_state(robot, ground, x, guess=guess)
+    if isinstance(plan, Solution):
+        return transcribed_schedule(plan, robot.r_m, force_limit(robot))
+    return landing_schedule(plan, robot.r_m)
 
 
 __all__ = ["STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "ground_numbers",
-           "plan_from_state", "state_landing_problem", "state_parameters", "state_transcription"]
+           "plan_from_state", "solve_from_state", "state_landing_problem", "state_parameters",
+           "state_transcription"]

@@ -279,7 +279,7 @@ class BangBangLanding:
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,
         then its weight (see :func:`landing_schedule`)."""
-        if self.refined is not None:
+        if self.refined is not None and (affine_laws(self.refined) or self.transcribed is None):
             return landing_schedule(self.refined, self.robot.r_m)
         assert self.transcribed is not None
         return transcribed_schedule(self.transcribed, self.robot.r_m, force_limit(self.robot))
@@ -303,6 +303,19 @@ class BangBangLanding:
         return json_safe(d)
 
 
+def affine_laws(refined: RefinedSwitching) -> bool:
+    """Whether every arc's control is a constant or an affine state feedback ``u = K x + k0``
+    (what :func:`landing_schedule` replays exactly). A boundary arc on a drag ground holds
+    the stroke with a law in ``v_f^2``: not affine, so no exact schedule.
+
+    Parameters
+    ----------
+    refined : RefinedSwitching
+        Refined arcs.
+    """
+    return all(law is None or "gain" in law for law in (refined.control_laws or []))
+
+
 def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | FeedbackSchedule:
     """A refined landing's open-loop control: its arcs, then ``u_b`` until the body stops,
     then the body's weight.
@@ -316,7 +329,15 @@ def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | F
         The refined arcs (of the landing OCP or of one started mid-landing).
     r_m : float
         Mass ratio.
+
+    Raises
+    ------
+    ValueError
+        An arc's law is not affine (:func:`affine_laws`).
     """
+    if not affine_laws(refined):
+        raise ValueError("a boundary arc's law is not affine in the state (drag): no exact "
+                         "schedule; replay the transcription (transcribed_schedule)")
     keep = [i for i, d in enumerate(refined.durations) if d > 1e-14]
     durs = [float(refined.durations[i]) for i in keep]
     rows = [_law_row(refined, i) for i in keep]

@@ -43,7 +43,8 @@ def _case(row: Mapping[str, Any], keys: Sequence[str]) -> dict[str, Any]:
     m = row.get("mpc")
     if isinstance(m, Mapping) and "mpc" in keys:
         out["mpc"].update({n: m[n] for n in ("step_time_median_ms", "step_time_p99_ms",
-                                             "replans", "fallbacks") if n in m})
+                                             "step_times_ms", "replans", "fallbacks")
+                           if n in m})
     return out
 
 
@@ -57,13 +58,20 @@ def _group(cases: Sequence[Mapping[str, Any]], keys: Sequence[str]) -> dict[str,
         "feasible": {k: sum(c[k]["feasible"] for c in cases) for k in keys}}
     if "mpc" in keys:
         ratios = np.array([c["mpc"]["ratio"] for c in cases])
-        med = [c["mpc"].get("step_time_median_ms", np.nan) for c in cases]
-        p99 = [c["mpc"].get("step_time_p99_ms", np.nan) for c in cases]
+        # over every step of every case, as the study's goals (the cases' own medians and
+        # 99th percentiles when the steps were not kept)
+        steps = [np.asarray(c["mpc"]["step_times_ms"], float) for c in cases
+                 if "step_times_ms" in c["mpc"]]
+        if len(steps) == len(cases) and any(x.size for x in steps):
+            pooled = np.concatenate(steps)
+            med, p99 = float(np.median(pooled)), float(np.percentile(pooled, 99))
+        else:
+            med = float(np.median([c["mpc"].get("step_time_median_ms", np.nan) for c in cases]))
+            p99 = float(np.max([c["mpc"].get("step_time_p99_ms", np.nan) for c in cases]))
         d["mpc"] = {"within_2_percent": int((ratios <= WITHIN).sum()),
                     "never_below": int((ratios >= 1.0 - BELOW_TOL).sum()),
                     "max_ratio": float(ratios.max()), "min_ratio": float(ratios.min()),
-                    "step_time_median_ms": float(np.median(med)),
-                    "step_time_p99_ms": float(np.max(p99))}
+                    "step_time_median_ms": med, "step_time_p99_ms": p99}
     return d
 
 
@@ -189,9 +197,9 @@ def unknown_ground_markdown(s: Mapping[str, Any]) -> list[str]:
         out += [f"The MPC with on-line estimation (sample period {s['period']:g}, "
                 f"{rig:.3g} ms on the paper's rig, tau_s = {1e3 * s['tau_s']:.3g} ms): depth "
                 f"within {100 * (WITHIN - 1):.0f} % of the clairvoyant depth, never below it, "
-                "and the wall time of one sample's estimate and re-plan (median over the "
-                "cases of each case's median; largest 99th percentile) in ms on this machine "
-                "and in periods of the rig (real time needs at most 1).", "",
+                "and the wall time of one sample's estimate and re-plan (median and 99th "
+                "percentile over every step of the cases) in ms on this machine and in periods "
+                "of the rig (real time needs at most 1).", "",
                 table(["v0", "cases", f"within {100 * (WITHIN - 1):.0f} %", "never below",
                        "largest ratio", "step median [ms]", "step p99 [ms]",
                        "median / rig period", "p99 / rig period"],

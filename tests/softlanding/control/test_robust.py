@@ -123,7 +123,40 @@ def test_cli_robust_bad_input(cli, args, message):
 def test_a_set_no_schedule_can_hold_is_reported_not_hidden(cli):
     # stiffness 0.1 and 10 at v0 = -10: the stroke cannot absorb both feet's stops
     r = robust_landing(-10, [LinearGround(0.1), LinearGround(10.0)], max_iterations=30)
-    assert not r.feasible and "no schedule" in r.message
+    assert not r.feasible and "none of the" in r.message
     assert json.loads(json.dumps(r.to_dict()))["feasible"] is False
     code, out, _ = cli("robust", "--v0", "-10", "--stiffness", "0.1,10", "--json")
     assert code == 1 and json.loads(out)["feasible"] is False
+
+
+def test_bad_nominal_and_tree_grounds_are_refused():
+    from softlanding.model.terrain import paper_rig_units, poppy_seed_added_mass
+
+    with pytest.raises(ParameterError, match="nominal"):
+        robust_landing(-3, [LinearGround()], nominal=solve_landing(-6))
+    with pytest.raises(ParameterError, match="nominal"):
+        robust_landing(-3, [LinearGround()], nominal="plan")
+    with pytest.raises(ParameterError, match="max_iterations"):
+        robust_landing(-3, [LinearGround()], max_iterations=0)
+    with pytest.raises(ParameterError, match="extra_pieces"):
+        robust_landing(-3, [LinearGround()], extra_pieces=-1)
+    with pytest.raises(ParameterError, match="linear or drag"):  # before the search
+        robust_landing(-3, [LinearGround(), poppy_seed_added_mass(paper_rig_units())],
+                       tree=True)
+
+
+def test_a_short_stroke_plan_from_state_replays_its_transcription():
+    # the landing from impact holds the stroke limit (a boundary arc): on the state-started
+    # problem its law is in v_f^2 through the drag parameter, not affine: the transcription
+    # is replayed instead of crashing (KeyError 'gain' before)
+    from softlanding import Robot
+    from softlanding.control import plan_from_state
+    from softlanding.model.controllers import ForceSchedule
+
+    robot = Robot(r_m=5, s=2, u_max=8.2)
+    x = np.array([robot.s / 2, -3.0, 0.0, -3.0])
+    plan = plan_from_state(robot, LinearGround(), x)
+    assert isinstance(plan, ForceSchedule)
+    assert simulate(robot, -3, plan, LinearGround()).depth > 0
+    with pytest.raises(ParameterError, match="yield"):
+        plan_from_state(robot, LinearGround(), np.array([1.0, 0.0, 0.0, 0.0]))
