@@ -28,7 +28,7 @@ from ocp import (
     Trajectory,
     refine_structure,
 )
-from ocp.switching import Mode, RefinedSwitching
+from ocp.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
@@ -172,7 +172,7 @@ class MPCLanding:
 def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 ground: Ground = LINEAR_GROUND, *, model: Ground = LINEAR_GROUND,
                 period: float = DEFAULT_PERIOD, estimate: bool = True,
-                max_samples: int = 100_000) -> MPCLanding:
+                max_samples: int = 100_000, reuse: bool = False) -> MPCLanding:
     """Land on ``ground`` under MPC whose first plan assumes ``model``.
 
     Parameters
@@ -191,6 +191,12 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         Update the ground estimate from the measurements (else keep ``model``).
     max_samples : int
         A bound on the samples while the foot yields.
+    reuse : bool
+        Start the re-solves from the NLPs earlier landings in this process solved (faster
+        steps: fewer builds within a sample) instead of none. The Newton re-solve starts
+        from the last solution of each cached structure, so the landing then depends on
+        what ran before it: in the unknown-ground study, 57 of 60 within 2 % and a 99th
+        percentile step of 14 ms with reuse, 59 of 60 and 152 ms without.
 
     Raises
     ------
@@ -206,6 +212,10 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     first = solve_landing(impact, robot, model, replay=False)
     plan: Any = first.refined if first.refined is not None else first.transcribed
     problem = state_landing_problem()
+    if not reuse:
+        # the re-solves start from the NLPs cached for this problem: a landing starts from
+        # none, so that it does not depend on what ran before it (its setup builds them)
+        clear_cache(problem)
     est = GroundEstimator(robot, drag=True, prior=ground_numbers(model))
     plant = SteppingPlant(robot, impact, ground)
     t0 = time.perf_counter()
