@@ -106,7 +106,12 @@ def land(mod: types.ModuleType, case: tuple[float, float, float],
     clocks = _TwoClocks()
     mod.time = clocks  # type: ignore[attr-defined]
     try:
-        m = mod.mpc_landing(case[0], PAPER_ROBOT, true_ground(case[1], case[2]))
+        import inspect
+
+        # --warm: the current code clears its own caches unless told to reuse them
+        extra = {"reuse": True} if warm and "reuse" in inspect.signature(
+            mod.mpc_landing).parameters else {}
+        m = mod.mpc_landing(case[0], PAPER_ROBOT, true_ground(case[1], case[2]), **extra)
     finally:
         mod.time = time  # type: ignore[attr-defined]
     steps = clocks.reads[2:]
