@@ -157,6 +157,9 @@ def grounds_of(a: argparse.Namespace) -> Any:
     """
     ks = a.stiffness if a.stiffness is not None else [None]
     cds = a.cd if a.cd is not None else [None]
+    for name, values in (("stiffness", ks), ("cd", cds)):
+        if len(set(values)) < len(values):  # a ground named twice would count twice
+            raise ParameterError(name, "lists a value twice")
     grounds = [ground_of(argparse.Namespace(**{**vars(a), "stiffness": k, "cd": cd}))
                for k, cd in itertools.product(ks, cds)]
     return grounds[0] if len(grounds) == 1 else grounds

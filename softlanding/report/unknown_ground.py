@@ -167,7 +167,8 @@ def unknown_ground_markdown(s: Mapping[str, Any]) -> list[str]:
     n_grounds = len(s["stiffness"]) * len(s["c_d"])
     p = s.get("robot")
     robot = ("The robot" if not p else
-             f"The robot (r_m = {p['r_m']:g}, s = {p['s']:g}, u_max = {p.get('u_max', 'inf'):g})")
+             f"The robot (r_m = {p['r_m']:g}, s = {p['s']:g}, u_max = "
+             f"{'none' if p.get('u_max') is None else format(p['u_max'], 'g')})")
     out = ["## Landing on an unknown ground (fig_unknown_ground)", "",
            f"{robot} lands at v0 in {{{', '.join(f'{v:g}' for v in s['v0'])}}} on "
            f"{n_grounds} true grounds f = K d + c_d v_f^2, K in "

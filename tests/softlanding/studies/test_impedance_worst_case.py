@@ -149,3 +149,8 @@ def test_cli_bad_ground_lists_are_one_line_errors(cli, args, match):
     code, out, err = cli("impedance", "--v0", "-3", "--grid", "3", *args)
     assert code == 2 and "Traceback" not in err
     assert match in err and len(err.strip().splitlines()) == 1
+
+
+def test_cli_a_ground_named_twice_is_refused(cli):
+    code, _, err = cli("impedance", "--v0", "-3", "--stiffness", "1,1")
+    assert code == 2 and "stiffness: lists a value twice" in err and err.count("\n") == 1
