@@ -20,6 +20,7 @@ def test_true_ground_is_linear_without_drag():
     assert true_ground(1.0, 0.2).to_dict() == {"model": "drag", "c_d": 0.2}
 
 
+@pytest.mark.slow  # ~15 s (every controller on four grounds): in the second test command
 def test_a_small_study_checks_the_worst_case_goals():
     from softlanding.studies.unknown_ground import unknown_ground_study
 
