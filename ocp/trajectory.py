@@ -107,6 +107,21 @@ class Trajectory:
             d["phase"] = self.phase.tolist()
         return d
 
+    def after(self, t0: float) -> Trajectory:
+        """The samples from ``t0`` on, their times counted from ``t0`` (e.g. the rest of a
+        plan, as the guess of a re-solve started there).
+
+        Parameters
+        ----------
+        t0 : float
+            The new time origin.
+        """
+        keep = self.t >= t0
+        return Trajectory(self.t[keep] - t0, self.x[keep], self.u[keep], self.state_names,
+                          self.control_names,
+                          None if self.mode is None else self.mode[keep],
+                          None if self.phase is None else self.phase[keep])
+
     def to_xarray(self):
         """An :class:`xarray.Dataset` with one variable per state and control, over ``t``."""
         import xarray as xr

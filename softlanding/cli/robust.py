@@ -15,7 +15,7 @@ from softlanding.cli.output import (
     target,
 )
 from softlanding.errors import ParameterError, check, check_count
-from softlanding.model.ground import DragGround, Ground, LinearGround
+from softlanding.model.ground import Ground, linear_or_drag
 from softlanding.model.robot import Impact
 
 
@@ -39,8 +39,7 @@ def ground_set(stiffness: list[float], drag: list[float]) -> list[Ground]:
     if len(set(stiffness)) < len(stiffness) or len(set(drag)) < len(drag):
         raise ParameterError("stiffness" if len(set(stiffness)) < len(stiffness) else "cd",
                              "lists a value twice")
-    return [LinearGround(k) if c == 0 else DragGround(c, k)
-            for k, c in itertools.product(stiffness, drag)]
+    return [linear_or_drag(k, c) for k, c in itertools.product(stiffness, drag)]
 
 
 def robust_command(a: argparse.Namespace) -> int:

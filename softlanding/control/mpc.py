@@ -513,11 +513,7 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     """The landing from ``x`` transcribed (from the rest of the last plan) and refined."""
     if isinstance(plan, Solution):
         return solve_from_state(robot, believed, x, warm_start=plan)
-    rest = plan.trajectory(200)
-    keep = rest.t >= applied
-    guess = Trajectory(rest.t[keep] - applied, rest.x[keep], rest.u[keep], rest.state_names,
-                       rest.control_names)
-    found = solve_from_state(robot, believed, x, guess=guess)
+    found = solve_from_state(robot, believed, x, guess=plan.trajectory(200).after(applied))
     return found if isinstance(found, Solution) else _checked(found)
 
 

@@ -483,10 +483,7 @@ def _shifted_trajectory(res: LandingResult, t0: float) -> Trajectory | None:
     """The open-loop landing from ``t0`` until the foot's first stop, times from ``t0``."""
     if not res.t_first_stop > t0:
         return None
-    tr = res.trajectory(t_end=res.t_first_stop, n=200)
-    keep = tr.t >= t0
-    return Trajectory(tr.t[keep] - t0, tr.x[keep], tr.u[keep], tr.state_names,
-                      tr.control_names)
+    return res.trajectory(t_end=res.t_first_stop, n=200).after(t0)
 
 
 __all__ = ["DEFAULT_BRANCH_TIME", "FD_STEP", "MAX_ITERATIONS", "GroundLanding", "RobustLanding",

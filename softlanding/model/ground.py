@@ -448,5 +448,16 @@ def ground_of_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
             **{k[7:]: v for k, v in attrs.items() if k.startswith("ground_")}}
 
 
+def linear_or_drag(stiffness: float, c_d: float) -> Ground:
+    """The ground ``f = K d + c_d v_f^2``: linear when ``c_d = 0`` (the exact path), else drag.
+
+    Parameters
+    ----------
+    stiffness, c_d : float
+        ``K`` and the drag number.
+    """
+    return LinearGround(stiffness) if c_d == 0 else DragGround(c_d, stiffness)
+
+
 __all__ = ["AddedMassGround", "CustomGround", "DragGround", "Ground", "LINEAR_GROUND",
-           "LinearGround", "ground_attrs", "ground_label", "ground_of_attrs"]
+           "LinearGround", "ground_attrs", "ground_label", "ground_of_attrs", "linear_or_drag"]

@@ -23,7 +23,7 @@ import numpy as np
 from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
 from softlanding.control.robust import GroundLanding, robust_landing, two_stage_landing
 from softlanding.model.controllers import Impedance
-from softlanding.model.ground import DragGround, Ground, LinearGround
+from softlanding.model.ground import Ground, linear_or_drag
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import solve_landing
 from softlanding.simulation.simulator import simulate
@@ -39,14 +39,15 @@ STUDY_V0 = (-1.0, -3.0, -6.0, -10.0)
 
 
 def true_ground(stiffness: float, c_d: float) -> Ground:
-    """The ground ``f = K d + c_d v^2`` (linear when ``c_d = 0``).
+    """A true ground of the study: ``f = K d + c_d v^2`` (linear when ``c_d = 0``,
+    :func:`~softlanding.model.ground.linear_or_drag`).
 
     Parameters
     ----------
     stiffness, c_d : float
         ``K`` and the drag number.
     """
-    return LinearGround(stiffness) if c_d == 0 else DragGround(c_d, stiffness)
+    return linear_or_drag(stiffness, c_d)
 
 
 def _replayed(res: Any) -> dict[str, Any]:

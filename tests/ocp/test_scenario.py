@@ -431,3 +431,15 @@ def test_the_guide_example_runs(capsys):
     exec(compile(code, str(guide), "exec"), {})
     out = capsys.readouterr().out.split("\n")
     assert out[0].startswith("0.1244444444") and out[0].endswith("[0, 1] True")
+
+
+def test_trajectory_after_restarts_its_times():
+    import numpy as np
+
+    from ocp import Trajectory
+
+    tr = Trajectory(np.linspace(0, 1, 5), np.arange(10.0).reshape(5, 2), np.zeros((5, 1)),
+                    ("a", "b"), ("u",), mode=np.array(list("vwxyz")))
+    rest = tr.after(0.5)
+    assert np.allclose(rest.t, [0, 0.25, 0.5]) and rest.x[0, 0] == 4.0
+    assert list(rest.mode) == ["x", "y", "z"]
