@@ -8,7 +8,7 @@ The baseline is ``softlanding/control/mpc.py`` as of the commit ``--baseline`` (
 runs on this tree's ``ocp`` and simulator (so only the controller differs). The contenders
 land case by case, interleaved (the baseline first on even repeats, the current code on odd
 ones), so that a drift of the shared machine's load falls on both. Before every landing the
-refinement NLPs cached in the process are forgotten (``ocp.switching.clear_cache``): each
+refinement NLPs cached in the process are forgotten (``ocp.structure.switching.clear_cache``): each
 landing is a controller's first after boot, whose one-time builds fall in its setup or in
 its steps, as the contender puts them (``--warm`` keeps them, as the unknown-ground study
 does). One untimed landing per contender first takes the process-wide compilations
@@ -97,7 +97,7 @@ def land(mod: types.ModuleType, case: tuple[float, float, float],
     warm : bool
         Keep the refinement NLPs cached by earlier landings.
     """
-    from ocp.switching import clear_cache
+    from ocp.structure.switching import clear_cache
     from softlanding.model.robot import PAPER_ROBOT
     from softlanding.studies.unknown_ground import true_ground
 

@@ -115,7 +115,7 @@ def contenders(N: int, v0s, guesses):
     """The four sweeps, each as ``(start, step)``: ``step(state, v0) -> state`` re-solves
     warm from its own previous result; ``depth(name, state)`` reads the depth."""
     from ocp import MultipleShooting
-    from ocp.switching import refine_structure
+    from ocp.structure.switching import refine_structure
     from softlanding import PAPER_ROBOT, Impact
     from softlanding.optimal.landing import PARAMETERS, build_landing_problem, solve_landing
 

@@ -36,7 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def load_baseline(commit: str):
-    """The ``ocp.switching`` and ``ocp.pmp`` modules at ``commit``, as private modules."""
+    """The ``ocp.structure.switching`` and ``ocp.certificate.certify`` modules at ``commit``,
+    as private modules."""
     mods = {}
     for name in ("switching", "pmp"):
         src = subprocess.run(["git", "-C", str(ROOT), "show", f"{commit}:ocp/{name}.py"],
@@ -58,8 +59,8 @@ def timed(fn, *args, **kw):
 
 
 def landing(args, old_sw, old_pmp) -> None:
-    from ocp.pmp import certify
-    from ocp.switching import detect_arcs, refine_switching
+    from ocp.certificate.certify import certify
+    from ocp.structure.switching import detect_arcs, refine_switching
     from softlanding.optimal.landing import solve_landing
 
     v0s = np.linspace(-0.5, -10.0, args.n)
@@ -102,8 +103,8 @@ def landing(args, old_sw, old_pmp) -> None:
 
 def rayleigh(args, old_sw, old_pmp) -> None:
     from ocp import MultipleShooting, OptimalControlProblem
-    from ocp.pmp import certify
-    from ocp.switching import clear_cache, refine_switching
+    from ocp.certificate.certify import certify
+    from ocp.structure.switching import clear_cache, refine_switching
 
     p = OptimalControlProblem("rayleigh")
     x1, x2 = p.state("x1"), p.state("x2")

@@ -32,8 +32,8 @@ import casadi as ca
 import numpy as np
 
 from ocp import Collocation, OptimalControlProblem  # noqa: E402
-from ocp.guess import control_guess, state_ends, variable_guess  # noqa: E402
-from ocp.nlp import DEFAULT_IPOPT  # noqa: E402
+from ocp.definition.guess import control_guess, state_ends, variable_guess  # noqa: E402
+from ocp.transcriptions.nlp import DEFAULT_IPOPT  # noqa: E402
 from tests.oracles.ocp_suite import PROBLEMS, SuiteProblem  # noqa: E402
 
 

@@ -103,6 +103,12 @@ FRONT_DOORS = {
     "softlanding.report": "The reproduction of the paper (every figure and table).",
     "softlanding.errors": "Every exception of the package.",
     "ocp": "Generic optimal control on CasADi and Ipopt.",
+    "ocp.definition": "What a problem is: phases, symbols, bounds, guesses, scaling.",
+    "ocp.transcriptions": "Multiple shooting, collocation, the NLP, the solution.",
+    "ocp.structure": "Arc structure and switching-time refinement.",
+    "ocp.certificate": "Pontryagin's conditions: costates, H, switching functions, verdicts.",
+    "ocp.scenarios": "Scenario problems: robust open loop, two-stage trees.",
+    "ocp.search": "Many starts: distinct local optima.",
 }
 HOME_ORDER = ["softlanding.model", "softlanding.simulation", "softlanding.optimal",
               "softlanding.control", "softlanding.studies", "softlanding.plots",

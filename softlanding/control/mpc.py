@@ -35,7 +35,7 @@ from ocp import (
     Trajectory,
     refine_structure,
 )
-from ocp.switching import Mode, RefinedSwitching, clear_cache
+from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (

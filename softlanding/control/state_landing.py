@@ -25,7 +25,7 @@ from ocp import (
     SolveError,
     Trajectory,
 )
-from ocp.switching import RefinedSwitching, detect_arcs, refine_switching
+from ocp.structure.switching import RefinedSwitching, detect_arcs, refine_switching
 from softlanding.errors import ParameterError
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.dynamics import STATE_NAMES

@@ -33,8 +33,13 @@ import casadi as ca
 import numpy as np
 
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
-from ocp.errors import PathViolationWarning
-from ocp.switching import RefinedSwitching, detect_arcs, refine_structure, refine_switching
+from ocp.definition.errors import PathViolationWarning
+from ocp.structure.switching import (
+    RefinedSwitching,
+    detect_arcs,
+    refine_structure,
+    refine_switching,
+)
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule, Rigid
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics

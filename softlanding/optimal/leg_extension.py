@@ -22,7 +22,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ocp import Solution, Trajectory
-from ocp.phase_refinement import RefinedPhases
+from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.errors import ParameterError, expect
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.ground import LINEAR_GROUND

@@ -3,7 +3,7 @@
 Every refined interval is an affine law of the augmented state ``z = [x_b, v_b,
 x_f, v_f, 1]``: a bang arc is the constant ``u = value``; a boundary arc is the
 state feedback ``u = K x + k0`` that holds its constraint (read off
-:attr:`ocp.switching.RefinedSwitching.control_laws`). The whole schedule is
+:attr:`ocp.structure.switching.RefinedSwitching.control_laws`). The whole schedule is
 therefore a :class:`~softlanding.model.controllers.FeedbackSchedule` (piecewise-affine
 in time), replayed exactly by :func:`softlanding.simulation.simulator.simulate`. Where every
 feedback law only reads states that its mode keeps constant (the crater-capacity
@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp.phase_refinement import RefinedPhases
+from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.model import controllers as _controllers
 from softlanding.model.controllers import ForceSchedule
 
@@ -169,7 +169,7 @@ def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
     x0 : ndarray (4,)
         State at the start.
     """
-    from ocp.flows import expm
+    from ocp.structure.flows import expm
 
     z = np.r_[np.asarray(x0, dtype=float), 1.0]
     for a in laws:

@@ -18,10 +18,10 @@ from typing import Any
 import numpy as np
 
 from ocp import MultipleShooting, Solution, SolveError, Trajectory
-from ocp.arcs import ArcStructure
-from ocp.errors import PathViolationWarning
-from ocp.flows import Mode
-from ocp.phase_refinement import (
+from ocp.definition.errors import PathViolationWarning
+from ocp.structure.arcs import ArcStructure
+from ocp.structure.flows import Mode
+from ocp.structure.phase_refinement import (
     RefinedPhases,
     detect_phase_structures,
     local_phase,
@@ -208,7 +208,7 @@ def repaired_structures(sol: Solution, structures: list[ArcStructure]
     structures : list of ArcStructure
         The detected structures, per phase.
     """
-    from ocp.arcs import detect_structure
+    from ocp.structure.arcs import detect_structure
 
     s = float(sol.params["s"])
     variants: list[tuple[list[ArcStructure], list[str]]] = [([], []), ([], [])]

@@ -28,7 +28,7 @@ from collections.abc import Callable, Iterable
 from typing import Any, TypeVar
 
 from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
-from ocp.phase_refinement import RefinedPhases
+from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from ocp import Solution
-from ocp.phase_refinement import RefinedPhases
+from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.verification import certificate_reasons, refined_result_reasons
 from softlanding.simulation.simulator import LandingResult
@@ -87,7 +87,7 @@ class PhasedLanding:
 
     def certify(self) -> Any:
         """The PMP certificate of the refined phases (None without a refinement)."""
-        from ocp.phase_pmp import certify_phases
+        from ocp.certificate.phases import certify_phases
 
         if self.refined is None:
             return None
@@ -112,7 +112,7 @@ class PhasedLanding:
 
         Parameters
         ----------
-        certificate : ocp.phase_pmp.PhasesCertificate, optional
+        certificate : ocp.certificate.phases.PhasesCertificate, optional
             The certificate of this solution.
         """
         return (refined_result_reasons(

@@ -4,7 +4,7 @@ instead of assumed (see :mod:`softlanding.optimal.two_phase_problem` for the for
 :func:`solve_two_phase` transcribes the problem (multiple shooting, both phases),
 starting from the exact-simulator replay of the paper's single-phase optimum;
 refines the switching times of both phases with exact arcs
-(:func:`ocp.phase_refinement.refine_phases`); and replays the whole schedule
+(:func:`ocp.structure.phase_refinement.refine_phases`); and replays the whole schedule
 (yielding arcs, the phase-2 arrest law, then the body's weight) in the exact
 simulator. :func:`sweep_two_phase` does this over impact velocities by
 continuation, each landing re-solving its neighbour's arc structure directly.
@@ -27,7 +27,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ocp import Solution, SolveError, Trajectory
-from ocp.phase_refinement import RefinedPhases
+from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.errors import InfeasibleLandingError, expect
 from softlanding.model.controllers import Rigid
 from softlanding.model.ground import LINEAR_GROUND, Ground
@@ -356,7 +356,7 @@ class TwoStepCheck:
 
         Parameters
         ----------
-        certificate : ocp.phase_pmp.PhasesCertificate, optional
+        certificate : ocp.certificate.phases.PhasesCertificate, optional
             A certificate of the one-step optimum.
         """
         return self.one_step.unverified_reasons(certificate)

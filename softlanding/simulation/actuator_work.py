@@ -16,7 +16,7 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from ocp.flows import expm
+from ocp.structure.flows import expm
 from softlanding.model.dynamics import VB, VF
 
 

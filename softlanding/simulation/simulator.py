@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp.trajectory import Trajectory
+from ocp.definition.trajectory import Trajectory
 from softlanding.errors import ParameterError, RestNotProvenError, check, check_count, expect
 from softlanding.model.controllers import (
     Controller,

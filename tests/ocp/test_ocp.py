@@ -13,7 +13,7 @@ from ocp import (
     SolveError,
     continuation,
 )
-from ocp.switching import detect_arcs, refine_switching
+from ocp.structure.switching import detect_arcs, refine_switching
 from tests.oracles.problems import min_time_double_integrator
 
 

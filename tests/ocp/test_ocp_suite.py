@@ -15,7 +15,7 @@ from functools import cache
 import pytest
 
 from ocp import Collocation, MultipleShooting, PathViolationWarning, certify, refine_switching
-from ocp.pmp import CERTIFIED
+from ocp.certificate.certify import CERTIFIED
 from tests.oracles.ocp_suite import PROBLEMS
 
 BY_NAME = {p.name: p for p in PROBLEMS}

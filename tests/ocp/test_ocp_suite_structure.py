@@ -4,8 +4,8 @@ problems get "not bang-bang" (from multiple-shooting transcriptions)."""
 import pytest
 
 from ocp import MultipleShooting, certify
-from ocp.pmp import CERTIFIED, NOT_BANG_BANG
-from ocp.switching import detect_structure, refine_switching
+from ocp.certificate.certify import CERTIFIED, NOT_BANG_BANG
+from ocp.structure.switching import detect_structure, refine_switching
 from tests.oracles.ocp_suite import problems as P
 
 

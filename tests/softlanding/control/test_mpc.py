@@ -81,7 +81,7 @@ def test_an_arc_ending_within_a_sample_is_dropped_and_newton_goes_on():
 
 
 def test_a_failed_re_solve_is_transcribed_and_lands_as_before():
-    from ocp.switching import clear_cache
+    from ocp.structure.switching import clear_cache
 
     clear_cache()  # the re-solves' paths depend on the NLPs earlier tests left cached
     # the first drag estimate (c_d 0 -> 1) is too far for the plan's re-solve: a

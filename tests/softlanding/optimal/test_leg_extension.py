@@ -4,7 +4,7 @@ problem; free, it lowers the depth; replays and the drop's flight are checked ex
 import numpy as np
 import pytest
 
-from ocp.refinement import clear_cache
+from ocp.structure.refinement import clear_cache
 from softlanding import PAPER_ROBOT
 from softlanding.errors import ParameterError
 from softlanding.optimal.leg_extension import solve_leg_extension, sweep_leg_extension

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from ocp.pmp import CERTIFIED, INCONCLUSIVE, certify
-from ocp.switching import detect_arcs, refine_switching
+from ocp.certificate.certify import CERTIFIED, INCONCLUSIVE, certify
+from ocp.structure.switching import detect_arcs, refine_switching
 from softlanding import Robot
 from softlanding.optimal.landing import STROKE, arrest_force, solve_landing
 

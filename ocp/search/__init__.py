@@ -1,0 +1,1 @@
+"""Many starts: the distinct local optima of a problem and the best (:func:`~ocp.multistart`)."""

@@ -1,0 +1,850 @@
+"""Switching-time refinement across the phases of a :class:`ocp.MultiPhaseProblem`.
+
+Each phase has its own arcs (bang and boundary arcs, one :class:`~ocp.structure.flows.Mode`
+per control and interval, as in :mod:`ocp.structure.refinement`); the unknowns are the
+interval durations of every phase, the state at the start of every phase and
+the problem's decision variables. The phases' own initial, terminal, boundary
+and duration constraints and the linkage constraints are imposed on the
+end-point values exactly as the transcription does (:meth:`MultiPhaseProblem.
+boundary_blocks`); a time link ``t0 of b = T of a`` is used directly (``t0``
+of the later phase *is* the earlier phase's ``T``), every other link is a
+constraint of the NLP. Path constraints are sampled inside every interval and
+at the start of every phase but the first. The NLP is built once per problem,
+structure and step counts and cached, so a new parameter value re-solves it
+(Newton's fast path first, as in the single-phase case).
+
+Limitations (each raises a clear error): dynamics may not depend on decision
+variables or time (``t``, ``t0``, ``T``), and a phase may not declare integrals
+used in boundary terms; a phase's initial time must be fixed (the first phase)
+or time-linked to an earlier phase.
+
+Example (accelerate, then brake with no control; :func:`refine_phases` of a
+transcribed solution)::
+
+    sol = MultipleShooting(mp, nodes=[20, 10]).solve({"d": 2.0})
+    r = refine_phases(sol)            # r.phases[0].kinds == ["max"], r.T == 2 sqrt(2)
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import weakref
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..definition.errors import InfeasibleError, ProblemDefinitionError, SolveError
+from ..definition.multiphase import MultiPhaseProblem
+from ..definition.trajectory import Trajectory
+from ..transcriptions.solution import Solution
+from .arcs import ArcStructure, control_bounds_at, detect_structure
+from .flows import Mode, has_running_cost
+from .refinement import (
+    DEFAULT_TOL,
+    REFINE_IPOPT,
+    ConstraintBlocks,
+    SwitchingNLP,
+    arc_dynamics,
+    build_intervals,
+    required_substeps,
+    rk8_of,
+)
+from .switching import RefinedSwitching, insert_extra_arcs
+
+Modes = tuple[tuple[Mode, ...], ...]
+PhaseModes = tuple[Modes, ...]
+
+_CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _check_problem(mp: MultiPhaseProblem) -> None:
+    """Refuse what the refinement cannot represent (see the module docstring)."""
+    for ph in mp.phases:
+        other = ca.vertcat(ph.t, ph.t0, ph.T, ph.v)
+        if ca.depends_on(ca.vertcat(ph.rhs, ph.lagrange), other):
+            raise ProblemDefinitionError(
+                f"phase {ph.name!r}: switching refinement needs dynamics and running cost "
+                "free of t, t0, T and decision variables")
+        if ph.integrals:
+            raise ProblemDefinitionError(f"phase {ph.name!r}: integrals in boundary terms are "
+                                         "not supported by the switching refinement")
+
+
+def _start_links(mp: MultiPhaseProblem) -> dict[int, int]:
+    """Phase index -> the earlier phase whose final time is its initial time."""
+    out: dict[int, int] = {}
+    for a, b in mp.time_links:
+        if a < b:
+            out[b] = a
+    for i, tm in enumerate(mp.times()):
+        if i not in out and tm.t0_free:
+            raise ProblemDefinitionError(
+                f"phase {mp.phases[i].name!r}: a free initial time must be time-linked to an "
+                "earlier phase for the switching refinement")
+    return out
+
+
+@dataclass
+class _EndSymbols:
+    """End-point symbols of every phase, stacked as the boundary function takes them."""
+
+    per_phase: list[dict[str, ca.SX]]
+
+    @classmethod
+    def of(cls, mp: MultiPhaseProblem) -> _EndSymbols:
+        return cls([{"x0": ph.x0, "u0": ph.u0, "xT": ph.xT, "uT": ph.uT, "t0": ph.t0,
+                     "T": ph.T} for ph in mp.phases])
+
+    def flat(self) -> ca.SX:
+        return ca.vertcat(*[ca.vertcat(*d.values()) for d in self.per_phase])
+
+
+class PhaseSwitchingNLP(SwitchingNLP):
+    """The switching-time NLP of a multi-phase problem and its arc structure, built once.
+
+    Decision vector: for each phase its interval durations then its initial state;
+    then the decision variables.
+
+    Parameters
+    ----------
+    mp : MultiPhaseProblem
+        The problem.
+    modes : tuple of Modes
+        Per phase, per interval, one :class:`Mode` per control.
+    substeps : tuple of tuple of int
+        Per phase and interval: exact sub-steps or RK8 steps.
+    samples : int
+        Path constraints are imposed at about this many points inside each interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`ocp.structure.refinement.REFINE_IPOPT`.
+
+    Attributes
+    ----------
+    phase_rows : list of ndarray
+        Constraint rows of each phase's flows (path, entry and law rows).
+    boundary_rows : ndarray
+        Rows of the end-point constraints (initial, terminal, boundary, durations,
+        final times, links), in the order of the boundary function ``B``.
+    """
+
+    def __init__(self, mp: MultiPhaseProblem, modes: PhaseModes,
+                 substeps: tuple[tuple[int, ...], ...], samples: int = 16,
+                 ipopt_options: dict | None = None) -> None:
+        t0 = time.perf_counter()
+        _check_problem(mp)
+        self.multiphase = mp
+        self.problem = mp.phases[0]
+        self.phase_modes = tuple(tuple(m) for m in modes)
+        self.phase_substeps = tuple(tuple(s) for s in substeps)
+        self.samples = int(samples)
+        self.phase_dyns = [[arc_dynamics(ph, m) for m in ms]
+                           for ph, ms in zip(mp.phases, self.phase_modes, strict=True)]
+        self.phase_K = [len(ms) for ms in self.phase_modes]
+        self.links = _start_links(mp)
+        sizes = [k + ph.nx for k, ph in zip(self.phase_K, mp.phases, strict=True)]
+        self.offsets = [int(o) for o in np.r_[0, np.cumsum(sizes)[:-1]]]
+        self.n_w = int(sum(sizes)) + mp.nv
+        self.exact = tuple(d.exact for ds in self.phase_dyns for d in ds)
+        self.K = sum(self.phase_K)
+        self._build_multi()
+        opts: dict[str, Any] = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})},
+                                "print_time": False, "error_on_fail": False}
+        self.solver = ca.nlpsol("refine_phases", "ipopt", self._nlp, opts)
+        self.build_time = time.perf_counter() - t0
+        self.n_solves = 0
+
+    # ------------------------------------------------------------------ build
+    def _build_multi(self) -> None:
+        mp = self.multiphase
+        p = mp.p
+        w = ca.SX.sym("w", self.n_w)
+        V = w[self.n_w - mp.nv:]
+        G = ConstraintBlocks()
+        self.entry_names: list[str] = []
+        values: list[dict[str, ca.SX]] = []
+        ends_all: list[ca.SX] = []
+        quad = ca.SX(0)
+        self.phase_rows = []
+        row_phase: list[int] = []
+        for i, ph in enumerate(mp.phases):
+            o, K = self.offsets[i], self.phase_K[i]
+            tau, x0 = w[o:o + K], w[o + K:o + K + ph.nx]
+            has_quad = has_running_cost(ph)
+            z = ca.vertcat(x0, 0) if has_quad else x0
+            n0 = G.n
+            z, ends = build_intervals(G, ph, self.phase_dyns[i], self.phase_substeps[i],
+                                      self.samples, tau, z, p, self.entry_names,
+                                      check_start=i > 0)
+            self.phase_rows.append(np.arange(n0, G.n))
+            row_phase += [i] * (G.n - n0)
+            xT = z[:ph.nx]
+            if has_quad:
+                quad = quad + z[ph.nx]
+            t0 = values[self.links[i]]["T"] if i in self.links else ca.SX(mp.times()[i]
+                                                                           .t0_bounds[0])
+            d0, d1 = self.phase_dyns[i][0], self.phase_dyns[i][-1]
+            values.append({"x0": x0, "u0": ca.substitute(d0.u, ph.x, x0), "xT": xT,
+                           "uT": ca.substitute(d1.u, ph.x, xT), "t0": t0,
+                           "T": t0 + ca.sum1(tau)})
+            ends_all.append(ca.horzcat(*ends))
+        self._values = values
+        self._boundary(G, values, p, V, row_phase)
+        J = self._Bfn_J(values, p, V) + quad
+        g = ca.vertcat(*G.exprs)
+        self._nlp = {"x": w, "p": p, "f": J, "g": g}
+        self.blocks = {k: np.array(v, dtype=int) for k, v in G.index.items()}
+        self.row_where = np.array(G.times, dtype=int).reshape(-1, 2)
+        self.row_phase = np.array(row_phase, dtype=int)
+        self.n_g = G.n
+        self.bounds_fn = ca.Function("bounds", [p], [ca.vertcat(*G.lower),
+                                                     ca.vertcat(*G.upper)])
+        xT_all = ca.vertcat(*[v["xT"] for v in values])
+        T_all = ca.vertcat(*[v["T"] for v in values])
+        t0_all = ca.vertcat(*[v["t0"] for v in values])
+        self.out_fn = ca.Function("out", [w, p], [xT_all, T_all, J, t0_all, *ends_all])
+        self.kkt_fn = ca.Function("kkt", [w, p], [g, ca.jacobian(g, w), ca.gradient(J, w)])
+        self.var_bounds_fn = ca.Function("vb", [p], [
+            ca.vertcat(*[mp._shared.var_bounds[n][0] for n in mp.var_names]),
+            ca.vertcat(*[mp._shared.var_bounds[n][1] for n in mp.var_names])])
+
+    def _boundary(self, G: ConstraintBlocks, values: list[dict[str, ca.SX]], p: ca.SX, V: ca.SX,
+                  row_phase: list[int]) -> None:
+        """End-point rows, and the boundary function ``B(ends, p, v, nu)`` for the costates."""
+        mp = self.multiphase
+        ends = _EndSymbols.of(mp)
+        exprs, lows, highs, names = [], [], [], []
+        skip = {f"time: {mp.phases[a].name} -> {mp.phases[b].name}" for a, b in mp.time_links}
+        for _, kind, c in mp.boundary_blocks(mp.times()):
+            if kind == "link" and c.name in skip:
+                continue  # t0 of the later phase is the earlier phase's T by construction
+            exprs.append(c.expr)
+            lows.append(c.lower)
+            highs.append(c.upper)
+            names.append(kind)
+        for ph, tm in zip(mp.phases, mp.times(), strict=True):
+            if tm.span is not None:
+                continue  # a duration constraint is among the blocks already
+            lo, hi = tm.T_bounds if tm.T_free else (tm.T_bounds[0], tm.T_bounds[0])
+            if math.isfinite(lo) or math.isfinite(hi):
+                exprs.append(ph.T)
+                lows.append(ca.SX(lo))
+                highs.append(ca.SX(hi))
+                names.append("final_time")
+        sym = ends.flat()
+        val = ca.vertcat(*[ca.vertcat(*v.values()) for v in values])
+        self.boundary_rows = np.arange(G.n, G.n + sum(int(e.numel()) for e in exprs))
+        for e, elo, ehi, kind in zip(exprs, lows, highs, names, strict=True):
+            G.add(kind, ca.substitute(e, ca.vertcat(sym, mp.v), ca.vertcat(val, V)), elo, ehi,
+                  (-1, -1))
+            row_phase += [-1] * int(e.numel())
+        gB = ca.vertcat(*exprs) if exprs else ca.SX(0, 1)
+        nu = ca.SX.sym("nu", gB.numel())
+        Bexpr = mp.objective() + (ca.dot(nu, gB) if gB.numel() else 0)
+        self._B = ca.Function("B", [sym, p, mp.v, nu], [Bexpr, ca.gradient(Bexpr, sym)])
+        self._objective_fn = ca.Function("J_end", [sym, p, mp.v], [mp.objective()])
+
+    def _Bfn_J(self, values: list[dict[str, ca.SX]], p: ca.SX, V: ca.SX) -> ca.SX:
+        val = ca.vertcat(*[ca.vertcat(*v.values()) for v in values])
+        return self._objective_fn(val, p, V)
+
+    # -------------------------------------------------------------- numerics
+    def phase_slice(self, i: int) -> slice:
+        """Where phase ``i``'s ``[durations, x0]`` live in ``w``.
+
+        Parameters
+        ----------
+        i : int
+            Phase index.
+        """
+        o = self.offsets[i]
+        return slice(o, o + self.phase_K[i] + self.multiphase.phases[i].nx)
+
+    def _report_fn(self) -> ca.Function | None:
+        return None  # the phases report through phase_outputs and transversality
+
+    def _bounds(self, pv: np.ndarray) -> dict[str, np.ndarray]:
+        lbg, ubg = (np.array(v, dtype=float).ravel() for v in self.bounds_fn(pv))
+        lbx, ubx = [], []
+        for K, ph in zip(self.phase_K, self.multiphase.phases, strict=True):
+            lbx += [np.zeros(K), -np.inf * np.ones(ph.nx)]
+            ubx += [np.inf * np.ones(K), np.inf * np.ones(ph.nx)]
+        vlo, vhi = (np.array(v, dtype=float).ravel() for v in self.var_bounds_fn(pv))
+        return {"lbx": np.concatenate([*lbx, vlo]), "ubx": np.concatenate([*ubx, vhi]),
+                "lbg": lbg, "ubg": ubg}
+
+    def phase_outputs(self, w: np.ndarray, pv: np.ndarray) -> dict[str, Any]:
+        """Per-phase final states, start and final times, junction states; and J.
+
+        Parameters
+        ----------
+        w : ndarray
+            Decision vector.
+        pv : ndarray
+            Parameter values.
+        """
+        out = self.out_fn(w, pv)
+        sizes = [ph.nx for ph in self.multiphase.phases]
+        xT = np.array(out[0], dtype=float).ravel()
+        cuts = np.r_[0, np.cumsum(sizes)]
+        return {"xT": [xT[a:b] for a, b in zip(cuts[:-1], cuts[1:], strict=True)],
+                "T": np.array(out[1], dtype=float).ravel(),
+                "t0": np.array(out[3], dtype=float).ravel(), "J": float(out[2]),
+                "Z": [np.array(z, dtype=float).T for z in out[4:]]}
+
+    def accuracy(self, w: np.ndarray, pv: np.ndarray, tol: float  # type: ignore[override]
+                 ) -> tuple[bool, float, list[tuple[int, int]]]:
+        """Integration check of every interval of every phase (see
+        :meth:`SwitchingNLP.accuracy`); the failing intervals as ``(phase, interval)``.
+
+        Parameters
+        ----------
+        w : ndarray
+            Decision vector.
+        pv : ndarray
+            Parameter values.
+        tol : float
+            Required relative accuracy of the RK8 intervals' end states.
+        """
+        from .flows import THETA_MAX, numeric_rk8_flow
+
+        Z = self.phase_outputs(w, pv)["Z"]
+        bad: list[tuple[int, int]] = []
+        worst = 0.0
+        for i, dyns in enumerate(self.phase_dyns):
+            o = self.offsets[i]
+            for k, d in enumerate(dyns):
+                tau, m = float(w[o + k]), self.phase_substeps[i][k]
+                if d.exact:
+                    if d.norm_A(pv) * tau / m > THETA_MAX:
+                        bad.append((i, k))
+                    continue
+                step = rk8_of(d)
+                a = numeric_rk8_flow(step, Z[i][k], tau, m, pv)[-1]
+                b = numeric_rk8_flow(step, Z[i][k], tau, 2 * m, pv)[-1]
+                err = float(np.max(np.abs(a - b)) / max(1.0, float(np.max(np.abs(b)))))
+                worst = max(worst, err)
+                if err > tol:
+                    bad.append((i, k))
+        return not bad, worst, bad
+
+    def phase_row_times(self, i: int, w: np.ndarray) -> np.ndarray:
+        """Local time (from the phase's start) of each of phase ``i``'s flow rows.
+
+        Parameters
+        ----------
+        i : int
+            Phase index.
+        w : ndarray
+            Decision vector.
+        """
+        o, K = self.offsets[i], self.phase_K[i]
+        tau = w[o:o + K]
+        edges = np.r_[0.0, np.cumsum(tau)]
+        rows = self.phase_rows[i]
+        out = np.empty(len(rows))
+        for r, (k, j) in enumerate(self.row_where[rows]):
+            if j < 0:
+                out[r] = edges[k + 1]
+            else:
+                m = self.phase_substeps[i][k]
+                stride = max(1, m // max(1, self.samples + 1))
+                out[r] = edges[k] + tau[k] * j * stride / m
+        return out
+
+    def transversality(self, w: np.ndarray, lam_g: np.ndarray,
+                       pv: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray],
+                                                list[float | None]]:
+        """Costates at the ends and starts of the phases, and the value H must have.
+
+        From the multipliers ``nu`` of the end-point rows and ``B = J_end + nu^T g_B``
+        over independent end-point symbols: ``lambda_i(T_i) = d B / d xT_i`` (through
+        the control law at the end), ``lambda_i(t0_i) = -d B / d x0_i``; H of the last
+        phase of a time chain is ``-dB/dT``, and across a time link ``a -> b``,
+        ``H_a = H_b - dB/dt0_b - dB/dT_a`` (None where a final time is fixed).
+
+        Parameters
+        ----------
+        w : ndarray
+            Decision vector.
+        lam_g : ndarray
+            Constraint multipliers (CasADi's signs).
+        pv : ndarray
+            Parameter values.
+        """
+        mp = self.multiphase
+        ev = ca.Function("ends", [self._nlp["x"], self._nlp["p"]],
+                         [ca.vertcat(*[ca.vertcat(*v.values()) for v in self._values])])
+        sym_vals = np.array(ev(w, pv), dtype=float).ravel()
+        nu = lam_g[self.boundary_rows]
+        V = w[self.n_w - mp.nv:]
+        _, grad = self._B(sym_vals, pv, V, nu)
+        grad = np.array(grad, dtype=float).ravel()
+        lam_end, lam_start, dT, dt0 = [], [], [], []
+        pos = 0
+        for i, ph in enumerate(mp.phases):
+            nx, nu_ = ph.nx, ph.nu
+            g0, gu0 = grad[pos:pos + nx], grad[pos + nx:pos + nx + nu_]
+            gT = grad[pos + nx + nu_:pos + 2 * nx + nu_]
+            guT = grad[pos + 2 * nx + nu_:pos + 2 * nx + 2 * nu_]
+            dt0.append(float(grad[pos + 2 * nx + 2 * nu_]))
+            dT.append(float(grad[pos + 2 * nx + 2 * nu_ + 1]))
+            pos += 2 * nx + 2 * nu_ + 2
+            K0, K1 = self._law_jacobians(i, pv)
+            lam_end.append(gT + K1.T @ guT)
+            lam_start.append(-(g0 + K0.T @ gu0))
+        H: list[float | None] = [None] * len(mp.phases)
+        nxt = {a: b for b, a in self.links.items()}
+        for i in range(len(mp.phases) - 1, -1, -1):
+            if not mp.phases[i].time_free:
+                continue
+            if i not in nxt:
+                H[i] = -dT[i]
+            else:
+                Hb = H[nxt[i]]
+                H[i] = None if Hb is None else Hb - dt0[nxt[i]] - dT[i]
+        return lam_end, lam_start, H
+
+    def _law_jacobians(self, i: int, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``du/dx`` of the first and last interval's control law of phase ``i`` (affine
+        laws; zero for bang arcs)."""
+        out = []
+        ph = self.multiphase.phases[i]
+        for d in (self.phase_dyns[i][0], self.phase_dyns[i][-1]):
+            aff = d.control_law_affine(pv)
+            out.append(aff[0] if aff is not None else np.zeros((ph.nu, ph.nx)))
+        return out[0], out[1]
+
+
+def phase_switching_nlp(mp: MultiPhaseProblem, modes: PhaseModes,
+                        substeps: tuple[tuple[int, ...], ...], samples: int = 16,
+                        ipopt_options: dict | None = None) -> PhaseSwitchingNLP:
+    """A cached :class:`PhaseSwitchingNLP` with at least ``substeps`` per interval.
+
+    Parameters
+    ----------
+    mp : MultiPhaseProblem
+    modes : tuple of Modes
+        Per phase, per interval, one mode per control.
+    substeps : tuple of tuple of int
+        Needed per phase and interval (:func:`ocp.structure.refinement.required_substeps`).
+    samples : int
+        Path-constraint samples per interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`ocp.structure.refinement.REFINE_IPOPT`.
+    """
+    key = (tuple(tuple(m) for m in modes), int(samples),
+           tuple(sorted((k, repr(v)) for k, v in (ipopt_options or {}).items())))
+    built = _CACHE.setdefault(mp, {}).setdefault(key, [])
+    flat_need = [n for s in substeps for n in s]
+    for nlp in built:
+        have = [n for s in nlp.phase_substeps for n in s]
+        if all(a >= b for a, b in zip(have, flat_need, strict=True)) and \
+                all(a <= 4 * b for a, b in zip(have, flat_need, strict=True)):
+            return nlp
+    nlp = PhaseSwitchingNLP(mp, modes, substeps, samples, ipopt_options)
+    built.append(nlp)
+    return nlp
+
+
+# ------------------------------------------------------------------ result
+class _PhaseRows:
+    """What the certificate reads of a phase's NLP rows (step counts, row times)."""
+
+    def __init__(self, nlp: PhaseSwitchingNLP, i: int) -> None:
+        self._nlp, self._i = nlp, i
+        self.substeps = nlp.phase_substeps[i]
+
+    def row_times(self, w: np.ndarray) -> np.ndarray:
+        """Local times of the phase's rows at the phase's ``[durations, x0]`` ``w``."""
+        full = np.zeros(self._nlp.n_w)
+        full[self._nlp.phase_slice(self._i)] = w
+        return self._nlp.phase_row_times(self._i, full)
+
+
+@dataclass
+class RefinedPhases:
+    """Switching times of every phase refined to machine precision.
+
+    Attributes
+    ----------
+    problem : MultiPhaseProblem
+    params : dict
+        Parameter values.
+    phases : list of RefinedSwitching
+        One per phase, in the phase's own time (from 0 to its duration), with the
+        transversality conditions of the whole problem (``terminal_costate``).
+    t0 : ndarray
+        Start time of every phase.
+    T, objective : float
+        Final time of the last phase and the refined objective.
+    variables : dict
+        Decision variables.
+    exact : bool
+        Every interval of every phase integrated by the matrix exponential.
+    status, iterations, solve_time, path : Ipopt's (or the Newton fast path's) figures.
+        ``status`` says ``"Solve_Succeeded (KKT residual ...; Ipopt said ...)"`` when Ipopt
+        stopped on another message at a point our own KKT check accepts.
+    success : bool
+        Converged to the requested accuracy (False on the iterate of a
+        :class:`~ocp.definition.errors.SolveError`: :func:`ocp.certify` refuses it).
+    transcribed_objective : float
+        The objective of the transcription it started from (NaN without one).
+    junction_costates : list of ndarray
+        ``lambda_i(t0_i) = -dB/dx0_i`` from the multipliers (a check of the adjoint sweep).
+    integration_error : float
+        Largest RK8 end-state error estimate (0 when every arc is exact).
+    notes : list of str
+    nlp : PhaseSwitchingNLP
+    w, lam_g, lam_x : ndarray
+        The NLP's solution and multipliers.
+    """
+
+    problem: MultiPhaseProblem
+    params: dict
+    phases: list[RefinedSwitching]
+    t0: np.ndarray
+    T: float
+    objective: float
+    variables: dict
+    exact: bool
+    status: str
+    iterations: int
+    solve_time: float
+    path: str
+    transcribed_objective: float
+    junction_costates: list[np.ndarray]
+    integration_error: float = 0.0
+    notes: list[str] = field(default_factory=list)
+    nlp: PhaseSwitchingNLP | None = field(repr=False, default=None)
+    w: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    lam_g: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    lam_x: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
+    success: bool = True
+
+    @property
+    def xT(self) -> np.ndarray:
+        """Final state of the last phase."""
+        return self.phases[-1].xT
+
+    @property
+    def durations(self) -> list[np.ndarray]:
+        """Interval durations of every phase."""
+        return [r.durations for r in self.phases]
+
+    @property
+    def modes(self) -> tuple[Modes, ...]:
+        """Interval modes of every phase."""
+        return tuple(r.modes for r in self.phases)
+
+    @property
+    def kinds(self) -> list[list]:
+        """Arc kinds of every phase."""
+        return [r.kinds for r in self.phases]
+
+    @property
+    def switch_times(self) -> list[list[float]]:
+        """Switch times of every phase, in absolute time."""
+        return [[float(t0 + t) for t in r.switch_times] for t0, r in zip(self.t0, self.phases,
+                                                                        strict=True)]
+
+    def trajectory(self, n: int = 1000) -> Trajectory:
+        """The refined trajectory of every phase joined (absolute time, ``phase`` column,
+        ``mode`` = arc kind), states and controls by the union of the phases' names.
+
+        Parameters
+        ----------
+        n : int
+            About how many samples in all.
+        """
+        snames: list[str] = []
+        cnames: list[str] = []
+        for r in self.phases:
+            snames += [s for s in r.problem.state_names if s not in snames]
+            cnames += [c for c in r.problem.control_names if c not in cnames]
+        total = max(self.T - float(self.t0[0]), 1e-300)
+        ts, xs, us, ph, md = [], [], [], [], []
+        for i, (t0, r) in enumerate(zip(self.t0, self.phases, strict=True)):
+            k = max(20, int(n * r.T / total))
+            tr = r.trajectory(k)
+            X = np.full((len(tr.t), len(snames)), np.nan)
+            U = np.full((len(tr.t), len(cnames)), np.nan)
+            X[:, [snames.index(s) for s in tr.state_names]] = tr.x
+            if tr.control_names:
+                U[:, [cnames.index(c) for c in tr.control_names]] = tr.u
+            ts.append(tr.t + t0)
+            xs.append(X)
+            us.append(U)
+            ph.append(np.full(len(tr.t), i))
+            md.append(tr.mode if tr.mode is not None else np.full(len(tr.t), ""))
+        return Trajectory(np.concatenate(ts), np.vstack(xs), np.vstack(us), tuple(snames),
+                          tuple(cnames), mode=np.concatenate(md), phase=np.concatenate(ph))
+
+    def path_violation(self, n: int = 4000) -> float:
+        """Largest path-constraint or control-bound violation over every phase.
+
+        Parameters
+        ----------
+        n : int
+            Samples per phase.
+        """
+        return max(r.path_violation(n) for r in self.phases)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-able dict (one entry per phase)."""
+        return {"T": self.T, "objective": self.objective, "t0": self.t0.tolist(),
+                "variables": self.variables, "exact_arcs": self.exact, "status": self.status,
+                "iterations": self.iterations, "solve_time_s": self.solve_time,
+                "path": self.path, "transcribed_objective": self.transcribed_objective,
+                "integration_error": self.integration_error, "notes": self.notes,
+                "phases": [{"name": r.problem.name, **r.to_dict()} for r in self.phases]}
+
+
+def _phase_result(nlp: PhaseSwitchingNLP, i: int, res: dict, pv: np.ndarray, params: dict,
+                  outs: dict, lam_end: np.ndarray, H: float | None, err: float,
+                  transcribed_objective: float) -> RefinedSwitching:
+    """Phase ``i`` of a solved multi-phase NLP as a :class:`RefinedSwitching` (local time)."""
+    ph = nlp.multiphase.phases[i]
+    w = res["w"]
+    sl = nlp.phase_slice(i)
+    K = nlp.phase_K[i]
+    values, kinds = [], []
+    single = ph.nu == 1
+    for modes in nlp.phase_modes[i]:
+        vals = []
+        for name, m in zip(ph.control_names, modes, strict=True):
+            lo, hi = control_bounds_at(ph, name, params)
+            vals.append(hi if m.kind == "max" else lo if m.kind == "min" else math.nan)
+        values.append(vals[0] if single else tuple(vals))
+        kinds.append(modes[0].kind if single else tuple(m.kind for m in modes))
+    rows = nlp.phase_rows[i]
+    local = {k: np.flatnonzero(np.isin(rows, v)) for k, v in nlp.blocks.items()
+             if np.isin(rows, v).any()}
+    dur = w[sl][:K].copy()
+    return RefinedSwitching(
+        problem=ph, params=dict(params), control=ph.control_names[0] if ph.nu else "",
+        kinds=kinds, values=values, durations=dur, T=float(np.sum(dur)),
+        objective=outs["J"], x0=w[sl][K:].copy(), xT=outs["xT"][i], exact=all(
+            d.exact for d in nlp.phase_dyns[i]), status=res["status"],
+        iterations=res["iterations"], solve_time=res["time"],
+        transcribed_objective=transcribed_objective, lam_g=res["lam_g"][rows], blocks=local,
+        modes=nlp.phase_modes[i], controls=tuple(ph.control_names), integration_error=err,
+        path=res["path"], build_time=nlp.build_time, nlp=_PhaseRows(nlp, i),  # type: ignore
+        w=w[sl].copy(), lam_x=res["lam_x"][sl].copy(), terminal_costate=(lam_end, H))
+
+
+def refine_phase_structure(mp: MultiPhaseProblem, modes: PhaseModes, durations: list,
+                           x0s: list, params: dict[str, float], *,
+                           variables: dict[str, float] | None = None,
+                           transcribed_objective: float = math.nan, interior_samples: int = 16,
+                           ipopt_options: dict | None = None, tol: float = DEFAULT_TOL,
+                           fast: bool = True, max_rebuilds: int = 4) -> RefinedPhases:
+    """Refine a given multi-phase arc structure from guesses of durations and phase starts.
+
+    Parameters
+    ----------
+    mp : MultiPhaseProblem
+    modes : tuple of Modes
+        Per phase, per interval, one :class:`Mode` per control.
+    durations : list of array
+        Guessed interval durations per phase.
+    x0s : list of array
+        Guessed initial state of every phase.
+    params : dict
+        A value for every parameter.
+    variables : dict, optional
+        Guesses of the decision variables (default: their declared guesses).
+    transcribed_objective : float
+        Recorded in the result.
+    interior_samples : int
+        Path constraints are imposed at about this many points inside each interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`ocp.structure.refinement.REFINE_IPOPT`.
+    tol : float
+        Relative accuracy required of the RK8 intervals' end states.
+    fast : bool
+        Try the Newton fast path first.
+    max_rebuilds : int
+        How often the step counts may be doubled to meet ``tol``.
+
+    Returns
+    -------
+    RefinedPhases
+
+    Raises
+    ------
+    SolveError, InfeasibleError
+        If Ipopt fails or the accuracy is not reached.
+    ProblemDefinitionError
+        If the problem is outside what the refinement represents.
+    """
+    pv = mp.param_vector(params)
+    durs = [np.maximum(np.asarray(d, dtype=float), 1e-6) for d in durations]
+    need = tuple(required_substeps(ph, m, pv, d, np.asarray(x, dtype=float),
+                                   interior_samples, tol)
+                 for ph, m, d, x in zip(mp.phases, modes, durs, x0s, strict=True))
+    vguess = _variable_guess(mp, pv, variables)
+    w0 = np.concatenate([np.r_[d, np.asarray(x, dtype=float)] for d, x in
+                         zip(durs, x0s, strict=True)] + [vguess])
+    notes: list[str] = []
+    warm: tuple[Any, Any] = (None, None)
+    for _ in range(max_rebuilds + 1):
+        nlp = phase_switching_nlp(mp, modes, need, interior_samples, ipopt_options)
+        fast_res = nlp.newton(pv, w0) if fast else None
+        res = fast_res if fast_res is not None else nlp.solve(pv, w0, *warm)
+        ok, err, bad = nlp.accuracy(res["w"], pv, tol)
+        if ok or not res["success"]:
+            break
+        notes.append(f"interval(s) {bad} needed more RK8 steps; re-solved")
+        need = tuple(tuple(2 * n if (i, k) in bad else n for k, n in enumerate(s))
+                     for i, s in enumerate(nlp.phase_substeps))
+        w0, warm = res["w"], (res["lam_g"], res["lam_x"])
+    out = _assemble(nlp, res, pv, dict(params), err, notes, transcribed_objective)
+    out.success = bool(res["success"] and ok)
+    for ph in out.phases:
+        ph.success = out.success
+    if not res["success"]:
+        cls = InfeasibleError if "Infeasible" in res["status"] else SolveError
+        raise cls(res["status"], out, f"multi-phase switching refinement failed: "
+                                      f"{res['status']}")
+    if not ok:
+        raise SolveError("Integration_Accuracy_Not_Reached", out,
+                         f"multi-phase switching refinement: RK8 error {err:.1e} above tol")
+    return out
+
+
+def _variable_guess(mp: MultiPhaseProblem, pv: np.ndarray,
+                    variables: dict[str, float] | None) -> np.ndarray:
+    if not mp.nv:
+        return np.zeros(0)
+    from ..definition.guess import variable_guess
+
+    g = np.array(ca.Function("vg", [mp.p], [variable_guess(mp._shared)])(pv),
+                 dtype=float).ravel()
+    for k, name in enumerate(mp.var_names):
+        if variables is not None and name in variables:
+            g[k] = variables[name]
+    return g
+
+
+def _assemble(nlp: PhaseSwitchingNLP, res: dict, pv: np.ndarray, params: dict, err: float,
+              notes: list[str], transcribed_objective: float) -> RefinedPhases:
+    mp = nlp.multiphase
+    w = res["w"]
+    outs = nlp.phase_outputs(w, pv)
+    lam_end, lam_start, H = nlp.transversality(w, res["lam_g"], pv)
+    phases = [_phase_result(nlp, i, res, pv, params, outs, lam_end[i], H[i], err,
+                            transcribed_objective) for i in range(len(mp.phases))]
+    tiny = [(i, k) for i, r in enumerate(phases) for k, d in enumerate(r.durations)
+            if d <= 1e-10 * max(outs["T"][-1], 1.0)]
+    if tiny:
+        notes = [*notes, f"interval(s) {tiny} (phase, interval) shrank to zero length"]
+    V = w[nlp.n_w - mp.nv:]
+    return RefinedPhases(
+        problem=mp, params=params, phases=phases, t0=outs["t0"], T=float(outs["T"][-1]),
+        objective=outs["J"], variables=dict(zip(mp.var_names, map(float, V), strict=True)),
+        exact=all(nlp.exact), status=res["status"], iterations=res["iterations"],
+        solve_time=res["time"], path=res["path"], transcribed_objective=transcribed_objective,
+        junction_costates=lam_start, integration_error=err, notes=notes, nlp=nlp, w=w,
+        lam_g=res["lam_g"], lam_x=res["lam_x"])
+
+
+# --------------------------------------------------------- from a transcription
+def local_phase(sol: Solution, i: int) -> Solution:
+    """Phase ``i`` of a multi-phase solution in its own time (``t0 = 0``), so the
+    single-phase structure detection and certificate read it as a one-phase solution.
+
+    Parameters
+    ----------
+    sol : Solution
+        A multi-phase (or single-phase) solution.
+    i : int
+        Phase index.
+    """
+    ph = sol.phases[i]
+    d = dict(ph.__dict__)
+    d.update(t=ph.t - ph.t0, T=ph.T - ph.t0, t0=0.0, mesh=ph.mesh - ph.t0)
+    d.pop("phases", None)
+    out = Solution(**d)
+    out.phases = [out]
+    return out
+
+
+def detect_phase_structures(sol: Solution, tol: float = 1e-4) -> list[ArcStructure]:
+    """The arc structure of every phase of a transcribed multi-phase solution.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed multi-phase solution.
+    tol : float
+        As in :func:`ocp.structure.arcs.detect_arcs`.
+    """
+    out = []
+    for i, ph in enumerate(sol.phases):
+        if ph.problem.nu == 0:
+            T = float(ph.T - ph.t0)
+            out.append(ArcStructure.from_modes((), [()], [T]))
+        else:
+            out.append(detect_structure(local_phase(sol, i), tol=tol))
+    return out
+
+
+def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *,
+                  extra_arcs: int = 0, interior_samples: int = 16,
+                  ipopt_options: dict | None = None, tol: float = DEFAULT_TOL,
+                  params: dict[str, float] | None = None, fast: bool = True) -> RefinedPhases:
+    """Refine the switching times of every phase of a transcribed multi-phase solution.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed multi-phase solution (its phases' arcs, end states and
+        parameters start the refinement).
+    structures : list of ArcStructure, optional
+        One per phase (default: :func:`detect_phase_structures`).
+    extra_arcs : int
+        Single-control phases: this many more bang arcs in every phase that has a bang
+        arc (see :func:`ocp.structure.switching.refine_switching`).
+    interior_samples : int
+        Path-constraint samples per interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`ocp.structure.refinement.REFINE_IPOPT`.
+    tol : float
+        Relative accuracy of the RK8 intervals.
+    params : dict, optional
+        Parameter values (default: ``sol.params``).
+    fast : bool
+        Try the Newton fast path first.
+
+    Raises
+    ------
+    ValueError
+        If a phase has an interior (singular or free) arc.
+    SolveError, InfeasibleError
+        If the refinement fails.
+    """
+    sts = detect_phase_structures(sol) if structures is None else list(structures)
+    modes, durs = [], []
+    for i, st in enumerate(sts):
+        if not st.refinable:
+            kinds = {s.control: s.kinds for s in st.per_control}
+            raise ValueError(f"phase {sol.phases[i].problem.name!r} is not bang-bang: arcs "
+                             f"{kinds}; refinement needs bang and boundary arcs only")
+        m, d = list(st.modes), list(st.durations)
+        if extra_arcs and len(st.controls) == 1 and any(x[0].kind in ("max", "min")
+                                                        for x in m):
+            insert_extra_arcs(m, d, extra_arcs)
+        modes.append(tuple(m))
+        durs.append(np.asarray(d, dtype=float))
+    x0s = [np.asarray(ph.x[0], dtype=float) for ph in sol.phases]
+    return refine_phase_structure(
+        sol.problem, tuple(modes), durs, x0s, dict(sol.params if params is None else params),
+        variables=sol.variables, transcribed_objective=float(sol.objective),
+        interior_samples=interior_samples, ipopt_options=ipopt_options, tol=tol, fast=fast)
+
+
+__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "detect_phase_structures", "local_phase",
+           "phase_switching_nlp", "refine_phase_structure", "refine_phases"]

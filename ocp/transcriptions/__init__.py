@@ -1,0 +1,13 @@
+"""How a problem becomes an NLP, and what a solve returns.
+
+:mod:`~ocp.transcriptions.transcription` (:class:`~ocp.MultipleShooting`,
+:class:`~ocp.Collocation`, :func:`~ocp.transcribe`, :func:`~ocp.continuation`), the
+per-phase discretisations (:mod:`~ocp.transcriptions.discretization`,
+:mod:`~ocp.transcriptions.shooting`, :mod:`~ocp.transcriptions.collocation`),
+:mod:`~ocp.transcriptions.integrators`, :mod:`~ocp.transcriptions.mesh` (error estimate and
+h-refinement), :mod:`~ocp.transcriptions.nlp` (the parametric NLP, built once; Ipopt),
+:mod:`~ocp.transcriptions.verify` (path constraints between the nodes),
+:mod:`~ocp.transcriptions.gridview` (how a solution's grid is read) and
+:mod:`~ocp.transcriptions.solution` (:class:`~ocp.Solution`). Imports only
+:mod:`ocp.definition`.
+"""

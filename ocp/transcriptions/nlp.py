@@ -1,0 +1,565 @@
+"""Assembly of the phases' discretisations into one parametric NLP, and its solution by Ipopt.
+
+The NLP takes the problem's parameters as CasADi NLP parameters ``p``; its
+variable and constraint bounds and its default initial guess are CasADi
+Functions of ``p`` evaluated at solve time, so a new parameter value (or a
+continuation step) re-solves the same NLP object: nothing is rebuilt, and a
+solve runs no Python loop over intervals. Ipopt gets exact sparse first and
+second derivatives from CasADi's algorithmic differentiation.
+
+Decision vector: the phases' blocks in order, then the decision variables.
+Constraint vector: each phase's blocks (``continuity``, ``path`` /
+``collocation``, ``path_inner``, then its ``initial``, ``terminal``,
+``boundary`` and ``time`` constraints), then the ``link`` constraints.
+
+Ipopt solves a scaled copy of this NLP (:mod:`ocp.definition.scaling`): ``w = D w_s + c``,
+rows and objective multiplied by constants; every result is mapped back, so
+``sol.w``, ``sol.objective``, ``lam_g``, ``lam_x`` and ``multipliers`` are in the
+user's units whatever the scaling.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..definition.compiled import CompiledPhase
+from ..definition.errors import GuessError, InfeasibleError, ProblemDefinitionError, SolveError
+from ..definition.guess import (
+    DefaultChoices,
+    control_guess,
+    diagnose_nonfinite,
+    raise_if_nonfinite,
+    repair_default,
+    state_ends,
+    variable_guess,
+)
+from ..definition.multiphase import MultiPhaseProblem, as_multiphase
+from ..definition.problem import OptimalControlProblem
+from ..definition.scaling import (
+    Scaling,
+    ScalingBuilder,
+    check_scaling,
+    loose_bounds,
+    phase_quantities,
+)
+from ..definition.sizes import phase_state_sizes
+from ..definition.symbols import positive_int
+from ..definition.trajectory import Trajectory
+from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
+from .solution import Solution
+from .verify import VERIFY_MODES, verify
+
+DEFAULT_IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0, "sb": "yes",
+                 "mu_strategy": "adaptive"}
+INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
+BOUNDARY_KINDS = ("initial", "terminal", "boundary", "time")
+
+
+class Transcription:
+    """Base of :class:`ocp.MultipleShooting` and :class:`ocp.Collocation`.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem (a single phase or several).
+    ipopt_options : dict, optional
+        Overrides of :data:`DEFAULT_IPOPT`.
+    expand : bool
+        Expand the NLP to SX scalar graphs (slower build, faster solves).
+    verify : {"warn", "raise", "off"}
+        After each converged solve, check path constraints and state bounds on
+        a fine grid; on a violation beyond ``verify_tol`` warn
+        (:class:`ocp.PathViolationWarning`) or raise
+        (:class:`ocp.PathViolationError`). Either way ``sol.verified`` and
+        ``sol.path_violation`` record the outcome.
+    verify_tol : float
+        Allowed violation, relative to ``max(1, |bound|)``.
+    verify_points : int
+        Check points per interval.
+    scaling : {"auto", "none"} or dict
+        How the NLP is scaled for Ipopt (results are always reported in the
+        user's units): ``"auto"`` uses the problem's ``ref``/``ref0`` and
+        ``minimize(..., ref=)`` and, where none is given, references from bounds
+        and guesses that are far from 1 (see :mod:`ocp.definition.scaling`); ``"none"``
+        solves the NLP exactly as posed; a dict overrides references by name
+        (``{"h": 1e4, "v": (0, 300), "objective": 1e3, "time": 10}``).
+
+    Attributes
+    ----------
+    n_builds : int
+        How many times the NLP was built (stays 1: re-solves never rebuild).
+    """
+
+    method = "base"
+
+    def __init__(self, problem: OptimalControlProblem | MultiPhaseProblem,
+                 ipopt_options: dict | None = None, expand: bool = False,
+                 verify: str = "warn", verify_tol: float = 1e-6,
+                 verify_points: int = 10, scaling: Any = "auto") -> None:
+        self.multiphase = as_multiphase(problem)
+        self.scaling_options = check_scaling(scaling)
+        self.multiphase.validate()
+        if verify not in VERIFY_MODES:
+            raise ProblemDefinitionError(f"verify must be one of {VERIFY_MODES}, got {verify!r}")
+        self.problem = problem
+        self.ipopt_options = {**DEFAULT_IPOPT, **(ipopt_options or {})}
+        self.expand = bool(expand)
+        self.verify, self.verify_tol = verify, float(verify_tol)
+        self.verify_points = positive_int(verify_points, "verify_points")
+        self.n_builds = 0
+        self._solvers: dict[bool, Any] = {}
+        self._nlp_fn: ca.Function | None = None
+        self.times = self.multiphase.times()
+        self.compiled = [CompiledPhase(ph) for ph in self.multiphase.phases]
+        self.phases: list[PhaseDiscretization] = self._discretize()
+        self._build()
+
+    def _discretize(self) -> list[PhaseDiscretization]:
+        raise NotImplementedError
+
+    # ------------------------------------------------------------------ build
+    def _build(self) -> None:
+        mp = self.multiphase
+        sizes = [d.size() for d in self.phases]
+        self.offsets = [int(o) for o in np.r_[0, np.cumsum(sizes)[:-1]]]
+        nw = int(sum(sizes)) + mp.nv
+        self.iV = slice(nw - mp.nv, nw)
+        w, P = ca.MX.sym("w", nw), ca.MX.sym("p", mp.np)
+        V = w[self.iV]
+        pieces: list[PhaseNLP] = []
+        ends: list[tuple[ca.SX, ca.SX]] = []
+        plain: list[tuple[ca.SX, ca.SX]] = []  # the same without replaceable defaults
+        choices = DefaultChoices()
+        for i, (disc, ph) in enumerate(zip(self.phases, mp.phases, strict=True)):
+            a, b = state_ends(ph, self._previous_ends(i, ends), choices)
+            ends.append((a, b))
+            plain.append(state_ends(ph, self._previous_ends(i, plain)))
+            wb = w[self.offsets[i]:self.offsets[i] + sizes[i]]
+            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph, choices)))
+        g, lbg, ubg, J_end = self._constraints(pieces, P, V)
+        J = J_end + sum(pn.lagrange for pn in pieces)
+        lbw = ca.vertcat(*[pn.lbw for pn in pieces], *self._var_bounds(0))
+        ubw = ca.vertcat(*[pn.ubw for pn in pieces], *self._var_bounds(1))
+        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared, choices))
+        self._bounds = ca.Function("bounds", [mp.p], [lbw, ubw, lbg, ubg])
+        self._guess = ca.Function("guess", [mp.p, *choices.symbols], [w0])
+        self._choices = choices
+        self._choice_bounds = choices.bound_function(mp.p)
+        self._nlp = {"x": w, "p": P, "f": J, "g": g}
+        self.n_w, self.n_g = nw, int(g.numel())
+        self.scaling = self._scaling(plain)
+        self._scaled = self._scaled_nlp()
+        self.n_builds += 1
+
+    def _scaling(self, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
+        """The constants of the scaled NLP (see :mod:`ocp.definition.scaling`)."""
+        mp = self.multiphase
+        known = {"objective", "time", *mp.var_names}
+        for ph in mp.phases:
+            known |= {*ph.state_names, *ph.control_names}
+        unknown = sorted(set(self.scaling_options["refs"]) - known)
+        if unknown:
+            raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
+                                         "variables of the problem (nor 'objective', 'time')")
+        sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
+        sizes = self._state_sizes(ends)
+        for ph, lay, tm, (a, b), sz in zip(mp.phases, self.layouts, self.times, ends, sizes,
+                                           strict=True):
+            states, controls = phase_quantities(ph, a, b)
+            for k, (name, user, lo, hi, guess) in enumerate(states):
+                ref = sb.ref(name, user, lo, hi, guess, sz[k])
+                for sl in (lay.iX, lay.iZ):
+                    if sl is not None:
+                        sb.set_entries(np.arange(sl.start, sl.stop)[k::ph.nx], ref)
+                for kind in ("continuity", "collocation"):  # defects: state fastest
+                    if kind in lay.blocks:
+                        rows = np.arange(lay.blocks[kind].start, lay.blocks[kind].stop)
+                        sb.r[rows[k::ph.nx]] = 1.0 / ref[1]
+            for k, (name, user, lo, hi, guess) in enumerate(controls):
+                sb.set_entries(np.arange(lay.iU.start, lay.iU.stop)[k::ph.nu],
+                               sb.ref(name, user, lo, hi, guess))
+            if lay.iT is not None:
+                sb.set_entries(lay.iT, sb.ref("time", None, *tm.T_bounds, tm.T_guess))
+            if lay.it0 is not None:
+                sb.set_entries(lay.it0, sb.ref("time", None, *tm.t0_bounds, tm.t0_guess))
+            if "path" in lay.blocks:
+                rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
+                sl = lay.blocks["path"]
+                sb.r[sl] = np.tile(rs, (sl.stop - sl.start) // max(len(rs), 1))
+        sh = mp._shared
+        for k, name in enumerate(sh.var_names):
+            sb.set_entries(self.iV.start + k, sb.ref(name, sh.var_ref.get(name),
+                                                      *sh.var_bounds[name],
+                                                      sh.var_guess.get(name)))
+        for i, kind, cs in self._groups:
+            sl = (self.link_blocks if i == -1 else self.layouts[i].blocks)[kind]
+            rs = [sb.row_scale(c, j) for c in cs for j in range(c.expr.numel())]
+            sb.r[sl] = rs
+        if "objective" not in self.scaling_options["refs"] and sh.objective_ref is not None:
+            self.scaling_options["refs"]["objective"] = (0.0, sh.objective_ref)
+        return sb.build()
+
+    def _state_sizes(self, ends: list[tuple[ca.SX, ca.SX]]) -> list[list[float | None]]:
+        """Sizes of the states that bounds and guess leave unknown (:mod:`ocp.definition.sizes`)."""
+        mp = self.multiphase
+        if not self.scaling_options["auto"]:
+            return [[None] * ph.nx for ph in mp.phases]
+        vg = variable_guess(mp._shared)
+        out: list[list[float | None]] = []
+        for i, (ph, tm, (a, b)) in enumerate(zip(mp.phases, self.times, ends, strict=True)):
+            prev = next((j for j, k in mp.time_links if k == i and j < i), None)
+            linked = None
+            if prev is not None:
+                pp = mp.phases[prev]
+                linked = {n: s for n, s in zip(pp.state_names, out[prev], strict=True)
+                          if s is not None}
+            out.append(phase_state_sizes(ph, a, b, (tm.t0_guess, tm.T_guess), vg, linked,
+                                         loose_bounds))
+        return out
+
+    def _scaled_nlp(self) -> dict[str, ca.MX]:
+        """The NLP Ipopt solves: ``w = D w_s + c``, rows times ``r``, objective times ``kf``.
+
+        ``kf = 1 / f_ref`` is an NLP parameter (after the problem's), so the
+        objective scale can follow each solve's start without a rebuild.
+        """
+        nlp, sc = self._nlp, self.scaling
+        kf = ca.MX.sym("kf")
+        P = ca.vertcat(nlp["p"], kf)
+        if sc.is_identity():  # keep the graph (and Ipopt's iterations) as posed
+            return {"x": nlp["x"], "p": P, "f": kf * nlp["f"], "g": nlp["g"]}
+        ws = ca.MX.sym("ws", self.n_w)
+        f, g = ca.substitute([nlp["f"], nlp["g"]], [nlp["x"]],
+                             [ca.DM(sc.D) * ws + ca.DM(sc.c)])
+        return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
+
+    def _previous_ends(self, i: int, ends: list) -> dict[str, ca.SX] | None:
+        """End guesses of the phase that phase ``i`` is time-linked from, by state name."""
+        for a, b in self.multiphase.time_links:
+            if b == i and a < i:
+                prev = self.multiphase.phases[a]
+                return {n: ends[a][1][k] for k, n in enumerate(prev.state_names)}
+        return None
+
+    def _var_bounds(self, side: int) -> list[ca.SX]:
+        sh = self.multiphase._shared
+        return [sh.var_bounds[n][side] for n in sh.var_names]
+
+    @staticmethod
+    def _bvalues(pn: PhaseNLP) -> ca.MX:
+        return ca.vertcat(pn.x0, pn.u0, pn.xT, pn.uT, pn.t0, pn.T, pn.q)
+
+    def _boundary_fn(self) -> ca.Function:
+        """``(end-point values of every phase, p, v) -> (each boundary group..., J)``."""
+        mp = self.multiphase
+        bsym = ca.vertcat(*[ca.vertcat(ph.x0, ph.u0, ph.xT, ph.uT, ph.t0, ph.T, ph.q)
+                            for ph in mp.phases])
+        outs = [ca.vertcat(*[c.expr for c in cs]) for _, _, cs in self._groups]
+        return ca.Function("boundary", [bsym, mp.p, mp.v], [*outs, mp.objective()])
+
+    def _constraints(self, pieces: list[PhaseNLP], P: ca.MX,
+                     V: ca.MX) -> tuple[ca.MX, ca.SX, ca.SX, ca.MX]:
+        """Stack g with its bounds; record each phase's blocks and the link blocks.
+
+        Returns g, its lower and upper bounds and the end-point part of the objective.
+        """
+        mp = self.multiphase
+        all_b = mp.boundary_blocks(self.times)
+        self._groups = []
+        for i in [*range(len(mp.phases)), -1]:
+            for kind in (*BOUNDARY_KINDS, "link"):
+                cs = [c for j, k, c in all_b if j == i and k == kind]
+                if cs:
+                    self._groups.append((i, kind, cs))
+        bvals = self._boundary_fn()(ca.vertcat(*[self._bvalues(pn) for pn in pieces]), P, V)
+        self.layouts = [d.layout(o) for d, o in zip(self.phases, self.offsets, strict=True)]
+        for lay in self.layouts:
+            lay.iV = self.iV
+        self.link_blocks: dict[str, slice] = {}
+        g: list[ca.MX] = []
+        lbg: list[ca.SX] = []
+        ubg: list[ca.SX] = []
+
+        def _add(blocks: dict[str, slice], name: str, expr: ca.MX, lo: ca.SX,
+                 hi: ca.SX) -> None:
+            n0 = sum(int(e.numel()) for e in g)
+            e = ca.vec(expr)
+            g.append(e)
+            lbg.append(ca.vec(lo))
+            ubg.append(ca.vec(hi))
+            blocks[name] = slice(n0, n0 + int(e.numel()))
+
+        for i, pn in enumerate(pieces):
+            for name, expr, lo, hi in pn.constraints:
+                _add(self.layouts[i].blocks, name, expr, lo, hi)
+            for gi, (j, kind, cs) in enumerate(self._groups):
+                if j == i:
+                    _add(self.layouts[i].blocks, kind, bvals[gi],
+                        ca.vertcat(*[c.lower for c in cs]), ca.vertcat(*[c.upper for c in cs]))
+        for gi, (j, kind, cs) in enumerate(self._groups):
+            if j == -1:
+                _add(self.link_blocks, kind, bvals[gi], ca.vertcat(*[c.lower for c in cs]),
+                    ca.vertcat(*[c.upper for c in cs]))
+        return ca.vertcat(*g), ca.vertcat(*lbg), ca.vertcat(*ubg), bvals[-1]
+
+    @property
+    def layout(self) -> PhaseLayout:
+        """Where the (only) phase lives in ``w`` and ``g`` (single-phase problems)."""
+        if len(self.layouts) != 1:
+            raise AttributeError("a multi-phase transcription has one layout per phase: "
+                                 "use .layouts")
+        return self.layouts[0]
+
+    def _solver(self, warm: bool) -> Any:
+        if warm not in self._solvers:
+            ipopt = dict(self.ipopt_options)
+            if warm:
+                ipopt.update(warm_start_init_point="yes", warm_start_bound_push=1e-9,
+                             warm_start_mult_bound_push=1e-9, mu_init=1e-6)
+            opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False,
+                                    "error_on_fail": False, "expand": self.expand}
+            name = f"{self.multiphase.name}_{self.method}"
+            nlp: Any = self._scaled
+            self._solvers[warm] = ca.nlpsol(name, "ipopt", nlp, opts)
+        return self._solvers[warm]
+
+    # ------------------------------------------------------------------ solve
+    def param_vector(self, params: dict[str, float]) -> np.ndarray:
+        """The parameter values in declaration order, checked (see the problem's).
+
+        Parameters
+        ----------
+        params : dict
+            A value for every declared parameter.
+        """
+        return self.multiphase.param_vector(params)
+
+    def default_guess(self, params: dict[str, float] | None = None) -> np.ndarray:
+        """The default initial guess (see :mod:`ocp.definition.guess`) for these parameter values.
+
+        A bare default (the bounds' midpoint, or 0 clipped into them) that makes
+        the dynamics or constraints non-finite is replaced by another point within
+        the bounds where one helps (:func:`ocp.definition.guess.repair_default`). Without
+        ``params`` the parameters are taken as 0 (non-finite entries become 0, no
+        replacement).
+
+        Parameters
+        ----------
+        params : dict, optional
+            Parameter values.
+        """
+        pv = self.param_vector(params) if params is not None else np.zeros(self.multiphase.np)
+        n = len(self._choices.names)
+        if params is None:
+            with np.errstate(all="ignore"):
+                w0 = np.array(self._guess(pv, np.zeros(n), np.zeros(n)), dtype=float).ravel()
+            return np.nan_to_num(w0, posinf=0.0, neginf=0.0)
+        return self._repaired_default(pv)
+
+    def _repaired_default(self, pv: np.ndarray) -> np.ndarray:
+        """The default guess, with bare defaults replaced where they make the NLP
+        non-finite and another point within the bounds does not (see
+        :mod:`ocp.definition.guess`)."""
+        n = len(self._choices.names)
+
+        def at(use: np.ndarray, val: np.ndarray) -> np.ndarray:
+            with np.errstate(all="ignore"):
+                return np.array(self._guess(pv, use, val), dtype=float).ravel()
+
+        def count(use: np.ndarray, val: np.ndarray) -> int:
+            w = at(use, val)
+            if not np.all(np.isfinite(w)):
+                return w.size + self.n_g + 1
+            with np.errstate(all="ignore"):
+                f, g = (np.array(v, dtype=float) for v in self._nlp_function()(w, pv))
+            return int(np.sum(~np.isfinite(f)) + np.sum(~np.isfinite(g)))
+
+        zeros = np.zeros(n)
+        if n == 0 or count(zeros, zeros) == 0:
+            return at(zeros, zeros)
+        lo, hi = (np.array(v, dtype=float).ravel() for v in self._choice_bounds(pv))
+        use, val = repair_default(count, lo, hi, self._choices.refs)
+        return at(use, val)
+
+    def _nlp_function(self) -> ca.Function:
+        """``(w, p) -> (f, g)`` in the user's units (built on first use)."""
+        if self._nlp_fn is None:
+            self._nlp_fn = ca.Function("nlp", [self._nlp["x"], self._nlp["p"]],
+                                       [self._nlp["f"], self._nlp["g"]])
+        return self._nlp_fn
+
+    def guess_from(self, sol: Solution | Trajectory) -> np.ndarray:
+        """A decision vector for this transcription from a solution of another
+        transcription (another grid or method) of the same problem, or from a
+        :class:`ocp.Trajectory` (states and controls by name, interpolated
+        linearly; a multi-phase problem needs its ``phase`` column).
+
+        Parameters
+        ----------
+        sol : Solution or Trajectory
+            Where to start from.
+        """
+        if isinstance(sol, Trajectory):
+            return self._guess_from_trajectory(sol)
+        if len(sol.phases) != len(self.phases):
+            raise GuessError(f"the solution has {len(sol.phases)} phases, this problem "
+                             f"{len(self.phases)}")
+        for i, (ps, ph) in enumerate(zip(sol.phases, self.multiphase.phases, strict=True)):
+            theirs = (ps.problem.state_names, ps.problem.control_names)
+            if theirs != (ph.state_names, ph.control_names):  # a solution of another problem
+                raise GuessError(
+                    f"phase {i}: the solution's states and controls {theirs[0] + theirs[1]} "
+                    f"are not this problem's {ph.state_names + ph.control_names}; pass a "
+                    "Trajectory to start from states matched by name")
+        parts = [d.guess_from(ps.at, ps.t0, ps.T) for d, ps in zip(self.phases, sol.phases,
+                                                                   strict=True)]
+        parts.append(np.array([sol.variables[k] for k in self.multiphase.var_names]))
+        return np.concatenate(parts)
+
+    def _guess_from_trajectory(self, traj: Trajectory) -> np.ndarray:
+        w0 = self.default_guess()
+        parts = []
+        for i, (disc, ph) in enumerate(zip(self.phases, self.multiphase.phases, strict=True)):
+            rows = np.ones(len(traj), bool) if traj.phase is None else traj.phase == i
+            if len(self.phases) > 1 and traj.phase is None:
+                raise ValueError("a guess trajectory for a multi-phase problem needs a "
+                                 "phase column")
+            t = traj.t[rows]
+            missing = [n for n in ph.state_names + ph.control_names
+                       if n not in traj.state_names + traj.control_names]
+            if missing:
+                raise ValueError(f"the guess trajectory lacks {missing}")
+
+            def _sample(tq: np.ndarray, t: np.ndarray = t, rows: np.ndarray = rows,
+                        ph: Any = ph) -> tuple[np.ndarray, np.ndarray]:
+                col = [np.interp(tq, t, traj[n][rows]) for n in ph.state_names]
+                ucol = [np.interp(tq, t, traj[n][rows]) for n in ph.control_names]
+                x = np.column_stack(col)
+                return x, (np.column_stack(ucol) if ucol else np.zeros((tq.size, 0)))
+
+            parts.append(disc.guess_from(_sample, float(t[0]), float(t[-1])))
+        parts.append(w0[self.iV])
+        return np.concatenate(parts)
+
+    def _start(self, pv: np.ndarray, params: dict[str, float], guess: Any,
+               warm_start: Solution | None) -> dict[str, Any]:
+        if warm_start is not None:
+            if warm_start.transcription is self:
+                return {"x0": warm_start.w, "lam_x0": warm_start.lam_x,
+                        "lam_g0": warm_start.lam_g}
+            return {"x0": self.guess_from(warm_start)}
+        if isinstance(guess, Solution):
+            return {"x0": guess.w if guess.transcription is self else self.guess_from(guess)}
+        if isinstance(guess, Trajectory):
+            return {"x0": self.guess_from(guess)}
+        if guess is not None:
+            x0 = np.asarray(guess, dtype=float).ravel()
+            if x0.shape != (self.n_w,):
+                raise ValueError(f"guess has {x0.size} entries, the NLP {self.n_w}")
+            return {"x0": x0}
+        return {"x0": self.default_guess(params)}
+
+    def _check_start(self, x0: np.ndarray, pv: np.ndarray) -> float:
+        """The objective at the start; a clear error if the start makes the NLP
+        non-finite, naming the expression."""
+        with np.errstate(all="ignore"):
+            f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
+        if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
+            return float(f.ravel()[0])
+        if not np.all(np.isfinite(x0)):
+            raise ProblemDefinitionError("the initial guess has non-finite entries")
+        sol = self._unpack_only(x0, pv)
+        msgs = [diagnose_nonfinite(d.cp, ps.t, ps.x, ps.data.u_points, ps.data.s)
+                for d, ps in zip(self.phases, sol.phases, strict=True)]
+        raise_if_nonfinite(msgs)
+        raise ProblemDefinitionError("the initial guess makes a boundary constraint or the "
+                                     "objective non-finite")
+
+    def _unpack_only(self, w: np.ndarray, pv: np.ndarray) -> Solution:
+        res = {"x": w, "f": np.nan, "lam_g": np.zeros(self.n_g), "lam_x": np.zeros(self.n_w)}
+        stats = {"success": False, "return_status": "Not_Solved", "iter_count": 0}
+        return Solution.from_nlp(self, pv, res, stats, 0.0)
+
+    def solve(self, params: dict[str, float] | None = None, guess: Any = None,
+              warm_start: Solution | None = None) -> Solution:
+        """Solve for the given parameter values.
+
+        Parameters
+        ----------
+        params : dict
+            A value for every declared parameter (none needed if there are none).
+        guess : Solution, Trajectory or decision vector, optional
+            Primal starting point (cold start); a solution of another
+            transcription (grid, method) or a trajectory is resampled.
+            By default, the default guess (see :mod:`ocp.definition.guess`).
+        warm_start : Solution, optional
+            Start from this solution's primal and dual values (Ipopt warm start).
+
+        Raises
+        ------
+        InfeasibleError, SolveError
+            Carrying Ipopt's status and the last iterate.
+        PathViolationError
+            With ``verify="raise"``, if a path constraint is violated between nodes.
+        GuessError
+            If the starting point makes an expression non-finite.
+        """
+        return self._solve(params, guess, warm_start, self.verify)
+
+    def _solve(self, params: dict[str, float] | None, guess: Any,
+               warm_start: Solution | None, verify_mode: str) -> Solution:
+        params = {} if params is None else params
+        pv = self.param_vector(params)
+        lbw, ubw, lbg, ubg = (np.array(v, dtype=float).ravel() for v in self._bounds(pv))
+        self._check_bound_order(lbw, ubw, lbg, ubg)
+        args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg,
+                **self._start(pv, params, guess, warm_start)}
+        f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
+        solver = self._solver(warm_start is not None and "lam_g0" in args)
+        fref = self.scaling.objective_scale(f0)
+        t0 = time.perf_counter()
+        res = self._unscale(solver(**self._scale_args(args, fref)), fref)
+        elapsed = time.perf_counter() - t0
+        sol = Solution.from_nlp(self, pv, res, solver.stats(), elapsed)
+        sol.objective_scale = fref
+        if not sol.success:
+            cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
+            raise cls(sol.status, sol, f"Ipopt failed: {sol.status} after {sol.iterations} "
+                                       f"iterations")
+        verify(sol, verify_mode, self.verify_tol, self.verify_points)
+        return sol
+
+    def _scale_args(self, args: dict[str, Any], fref: float) -> dict[str, Any]:
+        """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""
+        sc = self.scaling
+        out = dict(args)
+        out["p"] = np.r_[args["p"], 1.0 / fref]
+        for k in ("x0", "lbx", "ubx"):
+            out[k] = sc.x_to_scaled(args[k])
+        out["lbg"], out["ubg"] = sc.r * args["lbg"], sc.r * args["ubg"]
+        if "lam_g0" in args:
+            out["lam_g0"], out["lam_x0"] = sc.multipliers_to_scaled(args["lam_g0"],
+                                                                    args["lam_x0"], fref)
+        return out
+
+    def _unscale(self, res: dict[str, Any], fref: float) -> dict[str, Any]:
+        """Ipopt's result mapped back to the user's units."""
+        sc = self.scaling
+        lam_g, lam_x = sc.multipliers_from_scaled(np.array(res["lam_g"]).ravel(),
+                                                  np.array(res["lam_x"]).ravel(), fref)
+        return {"x": sc.x_from_scaled(np.array(res["x"]).ravel()),
+                "f": float(res["f"]) * fref, "lam_g": lam_g, "lam_x": lam_x,
+                "g": np.array(res["g"]).ravel() / sc.r}
+
+    def _check_bound_order(self, lbw: np.ndarray, ubw: np.ndarray, lbg: np.ndarray,
+                           ubg: np.ndarray) -> None:
+        for lo, hi, what in ((lbw, ubw, "variable"), (lbg, ubg, "constraint")):
+            bad = np.flatnonzero(lo > hi)
+            if bad.size:
+                raise ProblemDefinitionError(
+                    f"at these parameter values a {what} lower bound exceeds its upper bound "
+                    f"(index {int(bad[0])}: {lo[bad[0]]:g} > {hi[bad[0]]:g})")

@@ -1,0 +1,443 @@
+"""The two transcriptions -- multiple shooting and Radau collocation -- and continuation.
+
+Both share the problem definition, the NLP assembly (:mod:`ocp.transcriptions.nlp`) and the
+solution type; choose with :func:`transcribe` or by class::
+
+    tr = transcribe(problem, "collocation", intervals=20, degree=3)
+    sol = tr.refine(params, tol=1e-7)          # mesh refinement to an accuracy
+    ms = MultipleShooting(problem, nodes=100)   # or multiple shooting
+    sol = ms.solve(params)
+
+The NLP of a transcription is built once; new parameter values re-solve it
+without a rebuild (``n_builds`` stays 1). Mesh refinement builds one NLP per
+mesh; the final mesh's transcription is ``sol.transcription``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from ..definition.errors import ProblemDefinitionError, SolveError
+from ..definition.multiphase import MultiPhaseProblem
+from ..definition.problem import OptimalControlProblem
+from ..definition.symbols import positive_int
+from .collocation import CollocationPhase
+from .discretization import PhaseDiscretization
+from .integrators import cvodes_function, rk4_function
+from .mesh import (
+    MeshRound,
+    interval_errors,
+    objective_change,
+    objective_threshold,
+    refine_mesh,
+)
+from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, Transcription
+from .shooting import ShootingPhase
+from .solution import Solution
+from .verify import interval_excess, verify
+
+__all__ = ["DEFAULT_IPOPT", "INFEASIBLE_STATUSES", "Collocation", "MultipleShooting",
+           "Transcription", "continuation", "cvodes_function", "decision_bounds",
+           "rk4_function", "transcribe"]
+
+Problem = OptimalControlProblem | MultiPhaseProblem
+
+
+def _per_phase(value: Any, n: int, what: str) -> list[Any]:
+    if isinstance(value, Sequence) and not isinstance(value, str):
+        if len(value) != n:
+            raise ProblemDefinitionError(f"{what}: {len(value)} values for {n} phases")
+        return list(value)
+    return [value] * n
+
+
+class MultipleShooting(Transcription):
+    """Multiple-shooting transcription of an optimal control problem.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    nodes : int or sequence of int
+        Number of shooting intervals N (per phase, or one for all), with a
+        piecewise-constant control on each.
+    integrator : {"rk4", "cvodes"}
+        RK4 with ``substeps`` steps per interval, or CVODES (stiff problems).
+    substeps : int
+        RK4 steps per interval.
+    ipopt_options : dict, optional
+        Overrides of :data:`DEFAULT_IPOPT`.
+    expand : bool
+        Expand the NLP to SX scalar graphs (RK4 only): building takes longer
+        (0.4 s instead of 0.02 s for the soft landing at N = 100) but every
+        evaluation is ~5x faster, so re-solves are ~2x faster. Worth it for
+        sweeps and continuation.
+    inner_constraints : bool
+        Also impose path constraints and state bounds at the integrator's
+        ``substeps - 1`` inner steps of every interval (default: nodes only).
+    verify, verify_tol, verify_points
+        The post-solve check between nodes (see :class:`ocp.transcriptions.nlp.Transcription`).
+    scaling : {"auto", "none"} or dict
+        Scaling of the NLP (see :class:`ocp.transcriptions.nlp.Transcription` and
+        :mod:`ocp.definition.scaling`).
+
+    Attributes
+    ----------
+    n_builds : int
+        How many times the NLP was built (stays 1: re-solves never rebuild).
+    """
+
+    method = "multiple_shooting"
+
+    def __init__(self, problem: Problem, nodes: int | Sequence[int] = 50,
+                 integrator: str = "rk4", substeps: int = 4,
+                 ipopt_options: dict | None = None, expand: bool = False, *,
+                 inner_constraints: bool = False, verify: str = "warn",
+                 verify_tol: float = 1e-6, verify_points: int = 10,
+                 scaling: Any = "auto") -> None:
+        if integrator not in ("rk4", "cvodes"):
+            raise ProblemDefinitionError(f"integrator must be 'rk4' or 'cvodes', got "
+                                         f"{integrator!r}")
+        n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
+        self.nodes = [positive_int(n, "nodes") for n in _per_phase(nodes, n_ph, "nodes")]
+        self.integrator = integrator
+        self.substeps = positive_int(substeps, "substeps")
+        self.inner_constraints = bool(inner_constraints)
+        super().__init__(problem, ipopt_options, bool(expand) and integrator == "rk4",
+                         verify, verify_tol, verify_points, scaling)
+        self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
+        self.F = self.phases[0].F  # type: ignore[attr-defined]
+
+    def _discretize(self) -> list[PhaseDiscretization]:
+        return [ShootingPhase(cp, tm, n, self.integrator, self.substeps, self.inner_constraints)
+                for cp, tm, n in zip(self.compiled, self.times, self.nodes, strict=True)]
+
+    def initial_guess(self, T: float | None = None, x: Any = None, u: Any = None,
+                      params: dict[str, float] | None = None) -> np.ndarray:
+        """Decision vector from a final time, states and controls (single phase).
+
+        Parameters
+        ----------
+        T : float, optional
+            Final time (if free).
+        x : array (N+1, nx), (nx,) or callable of normalised time in [0, 1], optional
+            States at the nodes.
+        u : array (N, nu), (nu,) or callable likewise, optional
+            Controls on the intervals.
+        params : dict, optional
+            Parameter values for the defaults of what is not given (see
+            :meth:`default_guess`).
+        """
+        w = self.default_guess(params)
+        lay, pr, N = self.layout, self.multiphase.phases[0], self.nodes[0]
+        if lay.iT is not None and T is not None:
+            w[lay.iT] = T
+        s = np.linspace(0, 1, N + 1)
+        if x is not None:
+            w[lay.iX] = _fill(x, s, pr.nx).ravel()
+        if u is not None:
+            w[lay.iU] = _fill(u, s[:-1], pr.nu).ravel()
+        return w
+
+
+class Collocation(Transcription):
+    """Direct collocation on Legendre-Gauss-Radau points, with mesh refinement.
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    intervals : int or sequence of int
+        Number of (equal) mesh intervals per phase.
+    degree : int
+        Collocation points per interval (state polynomial degree); 3 gives
+        order 5 at the mesh points.
+    mesh : array or sequence of arrays, optional
+        Normalised mesh points in [0, 1] per phase (overrides ``intervals``).
+    ipopt_options : dict, optional
+        Overrides of :data:`DEFAULT_IPOPT`.
+    expand : bool
+        Expand the NLP to SX (default True: collocation graphs are small).
+    verify, verify_tol, verify_points
+        The post-solve check between nodes (see :class:`ocp.transcriptions.nlp.Transcription`).
+    scaling : {"auto", "none"} or dict
+        Scaling of the NLP (see :class:`ocp.transcriptions.nlp.Transcription` and
+        :mod:`ocp.definition.scaling`).
+
+    Notes
+    -----
+    Every solution carries ``mesh_error``, the largest interval error
+    estimate of :mod:`ocp.transcriptions.mesh` (relative; compare it with the accuracy you
+    need, or call :meth:`refine`), and ``objective_error``, the estimate of
+    the objective's error (NaN after one solve: it needs two meshes; see
+    :meth:`refine`).
+    """
+
+    method = "collocation"
+
+    def __init__(self, problem: Problem, intervals: int | Sequence[int] = 20, degree: int = 3,
+                 mesh: Any = None, ipopt_options: dict | None = None, expand: bool = True, *,
+                 verify: str = "warn", verify_tol: float = 1e-6,
+                 verify_points: int = 10, scaling: Any = "auto") -> None:
+        n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
+        self.scaling_arg = scaling
+        self.degree = positive_int(degree, "degree")
+        if mesh is None:
+            ns = [positive_int(n, "intervals") for n in _per_phase(intervals, n_ph,
+                                                                   "intervals")]
+            self.meshes = [np.linspace(0.0, 1.0, n + 1) for n in ns]
+        else:
+            meshes = [mesh] if n_ph == 1 and np.ndim(mesh[0]) == 0 else list(mesh)
+            self.meshes = [_check_mesh(m) for m in _per_phase(meshes, n_ph, "mesh")]
+        super().__init__(problem, ipopt_options, expand, verify, verify_tol, verify_points,
+                         scaling)
+        counts = [m.size - 1 for m in self.meshes]
+        self.N: int | list[int] = counts[0] if n_ph == 1 else counts
+
+    def _discretize(self) -> list[PhaseDiscretization]:
+        return [CollocationPhase(cp, tm, m, self.degree)
+                for cp, tm, m in zip(self.compiled, self.times, self.meshes, strict=True)]
+
+    def _solve(self, params: dict[str, float] | None, guess: Any,
+               warm_start: Solution | None, verify_mode: str) -> Solution:
+        """Solve, and attach the discretisation error estimate (``sol.mesh_error``)."""
+        sol = super()._solve(params, guess, warm_start, verify_mode)
+        sol.mesh_error = float(max(interval_errors(ph).max() for ph in sol.phases))
+        sol.objective_error = math.nan  # one mesh: nothing to compare the objective with
+        return sol
+
+    def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
+        """A new collocation of the same problem and options on other meshes.
+
+        Parameters
+        ----------
+        meshes : list of ndarray
+            Normalised mesh points per phase.
+        verify : str, optional
+            Override of the post-solve check mode.
+        """
+        return Collocation(self.problem, degree=self.degree, mesh=meshes,
+                           ipopt_options=self.ipopt_options, expand=self.expand,
+                           verify=verify or self.verify, verify_tol=self.verify_tol,
+                           verify_points=self.verify_points, scaling=self.scaling_arg)
+
+    def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
+               max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
+               max_split: int = 8, objective_tol: float | None = None) -> Solution:
+        """Solve, then refine the mesh until the states and the objective are accurate.
+
+        Parameters
+        ----------
+        params : dict, optional
+            Parameter values.
+        tol : float
+            Requested relative accuracy of the states (and cost quadratures):
+            every interval's error estimate must be below it.
+        max_rounds : int
+            Most refinements (each builds and solves one NLP).
+        max_intervals : int
+            Stop before a mesh (all phases) would exceed this many intervals.
+        guess : Solution or decision vector, optional
+            Start of the first solve.
+        max_split : int
+            Most pieces an interval is split into per round.
+        objective_tol : float, optional
+            Requested accuracy of the objective, relative to ``max(1, |J|)``
+            (default: ``tol``, but not below :meth:`objective_floor`, what the NLP
+            solver itself resolves; ``math.inf`` switches the criterion off). The
+            objective's error estimate is its change between the last two
+            meshes (see :mod:`ocp.transcriptions.mesh`): the states' estimate does not see
+            the error of a control that jumps inside an interval (an L1 cost,
+            bang-bang arcs), which can leave the objective ten times less
+            accurate than the states. Meeting it takes at least two solves.
+
+        Returns
+        -------
+        Solution
+            On the last mesh; ``mesh_history`` lists every round (with its
+            objective estimate and the criterion that drove the next round),
+            ``mesh_error`` is the final state estimate, ``objective_error``
+            the final objective estimate (absolute; ``inf`` if there was one
+            round only) and ``mesh_converged`` tells whether both met their
+            tolerances. ``sol.transcription`` re-solves on that mesh.
+
+        Notes
+        -----
+        The error of an interval is the larger of its estimate (see
+        :mod:`ocp.transcriptions.mesh`) and the path-constraint violation found inside it on
+        the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
+        relaxes bounds by about 1e-8), so refinement also closes gaps between
+        points. While an interval exceeds ``tol`` the rounds are driven by the
+        states; once none does, by the objective, splitting the intervals with
+        the largest estimates (:func:`ocp.transcriptions.mesh.objective_threshold`).
+        """
+        otol = max(tol, self.objective_floor()) if objective_tol is None \
+            else float(objective_tol)
+        tr = self  # every round is checked between points by the refinement itself
+        sol = tr._solve(params, guess, None, "off")
+        history: list[MeshRound] = []
+        previous: list[float] = []  # objectives of the earlier rounds
+        for rnd in range(max_rounds + 1):
+            errs = [np.maximum(interval_errors(ph), self._gaps(ph, sol.params))
+                    for ph in sol.phases]
+            emax = float(max(e.max() for e in errs))
+            change = objective_change(previous, sol.objective)
+            target = otol * max(1.0, abs(sol.objective))
+            driver = "state" if emax > tol else "objective" if change > target else ""
+            history.append(MeshRound([e.size for e in errs], emax, sol.objective,
+                                     sol.iterations, sol.solve_time, change, driver))
+            if not driver:
+                break
+            new = self._next_meshes(tr.meshes, errs, driver, tol, change, target, max_split)
+            if rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
+                history[-1].refined_for = ""
+                break
+            tr = tr.with_mesh(new)
+            previous.append(sol.objective)
+            try:
+                sol = tr._solve(params, sol, None, "off")
+            except SolveError:  # the previous mesh's solution may mislead: start afresh
+                sol = tr._solve(params, guess, None, "off")
+        sol.mesh_history, sol.mesh_error, sol.objective_error = history, emax, change
+        sol.mesh_converged = emax <= tol and change <= target
+        verify(sol, self.verify, self.verify_tol, self.verify_points)
+        return sol
+
+    def objective_floor(self) -> float:
+        """The relative objective accuracy below which mesh rounds chase the NLP solver's
+        own tolerance: ten times the larger of Ipopt's ``tol`` and its relaxation of
+        bounds (``bound_relax_factor``, 1e-8 by default), which move the objective of a
+        problem with active bounds by about that much whatever the mesh.
+
+        Returns
+        -------
+        float
+        """
+        opts = self.ipopt_options
+        return 10.0 * max(float(opts.get("tol", 1e-8)),
+                          float(opts.get("bound_relax_factor", 1e-8)))
+
+    def _next_meshes(self, meshes: list[np.ndarray], errs: list[np.ndarray], driver: str,
+                     tol: float, change: float, target: float,
+                     max_split: int) -> list[np.ndarray]:
+        """The refined meshes for a round driven by the states or by the objective."""
+        if driver == "state":
+            return [refine_mesh(m, e, tol, self.degree, max_split)
+                    for m, e in zip(meshes, errs, strict=True)]
+        emax = float(max(e.max() for e in errs))
+        if emax <= 0.0:  # nothing to localise the objective's error by: halve every interval
+            return [refine_mesh(m, np.ones(m.size - 1), 0.5, self.degree, 2) for m in meshes]
+        cut = objective_threshold(emax, change, target)
+        return [refine_mesh(m, e, cut, self.degree, max_split)
+                for m, e in zip(meshes, errs, strict=True)]
+
+    def _gaps(self, ph: Solution, params: dict[str, float]) -> np.ndarray:
+        excess = interval_excess(ph, params, self.verify_points)
+        return np.where(excess > self.verify_tol, excess, 0.0)
+
+
+def transcribe(problem: Problem, method: str = "multiple_shooting", **options: Any
+               ) -> Transcription:
+    """A transcription of ``problem`` by ``method`` ("multiple_shooting" or "collocation").
+
+    Parameters
+    ----------
+    problem : OptimalControlProblem or MultiPhaseProblem
+        The problem.
+    method : str
+        ``"multiple_shooting"`` (alias ``"ms"``) or ``"collocation"`` (alias ``"radau"``).
+    **options
+        Passed to :class:`MultipleShooting` or :class:`Collocation`.
+    """
+    m = method.lower()
+    if m in ("multiple_shooting", "ms", "shooting"):
+        return MultipleShooting(problem, **options)
+    if m in ("collocation", "radau", "lgr"):
+        return Collocation(problem, **options)
+    raise ProblemDefinitionError(f"method must be 'multiple_shooting' or 'collocation', got "
+                                 f"{method!r}")
+
+
+def decision_bounds(transcription: Transcription, params: dict[str, float] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of a transcription's decision vector at these parameter values.
+
+    Parameters
+    ----------
+    transcription : Transcription
+        A multiple-shooting or collocation transcription.
+    params : dict, optional
+        Parameter values (every declared parameter).
+    """
+    pv = transcription.param_vector({} if params is None else params)
+    lbw, ubw = transcription._bounds(pv)[:2]
+    return np.array(lbw, dtype=float).ravel(), np.array(ubw, dtype=float).ravel()
+
+
+def _check_mesh(mesh: Any) -> np.ndarray:
+    m = np.asarray(mesh, dtype=float).ravel()
+    if m.size < 2 or m[0] != 0.0 or m[-1] != 1.0 or np.any(np.diff(m) <= 0):
+        raise ProblemDefinitionError("mesh must increase strictly from 0 to 1")
+    return m
+
+
+def _fill(spec: Any, s: np.ndarray, n: int) -> np.ndarray:
+    if spec is None:
+        return np.zeros((len(s), n))
+    if callable(spec):
+        return np.array([np.ravel(spec(si)) for si in s], dtype=float).reshape(len(s), n)
+    a = np.asarray(spec, dtype=float)
+    if a.ndim == 1:
+        return np.tile(a.reshape(1, n), (len(s), 1))
+    if a.shape != (len(s), n):
+        raise ValueError(f"guess has shape {a.shape}, expected {(len(s), n)}")
+    return a
+
+
+def continuation(transcription: Transcription, params: dict[str, float], name: str,
+                 values: Any, guess: Solution | np.ndarray | None = None,
+                 progress: bool = False) -> list[Solution]:
+    """Solve along ``values`` of one parameter, each solve warm-started from the last.
+
+    If a warm-started solve fails, it is retried once from the previous primal
+    point only (a cold start), then the error is raised.
+
+    Parameters
+    ----------
+    transcription : Transcription
+        A multiple-shooting or collocation transcription.
+    params : dict
+        Values of the other parameters.
+    name : str
+        The parameter to vary.
+    values : iterable of float
+        Its values, in order.
+    guess : Solution or decision vector, optional
+        Start of the first solve.
+    progress : bool
+        Show a progress bar (tqdm).
+    """
+    out: list[Solution] = []
+    prev = guess if isinstance(guess, Solution) else None
+    first_guess = guess
+    it = values
+    if progress:
+        from tqdm.auto import tqdm
+
+        it = tqdm(values, desc=f"continuation in {name}", unit="solve")
+    for v in it:
+        pv = {**params, name: float(v)}
+        if prev is None:
+            sol = transcription.solve(pv, guess=first_guess)
+        else:
+            try:
+                sol = transcription.solve(pv, warm_start=prev)
+            except SolveError:
+                sol = transcription.solve(pv, guess=prev)
+        out.append(sol)
+        prev = sol
+    return out

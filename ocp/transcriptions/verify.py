@@ -1,0 +1,132 @@
+"""Post-solve check of path constraints and state bounds between the nodes.
+
+A transcription imposes path constraints at finitely many points (shooting
+nodes, integrator steps, collocation points). Between them the trajectory can
+leave the feasible set while Ipopt reports success: a state that must stay
+outside a band can dive through it between two nodes. After every solve the
+trajectory is therefore sampled on a fine grid (multiple shooting: re-integrated
+from each node with the interval's constant control; collocation: the state
+polynomials) and every path constraint and state bound is evaluated there.
+
+With collocation, a constraint that involves a control is only checked where
+the method defines the control (the collocation points, where it is imposed):
+between them the control is an interpolation, not part of the solution.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..definition.errors import PathViolationError, PathViolationWarning
+
+VERIFY_MODES = ("warn", "raise", "off")
+
+
+def _phase_excess(ph: Any, params: dict[str, float],
+                  per_interval: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
+    """Relative excess (rows, points) of one phase's checked rows, the times, the rows."""
+    disc = ph.discretization
+    cp = disc.cp
+    rows = [i for i in range(cp.ncheck)
+            if disc.method == "multiple_shooting" or cp.check_u_free[i]]
+    if not rows:
+        t = disc.check_points(ph.data, per_interval)
+        return np.zeros((0, t.size)), t, rows
+    t, x, u = disc.check_samples(ph.data, per_interval)
+    vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
+                    dtype=float)[rows]
+    b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
+    lo = np.array(b[6], dtype=float).ravel()[rows, None]
+    hi = np.array(b[7], dtype=float).ravel()[rows, None]
+    with np.errstate(invalid="ignore"):
+        excess = np.maximum(np.maximum(lo - vals, vals - hi), 0.0)
+        scale = np.maximum(1.0, np.where(vals < lo, np.abs(lo), np.abs(hi)))
+        rel = np.where(np.isfinite(vals), excess / np.where(np.isfinite(scale), scale, 1),
+                       np.inf)
+    return rel, t, rows
+
+
+def path_excess(sol: Any, per_interval: int = 10) -> dict[str, tuple[float, float]]:
+    """Largest relative violation of each path constraint and state bound on a fine grid.
+
+    Parameters
+    ----------
+    sol : Solution
+        A solution (single- or multi-phase).
+    per_interval : int
+        Check points per shooting interval or collocation mesh interval.
+
+    Returns
+    -------
+    dict
+        ``name -> (violation, time)`` for every violated row, where the
+        violation is the excess over the bound divided by ``max(1, |bound|)``
+        (infinite where the trajectory is not finite).
+    """
+    out: dict[str, tuple[float, float]] = {}
+    for ph in sol.phases:
+        rel, t, rows = _phase_excess(ph, sol.params, per_interval)
+        prefix = f"{ph.problem.name}: " if sol.is_multiphase else ""
+        for r, i in enumerate(rows):
+            j = int(np.argmax(rel[r]))
+            if rel[r, j] > 0:
+                out[prefix + ph.discretization.cp.check_names[i]] = (float(rel[r, j]),
+                                                                     float(t[j]))
+    return out
+
+
+def interval_excess(ph: Any, params: dict[str, float], per_interval: int = 10) -> np.ndarray:
+    """Largest relative path violation inside each mesh interval of one phase, shape (N,).
+
+    Parameters
+    ----------
+    ph : Solution
+        One phase of a solution.
+    params : dict
+        The parameter values.
+    per_interval : int
+        Check points per mesh interval.
+    """
+    rel, t, _ = _phase_excess(ph, params, per_interval)
+    n = t.size - 1
+    worst = rel.max(axis=0) if rel.size else np.zeros(t.size)
+    inner = worst[:n].reshape(-1, per_interval).max(axis=1)
+    inner[-1] = max(inner[-1], worst[-1])
+    return inner
+
+
+def verify(sol: Any, mode: str, tol: float, per_interval: int) -> None:
+    """Set ``sol.path_violation``, ``sol.violations`` and ``sol.verified``; warn or raise.
+
+    Parameters
+    ----------
+    sol : Solution
+        A converged solution.
+    mode : {"warn", "raise", "off"}
+        What to do when a violation exceeds ``tol``.
+    tol : float
+        Allowed relative violation.
+    per_interval : int
+        Check points per interval.
+    """
+    if mode == "off":
+        return
+    viol = path_excess(sol, per_interval)
+    worst = max((v for v, _ in viol.values()), default=0.0)
+    bad = {k: v for k, v in viol.items() if v[0] > tol}
+    sol.path_violation = worst
+    sol.violations = bad
+    sol.verified = not bad
+    if not bad or not sol.success:
+        return
+    what = "; ".join(f"{k} by {v:.3g} at t={t:.6g}" for k, (v, t) in
+                     sorted(bad.items(), key=lambda kv: -kv[1][0])[:3])
+    msg = (f"Ipopt reports {sol.status}, but between the nodes {what} (tolerance {tol:g}); "
+           "refine the grid, impose constraints at the inner steps (inner_constraints=True) "
+           "or use collocation with mesh refinement")
+    if mode == "raise":
+        raise PathViolationError("Path_Violated_Between_Nodes", sol, msg)
+    warnings.warn(msg, PathViolationWarning, stacklevel=3)

@@ -1,0 +1,122 @@
+"""Pontryagin certificate: analytic costates, a singular arc, the landing, refutation."""
+
+import dataclasses
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ocp import MultipleShooting, OptimalControlProblem, certify
+from ocp.certificate.certify import (
+    CERTIFIED,
+    INCONCLUSIVE,
+    NOT_BANG_BANG,
+    costates_from_multipliers,
+)
+from ocp.structure.switching import refine_switching
+from softlanding.optimal.landing import solve_landing
+from tests.oracles.problems import min_time_double_integrator
+
+
+@pytest.mark.parametrize("d", [1.0, 2.5])
+def test_double_integrator_analytic_costates_and_certificate(d):
+    # minimum principle, phi = T: H = lam_x v + lam_v u = -1, lam_x = -1/sqrt(d),
+    # lam_v = t/sqrt(d) - 1 (zero at the switch t = sqrt(d))
+    sol = MultipleShooting(min_time_double_integrator(mayer=True), nodes=40).solve({"d": d})
+    ref = refine_switching(sol)
+    c = certify(sol, ref)
+    assert c.verdict == CERTIFIED, c.reasons
+    rd = math.sqrt(d)
+    np.testing.assert_allclose(c.lam[:, 0], -1 / rd, atol=1e-9)
+    np.testing.assert_allclose(c.lam[:, 1], c.t / rd - 1, atol=1e-9)
+    assert c.H_expected == pytest.approx(-1.0)
+    assert c.H_max_abs < 1e-12
+    assert c.switch_sigma_gap < 1e-9
+    # the multiplier-based estimate agrees to the grid's accuracy
+    t, lam = costates_from_multipliers(sol)
+    np.testing.assert_allclose(lam[:, 0], -1 / rd, atol=1e-6)
+    np.testing.assert_allclose(lam[:, 1], t / rd - 1, atol=1e-6)
+    assert c.costate_estimates_gap < 1e-6
+
+
+def test_free_time_with_running_cost_has_zero_hamiltonian():
+    sol = MultipleShooting(min_time_double_integrator(mayer=False), nodes=40).solve({"d": 1.0})
+    ref = refine_switching(sol)
+    c = certify(sol, ref)
+    assert c.verdict == CERTIFIED
+    assert c.H_expected == 0.0
+    assert np.max(np.abs(c.H)) < 1e-12
+    # from the transcription alone: certified with grid-level tolerances
+    c2 = certify(sol)
+    assert c2.verdict == CERTIFIED, c2.reasons
+    assert c2.H_max_abs < 1e-6
+
+
+def test_singular_arc_is_not_certified():
+    # min int x^2, x' = u, |u| <= 1, x(0) = 1, T = 3: u = -1 until t = 1, then u = 0 (singular)
+    p = OptimalControlProblem()
+    x = p.state("x")
+    u = p.control("u", lower=-1, upper=1)
+    p.set_dynamics([u])
+    p.initial_constraint(x, 1.0)
+    p.fixed_final_time(3.0)
+    p.minimize_integral(x**2)
+    sol = MultipleShooting(p, nodes=60).solve({})
+    c = certify(sol)
+    assert c.verdict == NOT_BANG_BANG
+    assert c.singular_intervals
+    a, b = c.singular_intervals[0]
+    assert a == pytest.approx(1.0, abs=0.1) and b == pytest.approx(3.0)
+
+
+@pytest.mark.parametrize("v0", [-0.5, -3.0, -7.0, -10.0])
+def test_soft_landing_is_certified_bang_bang(v0):
+    r = solve_landing(v0, replay=False)
+    c = certify(r.transcribed, r.refined)
+    assert c.verdict == CERTIFIED, c.reasons
+    assert len(r.switch_times) == 1 and r.arcs == ["max", "min"]
+    assert c.H_expected == 0.0 and c.H_max_abs < 1e-9
+    assert c.switch_sigma_gap < 1e-9
+    assert c.sigma_sign_agreement == 1.0
+    assert c.costate_estimates_gap < 1e-2
+
+
+@pytest.mark.parametrize("how", ["late switch", "early switch", "swapped arcs"])
+def test_non_optimal_landing_is_refuted(how):
+    r = solve_landing(-3.0, replay=False)
+    ref = r.refined
+    if how == "late switch":
+        bad = dataclasses.replace(ref, durations=ref.durations * np.array([1.05, 0.96]))
+    elif how == "early switch":
+        bad = dataclasses.replace(ref, durations=ref.durations * np.array([0.9, 1.07]))
+    else:
+        bad = dataclasses.replace(ref, values=list(reversed(ref.values)))
+    c = certify(r.transcribed, bad)
+    assert c.verdict == NOT_BANG_BANG
+    assert c.reasons
+
+
+def test_transcription_alone_flags_the_constrained_tail():
+    # at v0 = -10 the transcription ends with an arc on which v_f <= 0 is active
+    r = solve_landing(-10.0, replay=False)
+    c = certify(r.transcribed)
+    assert c.verdict == INCONCLUSIVE
+    assert c.state_constraint_active_intervals
+
+
+def test_cli_pmp_json(tmp_path):
+    png = tmp_path / "bb.png"
+    p = subprocess.run([sys.executable, "-m", "softlanding", "solve", "--v0", "-2", "--pmp",
+                        "--json", "--plot", str(png)], capture_output=True, text=True,
+                       timeout=300)
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout)["pmp"]
+    for k in ("verdict", "H_max_abs", "H_variation", "sigma_sign_agreement", "switch_sigma_gap",
+              "singular_intervals", "state_constraint_active_intervals",
+              "costate_estimates_gap"):
+        assert k in d
+    assert d["verdict"] == CERTIFIED
+    assert (tmp_path / "bb-pmp.png").stat().st_size > 10_000
