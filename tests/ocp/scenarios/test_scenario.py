@@ -426,7 +426,7 @@ def test_bad_problems_and_solve_arguments_raise(robust):
 
 
 def test_the_guide_example_runs(capsys):
-    guide = Path(__file__).resolve().parents[2] / "docs" / "guides" / "ocp_scenarios.md"
+    guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "ocp_scenarios.md"
     code = re.findall(r"```python\n(.*?)```", guide.read_text(), re.S)[0]
     exec(compile(code, str(guide), "exec"), {})
     out = capsys.readouterr().out.split("\n")
