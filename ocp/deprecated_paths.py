@@ -62,12 +62,31 @@ MOVED = {
 
 
 class OldPathFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
-    """Finds ``<package>.<old name>`` and loads it as the module at its new path."""
+    """Finds ``<package>.<old name>`` and loads it as the module at its new path.
+
+    Parameters
+    ----------
+    package : str
+        The package whose old module paths it answers for (``"ocp"``).
+    """
 
     def __init__(self, package: str) -> None:
         self.package = package
 
     def new_path(self, fullname: str) -> str | None:
+        """The new dotted path of an old module name.
+
+        Parameters
+        ----------
+        fullname : str
+            A dotted module name (``"ocp.switching"``).
+
+        Returns
+        -------
+        str or None
+            Its path since 0.4 (``"ocp.structure.switching"``), or None if it is not an
+            old path of the package.
+        """
         head, _, old = fullname.rpartition(".")
         if head != self.package or old not in MOVED:
             return None
@@ -76,11 +95,39 @@ class OldPathFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def find_spec(
         self, fullname: str, path: object = None, target: object = None
     ) -> importlib.machinery.ModuleSpec | None:
+        """A spec for an old module path, loaded by this finder (the import protocol).
+
+        Parameters
+        ----------
+        fullname : str
+            The dotted name being imported.
+        path : object, optional
+            The parent package's search path (unused).
+        target : object, optional
+            A module being reloaded (unused).
+
+        Returns
+        -------
+        importlib.machinery.ModuleSpec or None
+            None for every name that is not an old path of the package.
+        """
         if self.new_path(fullname) is None:
             return None
         return importlib.util.spec_from_loader(fullname, self)
 
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
+        """The module at the new path, after a :class:`DeprecationWarning`.
+
+        Parameters
+        ----------
+        spec : importlib.machinery.ModuleSpec
+            The spec of the old name (from :meth:`find_spec`).
+
+        Returns
+        -------
+        types.ModuleType
+            The module at the new path, imported if it was not.
+        """
         new = self.new_path(spec.name)
         assert new is not None  # find_spec answered only for moved names
         warnings.warn(
@@ -92,10 +139,22 @@ class OldPathFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return importlib.import_module(new)
 
     def exec_module(self, module: ModuleType) -> None:
-        """The module at the new path is already executed."""
+        """Nothing to do: the module at the new path is already executed.
+
+        Parameters
+        ----------
+        module : types.ModuleType
+            The module :meth:`create_module` returned.
+        """
 
 
 def install(package: str) -> None:
-    """Answer for ``package``'s old module paths (once per interpreter)."""
+    """Answer for ``package``'s old module paths (once per interpreter).
+
+    Parameters
+    ----------
+    package : str
+        The package (``"ocp"``); its old names are the keys of :data:`MOVED`.
+    """
     if not any(isinstance(f, OldPathFinder) and f.package == package for f in sys.meta_path):
         sys.meta_path.append(OldPathFinder(package))
