@@ -211,7 +211,9 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     tsol = transcribed(sol)
     t0 = time.process_time()
     pr = tsol.problem
-    pmp_functions(pr)  # raises early on problems that are not control-affine
+    # raises early on problems that are not control-affine (a refinement with decision
+    # variables ran on a derived problem, where they are constant states)
+    pmp_functions(refined.problem if refined is not None else pr)
     h = grid_spacing(tsol)
     tol = Tolerances(H=tol_H if tol_H is not None else (1e-6 if refined else 1e-2),
                      sigma=tol_sigma if tol_sigma is not None else (1e-6 if refined else 1e-2),

@@ -39,7 +39,7 @@ def is_mixed(pr: OptimalControlProblem, name: str | None) -> bool:
     name : str or None
         A path constraint's name (None: False).
     """
-    return any(c.name == name and ca.depends_on(c.expr, pr.u) for c in pr.path)
+    return any(c.name == name and ca.depends_on(c.expr, pr.u) for c in pr.structure_path)
 
 
 def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
@@ -63,9 +63,12 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
     m = len(x)
     los, his = np.empty((m, pr.nu)), np.empty((m, pr.nu))
     for j, name in enumerate(pr.control_names):
-        lo, hi = pr.control_bounds[name]
-        los[:, j], his[:, j] = (float(v) for v in ca.Function("b", [pr.p], [lo, hi])(pv))
-    for c in pr.path:
+        # the control set at each sample: its limits may move with a state (a decision
+        # variable refined as a constant state, ocp.structure.variables)
+        lo, hi = pr.control_limits[name]
+        a, b = along(ca.Function("b", [pr.x, pr.p], [lo, hi]), x, pv)
+        los[:, j], his[:, j] = a.ravel(), b.ravel()
+    for c in pr.structure_path:
         uses = [j for j in range(pr.nu) if ca.depends_on(c.expr, pr.u[j])]
         if len(uses) != 1 or ca.depends_on(ca.jacobian(c.expr, pr.u), pr.u):
             continue
@@ -101,7 +104,7 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
     -------
     ndarray of bool (m,)
     """
-    cons = [c for c in pr.path if not (state_only and ca.depends_on(c.expr, pr.u))]
+    cons = [c for c in pr.structure_path if not (state_only and ca.depends_on(c.expr, pr.u))]
     if not cons:
         return np.zeros(len(x), dtype=bool)
     fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in cons]),
@@ -197,18 +200,20 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
     tiny = 1e-10 * max(T, 1.0)
     keep = (sw.t >= last - tiny) & (ref.durations[sw.interval] > tiny)
     switches = _effective_switches(ref, last)
+    values = {**ref.params, **ref.variables}  # the control set at the variables' values
     floor = np.zeros(pr.nu)
     args = (switches, tol.sigma)
-    mixed = any(ca.depends_on(c.expr, pr.u) for c in pr.path)
+    mixed = any(ca.depends_on(c.expr, pr.u) for c in pr.structure_path) or any(
+        ca.depends_on(ca.vertcat(*pr.control_limits[n]), pr.x) for n in pr.control_names)
     eff = effective_bounds(pr, sw.x[keep], ref.pv) if mixed else None
-    fig = figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
+    fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                   sw.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
                   tol.singular, bounds=eff)
     base = (ref.integration_error or 0.0) + sw.error_x
     err = {"H": base, "sigma": 0.0, "switch": 0.0, "costate": sw.error_lam, "state": sw.error_x}
     if sw.coarse is not None:
         c = sw.coarse
-        cf = figures(pr, ref.params, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
+        cf = figures(pr, values, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
                      c.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
                      tol.singular, bounds=effective_bounds(pr, c.x[keep], ref.pv)
                      if mixed else None)
@@ -219,7 +224,7 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                              if math.isfinite(fig.gap[k]) and math.isfinite(cf.gap[k])),
                             default=0.0)
         # samples inside the numerical error band of sigma are not judged
-        fig = figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
+        fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                       sw.H_expected, np.zeros(int(keep.sum()), bool), *args,
                       ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
@@ -244,6 +249,8 @@ def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray,
     if not sel.any() or len(t) < 2:
         return math.nan
     order = np.argsort(t, kind="stable")
+    # (a refinement with decision variables has them as the last states: not in sol)
+    lam = lam[:, :lam_tr.shape[1]]
     lam_i = np.column_stack([np.interp(t_tr[sel], t[order], lam[order, j])
                              for j in range(lam.shape[1])])
     return float(np.max(np.abs(lam_i - lam_tr[sel])) / max(np.max(np.abs(lam)), 1e-300))

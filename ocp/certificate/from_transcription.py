@@ -22,6 +22,7 @@ from ..structure.arcs import (
     TranscribedSolution,
     active_path_constraints,
     control_bounds_at,
+    known_values,
     detect_arcs,
     transcribed,
 )
@@ -106,7 +107,7 @@ def _transcription_figures(sol: TranscribedSolution, tol: Tolerances
         st = detect_arcs(sol, name)
         switches[name] = [a.end for a, b in zip(st.arcs[:-1], st.arcs[1:], strict=True)
                           if a.kind in ("max", "min") and b.kind in ("max", "min")]
-    fig = figures(pr, sol.params, t, x, u, lam, H_exp, constrained, switches, tol.sigma,
+    fig = figures(pr, known_values(sol), t, x, u, lam, H_exp, constrained, switches, tol.sigma,
                   np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
     if is_collocation(sol):
         _rescore_H(fig, ~constrained & ~_kinked_points(sol, switches), H_exp)
@@ -123,7 +124,7 @@ def _kinked_points(sol: TranscribedSolution, switches: dict[str, list[float]]) -
     N, d = len(mesh) - 1, len(sol.t[1:]) // max(len(mesh) - 1, 1)
     out = np.zeros(len(sol.t) - 1, dtype=bool)
     for j, name in enumerate(pr.control_names):
-        lo, hi = control_bounds_at(pr, name, sol.params)
+        lo, hi = control_bounds_at(pr, name, known_values(sol))
         room = 1e-3 * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
         U = np.asarray(sol.u)[:, j].reshape(N, d)
         one_bound = np.all(np.abs(U - hi) <= room, axis=1) | np.all(np.abs(U - lo) <= room,

@@ -330,7 +330,12 @@ def _arc_at(s: SwitchingStructure, t: float) -> Arc:
 
 def control_bounds_at(problem: OptimalControlProblem, name: str,
                       params: dict[str, float]) -> tuple[float, float]:
-    """Numeric ``(lower, upper)`` bounds of control ``name`` at parameter values ``params``.
+    """Numeric ``(lower, upper)`` bounds of control ``name`` at the values ``params``.
+
+    The control's limits (``problem.control_limits``, :mod:`ocp.definition.normal_form`)
+    may involve decision variables (``u <= peak``), and in a problem derived for the
+    refinement, the states that stand for them: their values are looked up by name in
+    ``params`` too (:func:`known_values` of a solution has them).
 
     Parameters
     ----------
@@ -338,17 +343,46 @@ def control_bounds_at(problem: OptimalControlProblem, name: str,
     name : str
         A control's name.
     params : dict
-        A value for every parameter of the problem.
+        A value for every parameter of the problem (and for every decision variable
+        or state the limits involve).
 
     Returns
     -------
     (float, float)
+
+    Raises
+    ------
+    ValueError
+        When the limits involve a variable whose value ``params`` does not give.
     """
-    lo, hi = problem.control_bounds[name]
-    f = ca.Function("b", [problem.p], [lo, hi])
-    pv = [params[k] for k in problem.param_names]
-    a, b = (float(v) for v in f(pv))
+    lo, hi = problem.control_limits[name]
+    both = ca.vertcat(lo, hi)
+    if both.is_constant():
+        return float(ca.DM(lo)), float(ca.DM(hi))
+    syms, vals = [], []
+    for names, vec in ((problem.param_names, problem.p), (problem.var_names, problem.v),
+                       (problem.state_names, problem.x)):
+        for i, n in enumerate(names):
+            if ca.depends_on(both, vec[i]):
+                if n not in params:
+                    raise ValueError(f"the bounds of control {name!r} depend on {n!r}: "
+                                     "its value is needed")
+                syms.append(vec[i])
+                vals.append(float(params[n]))
+    f = ca.Function("b", [ca.vertcat(*syms)], [lo, hi])
+    a, b = (float(v) for v in f(vals))
     return a, b
+
+
+def known_values(sol: SolutionLike) -> dict[str, float]:
+    """A solution's parameter values and its decision variables' optimised values.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed (or refined) solution.
+    """
+    return {**transcribed(sol).params, **(getattr(sol, "variables", None) or {})}
 
 
 def path_activity(sol: SolutionLike, tol: float,
@@ -373,11 +407,11 @@ def path_activity(sol: SolutionLike, tol: float,
     tsol = transcribed(sol)
     pr = tsol.problem
     n = tsol.N + 1
-    if not pr.path:
+    if not pr.structure_path:
         return np.zeros((n, 0), dtype=bool), np.zeros((n, 0), dtype=bool)
     pv = [tsol.params[k] for k in pr.param_names]
     lows, ups = [], []
-    for c, kind in zip(pr.path, path_kinds(pr), strict=True):
+    for c, kind in zip(pr.structure_path, path_kinds(pr), strict=True):
         if kind not in kinds:
             lows.append(np.zeros(n, dtype=bool))
             ups.append(np.zeros(n, dtype=bool))
@@ -447,7 +481,7 @@ def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_g
     at_lo, at_up = path_activity(sol, tol, kinds=("state", "mixed"))
     for i in range(at_lo.shape[1]):
         if not (at_lo[:, i].any() or at_up[:, i].any()) or \
-                control not in riding_controls(pr, pr.path[i]):
+                control not in riding_controls(pr, pr.structure_path[i]):
             continue
         for side, act in (("lower", at_lo[:, i]), ("upper", at_up[:, i])):
             for a, b, count in _clusters(act, max_gap):
@@ -513,7 +547,7 @@ def _absorb_end_transitions(runs: list[list], max_transition: int,
 
 def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h: float, lo: float,
                     hi: float, max_transition: int) -> list[Arc]:
-    names = [c.name for c in sol.problem.path]
+    names = [c.name for c in sol.problem.structure_path]
     t = np.asarray(sol.t, dtype=float)
     arcs: list[Arc] = []
     for i, (label, a, b) in enumerate(runs):
@@ -598,9 +632,9 @@ def _label_active(sol: TranscribedSolution, arcs: list[Arc], h: float, tol: floa
         k0 = int(round(arc.start / h)) if h > 0 else 0
         k1 = max(k0 + 1, int(round(arc.end / h)))
         nodes = act[k0 + 1:k1] if k1 - k0 > 1 else act[k0:k1]
-        held = [i for i in range(len(pr.path)) if nodes.shape[0] and nodes[:, i].all()]
-        arc.active = tuple(pr.path[i].name for i in held if kinds[i] != CONTROL)
-        arc.faces = tuple(pr.path[i].name for i in held if kinds[i] == CONTROL)
+        held = [i for i in range(len(pr.structure_path)) if nodes.shape[0] and nodes[:, i].all()]
+        arc.active = tuple(pr.structure_path[i].name for i in held if kinds[i] != CONTROL)
+        arc.faces = tuple(pr.structure_path[i].name for i in held if kinds[i] == CONTROL)
         if arc.constraint is not None and arc.constraint not in arc.active:
             arc.active = (arc.constraint, *arc.active)
 
@@ -648,7 +682,7 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
     tsol = transcribed(mesh_level(sol))
     pr = tsol.problem
     name = control or pr.control_names[0]
-    lo, hi = control_bounds_at(pr, name, tsol.params)
+    lo, hi = control_bounds_at(pr, name, known_values(tsol))
     u = tsol.control(name)
     h = 1.0
     at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
@@ -768,7 +802,7 @@ def snap_to_control_set(sol: SolutionLike, st: ArcStructure, short: float,
         return st
     for _ in range(len(st.intervals)):
         bad = [iv for iv in st.intervals[1:-1] if iv.duration <= short
-               and outside_control_set(pr, iv.modes, tsol.params)]
+               and outside_control_set(pr, iv.modes, known_values(tsol))]
         if not bad:
             return st
         a, b = bad[0].start, bad[0].end
