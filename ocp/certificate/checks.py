@@ -39,6 +39,7 @@ ERROR_MARGIN = 10.0
 """A violation within this factor of the estimated numerical error is not a refutation."""
 
 
+
 @dataclass
 class Tolerances:
     """What the checks allow.

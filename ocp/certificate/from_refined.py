@@ -20,11 +20,18 @@ import casadi as ca
 import numpy as np
 
 from ..definition.problem import OptimalControlProblem
-from ..structure.arcs import TranscribedSolution
+from ..structure.arcs import TranscribedSolution, no_control_crosses
 from ..structure.switching import RefinedSwitching
 from ..transcriptions.gridview import grid_spacing
 from ..transcriptions.solution import along
-from .checks import ERROR_MARGIN, Tolerances, figures, intervals_of, judge, verdict_of
+from .checks import (
+    ERROR_MARGIN,
+    Tolerances,
+    figures,
+    intervals_of,
+    judge,
+    verdict_of,
+)
 from .costates import adjoint_sweep, costates_from_multipliers
 from .result import PMPCertificate, build_certificate
 
@@ -86,7 +93,8 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
 
 
 def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
-                        pv: np.ndarray, tol: float, state_only: bool = False) -> np.ndarray:
+                        pv: np.ndarray, tol: float, state_only: bool = False,
+                        bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Where some path constraint is within ``tol * max(1, |value|)`` of a limit.
 
     Parameters
@@ -99,6 +107,10 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
     tol : float
     state_only : bool
         Leave out the mixed constraints (those involving a control).
+    bounds : (ndarray, ndarray), optional
+        The control set's box at the samples (:func:`effective_bounds`): a state
+        constraint at a limit no admissible control could cross there does not count
+        (:func:`ocp.certificate.checks.no_control_crosses`).
 
     Returns
     -------
@@ -112,7 +124,15 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
                                                  ca.vertcat(*[c.upper for c in cons])])
     v, lo, hi = along(fn, x, u, pv)
     sc = tol * np.maximum(1.0, np.abs(v))
-    return np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc), axis=1)
+    at_lo, at_hi = np.abs(v - lo) <= sc, np.abs(v - hi) <= sc
+    if bounds is not None:
+        for i, c in enumerate(cons):
+            if ca.depends_on(c.expr, pr.u):
+                continue
+            for side, at in (("lower", at_lo), ("upper", at_hi)):
+                if at[:, i].any():
+                    at[:, i] &= ~no_control_crosses(pr, c, side, x, *bounds, pv)
+    return np.any(at_lo | at_hi, axis=1)
 
 
 def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[float]]:
@@ -157,7 +177,8 @@ def constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[float
            if any(m.kind == "boundary" and not is_mixed(pr, m.constraint) for m in ms)]
     last = max((b for _, b in bnd), default=0.0)
     t, x, u, _ = ref.samples(n)
-    act = path_activity_along(pr, x, u, ref.pv, 1e-7, state_only=True) & (t > tiny) & \
+    act = path_activity_along(pr, x, u, ref.pv, 1e-7, state_only=True,
+                              bounds=effective_bounds(pr, x, ref.pv)) & (t > tiny) & \
         (t < T - tiny)
     dense = intervals_of(t, act, 2 * T / max(len(t), 1))
     if ref.nlp is not None and "path" in ref.blocks and len(ref.lam_g):

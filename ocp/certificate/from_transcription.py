@@ -22,8 +22,8 @@ from ..structure.arcs import (
     TranscribedSolution,
     active_path_constraints,
     control_bounds_at,
-    known_values,
     detect_arcs,
+    known_values,
     transcribed,
 )
 from ..structure.constraint_kinds import MIXED, STATE
@@ -67,7 +67,8 @@ def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, fl
     (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
     finds (which bridge the zig-zag of a transcription along a constraint)."""
     # control-only constraints shape the control set: they are no state constraint
-    act = active_path_constraints(sol, 1e-6, kinds=(STATE, MIXED))
+    # (a state constraint at a limit no admissible control could cross is not held there)
+    act = active_path_constraints(sol, 1e-6, kinds=(STATE, MIXED), crossable=True)
     act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, dtype=bool)
     spans = intervals_of(sol.t, np.asarray(act_nodes), _shortest_interval(sol) - 1e-12)
     for name in sol.problem.control_names:

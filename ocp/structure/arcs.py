@@ -32,7 +32,7 @@ import numpy as np
 
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.gridview import grid_spacing, is_collocation, mesh_level
-from ..transcriptions.solution import Solution
+from ..transcriptions.solution import Solution, along
 from .constraint_kinds import (
     CONTROL,
     KINDS,
@@ -425,7 +425,8 @@ def path_activity(sol: SolutionLike, tol: float,
 
 
 def active_path_constraints(sol: SolutionLike, tol: float,
-                            kinds: tuple[str, ...] = KINDS) -> np.ndarray:
+                            kinds: tuple[str, ...] = KINDS,
+                            crossable: bool = False) -> np.ndarray:
     """Which path constraints are active (at either limit) at every node.
 
     Parameters
@@ -436,6 +437,9 @@ def active_path_constraints(sol: SolutionLike, tol: float,
         As in :func:`path_activity`.
     kinds : tuple of str
         As in :func:`path_activity`.
+    crossable : bool
+        Count a state constraint at a limit only where some admissible control could
+        cross it (:func:`no_control_crosses`).
 
     Returns
     -------
@@ -443,7 +447,60 @@ def active_path_constraints(sol: SolutionLike, tol: float,
     """
     tsol = transcribed(sol)
     lo, up = path_activity(tsol, tol, kinds)
+    if crossable:
+        _drop_uncrossable(tsol, lo, up)
     return lo | up
+
+
+def no_control_crosses(pr: OptimalControlProblem, c: Any, side: str, x: np.ndarray,
+                       los: np.ndarray, his: np.ndarray, pv: np.ndarray,
+                       tol: float = 1e-9) -> np.ndarray:
+    """Where no admissible control could push state constraint ``c`` across its ``side``
+    limit: ``dc/dt = a(x) + b(x) u`` is on the feasible side for every ``u`` in the box.
+
+    A state at such a limit is not held there by the constraint (``m <= 1`` while
+    ``m' = -u/E`` with ``u >= 0``): touching it is no constrained arc, and the costate
+    does not jump there. A constraint whose first derivative does not involve the
+    controls (relative degree 2 or more), or involves them nonlinearly, can always be
+    crossed here (False).
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    c : Constraint
+        A state constraint (no control in it).
+    side : {"lower", "upper"}
+    x : ndarray (m, nx)
+        States at the samples.
+    los, his : ndarray (m, nu)
+        The control set's box at the samples.
+    pv : ndarray
+        Parameter values.
+    tol : float
+        Allowed push across, relative to the size of the terms.
+
+    Returns
+    -------
+    ndarray of bool (m,)
+    """
+    dc = ca.jtimes(c.expr, pr.x, pr.rhs)
+    b = ca.jacobian(dc, pr.u)
+    if pr.nu == 0 or ca.depends_on(b, pr.u) or not ca.depends_on(dc, pr.u) \
+            or ca.depends_on(dc, ca.vertcat(pr.t, pr.t0, pr.T, pr.v)):
+        return np.zeros(len(x), dtype=bool)
+    a = ca.substitute(dc, pr.u, ca.DM.zeros(pr.nu))
+    av, bv = along(ca.Function("ab", [pr.x, pr.p], [a, b.T]), x, pv)
+    av = av.ravel()
+    with np.errstate(invalid="ignore"):
+        ends = np.stack([bv * los, bv * his])  # (2, m, nu); 0 * inf is nan: no push
+    ends = np.where(bv[None] == 0.0, 0.0, ends)
+    push = av + (np.sum(np.max(ends, axis=0), axis=1) if side == "upper"
+                 else np.sum(np.min(ends, axis=0), axis=1))
+    size = np.abs(av) + np.sum(np.abs(np.where(np.isfinite(ends), ends, 0.0)), axis=(0, 2))
+    scale = tol * np.maximum(1.0, size)
+    ok = push <= scale if side == "upper" else push >= -scale
+    return np.isfinite(push) & ok
+
 
 
 def _runs(labels: list[str]) -> list[list]:
@@ -469,6 +526,24 @@ def _clusters(active: np.ndarray, max_gap: int) -> list[tuple[int, int, int]]:
     return out
 
 
+def _drop_uncrossable(sol: TranscribedSolution, at_lo: np.ndarray, at_up: np.ndarray) -> None:
+    """Clear the nodes where a state constraint sits at a limit no admissible control
+    could cross there (:func:`no_control_crosses`): not held by the constraint."""
+    pr = sol.problem
+    if not (at_lo.any() or at_up.any()):
+        return
+    values = known_values(sol)
+    box = [control_bounds_at(pr, n, values) for n in pr.control_names]
+    x = np.asarray(sol.x, dtype=float)
+    los = np.tile([b[0] for b in box], (len(x), 1))
+    his = np.tile([b[1] for b in box], (len(x), 1))
+    pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
+    for i, c in enumerate(pr.structure_path):
+        for side, at in (("lower", at_lo), ("upper", at_up)):
+            if at[:, i].any() and not ca.depends_on(c.expr, pr.u):
+                at[:, i] &= ~no_control_crosses(pr, c, side, x, los, his, pv)
+
+
 def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_gap: int,
                      min_nodes: int, control: str) -> None:
     """Relabel as ``"boundary:<i>:<side>"`` the intervals between the first and the last
@@ -479,6 +554,7 @@ def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_g
     control-only constraint is a face of the control set, not a boundary arc)."""
     pr = sol.problem
     at_lo, at_up = path_activity(sol, tol, kinds=("state", "mixed"))
+    _drop_uncrossable(sol, at_lo, at_up)
     for i in range(at_lo.shape[1]):
         if not (at_lo[:, i].any() or at_up[:, i].any()) or \
                 control not in riding_controls(pr, pr.structure_path[i]):

@@ -117,7 +117,8 @@ def path_constraint(pr: OptimalControlProblem, name: str) -> Constraint:
     for c in pr.structure_path:
         if c.name == name:
             return c
-    raise ValueError(f"no path constraint named {name!r}; have {[c.name for c in pr.structure_path]}")
+    have = [c.name for c in pr.structure_path]
+    raise ValueError(f"no path constraint named {name!r}; have {have}")
 
 
 def has_running_cost(pr: OptimalControlProblem) -> bool:

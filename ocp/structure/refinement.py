@@ -706,7 +706,8 @@ class SwitchingNLP:
         viol = ca.SX(0)
         if pr.structure_path:
             h = ca.vertcat(*[c.expr for c in pr.structure_path])
-            lo, hi = (ca.vertcat(*[getattr(c, s) for c in pr.structure_path]) for s in ("lower", "upper"))
+            lo, hi = (ca.vertcat(*[getattr(c, s) for c in pr.structure_path])
+                      for s in ("lower", "upper"))
             for x, d in ((w[K:K + pr.nx], self.dyns[0]), (xT, self.dyns[-1])):
                 he = ca.substitute(ca.substitute(h, pr.u, d.u), pr.x, x)
                 viol = ca.fmax(viol, ca.mmax(ca.vertcat(lo - he, he - hi, 0)))
@@ -936,7 +937,8 @@ def check_control_set(problem: OptimalControlProblem, modes: Modes, pv: np.ndarr
             limits = ca.vertcat(*problem.control_limits[name])
             if ca.depends_on(limits, problem.x):
                 continue  # a limit that moves with a (constant) state: a row of the NLP
-            blo, bhi = (float(b) for b in ca.Function("b", [problem.p], [limits])(pv).full().ravel())
+            fb = ca.Function("b", [problem.p], [limits])
+            blo, bhi = (float(b) for b in fb(pv).full().ravel())
             if mm.kind == "vertex" and not blo - tol <= u[j] <= bhi + tol:
                 raise ValueError(f"interval {k} ({labels}): the vertex value {u[j]:.6g} of "
                                  f"{name!r} is outside its bounds [{blo:g}, {bhi:g}]")
