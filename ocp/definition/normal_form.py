@@ -103,11 +103,10 @@ def single_variable_bound(c: Constraint, syms: ca.SX, rest: ca.SX
     b = ca.substitute(e, s, ca.SX(0))
     if constant(b) == 0.0 and av == 1.0:
         return hits[0], c.lower, c.upper  # the bound itself, not an expression of it
-    lo, hi = ((ca.SX(v) if constant(v) in (-INF, INF) else (v - b) / av)  # inf stays inf
-              for v in (c.lower, c.upper))
-    if av < 0:
-        lo, hi = -hi, -lo
-    return hits[0], lo, hi
+    # (v - b) / a, an infinite limit staying infinite (with a's sign)
+    lo, hi = ((ca.SX(constant(v) * math.copysign(1.0, av)) if constant(v) in (-INF, INF)
+               else (v - b) / av) for v in (c.lower, c.upper))
+    return (hits[0], lo, hi) if av > 0 else (hits[0], hi, lo)
 
 
 def _tighter(a: ca.SX, b: ca.SX, upper: bool) -> ca.SX:

@@ -533,7 +533,7 @@ class OptimalControlProblem:
         try:
             self._normalise()
         except ProblemDefinitionError:
-            self.path_written.remove(c)  # refused: leaves the problem as it was
+            self.path_written.pop()  # refused (it was the last added): the problem as it was
             self._normalise()
             raise
         return c
