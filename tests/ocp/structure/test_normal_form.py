@@ -17,11 +17,13 @@ References are closed forms: T = d / vmax + vmax (speed limit); J = 4 / (9 l)
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 import numpy as np
 import pytest
 
-from ocp import MultipleShooting, OptimalControlProblem
+from ocp import Collocation, MultipleShooting, OptimalControlProblem
 from ocp.certificate.certify import CERTIFIED, INCONCLUSIVE, certify
 from ocp.definition.errors import ProblemDefinitionError
 from ocp.structure.switching import detect_structure, refine_switching
@@ -89,9 +91,9 @@ def mixed(form: str) -> OptimalControlProblem:
     return p
 
 
-def _rows(ms: MultipleShooting) -> dict[str, int]:
+def _rows(tr: MultipleShooting | Collocation) -> dict[str, int]:
     """Rows per constraint block of the transcription's NLP."""
-    return {k: v.stop - v.start for k, v in ms.layout.blocks.items()}
+    return {k: v.stop - v.start for k, v in tr.layout.blocks.items()}
 
 
 def test_bounds_written_any_way_are_one_normal_form():
@@ -144,17 +146,22 @@ def test_speed_limit_same_answer_as_bound_or_path_constraint(speed_solutions):
 @pytest.mark.parametrize("problem", ["speed", "bryson_denham", "mixed"])
 def test_every_way_of_writing_gives_one_answer(problem):
     """Bounds, path constraints and bounds set later: same rows, objective (refined T
-    where the structure refines) to 1e-9 and verdict, on three problems."""
+    where the structure refines) to 1e-9 and verdict, on three problems (closed forms:
+    T = 3.3; J = 4 / (9 l) = 4; T = 3.25 - ln 2, accelerating on u + v = 1 until v = 1/2
+    at ln 2, cruising, braking for 1/2)."""
     build = {"speed": lambda f: speed_limited(f, f), "bryson_denham": bryson_denham,
              "mixed": mixed}[problem]
     got = []
     for form in FORMS:
-        ms = MultipleShooting(build(form), nodes=40)
-        sol = ms.solve()
+        if problem == "mixed":  # u = 1 - v on the mixed arc: collocation follows it
+            tr = Collocation(build(form), intervals=20)
+        else:
+            tr = MultipleShooting(build(form), nodes=40, inner_constraints=True)
+        sol = tr.solve()
         st = detect_structure(sol)
         r = refine_switching(sol) if st.refinable else None
         c = certify(sol, r, chattering=False)
-        got.append((_rows(ms), sol.objective, r.T if r else None, c.verdict, st.kinds))
+        got.append((_rows(tr), sol.objective, r.T if r else None, c.verdict, st.kinds))
     rows, J, T, verdict, kinds = got[0]
     for other in got[1:]:
         assert other[0] == rows and abs(other[1] - J) <= 1e-9 * max(1.0, abs(J))
@@ -162,10 +169,12 @@ def test_every_way_of_writing_gives_one_answer(problem):
         assert (other[2] is None) == (T is None)
         if T is not None:
             assert abs(other[2] - T) <= 1e-9
-    if problem == "speed":
-        assert T == pytest.approx(3.3, abs=1e-12) and verdict == INCONCLUSIVE
-    if problem == "bryson_denham":
-        assert J == pytest.approx(4 / (9 * (1 / 9)), rel=2e-3)
+    exact = {"speed": 3.3, "mixed": 3.25 - math.log(2)}
+    if problem in exact:
+        assert T == pytest.approx(exact[problem], abs=1e-12) and verdict == INCONCLUSIVE
+    else:
+        assert J == pytest.approx(4.0, rel=2e-3) and T is None
+        assert verdict == INCONCLUSIVE  # interior arcs off the constraint
 
 
 # ------------------------------------------------------------ decision variables
