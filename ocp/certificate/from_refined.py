@@ -73,8 +73,8 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
         # the control set at each sample: its limits may move with a state (a decision
         # variable refined as a constant state, ocp.structure.variables)
         lo, hi = pr.control_limits[name]
-        a, b = along(ca.Function("b", [pr.x, pr.p], [lo, hi]), x, pv)
-        los[:, j], his[:, j] = a.ravel(), b.ravel()
+        lo_v, hi_v = along(ca.Function("b", [pr.x, pr.p], [lo, hi]), x, pv)
+        los[:, j], his[:, j] = lo_v.ravel(), hi_v.ravel()
     for c in pr.structure_path:
         uses = [j for j in range(pr.nu) if ca.depends_on(c.expr, pr.u[j])]
         if len(uses) != 1 or ca.depends_on(ca.jacobian(c.expr, pr.u), pr.u):

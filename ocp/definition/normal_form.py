@@ -103,9 +103,13 @@ def single_variable_bound(c: Constraint, syms: ca.SX, rest: ca.SX
     b = ca.substitute(e, s, ca.SX(0))
     if constant(b) == 0.0 and av == 1.0:
         return hits[0], c.lower, c.upper  # the bound itself, not an expression of it
-    # (v - b) / a, an infinite limit staying infinite (with a's sign)
-    lo, hi = ((ca.SX(constant(v) * math.copysign(1.0, av)) if constant(v) in (-INF, INF)
-               else (v - b) / av) for v in (c.lower, c.upper))
+    def solved(v: ca.SX) -> ca.SX:  # (v - b) / a, an infinite limit staying infinite
+        k = constant(v)
+        if k is not None and math.isinf(k):
+            return ca.SX(math.copysign(INF, k * av))
+        return (v - b) / av
+
+    lo, hi = solved(c.lower), solved(c.upper)
     return (hits[0], lo, hi) if av > 0 else (hits[0], hi, lo)
 
 

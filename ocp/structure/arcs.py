@@ -59,6 +59,7 @@ class TranscribedSolution(Protocol):
     T: float
     N: int
     params: dict[str, float]
+    variables: dict[str, float]
     multipliers: dict[str, np.ndarray]
     objective: float
 
