@@ -488,7 +488,9 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
                             "ipopt_options": ipopt_options, "tol": tol, "fast": fast}
 
     pr, x0 = tsol.problem, np.asarray(tsol.x[0], dtype=float)
-    if pr.nv:  # decision variables: refined with the switching times, as constant states
+    if pr.nv or pr.boundary or not ca.SX(pr.boundary_cost).is_zero():
+        # decision variables: refined with the switching times, as constant states; end-point
+        # terms (p.minimize, boundary_constraint) read at T (refused if they cannot be)
         pr = variables_as_states(tsol.problem)
         x0 = np.r_[x0, [float(tsol.variables[n]) for n in tsol.problem.var_names]]
 

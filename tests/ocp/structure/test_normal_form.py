@@ -250,3 +250,22 @@ def test_state_bound_with_a_decision_variable_is_refused():
     k = p.variable("k", 0, 1)
     with pytest.raises(ProblemDefinitionError, match="parameters only"):
         p.state("x", upper=k)
+
+
+def test_end_point_cost_written_with_minimize_is_refined():
+    """``p.minimize(p.T)`` (an end-point cost) refines as ``minimize_terminal(p.T)``: T =
+    2 sqrt(2) for 0 -> 2 at rest. Before, the refinement ignored end-point costs: objective
+    0.0 and "not bang-bang"."""
+    p = OptimalControlProblem()
+    x, v = p.state("x"), p.state("v")
+    u = p.control("u", -1, 1)
+    p.set_dynamics({"x": v, "v": u})
+    for s, a, b in ((x, 0.0, 2.0), (v, 0.0, 0.0)):
+        p.initial_constraint(s, a)
+        p.terminal_constraint(s, b)
+    p.free_final_time(0.01, 100, 3.0)
+    p.minimize(p.T)
+    sol = MultipleShooting(p, nodes=30).solve()
+    r = refine_switching(sol)
+    assert r.objective == r.T == pytest.approx(2 * math.sqrt(2), rel=1e-14)
+    assert certify(sol, r, chattering=False).verdict == CERTIFIED
