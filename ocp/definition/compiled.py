@@ -68,8 +68,8 @@ class CompiledPhase:
         self.check_u_free = self.path_u_free + [True] * len(self.bounded_states)
         self.check_names = [c.name if c.expr.numel() == 1 else f"{c.name}[{i}]"
                             for c in pr.path for i in range(c.expr.numel())]
-        # a bound written as a path constraint keeps that constraint's name
-        self.check_names += [pr.bound_names[pr.state_names[i]] for i in self.bounded_states]
+        self.check_names += [f"bounds of state {pr.state_names[i]!r}"
+                             for i in self.bounded_states]
         clo = ca.vertcat(hlo, *[xlo[i] for i in self.bounded_states])
         chi = ca.vertcat(hhi, *[xhi[i] for i in self.bounded_states])
         self.bounds = ca.Function("bounds", [pr.p], [hlo, hhi, xlo, xhi, ulo, uhi, clo, chi])

@@ -4,23 +4,25 @@ A bound on one state may be given as ``p.state("v", upper=0.8)``, set later by
 ``p.bound_state("v", upper=0.8)``, or written as a path constraint on that state
 alone (``p.path_constraint(v, upper=0.8)``, or ``2 * v - 1 <= 0.6``); a control
 bound likewise (``p.control("u", -1, 1)`` or ``p.path_constraint(u, -1, 1)``). They
-are one constraint, and every part of ``ocp`` sees one form of it
-(:func:`normal_form`, run by the problem each time a bound or a path constraint is
-added):
+are one constraint. :func:`normal_form` (run by the problem each time a bound or a
+path constraint is added) gives every part of ``ocp`` its view of them:
 
-* **transcriptions** impose every bound as a bound of the NLP's variables (no row):
-  ``problem.state_bounds`` and ``problem.control_bounds`` are the tightest of the
-  declared bounds and the path constraints on that variable alone, and
-  ``problem.path`` holds only the other path constraints. A control limit that
-  depends on a decision variable (``u <= peak``, ``peak = p.variable(...)``) cannot be
-  a variable bound of the NLP: it is the row ``u - peak <= 0`` (its side of
-  ``control_bounds`` is then infinite);
-* **structure detection, refinement and the certificate** read
-  ``problem.structure_path`` (the other path constraints, then one state constraint
-  ``lower <= x_i <= upper`` per bounded state, named after the path constraints it
-  came from or ``"bounds of state 'x'"``) and ``problem.control_limits`` (each
-  control's bounds, which may depend on decision variables: the control set at the
-  variables' values).
+* **transcriptions** impose what was written: declared bounds as bounds of the NLP's
+  variables (``problem.state_bounds``, ``problem.control_bounds``), path constraints as
+  rows (``problem.path``). Both impose the bound at the same nodes, so the feasible
+  node values are the same; the NLPs differ only in how Ipopt treats a bound and a
+  row (their optima agree to Ipopt's tolerance). A control limit that depends on a
+  decision variable (``-peak <= u <= peak``, ``peak = p.variable(...)``) cannot be a
+  variable bound of the NLP: it is the row ``u - peak <= 0`` (and its side of
+  ``control_bounds`` is infinite);
+* **structure detection, refinement and the certificate** see one form:
+  ``problem.structure_path`` (the path constraints that are no bound, then one state
+  constraint ``lower <= x_i <= upper`` per bounded state, the tightest of its declared
+  bounds and its path constraints, named after the path constraints it came from or
+  ``"bounds of state 'x'"``) and ``problem.control_limits`` (each control's tightest
+  bounds, which may depend on decision variables: the control set at the variables'
+  values). So the arcs, the refined solution and the verdict do not depend on how a
+  bound was written.
 
 A path constraint counts as a bound when it is one row ``a * s + b`` with ``s`` one
 state or control, ``a`` a nonzero number and ``b`` a parameter expression (also of
@@ -48,10 +50,11 @@ class NormalForm:
     Attributes
     ----------
     path : list of Constraint
-        The rows a transcription imposes: the path constraints that are no bound, then
-        the rows of control limits that depend on decision variables.
+        The rows a transcription imposes: the path constraints as written, then the
+        rows of declared control limits that depend on decision variables.
     state_bounds, control_bounds : dict
-        Name -> ``(lower, upper)``, parameter expressions: the NLP's variable bounds.
+        Name -> ``(lower, upper)``, parameter expressions: the declared bounds, the NLP's
+        variable bounds.
     control_limits : dict
         Name -> ``(lower, upper)``, expressions of parameters and decision variables:
         the control set.
@@ -173,16 +176,18 @@ def normal_form(declared_states: Bounds, declared_controls: Bounds, written: lis
                                 f"(with path constraint {c.name!r})")
         names.setdefault(k, []).append(c.name)
     out.bound_names = {k: " & ".join(v) for k, v in names.items()}
-    out.state_bounds = sb
+    # the transcriptions impose what was written: declared bounds as bounds of the NLP's
+    # variables, path constraints as rows (a bound written either way is one set of
+    # feasible node values; moving rows to variable bounds changes Ipopt's path to it)
+    out.state_bounds = dict(declared_states)
     out.control_limits = limits
-    out.path = list(general)
+    out.path = list(written)
     for j, k in enumerate(control_names):
         sides = []
-        for side, b in enumerate(limits[k]):
+        for side, b in enumerate(declared_controls[k]):
             if ca.depends_on(b, variables):
                 # a limit that moves with a decision variable is a row, u - b on one side of 0
-                label = out.bound_names.get(k) or f"bounds of control {k!r}"
-                label = f"{label} ({'lower' if side == 0 else 'upper'})"
+                label = f"bounds of control {k!r} ({'lower' if side == 0 else 'upper'})"
                 row = Constraint(u[j] - b, ca.SX(0 if side == 0 else -INF),
                                  ca.SX(INF if side == 0 else 0), label)
                 out.path.append(row)

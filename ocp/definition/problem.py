@@ -219,7 +219,7 @@ class OptimalControlProblem:
         self._uT: list[ca.SX] = []
         self._rhs: dict[str, ca.SX] = {}
         # as declared (state/bound_state, control/bound_control); the attributes the rest of
-        # ocp reads are their normal form (ocp.definition.normal_form), set by _normalise
+        # ocp reads are their views (ocp.definition.normal_form), set by _normalise
         self.declared_state_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
         self.declared_control_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
         self.state_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
@@ -232,7 +232,7 @@ class OptimalControlProblem:
         self.control_guess: dict[str, Any] = {}
         self.state_ref: dict[str, tuple[float, float] | None] = {}
         self.control_ref: dict[str, tuple[float, float] | None] = {}
-        self.path: list[Constraint] = []  # the normal form's rows (see path_written)
+        self.path: list[Constraint] = []  # the transcription's rows (see path_written)
         self.initial: list[Constraint] = []
         self.terminal: list[Constraint] = []
         self.boundary: list[Constraint] = []
@@ -266,8 +266,8 @@ class OptimalControlProblem:
             Unique within the phase (phases may share state names; links use them).
         lower, upper : float, parameter expression or None
             Bounds on the state along the whole trajectory (None: unbounded). A path
-            constraint on this state alone is the same bound, and reads the same
-            everywhere (:mod:`ocp.definition.normal_form`).
+            constraint on this state alone is the same bound for structure detection,
+            refinement and the certificate (:mod:`ocp.definition.normal_form`).
         guess : float, parameter expression or (start, end) pair, optional
             Initial guess (a pair is interpolated linearly in time). Default:
             the fixed initial/final values where the constraints fix them, else
@@ -307,7 +307,7 @@ class OptimalControlProblem:
             variable; the transcription imposes such a limit as the row ``u - peak <=
             0``, structure detection and the certificate read the control set at the
             variable's value). A path constraint on this control alone is the same bound
-            (:mod:`ocp.definition.normal_form`).
+            for structure detection (:mod:`ocp.definition.normal_form`).
         guess : float or parameter expression, optional
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
         ref, ref0 : float, optional
@@ -510,11 +510,11 @@ class OptimalControlProblem:
         collocation points, and checked on a fine grid after every solve.
 
         A constraint on one state or one control alone (``v <= 0.8``, ``u - peak <=
-        0``) is that variable's bound: the problem keeps it in its normal form
-        (:mod:`ocp.definition.normal_form`: a bound of the NLP's variables, a state
-        constraint for structure detection), so the answer does not depend on how the
-        bound was written. ``path_written`` keeps every path constraint as given;
-        ``path`` holds the rows a transcription imposes.
+        0``) is that variable's bound for structure detection, refinement and the
+        certificate (:mod:`ocp.definition.normal_form`): the arcs, the refined
+        solution and the verdict do not depend on how the bound was written. The
+        transcription imposes it as written (rows). ``path_written`` keeps every path
+        constraint as given; ``path`` holds the rows a transcription imposes.
 
         Parameters
         ----------
