@@ -86,15 +86,10 @@ def _build(pr: OptimalControlProblem) -> OptimalControlProblem:
     q.set_dynamics({**{n: sub(e) for n, e in zip(pr.state_names, ca.vertsplit(pr.rhs),
                                                   strict=True)},
                     **{n: ca.SX(0) for n in pr.var_names}})
-    # bounds keep their names (structure modes refer to them)
-    for i, n in enumerate(pr.state_names):
-        lo, hi = pr.state_bounds[n]
-        if constant(lo) != -INF or constant(hi) != INF:
-            q.path_constraint(X[i], sub(lo), sub(hi), name=pr.bound_names[n])
-    general = {id(c) for c in pr.path}
+    # what structure detection sees, by the same names (modes refer to them): the state
+    # bounds (declared or written) and the other path constraints
     for c in pr.structure_path:
-        if id(c) in general:
-            q.path_constraint(sub(c.expr), sub(c.lower), sub(c.upper), name=c.name)
+        q.path_constraint(sub(c.expr), sub(c.lower), sub(c.upper), name=c.name)
     for j, n in enumerate(pr.var_names):  # the variable's bounds hold at the start
         lo, hi = pr.variable_bounds(n)
         if constant(lo) != -INF or constant(hi) != INF:
