@@ -609,6 +609,11 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
     SolveError, InfeasibleError
         If Ipopt fails, or the accuracy is not reached after ``max_rebuilds``.
     """
+    if problem.nv:
+        raise ValueError(
+            "a problem with decision variables is refined as "
+            "ocp.structure.variables.variables_as_states(problem), with the variables' "
+            "guesses after the states in x0 (refine_switching does this)")
     pv = np.array([float(params[k]) for k in problem.param_names])
     check_control_set(problem, modes, pv)
     durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)
