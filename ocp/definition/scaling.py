@@ -71,7 +71,9 @@ from .symbols import Constraint, constant
 AUTO_RANGE = (1e-2, 1e2)  # automatic references inside this range are not applied
 SCALING_MODES = ("auto", "none")
 OBJECTIVE_AUTO_MAX = 1e4
-"""The largest automatic objective scale (a user's ``ref`` may be larger)."""
+"""The largest automatic objective scale from its value (a user's ``ref`` may be larger)."""
+VARIATION_RANGE = (1e-8, 1e8)
+"""The automatic objective scale from its variation is clipped into this range."""
 
 
 @dataclass
@@ -100,19 +102,37 @@ class Scaling:
         """True if no variable or row is scaled."""
         return bool(np.all(self.D == 1.0) and np.all(self.c == 0.0) and np.all(self.r == 1.0))
 
-    def objective_scale(self, f0: float) -> float:
+    def objective_scale(self, f0: float, variation: float = math.nan) -> float:
         """``f_ref`` for a solve whose starting objective is ``f0``.
 
         Parameters
         ----------
         f0 : float
             The objective at the starting point.
+        variation : float, optional
+            ``sum |df/dw| D`` there: how much the objective changes when every
+            variable moves by its scale (``D``). Proportional to the objective
+            (a cost in km rather than m has 1e-3 of it), so dividing by it makes
+            the NLP Ipopt sees the same whatever the objective's unit.
         """
         if not self.enabled:
             return 1.0
         if self.objective_ref is not None:
             return self.objective_ref
+        v = abs(variation)
+        if math.isfinite(v) and v > 0:
+            # an objective that varies by about its scale keeps its NLP (as a variable
+            # within AUTO_RANGE); one that varies by 1e6, or 1e-6, is brought to 1 --
+            # up as well as down, which a value cannot do (a small value at the start
+            # may be small by accident, a variation that is non-zero is a rate)
+            # and to a power of ten: an objective in km and the same in m then give
+            # exactly the same NLP (1e-3 f over 10^(k-3) is f over 10^k)
+            if not _far(v):
+                return 1.0
+            v = min(max(v, VARIATION_RANGE[0]), VARIATION_RANGE[1])
+            return float(10.0 ** round(math.log10(v)))
         a = abs(f0)
+        # no variation at the start (a cost at its minimum there, u = 0 in u^2): its value,
         # only down: a small objective at the start may be small by accident (a guess
         # at rest, a cost that vanishes there), and scaling it up would blow it up; and
         # at most OBJECTIVE_AUTO_MAX down: a poor start's value can exceed the optimum's
