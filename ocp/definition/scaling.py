@@ -218,7 +218,10 @@ def check_scaling(scaling: Any) -> dict[str, Any]:
     auto = True
     for key, val in scaling.items():
         if key == "auto":
-            auto = bool(val)
+            if not isinstance(val, bool):
+                raise ProblemDefinitionError(f"scaling['auto'] must be True or False, got "
+                                             f"{val!r}")
+            auto = val
             continue
         pair = val if isinstance(val, tuple | list) else (None, val)
         if len(pair) != 2:
