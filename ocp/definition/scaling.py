@@ -72,6 +72,8 @@ AUTO_RANGE = (1e-2, 1e2)  # automatic references inside this range are not appli
 SCALING_MODES = ("auto", "none")
 OBJECTIVE_AUTO_MAX = 1e4
 """The largest automatic objective scale from its value (a user's ``ref`` may be larger)."""
+VARIATION_KEPT = (1.0, 1e2)
+"""An objective whose variation at the start lies here is not scaled automatically."""
 VARIATION_RANGE = (1e-8, 1e8)
 """The automatic objective scale from its variation is clipped into this range."""
 
@@ -121,16 +123,16 @@ class Scaling:
             return self.objective_ref
         v = abs(variation)
         if math.isfinite(v) and v > 0:
-            # an objective that varies by about its scale keeps its NLP (as a variable
-            # within AUTO_RANGE); one that varies by 1e6, or 1e-6, is brought to 1 --
-            # up as well as down, which a value cannot do (a small value at the start
-            # may be small by accident, a variation that is non-zero is a rate)
-            # and to a power of ten: an objective in km and the same in m then give
-            # exactly the same NLP (1e-3 f over 10^(k-3) is f over 10^k)
-            if not _far(v):
+            # divided by the power of ten that brings the variation into [1, 10): an
+            # objective in km and the same in m then give exactly the same NLP (1e-3 f
+            # over 10^(k-3) is f over 10^k); up as well as down, which a value cannot
+            # do (a small value at the start may be small by accident, a variation that
+            # is non-zero is a rate). A variation in [1, 100] is left as posed: Ipopt
+            # leaves gradients up to 100 alone, and well-posed problems keep their NLP
+            if VARIATION_KEPT[0] <= v <= VARIATION_KEPT[1]:
                 return 1.0
             v = min(max(v, VARIATION_RANGE[0]), VARIATION_RANGE[1])
-            return float(10.0 ** round(math.log10(v)))
+            return float(10.0 ** math.floor(math.log10(v) + 1e-9))
         a = abs(f0)
         # no variation at the start (a cost at its minimum there, u = 0 in u^2): its value,
         # only down: a small objective at the start may be small by accident (a guess
