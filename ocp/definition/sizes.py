@@ -323,7 +323,8 @@ def transfer_time(ph: OptimalControlProblem, x_start: np.ndarray, x_end: np.ndar
     su = np.array([known_size(*ph.control_bounds[n], ph.control_guess.get(n), _never) or 1.0
                    for n in ph.control_names])
     statics: dict[str, float | None] = {ph.t0.name(): times[0], ph.T.name(): times[1]}
-    statics |= {s.name(): float(v) for s, v in zip(ph._shared.vars, var_values, strict=True)}
+    var_syms = ca.vertsplit(ph.v) if ph.v.numel() else []
+    statics |= {s.name(): float(v) for s, v in zip(var_syms, var_values, strict=True)}
     rates = dynamics_sizes(ph, [a, b], np.asarray(u, dtype=float), statics, sx, su, 1.0)
     ok = (change > 0) & np.isfinite(rates) & (rates > 0)
     return float(np.max(change[ok] / rates[ok])) if np.any(ok) else None
