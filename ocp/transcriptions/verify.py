@@ -10,9 +10,12 @@ polynomials) and every path constraint and state bound is evaluated there.
 
 With collocation, a constraint that involves a control and a state (a heating
 limit ``q(h, v, alpha) <= 70``) is checked between the points with the
-method's own control there: the Lagrange polynomial through the interval's
-values at its collocation points (the one the state polynomial is collocated
-with), held within the control's bounds. A constraint on the controls alone
+method's own control there, never extrapolated: the Lagrange polynomial
+through the interval's values at its collocation points (the one the state
+polynomial is collocated with) from its first point on, a straight line from
+the previous interval's last point before it
+(:meth:`ocp.transcriptions.collocation.CollocationPhase.check_samples`), held
+within the control's bounds. A constraint on the controls alone
 (``u1 + u2 <= 1``) bounds the control set, and between the points there is no
 other control than that interpolant, which at a switch inside an interval
 swings across it: such a row is checked at the collocation points only, where
