@@ -76,8 +76,11 @@ def test_starts_cover_the_box_and_are_deterministic():
     assert log and lo == pytest.approx(math.pi / 4) and hi == 50.0
     assert np.all(np.abs(u) <= 0.4) and np.all((T >= lo) & (T <= hi))
     assert T.min() < 2.0 < 10.0 < T.max()
-    # the same seed gives the same starts (and the same outcome); another seed others
-    assert [s.point for s in coarse(0).starts] == [s.point for s in res.starts[:3]]
+    # the same seed gives the same starts (and the same outcome); another seed others. A
+    # coarser grid's start 0 converges to another T, hence another T box: the other
+    # coordinates are the same points
+    same = [{k: v for k, v in s.point.items() if k != "T"} for s in coarse(0).starts]
+    assert same == [{k: v for k, v in s.point.items() if k != "T"} for s in res.starts[:3]]
     lhs = coarse(1, method="lhs", n=2)
     assert [s.origin for s in lhs.starts] == ["default", "lhs"]
     assert lhs.starts[1].point != res.starts[1].point
