@@ -16,7 +16,8 @@ Starts
 ------
 Start 0 is the user's ``guess`` (or the default guess). The others are points
 of a scrambled Sobol' sequence or a Latin hypercube (:mod:`scipy.stats.qmc`,
-seeded: the same seed gives the same starts) in the box of these coordinates:
+seeded: the same seed gives the same starts on the same transcription) in the box
+of these coordinates:
 
 * every free initial time not linked to the previous phase's end (``t0``),
   in its bounds;
