@@ -33,12 +33,19 @@ Where the numbers come from (``scaling="auto"``, the default):
   ``boundary_constraint``, ``integral_constraint``, ``link_constraint``), else by
   the largest finite magnitude of their bounds (unless two non-zero bounds are
   loose);
-* the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
-  starting point of each solve when that exceeds 100 (never up: a small value at
-  the start may be small by accident; at most :data:`OBJECTIVE_AUTO_MAX`: a poor
-  start's value may exceed the optimum's by far). Its gradient is left to Ipopt, whose
-  gradient-based scaling divides an objective whose gradient in the *scaled*
-  variables exceeds 100 (``-r(T)`` with ``r`` scaled by 800 has gradient 800).
+* the objective by ``minimize(..., ref=)`` if given, else by the power of ten
+  that brings its *variation* at the starting point of each solve,
+  ``sum |df/dw| D`` (how much it changes when every variable moves by its
+  scale), into [1, 10) -- up or down, unless that variation is already in
+  [1, 100] (:data:`VARIATION_KEPT`: Ipopt's gradient-based scaling leaves
+  gradients up to 100 alone). The variation is proportional to the objective,
+  so the same objective in metres, kilometres or millimetres gives exactly the
+  same NLP (the cannonball's ``-r(T)``, ``-r(T) / 1000``, ``-1000 r(T)``: the
+  same iterations). Where the objective does not vary at the start (``u^2`` at
+  ``u = 0``), by its magnitude there when that exceeds 100 (never up: a small
+  value at the start may be small by accident; at most
+  :data:`OBJECTIVE_AUTO_MAX`: a poor start's value may exceed the optimum's by
+  far).
 
 An automatic number is used only when it is far from 1 (outside
 :data:`AUTO_RANGE`): well-scaled problems -- every problem posed in
