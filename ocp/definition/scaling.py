@@ -48,10 +48,12 @@ Where the numbers come from (``scaling="auto"``, the default):
   far).
 
 An automatic number is used only when it is far from 1 (outside
-:data:`AUTO_RANGE`): well-scaled problems -- every problem posed in
-normalised units -- keep exactly the NLP they had (identical Ipopt iterations),
-and only badly scaled ones (SI units: ranges of 1e3 m, energies of 1e5 J, radii
-of 1e-2 m) are touched. User-given references are always used.
+:data:`AUTO_RANGE`; the objective's variation: outside [1, 100]): well-scaled
+problems -- every problem posed in normalised units -- keep exactly the NLP
+they had (identical Ipopt iterations), and only badly scaled ones (SI units:
+ranges of 1e3 m, energies of 1e5 J, radii of 1e-2 m; an objective whose
+variation is below 1, as a cost in km of a problem posed in m) are touched.
+User-given references are always used.
 
 Why not leave it to Ipopt: its ``nlp_scaling_method=gradient-based`` only scales
 *down* a function whose gradient at the start exceeds
