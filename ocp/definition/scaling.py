@@ -33,18 +33,27 @@ Where the numbers come from (``scaling="auto"``, the default):
   ``boundary_constraint``, ``integral_constraint``, ``link_constraint``), else by
   the largest finite magnitude of their bounds (unless two non-zero bounds are
   loose);
-* the objective by ``minimize(..., ref=)`` if given, else by its magnitude at the
-  starting point of each solve when that exceeds 100 (never up: a small value at
-  the start may be small by accident; at most :data:`OBJECTIVE_AUTO_MAX`: a poor
-  start's value may exceed the optimum's by far). Its gradient is left to Ipopt, whose
-  gradient-based scaling divides an objective whose gradient in the *scaled*
-  variables exceeds 100 (``-r(T)`` with ``r`` scaled by 800 has gradient 800).
+* the objective by ``minimize(..., ref=)`` if given, else by the power of ten
+  that brings its *variation* at the starting point of each solve,
+  ``sum |df/dw| D`` (how much it changes when every variable moves by its
+  scale), into [1, 10) -- up or down, unless that variation is already in
+  [1, 100] (:data:`VARIATION_KEPT`: Ipopt's gradient-based scaling leaves
+  gradients up to 100 alone). The variation is proportional to the objective,
+  so the same objective in metres, kilometres or millimetres gives exactly the
+  same NLP (the cannonball's ``-r(T)``, ``-r(T) / 1000``, ``-1000 r(T)``: the
+  same iterations). Where the objective does not vary at the start (``u^2`` at
+  ``u = 0``), by its magnitude there when that exceeds 100 (never up: a small
+  value at the start may be small by accident; at most
+  :data:`OBJECTIVE_AUTO_MAX`: a poor start's value may exceed the optimum's by
+  far).
 
 An automatic number is used only when it is far from 1 (outside
-:data:`AUTO_RANGE`): well-scaled problems -- every problem posed in
-normalised units -- keep exactly the NLP they had (identical Ipopt iterations),
-and only badly scaled ones (SI units: ranges of 1e3 m, energies of 1e5 J, radii
-of 1e-2 m) are touched. User-given references are always used.
+:data:`AUTO_RANGE`; the objective's variation: outside [1, 100]): well-scaled
+problems -- every problem posed in normalised units -- keep exactly the NLP
+they had (identical Ipopt iterations), and only badly scaled ones (SI units:
+ranges of 1e3 m, energies of 1e5 J, radii of 1e-2 m; an objective whose
+variation is below 1, as a cost in km of a problem posed in m) are touched.
+User-given references are always used.
 
 Why not leave it to Ipopt: its ``nlp_scaling_method=gradient-based`` only scales
 *down* a function whose gradient at the start exceeds
@@ -71,7 +80,11 @@ from .symbols import Constraint, constant
 AUTO_RANGE = (1e-2, 1e2)  # automatic references inside this range are not applied
 SCALING_MODES = ("auto", "none")
 OBJECTIVE_AUTO_MAX = 1e4
-"""The largest automatic objective scale (a user's ``ref`` may be larger)."""
+"""The largest automatic objective scale from its value (a user's ``ref`` may be larger)."""
+VARIATION_KEPT = (1.0, 1e2)
+"""An objective whose variation at the start lies here is not scaled automatically."""
+VARIATION_RANGE = (1e-8, 1e8)
+"""The automatic objective scale from its variation is clipped into this range."""
 
 
 @dataclass
@@ -100,19 +113,37 @@ class Scaling:
         """True if no variable or row is scaled."""
         return bool(np.all(self.D == 1.0) and np.all(self.c == 0.0) and np.all(self.r == 1.0))
 
-    def objective_scale(self, f0: float) -> float:
+    def objective_scale(self, f0: float, variation: float = math.nan) -> float:
         """``f_ref`` for a solve whose starting objective is ``f0``.
 
         Parameters
         ----------
         f0 : float
             The objective at the starting point.
+        variation : float, optional
+            ``sum |df/dw| D`` there: how much the objective changes when every
+            variable moves by its scale (``D``). Proportional to the objective
+            (a cost in km rather than m has 1e-3 of it), so dividing by it makes
+            the NLP Ipopt sees the same whatever the objective's unit.
         """
         if not self.enabled:
             return 1.0
         if self.objective_ref is not None:
             return self.objective_ref
+        v = abs(variation)
+        if math.isfinite(v) and v > 0:
+            # divided by the power of ten that brings the variation into [1, 10): an
+            # objective in km and the same in m then give exactly the same NLP (1e-3 f
+            # over 10^(k-3) is f over 10^k); up as well as down, which a value cannot
+            # do (a small value at the start may be small by accident, a variation that
+            # is non-zero is a rate). A variation in [1, 100] is left as posed: Ipopt
+            # leaves gradients up to 100 alone, and well-posed problems keep their NLP
+            if VARIATION_KEPT[0] <= v <= VARIATION_KEPT[1]:
+                return 1.0
+            v = min(max(v, VARIATION_RANGE[0]), VARIATION_RANGE[1])
+            return float(10.0 ** math.floor(math.log10(v) + 1e-9))
         a = abs(f0)
+        # no variation at the start (a cost at its minimum there, u = 0 in u^2): its value,
         # only down: a small objective at the start may be small by accident (a guess
         # at rest, a cost that vanishes there), and scaling it up would blow it up; and
         # at most OBJECTIVE_AUTO_MAX down: a poor start's value can exceed the optimum's
@@ -198,7 +229,10 @@ def check_scaling(scaling: Any) -> dict[str, Any]:
     auto = True
     for key, val in scaling.items():
         if key == "auto":
-            auto = bool(val)
+            if not isinstance(val, bool):
+                raise ProblemDefinitionError(f"scaling['auto'] must be True or False, got "
+                                             f"{val!r}")
+            auto = val
             continue
         pair = val if isinstance(val, tuple | list) else (None, val)
         if len(pair) != 2:

@@ -279,3 +279,52 @@ def _float_bounds(lo: Any, hi: Any) -> tuple[float, float]:
 
 def _never(*_: float) -> bool:
     return False
+
+
+def transfer_time(ph: OptimalControlProblem, x_start: np.ndarray, x_end: np.ndarray,
+                  u: np.ndarray, times: tuple[float, float], var_values: Sequence[float],
+                  loose: Any) -> float | None:
+    """The time the dynamics need for the change the guess asks of the states.
+
+    For every state whose guessed start and end differ (boundary values, a
+    transfer), ``|x_end - x_start|`` divided by the size of its rate at the
+    guess's ends (rule 3 of the module: ``|f| + |df/dx| s_x + |df/du| s_u``,
+    each state and control at its size ``s`` from bounds or guess, else 1);
+    the largest over the states. It is a time scale of the problem that its
+    bounds (``free_final_time()``'s default spans six decades) do not give.
+
+    Parameters
+    ----------
+    ph : OptimalControlProblem
+        The phase.
+    x_start, x_end : ndarray
+        The states' guess at the phase's start and end.
+    u : ndarray
+        The controls' guess.
+    times : tuple
+        Guessed ``(t0, T)``.
+    var_values : sequence of float
+        The decision variables' guess.
+    loose : callable
+        ``(lo, hi, g) -> bool`` (see :mod:`ocp.definition.scaling`).
+
+    Returns
+    -------
+    float or None
+        The time, or None when no state changes or a rate cannot be evaluated
+        (dynamics that depend on parameters).
+    """
+    a, b = np.asarray(x_start, dtype=float), np.asarray(x_end, dtype=float)
+    change = np.abs(b - a)
+    if not np.any(change > 0):
+        return None
+    sx = np.array([known_size(*ph.state_bounds[n], (float(a[i]), float(b[i])), loose) or 1.0
+                   for i, n in enumerate(ph.state_names)])
+    su = np.array([known_size(*ph.control_bounds[n], ph.control_guess.get(n), _never) or 1.0
+                   for n in ph.control_names])
+    statics: dict[str, float | None] = {ph.t0.name(): times[0], ph.T.name(): times[1]}
+    var_syms = ca.vertsplit(ph.v) if ph.v.numel() else []
+    statics |= {s.name(): float(v) for s, v in zip(var_syms, var_values, strict=True)}
+    rates = dynamics_sizes(ph, [a, b], np.asarray(u, dtype=float), statics, sx, su, 1.0)
+    ok = (change > 0) & np.isfinite(rates) & (rates > 0)
+    return float(np.max(change[ok] / rates[ok])) if np.any(ok) else None

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import numbers
 import operator
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -167,4 +168,31 @@ def positive_int(value: object, what: str, minimum: int = 1) -> int:
         raise ProblemDefinitionError(f"{what} must be an integer, got {value!r}") from None
     if v < minimum:
         raise ProblemDefinitionError(f"{what} must be >= {minimum}, got {v}")
+    return v
+
+
+def relative_tolerance(value: object, what: str, allow_inf: bool = False) -> float:
+    """``value`` as a relative tolerance in (0, 1), or a :class:`ProblemDefinitionError`.
+
+    A tolerance of 0 or below can never be met, NaN compares false with everything
+    (it would switch a check off silently), and 1 or more is no accuracy at all.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+    what : str
+        Named in the error.
+    allow_inf : bool
+        Accept ``math.inf`` (documented as switching a criterion off).
+    """
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ProblemDefinitionError(f"{what} must be a number, got {value!r}")
+    v = float(value)
+    if allow_inf and v == math.inf:
+        return v
+    if not (math.isfinite(v) and 0.0 < v < 1.0):
+        extra = " (math.inf switches it off)" if allow_inf else ""
+        raise ProblemDefinitionError(f"{what} must be a relative tolerance in (0, 1){extra}, "
+                                     f"got {v!r}")
     return v

@@ -16,15 +16,24 @@ Starts
 ------
 Start 0 is the user's ``guess`` (or the default guess). The others are points
 of a scrambled Sobol' sequence or a Latin hypercube (:mod:`scipy.stats.qmc`,
-seeded: the same seed gives the same starts) in the box of these coordinates:
+seeded: the same seed gives the same starts on the same transcription) in the box
+of these coordinates:
 
 * every free initial time not linked to the previous phase's end (``t0``),
-  and every free final time: ``T`` when the phase starts at a fixed time,
-  its ``duration`` otherwise (a linked phase starts where the previous one
-  ends). Box: the bounds (for a duration, the duration bounds); sampled
-  log-uniformly when the lower bound is positive and the upper exceeds ten
-  times it (a box [0.01, 100] would otherwise put nearly every start above
-  10);
+  in its bounds;
+* every free final time: ``T`` when the phase starts at a fixed time, its
+  ``duration`` otherwise (a linked phase starts where the previous one ends).
+  Its box is what the problem knows of the phase's time scale, not the bounds
+  alone (``free_final_time()``'s default, [1e-3, 1e3], spans six decades, and
+  starts spread over them rarely land near the optimum): the duration that
+  start 0 converged to (else the guessed duration), and the time the dynamics
+  need for the change the guess asks of the states (a state's boundary
+  values apart by ``D``, its rate at the guess of size ``r``: ``D / r``; see
+  :func:`ocp.definition.sizes.transfer_time`); the box runs from the smallest
+  of these over :data:`TIME_SPAN` to the largest times :data:`TIME_SPAN`,
+  cut by the bounds (a bound narrower than that is a real range and is kept).
+  Sampled log-uniformly when the lower end is positive and the upper exceeds
+  ten times it. Start 0 is therefore solved first, then the others;
 * every state: its value at mid-phase. The start is the default guess plus
   ``sin(pi s) (z - x_default(1/2))`` (``s`` the normalised time), which keeps
   the guess's end values (fixed boundary values) and passes through the
@@ -36,7 +45,17 @@ A state's or control's box is its bounds; an infinite side is replaced by the
 default guess's value ``-+ spread * max(1, |value|)`` (``spread = 1`` by
 default), and ``box={"name": (lo, hi)}`` sets any coordinate's box by name
 (``"T"``, ``"duration"``, ``"t0"`` for the times; in a multi-phase problem
-every name is prefixed by its phase's, ``"phase.name"``).
+every name is prefixed by its phase's, ``"phase.name"``); a name that is not a
+coordinate, or a box that is not ``lo < hi`` in finite numbers, is refused.
+:attr:`MultistartResult.boxes` reports the boxes sampled.
+
+What a result means
+-------------------
+Every optimum multistart returns is *local*: Ipopt's convergence and a PMP
+certificate are local statements. ``best`` is the best of the optima the
+starts reached, not a proof of a global optimum; more starts (``n``), another
+``seed`` or a box narrowed by what one knows (``box={"T": (2, 8)}``) search
+further.
 
 Solving on processes or Dask
 ----------------------------
@@ -61,6 +80,8 @@ from __future__ import annotations
 
 import math
 import multiprocessing
+import numbers
+import pickle
 import time
 import warnings
 from collections.abc import Callable
@@ -73,6 +94,9 @@ from scipy.stats import qmc
 
 from ..definition.errors import PathViolationWarning, ProblemDefinitionError, SolveError
 from ..definition.multiphase import PhaseTimes
+from ..definition.scaling import loose_bounds
+from ..definition.sizes import transfer_time
+from ..definition.symbols import positive_int
 from ..definition.trajectory import Trajectory
 from ..transcriptions.nlp import Transcription
 from ..transcriptions.solution import Solution
@@ -83,6 +107,10 @@ __all__ = ["LocalOptimum", "MultistartResult", "StartResult", "multistart",
            "trajectory_distance"]
 
 METHODS = ("sobol", "lhs")
+MAX_STARTS = 100_000
+"""The most starts one call takes (each is an NLP solve; the sampler holds them all)."""
+TIME_SPAN = 4.0
+"""A free time's box spans its known scales divided and multiplied by this (module doc)."""
 Builder = Callable[[], Transcription]
 
 
@@ -167,6 +195,9 @@ class MultistartResult:
         The sampling seed.
     wall_time : float
         Seconds for the whole run.
+    boxes : dict
+        ``name -> (lo, hi, log)``: the box each coordinate was sampled in, and
+        whether log-uniformly.
     """
 
     optima: list[LocalOptimum]
@@ -174,6 +205,7 @@ class MultistartResult:
     method: str
     seed: int | None
     wall_time: float
+    boxes: dict[str, tuple[float, float, bool]] = field(default_factory=dict)
 
     @property
     def success(self) -> bool:
@@ -213,8 +245,8 @@ class MultistartResult:
         if not self.optima:
             return f"no verified optimum from {len(self.starts)} starts (failures: {what})"
         objs = ", ".join(f"{o.objective:.10g} (x{o.count})" for o in self.optima)
-        return (f"{len(self.optima)} distinct optima from {len(self.starts)} starts: {objs}; "
-                f"failures: {what}")
+        return (f"{len(self.optima)} distinct local optima from {len(self.starts)} starts: "
+                f"{objs}; failures: {what}")
 
     def __repr__(self) -> str:
         return f"MultistartResult({self.message})"
@@ -236,12 +268,12 @@ class _Coordinate:
 
 
 def multistart(transcription: Transcription | Builder, n: int = 16, method: str = "sobol",
-               seed: int | None = None, guess: Any = None,
+               seed: int | np.random.Generator | None = None, guess: Any = None,
                params: dict[str, float] | None = None, workers: int | None = None,
                client: Any = None, spread: float = 1.0,
                box: dict[str, tuple[float, float]] | None = None,
                objective_rtol: float = 1e-6, distance_tol: float = 1e-3) -> MultistartResult:
-    """Solve from ``n`` starts spread over the bounds' box; keep the distinct local optima.
+    """Solve from ``n`` starts spread over what the problem knows; keep the distinct local optima.
 
     Parameters
     ----------
@@ -249,10 +281,11 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
         The transcription to solve, or a picklable zero-argument callable
         returning it (needed with ``workers > 1`` or ``client``).
     n : int
-        Number of starts, the user's (or the default) guess included.
+        Number of starts, the user's (or the default) guess included; at most
+        :data:`MAX_STARTS`.
     method : {"sobol", "lhs"}
         Scrambled Sobol' points or a Latin hypercube.
-    seed : int, optional
+    seed : int or numpy.random.Generator, optional
         Seed of the sampling (the same seed gives the same starts).
     guess : Solution, Trajectory or decision vector, optional
         Start 0 (by default, the default guess).
@@ -264,9 +297,9 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
         Solve on this Dask cluster instead.
     spread : float
         Half-width of the box of an unbounded state or control, relative to
-        ``max(1, |default guess|)``.
+        ``max(1, |default guess|)`` (positive, finite).
     box : dict, optional
-        Boxes ``(lo, hi)`` by coordinate name, overriding the bounds.
+        Boxes ``(lo, hi)`` by coordinate name, overriding the bounds and scales.
     objective_rtol, distance_tol : float
         When two solutions are the same optimum (see the module docstring).
 
@@ -274,13 +307,17 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
     -------
     MultistartResult
         ``best`` (raises :class:`ocp.SolveError` if no start reached a
-        verified optimum), ``optima`` best first, ``starts``, ``failures``.
+        verified optimum), ``optima`` best first, ``starts``, ``failures``,
+        ``boxes``. Every optimum is local (see the module docstring).
+
+    Raises
+    ------
+    ProblemDefinitionError
+        An invalid argument, named in the message.
     """
-    if method not in METHODS:
-        raise ProblemDefinitionError(f"method must be one of {METHODS}, got {method!r}")
-    if int(n) < 1:
-        raise ProblemDefinitionError(f"n must be a positive integer, got {n!r}")
-    parallel = client is not None or (workers is not None and int(workers) > 1)
+    n, workers = _check_arguments(n, method, seed, workers, spread, objective_rtol,
+                                  distance_tol)
+    parallel = client is not None or (workers is not None and workers > 1)
     if isinstance(transcription, Transcription):
         if parallel:
             raise ProblemDefinitionError(
@@ -288,6 +325,8 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
                 "returns the transcription (a transcription holds CasADi solvers)")
         tr, builder = transcription, None
     elif callable(transcription):
+        if parallel:
+            _check_picklable(transcription)
         tr, builder = transcription(), transcription
         if not isinstance(tr, Transcription):
             raise ProblemDefinitionError("the builder must return a transcription, got "
@@ -295,33 +334,132 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
     else:
         raise ProblemDefinitionError("transcription must be a Transcription or a builder")
     params = {} if params is None else dict(params)
+    box = _check_box(box, [c.name for c in start_coordinates(tr, params, spread)])
     t_start = time.perf_counter()
-    coords = start_coordinates(tr, params, spread, box or {})
-    origins, points, guesses = _starts(tr, params, coords, int(n), method, seed, guess)
-    if client is not None:
-        raw = client.gather([client.submit(solve_start, builder, params, g, pure=False)
-                             for g in guesses])
-    elif parallel:
-        # spawn, not fork: forking a process with Ipopt's and BLAS's threads can deadlock
-        with ProcessPoolExecutor(max_workers=int(workers or 1),
-                                 mp_context=multiprocessing.get_context("spawn")) as pool:
-            raw = list(pool.map(solve_start, [builder] * len(guesses), [params] * len(guesses),
-                                guesses))
-    else:
-        raw = [_solve_here(tr, params, g) for g in guesses]
+    first = tr.default_guess(params) if guess is None else _as_vector(tr, params, guess)
+    with _Runner(tr, builder, params, client, workers if parallel else None) as run:
+        raw = run([first])
+        sol0 = raw[0] if isinstance(raw[0], Solution) else _reassemble(tr, params, raw[0])
+        scales = _solved_times(tr, sol0) if sol0 is not None and sol0.success else {}
+        coords = start_coordinates(tr, params, spread, box, scales)
+        origins, points, guesses = _starts(tr, params, coords, n, method, seed, guess)
+        raw += run(guesses[1:])
     starts, sols = [], []
     for i, (orig, pt, r) in enumerate(zip(origins, points, raw, strict=True)):
-        sol = r if isinstance(r, Solution) else _reassemble(tr, params, r)
+        sol = sol0 if i == 0 else r if isinstance(r, Solution) else _reassemble(tr, params, r)
         rec = _record(i, orig, pt, sol, r)
         starts.append(rec)
         sols.append(sol if rec.verified else None)
     optima = _cluster(starts, sols, objective_rtol, distance_tol)
-    return MultistartResult(optima, starts, method, seed, time.perf_counter() - t_start)
+    boxes = {c.name: (c.lo, c.hi, c.log) for c in coords}
+    return MultistartResult(optima, starts, method, seed, time.perf_counter() - t_start, boxes)
+
+
+class _Runner:
+    """Solves lists of starts here, on a process pool (kept for the whole run) or on Dask."""
+
+    def __init__(self, tr: Transcription, builder: Builder | None, params: dict[str, float],
+                 client: Any, workers: int | None) -> None:
+        self.tr, self.builder, self.params = tr, builder, params
+        self.client, self.workers = client, workers
+        self.pool: ProcessPoolExecutor | None = None
+
+    def __enter__(self) -> _Runner:
+        if self.client is None and self.workers is not None:
+            # spawn, not fork: forking a process with Ipopt's and BLAS's threads can deadlock
+            self.pool = ProcessPoolExecutor(max_workers=self.workers,
+                                            mp_context=multiprocessing.get_context("spawn"))
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
+
+    def __call__(self, guesses: list[np.ndarray]) -> list[Any]:
+        if not guesses:
+            return []
+        if self.client is not None:
+            return self.client.gather([self.client.submit(solve_start, self.builder,
+                                                          self.params, g, pure=False)
+                                       for g in guesses])
+        if self.pool is not None:
+            k = len(guesses)
+            return list(self.pool.map(solve_start, [self.builder] * k, [self.params] * k,
+                                      guesses))
+        return [_solve_here(self.tr, self.params, g) for g in guesses]
+
+
+def _check_arguments(n: Any, method: Any, seed: Any, workers: Any, spread: Any,
+                     objective_rtol: Any, distance_tol: Any) -> tuple[int, int | None]:
+    """``n`` and ``workers`` checked; every other argument checked (a clear error naming it)."""
+    if method not in METHODS:
+        raise ProblemDefinitionError(f"method must be one of {METHODS}, got {method!r}")
+    n = positive_int(n, "multistart(n)")
+    if n > MAX_STARTS:
+        raise ProblemDefinitionError(f"multistart(n) must be at most {MAX_STARTS}, got {n}")
+    if workers is not None:
+        workers = positive_int(workers, "multistart(workers)")
+    if seed is not None and not isinstance(seed, np.random.Generator) and (
+            isinstance(seed, bool) or not isinstance(seed, numbers.Integral) or seed < 0):
+        raise ProblemDefinitionError("multistart(seed) must be a non-negative integer, a "
+                                     f"numpy Generator or None, got {seed!r}")
+    for name, v in (("spread", spread), ("objective_rtol", objective_rtol),
+                    ("distance_tol", distance_tol)):
+        if isinstance(v, bool) or not isinstance(v, numbers.Real) or not math.isfinite(v) \
+                or v <= 0:
+            raise ProblemDefinitionError(f"multistart({name}) must be a positive finite "
+                                         f"number, got {v!r}")
+    return n, workers
+
+
+def _check_picklable(builder: Builder) -> None:
+    """A builder for other processes must pickle (a lambda or a local function does not)."""
+    try:
+        pickle.dumps(builder)
+    except (pickle.PicklingError, AttributeError, TypeError) as err:
+        raise ProblemDefinitionError(
+            "multistart(transcription): with workers or a Dask client the builder must be "
+            f"picklable (a module-level function, not a lambda or a local function): {err}"
+        ) from None
+
+
+def _check_box(box: Any, names: list[str]) -> dict[str, tuple[float, float]]:
+    """``box`` checked against the coordinates' names: known names, finite ``lo < hi``."""
+    if box is None:
+        return {}
+    if not isinstance(box, dict):
+        raise ProblemDefinitionError(f"multistart(box) must be a dict, got {type(box).__name__}")
+    out: dict[str, tuple[float, float]] = {}
+    for key, val in box.items():
+        if key not in names:
+            raise ProblemDefinitionError(f"multistart(box): {key!r} is not a sampled coordinate "
+                                         f"(they are {names})")
+        try:
+            lo, hi = (float(v) for v in val)
+        except (TypeError, ValueError):
+            raise ProblemDefinitionError(f"multistart(box[{key!r}]) must be a pair (lo, hi) "
+                                         f"of numbers, got {val!r}") from None
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise ProblemDefinitionError(f"multistart(box[{key!r}]) needs finite lo < hi, "
+                                         f"got ({lo!r}, {hi!r})")
+        out[key] = (lo, hi)
+    return out
+
+
+def _solved_times(tr: Transcription, sol: Solution) -> dict[str, float]:
+    """The durations of a converged solution's phases, by the name of their time coordinate."""
+    multi = len(tr.phases) > 1
+    out = {}
+    for ps in sol.phases:
+        pre = f"{ps.problem.name}." if multi else ""
+        out[pre + "T"] = out[pre + "duration"] = float(ps.T - ps.t0)
+    return out
 
 
 # ---------------------------------------------------------------------- the starts
 def start_coordinates(tr: Transcription, params: dict[str, float], spread: float = 1.0,
-                      box: dict[str, tuple[float, float]] | None = None) -> list[_Coordinate]:
+                      box: dict[str, tuple[float, float]] | None = None,
+                      solved: dict[str, float] | None = None) -> list[_Coordinate]:
     """The coordinates a start samples, with their boxes (see the module docstring).
 
     Parameters
@@ -334,10 +472,16 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
         Half-width of an unbounded box relative to ``max(1, |default|)``.
     box : dict, optional
         Boxes by name, overriding the bounds.
+    solved : dict, optional
+        Durations a converged start found, by the name of the time coordinate
+        (they replace the guessed durations as a scale of the free times).
     """
     box = box or {}
+    solved = solved or {}
     pv = tr.param_vector(params)
     base = _default_solution(tr, params)
+    w0 = tr.default_guess(params)
+    var_values = [float(w0[k]) for k in range(tr.iV.start, tr.iV.stop)]
     multi = len(tr.phases) > 1
     out: list[_Coordinate] = []
     linked = {b for _, b in tr.multiphase.time_links}
@@ -352,14 +496,32 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
             lo, hi = ulo[j], uhi[j]
             mid = 0.5 * (lo + hi) if np.isfinite(lo) and np.isfinite(hi) else 0.0
             out.append(_coordinate(pre + name, lo, hi, mid, spread, box))
-        out.extend(_time_coordinates(pre, tm, i in linked, spread, box))
+        scales = [ps.T - ps.t0]  # the guessed duration, or what start 0 converged to
+        for key in (pre + "T", pre + "duration"):
+            if key in solved:
+                scales = [solved[key]]
+        if tm.T_free:
+            scales += _transfer_times(ps, var_values)
+        out.extend(_time_coordinates(pre, tm, i in linked, spread, box, scales))
     if tr.multiphase.var_names:
         lbw, ubw = decision_bounds(tr, params)
-        w0 = tr.default_guess(params)
         for k, name in zip(range(tr.iV.start, tr.iV.stop), tr.multiphase.var_names,
                            strict=True):
             out.append(_coordinate(name, lbw[k], ubw[k], w0[k], spread, box))
     return out
+
+
+def _transfer_times(ps: Solution, var_values: list[float]) -> list[float]:
+    """The dynamics' time for the change the default guess asks (empty if none)."""
+    x, u = np.asarray(ps.x, dtype=float), np.asarray(ps.u, dtype=float)  # at the nodes
+    if x.shape[0] < 2 or not np.all(np.isfinite(x)) or not np.all(np.isfinite(u)):
+        return []
+    try:
+        tau = transfer_time(ps.problem, x[0], x[-1], u[0] if u.size else np.zeros(0),
+                            (ps.t0, ps.T), var_values, loose_bounds)
+    except (RuntimeError, ArithmeticError):  # a rate CasADi cannot evaluate there
+        return []
+    return [tau] if tau is not None and math.isfinite(tau) and tau > 0 else []
 
 
 def _coordinate(name: str, lo: float, hi: float, centre: float, spread: float,
@@ -376,9 +538,11 @@ def _coordinate(name: str, lo: float, hi: float, centre: float, spread: float,
 
 
 def _time_coordinates(pre: str, tm: PhaseTimes, linked: bool, spread: float,
-                      box: dict[str, tuple[float, float]]) -> list[_Coordinate]:
+                      box: dict[str, tuple[float, float]],
+                      scales: list[float]) -> list[_Coordinate]:
     """A phase's sampled times: ``t0`` (free and not linked to the previous phase's end),
-    then ``T`` (free, fixed start) or ``duration`` (free, free start)."""
+    then ``T`` (free, fixed start) or ``duration`` (free, free start), in the box of the
+    phase's known durations ``scales`` cut by the bounds (see the module docstring)."""
     out: list[_Coordinate] = []
     if tm.t0_free and not linked:
         lo, hi = tm.t0_bounds
@@ -386,13 +550,24 @@ def _time_coordinates(pre: str, tm: PhaseTimes, linked: bool, spread: float,
     if not tm.T_free:
         return out
     if tm.t0_free:
+        name, offset = pre + "duration", 0.0
         lo, hi = tm.span if tm.span is not None else (0.0, math.inf)
-        c = _coordinate(pre + "duration", max(lo, 0.0), hi, tm.T_guess - tm.t0_guess,
-                        spread, box)
+        lo = max(lo, 0.0)
     else:
+        name, offset = pre + "T", tm.t0_bounds[0]
         lo, hi = tm.T_bounds
-        c = _coordinate(pre + "T", lo, hi, tm.T_guess, spread, box)
-    if c.name not in box and c.lo > 0 and c.hi > 10 * c.lo:
+    if name in box:
+        return out + [_coordinate(name, lo, hi, 0.0, spread, box)]
+    known = [v for v in scales if math.isfinite(v) and v > 0]
+    if not known:  # nothing known: the bounds, as for any other coordinate
+        c = _coordinate(name, lo, hi, tm.T_guess - tm.t0_guess, spread, box)
+    else:
+        a = max(lo, offset + min(known) / TIME_SPAN)
+        b = min(hi, offset + max(known) * TIME_SPAN)
+        if not a < b:  # the scales lie outside the bounds: the bounds are what is known
+            a, b = lo, hi if math.isfinite(hi) else lo + max(known) * TIME_SPAN
+        c = _Coordinate(name, float(a), float(b))
+    if c.lo > 0 and c.hi > 10 * c.lo:
         c.log = True
     return out + [c]
 

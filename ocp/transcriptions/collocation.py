@@ -218,6 +218,46 @@ class CollocationPhase(PhaseDiscretization):
         theta = np.where(h > 0, (t - data.mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
         return self.local(data, k, theta)
 
+    def check_samples(self, data: PhaseData,
+                      per_interval: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Times, states and controls where the path constraints are checked after a solve.
+
+        The states are the collocation polynomials. The control is the method's between
+        its points, never extrapolated: on ``[c_1, 1]`` of an interval the Lagrange
+        polynomial through its values at the collocation points; before ``c_1``, the
+        straight line from the previous interval's last point (the mesh point, where the
+        control is that point's) to ``c_1`` -- on the first interval, the value at ``c_1``.
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        per_interval : int
+            Points per mesh interval.
+        """
+        t = self.check_points(data, per_interval)
+        x, _ = self.sample(data, t)
+        k = segment_index(data.mesh, t)
+        h = np.diff(data.mesh)[k]
+        theta = np.where(h > 0, (t - data.mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
+        N, d = self.N, self.d
+        Uk = data.raw["U"].reshape(N, d, -1)
+        c1 = self.c[0]
+        inside = theta >= c1
+        u = np.empty((t.size, Uk.shape[2]))
+        if d > 1 and np.any(inside):
+            u[inside] = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta[inside]),
+                                  Uk[k[inside]])
+        elif np.any(inside):
+            u[inside] = Uk[k[inside], 0, :]
+        before = ~inside
+        kb = k[before]
+        first = Uk[kb, 0, :]
+        left = np.where((kb > 0)[:, None], Uk[np.maximum(kb - 1, 0), d - 1, :], first)
+        s = (theta[before] / c1)[:, None]
+        u[before] = left + s * (first - left)
+        return t, x, u
+
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
                    t0: float, T: float) -> np.ndarray:
         """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.guess_from`."""

@@ -20,6 +20,7 @@ user's units whatever the scaling.
 
 from __future__ import annotations
 
+import math
 import time
 from typing import Any
 
@@ -113,6 +114,7 @@ class Transcription:
         self.n_builds = 0
         self._solvers: dict[bool, Any] = {}
         self._nlp_fn: ca.Function | None = None
+        self._grad_fn: ca.Function | None = None
         self.times = self.multiphase.times()
         self.compiled = [CompiledPhase(ph) for ph in self.multiphase.phases]
         self.phases: list[PhaseDiscretization] = self._discretize()
@@ -479,6 +481,19 @@ class Transcription:
         raise ProblemDefinitionError("the initial guess makes a boundary constraint or the "
                                      "objective non-finite")
 
+    def _objective_variation(self, x0: np.ndarray, pv: np.ndarray) -> float:
+        """``sum |df/dw| D`` at the start: the objective's change when every variable
+        moves by its scale (:mod:`ocp.definition.scaling`; NaN when not needed)."""
+        sc = self.scaling
+        if not sc.enabled or sc.objective_ref is not None:
+            return math.nan
+        if self._grad_fn is None:  # built on first use: one reverse sweep per solve
+            self._grad_fn = ca.Function("grad_f", [self._nlp["x"], self._nlp["p"]],
+                                        [ca.gradient(self._nlp["f"], self._nlp["x"])])
+        with np.errstate(all="ignore"):
+            g = np.array(self._grad_fn(x0, pv), dtype=float).ravel()
+        return float(np.sum(np.abs(g * sc.D)))
+
     def _unpack_only(self, w: np.ndarray, pv: np.ndarray) -> Solution:
         res = {"x": w, "f": np.nan, "lam_g": np.zeros(self.n_g), "lam_x": np.zeros(self.n_w)}
         stats = {"success": False, "return_status": "Not_Solved", "iter_count": 0}
@@ -520,7 +535,7 @@ class Transcription:
                 **self._start(pv, params, guess, warm_start)}
         f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
         solver = self._solver(warm_start is not None and "lam_g0" in args)
-        fref = self.scaling.objective_scale(f0)
+        fref = self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
         t0 = time.perf_counter()
         res = self._unscale(solver(**self._scale_args(args, fref)), fref)
         elapsed = time.perf_counter() - t0

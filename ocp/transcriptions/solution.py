@@ -63,7 +63,10 @@ class Solution:
         Largest violation of a path constraint or state bound found on a fine
         grid between the nodes (relative to ``max(1, |bound|)``); ``verified``
         is True when it is within the transcription's ``verify_tol``;
-        ``violations`` names the offending constraints.
+        ``violations`` names the offending constraints. ``unchecked`` names the
+        constraints ``verified`` does not cover between the nodes (collocation:
+        those on the controls alone, checked at the collocation points only;
+        see :mod:`ocp.transcriptions.verify`).
     phases : list of Solution
         One per phase (a single-phase solution is its own only phase). A
         multi-phase solution has no ``t``, ``x``, ``u``: use ``phases[i]`` or
@@ -87,6 +90,7 @@ class Solution:
     path_violation: float
     verified: bool | None
     violations: dict[str, tuple[float, float]]
+    unchecked: list[str]
     mesh_history: list[Any]
     mesh_error: float
     objective_error: float  # Collocation.refine's estimate of the objective's error
@@ -141,7 +145,8 @@ class Solution:
             iterations=int(stats["iter_count"]), solve_time=elapsed, transcription=tr,
             params=dict(zip(mp.param_names, (float(v) for v in pv), strict=True)),
             variables=dict(zip(mp.var_names, (float(v) for v in vv), strict=True)),
-            path_violation=math.nan, verified=None, violations={})
+            path_violation=math.nan, verified=None, violations={},
+            unchecked=[])
         phases = []
         for i, (disc, lay) in enumerate(zip(tr.phases, tr.layouts, strict=True)):
             data = disc.unpack(w[tr.offsets[i]:tr.offsets[i] + disc.size()], pv, vv)
@@ -257,7 +262,8 @@ class Solution:
             "status": self.status, "success": self.success, "iterations": self.iterations,
             "solve_time_s": self.solve_time, "objective": _clean(self.objective),
             "params": self.params, "variables": self.variables,
-            "path_violation": _clean(self.path_violation), "verified": self.verified}
+            "path_violation": _clean(self.path_violation), "verified": self.verified,
+            "unchecked": list(self.__dict__.get("unchecked", []))}
         if self.is_multiphase:
             d["phases"] = [{**_phase_dict(p), "name": p.problem.name} for p in self.phases]
             return d

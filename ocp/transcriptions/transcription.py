@@ -24,7 +24,7 @@ import numpy as np
 from ..definition.errors import ProblemDefinitionError, SolveError
 from ..definition.multiphase import MultiPhaseProblem
 from ..definition.problem import OptimalControlProblem
-from ..definition.symbols import positive_int
+from ..definition.symbols import positive_int, relative_tolerance
 from .collocation import CollocationPhase
 from .discretization import PhaseDiscretization
 from .integrators import cvodes_function, rk4_function
@@ -275,8 +275,9 @@ class Collocation(Transcription):
         states; once none does, by the objective, splitting the intervals with
         the largest estimates (:func:`ocp.transcriptions.mesh.objective_threshold`).
         """
+        tol = relative_tolerance(tol, "refine(tol)")
         otol = max(tol, self.objective_floor()) if objective_tol is None \
-            else float(objective_tol)
+            else relative_tolerance(objective_tol, "refine(objective_tol)", allow_inf=True)
         tr = self  # every round is checked between points by the refinement itself
         sol = tr._solve(params, guess, None, "off")
         history: list[MeshRound] = []

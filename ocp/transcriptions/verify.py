@@ -8,9 +8,19 @@ trajectory is therefore sampled on a fine grid (multiple shooting: re-integrated
 from each node with the interval's constant control; collocation: the state
 polynomials) and every path constraint and state bound is evaluated there.
 
-With collocation, a constraint that involves a control is only checked where
-the method defines the control (the collocation points, where it is imposed):
-between them the control is an interpolation, not part of the solution.
+With collocation, a constraint that involves a control and a state (a heating
+limit ``q(h, v, alpha) <= 70``) is checked between the points with the
+method's own control there, never extrapolated: the Lagrange polynomial
+through the interval's values at its collocation points (the one the state
+polynomial is collocated with) from its first point on, a straight line from
+the previous interval's last point before it
+(:meth:`ocp.transcriptions.collocation.CollocationPhase.check_samples`), held
+within the control's bounds. A constraint on the controls alone
+(``u1 + u2 <= 1``) bounds the control set, and between the points there is no
+other control than that interpolant, which at a switch inside an interval
+swings across it: such a row is checked at the collocation points only, where
+it is imposed, and named in ``sol.unchecked`` -- the verdict does not cover it
+between the points.
 """
 
 from __future__ import annotations
@@ -30,15 +40,17 @@ def _phase_excess(ph: Any, params: dict[str, float],
     """Relative excess (rows, points) of one phase's checked rows, the times, the rows."""
     disc = ph.discretization
     cp = disc.cp
-    rows = [i for i in range(cp.ncheck)
-            if disc.method == "multiple_shooting" or cp.check_u_free[i]]
+    only_u = control_only_rows(disc)
+    rows = [i for i in range(cp.ncheck) if i not in only_u]
     if not rows:
         t = disc.check_points(ph.data, per_interval)
         return np.zeros((0, t.size)), t, rows
     t, x, u = disc.check_samples(ph.data, per_interval)
+    b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
+    if disc.method != "multiple_shooting" and u.size:  # the interpolant, within the bounds
+        u = np.clip(u, np.array(b[4], dtype=float).ravel(), np.array(b[5], dtype=float).ravel())
     vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
                     dtype=float)[rows]
-    b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
     lo = np.array(b[6], dtype=float).ravel()[rows, None]
     hi = np.array(b[7], dtype=float).ravel()[rows, None]
     with np.errstate(invalid="ignore"):
@@ -47,6 +59,38 @@ def _phase_excess(ph: Any, params: dict[str, float],
         rel = np.where(np.isfinite(vals), excess / np.where(np.isfinite(scale), scale, 1),
                        np.inf)
     return rel, t, rows
+
+
+def control_only_rows(disc: Any) -> set[int]:
+    """Rows of a collocation phase's check that depend on the controls and not on the
+    states: checked at the collocation points only (see the module; empty for shooting).
+
+    Parameters
+    ----------
+    disc : PhaseDiscretization
+        The phase's discretisation.
+    """
+    cp = disc.cp
+    if disc.method == "multiple_shooting" or cp.nu == 0:
+        return set()
+    on_x = set(cp.check.jac_sparsity(0, 1).get_triplet()[0])
+    return {i for i in range(cp.ncheck) if not cp.check_u_free[i] and i not in on_x}
+
+
+def unchecked_rows(sol: Any) -> list[str]:
+    """Names of the path constraints checked at the collocation points only (see the module).
+
+    Parameters
+    ----------
+    sol : Solution
+        A solution (single- or multi-phase).
+    """
+    out = []
+    for ph in sol.phases:
+        prefix = f"{ph.problem.name}: " if sol.is_multiphase else ""
+        disc = ph.discretization
+        out += [prefix + disc.cp.check_names[i] for i in sorted(control_only_rows(disc))]
+    return out
 
 
 def path_excess(sol: Any, per_interval: int = 10) -> dict[str, tuple[float, float]]:
@@ -120,6 +164,7 @@ def verify(sol: Any, mode: str, tol: float, per_interval: int) -> None:
     sol.path_violation = worst
     sol.violations = bad
     sol.verified = not bad
+    sol.unchecked = unchecked_rows(sol)
     if not bad or not sol.success:
         return
     what = "; ".join(f"{k} by {v:.3g} at t={t:.6g}" for k, (v, t) in

@@ -310,3 +310,43 @@ def test_bad_objective_ref_and_scaling_argument_are_rejected():
         MultipleShooting(p, nodes=5, scaling={"x": -1.0})
     with pytest.raises(ProblemDefinitionError, match=r"\['xx'\] are not states"):
         MultipleShooting(p, nodes=5, scaling={"xx": 10.0})
+    for bad in ("no", 0, None):  # issue 34: {'auto': 'no'} was taken as True
+        with pytest.raises(ProblemDefinitionError, match=r"scaling\['auto'\]"):
+            MultipleShooting(p, nodes=5, scaling={"auto": bad})
+
+
+def test_the_objective_unit_does_not_change_the_solve():
+    """Issue 31 item 5: the cannonball in SI units, its objective -factor * r(T) with no
+    ``ref``: the range in km, m or mm. The objective is divided by the power of ten that
+    brings its variation at the start (``sum |df/dw| D``) into [1, 10), so the NLP Ipopt
+    sees is the same. On the tree before, scaled by its value only, the three took 16,
+    28 and 28 iterations (and with multiple shooting 18, 77, 77; posed bare, km ended in
+    Restoration_Failed)."""
+    sols = {k: Collocation(cannonball(factor=k, objective_ref=False), intervals=[10, 10]).solve()
+            for k in (1e-3, 1.0, 1e3)}
+    for k, sol in sols.items():
+        assert sol.success and sol.verified
+        # 10 intervals a phase: 3182.95 m, within 1e-4 of dymos' published range
+        assert -sol.objective / k == pytest.approx(PUBLISHED_RANGE, rel=1e-4)
+        assert sol.objective_scale == pytest.approx(1e3 * k, rel=1e-12)  # ref 1 km of r
+    first = sols[1e-3]
+    for sol in sols.values():
+        assert sol.iterations == first.iterations
+        assert sol.objective / sol.objective_scale == pytest.approx(
+            first.objective / first.objective_scale, rel=1e-12)
+        assert np.allclose(sol.w, first.w, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("transcription", ["collocation", "shooting"])
+def test_the_objective_unit_does_not_change_the_bare_solve(transcription):
+    """The same, posed bare (no ref anywhere): identical iterations for km, m and mm."""
+    rng, _, _ = cannonball_exact()
+    its = []
+    for k in (1e-3, 1.0, 1e3):
+        p = cannonball(refs=False, factor=k)
+        tr = Collocation(p) if transcription == "collocation" else MultipleShooting(p)
+        sol = tr.solve()
+        assert sol.success and -sol.objective / k == pytest.approx(rng, rel=1e-5)
+        its.append(sol.iterations)
+    assert its[0] == its[1] == its[2]

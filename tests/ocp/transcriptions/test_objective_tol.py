@@ -16,7 +16,7 @@ import math
 
 import pytest
 
-from ocp import Collocation
+from ocp import Collocation, ProblemDefinitionError
 from ocp.transcriptions.mesh import ONE_CHANGE_MARGIN, objective_change, objective_threshold
 from tests.oracles.ocp_suite.min_fuel_double_integrator import build, exact, exact_by_simulation
 
@@ -67,3 +67,14 @@ def test_objective_estimate_helpers():
     assert objective_threshold(1e-6, math.inf, 1e-6) == 0.5e-6
     assert objective_threshold(1e-6, 1e-5, 1e-6) == pytest.approx(1e-7)
     assert objective_threshold(1e-6, 1.0, 1e-6) == pytest.approx(1e-8)  # at most 2 decades
+
+
+@pytest.mark.parametrize("bad", [math.nan, 0.0, -1.0, "1e-6", 1e300, True])
+def test_meaningless_tolerances_are_refused(bad):
+    """Issue 34 defect 7: NaN switched the objective check off, 0 and -1 could never be met
+    yet the result said success and verified, a string or 1e300 passed silently."""
+    tr = Collocation(build(), intervals=4)
+    with pytest.raises(ProblemDefinitionError, match=r"refine\(objective_tol\)"):
+        tr.refine(objective_tol=bad)
+    with pytest.raises(ProblemDefinitionError, match=r"refine\(tol\)"):
+        tr.refine(tol=bad)

@@ -66,19 +66,57 @@ def test_inner_constraints_and_collocation_refinement_close_the_gap():
     assert np.all(x_bump[:, 0] - bump >= -1e-6)
 
 
-def test_collocation_does_not_flag_controls_it_does_not_define():
-    # a mixed constraint u <= 1 - x active on an arc: checked at the collocation points only
-    p = OptimalControlProblem()
+def _mixed_arc():
+    """``x' = u``, ``u + x^2 <= 1`` active on the whole horizon (``x = tanh t``): a
+    constraint on a state and a control, held at the collocation points only."""
+    p = OptimalControlProblem("mixed")
     x = p.state("x")
-    u = p.control("u", -5, 5)
+    u = p.control("u", -2, 2)
     p.set_dynamics({"x": u})
     p.initial_constraint(x, 0.0)
-    p.path_constraint(u + x, upper=1.0)
+    p.path_constraint(u + x**2, upper=1.0, name="u + x^2")
     p.fixed_final_time(2.0)
     p.minimize_terminal(-x)
-    sol = Collocation(p, intervals=5).solve()
-    assert sol.verified
-    assert sol.x[-1, 0] == pytest.approx(1 - math.exp(-2), abs=1e-6)  # x' = 1 - x
+    return p
+
+
+def test_collocation_checks_mixed_constraints_between_the_points():
+    """Issue 31 item 6: between its collocation points the method's control is the
+    Lagrange polynomial through them; with it ``u + x^2`` exceeds 1 there (by 7e-4 on 5
+    intervals) while Ipopt reports success and the constraint holds at every collocation
+    point. On the tree before, a constraint with a control was checked at the collocation
+    points only, and this solution said ``verified``; refinement now also closes the gap."""
+    with pytest.warns(PathViolationWarning, match=r"u \+ x\^2"):
+        sol = Collocation(_mixed_arc(), intervals=5).solve()
+    assert sol.success and sol.verified is False and sol.unchecked == []
+    viol, t = sol.violations["u + x^2"]
+    assert 1e-4 < viol < 1e-2
+    tc = sol.transcription.phases[0].tau_c * 2.0  # the collocation points (T = 2)
+    inner = tc.reshape(5, -1)[:, :-1].ravel()  # those inside the intervals (not mesh points)
+    x, u = sol.at(inner)
+    assert np.all(u[:, 0] + x[:, 0] ** 2 <= 1.0 + 1e-7)  # held where it is imposed ...
+    assert np.min(np.abs(tc - t)) > 1e-3 and 0.0 < t < 2.0  # ... violated between
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PathViolationWarning)
+        fine = Collocation(_mixed_arc(), intervals=5).refine(tol=1e-6)
+    assert fine.verified and fine.path_violation <= 1e-6
+    assert fine.x[-1, 0] == pytest.approx(math.tanh(2.0), abs=1e-6)  # x' = 1 - x^2
+
+
+def test_control_only_constraints_are_named_as_checked_at_the_points_only():
+    """A constraint on the controls alone bounds the control set: between the points the
+    interpolant swings across it at a switch, so the verdict leaves it out -- and says so."""
+    p = OptimalControlProblem("pair")
+    x = p.state("x")
+    a, b = p.control("a", 0, 1), p.control("b", 0, 1)
+    p.set_dynamics({"x": a - b})
+    p.initial_constraint(x, 0.0)
+    p.path_constraint(a + b, upper=1.0, name="one at a time")
+    p.fixed_final_time(1.0)
+    p.minimize_integral((x - 0.5) ** 2 + 1e-3 * (a + b))
+    sol = Collocation(p, intervals=4).solve()
+    assert sol.unchecked == ["one at a time"] and sol.to_dict()["unchecked"] == sol.unchecked
+    assert MultipleShooting(p, nodes=4).solve().unchecked == []  # constant per interval
 
 
 def test_non_finite_guess_is_named_before_the_solve():

@@ -68,7 +68,8 @@ def mass(radius: float | ca.SX) -> float | ca.SX:
     return 4.0 / 3.0 * math.pi * DENSITY * radius**3
 
 
-def cannonball(refs: bool = True) -> MultiPhaseProblem:
+def cannonball(refs: bool = True, factor: float = 1.0,
+               objective_ref: bool | None = None) -> MultiPhaseProblem:
     """The two-phase cannonball in SI units, default guesses only (no hand guess).
 
     Parameters
@@ -77,6 +78,10 @@ def cannonball(refs: bool = True) -> MultiPhaseProblem:
         Give the states and the objective their typical magnitudes (``ref=``, as a
         dymos user would: 1 km for range and altitude, 100 m/s for speed, 1 km for
         the objective); False poses it bare, for the automatic scaling alone.
+    factor : float
+        The objective is ``-factor * r_end`` (1e-3: the range in km).
+    objective_ref : bool, optional
+        Give the objective its ``ref`` (default: as ``refs``).
     """
     rho = ca.interpolant("rho", "linear", [ALT_M], RHO_SI)
     km = {"ref": 1e3} if refs else {}
@@ -101,7 +106,8 @@ def cannonball(refs: bool = True) -> MultiPhaseProblem:
     descent.terminal_constraint(descent.x[1], 0.0)  # impact
     descent.free_duration(0.5, 100.0)
     mp.link(ascent, descent)
-    mp.minimize(-descent.at_tf(descent.x[0]), **km)
+    oref = refs if objective_ref is None else objective_ref
+    mp.minimize(-factor * descent.at_tf(descent.x[0]), **({"ref": 1e3 * factor} if oref else {}))
     return mp
 
 
