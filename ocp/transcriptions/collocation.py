@@ -17,6 +17,7 @@ interval function is mapped over the N intervals.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import lru_cache
 from typing import Any
 
 import casadi as ca
@@ -37,14 +38,43 @@ from .discretization import (
 
 
 def radau_points(d: int) -> np.ndarray:
-    """The ``d`` Legendre-Gauss-Radau points in (0, 1], the last being 1.
+    """The ``d`` Legendre-Gauss-Radau points in (0, 1], the last being 1 (read-only,
+    computed once per degree).
 
     Parameters
     ----------
     d : int
         Number of points (the degree).
     """
-    return np.array(ca.collocation_points(d, "radau"), dtype=float)
+    return _radau_points(int(d))
+
+
+@lru_cache(maxsize=None)
+def _radau_points(d: int) -> np.ndarray:
+    return _frozen(np.array(ca.collocation_points(d, "radau"), dtype=float))
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+def degree_matrices(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`collocation_matrices` of the degree-``d`` Radau points, computed once per
+    degree (read-only arrays: every mesh and every solve of that degree shares them).
+
+    Parameters
+    ----------
+    d : int
+        The degree.
+    """
+    return _degree_matrices(int(d))
+
+
+@lru_cache(maxsize=None)
+def _degree_matrices(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    C, D, B = collocation_matrices(radau_points(d))
+    return _frozen(C), _frozen(D), _frozen(B)
 
 
 def collocation_matrices(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -93,17 +123,20 @@ class CollocationPhase(PhaseDiscretization):
         Normalised mesh points, increasing from 0 to 1 (N + 1 of them).
     degree : int
         Collocation points per interval (polynomial degree of the state).
+    functions : dict, optional
+        Where the interval function is kept for other meshes of the same phase and
+        degree (:attr:`ocp.transcriptions.nlp.GridFree.functions`).
     """
 
     method = "collocation"
 
     def __init__(self, cp: CompiledPhase, times: PhaseTimes, mesh: np.ndarray,
-                 degree: int) -> None:
+                 degree: int, functions: dict | None = None) -> None:
         super().__init__(cp, times)
         self.tau = np.asarray(mesh, dtype=float)
         self.N, self.d = self.tau.size - 1, degree
         self.c = radau_points(degree)
-        self.C, self.D, self.B = collocation_matrices(self.c)
+        self.C, self.D, self.B = degree_matrices(degree)
         self.u0_weights = lagrange_basis(self.c, np.zeros(1))[0] if degree > 1 \
             else np.ones(1)
         nx, nu, N, d = cp.nx, cp.nu, self.N, degree
@@ -111,7 +144,11 @@ class CollocationPhase(PhaseDiscretization):
         self.iU = slice(self.iX.stop, self.iX.stop + nu * N * d)
         self.it0 = self.iU.stop
         self.iZ = slice(self.it0 + self.nt0, self.it0 + self.nt0 + nx * N * d)
-        self.G = self._interval_function()
+        key = ("radau interval", cp, degree)
+        functions = {} if functions is None else functions
+        if key not in functions:
+            functions[key] = self._interval_function()
+        self.G = functions[key]
         # normalised times of the collocation points, interval by interval
         self.tau_c = (self.tau[:-1, None] + np.diff(self.tau)[:, None] * self.c[None, :]).ravel()
 
@@ -239,3 +276,58 @@ class CollocationPhase(PhaseDiscretization):
             if k in out:
                 out[k] = out[k].reshape(shp)
         return out
+
+    def weights(self) -> np.ndarray:
+        """Quadrature weight ``h_k B_j`` of every collocation point (normalised time), (N d,)."""
+        return (np.diff(self.tau)[:, None] * self.B[None, :]).ravel()
+
+    def dual_from(self, old: CollocationPhase, lam_g: dict[str, np.ndarray],
+                  lam_x: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        """Multipliers for this mesh from those of the same phase on another mesh.
+
+        A multiplier of a row imposed at a collocation point (the dynamics, a path
+        constraint, a bound of a state or control there) is a density times the point's
+        quadrature weight ``h_k B_j``: the densities are interpolated linearly in
+        normalised time and multiplied by the new weights. The continuity rows' carry the
+        costate at the mesh points, interpolated as they are; the bounds of the mesh-point
+        states get none (the collocation point that ends each interval carries the same
+        bound); rows that do not depend on the mesh (boundary, time) keep theirs.
+
+        Parameters
+        ----------
+        old : CollocationPhase
+            The discretisation the multipliers belong to (same phase, any mesh or degree).
+        lam_g : dict
+            Its constraint multipliers by block name, flat (the user's units).
+        lam_x : ndarray
+            Its block of the bound multipliers.
+
+        Returns
+        -------
+        tuple
+            ``(lam_g by block name, lam_x block)`` for this mesh.
+        """
+        nx, nu = self.cp.nx, self.cp.nu
+        w_old, w_new = old.weights(), self.weights()
+
+        def density(values: np.ndarray, k: int) -> np.ndarray:
+            rows = values.reshape(-1, k) / w_old[:, None]
+            return np.column_stack([np.interp(self.tau_c, old.tau_c, rows[:, i])
+                                    for i in range(k)]) * w_new[:, None] if k else \
+                np.zeros((self.tau_c.size, 0))
+
+        out = dict(lam_g)
+        out["collocation"] = density(lam_g["collocation"], nx).ravel()
+        if "path" in lam_g:
+            out["path"] = density(lam_g["path"], self.cp.npath).ravel()
+        cont = lam_g["continuity"].reshape(-1, nx)
+        out["continuity"] = np.column_stack([np.interp(self.tau[1:], old.tau[1:], cont[:, i])
+                                             for i in range(nx)]).ravel()
+        lx = np.zeros(self.size())
+        if self.nT:
+            lx[0] = lam_x[0]
+        if self.nt0:
+            lx[self.it0] = lam_x[old.it0]
+        lx[self.iU] = density(lam_x[old.iU], nu).ravel()
+        lx[self.iZ] = density(lam_x[old.iZ], nx).ravel()
+        return out, lx

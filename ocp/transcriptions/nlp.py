@@ -20,7 +20,9 @@ user's units whatever the scaling.
 
 from __future__ import annotations
 
+import math
 import time
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -57,6 +59,78 @@ DEFAULT_IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0, "sb": "yes",
                  "mu_strategy": "adaptive"}
 INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
 BOUNDARY_KINDS = ("initial", "terminal", "boundary", "time")
+
+
+@dataclass
+class GridFree:
+    """What a transcription's build does not take from its grid, shared by the
+    transcriptions of one problem on other meshes (mesh refinement builds each
+    round's NLP from it: the problem is compiled, its default guesses and its
+    scaling references are derived once).
+
+    Attributes
+    ----------
+    multiphase : MultiPhaseProblem
+        The problem as phases.
+    times : list of PhaseTimes
+        How each phase's times enter the NLP.
+    compiled : list of CompiledPhase
+        Each phase's functions.
+    choices : DefaultChoices
+        The replaceable bare defaults of the guesses.
+    ends, plain : list of tuple of SX
+        Each phase's state start and end guesses, with the replaceable defaults
+        and without them.
+    controls : list of SX
+        Each phase's control guess.
+    variables : SX
+        The decision variables' guess.
+    sizes : list or None
+        The states' sizes for the scaling (:mod:`ocp.definition.sizes`), once known.
+    functions : dict
+        Grid-independent CasADi functions of a discretisation, by key.
+    """
+
+    multiphase: MultiPhaseProblem
+    times: list[Any]
+    compiled: list[CompiledPhase]
+    choices: DefaultChoices
+    ends: list[tuple[ca.SX, ca.SX]]
+    plain: list[tuple[ca.SX, ca.SX]]
+    controls: list[ca.SX]
+    variables: ca.SX
+    sizes: list[list[float | None]] | None = None
+    functions: dict[Any, Any] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, multiphase: MultiPhaseProblem) -> GridFree:
+        """Compile a validated problem and derive its default guesses.
+
+        Parameters
+        ----------
+        multiphase : MultiPhaseProblem
+            The problem.
+        """
+        mp = multiphase
+        choices = DefaultChoices()
+        ends: list[tuple[ca.SX, ca.SX]] = []
+        plain: list[tuple[ca.SX, ca.SX]] = []
+        controls = []
+        for i, ph in enumerate(mp.phases):
+            ends.append(state_ends(ph, _previous_ends(mp, i, ends), choices))
+            plain.append(state_ends(ph, _previous_ends(mp, i, plain)))
+            controls.append(control_guess(ph, choices))
+        return cls(mp, mp.times(), [CompiledPhase(ph) for ph in mp.phases], choices, ends,
+                   plain, controls, variable_guess(mp._shared, choices))
+
+
+def _previous_ends(mp: MultiPhaseProblem, i: int, ends: list) -> dict[str, ca.SX] | None:
+    """End guesses of the phase that phase ``i`` is time-linked from, by state name."""
+    for a, b in mp.time_links:
+        if b == i and a < i:
+            prev = mp.phases[a]
+            return {n: ends[a][1][k] for k, n in enumerate(prev.state_names)}
+    return None
 
 
 class Transcription:
@@ -99,10 +173,15 @@ class Transcription:
     def __init__(self, problem: OptimalControlProblem | MultiPhaseProblem,
                  ipopt_options: dict | None = None, expand: bool = False,
                  verify: str = "warn", verify_tol: float = 1e-6,
-                 verify_points: int = 10, scaling: Any = "auto") -> None:
-        self.multiphase = as_multiphase(problem)
+                 verify_points: int = 10, scaling: Any = "auto",
+                 grid_free: GridFree | None = None) -> None:
         self.scaling_options = check_scaling(scaling)
-        self.multiphase.validate()
+        if grid_free is None:
+            mp = as_multiphase(problem)
+            mp.validate()
+            grid_free = GridFree.of(mp)
+        self.grid_free = grid_free
+        self.multiphase = grid_free.multiphase
         if verify not in VERIFY_MODES:
             raise ProblemDefinitionError(f"verify must be one of {VERIFY_MODES}, got {verify!r}")
         self.problem = problem
@@ -111,10 +190,11 @@ class Transcription:
         self.verify, self.verify_tol = verify, float(verify_tol)
         self.verify_points = positive_int(verify_points, "verify_points")
         self.n_builds = 0
-        self._solvers: dict[bool, Any] = {}
+        self._solvers: dict[tuple[bool, bool], Any] = {}
         self._nlp_fn: ca.Function | None = None
-        self.times = self.multiphase.times()
-        self.compiled = [CompiledPhase(ph) for ph in self.multiphase.phases]
+        self._last_bounds: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+        self.times = grid_free.times
+        self.compiled = grid_free.compiled
         self.phases: list[PhaseDiscretization] = self._discretize()
         self._build()
 
@@ -131,27 +211,23 @@ class Transcription:
         w, P = ca.MX.sym("w", nw), ca.MX.sym("p", mp.np)
         V = w[self.iV]
         pieces: list[PhaseNLP] = []
-        ends: list[tuple[ca.SX, ca.SX]] = []
-        plain: list[tuple[ca.SX, ca.SX]] = []  # the same without replaceable defaults
-        choices = DefaultChoices()
-        for i, (disc, ph) in enumerate(zip(self.phases, mp.phases, strict=True)):
-            a, b = state_ends(ph, self._previous_ends(i, ends), choices)
-            ends.append((a, b))
-            plain.append(state_ends(ph, self._previous_ends(i, plain)))
+        gf = self.grid_free
+        choices = gf.choices
+        for i, disc in enumerate(self.phases):
             wb = w[self.offsets[i]:self.offsets[i] + sizes[i]]
-            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph, choices)))
+            pieces.append(disc.build(wb, P, V, gf.ends[i], gf.controls[i]))
         g, lbg, ubg, J_end = self._constraints(pieces, P, V)
         J = J_end + sum(pn.lagrange for pn in pieces)
         lbw = ca.vertcat(*[pn.lbw for pn in pieces], *self._var_bounds(0))
         ubw = ca.vertcat(*[pn.ubw for pn in pieces], *self._var_bounds(1))
-        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared, choices))
+        w0 = ca.vertcat(*[pn.w0 for pn in pieces], gf.variables)
         self._bounds = ca.Function("bounds", [mp.p], [lbw, ubw, lbg, ubg])
         self._guess = ca.Function("guess", [mp.p, *choices.symbols], [w0])
         self._choices = choices
         self._choice_bounds = choices.bound_function(mp.p)
         self._nlp = {"x": w, "p": P, "f": J, "g": g}
         self.n_w, self.n_g = nw, int(g.numel())
-        self.scaling = self._scaling(plain)
+        self.scaling = self._scaling(gf.plain)
         self._scaled = self._scaled_nlp()
         self.n_builds += 1
 
@@ -166,7 +242,12 @@ class Transcription:
             raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
                                          "variables of the problem (nor 'objective', 'time')")
         sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
-        sizes = self._state_sizes(ends)
+        if self.grid_free.sizes is None or not self.scaling_options["auto"]:
+            sizes = self._state_sizes(ends)
+            if self.scaling_options["auto"]:
+                self.grid_free.sizes = sizes
+        else:
+            sizes = self.grid_free.sizes
         for ph, lay, tm, (a, b), sz in zip(mp.phases, self.layouts, self.times, ends, sizes,
                                            strict=True):
             states, controls = phase_quantities(ph, a, b)
@@ -237,14 +318,6 @@ class Transcription:
                              [ca.DM(sc.D) * ws + ca.DM(sc.c)])
         return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
 
-    def _previous_ends(self, i: int, ends: list) -> dict[str, ca.SX] | None:
-        """End guesses of the phase that phase ``i`` is time-linked from, by state name."""
-        for a, b in self.multiphase.time_links:
-            if b == i and a < i:
-                prev = self.multiphase.phases[a]
-                return {n: ends[a][1][k] for k, n in enumerate(prev.state_names)}
-        return None
-
     def _var_bounds(self, side: int) -> list[ca.SX]:
         sh = self.multiphase._shared
         return [sh.var_bounds[n][side] for n in sh.var_names]
@@ -314,18 +387,24 @@ class Transcription:
                                  "use .layouts")
         return self.layouts[0]
 
-    def _solver(self, warm: bool) -> Any:
-        if warm not in self._solvers:
+    def _solver(self, warm: bool, expand: bool | None = None) -> Any:
+        """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers
+        given; ``expand`` overrides the transcription's for this solver only (mesh
+        refinement's warm rounds, where building the expanded graph costs more than the
+        few iterations it would speed up)."""
+        key = (warm, self.expand if expand is None else bool(expand))
+        if key not in self._solvers:
             ipopt = dict(self.ipopt_options)
             if warm:
                 ipopt.update(warm_start_init_point="yes", warm_start_bound_push=1e-9,
                              warm_start_mult_bound_push=1e-9, mu_init=1e-6)
             opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False,
-                                    "error_on_fail": False, "expand": self.expand}
+                                    "error_on_fail": False, "expand": key[1],
+                                    "calc_lam_p": False}
             name = f"{self.multiphase.name}_{self.method}"
             nlp: Any = self._scaled
-            self._solvers[warm] = ca.nlpsol(name, "ipopt", nlp, opts)
-        return self._solvers[warm]
+            self._solvers[key] = ca.nlpsol(name, "ipopt", nlp, opts)
+        return self._solvers[key]
 
     # ------------------------------------------------------------------ solve
     def param_vector(self, params: dict[str, float]) -> np.ndarray:
@@ -420,6 +499,36 @@ class Transcription:
         parts.append(np.array([sol.variables[k] for k in self.multiphase.var_names]))
         return np.concatenate(parts)
 
+    def dual_from(self, sol: Solution) -> tuple[np.ndarray, np.ndarray] | None:
+        """Multipliers ``(lam_x, lam_g)`` for this NLP from a solution of the same problem
+        on another collocation mesh (each phase's ``dual_from``), or None where a phase's
+        discretisation cannot map them (multiple shooting, another method).
+
+        Parameters
+        ----------
+        sol : Solution
+            A solution of another transcription of this problem.
+        """
+        other = sol.transcription
+        if len(sol.phases) != len(self.phases) or \
+                other.multiphase is not self.multiphase or \
+                any(not hasattr(d, "dual_from") or type(d) is not type(o)
+                    for d, o in zip(self.phases, other.phases, strict=True)):
+            return None
+        lam_x, lam_g = np.zeros(self.n_w), np.zeros(self.n_g)
+        for i, (d, o) in enumerate(zip(self.phases, other.phases, strict=True)):
+            lay, olay = self.layouts[i], other.layouts[i]
+            blocks = {k: sol.lam_g[sl] for k, sl in olay.blocks.items()}
+            ob = other.offsets[i]
+            g, x = d.dual_from(o, blocks, sol.lam_x[ob:ob + o.size()])
+            for k, sl in lay.blocks.items():
+                lam_g[sl] = g[k]
+            lam_x[self.offsets[i]:self.offsets[i] + d.size()] = x
+        for k, sl in self.link_blocks.items():
+            lam_g[sl] = sol.lam_g[other.link_blocks[k]]
+        lam_x[self.iV] = sol.lam_x[other.iV]
+        return lam_x, lam_g
+
     def _guess_from_trajectory(self, traj: Trajectory) -> np.ndarray:
         w0 = self.default_guess()
         parts = []
@@ -451,7 +560,11 @@ class Transcription:
             if warm_start.transcription is self:
                 return {"x0": warm_start.w, "lam_x0": warm_start.lam_x,
                         "lam_g0": warm_start.lam_g}
-            return {"x0": self.guess_from(warm_start)}
+            x0 = self.guess_from(warm_start)
+            dual = self.dual_from(warm_start)
+            if dual is None:
+                return {"x0": x0}
+            return {"x0": x0, "lam_x0": dual[0], "lam_g0": dual[1]}
         if isinstance(guess, Solution):
             return {"x0": guess.w if guess.transcription is self else self.guess_from(guess)}
         if isinstance(guess, Trajectory):
@@ -511,15 +624,20 @@ class Transcription:
         return self._solve(params, guess, warm_start, self.verify)
 
     def _solve(self, params: dict[str, float] | None, guess: Any,
-               warm_start: Solution | None, verify_mode: str) -> Solution:
+               warm_start: Solution | None, verify_mode: str,
+               expand: bool | None = None) -> Solution:
         params = {} if params is None else params
         pv = self.param_vector(params)
-        lbw, ubw, lbg, ubg = (np.array(v, dtype=float).ravel() for v in self._bounds(pv))
-        self._check_bound_order(lbw, ubw, lbg, ubg)
+        lbw, ubw, lbg, ubg = self._bounds_at(pv)
         args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg,
                 **self._start(pv, params, guess, warm_start)}
-        f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
-        solver = self._solver(warm_start is not None and "lam_g0" in args)
+        if warm_start is not None and warm_start.transcription is self and \
+                np.array_equal(pv, self.param_vector(warm_start.params)) and \
+                math.isfinite(warm_start.objective):
+            f0 = warm_start.objective  # a re-solve at its own solution: f, g known finite
+        else:
+            f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
+        solver = self._solver(warm_start is not None and "lam_g0" in args, expand)
         fref = self.scaling.objective_scale(f0)
         t0 = time.perf_counter()
         res = self._unscale(solver(**self._scale_args(args, fref)), fref)
@@ -532,6 +650,18 @@ class Transcription:
                                        f"iterations")
         verify(sol, verify_mode, self.verify_tol, self.verify_points)
         return sol
+
+    def _bounds_at(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``(lbw, ubw, lbg, ubg)`` at the parameter values ``pv``, checked (the last
+        parameter values' are kept: a re-solve at the same values reuses them)."""
+        key = pv.tobytes()
+        if self._last_bounds is None or self._last_bounds[0] != key:
+            b = tuple(np.array(v, dtype=float).ravel() for v in self._bounds(pv))
+            self._check_bound_order(*b)
+            for a in b:
+                a.setflags(write=False)
+            self._last_bounds = (key, b)
+        return self._last_bounds[1]
 
     def _scale_args(self, args: dict[str, Any], fref: float) -> dict[str, Any]:
         """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""
