@@ -38,8 +38,6 @@ import warnings
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[1]
 
 SMALL = r"""
@@ -130,8 +128,8 @@ def moon(repeats: int) -> None:
         ocp = rockit_moon(method)
         runs: dict[str, list[float]] = {"warm": [], "guess": [], "rockit": []}
         iters: dict[str, int] = {}
-        fns = {"warm": lambda: tr.solve(warm_start=sol), "guess": tr.solve,
-               "rockit": ocp.solve}
+        fns = {"warm": lambda tr=tr, sol=sol: tr.solve(warm_start=sol),
+               "guess": tr.solve, "rockit": ocp.solve}
         for k in range(repeats):
             names = list(fns) if k % 2 == 0 else list(fns)[::-1]
             for name in names:

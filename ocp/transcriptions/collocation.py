@@ -17,7 +17,7 @@ interval function is mapped over the N intervals.
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import casadi as ca
@@ -49,7 +49,7 @@ def radau_points(d: int) -> np.ndarray:
     return _radau_points(int(d))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _radau_points(d: int) -> np.ndarray:
     return _frozen(np.array(ca.collocation_points(d, "radau"), dtype=float))
 
@@ -71,7 +71,7 @@ def degree_matrices(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return _degree_matrices(int(d))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _degree_matrices(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     C, D, B = collocation_matrices(radau_points(d))
     return _frozen(C), _frozen(D), _frozen(B)
@@ -151,6 +151,8 @@ class CollocationPhase(PhaseDiscretization):
         self.G = functions[key]
         # normalised times of the collocation points, interval by interval
         self.tau_c = (self.tau[:-1, None] + np.diff(self.tau)[:, None] * self.c[None, :]).ravel()
+        self.tau_points = np.concatenate([[0.0], self.tau_c])  # every point, normalised
+        self._check_bases: dict[int, tuple[np.ndarray, ...]] = {}
 
     def _interval_function(self) -> ca.Function:
         cp, d = self.cp, self.d
@@ -218,10 +220,10 @@ class CollocationPhase(PhaseDiscretization):
         X = wb[self.iX].reshape(N + 1, nx)
         U = wb[self.iU].reshape(N * d, nu)
         Z = wb[self.iZ].reshape(N * d, nx)
-        t = t0 + (T - t0) * np.r_[0.0, self.tau_c]
+        t = t0 + (T - t0) * self.tau_points
         u0 = self.u0_weights @ U[:d] if nu else np.zeros(0)
         return PhaseData(t0, T, t, np.vstack([X[:1], Z]), U, np.vstack([u0[None, :], U]),
-                         t0 + (T - t0) * self.tau, np.r_[pv, vv, t0, T],
+                         t0 + (T - t0) * self.tau, np.concatenate([pv, vv, (t0, T)]),
                          {"X": X, "Z": Z, "U": U})
 
     def local(self, data: PhaseData, k: np.ndarray,
@@ -245,6 +247,29 @@ class CollocationPhase(PhaseDiscretization):
         u = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta), Uk) if d > 1 \
             else Uk[:, 0, :]
         return x, u
+
+    def check_samples(self, data: PhaseData,
+                      per_interval: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.check_samples`
+        (the same points and values; the polynomial bases at the check points depend on
+        the mesh only and are computed once per ``per_interval``)."""
+        if per_interval not in self._check_bases:
+            N, d = self.N, self.d
+            frac = np.arange(per_interval) / per_interval
+            k = np.concatenate([np.repeat(np.arange(N), per_interval), [N - 1]])
+            theta = np.concatenate([np.tile(frac, N), [1.0]])
+            self._check_bases[per_interval] = (
+                k, np.concatenate([frac, [1.0]]),
+                lagrange_basis(np.concatenate([[0.0], self.c]), theta),
+                lagrange_basis(self.c, theta) if d > 1 else np.ones((theta.size, 1)))
+        k, _, bx, bu = self._check_bases[per_interval]
+        t = self.check_points(data, per_interval)
+        N, d = self.N, self.d
+        Zf = np.concatenate([data.raw["X"][:N, None, :], data.raw["Z"].reshape(N, d, -1)],
+                            axis=1)[k]
+        x = np.einsum("nr,nri->ni", bx, Zf)
+        u = np.einsum("nr,nri->ni", bu, data.raw["U"].reshape(N, d, -1)[k])
+        return t, x, u
 
     def sample(self, data: PhaseData, t: np.ndarray,
                substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
@@ -285,10 +310,11 @@ class CollocationPhase(PhaseDiscretization):
                   lam_x: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Multipliers for this mesh from those of the same phase on another mesh.
 
-        A multiplier of a row imposed at a collocation point (the dynamics, a path
-        constraint, a bound of a state or control there) is a density times the point's
-        quadrature weight ``h_k B_j``: the densities are interpolated linearly in
-        normalised time and multiplied by the new weights. The continuity rows' carry the
+        A multiplier of a row imposed at a collocation point (a path constraint, a bound
+        of a state or control there) is a density times the point's quadrature weight
+        ``h_k B_j``, that of a collocation defect the costate times ``B_j``: the densities
+        are interpolated linearly in normalised time and multiplied by the new weights.
+        The continuity rows' carry the
         costate at the mesh points, interpolated as they are; the bounds of the mesh-point
         states get none (the collocation point that ends each interval carries the same
         bound); rows that do not depend on the mesh (boundary, time) keep theirs.
@@ -308,16 +334,21 @@ class CollocationPhase(PhaseDiscretization):
             ``(lam_g by block name, lam_x block)`` for this mesh.
         """
         nx, nu = self.cp.nx, self.cp.nu
-        w_old, w_new = old.weights(), self.weights()
+        quad = (old.weights(), self.weights())
+        nodal = (np.tile(old.B, old.N), np.tile(self.B, self.N))
 
-        def density(values: np.ndarray, k: int) -> np.ndarray:
-            rows = values.reshape(-1, k) / w_old[:, None]
-            return np.column_stack([np.interp(self.tau_c, old.tau_c, rows[:, i])
-                                    for i in range(k)]) * w_new[:, None] if k else \
-                np.zeros((self.tau_c.size, 0))
+        def density(values: np.ndarray, k: int, w: tuple = quad) -> np.ndarray:
+            """Per-point multipliers (old mesh) -> per-point multipliers (this mesh)."""
+            rows = values.reshape(-1, k) / w[0][:, None]
+            out = np.zeros((self.tau_c.size, k))
+            for i in range(k):
+                out[:, i] = np.interp(self.tau_c, old.tau_c, rows[:, i])
+            return out * w[1][:, None]
 
         out = dict(lam_g)
-        out["collocation"] = density(lam_g["collocation"], nx).ravel()
+        # a defect row sum_r C_rj Z_r - h f has no 1/h: its multiplier is B_j times the
+        # costate (O(1) in h), where a row or bound at a point carries h B_j times a density
+        out["collocation"] = density(lam_g["collocation"], nx, nodal).ravel()
         if "path" in lam_g:
             out["path"] = density(lam_g["path"], self.cp.npath).ravel()
         cont = lam_g["continuity"].reshape(-1, nx)

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -155,7 +155,7 @@ def integration_matrix(nodes: np.ndarray) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def estimate_matrix(d: int) -> tuple[np.ndarray, np.ndarray]:
     """The degree-``d + 1`` Radau points of the error estimate and their
     :func:`integration_matrix` (read-only; computed once per degree ``d``).

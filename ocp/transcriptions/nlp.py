@@ -667,7 +667,7 @@ class Transcription:
         """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""
         sc = self.scaling
         out = dict(args)
-        out["p"] = np.r_[args["p"], 1.0 / fref]
+        out["p"] = np.append(args["p"], 1.0 / fref)
         for k in ("x0", "lbx", "ubx"):
             out[k] = sc.x_to_scaled(args[k])
         out["lbg"], out["ubg"] = sc.r * args["lbg"], sc.r * args["ubg"]
