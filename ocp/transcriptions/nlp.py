@@ -161,11 +161,17 @@ class Transcription:
         and guesses that are far from 1 (see :mod:`ocp.definition.scaling`); ``"none"``
         solves the NLP exactly as posed; a dict overrides references by name
         (``{"h": 1e4, "v": (0, 300), "objective": 1e3, "time": 10}``).
+    grid_free : GridFree, optional
+        The grid-independent part of another transcription of the same problem
+        (:attr:`grid_free`), reused instead of compiled again (mesh refinement).
 
     Attributes
     ----------
     n_builds : int
         How many times the NLP was built (stays 1: re-solves never rebuild).
+    grid_free : GridFree
+        What the build does not take from the grid (compiled phases, default guesses,
+        scaling sizes), shared with the transcriptions on other meshes it makes.
     """
 
     method = "base"
@@ -193,6 +199,8 @@ class Transcription:
         self._solvers: dict[tuple[bool, bool], Any] = {}
         self._nlp_fn: ca.Function | None = None
         self._last_bounds: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+        self._last_default: tuple[bytes, np.ndarray] | None = None
+        self._last_start: tuple[bytes, float] | None = None
         self.times = grid_free.times
         self.compiled = grid_free.compiled
         self.phases: list[PhaseDiscretization] = self._discretize()
@@ -442,7 +450,14 @@ class Transcription:
     def _repaired_default(self, pv: np.ndarray) -> np.ndarray:
         """The default guess, with bare defaults replaced where they make the NLP
         non-finite and another point within the bounds does not (see
-        :mod:`ocp.definition.guess`)."""
+        :mod:`ocp.definition.guess`); the last parameter values' is kept (a copy is
+        returned), so re-solves from the default guess do not derive it again."""
+        key = pv.tobytes()
+        if self._last_default is None or self._last_default[0] != key:
+            self._last_default = (key, self._derive_default(pv))
+        return self._last_default[1].copy()
+
+    def _derive_default(self, pv: np.ndarray) -> np.ndarray:
         n = len(self._choices.names)
 
         def at(use: np.ndarray, val: np.ndarray) -> np.ndarray:
@@ -578,11 +593,16 @@ class Transcription:
 
     def _check_start(self, x0: np.ndarray, pv: np.ndarray) -> float:
         """The objective at the start; a clear error if the start makes the NLP
-        non-finite, naming the expression."""
+        non-finite, naming the expression (the last start's objective is kept: a re-solve
+        from the same start does not evaluate it again)."""
+        key = pv.tobytes() + x0.tobytes()
+        if self._last_start is not None and self._last_start[0] == key:
+            return self._last_start[1]
         with np.errstate(all="ignore"):
             f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
         if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
-            return float(f.ravel()[0])
+            self._last_start = (key, float(f.ravel()[0]))
+            return self._last_start[1]
         if not np.all(np.isfinite(x0)):
             raise ProblemDefinitionError("the initial guess has non-finite entries")
         sol = self._unpack_only(x0, pv)
@@ -610,7 +630,10 @@ class Transcription:
             transcription (grid, method) or a trajectory is resampled.
             By default, the default guess (see :mod:`ocp.definition.guess`).
         warm_start : Solution, optional
-            Start from this solution's primal and dual values (Ipopt warm start).
+            Start from this solution's primal and dual values (Ipopt warm start). A
+            solution on another collocation mesh of the same problem is resampled, its
+            multipliers interpolated (:meth:`dual_from`); one of another method gives
+            its primal values only.
 
         Raises
         ------

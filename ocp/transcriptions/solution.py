@@ -99,7 +99,7 @@ class Solution:
     def __getattr__(self, name: str) -> Any:
         deferred = self.__dict__.get("deferred")
         if deferred and name in deferred:
-            value = deferred.pop(name)(self)
+            value = deferred[name](self)  # not popped: a copy of __dict__ shares the dict
             self.__dict__[name] = value
             return value
         if name in _PER_PHASE and "phases" in self.__dict__:

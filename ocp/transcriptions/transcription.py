@@ -10,7 +10,10 @@ solution type; choose with :func:`transcribe` or by class::
 
 The NLP of a transcription is built once; new parameter values re-solve it
 without a rebuild (``n_builds`` stays 1). Mesh refinement builds one NLP per
-mesh; the final mesh's transcription is ``sol.transcription``.
+mesh from the problem compiled once (:class:`ocp.transcriptions.nlp.GridFree`),
+and starts a round whose previous mesh was already accurate from that mesh's
+solution and multipliers interpolated; the final mesh's transcription is
+``sol.transcription``.
 """
 
 from __future__ import annotations
@@ -177,12 +180,16 @@ class Collocation(Transcription):
     scaling : {"auto", "none"} or dict
         Scaling of the NLP (see :class:`ocp.transcriptions.nlp.Transcription` and
         :mod:`ocp.definition.scaling`).
+    grid_free : GridFree, optional
+        Reuse another transcription's compiled problem (see
+        :class:`ocp.transcriptions.nlp.Transcription`).
 
     Notes
     -----
     Every solution carries ``mesh_error``, the largest interval error
     estimate of :mod:`ocp.transcriptions.mesh` (relative; compare it with the accuracy you
-    need, or call :meth:`refine`), and ``objective_error``, the estimate of
+    need, or call :meth:`refine`; computed when first read, so a re-solve that does
+    not read it does not pay for it), and ``objective_error``, the estimate of
     the objective's error (NaN after one solve: it needs two meshes; see
     :meth:`refine`).
     """
@@ -280,7 +287,11 @@ class Collocation(Transcription):
 
         Notes
         -----
-        The error of an interval is the larger of its estimate (see
+        A round whose previous mesh's largest estimate is at most
+        :data:`WARM_REFINE_ERROR` starts from that mesh's solution and multipliers
+        interpolated (Ipopt's warm start; on the unexpanded graph, cheaper to build
+        than its few iterations would gain from expansion), other rounds from its
+        primal values. The error of an interval is the larger of its estimate (see
         :mod:`ocp.transcriptions.mesh`) and the path-constraint violation found inside it on
         the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
         relaxes bounds by about 1e-8), so refinement also closes gaps between
