@@ -525,8 +525,8 @@ class Transcription:
             A solution of another transcription of this problem.
         """
         other = sol.transcription
-        if len(sol.phases) != len(self.phases) or \
-                other.multiphase is not self.multiphase or \
+        same = other.problem is self.problem or other.multiphase is self.multiphase
+        if not same or len(sol.phases) != len(self.phases) or \
                 any(not hasattr(d, "dual_from") or type(d) is not type(o)
                     for d, o in zip(self.phases, other.phases, strict=True)):
             return None
