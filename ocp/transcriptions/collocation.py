@@ -339,8 +339,10 @@ class CollocationPhase(PhaseDiscretization):
 
         def density(values: np.ndarray, k: int, w: tuple = quad) -> np.ndarray:
             """Per-point multipliers (old mesh) -> per-point multipliers (this mesh)."""
-            rows = values.reshape(-1, k) / w[0][:, None]
             out = np.zeros((self.tau_c.size, k))
+            if k == 0:  # a phase without controls
+                return out
+            rows = values.reshape(-1, k) / w[0][:, None]
             for i in range(k):
                 out[:, i] = np.interp(self.tau_c, old.tau_c, rows[:, i])
             return out * w[1][:, None]
