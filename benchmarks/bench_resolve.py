@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -180,6 +181,15 @@ def main() -> None:
         if not args.skip_moon:
             moon(args.repeats)
     base = baseline_tree(args.baseline)
+    try:
+        baseline_runs(base, args)
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
+    print(f"load average {os.getloadavg()}")
+
+
+def baseline_runs(base: Path, args: Any) -> None:
+    """The brachistochrone and alp rider runs against the baseline tree ``base``."""
     if not args.skip_small:
         small(base, args)
     if args.alp:
@@ -188,7 +198,6 @@ def main() -> None:
             print(f"alp rider, refine(1e-6) from N = 20, {who}: {r['cpu']:.2f} s CPU, "
                   f"J = {r['J']:.8f} (published 2030.85609), {r['rounds']} rounds, final "
                   f"N = {r['N']}, iterations {r['iterations']}, converged {r['converged']}")
-    print(f"load average {os.getloadavg()}")
 
 
 def small(base: Path, args: Any) -> None:
