@@ -17,6 +17,7 @@ interval function is mapped over the N intervals.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import cache
 from typing import Any
 
 import casadi as ca
@@ -37,14 +38,43 @@ from .discretization import (
 
 
 def radau_points(d: int) -> np.ndarray:
-    """The ``d`` Legendre-Gauss-Radau points in (0, 1], the last being 1.
+    """The ``d`` Legendre-Gauss-Radau points in (0, 1], the last being 1 (read-only,
+    computed once per degree).
 
     Parameters
     ----------
     d : int
         Number of points (the degree).
     """
-    return np.array(ca.collocation_points(d, "radau"), dtype=float)
+    return _radau_points(int(d))
+
+
+@cache
+def _radau_points(d: int) -> np.ndarray:
+    return _frozen(np.array(ca.collocation_points(d, "radau"), dtype=float))
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+def degree_matrices(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`collocation_matrices` of the degree-``d`` Radau points, computed once per
+    degree (read-only arrays: every mesh and every solve of that degree shares them).
+
+    Parameters
+    ----------
+    d : int
+        The degree.
+    """
+    return _degree_matrices(int(d))
+
+
+@cache
+def _degree_matrices(d: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    C, D, B = collocation_matrices(radau_points(d))
+    return _frozen(C), _frozen(D), _frozen(B)
 
 
 def collocation_matrices(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -93,17 +123,20 @@ class CollocationPhase(PhaseDiscretization):
         Normalised mesh points, increasing from 0 to 1 (N + 1 of them).
     degree : int
         Collocation points per interval (polynomial degree of the state).
+    functions : dict, optional
+        Where the interval function is kept for other meshes of the same phase and
+        degree (:attr:`ocp.transcriptions.nlp.GridFree.functions`).
     """
 
     method = "collocation"
 
     def __init__(self, cp: CompiledPhase, times: PhaseTimes, mesh: np.ndarray,
-                 degree: int) -> None:
+                 degree: int, functions: dict | None = None) -> None:
         super().__init__(cp, times)
         self.tau = np.asarray(mesh, dtype=float)
         self.N, self.d = self.tau.size - 1, degree
         self.c = radau_points(degree)
-        self.C, self.D, self.B = collocation_matrices(self.c)
+        self.C, self.D, self.B = degree_matrices(degree)
         self.u0_weights = lagrange_basis(self.c, np.zeros(1))[0] if degree > 1 \
             else np.ones(1)
         nx, nu, N, d = cp.nx, cp.nu, self.N, degree
@@ -111,9 +144,15 @@ class CollocationPhase(PhaseDiscretization):
         self.iU = slice(self.iX.stop, self.iX.stop + nu * N * d)
         self.it0 = self.iU.stop
         self.iZ = slice(self.it0 + self.nt0, self.it0 + self.nt0 + nx * N * d)
-        self.G = self._interval_function()
+        key = ("radau interval", cp, degree)
+        functions = {} if functions is None else functions
+        if key not in functions:
+            functions[key] = self._interval_function()
+        self.G = functions[key]
         # normalised times of the collocation points, interval by interval
         self.tau_c = (self.tau[:-1, None] + np.diff(self.tau)[:, None] * self.c[None, :]).ravel()
+        self.tau_points = np.concatenate([[0.0], self.tau_c])  # every point, normalised
+        self._check_bases: dict[int, tuple[np.ndarray, ...]] = {}
 
     def _interval_function(self) -> ca.Function:
         cp, d = self.cp, self.d
@@ -181,10 +220,10 @@ class CollocationPhase(PhaseDiscretization):
         X = wb[self.iX].reshape(N + 1, nx)
         U = wb[self.iU].reshape(N * d, nu)
         Z = wb[self.iZ].reshape(N * d, nx)
-        t = t0 + (T - t0) * np.r_[0.0, self.tau_c]
+        t = t0 + (T - t0) * self.tau_points
         u0 = self.u0_weights @ U[:d] if nu else np.zeros(0)
         return PhaseData(t0, T, t, np.vstack([X[:1], Z]), U, np.vstack([u0[None, :], U]),
-                         t0 + (T - t0) * self.tau, np.r_[pv, vv, t0, T],
+                         t0 + (T - t0) * self.tau, np.concatenate([pv, vv, (t0, T)]),
                          {"X": X, "Z": Z, "U": U})
 
     def local(self, data: PhaseData, k: np.ndarray,
@@ -235,27 +274,31 @@ class CollocationPhase(PhaseDiscretization):
         per_interval : int
             Points per mesh interval.
         """
+        if per_interval not in self._check_bases:
+            # the check points' fractions, and so the polynomial bases there, depend on the
+            # mesh only: computed once per per_interval
+            N, d = self.N, self.d
+            frac = np.arange(per_interval) / per_interval
+            k = np.concatenate([np.repeat(np.arange(N), per_interval), [N - 1]])
+            theta = np.concatenate([np.tile(frac, N), [1.0]])
+            inside = theta >= self.c[0]
+            bu = lagrange_basis(self.c, theta[inside]) if d > 1 \
+                else np.ones((int(inside.sum()), 1))
+            self._check_bases[per_interval] = (
+                k, theta, lagrange_basis(np.concatenate([[0.0], self.c]), theta), inside, bu)
+        k, theta, bx, inside, bu = self._check_bases[per_interval]
         t = self.check_points(data, per_interval)
-        x, _ = self.sample(data, t)
-        k = segment_index(data.mesh, t)
-        h = np.diff(data.mesh)[k]
-        theta = np.where(h > 0, (t - data.mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
         N, d = self.N, self.d
+        Zf = np.concatenate([data.raw["X"][:N, None, :], data.raw["Z"].reshape(N, d, -1)],
+                            axis=1)[k]
+        x = np.einsum("nr,nri->ni", bx, Zf)
         Uk = data.raw["U"].reshape(N, d, -1)
-        c1 = self.c[0]
-        inside = theta >= c1
         u = np.empty((t.size, Uk.shape[2]))
-        if d > 1 and np.any(inside):
-            u[inside] = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta[inside]),
-                                  Uk[k[inside]])
-        elif np.any(inside):
-            u[inside] = Uk[k[inside], 0, :]
-        before = ~inside
-        kb = k[before]
+        u[inside] = np.einsum("nr,nri->ni", bu, Uk[k[inside]])
+        kb = k[~inside]
         first = Uk[kb, 0, :]
         left = np.where((kb > 0)[:, None], Uk[np.maximum(kb - 1, 0), d - 1, :], first)
-        s = (theta[before] / c1)[:, None]
-        u[before] = left + s * (first - left)
+        u[~inside] = left + (theta[~inside] / self.c[0])[:, None] * (first - left)
         return t, x, u
 
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
@@ -279,3 +322,66 @@ class CollocationPhase(PhaseDiscretization):
             if k in out:
                 out[k] = out[k].reshape(shp)
         return out
+
+    def weights(self) -> np.ndarray:
+        """Quadrature weight ``h_k B_j`` of every collocation point (normalised time), (N d,)."""
+        return (np.diff(self.tau)[:, None] * self.B[None, :]).ravel()
+
+    def dual_from(self, old: CollocationPhase, lam_g: dict[str, np.ndarray],
+                  lam_x: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        """Multipliers for this mesh from those of the same phase on another mesh.
+
+        A multiplier of a row imposed at a collocation point (a path constraint, a bound
+        of a state or control there) is a density times the point's quadrature weight
+        ``h_k B_j``, that of a collocation defect the costate times ``B_j``: the densities
+        are interpolated linearly in normalised time and multiplied by the new weights.
+        The continuity rows' carry the
+        costate at the mesh points, interpolated as they are; the bounds of the mesh-point
+        states get none (the collocation point that ends each interval carries the same
+        bound); rows that do not depend on the mesh (boundary, time) keep theirs.
+
+        Parameters
+        ----------
+        old : CollocationPhase
+            The discretisation the multipliers belong to (same phase, any mesh or degree).
+        lam_g : dict
+            Its constraint multipliers by block name, flat (the user's units).
+        lam_x : ndarray
+            Its block of the bound multipliers.
+
+        Returns
+        -------
+        tuple
+            ``(lam_g by block name, lam_x block)`` for this mesh.
+        """
+        nx, nu = self.cp.nx, self.cp.nu
+        quad = (old.weights(), self.weights())
+        nodal = (np.tile(old.B, old.N), np.tile(self.B, self.N))
+
+        def density(values: np.ndarray, k: int, w: tuple = quad) -> np.ndarray:
+            """Per-point multipliers (old mesh) -> per-point multipliers (this mesh)."""
+            out = np.zeros((self.tau_c.size, k))
+            if k == 0:  # a phase without controls
+                return out
+            rows = values.reshape(-1, k) / w[0][:, None]
+            for i in range(k):
+                out[:, i] = np.interp(self.tau_c, old.tau_c, rows[:, i])
+            return out * w[1][:, None]
+
+        out = dict(lam_g)
+        # a defect row sum_r C_rj Z_r - h f has no 1/h: its multiplier is B_j times the
+        # costate (O(1) in h), where a row or bound at a point carries h B_j times a density
+        out["collocation"] = density(lam_g["collocation"], nx, nodal).ravel()
+        if "path" in lam_g:
+            out["path"] = density(lam_g["path"], self.cp.npath).ravel()
+        cont = lam_g["continuity"].reshape(-1, nx)
+        out["continuity"] = np.column_stack([np.interp(self.tau[1:], old.tau[1:], cont[:, i])
+                                             for i in range(nx)]).ravel()
+        lx = np.zeros(self.size())
+        if self.nT:
+            lx[0] = lam_x[0]
+        if self.nt0:
+            lx[self.it0] = lam_x[old.it0]
+        lx[self.iU] = density(lam_x[old.iU], nu).ravel()
+        lx[self.iZ] = density(lam_x[old.iZ], nx).ravel()
+        return out, lx

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -154,6 +155,23 @@ def integration_matrix(nodes: np.ndarray) -> np.ndarray:
     return out
 
 
+@cache
+def estimate_matrix(d: int) -> tuple[np.ndarray, np.ndarray]:
+    """The degree-``d + 1`` Radau points of the error estimate and their
+    :func:`integration_matrix` (read-only; computed once per degree ``d``).
+
+    Parameters
+    ----------
+    d : int
+        The collocation degree.
+    """
+    ch = np.array(radau_points(d + 1))
+    Ihat = integration_matrix(ch)
+    ch.setflags(write=False)
+    Ihat.setflags(write=False)
+    return ch, Ihat
+
+
 def interval_errors(ph: Any) -> np.ndarray:
     """Relative error estimate of every mesh interval of a collocation phase solution.
 
@@ -169,8 +187,7 @@ def interval_errors(ph: Any) -> np.ndarray:
     """
     disc: CollocationPhase = ph.discretization
     data, N, d = ph.data, disc.N, disc.d
-    ch = radau_points(d + 1)
-    Ihat = integration_matrix(ch)
+    ch, Ihat = estimate_matrix(d)
     mesh, h = data.mesh, np.diff(data.mesh)
     k = np.repeat(np.arange(N), d + 1)
     theta = np.tile(ch, N)
@@ -191,6 +208,17 @@ def interval_errors(ph: Any) -> np.ndarray:
         qscale = 1.0 + np.abs(q_col.sum(axis=0))
         err = np.maximum(err, np.max(np.abs(q_hat - q_col) / qscale, axis=1))
     return err
+
+
+def mesh_error(sol: Any) -> float:
+    """The largest interval error estimate of a collocation solution, over its phases.
+
+    Parameters
+    ----------
+    sol : Solution
+        A collocation solution.
+    """
+    return float(max(interval_errors(ph).max() for ph in sol.phases))
 
 
 def refine_mesh(tau: np.ndarray, err: np.ndarray, tol: float, degree: int,

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -60,6 +61,78 @@ INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
 BOUNDARY_KINDS = ("initial", "terminal", "boundary", "time")
 
 
+@dataclass
+class GridFree:
+    """What a transcription's build does not take from its grid, shared by the
+    transcriptions of one problem on other meshes (mesh refinement builds each
+    round's NLP from it: the problem is compiled, its default guesses and its
+    scaling references are derived once).
+
+    Attributes
+    ----------
+    multiphase : MultiPhaseProblem
+        The problem as phases.
+    times : list of PhaseTimes
+        How each phase's times enter the NLP.
+    compiled : list of CompiledPhase
+        Each phase's functions.
+    choices : DefaultChoices
+        The replaceable bare defaults of the guesses.
+    ends, plain : list of tuple of SX
+        Each phase's state start and end guesses, with the replaceable defaults
+        and without them.
+    controls : list of SX
+        Each phase's control guess.
+    variables : SX
+        The decision variables' guess.
+    sizes : list or None
+        The states' sizes for the scaling (:mod:`ocp.definition.sizes`), once known.
+    functions : dict
+        Grid-independent CasADi functions of a discretisation, by key.
+    """
+
+    multiphase: MultiPhaseProblem
+    times: list[Any]
+    compiled: list[CompiledPhase]
+    choices: DefaultChoices
+    ends: list[tuple[ca.SX, ca.SX]]
+    plain: list[tuple[ca.SX, ca.SX]]
+    controls: list[ca.SX]
+    variables: ca.SX
+    sizes: list[list[float | None]] | None = None
+    functions: dict[Any, Any] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, multiphase: MultiPhaseProblem) -> GridFree:
+        """Compile a validated problem and derive its default guesses.
+
+        Parameters
+        ----------
+        multiphase : MultiPhaseProblem
+            The problem.
+        """
+        mp = multiphase
+        choices = DefaultChoices()
+        ends: list[tuple[ca.SX, ca.SX]] = []
+        plain: list[tuple[ca.SX, ca.SX]] = []
+        controls = []
+        for i, ph in enumerate(mp.phases):
+            ends.append(state_ends(ph, _previous_ends(mp, i, ends), choices))
+            plain.append(state_ends(ph, _previous_ends(mp, i, plain)))
+            controls.append(control_guess(ph, choices))
+        return cls(mp, mp.times(), [CompiledPhase(ph) for ph in mp.phases], choices, ends,
+                   plain, controls, variable_guess(mp._shared, choices))
+
+
+def _previous_ends(mp: MultiPhaseProblem, i: int, ends: list) -> dict[str, ca.SX] | None:
+    """End guesses of the phase that phase ``i`` is time-linked from, by state name."""
+    for a, b in mp.time_links:
+        if b == i and a < i:
+            prev = mp.phases[a]
+            return {n: ends[a][1][k] for k, n in enumerate(prev.state_names)}
+    return None
+
+
 class Transcription:
     """Base of :class:`ocp.MultipleShooting` and :class:`ocp.Collocation`.
 
@@ -88,11 +161,17 @@ class Transcription:
         and guesses that are far from 1 (see :mod:`ocp.definition.scaling`); ``"none"``
         solves the NLP exactly as posed; a dict overrides references by name
         (``{"h": 1e4, "v": (0, 300), "objective": 1e3, "time": 10}``).
+    grid_free : GridFree, optional
+        The grid-independent part of another transcription of the same problem
+        (:attr:`grid_free`), reused instead of compiled again (mesh refinement).
 
     Attributes
     ----------
     n_builds : int
         How many times the NLP was built (stays 1: re-solves never rebuild).
+    grid_free : GridFree
+        What the build does not take from the grid (compiled phases, default guesses,
+        scaling sizes), shared with the transcriptions on other meshes it makes.
     """
 
     method = "base"
@@ -100,10 +179,15 @@ class Transcription:
     def __init__(self, problem: OptimalControlProblem | MultiPhaseProblem,
                  ipopt_options: dict | None = None, expand: bool = False,
                  verify: str = "warn", verify_tol: float = 1e-6,
-                 verify_points: int = 10, scaling: Any = "auto") -> None:
-        self.multiphase = as_multiphase(problem)
+                 verify_points: int = 10, scaling: Any = "auto",
+                 grid_free: GridFree | None = None) -> None:
         self.scaling_options = check_scaling(scaling)
-        self.multiphase.validate()
+        if grid_free is None:
+            mp = as_multiphase(problem)
+            mp.validate()
+            grid_free = GridFree.of(mp)
+        self.grid_free = grid_free
+        self.multiphase = grid_free.multiphase
         if verify not in VERIFY_MODES:
             raise ProblemDefinitionError(f"verify must be one of {VERIFY_MODES}, got {verify!r}")
         self.problem = problem
@@ -112,11 +196,14 @@ class Transcription:
         self.verify, self.verify_tol = verify, float(verify_tol)
         self.verify_points = positive_int(verify_points, "verify_points")
         self.n_builds = 0
-        self._solvers: dict[bool, Any] = {}
+        self._solvers: dict[tuple[bool, bool], Any] = {}
         self._nlp_fn: ca.Function | None = None
         self._grad_fn: ca.Function | None = None
-        self.times = self.multiphase.times()
-        self.compiled = [CompiledPhase(ph) for ph in self.multiphase.phases]
+        self._last_bounds: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+        self._last_default: tuple[bytes, np.ndarray] | None = None
+        self._last_start: tuple[bytes, float] | None = None
+        self.times = grid_free.times
+        self.compiled = grid_free.compiled
         self.phases: list[PhaseDiscretization] = self._discretize()
         self._build()
 
@@ -133,27 +220,23 @@ class Transcription:
         w, P = ca.MX.sym("w", nw), ca.MX.sym("p", mp.np)
         V = w[self.iV]
         pieces: list[PhaseNLP] = []
-        ends: list[tuple[ca.SX, ca.SX]] = []
-        plain: list[tuple[ca.SX, ca.SX]] = []  # the same without replaceable defaults
-        choices = DefaultChoices()
-        for i, (disc, ph) in enumerate(zip(self.phases, mp.phases, strict=True)):
-            a, b = state_ends(ph, self._previous_ends(i, ends), choices)
-            ends.append((a, b))
-            plain.append(state_ends(ph, self._previous_ends(i, plain)))
+        gf = self.grid_free
+        choices = gf.choices
+        for i, disc in enumerate(self.phases):
             wb = w[self.offsets[i]:self.offsets[i] + sizes[i]]
-            pieces.append(disc.build(wb, P, V, (a, b), control_guess(ph, choices)))
+            pieces.append(disc.build(wb, P, V, gf.ends[i], gf.controls[i]))
         g, lbg, ubg, J_end = self._constraints(pieces, P, V)
         J = J_end + sum(pn.lagrange for pn in pieces)
         lbw = ca.vertcat(*[pn.lbw for pn in pieces], *self._var_bounds(0))
         ubw = ca.vertcat(*[pn.ubw for pn in pieces], *self._var_bounds(1))
-        w0 = ca.vertcat(*[pn.w0 for pn in pieces], variable_guess(mp._shared, choices))
+        w0 = ca.vertcat(*[pn.w0 for pn in pieces], gf.variables)
         self._bounds = ca.Function("bounds", [mp.p], [lbw, ubw, lbg, ubg])
         self._guess = ca.Function("guess", [mp.p, *choices.symbols], [w0])
         self._choices = choices
         self._choice_bounds = choices.bound_function(mp.p)
         self._nlp = {"x": w, "p": P, "f": J, "g": g}
         self.n_w, self.n_g = nw, int(g.numel())
-        self.scaling = self._scaling(plain)
+        self.scaling = self._scaling(gf.plain)
         self._scaled = self._scaled_nlp()
         self.n_builds += 1
 
@@ -168,7 +251,12 @@ class Transcription:
             raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
                                          "variables of the problem (nor 'objective', 'time')")
         sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
-        sizes = self._state_sizes(ends)
+        if self.grid_free.sizes is None or not self.scaling_options["auto"]:
+            sizes = self._state_sizes(ends)
+            if self.scaling_options["auto"]:
+                self.grid_free.sizes = sizes
+        else:
+            sizes = self.grid_free.sizes
         for ph, lay, tm, (a, b), sz in zip(mp.phases, self.layouts, self.times, ends, sizes,
                                            strict=True):
             states, controls = phase_quantities(ph, a, b)
@@ -239,14 +327,6 @@ class Transcription:
                              [ca.DM(sc.D) * ws + ca.DM(sc.c)])
         return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
 
-    def _previous_ends(self, i: int, ends: list) -> dict[str, ca.SX] | None:
-        """End guesses of the phase that phase ``i`` is time-linked from, by state name."""
-        for a, b in self.multiphase.time_links:
-            if b == i and a < i:
-                prev = self.multiphase.phases[a]
-                return {n: ends[a][1][k] for k, n in enumerate(prev.state_names)}
-        return None
-
     def _var_bounds(self, side: int) -> list[ca.SX]:
         sh = self.multiphase._shared
         return [sh.var_bounds[n][side] for n in sh.var_names]
@@ -316,18 +396,24 @@ class Transcription:
                                  "use .layouts")
         return self.layouts[0]
 
-    def _solver(self, warm: bool) -> Any:
-        if warm not in self._solvers:
+    def _solver(self, warm: bool, expand: bool | None = None) -> Any:
+        """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers
+        given; ``expand`` overrides the transcription's for this solver only (mesh
+        refinement's warm rounds, where building the expanded graph costs more than the
+        few iterations it would speed up)."""
+        key = (warm, self.expand if expand is None else bool(expand))
+        if key not in self._solvers:
             ipopt = dict(self.ipopt_options)
             if warm:
                 ipopt.update(warm_start_init_point="yes", warm_start_bound_push=1e-9,
                              warm_start_mult_bound_push=1e-9, mu_init=1e-6)
             opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False,
-                                    "error_on_fail": False, "expand": self.expand}
+                                    "error_on_fail": False, "expand": key[1],
+                                    "calc_lam_p": False}
             name = f"{self.multiphase.name}_{self.method}"
             nlp: Any = self._scaled
-            self._solvers[warm] = ca.nlpsol(name, "ipopt", nlp, opts)
-        return self._solvers[warm]
+            self._solvers[key] = ca.nlpsol(name, "ipopt", nlp, opts)
+        return self._solvers[key]
 
     # ------------------------------------------------------------------ solve
     def param_vector(self, params: dict[str, float]) -> np.ndarray:
@@ -365,7 +451,14 @@ class Transcription:
     def _repaired_default(self, pv: np.ndarray) -> np.ndarray:
         """The default guess, with bare defaults replaced where they make the NLP
         non-finite and another point within the bounds does not (see
-        :mod:`ocp.definition.guess`)."""
+        :mod:`ocp.definition.guess`); the last parameter values' is kept (a copy is
+        returned), so re-solves from the default guess do not derive it again."""
+        key = pv.tobytes()
+        if self._last_default is None or self._last_default[0] != key:
+            self._last_default = (key, self._derive_default(pv))
+        return self._last_default[1].copy()
+
+    def _derive_default(self, pv: np.ndarray) -> np.ndarray:
         n = len(self._choices.names)
 
         def at(use: np.ndarray, val: np.ndarray) -> np.ndarray:
@@ -422,6 +515,36 @@ class Transcription:
         parts.append(np.array([sol.variables[k] for k in self.multiphase.var_names]))
         return np.concatenate(parts)
 
+    def dual_from(self, sol: Solution) -> tuple[np.ndarray, np.ndarray] | None:
+        """Multipliers ``(lam_x, lam_g)`` for this NLP from a solution of the same problem
+        on another collocation mesh (each phase's ``dual_from``), or None where a phase's
+        discretisation cannot map them (multiple shooting, another method).
+
+        Parameters
+        ----------
+        sol : Solution
+            A solution of another transcription of this problem.
+        """
+        other = sol.transcription
+        same = other.problem is self.problem or other.multiphase is self.multiphase
+        if not same or len(sol.phases) != len(self.phases) or \
+                any(not hasattr(d, "dual_from") or type(d) is not type(o)
+                    for d, o in zip(self.phases, other.phases, strict=True)):
+            return None
+        lam_x, lam_g = np.zeros(self.n_w), np.zeros(self.n_g)
+        for i, (d, o) in enumerate(zip(self.phases, other.phases, strict=True)):
+            lay, olay = self.layouts[i], other.layouts[i]
+            blocks = {k: sol.lam_g[sl] for k, sl in olay.blocks.items()}
+            ob = other.offsets[i]
+            g, x = d.dual_from(o, blocks, sol.lam_x[ob:ob + o.size()])
+            for k, sl in lay.blocks.items():
+                lam_g[sl] = g[k]
+            lam_x[self.offsets[i]:self.offsets[i] + d.size()] = x
+        for k, sl in self.link_blocks.items():
+            lam_g[sl] = sol.lam_g[other.link_blocks[k]]
+        lam_x[self.iV] = sol.lam_x[other.iV]
+        return lam_x, lam_g
+
     def _guess_from_trajectory(self, traj: Trajectory) -> np.ndarray:
         w0 = self.default_guess()
         parts = []
@@ -453,7 +576,11 @@ class Transcription:
             if warm_start.transcription is self:
                 return {"x0": warm_start.w, "lam_x0": warm_start.lam_x,
                         "lam_g0": warm_start.lam_g}
-            return {"x0": self.guess_from(warm_start)}
+            x0 = self.guess_from(warm_start)
+            dual = self.dual_from(warm_start)
+            if dual is None:
+                return {"x0": x0}
+            return {"x0": x0, "lam_x0": dual[0], "lam_g0": dual[1]}
         if isinstance(guess, Solution):
             return {"x0": guess.w if guess.transcription is self else self.guess_from(guess)}
         if isinstance(guess, Trajectory):
@@ -467,11 +594,16 @@ class Transcription:
 
     def _check_start(self, x0: np.ndarray, pv: np.ndarray) -> float:
         """The objective at the start; a clear error if the start makes the NLP
-        non-finite, naming the expression."""
+        non-finite, naming the expression (the last start's objective is kept: a re-solve
+        from the same start does not evaluate it again)."""
+        key = pv.tobytes() + x0.tobytes()
+        if self._last_start is not None and self._last_start[0] == key:
+            return self._last_start[1]
         with np.errstate(all="ignore"):
             f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
         if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
-            return float(f.ravel()[0])
+            self._last_start = (key, float(f.ravel()[0]))
+            return self._last_start[1]
         if not np.all(np.isfinite(x0)):
             raise ProblemDefinitionError("the initial guess has non-finite entries")
         sol = self._unpack_only(x0, pv)
@@ -512,7 +644,10 @@ class Transcription:
             transcription (grid, method) or a trajectory is resampled.
             By default, the default guess (see :mod:`ocp.definition.guess`).
         warm_start : Solution, optional
-            Start from this solution's primal and dual values (Ipopt warm start).
+            Start from this solution's primal and dual values (Ipopt warm start). A
+            solution on another collocation mesh of the same problem is resampled, its
+            multipliers interpolated (:meth:`dual_from`); one of another method gives
+            its primal values only.
 
         Raises
         ------
@@ -526,16 +661,23 @@ class Transcription:
         return self._solve(params, guess, warm_start, self.verify)
 
     def _solve(self, params: dict[str, float] | None, guess: Any,
-               warm_start: Solution | None, verify_mode: str) -> Solution:
+               warm_start: Solution | None, verify_mode: str,
+               expand: bool | None = None) -> Solution:
         params = {} if params is None else params
         pv = self.param_vector(params)
-        lbw, ubw, lbg, ubg = (np.array(v, dtype=float).ravel() for v in self._bounds(pv))
-        self._check_bound_order(lbw, ubw, lbg, ubg)
+        lbw, ubw, lbg, ubg = self._bounds_at(pv)
         args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg,
                 **self._start(pv, params, guess, warm_start)}
-        f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
-        solver = self._solver(warm_start is not None and "lam_g0" in args)
-        fref = self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
+        if warm_start is not None and warm_start.transcription is self and \
+                np.array_equal(pv, self.param_vector(warm_start.params)) and \
+                math.isfinite(warm_start.objective) and math.isfinite(warm_start.objective_scale):
+            # a re-solve at its own solution: f, g known finite, and the same NLP as the
+            # solve that found it (its objective scale), so its multipliers fit as they are
+            f0, fref = warm_start.objective, warm_start.objective_scale
+        else:
+            f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
+            fref = self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
+        solver = self._solver(warm_start is not None and "lam_g0" in args, expand)
         t0 = time.perf_counter()
         res = self._unscale(solver(**self._scale_args(args, fref)), fref)
         elapsed = time.perf_counter() - t0
@@ -548,11 +690,23 @@ class Transcription:
         verify(sol, verify_mode, self.verify_tol, self.verify_points)
         return sol
 
+    def _bounds_at(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``(lbw, ubw, lbg, ubg)`` at the parameter values ``pv``, checked (the last
+        parameter values' are kept: a re-solve at the same values reuses them)."""
+        key = pv.tobytes()
+        if self._last_bounds is None or self._last_bounds[0] != key:
+            b = tuple(np.array(v, dtype=float).ravel() for v in self._bounds(pv))
+            self._check_bound_order(*b)
+            for a in b:
+                a.setflags(write=False)
+            self._last_bounds = (key, b)
+        return self._last_bounds[1]
+
     def _scale_args(self, args: dict[str, Any], fref: float) -> dict[str, Any]:
         """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""
         sc = self.scaling
         out = dict(args)
-        out["p"] = np.r_[args["p"], 1.0 / fref]
+        out["p"] = np.append(args["p"], 1.0 / fref)
         for k in ("x0", "lbx", "ubx"):
             out[k] = sc.x_to_scaled(args[k])
         out["lbg"], out["ubg"] = sc.r * args["lbg"], sc.r * args["ubg"]

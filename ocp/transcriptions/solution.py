@@ -101,10 +101,27 @@ class Solution:
         self.__dict__.update(kw)
 
     def __getattr__(self, name: str) -> Any:
+        deferred = self.__dict__.get("deferred")
+        if deferred and name in deferred:
+            value = deferred[name](self)  # not popped: a copy of __dict__ shares the dict
+            self.__dict__[name] = value
+            return value
         if name in _PER_PHASE and "phases" in self.__dict__:
             raise AttributeError(f"a multi-phase solution has no {name!r}; use "
                                  f"sol.phases[i].{name} or sol.trajectory()")
         raise AttributeError(name)
+
+    def defer(self, name: str, compute: Any) -> None:
+        """Compute the attribute ``name`` as ``compute(self)`` when it is first read.
+
+        Parameters
+        ----------
+        name : str
+            The attribute (setting it directly overrides the deferred value).
+        compute : callable
+            ``solution -> value``.
+        """
+        self.__dict__.setdefault("deferred", {})[name] = compute
 
     # python-control / scipy style aliases
     @property

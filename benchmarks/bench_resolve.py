@@ -1,0 +1,219 @@
+"""Re-solves and mesh refinement (issue 31, items 2 and 3), against rockit and a baseline.
+
+Run:  pip install -e ".[bench]" && python -m benchmarks.bench_resolve [--baseline fc46d09]
+      [--repeats 30] [--alp]
+
+1. **Moon lander re-solves** (the suite's ``moon_lander``: multiple shooting N = 20 with
+   4 RK4 steps per interval; Radau collocation N = 10, degree 3), interleaved solve by
+   solve in one process (CPU time, ``time.process_time``, medians):
+
+   * this toolkit's ``solve(warm_start=sol)`` at its own solution (Ipopt: 1 iteration);
+   * this toolkit's ``solve()`` from the default guess;
+   * rockit's re-solve of its built ``Ocp`` from the same guess (the same problem through
+     ``benchmarks.ocp_suite``'s translation, same N, scheme and Ipopt options).
+
+   Goals: warm re-solve <= 0.25x rockit's re-solve; re-solve from the guess <= rockit's.
+
+2. **Small builds** (the baseline revision, ``--baseline``, loaded from git into a
+   temporary directory and run in fresh processes, alternating with the current tree
+   process by process): brachistochrone, Radau N = 5, build + solve, and
+   ``refine(tol=1e-6)``. Goal: no slower than the baseline.
+
+3. **Alp rider** (``--alp``; Betts 2010, pp. 163-165, J* = 2030.85609): Radau from
+   N = 20 with ``refine(tol=1e-6)``, CPU per run, current and baseline alternating.
+   Goal: <= 5 s CPU.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SMALL = r"""
+import json, sys, time, warnings
+import numpy as np
+from ocp import Collocation
+try:
+    from tests.oracles.ocp_suite.problems import brachistochrone
+except ImportError:  # a revision before the oracles folder (0.2.0: tests/ocp_suite)
+    from tests.ocp_suite.problems import brachistochrone
+warnings.simplefilter("ignore")
+repeats = int(sys.argv[1])
+def one():
+    return Collocation(brachistochrone(), intervals=5).solve()
+def ref():
+    return Collocation(brachistochrone(), intervals=5).refine(tol=1e-6)
+one(); ref()  # imports, CasADi's first calls
+out = {}
+for name, f in (("build_solve", one), ("refine", ref)):
+    ts = []
+    for _ in range(repeats):
+        c = time.process_time(); s = f(); ts.append(time.process_time() - c)
+    out[name] = float(np.median(ts))
+    out[name + "_J"] = s.objective
+print(json.dumps(out))
+"""
+
+ALP = r"""
+import json, time, warnings
+from ocp import Collocation
+from tests.oracles.ocp_suite.alp_rider import alp_rider
+warnings.simplefilter("ignore")
+c = time.process_time()
+sol = Collocation(alp_rider(), intervals=20).refine(tol=1e-6, max_rounds=10)
+print(json.dumps({"cpu": time.process_time() - c, "J": sol.objective,
+                  "rounds": len(sol.mesh_history), "N": int(sol.N),
+                  "iterations": [r.iterations for r in sol.mesh_history],
+                  "converged": bool(sol.mesh_converged)}))
+"""
+
+
+def baseline_tree(rev: str) -> Path:
+    """The baseline's ``ocp`` and ``tests`` in a temporary directory (``git archive``)."""
+    tmp = Path(tempfile.mkdtemp(prefix="ocp_baseline_"))
+    arch = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "ocp", "tests"],
+                          check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(tmp)], input=arch, check=True)
+    alp = "tests/oracles/ocp_suite/alp_rider.py"  # the problem, if the baseline lacks it
+    if (tmp / alp).parent.is_dir() and not (tmp / alp).exists():
+        (tmp / alp).write_text((ROOT / alp).read_text())
+    return tmp
+
+
+def child(tree: Path, code: str, *args: str) -> dict[str, Any]:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run([sys.executable, "-c", code, *args], cwd=tree, env=env,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def alternate(base: Path, code: str, runs: int, *args: str) -> tuple[list, list]:
+    """Fresh processes, baseline and current alternating (the other first every second)."""
+    old, new = [], []
+    for k in range(runs):
+        order = [(base, old), (ROOT, new)][:: 1 if k % 2 == 0 else -1]
+        for tree, acc in order:
+            acc.append(child(tree, code, *args))
+    return old, new
+
+
+# ------------------------------------------------------------------ moon lander
+def rockit_moon(method: str) -> Any:
+    from rockit import DirectCollocation, MultipleShooting
+
+    from benchmarks.ocp_suite import rockit_problem
+    from tests.oracles.ocp_suite.problems import moon_lander
+
+    N = 20 if method == "ms" else 10
+    ocp, _ = rockit_problem(moon_lander(), N, 3)
+    ocp.method(MultipleShooting(N=N, M=4, intg="rk") if method == "ms"
+               else DirectCollocation(N=N, degree=3, scheme="radau"))
+    ocp.solve()  # build (transcription) and first solve
+    return ocp
+
+
+def moon(repeats: int) -> None:
+    from ocp import Collocation, MultipleShooting
+    from tests.oracles.ocp_suite.problems import moon_lander
+
+    for method in ("ms", "radau"):
+        tr = MultipleShooting(moon_lander(), nodes=20) if method == "ms" else \
+            Collocation(moon_lander(), intervals=10)
+        sol = tr.solve()
+        ocp = rockit_moon(method)
+        fns = {"warm": lambda tr=tr, sol=sol: tr.solve(warm_start=sol),
+               "guess": tr.solve, "rockit": ocp.solve}
+        if method == "ms":  # rockit's NLP is expanded (benchmarks.ocp_suite): so is this one
+            trx = MultipleShooting(moon_lander(), nodes=20, expand=True)
+            trx.solve()
+            fns["expanded"] = trx.solve
+        runs: dict[str, list[float]] = {k: [] for k in fns}
+        iters: dict[str, int] = {}
+        for k in range(repeats):
+            names = list(fns) if k % 2 == 0 else list(fns)[::-1]
+            for name in names:
+                c = time.process_time()
+                out = fns[name]()
+                runs[name].append(time.process_time() - c)
+                iters[name] = (int(out.stats["iter_count"]) if name == "rockit"
+                               else out.iterations)
+        med = {k: statistics.median(v) * 1e3 for k, v in runs.items()}
+        J = float(ocp._method.opti.debug.value(ocp._method.opti.f))
+        label = "multiple shooting N = 20" if method == "ms" else "Radau N = 10, degree 3"
+        print(f"moon lander, {label}: CPU ms per solve (median of {repeats}), iterations")
+        for name, what in (("warm", "toolkit solve(warm_start=sol)"),
+                           ("guess", "toolkit solve() from the guess"),
+                           ("expanded", "the same, expand=True"),
+                           ("rockit", "rockit re-solve from the guess")):
+            if name in med:
+                print(f"  {what:34s} {med[name]:7.3f} ms  {iters[name]:3d} it")
+        extra = (f", expanded / rockit {med['expanded'] / med['rockit']:.2f}"
+                 if "expanded" in med else "")
+        print(f"  ratio warm / rockit {med['warm'] / med['rockit']:.2f} (goal <= 0.25); "
+              f"guess / rockit {med['guess'] / med['rockit']:.2f} (goal <= 1){extra}; "
+              f"objective {sol.objective:.10f}, rockit {J:.10f}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--baseline", default="fc46d09")
+    ap.add_argument("--repeats", type=int, default=30)
+    ap.add_argument("--processes", type=int, default=3, help="fresh processes per tree")
+    ap.add_argument("--alp", action="store_true", help="also the alp rider (minutes)")
+    ap.add_argument("--skip-moon", action="store_true")
+    ap.add_argument("--skip-small", action="store_true")
+    args = ap.parse_args()
+    print(f"load average {os.getloadavg()}; {os.cpu_count()} cores")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if not args.skip_moon:
+            moon(args.repeats)
+    base = baseline_tree(args.baseline)
+    try:
+        baseline_runs(base, args)
+    finally:
+        shutil.rmtree(base, ignore_errors=True)
+    print(f"load average {os.getloadavg()}")
+
+
+def baseline_runs(base: Path, args: Any) -> None:
+    """The brachistochrone and alp rider runs against the baseline tree ``base``."""
+    if not args.skip_small:
+        small(base, args)
+    if args.alp:
+        old, new = alternate(base, ALP, 1)
+        for who, r in (("baseline", old[0]), ("now", new[0])):
+            print(f"alp rider, refine(1e-6) from N = 20, {who}: {r['cpu']:.2f} s CPU, "
+                  f"J = {r['J']:.8f} (published 2030.85609), {r['rounds']} rounds, final "
+                  f"N = {r['N']}, iterations {r['iterations']}, converged {r['converged']}")
+
+
+def small(base: Path, args: Any) -> None:
+    """Brachistochrone builds, baseline and current in alternating fresh processes."""
+    old, new = alternate(base, SMALL, args.processes, str(max(3, args.repeats // 4)))
+    print(f"brachistochrone Radau N = 5 (median CPU per process, {args.processes} "
+          f"processes each, alternating): baseline {args.baseline} / now")
+    for key in ("build_solve", "refine"):
+        a = [r[key] * 1e3 for r in old]
+        b = [r[key] * 1e3 for r in new]
+        print(f"  {key:12s} {' '.join(f'{v:6.1f}' for v in a)} ms / "
+              f"{' '.join(f'{v:6.1f}' for v in b)} ms; ratio of medians "
+              f"{statistics.median(b) / statistics.median(a):.2f}; objectives "
+              f"{old[0][key + '_J']:.12g} / {new[0][key + '_J']:.12g}")
+
+
+if __name__ == "__main__":
+    sys.path.insert(0, str(ROOT))
+    main()
