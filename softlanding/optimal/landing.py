@@ -281,6 +281,46 @@ class BangBangLanding:
 
         return certify(self.transcribed, self.refined)
 
+    def uncertified_reason(self) -> str:
+        """One line: why :meth:`certify` gives no certificate (empty when it gives one)."""
+        if self.transcribed is None:
+            return ("no PMP certificate: the refined structure was re-solved from a "
+                    "neighbour's, without a transcription to read costates from")
+        return ""
+
+    def rows(self) -> list[tuple[str, object]]:
+        """The ``label, value`` rows of the printed table."""
+        rows: list[tuple[str, object]] = [
+            ("depth -x_f(T)" + (" (refined)" if self.refined is not None else ""), self.depth),
+            ("depth, transcribed", self.depth_transcribed), ("final time T", self.T),
+            ("arcs", " -> ".join(self.arcs)),
+            ("switch times", ", ".join(f"{t:.12g}" for t in self.switch_times)),
+            ("arrest force u_b", self.u_b), ("arrest condition active", self.arrest_active),
+            ("Ipopt status", self.status), ("Ipopt iterations", self.iterations),
+            ("solve time [s]", self.solve_time_s)]
+        if self.replay is not None:
+            rows += [("simulator replay depth", self.replay.depth),
+                     ("replay difference", self.replay_difference),
+                     ("replay feasible", self.replay.feasible)]
+        return rows
+
+    def figures(self, certificate: Any = None) -> list[Any]:
+        """The figures ``--plot`` writes: the landing, then the certificate's (if given).
+
+        Parameters
+        ----------
+        certificate : PMPCertificate, optional
+            Drawn as a second figure.
+        """
+        from softlanding.plots.paper import plot_bang_bang
+
+        figs = [plot_bang_bang(self)]
+        if certificate is not None:
+            from ocp import plot_certificate
+
+            figs.append(plot_certificate(certificate))
+        return figs
+
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,
         then its weight (see :func:`landing_schedule`)."""

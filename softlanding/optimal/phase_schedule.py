@@ -177,4 +177,29 @@ def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
     return z[:4]
 
 
-__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller"]
+def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[ForceSchedule, str]:
+    """A transcription's piecewise-constant force, from phase ``first`` on, then ``tail``:
+    the replay of a result that was not refined (exact up to the transcription's grid).
+
+    Parameters
+    ----------
+    sol : ocp.Solution
+        A transcribed multi-phase solution (multiple shooting: one force per interval).
+    tail : float
+        Force held after the last phase (the body's weight share).
+    first : int
+        First phase replayed (earlier ones, e.g. a flight, are propagated elsewhere).
+    """
+    durs: list[float] = []
+    vals: list[float] = []
+    for ph in sol.phases[first:]:
+        h = float(ph.T - ph.t0) / ph.N
+        if h > 0:
+            durs += [h] * ph.N
+            vals += [float(u) for u in ph.u[:, 0]]
+    return (ForceSchedule.from_arcs(durs, vals + [tail]),
+            "ForceSchedule (the transcription's piecewise-constant force)")
+
+
+__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller",
+           "transcribed_controller"]
