@@ -24,6 +24,7 @@ from softlanding.optimal.variants import (
     Variant,
     all_variants,
     built_in_names,
+    built_in_variants,
     find_variant,
 )
 
@@ -57,11 +58,11 @@ def _wanted(argv: Sequence[str] | None, command: str) -> list[Variant]:
     """The variants whose options the ``command`` parser needs for ``argv``."""
     args = list(argv or [])
     if command not in args:
-        return [v for v in all_variants() if v.source == "built-in"]
+        return built_in_variants()
     rest = args[args.index(command) + 1:]
     if "-h" in rest or "--help" in rest:
         return all_variants()
-    out = [v for v in all_variants() if v.source == "built-in"]
+    out = built_in_variants()
     name = named_variant(rest)
     if name is not None and name not in {v.name for v in out}:
         out.append(find_variant(name))
@@ -131,15 +132,17 @@ def variant_of(a: argparse.Namespace, ground: Any) -> tuple[Variant, dict[str, A
     v = find_variant(a.variant)
     names = tuple(getattr(a, "variant_options", ())) + PIPELINE_OPTIONS
     given = {n: getattr(a, n, None) for n in names}
-    takes = v.applicable(given)
-    why = v.refusal(given) if v.refusal is not None else ""
+    values = v.values(given)  # typed, checked, defaults filled: what decides what applies
+    known = {**given, **values}
+    takes = v.applicable(known)
+    why = v.refusal(known) if v.refusal is not None else ""
     for n, value in given.items():
         if value not in (None, False) and n not in takes:
             raise ParameterError(_flag(n), f"does not apply to --variant {v.name}{why}")
     if ground != LINEAR_GROUND and "ground" not in takes:
         raise ParameterError("--ground", f"--variant {v.name}{why} takes only the paper's "
                                          "linear ground")
-    return v, v.values(given)
+    return v, values
 
 
 def _cmd_variants(a: argparse.Namespace) -> int:

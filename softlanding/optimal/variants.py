@@ -307,7 +307,8 @@ def _as_variant(obj: Any, spec: str, source: str, what: str) -> Variant:
     return replace(obj, source=source, module=mod, attribute=attr)
 
 
-def _built_in() -> list[Variant]:
+def built_in_variants() -> list[Variant]:
+    """The built-in variants (declared light: loads no numerical library)."""
     from softlanding.optimal.builtin_variants import VARIANTS
 
     return [replace(v, source="built-in", module="softlanding.optimal.builtin_variants",
@@ -328,7 +329,7 @@ def entry_points() -> dict[str, Any]:
 def built_in_names() -> list[str]:
     """The names of the variants known without importing anything heavy (built-in and
     packaged; not the installed packages')."""
-    return [v.name for v in _built_in()] + list(PACKAGED)
+    return [v.name for v in built_in_variants()] + list(PACKAGED)
 
 
 def find_variant(name: str) -> Variant:
@@ -344,7 +345,7 @@ def find_variant(name: str) -> Variant:
     ParameterError
         No such variant (one line, with the names there are).
     """
-    for v in _built_in():
+    for v in built_in_variants():
         if v.name == name:
             return v
     if name in PACKAGED:
@@ -369,7 +370,7 @@ def find_variant(name: str) -> Variant:
 
 def all_variants() -> list[Variant]:
     """Every variant: built in, packaged, and installed (entry points), in that order."""
-    out = _built_in() + [find_variant(n) for n in PACKAGED]
+    out = built_in_variants() + [find_variant(n) for n in PACKAGED]
     seen = {v.name for v in out}
     out += [find_variant(n) for n in sorted(entry_points()) if n not in seen]
     return out
@@ -406,5 +407,5 @@ def sweep_variant(variant: Variant, v0_values: Iterable[float], robot: Any, grou
 
 
 __all__ = ["ENTRY_POINT_GROUP", "PACKAGED", "PIPELINE_OPTIONS", "Option", "Variant",
-           "VariantResult", "all_variants", "built_in_names", "entry_points", "find_variant",
-           "resolve", "sweep_variant"]
+           "VariantResult", "all_variants", "built_in_names", "built_in_variants",
+           "entry_points", "find_variant", "resolve", "sweep_variant"]
