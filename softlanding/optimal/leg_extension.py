@@ -297,7 +297,10 @@ class LegExtension(pipeline.PhasedVariant):
         return params
 
     def transcription(self) -> Any:
-        """The leg-extension transcription of this mode."""
+        """The leg-extension transcription of this mode (unrefined: the one with the path
+        constraints imposed between the nodes too, as the replay of its force checks)."""
+        if not self.refine:
+            return problem.leg_extension_transcription_inner(self.mode)
         return problem.leg_extension_transcription(self.mode)
 
     def guess(self) -> Any:

@@ -197,8 +197,16 @@ def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[Force
         if h > 0:
             durs += [h] * ph.N
             vals += [float(u) for u in ph.u[:, 0]]
-    return (ForceSchedule.from_arcs(durs, vals + [tail]),
-            "ForceSchedule (the transcription's piecewise-constant force)")
+    if not feedback_available():
+        return (ForceSchedule.from_arcs(durs, vals + [tail]),
+                "ForceSchedule (the transcription's piecewise-constant force)")
+    # the tail damps the body's velocity, as replay_controller's does: the transcription
+    # leaves a residual body velocity of its own accuracy (~1e-8) that would carry the
+    # body through the stroke limit forever
+    gains = [(0.0, 0.0, 0.0, 0.0, v) for v in vals] + [(0.0, -TAIL_DAMPING, 0.0, 0.0, tail)]
+    return (_controllers.FeedbackSchedule(tuple(np.cumsum(durs)), tuple(gains)),
+            "FeedbackSchedule (the transcription's piecewise-constant force; then the tail "
+            "force with a damper)")
 
 
 __all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller",

@@ -28,8 +28,10 @@ def replay_reasons(replay: Any, depth: float, refined: bool) -> list[str]:
     if not replay.rest_proven:
         out.append(f"the exact-simulator replay does not come to rest ({replay.status})")
     elif not replay.feasible:
+        excess = max(-replay.stroke_min, replay.stroke_max - replay.robot.s)
         out.append(f"the exact-simulator replay leaves the stroke [0, {replay.robot.s:g}] "
-                   f"(leg length from {replay.stroke_min:.6g} to {replay.stroke_max:.6g})")
+                   f"by {excess:.1e} (leg length from {replay.stroke_min:.6g} to "
+                   f"{replay.stroke_max:.6g})")
     tol = (1e-9 if refined else 1e-6) * max(1.0, depth)
     diff = abs(replay.depth - depth)
     if not diff <= tol:
