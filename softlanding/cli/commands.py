@@ -148,8 +148,13 @@ def _v0_grid(a: argparse.Namespace) -> Any:
 
 
 def _cmd_solve_sweep(a: argparse.Namespace) -> int:
+    from softlanding.cli.variants import DEFAULT_VARIANT, sweep_command, variant_of
+
     v, plot, ground, robot = _v0_grid(a), target(a), ground_of_args(a), robot_of(a)
-    nodes = check_count("nodes", a.nodes, 2, 5000)
+    variant, options = variant_of(a, ground)
+    if variant.name != DEFAULT_VARIANT:  # the paper's sweep also compares with a rigid leg
+        return sweep_command(a, variant, options, v, robot, ground, plot)
+    nodes = options["nodes"]
     import numpy as np
 
     from softlanding.optimal.landing import sweep_landing

@@ -202,16 +202,18 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
     return h
 
 
-def _solve_sweep(sub: Any) -> argparse.ArgumentParser:
+def _solve_sweep(sub: Any, argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     w = sub.add_parser("solve-sweep", help="bang-bang depth against impact velocity",
                        description="Solve the OCP over v0 from --v0-max down to --v0-min "
-                                   "with continuation (each solve warm-starts the next).")
+                                   "with continuation (each solve warm-starts the next); "
+                                   "or any landing variant (--variant, its options as for "
+                                   "solve).")
     _v0_range_args(w, 21)
     _model_args(w, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
-    w.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
     _plot_arg(w, "depth against v0")
     _accept_arg(w)
     ground_args(w)
+    add_variant_options(w, argv, "solve-sweep")
     return w
 
 
@@ -400,7 +402,7 @@ def build_parser(handlers: Handlers, parser_class: type[argparse.ArgumentParser]
                     help="draw progress bars even when stderr is not a terminal")
     sub = ap.add_subparsers(dest="command", required=True, parser_class=parser_class)
     for name, build in BUILDERS.items():
-        s = _solve(sub, argv) if build is _solve else build(sub)
+        s = build(sub, argv) if build in (_solve, _solve_sweep) else build(sub)
         if name in handlers:
             s.set_defaults(func=handlers[name])
         # also accepted after the sub-command (without overwriting the value given before it)

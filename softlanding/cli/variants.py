@@ -145,6 +145,56 @@ def variant_of(a: argparse.Namespace, ground: Any) -> tuple[Variant, dict[str, A
     return v, values
 
 
+def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, Any],
+                  v0: Any, robot: Any, ground: Any, plot: Any) -> int:
+    """``softlanding solve-sweep --variant NAME``: any variant over ``v0`` by continuation.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed options (``json``, ``accept_unverified``).
+    variant : Variant
+        The variant.
+    options : dict
+        Its checked options.
+    v0 : array
+        Impact velocities, from the easy end.
+    robot, ground
+        The landing.
+    plot : Path or None
+        The figure to write (depth against ``v0``).
+    """
+    from softlanding.cli.output import EXIT_FAILURE, EXIT_OK, print_json, savefig
+    from softlanding.optimal.variants import sweep_variant
+
+    res = sweep_variant(variant, v0, robot, ground, options, progress=not a.json)
+    rows = [{"v0": float(x), **r.to_dict(), "unverified_reasons": r.unverified_reasons()}
+            for x, r in zip(v0, res, strict=True)]
+    unverified = [r for r in rows if r["unverified_reasons"]]
+    code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
+    written = None
+    if plot:
+        import numpy as np
+
+        from softlanding.plots.paper import plot_depth_vs_velocity
+
+        written = savefig(plot_depth_vs_velocity(
+            np.asarray(v0), {variant.name: np.array([r.depth for r in res])}), plot)
+    if a.json:
+        print_json({"verified": not unverified, "variant": variant.name, "sweep": rows})
+        return code
+    if unverified:
+        print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
+            f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
+    print(f"{'v0':>7} {'depth':>14}  verified  solved by")
+    for r in rows:
+        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}  "
+              f"{'no' if r['unverified_reasons'] else 'yes':>8}  {r.get('path', '-')}")
+    if written:
+        print(f"figure written to {written}")
+    return code
+
+
 def _cmd_variants(a: argparse.Namespace) -> int:
     from softlanding.cli.output import EXIT_OK, print_json
 
@@ -183,4 +233,4 @@ def variants_parser(sub: Any) -> argparse.ArgumentParser:
 
 
 __all__ = ["DEFAULT_VARIANT", "SUBCOMMANDS", "add_variant_options", "named_variant",
-           "variant_of", "variants_parser"]
+           "sweep_command", "variant_of", "variants_parser"]
