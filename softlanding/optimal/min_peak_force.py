@@ -153,7 +153,13 @@ class MinPeakForce(TwoPhase):
         return phase_guess(start.trajectory(400), [self.start.T1])
 
     def accepts(self, neighbour: Any) -> bool:
-        """Only a neighbour of this variant."""
+        """Only a neighbour of this variant.
+
+        Parameters
+        ----------
+        neighbour : PhasedLanding
+            The warm start.
+        """
         return isinstance(neighbour, MinPeakForceLanding)
 
     def bound(self) -> float | None:
@@ -161,11 +167,31 @@ class MinPeakForce(TwoPhase):
         return None
 
     def explain(self, err: Any, guess: Any) -> Exception:
-        """Ipopt's verdict as it is (the budget was checked before)."""
+        """Ipopt's verdict as it is (the budget was checked before).
+
+        Parameters
+        ----------
+        err : ocp.SolveError
+            Ipopt's verdict.
+        guess : object
+            The guess it started from.
+        """
         return err
 
     def assemble(self, sol: Any, ref: Any, notes: list[str], path: str) -> MinPeakForceLanding:
-        """The two-phase result, with the peak and the budget."""
+        """The two-phase result, with the peak and the budget.
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription (None on the structure path).
+        ref : RefinedPhases or None
+            The refined phases.
+        notes : list of str
+            What the solve noticed.
+        path : str
+            ``"transcription"`` or ``"structure"``.
+        """
         two = super().assemble(sol, ref, notes, path)
         src = ref if ref is not None else sol
         return MinPeakForceLanding(**two.__dict__, depth_max=self.depth_max,

@@ -139,17 +139,41 @@ class VariantResult(Protocol):
     depth: float
     notes: list[str]
 
-    def rows(self) -> list[tuple[str, object]]: ...
+    def rows(self) -> list[tuple[str, object]]:
+        """The ``label, value`` rows of the printed table."""
+        ...
 
-    def to_dict(self) -> dict[str, Any]: ...
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict (``--json``)."""
+        ...
 
-    def figures(self, certificate: Any = None) -> list[Any]: ...
+    def figures(self, certificate: Any = None) -> list[Any]:
+        """The figures ``--plot`` writes (the first to the file named).
 
-    def certify(self) -> Any: ...
+        Parameters
+        ----------
+        certificate : object, optional
+            The certificate, for a variant that draws it.
+        """
+        ...
 
-    def uncertified_reason(self) -> str: ...
+    def certify(self) -> Any:
+        """The PMP certificate, or None (then :meth:`uncertified_reason` says why)."""
+        ...
 
-    def unverified_reasons(self, certificate: Any = None) -> list[str]: ...
+    def uncertified_reason(self) -> str:
+        """One line: why :meth:`certify` gives None (empty when it gives a certificate)."""
+        ...
+
+    def unverified_reasons(self, certificate: Any = None) -> list[str]:
+        """Why the result cannot be taken as proven (empty: every check passed).
+
+        Parameters
+        ----------
+        certificate : object, optional
+            Its certificate, whose verdict counts too.
+        """
+        ...
 
 
 Solve = Callable[..., Any]
