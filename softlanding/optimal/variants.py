@@ -331,12 +331,17 @@ def _as_variant(obj: Any, spec: str, source: str, what: str) -> Variant:
     return replace(obj, source=source, module=mod, attribute=attr)
 
 
+BUILT_IN = "softlanding.optimal.builtin_variants:VARIANTS"
+"""The table of built-in variants (attribute name -> :class:`Variant`; named, like
+:data:`PACKAGED`, so that this module depends on no variant)."""
+
+
 def built_in_variants() -> list[Variant]:
     """The built-in variants (declared light: loads no numerical library)."""
-    from softlanding.optimal.builtin_variants import VARIANTS
-
-    return [replace(v, source="built-in", module="softlanding.optimal.builtin_variants",
-                    attribute=attr) for attr, v in VARIANTS.items()]
+    table = resolve(BUILT_IN, "built-in variants")
+    mod = BUILT_IN.partition(":")[0]
+    return [replace(v, source="built-in", module=mod, attribute=attr)
+            for attr, v in table.items()]
 
 
 PACKAGED: Mapping[str, str] = {"min-peak-force": "softlanding.optimal.min_peak_force:VARIANT"}
@@ -430,6 +435,6 @@ def sweep_variant(variant: Variant, v0_values: Iterable[float], robot: Any, grou
                         f"{variant.name} sweep")
 
 
-__all__ = ["ENTRY_POINT_GROUP", "PACKAGED", "PIPELINE_OPTIONS", "Option", "Variant",
+__all__ = ["BUILT_IN", "ENTRY_POINT_GROUP", "PACKAGED", "PIPELINE_OPTIONS", "Option", "Variant",
            "VariantResult", "all_variants", "built_in_names", "built_in_variants",
            "entry_points", "find_variant", "resolve", "sweep_variant"]
