@@ -115,3 +115,34 @@ def test_min_peak_force_is_the_inverse_of_the_two_phase_depth(cli):
     code, out, err = cli("solve", "--v0", str(V0), "--variant", "min-peak-force",
                          "--depth-max", str(LEAST - 0.01))
     assert code == 2 and out == "" and "below the least depth" in err
+
+
+NO_REFINE = [("paper", []), ("two-phase", []), ("leg-extension", []),
+             ("min-peak-force", ["--depth-max", str(LEAST + 0.5)])]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name,extra", NO_REFINE, ids=[n for n, _ in NO_REFINE])
+def test_every_variant_transcribed_only_plots_and_is_checked(cli, tmp_path, name, extra):
+    """--no-refine --plot: the transcribed result is replayed (its piecewise-constant force,
+    exactly), drawn, and verified to the transcription's accuracy."""
+    png = tmp_path / "f.png"
+    code, out, err = cli("solve", "--v0", "-3", "--variant", name, "--no-refine", "--plot",
+                         png, "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["verified"] is True and "refined" not in d
+    assert d["replay"]["difference"] < 1e-6
+    assert png.read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.slow
+def test_a_sweep_over_v0_for_a_variant_is_continuation(cli):
+    code, out, err = cli("solve-sweep", "--variant", "two-phase", "--v0-min", "-2",
+                         "--v0-max", "-1", "--n", "3", "--json")
+    assert code == 0, err
+    rows = json.loads(out)["sweep"]
+    assert [r["v0"] for r in rows] == [-1.0, -1.5, -2.0]
+    assert [r["path"] for r in rows][1:] == ["structure", "structure"]  # warm from the last
+    code, out, _ = cli("solve", "--v0", "-1.5", "--variant", "two-phase", "--json")
+    assert json.loads(out)["depth"] == pytest.approx(rows[1]["depth"], abs=1e-9)
