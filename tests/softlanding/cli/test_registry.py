@@ -146,3 +146,27 @@ def test_a_sweep_over_v0_for_a_variant_is_continuation(cli):
     assert [r["path"] for r in rows][1:] == ["structure", "structure"]  # warm from the last
     code, out, _ = cli("solve", "--v0", "-1.5", "--variant", "two-phase", "--json")
     assert json.loads(out)["depth"] == pytest.approx(rows[1]["depth"], abs=1e-9)
+
+
+def test_an_installed_package_registers_a_variant_by_entry_point(cli, tmp_path, monkeypatch):
+    """A distribution on sys.path with an entry point in the group softlanding.variants:
+    listed by `softlanding variants` with its origin, and found by its name."""
+    (tmp_path / "mypkg_variants.py").write_text(
+        "from dataclasses import replace\n"
+        "from softlanding.optimal.builtin_variants import TWO_PHASE\n"
+        "VARIANT = replace(TWO_PHASE, name='my-two-phase', summary='two-phase, renamed')\n")
+    info = tmp_path / "mypkg-0.1.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: mypkg\nVersion: 0.1\n")
+    (info / "entry_points.txt").write_text(
+        "[softlanding.variants]\nmy-two-phase = mypkg_variants:VARIANT\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    code, out, err = cli("variants", "--json")
+    assert code == 0, err
+    mine = [v for v in json.loads(out)["variants"] if v["name"] == "my-two-phase"]
+    assert len(mine) == 1
+    assert (mine[0]["module"], mine[0]["attribute"]) == ("mypkg_variants", "VARIANT")
+    assert mine[0]["source"] == "entry point (mypkg)"
+    assert find_variant("my-two-phase").summary == "two-phase, renamed"
+    code, out, err = cli("solve", "--v0", "-3", "--variant", "my-two-phase", "--steps", "3")
+    assert code == 2 and "--steps" in err and err.count("\n") == 1
