@@ -127,8 +127,8 @@ def test_every_variant_transcribed_only_plots_and_is_checked(cli, tmp_path, name
     """--no-refine --plot: the transcribed result is replayed (its piecewise-constant force,
     exactly), drawn, and verified to the transcription's accuracy."""
     png = tmp_path / "f.png"
-    code, out, err = cli("solve", "--v0", "-3", "--variant", name, "--no-refine", "--plot",
-                         png, "--json")
+    code, out, err = cli("solve", "--v0", "-3", "--variant", name, *extra, "--no-refine",
+                         "--plot", png, "--json")
     assert code == 0, err
     d = json.loads(out)
     assert d["verified"] is True and "refined" not in d
@@ -170,3 +170,23 @@ def test_an_installed_package_registers_a_variant_by_entry_point(cli, tmp_path, 
     assert find_variant("my-two-phase").summary == "two-phase, renamed"
     code, out, err = cli("solve", "--v0", "-3", "--variant", "my-two-phase", "--steps", "3")
     assert code == 2 and "--steps" in err and err.count("\n") == 1
+
+
+def test_the_worked_example_uses_public_names_and_the_guide_shows_it_whole():
+    """Absolute imports of public names only (no private module or name, nothing relative),
+    and the how-to includes the module itself, so the page cannot drift from it."""
+    import ast
+
+    tree = ast.parse(PACKAGED.read_text())
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module != "__future__":
+            assert node.level == 0 and node.module is not None
+            assert not any(p.startswith("_") for p in node.module.split("."))
+            assert not any(a.name.startswith("_") for a in node.names), node.module
+            if node.module.startswith("softlanding.optimal."):  # a public module's __all__
+                import importlib
+
+                mod = importlib.import_module(node.module)
+                assert {a.name for a in node.names} <= set(mod.__all__), node.module
+    guide = (PACKAGED.parents[2] / "docs" / "guides" / "hybrid.md").read_text()
+    assert "```{literalinclude} ../../softlanding/optimal/min_peak_force.py" in guide
