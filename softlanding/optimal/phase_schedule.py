@@ -177,7 +177,7 @@ def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
     return z[:4]
 
 
-def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[ForceSchedule, str]:
+def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[Any, str]:
     """A transcription's piecewise-constant force, from phase ``first`` on, then ``tail``:
     the replay of a result that was not refined (exact up to the transcription's grid).
 

@@ -113,9 +113,9 @@ class Option:
             raise ParameterError(self.flag, "must be one of "
                                  + ", ".join(str(c) for c in self.choices) + f", got {v!r}")
         if self.check is not None:
-            why = self.check(v)
-            if why:
-                raise ParameterError(self.flag, why)
+            refused = self.check(v)
+            if refused:
+                raise ParameterError(self.flag, refused)
         return v
 
     def to_dict(self) -> dict[str, Any]:

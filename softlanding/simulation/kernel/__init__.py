@@ -112,8 +112,9 @@ def cache_index_current(py_func) -> bool:
     import numba
 
     src = Path(inspect.getsourcefile(py_func) or "").resolve()
-    if numba.config.CACHE_DIR:  # NUMBA_CACHE_DIR: numba's folder per source folder there
-        folder = Path(numba.config.CACHE_DIR) / (
+    cache_dir = getattr(numba.config, "CACHE_DIR", "")
+    if cache_dir:  # NUMBA_CACHE_DIR: numba's folder per source folder there
+        folder = Path(cache_dir) / (
             f"{src.parent.name}_{hashlib.sha1(str(src.parent).encode()).hexdigest()}")
     else:
         folder = src.parent / "__pycache__"
