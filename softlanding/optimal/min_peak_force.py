@@ -52,7 +52,8 @@ from softlanding.optimal.stance_phases import (
 @lru_cache(maxsize=4)
 def min_peak_force_transcription(ground: Ground = LINEAR_GROUND) -> MultipleShooting:
     """Yielding, then static until the body rests, ``|u| <= peak``; minimise ``peak``
-    with the final depth at most the parameter ``depth_max``.
+    with the final depth at most the parameter ``depth_max``. The peak is at least the
+    body's weight, which the leg holds once the body rests.
 
     Parameters
     ----------
@@ -62,7 +63,8 @@ def min_peak_force_transcription(ground: Ground = LINEAR_GROUND) -> MultipleShoo
     mp = MultiPhaseProblem("min_peak_force")
     par = parameters(mp)
     depth_max = mp.parameter("depth_max")
-    peak = mp.variable("peak", 0.0, par["u_max"], guess=par["u_max"])
+    weight = par["r_m"] / (1 + par["r_m"])  # the body's weight: the leg holds it at rest
+    peak = mp.variable("peak", weight, par["u_max"], guess=par["u_max"])
     yielding = add_yielding(mp, "yielding", par, ground, u_bound=peak)
     yielding.free_final_time(1e-3, T_MAX, guess=0.3)
     static = add_static(mp, "static", par, ground, u_bound=peak)
