@@ -23,8 +23,13 @@ import casadi as ca
 from ocp import MultiPhaseProblem, MultipleShooting
 from softlanding.errors import InfeasibleLandingError
 from softlanding.model import LINEAR_GROUND, PAPER_ROBOT, Impact, Robot
-from softlanding.optimal import TwoPhase, TwoPhaseLanding, solve_phased, solve_two_phase
-from softlanding.optimal.phase_solve import phase_guess
+from softlanding.optimal import (
+    TwoPhase,
+    TwoPhaseLanding,
+    phase_guess,
+    solve_phased,
+    solve_two_phase,
+)
 from softlanding.optimal.stance_phases import (
     ARREST_MAX,
     T_MAX,

@@ -93,37 +93,42 @@ def _certificate_rows(cert: Any) -> list[tuple[str, object]]:
 
 
 def _cmd_solve(a: argparse.Namespace) -> int:
-    """Every ``--variant`` through one flow: check, solve, certify, plot, print."""
+    """Every ``--variant`` through one flow: check, solve, certify, plot, print (the
+    result's protocol, :class:`softlanding.optimal.variants.VariantResult`)."""
     from softlanding.cli.variants import variant_of
     from softlanding.util.files import output_path
 
     robot, ground = robot_of(a), ground_of_args(a)
-    variant = variant_of(a, ground)  # refuses what the variant would ignore
+    variant, options = variant_of(a, ground)  # refuses what the variant would ignore
     plot = target(a)
     pmp_plot = None
-    if plot is not None and a.pmp and a.variant == "paper":
+    if plot is not None and a.pmp and variant.certificate_figure:
         pmp_plot = output_path(plot.with_name(f"{plot.stem}-pmp{plot.suffix}"), "plot", a.force)
     from softlanding.optimal.limits import force_limit
 
-    Impact(a.v0), force_limit(robot)  # checked before the solver loads
-    res = variant.solve(a, robot, ground)
+    impact = Impact(a.v0)
+    force_limit(robot)  # checked before the solver loads
+    res = variant.run(impact, robot, ground, options, refine=not a.no_refine)
     cert = res.certify() if a.pmp else None
+    no_cert = res.uncertified_reason() if a.pmp and cert is None else ""
     written = [savefig(fig, path) for fig, path in
-               zip(variant.figures(res, cert) if plot else [], (plot, pmp_plot), strict=False)
+               zip(res.figures(cert) if plot else [], (plot, pmp_plot), strict=False)
                if path is not None]
     unverified = res.unverified_reasons(cert)
     if a.json:
         d = res.to_dict()
         if cert is not None:
             d["pmp"] = cert.to_dict()
+        elif a.pmp:
+            d["pmp"] = {"verdict": None, "why_none": no_cert}
         print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
         status = "yes" if not unverified else "NO: " + "; ".join(unverified)
-        print_table([("verified", status)] + variant.rows(res)
+        print_table([("verified", status)] + res.rows()
                     + (_certificate_rows(cert) if cert is not None else []))
         for n in res.notes:
             print(f"note: {n}")
-        for r_ in (cert.reasons if cert is not None else []):
+        for r_ in (cert.reasons if cert is not None else [no_cert] if no_cert else []):
             print(f"PMP: {r_}")
         if written:
             print(f"figure written to {' and '.join(written)}")
@@ -143,8 +148,13 @@ def _v0_grid(a: argparse.Namespace) -> Any:
 
 
 def _cmd_solve_sweep(a: argparse.Namespace) -> int:
+    from softlanding.cli.variants import DEFAULT_VARIANT, sweep_command, variant_of
+
     v, plot, ground, robot = _v0_grid(a), target(a), ground_of_args(a), robot_of(a)
-    nodes = check_count("nodes", a.nodes, 2, 5000)
+    variant, options = variant_of(a, ground)
+    if variant.name != DEFAULT_VARIANT:  # the paper's sweep also compares with a rigid leg
+        return sweep_command(a, variant, options, v, robot, ground, plot)
+    nodes = options["nodes"]
     import numpy as np
 
     from softlanding.optimal.landing import sweep_landing
@@ -652,7 +662,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from softlanding.cli.parser import build_parser
 
-    args = build_parser(HANDLERS, CliParser).parse_args(argv)
+    args = build_parser(HANDLERS, CliParser, sys.argv[1:] if argv is None else argv
+                        ).parse_args(argv)
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)

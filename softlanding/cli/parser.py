@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from softlanding.cli.ground import ground_args, numbers
-from softlanding.cli.variants import VARIANTS, extension_value
+from softlanding.cli.variants import add_variant_options, variants_parser
 from softlanding.errors import LIMITS
 from softlanding.model.robot import PAPER_ROBOT
 
@@ -101,7 +102,7 @@ def _dask_args(p: argparse.ArgumentParser, what: str) -> None:
 
 
 def _force_arg(p: argparse.ArgumentParser) -> None:
-    if not any("--force" in a.option_strings for a in p._actions):
+    with contextlib.suppress(argparse.ArgumentError):  # a second output option: already there
         p.add_argument("--force", action="store_true",
                        help="overwrite existing output files (default: refuse)")
 
@@ -154,7 +155,7 @@ def _scale(sub: Any) -> argparse.ArgumentParser:
     return c
 
 
-def _solve(sub: Any) -> argparse.ArgumentParser:
+def _solve(sub: Any, argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     o = sub.add_parser("solve", help="minimum-depth landing by optimal control (bang-bang)",
                        description="Solve the paper's soft-landing OCP (min -x_f(T), free T, "
                                    "|u| <= umax, 0 <= stroke <= s, v_f <= 0, v_f(T) = 0, "
@@ -165,32 +166,17 @@ def _solve(sub: Any) -> argparse.ArgumentParser:
                                    "variant does not take is refused (exit 2).")
     o.add_argument("--v0", type=float, required=True, help="impact velocity (<= 0)")
     _model_args(o, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
-    o.add_argument("--variant", choices=list(VARIANTS), default="paper",
-                   help="; ".join(f"{v.name}: {v.summary}" for v in VARIANTS.values()))
-    o.add_argument("--nodes", type=int, help="paper: shooting intervals (default 100, 2 to 5000)")
     o.add_argument("--no-refine", action="store_true", default=None,
-                   help="paper, two-phase: report the transcribed solution only")
-    o.add_argument("--extra-arcs", type=int,
-                   help="paper: also try this many more bang arcs (default 0, at most 20)")
+                   help="report the transcribed solution only (replayed as its "
+                        "piecewise-constant force)")
     o.add_argument("--pmp", action="store_true", default=None,
                    help="check Pontryagin's conditions (costates, H, switching function) "
-                        "and give a bang-bang verdict (not with two-phase --steps 2)")
-    o.add_argument("--steps", type=int, choices=[1, 2],
-                   help="two-phase: yielding steps allowed (default 1; 2: yielding, static, "
-                        "yielding, static, compared with one step)")
-    o.add_argument("--mode", choices=["impact", "drop"],
-                   help="leg-extension: decide the leg's state at impact directly (impact, "
-                        "the default: both masses at v0), or by a flight phase from the drop "
-                        "height v0^2/2 (drop)")
-    o.add_argument("--extension", type=extension_value,
-                   help="leg-extension, impact mode: 'free' (within the stroke; default) or "
-                        "a leg length at impact (s/2 is the paper's)")
-    o.add_argument("--rate-max", type=float, default=None,
-                   help="leg-extension, impact mode: also free the relative velocity at "
-                        "impact within +-RATE_MAX (default: 0, the paper's)")
+                        "and give a bang-bang verdict, or say in one line why there is no "
+                        "certificate (not with two-phase --steps 2)")
     _plot_arg(o, "the trajectory figure (paper --pmp: also FILE-pmp.png, the certificate)")
     _accept_arg(o)
     ground_args(o)
+    add_variant_options(o, argv, "solve")
     return o
 
 
@@ -216,16 +202,18 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
     return h
 
 
-def _solve_sweep(sub: Any) -> argparse.ArgumentParser:
+def _solve_sweep(sub: Any, argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     w = sub.add_parser("solve-sweep", help="bang-bang depth against impact velocity",
                        description="Solve the OCP over v0 from --v0-max down to --v0-min "
-                                   "with continuation (each solve warm-starts the next).")
+                                   "with continuation (each solve warm-starts the next); "
+                                   "or any landing variant (--variant, its options as for "
+                                   "solve).")
     _v0_range_args(w, 21)
     _model_args(w, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
-    w.add_argument("--nodes", type=int, default=100, help="shooting intervals (default 100)")
     _plot_arg(w, "depth against v0")
     _accept_arg(w)
     ground_args(w)
+    add_variant_options(w, argv, "solve-sweep")
     return w
 
 
@@ -388,19 +376,23 @@ def _robust(sub: Any) -> argparse.ArgumentParser:
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
             "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc,
-            "robust": _robust}
+            "robust": _robust, "variants": variants_parser}
 
 
-def build_parser(handlers: Handlers,
-                 parser_class: type[argparse.ArgumentParser]) -> argparse.ArgumentParser:
+def build_parser(handlers: Handlers, parser_class: type[argparse.ArgumentParser],
+                 argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The whole parser; each sub-command calls its handler.
 
     Parameters
     ----------
     handlers : dict
-        Sub-command name -> function of the parsed arguments returning the exit code.
+        Sub-command name -> function of the parsed arguments returning the exit code
+        (``variants`` has its own).
     parser_class : type
         The ArgumentParser subclass to use (one-line errors).
+    argv : sequence of str, optional
+        The command line to be parsed: a variant it names outside the built-in ones
+        (``--variant module:attribute``) adds its options to ``solve``.
     """
     ap = parser_class(prog="softlanding", description=DESCRIPTION)
     ap.add_argument("--version", action="version", version=f"softlanding {_version()}")
@@ -410,8 +402,9 @@ def build_parser(handlers: Handlers,
                     help="draw progress bars even when stderr is not a terminal")
     sub = ap.add_subparsers(dest="command", required=True, parser_class=parser_class)
     for name, build in BUILDERS.items():
-        s = build(sub)
-        s.set_defaults(func=handlers[name])
+        s = build(sub, argv) if build in (_solve, _solve_sweep) else build(sub)
+        if name in handlers:
+            s.set_defaults(func=handlers[name])
         # also accepted after the sub-command (without overwriting the value given before it)
         s.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                        help=argparse.SUPPRESS)

@@ -1,257 +1,236 @@
-"""The variant table of ``softlanding solve --variant``: one row per landing variant.
+"""``softlanding solve --variant``'s options and ``softlanding variants``, built from the
+registered variants (:mod:`softlanding.optimal.variants`): adding a variant touches no
+file here.
 
-A row names the variant-specific options it takes (given the others: ``--steps 2`` or
-``--mode drop`` take fewer), how to solve it from the parsed options, its table rows and
-its figure. :func:`variant_of` refuses an option the chosen variant would ignore (exit 2
-naming the option) and fills in the defaults, so no option is ever silently dropped.
-A new variant is one row here (and one name in the parser's ``--variant`` choices,
-which are read from this table).
+The parser holds every built-in variant's options, and those of the variant named on the
+command line (packaged, ``module:attribute`` or an installed entry point), found by a
+look at the arguments before parsing; ``--help`` and ``softlanding variants`` list them
+all. Every variant option is parsed as text and converted and checked by its variant
+(:meth:`softlanding.optimal.variants.Option.value`), so that two variants may share an
+option's name. :func:`variant_of` refuses an option the chosen variant would ignore
+(exit 2 naming it), so no option is ever silently dropped.
 """
 
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Sequence
 from typing import Any
 
-from softlanding.errors import ParameterError, check_count
-from softlanding.model.robot import Impact, Robot
+from softlanding.errors import ParameterError
+from softlanding.optimal.variants import (
+    PIPELINE_OPTIONS,
+    Option,
+    Variant,
+    all_variants,
+    built_in_names,
+    built_in_variants,
+    find_variant,
+)
 
-#: The variant-specific options of ``solve`` (argparse dests) and their defaults. The
-#: parser leaves them None so that "given" and "not given" can be told apart.
-VARIANT_OPTIONS: Mapping[str, object] = {
-    "nodes": 100, "no_refine": False, "extra_arcs": 0, "pmp": False, "plot": None,
-    "steps": 1, "mode": "impact", "extension": "free", "rate_max": None}
-
-Rows = list[tuple[str, object]]
-
-
-@dataclass(frozen=True)
-class SolveVariant:
-    """One row of the variant table.
-
-    Attributes
-    ----------
-    name : str
-        The ``--variant`` value.
-    summary : str
-        One line for ``--help``.
-    takes : callable
-        Parsed options -> the variant-specific options (:data:`VARIANT_OPTIONS` keys,
-        and ``"ground"`` for a non-linear ground) that apply, given the others.
-    solve : callable
-        ``(options, robot, ground) -> result``, a result with ``depth``, ``notes``,
-        ``to_dict()`` and ``unverified_reasons(certificate)``.
-    rows : callable
-        Result -> the ``label, value`` rows of the printed table.
-    figures : callable
-        ``(result, certificate) -> list of figures`` for ``--plot`` (the first is written
-        to the file named, the next ones beside it with a ``-pmp`` suffix).
-    """
-
-    name: str
-    summary: str
-    takes: Callable[[argparse.Namespace], frozenset[str]]
-    solve: Callable[[argparse.Namespace, Robot, Any], Any]
-    rows: Callable[[Any], Rows]
-    figures: Callable[[Any, Any], list[Any]]
-
-
-# ----------------------------------------------------------------------- paper
-def _paper_solve(a: argparse.Namespace, robot: Robot, ground: Any) -> Any:
-    from softlanding.optimal.landing import solve_landing
-
-    return solve_landing(Impact(a.v0), robot, ground, nodes=a.nodes, refine=not a.no_refine,
-                         extra_arcs=a.extra_arcs)
-
-
-def _paper_rows(res: Any) -> Rows:
-    rows: Rows = [
-        ("depth -x_f(T)" + (" (refined)" if res.refined is not None else ""), res.depth),
-        ("depth, transcribed", res.depth_transcribed), ("final time T", res.T),
-        ("arcs", " -> ".join(res.arcs)),
-        ("switch times", ", ".join(f"{t:.12g}" for t in res.switch_times)),
-        ("arrest force u_b", res.u_b), ("arrest condition active", res.arrest_active),
-        ("Ipopt status", res.status), ("Ipopt iterations", res.iterations),
-        ("solve time [s]", res.solve_time_s)]
-    if res.replay is not None:
-        rows += [("simulator replay depth", res.replay.depth),
-                 ("replay difference", res.replay_difference),
-                 ("replay feasible", res.replay.feasible)]
-    return rows
-
-
-def _paper_figures(res: Any, cert: Any) -> list[Any]:
-    from softlanding.plots.paper import plot_bang_bang
-
-    figs = [plot_bang_bang(res)]
-    if cert is not None:
-        from ocp import plot_certificate
-
-        figs.append(plot_certificate(cert))
-    return figs
-
-
-# -------------------------------------------------------------- phased variants
-def _phased_rows(res: Any) -> Rows:
-    rows: Rows = [
-        ("variant", res.VARIANT), ("depth -x_f", res.depth),
-        ("depth, transcribed", res.depth_transcribed),
-        ("paper's depth (same v0)", res.paper_depth)]
-    rows += _own_rows(res)
-    rows += [("arcs per phase", " | ".join(" -> ".join(a) for a in res.arcs) or "-"),
-             ("phase start times", ", ".join(f"{t:.9g}" for t in res.phase_times)),
-             ("solved by", res.path), ("Ipopt status", res.status)]
-    if res.replay is not None:
-        rows += [("simulator replay depth", res.replay.depth),
-                 ("replay difference", res.replay_difference),
-                 ("replay controller", res.replay_kind)]
-    return rows
-
-
-def _own_rows(res: Any) -> Rows:
-    """The rows only one phased variant has: the arrest, or the touchdown state."""
-    if hasattr(res, "steps"):
-        return [("yielding steps allowed", res.steps), ("foot stops T1", res.T1),
-                ("body stops T", res.T), ("arrest force (phase 2)", res.arrest_force),
-                ("arrest force range", "{:.12g} .. {:.12g}".format(*res.arrest_force_range))]
-    return [("mode", res.mode), ("leg length at touchdown", res.extension),
-            ("relative velocity at touchdown", res.rate),
-            ("centre of mass velocity at touchdown", res.com_velocity),
-            ("depth gained", res.gain)]
-
-
-def _phased_figures(res: Any, cert: Any) -> list[Any]:
-    from softlanding.plots.phased import plot_phased_landing
-
-    return [plot_phased_landing(res)]
-
-
-def _two_phase_takes(a: argparse.Namespace) -> frozenset[str]:
-    if a.steps == 2:  # the four-phase check prints a comparison, no figure or certificate
-        return frozenset({"steps"})
-    return frozenset({"steps", "no_refine", "pmp", "plot", "ground"})
-
-
-def _two_phase_solve(a: argparse.Namespace, robot: Robot, ground: Any) -> Any:
-    from softlanding.optimal.two_phase import solve_two_phase, two_step_check
-
-    if a.steps == 2:
-        return two_step_check(Impact(a.v0), robot, ground)
-    return solve_two_phase(Impact(a.v0), robot, ground, refine=not a.no_refine)
-
-
-def _two_phase_rows(res: Any) -> Rows:
-    if hasattr(res, "one_step"):  # --steps 2
-        rows: Rows = [
-            ("one-step depth (refined)", res.one_step.depth),
-            ("two-step depth (transcribed, best start)", res.depth),
-            ("gain of a second step", res.gain), ("middle phases collapse", res.collapsed)]
-        for st in res.starts:
-            rows.append((f"start {st['start']}", f"depth {st['depth']:.10g}, phase durations "
-                         + ", ".join(f"{d:.4g}" for d in st["durations"]) if "depth" in st
-                         else f"failed ({st['error']})"))
-        return rows
-    return _phased_rows(res)
-
-
-def _leg_extension_takes(a: argparse.Namespace) -> frozenset[str]:
-    base = {"mode", "pmp", "plot"}
-    if a.mode in (None, "impact"):  # a drop decides the touchdown state by its flight
-        base |= {"extension", "rate_max"}
-    return frozenset(base)
-
-
-def _leg_extension_solve(a: argparse.Namespace, robot: Robot, ground: Any) -> Any:
-    from softlanding.optimal.leg_extension import solve_leg_extension
-
-    ext = None if a.extension == "free" else a.extension
-    rate = None if a.rate_max is None else (-a.rate_max, a.rate_max)
-    return solve_leg_extension(Impact(a.v0), robot, mode=a.mode, extension=ext, rate=rate)
-
-
-VARIANTS: Mapping[str, SolveVariant] = {v.name: v for v in (
-    SolveVariant("paper", "the paper's single-phase OCP (default)",
-                 lambda a: frozenset({"nodes", "no_refine", "extra_arcs", "pmp", "plot",
-                                      "ground"}),
-                 _paper_solve, _paper_rows, _paper_figures),
-    SolveVariant("two-phase", "yielding then static stance until the body stops, the arrest "
-                              "optimised", _two_phase_takes, _two_phase_solve, _two_phase_rows,
-                 _phased_figures),
-    SolveVariant("leg-extension", "the leg's state at touchdown optimised (changes the paper's "
-                                  "initial condition)", _leg_extension_takes,
-                 _leg_extension_solve, _phased_rows, _phased_figures),
-)}
-
-
-def extension_value(text: str) -> str | float:
-    """``--extension``: ``free`` or a finite leg length (an argparse ``type``, like
-    :func:`softlanding.cli.parser.scheduler_address`: a bad value is a usage error).
-
-    Parameters
-    ----------
-    text : str
-        What the user typed.
-    """
-    if text == "free":
-        return text
-    try:
-        x = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"'free' or a leg length, not {text!r}") from None
-    if x != x or x in (float("inf"), float("-inf")):
-        raise argparse.ArgumentTypeError(f"a finite leg length, not {text!r}")
-    return x
-
-
-#: Bounds of the variant-specific sizes, checked before any work.
-_BOUNDS = {"nodes": (2, 5000), "extra_arcs": (0, 20)}
+DEFAULT_VARIANT = "paper"
+SUBCOMMANDS = ("solve", "solve-sweep")
+"""The sub-commands that take ``--variant``."""
 
 
 def _flag(dest: str) -> str:
     return "--" + dest.replace("_", "-")
 
 
-def variant_of(a: argparse.Namespace, ground: Any) -> SolveVariant:
-    """The variant ``a`` names, after refusing the options it does not take.
+def named_variant(argv: Sequence[str] | None) -> str | None:
+    """The ``--variant`` value in ``argv`` (a look before parsing; None when not there).
 
-    Fills the defaults of :data:`VARIANT_OPTIONS` into ``a`` once checked.
+    Parameters
+    ----------
+    argv : sequence of str or None
+        The command line.
+    """
+    args = list(argv or [])
+    for i, arg in enumerate(args):
+        if arg == "--variant" and i + 1 < len(args):
+            return args[i + 1]
+        if arg.startswith("--variant="):
+            return arg.split("=", 1)[1]
+    return None
+
+
+def _wanted(argv: Sequence[str] | None, command: str) -> list[Variant]:
+    """The variants whose options the ``command`` parser needs for ``argv``."""
+    args = list(argv or [])
+    if command not in args:
+        return built_in_variants()
+    rest = args[args.index(command) + 1:]
+    if "-h" in rest or "--help" in rest:
+        return all_variants()
+    out = built_in_variants()
+    name = named_variant(rest)
+    if name is not None and name not in {v.name for v in out}:
+        out.append(find_variant(name))
+    return out
+
+
+def add_variant_options(p: argparse.ArgumentParser, argv: Sequence[str] | None,
+                        command: str) -> None:
+    """``--variant`` and the options of the variants ``argv`` may use, on ``p``.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The sub-command's parser.
+    argv : sequence of str or None
+        The command line (to find a variant named ``module:attribute`` or installed).
+    command : str
+        The sub-command (``solve`` or ``solve-sweep``).
+    """
+    try:
+        wanted = _wanted(argv, command)
+    except ParameterError as err:
+        p.error(str(err))
+    p.add_argument("--variant", default=DEFAULT_VARIANT, metavar="NAME",
+                   help="the landing variant: " + ", ".join(built_in_names())
+                        + " (default paper), module:attribute (a Variant in any importable "
+                          "module), or an installed one; `softlanding variants` lists them "
+                          "with their options")
+    owners: dict[str, list[str]] = {}
+    first: dict[str, Option] = {}
+    for v in wanted:
+        for o in v.options:
+            owners.setdefault(o.name, []).append(v.name)
+            first.setdefault(o.name, o)
+    for name, o in first.items():
+        who = ", ".join(owners[name])
+        kw: dict[str, Any] = (
+            {"action": "store_true", "default": None} if o.is_flag else
+            {"default": None, "metavar": o.metavar})
+        extra = f" (one of {', '.join(map(str, o.choices))})" if o.choices else ""
+        try:
+            p.add_argument(o.flag, dest=name, help=f"{who}: {o.help}{extra}", **kw)
+        except argparse.ArgumentError:
+            p.error(f"--variant {owners[name][0]}: its option {o.flag} clashes with "
+                    f"{command}'s own")
+    p.set_defaults(variant_options=tuple(first))
+
+
+def variant_of(a: argparse.Namespace, ground: Any) -> tuple[Variant, dict[str, Any]]:
+    """The variant ``a`` names and its checked options, after refusing the options it
+    does not take.
 
     Parameters
     ----------
     a : argparse.Namespace
-        Parsed ``solve`` options (the variant-specific ones None when not given).
+        Parsed options (the variant options None when not given).
     ground : Ground
         The ground the options name.
 
     Raises
     ------
     ParameterError
-        Naming the first option the variant would ignore.
+        An option the variant would ignore, a bad value, or no such variant (one line).
     """
     from softlanding.model.ground import LINEAR_GROUND
 
-    v = VARIANTS[a.variant]
-    takes = v.takes(a)
-    for dest in VARIANT_OPTIONS:
-        given = getattr(a, dest, None)
-        if given not in (None, False) and dest not in takes:
-            why = (" --steps 2" if a.variant == "two-phase" and a.steps == 2 else
-                   " --mode drop" if a.variant == "leg-extension" and a.mode == "drop" else "")
-            raise ParameterError(_flag(dest), f"does not apply to --variant {a.variant}{why}")
+    v = find_variant(a.variant)
+    names = tuple(getattr(a, "variant_options", ())) + PIPELINE_OPTIONS
+    given = {n: getattr(a, n, None) for n in names}
+    values = v.values(given)  # typed, checked, defaults filled: what decides what applies
+    known = {**given, **values}
+    takes = v.applicable(known)
+    why = v.refusal(known) if v.refusal is not None else ""
+    for n, value in given.items():
+        if value not in (None, False) and n not in takes:
+            raise ParameterError(_flag(n), f"does not apply to --variant {v.name}{why}")
     if ground != LINEAR_GROUND and "ground" not in takes:
-        raise ParameterError("--ground", f"--variant {a.variant}"
-                             + (" --steps 2" if a.steps == 2 else "")
-                             + " takes only the paper's linear ground")
-    for dest, default in VARIANT_OPTIONS.items():
-        if getattr(a, dest, None) is None:
-            setattr(a, dest, default)
-    for dest, (lo, hi) in _BOUNDS.items():
-        setattr(a, dest, check_count(_flag(dest), getattr(a, dest), lo, hi))
-    if a.rate_max is not None and not a.rate_max >= 0:
-        raise ParameterError("--rate-max", f"must be >= 0, got {a.rate_max:g}")
-    return v
+        raise ParameterError("--ground", f"--variant {v.name}{why} takes only the paper's "
+                                         "linear ground")
+    return v, values
 
 
-__all__ = ["VARIANTS", "VARIANT_OPTIONS", "SolveVariant", "extension_value", "variant_of"]
+def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, Any],
+                  v0: Any, robot: Any, ground: Any, plot: Any) -> int:
+    """``softlanding solve-sweep --variant NAME``: any variant over ``v0`` by continuation.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed options (``json``, ``accept_unverified``).
+    variant : Variant
+        The variant.
+    options : dict
+        Its checked options.
+    v0 : array
+        Impact velocities, from the easy end.
+    robot, ground
+        The landing.
+    plot : Path or None
+        The figure to write (depth against ``v0``).
+    """
+    from softlanding.cli.output import EXIT_FAILURE, EXIT_OK, print_json, savefig
+    from softlanding.optimal.variants import sweep_variant
+
+    res = sweep_variant(variant, v0, robot, ground, options, progress=not a.json)
+    rows = [{"v0": float(x), **r.to_dict(), "unverified_reasons": r.unverified_reasons()}
+            for x, r in zip(v0, res, strict=True)]
+    unverified = [r for r in rows if r["unverified_reasons"]]
+    code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
+    written = None
+    if plot:
+        import numpy as np
+
+        from softlanding.plots.paper import plot_depth_vs_velocity
+
+        written = savefig(plot_depth_vs_velocity(
+            np.asarray(v0), {variant.name: np.array([r.depth for r in res])}), plot)
+    if a.json:
+        print_json({"verified": not unverified, "variant": variant.name, "sweep": rows})
+        return code
+    if unverified:
+        print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
+            f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
+    print(f"{'v0':>7} {'depth':>14}  verified  solved by")
+    for r in rows:
+        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}  "
+              f"{'no' if r['unverified_reasons'] else 'yes':>8}  {r.get('path', '-')}")
+    if written:
+        print(f"figure written to {written}")
+    return code
+
+
+def _cmd_variants(a: argparse.Namespace) -> int:
+    from softlanding.cli.output import EXIT_OK, print_json
+
+    found = all_variants()
+    if a.json:
+        print_json({"variants": [v.to_dict() for v in found]})
+        return EXIT_OK
+    for v in found:
+        print(f"{v.name}: {v.summary}")
+        print(f"    from {v.module}:{v.attribute} ({v.source})")
+        for o in v.options:
+            req = "required" if o.required else f"default {o.default}"
+            print(f"    {o.flag} ({getattr(o.type, '__name__', 'value')}, {req}): {o.help}")
+        pipe = [_flag(n) for n in PIPELINE_OPTIONS if n != "no_refine" or v.refine]
+        print(f"    and {', '.join(pipe)}" + (", --ground" if v.ground else ""))
+    return EXIT_OK
+
+
+def variants_parser(sub: Any) -> argparse.ArgumentParser:
+    """The ``softlanding variants`` sub-command.
+
+    Parameters
+    ----------
+    sub : argparse subparsers
+        Where to add it.
+    """
+    p = sub.add_parser("variants", help="list the landing variants and their options",
+                       description="Every landing variant `softlanding solve --variant` "
+                                   "takes: built in, packaged, and installed (entry-point "
+                                   "group softlanding.variants), with its options and "
+                                   "where it is declared. A variant in any importable "
+                                   "module is also taken as --variant module:attribute.")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=_cmd_variants)
+    return p
+
+
+__all__ = ["DEFAULT_VARIANT", "SUBCOMMANDS", "add_variant_options", "named_variant",
+           "sweep_command", "variant_of", "variants_parser"]

@@ -15,8 +15,14 @@
 * :mod:`.phase_solve`, :mod:`.phase_schedule`, :mod:`.verification` -- transcribe, refine,
   re-solve; refined arcs to a simulator controller; the checks every result states.
 
-A new variant is one module: its problem, then a :class:`PhasedVariant` subclass and a
-:class:`PhasedLanding` subclass (see ``docs/examples/min_peak_force.py``).
+* :mod:`.variants` -- what a variant declares (:class:`Variant`, :class:`Option`), the
+  result protocol (:class:`VariantResult`), where variants are found (built in,
+  ``module:attribute``, the entry-point group ``softlanding.variants``), and
+  :func:`sweep_variant`; :mod:`.builtin_variants` declares the built-in ones.
+
+A new variant is one module: its problem, a :class:`PhasedVariant` subclass, a
+:class:`PhasedLanding` subclass and a :class:`Variant` (see :mod:`.min_peak_force`, the
+least peak force within a depth budget).
 """
 
 import lazy_loader as _lazy

@@ -6,7 +6,10 @@ from .landing import BangBangLanding as BangBangLanding, build_landing_problem a
 from .leg_extension import LegExtension as LegExtension, LegExtensionLanding as LegExtensionLanding, solve_leg_extension as solve_leg_extension, sweep_leg_extension as sweep_leg_extension
 from .leg_extension_problem import build_leg_extension_problem as build_leg_extension_problem, leg_extension_transcription as leg_extension_transcription
 from .limits import MIN_HOP_SPEED as MIN_HOP_SPEED, force_limit as force_limit, hop_input as hop_input
+from .min_peak_force import MinPeakForceLanding as MinPeakForceLanding, solve_min_peak_force as solve_min_peak_force
+from .phase_solve import phase_guess as phase_guess
 from .pipeline import PhasedVariant as PhasedVariant, continuation as continuation, landing_parameters as landing_parameters, solve_phased as solve_phased
 from .result import PhasedLanding as PhasedLanding
 from .two_phase import TwoPhase as TwoPhase, TwoPhaseLanding as TwoPhaseLanding, TwoStepCheck as TwoStepCheck, solve_two_phase as solve_two_phase, sweep_two_phase as sweep_two_phase, two_step_check as two_step_check
 from .two_phase_problem import build_two_phase_problem as build_two_phase_problem, two_phase_transcription as two_phase_transcription
+from .variants import Option as Option, Variant as Variant, VariantResult as VariantResult, all_variants as all_variants, find_variant as find_variant, sweep_variant as sweep_variant

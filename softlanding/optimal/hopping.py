@@ -195,7 +195,7 @@ def _posture(robot: Robot, x: np.ndarray) -> np.ndarray:
 
 def _crater(res: LandingResult, t_end: float) -> float:
     """The crater's depth up to ``t_end`` (deepest foot position at the segment ends)."""
-    seg = res._segments
+    seg = res.segments
     ends = [float(-seg["z"][k][2]) for k in range(len(seg["t"]) - 1) if seg["t"][k] <= t_end]
     return max([0.0, *ends, float(-state_at(res, t_end)[2])])
 
@@ -224,7 +224,7 @@ def _evaluate(leg: str, robot: Robot, impact: Impact, eta: float, res: LandingRe
     balance = abs(E_apex - E_td - (w.net - depth ** 2 / 2))
     stop = res.t_first_stop
     cot = _landing_cot(robot, impact, res) if leg == "free" else math.nan
-    seg = res._segments
+    seg = res.segments
     flight = [float(t) for t, m in zip(seg["t"][:-1], seg["mode"], strict=True) if m == 2]
     return HopCycle(leg, robot, impact, eta, w.drawn(eta), w, math.nan, depth, cot, err,
                     balance, times={"touchdown": 0.0, "foot_stop": float(stop),
@@ -450,7 +450,7 @@ def _bottom(res: LandingResult) -> float:
     """First time the body's velocity crosses zero upwards before any lift-off (NaN if none)."""
     from scipy.optimize import brentq
 
-    seg = res._segments
+    seg = res.segments
     for k in range(len(seg["t"]) - 1):
         if seg["mode"][k] == 2:
             return math.nan
@@ -468,7 +468,7 @@ def _bottom(res: LandingResult) -> float:
 
 def _in_stroke(res: LandingResult, t_end: float, s: float, probes: int = 60) -> bool:
     """The leg stays within ``[0, s]`` up to ``t_end`` (sampled on every segment)."""
-    seg = res._segments
+    seg = res.segments
     for k in range(len(seg["t"]) - 1):
         t0, t1 = float(seg["t"][k]), min(float(seg["t"][k + 1]), t_end)
         if t1 < t0:
@@ -501,7 +501,7 @@ def _stance(robot: Robot, impact: Impact, k_p: float, k_d: float, u_t: float,
     second = simulate(robot, impact, ThrustImpedance(k_p, k_d, u_t), x0=zb,  # type: ignore
                       t_max=200.0)
     out.second = second
-    seg = second._segments
+    seg = second.segments
     lift = [k for k, m in enumerate(seg["mode"]) if m == 2]
     if not lift:
         return out

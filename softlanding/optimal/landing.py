@@ -281,13 +281,54 @@ class BangBangLanding:
 
         return certify(self.transcribed, self.refined)
 
+    def uncertified_reason(self) -> str:
+        """One line: why :meth:`certify` gives no certificate (empty when it gives one)."""
+        if self.transcribed is None:
+            return ("no PMP certificate: the refined structure was re-solved from a "
+                    "neighbour's, without a transcription to read costates from")
+        return ""
+
+    def rows(self) -> list[tuple[str, object]]:
+        """The ``label, value`` rows of the printed table."""
+        rows: list[tuple[str, object]] = [
+            ("depth -x_f(T)" + (" (refined)" if self.refined is not None else ""), self.depth),
+            ("depth, transcribed", self.depth_transcribed), ("final time T", self.T),
+            ("arcs", " -> ".join(self.arcs)),
+            ("switch times", ", ".join(f"{t:.12g}" for t in self.switch_times)),
+            ("arrest force u_b", self.u_b), ("arrest condition active", self.arrest_active),
+            ("Ipopt status", self.status), ("Ipopt iterations", self.iterations),
+            ("solve time [s]", self.solve_time_s)]
+        if self.replay is not None:
+            rows += [("simulator replay depth", self.replay.depth),
+                     ("replay difference", self.replay_difference),
+                     ("replay feasible", self.replay.feasible)]
+        return rows
+
+    def figures(self, certificate: Any = None) -> list[Any]:
+        """The figures ``--plot`` writes: the landing, then the certificate's (if given).
+
+        Parameters
+        ----------
+        certificate : PMPCertificate, optional
+            Drawn as a second figure.
+        """
+        from softlanding.plots.paper import plot_bang_bang
+
+        figs = [plot_bang_bang(self)]
+        if certificate is not None:
+            from ocp import plot_certificate
+
+            figs.append(plot_certificate(certificate))
+        return figs
+
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The whole landing's open-loop control: the arcs, then ``u_b`` until the body stops,
         then its weight (see :func:`landing_schedule`)."""
         if self.refined is not None and (affine_laws(self.refined) or self.transcribed is None):
             return landing_schedule(self.refined, self.robot.r_m)
         assert self.transcribed is not None
-        return transcribed_schedule(self.transcribed, self.robot.r_m, force_limit(self.robot))
+        return transcribed_schedule(self.transcribed, self.robot.r_m, force_limit(self.robot),
+                                    damped=True)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined arcs and the replay."""
@@ -349,8 +390,8 @@ def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | F
     return _with_arrest(durs, rows, refined.xT, r_m)
 
 
-def transcribed_schedule(sol: Solution, r_m: float,
-                         u_max: float = math.inf) -> ForceSchedule | FeedbackSchedule:
+def transcribed_schedule(sol: Solution, r_m: float, u_max: float = math.inf,
+                         damped: bool = False) -> ForceSchedule | FeedbackSchedule:
     """A transcribed landing's open-loop control: its piecewise-constant force, then ``u_b``
     until the body stops, then the body's weight (see :func:`landing_schedule`).
 
@@ -363,10 +404,16 @@ def transcribed_schedule(sol: Solution, r_m: float,
     u_max : float
         The force limit: Ipopt meets its bounds to its tolerance (~1e-8), the actuator
         exactly, so the forces are clipped to it.
+    damped : bool
+        Hold the body's weight with a damper on its velocity
+        (:data:`~softlanding.optimal.phase_schedule.TAIL_DAMPING`): the transcription
+        leaves the body a residual velocity of its accuracy (~1e-8) that would otherwise
+        carry it through the stroke limit forever.
     """
     u = np.clip(sol.u[:, 0], -u_max, u_max)
     h = sol.T / sol.N
-    return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m)
+    return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m,
+                        damped=damped)
 
 
 def arrest_schedule(x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
@@ -384,14 +431,20 @@ def arrest_schedule(x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedu
 
 
 def _with_arrest(durs: list[float], rows: list[list[float]], xT: np.ndarray,
-                 r_m: float) -> ForceSchedule | FeedbackSchedule:
-    """``durs, rows`` then the arrest force until the body stops, then the body's weight."""
+                 r_m: float, damped: bool = False) -> ForceSchedule | FeedbackSchedule:
+    """``durs, rows`` then the arrest force until the body stops, then the body's weight
+    (``damped``: with a damper on the body's velocity, for a transcribed schedule whose
+    body keeps a residual velocity of the transcription's accuracy)."""
     stroke = xT[0] - xT[2]
     if xT[1] < 0 and stroke > 0:  # the arrest force until the body stops (none if stopped)
         rows.append(_const_row(arrest_force(r_m, xT)))
         decel = xT[1] ** 2 / (2 * stroke)
         durs.append(-xT[1] / decel)
     rows.append(_const_row(r_m / (1 + r_m)))
+    if damped:
+        from softlanding.optimal.phase_schedule import TAIL_DAMPING
+
+        rows[-1][1] = -TAIL_DAMPING
     if all(not any(r[:4]) for r in rows):
         return ForceSchedule.from_arcs(durs, [r[4] for r in rows])
     return FeedbackSchedule.from_arcs(durs, rows)

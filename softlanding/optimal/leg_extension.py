@@ -30,7 +30,13 @@ from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal import leg_extension_problem as problem
 from softlanding.optimal import pipeline
 from softlanding.optimal.limits import force_limit
-from softlanding.optimal.phase_schedule import ArcLaw, arc_laws, propagate, replay_controller
+from softlanding.optimal.phase_schedule import (
+    ArcLaw,
+    arc_laws,
+    propagate,
+    replay_controller,
+    transcribed_controller,
+)
 from softlanding.optimal.phase_solve import phase_guess, second_start
 from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase import TwoPhaseLanding, solve_two_phase
@@ -72,6 +78,7 @@ class LegExtensionLanding(PhasedLanding):
     """
 
     VARIANT: ClassVar[str] = "leg-extension"
+    REFERENCE: ClassVar[str] = "paper's depth (same v0)"
     WORSE_THAN_REFERENCE: ClassVar[str] = (
         "with the paper's initial condition by {:.2e}: a local optimum (the paper's "
         "touchdown state is admissible)")
@@ -98,6 +105,18 @@ class LegExtensionLanding(PhasedLanding):
             return [f"the flight arcs propagated exactly miss the touchdown state by "
                     f"{self.flight_check:.2e}"]
         return []
+
+    @property
+    def label(self) -> str:
+        """``leg extension (mode)``."""
+        return f"leg extension ({self.mode})"
+
+    def own_rows(self) -> list[tuple[str, object]]:
+        """The touchdown state's rows of the table."""
+        return [("mode", self.mode), ("leg length at touchdown", self.extension),
+                ("relative velocity at touchdown", self.rate),
+                ("centre of mass velocity at touchdown", self.com_velocity),
+                ("depth gained", self.gain)]
 
     def own_dict(self) -> dict[str, Any]:
         """The leg-extension fields of the JSON."""
@@ -181,17 +200,26 @@ def _flight_touchdown(out: LegExtensionLanding) -> np.ndarray:
 
 
 def _replay(out: LegExtensionLanding) -> None:
-    """Flight arcs propagated exactly (drop), then the landing in the exact simulator."""
-    if out.refined is None:
-        out.replay_kind = "no refined schedule"
+    """Flight arcs propagated exactly (drop), then the landing in the exact simulator (the
+    refined arcs, or the transcription's piecewise-constant force)."""
+    if out.refined is None and out.transcribed is None:
+        out.replay_kind = "no schedule"
         return
+    if out.mode == "drop" and out.refined is None:
+        assert out.transcribed is not None
+        out.flight_arcs = _transcribed_flight(out.transcribed)
     x0 = out.touchdown
     if out.mode == "drop":
         x0 = _flight_touchdown(out)
         out.flight_check = float(np.max(np.abs(x0 - out.touchdown)))
-    first = len(out.refined.phases) - 2  # the yielding phase
     try:
-        ctrl, kind = replay_controller(out.refined, out.robot.body_mass, first)
+        if out.refined is not None:
+            first = len(out.refined.phases) - 2  # the yielding phase
+            ctrl, kind = replay_controller(out.refined, out.robot.body_mass, first)
+        else:
+            assert out.transcribed is not None
+            ctrl, kind = transcribed_controller(out.transcribed, out.robot.body_mass,
+                                                len(out.transcribed.phases) - 2)
     except NotImplementedError as err:
         out.replay_kind = str(err)
         return
@@ -259,6 +287,7 @@ class LegExtension(pipeline.PhasedVariant):
                  two: TwoPhaseLanding) -> None:
         super().__init__(robot, impact)
         self.mode, self.bounds, self.two = mode, bounds, two
+        self.refine = True  # False: a drop's non-unique flight is not re-solved either
 
     def parameters(self) -> dict[str, float]:
         """The landing's parameters, the touchdown bounds, the paper's leg in ``impact``."""
@@ -268,7 +297,10 @@ class LegExtension(pipeline.PhasedVariant):
         return params
 
     def transcription(self) -> Any:
-        """The leg-extension transcription of this mode."""
+        """The leg-extension transcription of this mode (unrefined: the one with the path
+        constraints imposed between the nodes too, as the replay of its force checks)."""
+        if not self.refine:
+            return problem.leg_extension_transcription_inner(self.mode)
         return problem.leg_extension_transcription(self.mode)
 
     def guess(self) -> Any:
@@ -303,7 +335,7 @@ class LegExtension(pipeline.PhasedVariant):
 
     def finish(self, result: Any) -> Any:
         """A drop whose flight force is not unique: fix the flight, refine the landing."""
-        if self.mode == "drop" and result.refined is None:
+        if self.mode == "drop" and result.refined is None and self.refine:
             return _fixed_flight(result, self.robot, self.impact, self.two)
         return result
 
@@ -315,7 +347,8 @@ class LegExtension(pipeline.PhasedVariant):
 def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
                         mode: str = "impact", extension: Any = None, rate: Any = None,
                         warm_start: LegExtensionLanding | None = None, replay: bool = True,
-                        two_phase: TwoPhaseLanding | None = None) -> LegExtensionLanding:
+                        two_phase: TwoPhaseLanding | None = None,
+                        refine: bool = True) -> LegExtensionLanding:
     """The minimum-depth landing with the leg's state at touchdown optimised.
 
     Parameters
@@ -338,6 +371,9 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         Replay in the exact simulator.
     two_phase : TwoPhaseLanding, optional
         The two-phase optimum with the paper's initial condition (solved if not given).
+    refine : bool
+        Refine the switching times of every phase with exact arcs (False: the
+        transcription, replayed as its piecewise-constant force).
 
     Raises
     ------
@@ -357,10 +393,41 @@ def solve_leg_extension(impact: Impact | float, robot: Robot = PAPER_ROBOT, *,
         raise ParameterError("v0", "a drop needs a height: v0 < 0")
     bounds = _bounds(robot, extension, rate) if mode == "impact" else {}
     two = two_phase if two_phase is not None else solve_two_phase(impact, robot.replace(l0=None))
-    out = pipeline.solve_phased(LegExtension(robot, impact, mode, bounds, two), warm_start,
-                       replay=replay)
+    hooks = LegExtension(robot, impact, mode, bounds, two)
+    hooks.refine = refine
+    out = pipeline.solve_phased(hooks, warm_start, refine=refine, replay=replay)
     assert isinstance(out, LegExtensionLanding)
     return out
+
+
+def solve_leg_extension_variant(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                                ground: Any = LINEAR_GROUND, *, refine: bool = True,
+                                warm_start: Any = None, mode: str = "impact",
+                                extension: Any = "free",
+                                rate_max: float | None = None) -> LegExtensionLanding:
+    """``--variant leg-extension`` (see :mod:`softlanding.optimal.builtin_variants`):
+    :func:`solve_leg_extension` with the command line's options.
+
+    Parameters
+    ----------
+    impact, robot, refine, mode
+        As :func:`solve_leg_extension`.
+    ground : Ground
+        Only the paper's linear ground.
+    warm_start : LegExtensionLanding, optional
+        A neighbour of the same mode (continuation; anything else is not used).
+    extension : "free" or float
+        The leg length at impact, or free within the stroke.
+    rate_max : float, optional
+        Free the relative velocity at impact within ``+-rate_max`` (None: 0).
+    """
+    if ground != LINEAR_GROUND:
+        raise ParameterError("ground", "leg extension takes only the paper's linear ground")
+    warm = warm_start if isinstance(warm_start, LegExtensionLanding) else None
+    return solve_leg_extension(
+        impact, robot, mode=mode, extension=None if extension == "free" else extension,
+        rate=None if rate_max is None else (-rate_max, rate_max), warm_start=warm,
+        refine=refine)
 
 
 def sweep_leg_extension(v0_values, robot: Robot = PAPER_ROBOT, *, mode: str = "impact",
@@ -397,4 +464,5 @@ def sweep_leg_extension(v0_values, robot: Robot = PAPER_ROBOT, *, mode: str = "i
     return pipeline.continuation(impacts, one, progress, f"leg extension ({mode})")
 
 
-__all__ = ["LegExtension", "LegExtensionLanding", "solve_leg_extension", "sweep_leg_extension"]
+__all__ = ["LegExtension", "LegExtensionLanding", "solve_leg_extension",
+           "solve_leg_extension_variant", "sweep_leg_extension"]

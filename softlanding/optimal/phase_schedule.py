@@ -177,4 +177,37 @@ def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
     return z[:4]
 
 
-__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller"]
+def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[Any, str]:
+    """A transcription's piecewise-constant force, from phase ``first`` on, then ``tail``:
+    the replay of a result that was not refined (exact up to the transcription's grid).
+
+    Parameters
+    ----------
+    sol : ocp.Solution
+        A transcribed multi-phase solution (multiple shooting: one force per interval).
+    tail : float
+        Force held after the last phase (the body's weight share).
+    first : int
+        First phase replayed (earlier ones, e.g. a flight, are propagated elsewhere).
+    """
+    durs: list[float] = []
+    vals: list[float] = []
+    for ph in sol.phases[first:]:
+        h = float(ph.T - ph.t0) / ph.N
+        if h > 0:
+            durs += [h] * ph.N
+            vals += [float(u) for u in ph.u[:, 0]]
+    if not feedback_available():
+        return (ForceSchedule.from_arcs(durs, vals + [tail]),
+                "ForceSchedule (the transcription's piecewise-constant force)")
+    # the tail damps the body's velocity, as replay_controller's does: the transcription
+    # leaves a residual body velocity of its own accuracy (~1e-8) that would carry the
+    # body through the stroke limit forever
+    gains = [(0.0, 0.0, 0.0, 0.0, v) for v in vals] + [(0.0, -TAIL_DAMPING, 0.0, 0.0, tail)]
+    return (_controllers.FeedbackSchedule(tuple(np.cumsum(durs)), tuple(gains)),
+            "FeedbackSchedule (the transcription's piecewise-constant force; then the tail "
+            "force with a damper)")
+
+
+__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller",
+           "transcribed_controller"]

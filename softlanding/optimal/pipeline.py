@@ -232,6 +232,7 @@ def solve_phased(variant: PhasedVariant, warm_start: PhasedLanding | None = None
         if refine:
             sol, ref = variant.retry(sol, ref, guess, notes)
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
+    out.refine_requested = refine
     if replay:
         variant.replay(out)
     return out

@@ -55,12 +55,19 @@ class PhasedLanding:
         What the solve noticed.
     path : str
         ``"transcription"`` or ``"structure"`` (the neighbour's arcs re-solved directly).
+    refine_requested : bool
+        Whether the switching times were to be refined (False: ``refine=False``, and a
+        transcribed result is then what was asked for, not a failure).
     """
 
     VARIANT: ClassVar[str] = ""
     """The variant's name in JSON and on the command line."""
     WORSE_THAN_REFERENCE: ClassVar[str] = "the reference by {:.2e}: a local optimum"
     """How to say that ``depth`` is worse than ``paper_depth`` ({} is the gap)."""
+    LABEL: ClassVar[str] = "phased landing"
+    """What the figure's title calls it."""
+    REFERENCE: ClassVar[str] = "paper's depth (same v0)"
+    """What the table calls ``paper_depth``."""
 
     robot: Robot
     impact: Impact
@@ -79,19 +86,38 @@ class PhasedLanding:
     replay_kind: str = ""
     notes: list[str] = field(default_factory=list)
     path: str = "transcription"
+    refine_requested: bool = True
 
     @property
     def certified_transcription(self) -> Solution | None:
         """The transcription ``refined`` was refined from (what the certificate reads)."""
         return self.transcribed
 
+    @property
+    def label(self) -> str:
+        """What the figure's title calls this landing (default :attr:`LABEL`)."""
+        return self.LABEL
+
     def certify(self) -> Any:
-        """The PMP certificate of the refined phases (None without a refinement)."""
+        """The PMP certificate of the refined phases (None without a refinement: see
+        :meth:`uncertified_reason`)."""
         from ocp.certificate.phases import certify_phases
 
-        if self.refined is None:
+        if self.refined is None or self.certified_transcription is None:
             return None
         return certify_phases(self.certified_transcription, self.refined)
+
+    def uncertified_reason(self) -> str:
+        """One line: why :meth:`certify` gives no certificate (empty when it gives one)."""
+        if self.refined is None:
+            if not self.refine_requested:
+                return "no PMP certificate: the switching times were not refined (--no-refine)"
+            why = "; ".join(n for n in self.notes if "refin" in n) or "see the notes"
+            return f"no PMP certificate: the switching times could not be refined ({why})"
+        if self.certified_transcription is None:
+            return ("no PMP certificate: the refined structure was re-solved from a "
+                    "neighbour's, without a transcription to read costates from")
+        return ""
 
     @property
     def gain(self) -> float:
@@ -115,14 +141,48 @@ class PhasedLanding:
         certificate : ocp.certificate.phases.PhasesCertificate, optional
             The certificate of this solution.
         """
-        return (refined_result_reasons(
+        out = refined_result_reasons(
             self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
-            self.gain, self.WORSE_THAN_REFERENCE) + self.own_reasons()
-            + certificate_reasons(certificate))
+            self.gain, self.WORSE_THAN_REFERENCE)
+        if not self.refine_requested:  # a transcribed result is what was asked for
+            out = [r for r in out if not r.startswith("switching times not refined")]
+        return out + self.own_reasons() + certificate_reasons(certificate)
 
     def own_dict(self) -> dict[str, Any]:
         """The variant's own JSON fields (none by default)."""
         return {}
+
+    def own_rows(self) -> list[tuple[str, object]]:
+        """The variant's own table rows (none by default)."""
+        return []
+
+    def rows(self) -> list[tuple[str, object]]:
+        """The ``label, value`` rows of the printed table."""
+        rows: list[tuple[str, object]] = [
+            ("variant", self.VARIANT),
+            ("depth -x_f" + (" (refined)" if self.refined is not None else ""), self.depth),
+            ("depth, transcribed", self.depth_transcribed), (self.REFERENCE, self.paper_depth)]
+        rows += self.own_rows()
+        rows += [("arcs per phase", " | ".join(" -> ".join(a) for a in self.arcs) or "-"),
+                 ("phase start times", ", ".join(f"{t:.9g}" for t in self.phase_times)),
+                 ("solved by", self.path), ("Ipopt status", self.status)]
+        if self.replay is not None:
+            rows += [("simulator replay depth", self.replay.depth),
+                     ("replay difference", self.replay_difference),
+                     ("replay controller", self.replay_kind)]
+        return rows
+
+    def figures(self, certificate: Any = None) -> list[Any]:
+        """The figures ``--plot`` writes: the landing, phases shaded.
+
+        Parameters
+        ----------
+        certificate : PhasesCertificate, optional
+            Not drawn (the phases' certificate is printed).
+        """
+        from softlanding.plots.phased import plot_phased_landing
+
+        return [plot_phased_landing(self)]
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict: the figures, the refined phases and the replay."""

@@ -25,7 +25,7 @@ from functools import lru_cache
 
 import casadi as ca
 
-from ocp import MultiPhaseProblem, OptimalControlProblem
+from ocp import MultiPhaseProblem, OptimalControlProblem, ProblemDefinitionError
 from softlanding.model.dynamics import STATE_NAMES, VF, robot_rhs, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 
@@ -44,6 +44,7 @@ NO_PULL = "ground cannot pull (support force >= 0)"
 BODY_DESCENDING = "body descending v_b <= 0 until it stops"
 ABOVE_SURFACE = "foot above the ground x_f >= 0"
 ABOVE_CRATER = "foot above the crater bottom"
+PEAK = "force within the peak |u| <= peak"
 
 
 def parameters(mp: MultiPhaseProblem) -> dict[str, ca.SX]:
@@ -58,15 +59,46 @@ def parameters(mp: MultiPhaseProblem) -> dict[str, ca.SX]:
 
 
 def _phase(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
-           omit: tuple[str, ...] = ()) -> OptimalControlProblem:
+           omit: tuple[str, ...] = (), u_bound: ca.SX | None = None) -> OptimalControlProblem:
     ph = mp.phase(name)
     for n in STATE_NAMES:
         ph.state(n)
-    ph.control("u", lower=-par["u_max"], upper=par["u_max"])
+    bounded_by(ph, par, u_bound)
     x = ph.x
     if STROKE not in omit:
         ph.path_constraint(x[0] - x[2], 0, par["s"], name=STROKE)
     return ph
+
+
+def bounded_by(ph: OptimalControlProblem, par: dict[str, ca.SX],
+               u_bound: ca.SX | None = None) -> None:
+    """Declare the control ``u`` of ``ph``, ``|u| <= u_bound`` (default ``u_max``).
+
+    A ``u_bound`` that is a decision variable (the epigraph of the peak force) is the
+    control's bounds where :mod:`ocp` takes a variable there (the arcs at the bound are
+    then boundary arcs of the control); otherwise ``|u| <= u_max`` are the bounds and
+    ``|u| <= u_bound`` two path constraints (:data:`PEAK`).
+
+    Parameters
+    ----------
+    ph : OptimalControlProblem
+        A phase without its control yet.
+    par : dict
+        The problem's parameters (:func:`parameters`).
+    u_bound : casadi expression, optional
+        The bound (default ``par["u_max"]``).
+    """
+    if u_bound is None:
+        ph.control("u", lower=-par["u_max"], upper=par["u_max"])
+        return
+    try:
+        ph.control("u", lower=-u_bound, upper=u_bound)
+        return
+    except ProblemDefinitionError:  # ocp refuses a decision variable in bounds (checked first)
+        pass
+    ph.control("u", lower=-par["u_max"], upper=par["u_max"])
+    ph.path_constraint(ph.u[0] - u_bound, -ca.inf, 0.0, name=PEAK + " (upper)")
+    ph.path_constraint(ph.u[0] + u_bound, 0.0, ca.inf, name=PEAK + " (lower)")
 
 
 @lru_cache(maxsize=1)
@@ -107,7 +139,8 @@ def crater_capacity(x, ground: Ground = LINEAR_GROUND):
 
 
 def add_yielding(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
-                 ground: Ground = LINEAR_GROUND) -> OptimalControlProblem:
+                 ground: Ground = LINEAR_GROUND,
+                 u_bound: ca.SX | None = None) -> OptimalControlProblem:
     """A yielding-stance phase: foot descending, ``v_f(T) = 0`` (the foot stops).
 
     Parameters
@@ -117,8 +150,10 @@ def add_yielding(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
         (:func:`parameters`).
     ground : Ground
         Ground model.
+    u_bound : casadi expression, optional
+        ``|u| <= u_bound`` instead of ``u_max`` (see :func:`bounded_by`).
     """
-    ph = _phase(mp, name, par)
+    ph = _phase(mp, name, par, u_bound=u_bound)
     ph.set_dynamics(stance_dynamics(ph.x, ph.u[0], par["r_m"], ground))
     ph.path_constraint(ph.x[3], -ca.inf, 0, name=DESCENDING)
     ph.terminal_constraint(ph.x[3], 0.0, name="foot stopped v_f(T) = 0")
@@ -126,7 +161,8 @@ def add_yielding(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
 
 
 def add_static(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
-               ground: Ground = LINEAR_GROUND, omit: tuple[str, ...] = ()) -> OptimalControlProblem:
+               ground: Ground = LINEAR_GROUND, omit: tuple[str, ...] = (),
+               u_bound: ca.SX | None = None) -> OptimalControlProblem:
     """Add a static-stance phase: the foot pinned at the crater bottom, the support force
     within ``[0, crater capacity]`` (mixed path constraints :data:`NO_PULL`, :data:`CRATER`).
 
@@ -136,8 +172,10 @@ def add_static(mp: MultiPhaseProblem, name: str, par: dict[str, ca.SX],
         As :func:`add_yielding` (``ground``: whose yield force is the crater's capacity).
     omit : tuple of str
         Conditions to leave out (:data:`STROKE`, :data:`CRATER`; diagnosis only).
+    u_bound : casadi expression, optional
+        ``|u| <= u_bound`` instead of ``u_max`` (see :func:`bounded_by`).
     """
-    ph = _phase(mp, name, par, omit)
+    ph = _phase(mp, name, par, omit, u_bound)
     x, u, r_m = ph.x, ph.u[0], par["r_m"]
     f = support_force(x, u, r_m)
     ph.set_dynamics(robot_rhs(x, u, f, r_m))
@@ -202,6 +240,6 @@ def impact_state(ph: OptimalControlProblem, par: dict[str, ca.SX]) -> None:
 
 
 __all__ = ["ABOVE_CRATER", "ABOVE_SURFACE", "ARREST_MAX", "BODY_DESCENDING", "CRATER",
-           "DESCENDING", "NO_PULL", "PARAMETERS", "STROKE", "T_MAX", "add_flight", "add_static",
-           "add_yielding", "arrest_to_rest", "crater_capacity", "impact_state", "parameters",
-           "support_force"]
+           "DESCENDING", "NO_PULL", "PARAMETERS", "PEAK", "STROKE", "T_MAX", "add_flight",
+           "add_static", "add_yielding", "arrest_to_rest", "bounded_by", "crater_capacity",
+           "impact_state", "parameters", "support_force"]

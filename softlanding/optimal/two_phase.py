@@ -34,7 +34,7 @@ from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
 from softlanding.optimal.limits import landing_input
-from softlanding.optimal.phase_schedule import replay_controller
+from softlanding.optimal.phase_schedule import replay_controller, transcribed_controller
 from softlanding.optimal.phase_solve import phase_guess, transcribed_solve
 from softlanding.optimal.pipeline import (
     PhasedVariant,
@@ -84,6 +84,15 @@ class TwoPhaseLanding(PhasedLanding):
     T: float
     arrest_force: float
     arrest_force_range: tuple[float, float]
+
+    LABEL: ClassVar[str] = "two-phase landing"
+
+    def own_rows(self) -> list[tuple[str, object]]:
+        """The arrest's rows of the table."""
+        return [("yielding steps allowed", self.steps), ("foot stops T1", self.T1),
+                ("body stops T", self.T), ("arrest force (phase 2)", self.arrest_force),
+                ("arrest force range",
+                 "{:.12g} .. {:.12g}".format(*self.arrest_force_range))]
 
     def own_dict(self) -> dict[str, Any]:
         """The two-phase fields of the JSON."""
@@ -214,16 +223,8 @@ class TwoPhase(PhasedVariant):
             if result.refined is not None:
                 ctrl, kind = replay_controller(result.refined, tail)
             else:
-                from softlanding.model.controllers import ForceSchedule
-
                 assert result.transcribed is not None
-                durs, vals = [], []
-                for ph in result.transcribed.phases:
-                    h = (ph.T - ph.t0) / ph.N
-                    durs += [h] * ph.N if h > 0 else []
-                    vals += list(ph.u[:, 0]) if h > 0 else []
-                ctrl = ForceSchedule.from_arcs(durs, vals + [tail])
-                kind = "ForceSchedule (the transcription's piecewise-constant force)"
+                ctrl, kind = transcribed_controller(result.transcribed, tail)
         except NotImplementedError as err:
             result.replay_kind = str(err)
             return
@@ -283,6 +284,29 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     return out
 
 
+def solve_two_phase_variant(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                            ground: Ground = LINEAR_GROUND, *, refine: bool = True,
+                            warm_start: Any = None, steps: int = 1) -> Any:
+    """``--variant two-phase``: :func:`solve_two_phase`, or with ``steps=2``
+    :func:`two_step_check` (the variant's solve function, see
+    :mod:`softlanding.optimal.builtin_variants`).
+
+    Parameters
+    ----------
+    impact, robot, ground, refine
+        As :func:`solve_two_phase`.
+    warm_start : TwoPhaseLanding, optional
+        A neighbour (continuation; anything else is not used).
+    steps : {1, 2}
+        Yielding steps allowed.
+    """
+    if steps == 2:
+        return two_step_check(impact, robot, ground)
+    warm = warm_start if isinstance(warm_start, TwoPhaseLanding) and \
+        warm_start.steps == 1 else None
+    return solve_two_phase(impact, robot, ground, refine=refine, warm_start=warm)
+
+
 def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR_GROUND, *,
                     progress: bool | None = False,
                     replay: bool = True) -> list[TwoPhaseLanding]:
@@ -311,7 +335,8 @@ def sweep_two_phase(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINE
     return continuation(impacts, one, progress, "two-phase sweep")
 
 
-__all__ = ["TwoPhase", "TwoPhaseLanding", "solve_two_phase", "sweep_two_phase"]
+__all__ = ["TwoPhase", "TwoPhaseLanding", "solve_two_phase", "solve_two_phase_variant",
+           "sweep_two_phase"]
 
 
 # ------------------------------------------------------------ a second step
@@ -360,6 +385,37 @@ class TwoStepCheck:
             A certificate of the one-step optimum.
         """
         return self.one_step.unverified_reasons(certificate)
+
+    def rows(self) -> list[tuple[str, object]]:
+        """The comparison's table rows, one per start."""
+        rows: list[tuple[str, object]] = [
+            ("one-step depth (refined)", self.one_step.depth),
+            ("two-step depth (transcribed, best start)", self.depth),
+            ("gain of a second step", self.gain), ("middle phases collapse", self.collapsed)]
+        for st in self.starts:
+            rows.append((f"start {st['start']}", f"depth {st['depth']:.10g}, phase durations "
+                         + ", ".join(f"{d:.4g}" for d in st["durations"]) if "depth" in st
+                         else f"failed ({st['error']})"))
+        return rows
+
+    def figures(self, certificate: Any = None) -> list[Any]:
+        """The one-step optimum's figure (the comparison itself is a table).
+
+        Parameters
+        ----------
+        certificate : object, optional
+            Not drawn.
+        """
+        return self.one_step.figures()
+
+    def certify(self) -> None:
+        """None: the check compares transcribed depths (see :meth:`uncertified_reason`)."""
+        return None
+
+    def uncertified_reason(self) -> str:
+        """Why there is no certificate."""
+        return ("no PMP certificate: the two-step check compares transcribed depths "
+                "(certify the one-step optimum with --steps 1 --pmp)")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict."""

@@ -11,6 +11,14 @@ from __future__ import annotations
 from typing import Any
 
 
+def _within_grid(replay: Any, refined: bool) -> bool:
+    """A transcribed schedule's replay that leaves the stroke by no more than the
+    transcription's accuracy (1e-6, as its depth): a constraint the transcription holds
+    at Ipopt's tolerance, not a violated one. A refined schedule gets no such allowance."""
+    excess = max(-replay.stroke_min, replay.stroke_max - replay.robot.s)
+    return not refined and excess <= 1e-6 * max(1.0, replay.robot.s)
+
+
 def replay_reasons(replay: Any, depth: float, refined: bool) -> list[str]:
     """What the exact replay of a schedule disproves (empty: it confirms the result).
 
@@ -21,15 +29,17 @@ def replay_reasons(replay: Any, depth: float, refined: bool) -> list[str]:
     depth : float
         The depth the optimiser reports.
     refined : bool
-        The result was refined (exact arcs: replay to 1e-9; else 1e-6, the transcription's
-        grid error).
+        The result was refined (exact arcs: replay to 1e-9 and the stroke exactly; else
+        1e-6, the transcription's grid error, in depth and stroke).
     """
     out = []
     if not replay.rest_proven:
         out.append(f"the exact-simulator replay does not come to rest ({replay.status})")
-    elif not replay.feasible:
+    elif not replay.feasible and not _within_grid(replay, refined):
+        excess = max(-replay.stroke_min, replay.stroke_max - replay.robot.s)
         out.append(f"the exact-simulator replay leaves the stroke [0, {replay.robot.s:g}] "
-                   f"(leg length from {replay.stroke_min:.6g} to {replay.stroke_max:.6g})")
+                   f"by {excess:.1e} (leg length from {replay.stroke_min:.6g} to "
+                   f"{replay.stroke_max:.6g})")
     tol = (1e-9 if refined else 1e-6) * max(1.0, depth)
     diff = abs(replay.depth - depth)
     if not diff <= tol:

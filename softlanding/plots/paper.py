@@ -152,7 +152,8 @@ def plot_bang_bang(landing) -> plt.Figure:
     else:
         t, x, uu = landing.transcribed.sample(800)
         u = uu[:, 0]
-    ncol = 1 if landing.replay is None else 2
+    # the whole landing only when its replay comes to rest (else there is no end to draw)
+    ncol = 1 if landing.replay is None or not landing.replay.rest_proven else 2
     fig, axes = plt.subplots(3, ncol, sharex="col", figsize=(6.5 + 4.5 * (ncol - 1), 7.0),
                              squeeze=False, gridspec_kw={"width_ratios": [1.3, 1][:ncol]})
     cols: list[tuple[Any, Any, Any, str | None]] = [(t, x, u, "post")]

@@ -95,25 +95,34 @@ def _refined_spans(ref: Any) -> list[tuple[float, float, str]]:
 
 
 def plot_phased_landing(res: Any) -> plt.Figure:
-    """A two-phase (or leg-extension) landing: the refined exact arcs, phases shaded.
+    """A phased landing (two-phase, leg extension, any variant on the pipeline): the refined
+    exact arcs, or the transcription when there is no refinement, phases shaded.
 
     Parameters
     ----------
-    res : TwoPhaseLanding or LegExtensionLanding
-        With a refinement.
+    res : PhasedLanding
+        A solved landing (its ``label`` heads the title).
     """
     ref = res.refined
-    if ref is None:
-        raise ValueError("no refined solution to plot (see the result's notes)")
-    tr = ref.trajectory(1200)
-    sw = [t for ph in ref.switch_times for t in ph]
-    kind = getattr(res, "mode", None)
-    head = "leg extension (" + kind + ")" if kind else "two-phase landing"
+    if ref is not None:
+        tr = ref.trajectory(1200)
+        sw = [t for ph in ref.switch_times for t in ph]
+        spans = _refined_spans(ref)
+        what = ""
+    elif res.transcribed is not None:
+        tr = res.transcribed.trajectory(1200)
+        sw = []
+        ends = [float(t) for t in res.phase_times]
+        spans = [(a, b, p.problem.name) for a, b, p in zip(ends[:-1], ends[1:],
+                                                           res.transcribed.phases, strict=True)]
+        what = " (transcribed, not refined)"
+    else:
+        raise ValueError("neither a refinement nor a transcription to plot")
     p = res.robot
-    title = (f"{head}, $v_0$={res.impact.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
+    title = (f"{res.label}{what}, $v_0$={res.impact.v0:g}, $r_m$={p.r_m:g}, $s$={p.s:g}, "
              f"$u_{{max}}$={p.u_max:g}, {ground_label(getattr(res, 'ground', LINEAR_GROUND))}: "
-             f"depth {res.depth:.6f} (paper's: {res.paper_depth:.6f})")
-    return plot_phases(tr.t, tr.x, tr.u[:, 0], _refined_spans(ref), title, sw)
+             f"depth {res.depth:.6f} ({res.REFERENCE}: {res.paper_depth:.6f})")
+    return plot_phases(tr.t, tr.x, tr.u[:, 0], spans, title, sw)
 
 
 def plot_hop(cycle: Any) -> plt.Figure:

@@ -121,7 +121,7 @@ def result_work(res, t_end: float) -> Work:
     t_end : float
         Where to stop.
     """
-    seg = res._segments
+    seg = res.segments
     out = Work()
     for k in range(len(seg["t"]) - 1):
         t0, t1 = float(seg["t"][k]), min(float(seg["t"][k + 1]), t_end)
@@ -141,7 +141,7 @@ def state_at(res, t: float) -> np.ndarray:
     t : float
         Time.
     """
-    seg = res._segments
+    seg = res.segments
     k = int(np.clip(np.searchsorted(seg["t"][:-1], t, side="right") - 1, 0,
                     len(seg["t"]) - 2))
     return (expm(seg["A"][k] * (t - seg["t"][k])) @ seg["z"][k])[:4]

@@ -27,8 +27,9 @@ Example
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -194,6 +195,13 @@ class LandingResult:
     depth_limit: float = math.nan
     foot_rest: bool = False
     _segments: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+
+    @property
+    def segments(self) -> Mapping[str, np.ndarray]:
+        """The simulated segments (the kernel's arrays by name: ``t``, the state at each
+        segment's start, its mode and law), read-only: what the samplers and energy
+        integrals of other modules read."""
+        return MappingProxyType(self._segments)
 
     @property
     def stroke_held(self) -> bool:

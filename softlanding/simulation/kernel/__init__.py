@@ -88,9 +88,40 @@ def compiled_before(dispatcher) -> bool:
     if dispatcher.signatures:
         return True
     try:
-        return bool(dispatcher._cache._cache_file._load_index())
+        return cache_index_current(dispatcher.py_func)
     except Exception:  # no on-disk cache (NUMBA_DISABLE_JIT, another numba): assume compiled
         return True
+
+
+def cache_index_current(py_func) -> bool:
+    """True if numba's on-disk cache index of ``py_func`` exists and is not older than its
+    source (numba names it ``<module>.<qualname>-<line>.py<ver>.nbi``, in ``__pycache__``
+    beside the source or in ``NUMBA_CACHE_DIR``; read from the file system, not from
+    numba's private cache objects).
+
+    Parameters
+    ----------
+    py_func : function
+        The Python function of a ``cache=True`` dispatcher.
+    """
+    import hashlib
+    import inspect
+    import sys
+    from pathlib import Path
+
+    import numba
+
+    src = Path(inspect.getsourcefile(py_func) or "").resolve()
+    cache_dir = getattr(numba.config, "CACHE_DIR", "")
+    if cache_dir:  # NUMBA_CACHE_DIR: numba's folder per source folder there
+        folder = Path(cache_dir) / (
+            f"{src.parent.name}_{hashlib.sha1(str(src.parent).encode()).hexdigest()}")
+    else:
+        folder = src.parent / "__pycache__"
+    ver = f"{sys.version_info[0]}{sys.version_info[1]}"
+    index = folder / (
+        f"{src.stem}.{py_func.__qualname__}-{py_func.__code__.co_firstlineno}.py{ver}.nbi")
+    return index.is_file() and index.stat().st_mtime >= src.stat().st_mtime
 
 
 def compile_notice(kind: str = "affine") -> str | None:

@@ -8,7 +8,7 @@ import sys
 import pytest
 
 from softlanding.cli.output import FIGURE_FORMATS
-from softlanding.cli.variants import VARIANT_OPTIONS, VARIANTS
+from softlanding.optimal.variants import PIPELINE_OPTIONS, all_variants
 
 IGNORED = [  # (arguments, the option named in the refusal)
     (["--variant", "two-phase", "--mode", "drop"], "--mode"),
@@ -22,7 +22,6 @@ IGNORED = [  # (arguments, the option named in the refusal)
     (["--variant", "paper", "--rate-max", "1"], "--rate-max"),
     (["--variant", "leg-extension", "--mode", "drop", "--extension", "5"], "--extension"),
     (["--variant", "leg-extension", "--mode", "drop", "--rate-max", "1"], "--rate-max"),
-    (["--variant", "leg-extension", "--no-refine"], "--no-refine"),
     (["--variant", "leg-extension", "--ground", "drag", "--cd", "1"], "--ground"),
     (["--variant", "two-phase", "--steps", "2", "--ground", "drag", "--cd", "1"], "--ground"),
 ]
@@ -36,16 +35,15 @@ def test_an_option_the_variant_ignores_is_refused(cli, args, option):
         option == "--ground" and "linear ground" in err)
 
 
-def test_every_variant_option_is_claimed_by_some_variant():
-    """An option no variant takes would be refused everywhere: a dead option."""
-    import argparse
-
-    claimed = set()
-    for v in VARIANTS.values():
+def test_every_variant_option_applies_somewhere():
+    """An option its variant takes in no mode would be refused everywhere: a dead option."""
+    for v in all_variants():
+        claimed = set()
         for steps in (None, 2):
             for mode in (None, "drop"):
-                claimed |= v.takes(argparse.Namespace(steps=steps, mode=mode))
-    assert set(VARIANT_OPTIONS) <= claimed
+                claimed |= v.applicable({"steps": steps, "mode": mode})
+        assert set(v.option_names()) <= claimed, v.name
+        assert set(PIPELINE_OPTIONS) - {"no_refine"} <= claimed, v.name
 
 
 BAD = [  # each a distinct class of bad input the CLI once called a bug or ignored

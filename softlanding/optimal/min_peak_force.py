@@ -1,0 +1,258 @@
+"""A landing variant in one module: the smallest peak force that lands within a depth budget.
+
+An actuator's size is set by its peak force. Given a budget ``depth_max`` for the final
+depth, what is the smallest ``max |u|`` that still lands within it? The problem is the
+two-phase landing (yielding, then static stance until the body rests; see
+:mod:`softlanding.optimal.two_phase_problem`) in epigraph form: a decision variable
+``peak``, ``-peak <= u <= peak`` in both phases, ``peak`` minimised, the final depth at
+most ``depth_max``. Its answer ``P`` is the force limit at which the two-phase landing's
+least depth is exactly ``depth_max``.
+
+This module is the whole variant, written against public names only: the problem, the
+result (its own table rows and JSON fields), the hooks that
+:func:`softlanding.optimal.solve_phased` runs (a transcription started from the two-phase
+landing, the switches refined with exact arcs where the arcs allow, the schedule replayed
+in the exact simulator), and :data:`VARIANT`, which gives the command line its name and
+option: ``softlanding solve --variant min-peak-force --v0 -3 --depth-max 2``. A copy
+outside the package runs as ``--variant mymodule:VARIANT``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, ClassVar
+
+import casadi as ca
+
+from ocp import MultiPhaseProblem, MultipleShooting
+from softlanding.errors import ParameterError
+from softlanding.model import LINEAR_GROUND, PAPER_ROBOT, Ground, Impact, Robot
+from softlanding.optimal import (
+    Option,
+    TwoPhase,
+    TwoPhaseLanding,
+    Variant,
+    phase_guess,
+    solve_phased,
+    solve_two_phase,
+)
+from softlanding.optimal.stance_phases import (
+    ARREST_MAX,
+    T_MAX,
+    add_static,
+    add_yielding,
+    arrest_to_rest,
+    impact_state,
+    parameters,
+)
+
+
+@lru_cache(maxsize=4)
+def min_peak_force_transcription(ground: Ground = LINEAR_GROUND) -> MultipleShooting:
+    """Yielding, then static until the body rests, ``|u| <= peak``; minimise ``peak``
+    with the final depth at most the parameter ``depth_max``. The peak is at least the
+    body's weight, which the leg holds once the body rests.
+
+    Parameters
+    ----------
+    ground : Ground
+        Ground model.
+    """
+    mp = MultiPhaseProblem("min_peak_force")
+    par = parameters(mp)
+    depth_max = mp.parameter("depth_max")
+    weight = par["r_m"] / (1 + par["r_m"])  # the body's weight: the leg holds it at rest
+    peak = mp.variable("peak", weight, par["u_max"], guess=par["u_max"])
+    yielding = add_yielding(mp, "yielding", par, ground, u_bound=peak)
+    yielding.free_final_time(1e-3, T_MAX, guess=0.3)
+    static = add_static(mp, "static", par, ground, u_bound=peak)
+    static.free_duration(1e-6, ARREST_MAX, guess=1.0)
+    impact_state(yielding, par)
+    arrest_to_rest(static, par, ground)
+    mp.link(yielding, static)
+    static.terminal_constraint(-static.x[2] - depth_max, -ca.inf, 0.0, name="depth budget")
+    mp.minimize(peak)
+    return MultipleShooting(mp, nodes=[100, 40], integrator="rk4", substeps=4, expand=True)
+
+
+@dataclass(kw_only=True)
+class MinPeakForceLanding(TwoPhaseLanding):
+    """The least peak force within a depth budget (a two-phase landing).
+
+    ``paper_depth`` holds the budget, so ``gain`` is the depth left unused (>= 0).
+
+    Attributes
+    ----------
+    depth_max : float
+        The depth budget.
+    peak : float
+        The least peak force ``max |u|`` (refined, else transcribed).
+    least_depth : float
+        The two-phase landing's least depth with the robot's own force limit.
+    """
+
+    VARIANT: ClassVar[str] = "min-peak-force"
+    LABEL: ClassVar[str] = "least peak force"
+    REFERENCE: ClassVar[str] = "depth budget"
+    WORSE_THAN_REFERENCE: ClassVar[str] = "the depth budget, exceeded by {:.2e}"
+
+    depth_max: float
+    peak: float
+    least_depth: float
+
+    def own_rows(self) -> list[tuple[str, object]]:
+        """The peak force first, then the two-phase rows."""
+        return [("peak force max |u|", self.peak),
+                ("least depth at u_max", self.least_depth), *super().own_rows()]
+
+    def own_reasons(self) -> list[str]:
+        """The exact replay's largest force must be the peak."""
+        if self.replay is None or self.refined is None:
+            return []
+        gap = abs(self.replay.u_peak - self.peak)
+        return [] if gap <= 1e-9 * max(1.0, self.peak) else [
+            f"the replay's largest force differs from the peak by {gap:.2e}"]
+
+    def own_dict(self) -> dict[str, Any]:
+        """The two-phase fields and the peak."""
+        return {**super().own_dict(), "peak": self.peak, "depth_max": self.depth_max,
+                "least_depth": self.least_depth}
+
+
+class MinPeakForce(TwoPhase):
+    """The hooks: the two-phase landing's result and replay, with this problem.
+
+    Parameters
+    ----------
+    robot, impact, ground
+        The landing.
+    depth_max : float
+        The depth budget.
+    start : TwoPhaseLanding
+        The two-phase minimum-depth landing (the guess: its force is within ``u_max``).
+    """
+
+    def __init__(self, robot: Robot, impact: Impact, ground: Ground, depth_max: float,
+                 start: TwoPhaseLanding) -> None:
+        super().__init__(robot, impact, ground, 1, None)
+        self.depth_max, self.start = depth_max, start
+        self.paper_depth = depth_max
+
+    def parameters(self) -> dict[str, float]:
+        """The landing's parameters and the budget."""
+        return {**super().parameters(), "depth_max": self.depth_max}
+
+    def transcription(self) -> MultipleShooting:
+        """This variant's problem."""
+        return min_peak_force_transcription(self.ground)
+
+    def guess(self) -> Any:
+        """The two-phase minimum-depth landing, cut into the phases."""
+        start = self.start.refined if self.start.refined is not None else self.start.transcribed
+        assert start is not None
+        return phase_guess(start.trajectory(400), [self.start.T1])
+
+    def accepts(self, neighbour: Any) -> bool:
+        """Only a neighbour of this variant.
+
+        Parameters
+        ----------
+        neighbour : PhasedLanding
+            The warm start.
+        """
+        return isinstance(neighbour, MinPeakForceLanding)
+
+    def bound(self) -> float | None:
+        """No bound on a re-solved structure's objective."""
+        return None
+
+    def explain(self, err: Any, guess: Any) -> Exception:
+        """Ipopt's verdict as it is (the budget was checked before).
+
+        Parameters
+        ----------
+        err : ocp.SolveError
+            Ipopt's verdict.
+        guess : object
+            The guess it started from.
+        """
+        return err
+
+    def assemble(self, sol: Any, ref: Any, notes: list[str], path: str) -> MinPeakForceLanding:
+        """The two-phase result, with the peak and the budget.
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription (None on the structure path).
+        ref : RefinedPhases or None
+            The refined phases.
+        notes : list of str
+            What the solve noticed.
+        path : str
+            ``"transcription"`` or ``"structure"``.
+        """
+        two = super().assemble(sol, ref, notes, path)
+        src = ref if ref is not None else sol
+        return MinPeakForceLanding(**two.__dict__, depth_max=self.depth_max,
+                                   peak=float(src.variables["peak"]),
+                                   least_depth=self.start.depth)
+
+
+def solve_min_peak_force(impact: Impact | float, robot: Robot = PAPER_ROBOT,
+                         ground: Ground = LINEAR_GROUND, *, depth_max: float,
+                         refine: bool = True, warm_start: Any = None) -> MinPeakForceLanding:
+    """The least peak force ``max |u|`` that lands with the final depth at most
+    ``depth_max``.
+
+    Parameters
+    ----------
+    impact : Impact or float
+        Impact velocity.
+    robot : Robot
+        The robot; its force limit ``u_max`` bounds the peak.
+    ground : Ground
+        Ground model.
+    depth_max : float
+        The depth budget: at least the two-phase landing's least depth with ``u_max``.
+    refine : bool
+        Refine the switching times with exact arcs.
+    warm_start : MinPeakForceLanding, optional
+        A neighbour (continuation).
+
+    Raises
+    ------
+    ParameterError
+        A budget below the least depth that ``u_max`` reaches.
+    """
+    impact = Impact.of(impact)
+    if not (isinstance(depth_max, float | int) and math.isfinite(depth_max)
+            and depth_max > 0):
+        raise ParameterError("depth_max", f"must be a finite depth > 0, got {depth_max!r}")
+    start = solve_two_phase(impact, robot, ground, replay=False)
+    if depth_max < start.depth:
+        raise ParameterError("depth_max", f"{depth_max:.9g} is below the least depth "
+                                          f"{start.depth:.9g} that u_max={robot.u_max:g} "
+                                          "reaches: no force within it lands")
+    warm = warm_start if isinstance(warm_start, MinPeakForceLanding) else None
+    out = solve_phased(MinPeakForce(robot, impact, ground, float(depth_max), start), warm,
+                       refine=refine)
+    assert isinstance(out, MinPeakForceLanding)
+    return out
+
+
+def _positive(d: float) -> str | None:
+    return None if d > 0 else f"must be a depth > 0, got {d:g}"
+
+
+VARIANT = Variant(
+    "min-peak-force", "the least peak force max |u| landing within a depth budget",
+    solve_min_peak_force, ground=True,
+    options=(Option("depth_max", float, help="the depth budget D (at least the two-phase "
+                    "least depth)", check=_positive, required=True, metavar="D"),))
+"""``softlanding solve --variant min-peak-force --depth-max D``."""
+
+__all__ = ["VARIANT", "MinPeakForce", "MinPeakForceLanding", "min_peak_force_transcription",
+           "solve_min_peak_force"]
