@@ -160,3 +160,31 @@ def test_a_short_stroke_plan_from_state_replays_its_transcription():
     assert simulate(robot, -3, plan, LinearGround()).depth > 0
     with pytest.raises(ParameterError, match="yield"):
         plan_from_state(robot, LinearGround(), np.array([1.0, 0.0, 0.0, 0.0]))
+
+
+def test_the_kkt_check_tells_a_minimax_optimum_from_a_point_that_is_not():
+    # min z s.t. z >= (x - 1)^2, z >= (x + 1)^2: the optimum x = 0, z = 1 (both active,
+    # multipliers 1/2 each); at x = 0.5 only one is active and z can still decrease
+    from softlanding.control.robust import KKT_TOL, kkt_residual
+
+    def cons(v):
+        return np.array([v[1] - (v[0] - 1) ** 2, v[1] - (v[0] + 1) ** 2])
+
+    lo, hi, grad = np.array([-5.0, 0.0]), np.array([5.0, np.inf]), np.array([0.0, 1.0])
+    assert kkt_residual(cons, np.array([0.0, 1.0]), lo, hi, grad) < 1e-9
+    assert kkt_residual(cons, np.array([0.5, 2.25]), lo, hi, grad) > 0.1
+    assert kkt_residual(cons, np.array([0.0, 0.9]), lo, hi, grad) == np.inf  # infeasible
+    # at a bound the bound's multiplier counts: min z s.t. z >= (x - 1)^2, x <= 0
+    assert kkt_residual(lambda v: cons(v)[:1], np.array([0.0, 1.0]), lo,
+                        np.array([0.0, np.inf]), grad) < KKT_TOL
+
+
+def test_the_search_converges_or_says_so(robust):
+    # issue 34: the schedule is a KKT point of the epigraph problem, checked independently
+    from softlanding.control.robust import KKT_TOL
+
+    assert robust.converged and robust.kkt_residual <= KKT_TOL
+    assert "converged" in robust.message and robust.to_dict()["converged"] is True
+    cut = robust_landing(-3, GROUNDS[:2], max_iterations=1)
+    assert not cut.converged and cut.to_dict()["converged"] is False
+    assert "NOT converged" in cut.message or "none of the" in cut.message
