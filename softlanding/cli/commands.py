@@ -528,7 +528,7 @@ def _cmd_hop(a: argparse.Namespace) -> int:
     if a.doublings is not None and "free" not in legs:
         raise ParameterError("--doublings", f"refines the free leg's grid; --leg {a.leg} has "
                                             "none")
-    doublings = check_count("--doublings", 2 if a.doublings is None else a.doublings, 0, 4)
+    doublings = check_count("--doublings", 1 if a.doublings is None else a.doublings, 0, 4)
     from softlanding.optimal.limits import hop_input
 
     hop_input(robot, a.v0, a.eta)  # checked before the solver loads

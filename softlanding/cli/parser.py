@@ -212,7 +212,7 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
                    help="--leg impedance or all: gain grid per axis (default 9, 2 to 41)")
     h.add_argument("--doublings", type=int, default=None, metavar="K",
                    help="--leg free or all: the optimum re-solved on K grids, each with twice "
-                        "the nodes (default 2, 0 to 4); the finest is reported with the "
+                        "the nodes (default 1, 0 to 4); the finest is reported with the "
                         "continuous optimum extrapolated from the sequence and its error. A "
                         "grid's energy is a discretised value: unless it has settled to 1e-6 "
                         "the cycle is not verified (exit 1 without --accept-unverified)")

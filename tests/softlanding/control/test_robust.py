@@ -188,3 +188,27 @@ def test_the_search_converges_or_says_so(robust):
     cut = robust_landing(-3, GROUNDS[:2], max_iterations=1)
     assert not cut.converged and cut.to_dict()["converged"] is False
     assert "NOT converged" in cut.message or "none of the" in cut.message
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("v0", [-1.0, -3.0, -6.0, -10.0])
+def test_the_guides_robust_and_tree_columns_are_runs(v0):
+    # issue 34: the unknown-ground guide's worst depths of the robust schedule and the tree
+    # over the study's 15 grounds are these runs' (as the study makes them), and the robust
+    # search behind them converged (minutes at v0 = -10)
+    import itertools
+    import re
+    from pathlib import Path
+
+    from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
+
+    guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground.md"
+    rows = {float(m[1]): m[2].split("|") for m in
+            re.finditer(r"^\| (-[\d.]+) \|(.*)\|$", guide.read_text(), re.M)}
+    cells = [c.strip() for c in rows[v0]]
+    grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
+    r = robust_landing(v0, grounds, nominal=solve_landing(v0))
+    t = two_stage_landing(r)
+    assert r.converged, r.message
+    assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !")
+    assert cells[3] == f"{t.worst:.3f}" + ("" if t.feasible else " !")

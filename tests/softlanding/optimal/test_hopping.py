@@ -46,6 +46,17 @@ def test_the_optimal_cycle_closes_and_balances(free):
         < free.times["apex"]
 
 
+def test_one_grid_says_it_is_discretised(free):
+    # issue 34: the energy is a grid's (exact replay of its control), not the continuous
+    # optimum; one grid gives no error estimate, and the cycle says both
+    assert not free.converged and math.isnan(free.energy_estimate)
+    assert free.unconverged_reason().startswith("discretised") and "one grid" in \
+        free.unconverged_reason()
+    d = free.to_dict()
+    assert d["verified"] is False and d["replay_verified"] is True
+    assert d["optimum"] == "discretised" and len(d["grids"]) == 1
+
+
 def test_regeneration_lowers_the_energy(free):
     half = solve_hop(-2.0, PAPER_ROBOT, eta=0.5)
     assert half.unverified_reasons() == []
@@ -71,3 +82,45 @@ def test_bad_requests():
         solve_hop(-2.0, eta=1.0)
     with pytest.raises(ParameterError, match="v0"):
         rigid_hop(0.0)
+
+
+@pytest.mark.slow
+def test_the_grid_estimate_agrees_with_an_independent_grid_sequence():
+    # issue 34, v0 = -3, eta = 0: the continuous optimum is estimated independently here,
+    # from uniform grids of 120 and 240 nodes per phase (not solve_hop's 60/80/60 family),
+    # each replayed exactly by the simulator with code of this test, and extrapolated at
+    # first order; solve_hop's estimate must agree within its stated error, its energy be
+    # above both, and it must not call itself converged (minutes)
+    from ocp import MultipleShooting
+    from softlanding.model.controllers import ForceSchedule
+    from softlanding.model.robot import Impact
+    from softlanding.optimal.hopping_problem import build_hop_problem
+    from softlanding.optimal.pipeline import landing_parameters
+    from softlanding.simulation.actuator_work import result_work, state_at
+    from softlanding.simulation.simulator import simulate
+
+    impact = Impact(-3.0)
+    h = solve_hop(impact, doublings=1)
+    assert not h.converged and len(h.grids) == 2 and h.grids[1]["nodes"] == [120, 160, 120]
+    params = {**landing_parameters(PAPER_ROBOT, impact), "l0": PAPER_ROBOT.s / 2, "eta": 0.0}
+    mb, mf = PAPER_ROBOT.body_mass, PAPER_ROBOT.foot_mass
+    energy, prev = {}, h.transcribed[0]
+    for n in (120, 240):
+        tr = MultipleShooting(build_hop_problem(), nodes=[n] * 3, integrator="rk4",
+                              substeps=4, expand=True, inner_constraints=True,
+                              ipopt_options={"max_iter": 1500})
+        sol = tr.solve(params, warm_start=prev)
+        steps = [((float(ph.T) - float(ph.t0)) / ph.N, float(u)) for ph in sol.phases
+                 for u in ph.u[:, 0]]
+        t_apex = sum(s for s, _ in steps)
+        res = simulate(PAPER_ROBOT, impact, ForceSchedule.from_arcs(
+            [s for s, _ in steps], [u for _, u in steps] + [0.0]),
+            x0=impact.initial_state(PAPER_ROBOT.replace(l0=None)), t_max=t_apex + 1.0)
+        x = state_at(res, t_apex)  # the replay reaches the apex posture
+        assert mb * x[0] + mf * x[2] == pytest.approx(4.5 + mb * 10, abs=1e-4)
+        assert abs(mb * x[1] + mf * x[3]) < 1e-4 and x[0] - x[2] == pytest.approx(10, abs=1e-4)
+        energy[n] = result_work(res, t_apex).positive
+        prev = sol
+    estimate = 2 * energy[240] - energy[120]
+    assert energy[240] < energy[120] and estimate < h.energy
+    assert abs(h.energy_estimate - estimate) <= h.energy_error
