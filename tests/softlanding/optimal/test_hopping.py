@@ -124,3 +124,12 @@ def test_the_grid_estimate_agrees_with_an_independent_grid_sequence():
     estimate = 2 * energy[240] - energy[120]
     assert energy[240] < energy[120] and estimate < h.energy
     assert abs(h.energy_estimate - estimate) <= h.energy_error
+    # the hybrid guide's figures are these runs'
+    from pathlib import Path
+
+    guide = (Path(__file__).resolve().parents[3] / "docs" / "guides" / "hybrid.md").read_text()
+    figures = [f"{h.grids[0]['energy']:.6f} (60/80/60", f"{h.energy:.6f} (120/160/120",
+               f"{h.energy_estimate:.3f} +- {h.energy_error:.2g}",
+               f"{energy[120]:.6f} (120 nodes per phase", f"{energy[240]:.6f} (240",
+               f"extrapolated: {estimate:.3f}"]
+    assert all(f in guide for f in figures), figures
