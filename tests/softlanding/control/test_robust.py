@@ -194,8 +194,8 @@ def test_the_search_converges_or_says_so(robust):
 @pytest.mark.parametrize("v0", [-1.0, -3.0, -6.0, -10.0])
 def test_the_guides_robust_and_tree_columns_are_runs(v0):
     # issue 34: the unknown-ground guide's worst depths of the robust schedule and the tree
-    # over the study's 15 grounds are these runs' (as the study makes them), and the robust
-    # search behind them converged (minutes at v0 = -10)
+    # over the study's 15 grounds are these runs' (as the study makes them), marked "~" where
+    # the robust search did not converge (its KKT check failed; minutes at v0 = -10)
     import itertools
     import re
     from pathlib import Path
@@ -209,6 +209,6 @@ def test_the_guides_robust_and_tree_columns_are_runs(v0):
     grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
     r = robust_landing(v0, grounds, nominal=solve_landing(v0))
     t = two_stage_landing(r)
-    assert r.converged, r.message
-    assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !")
+    assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !") + (
+        "" if r.converged else " ~"), r.message
     assert cells[3] == f"{t.worst:.3f}" + ("" if t.feasible else " !")
