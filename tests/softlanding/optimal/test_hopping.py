@@ -91,8 +91,8 @@ def test_the_grid_estimate_brackets_the_continuous_optimum():
     # 9.596794, 9.587836, 9.580310, 9.575942), is about 9.564 by their 1/N trend; solve_hop's
     # extrapolation must hold it within its stated error, its energy be above it, and it must
     # not call itself converged (minutes). (Uniform grids re-solved here from solve_hop's
-    # solution replay off their transcription: lift-off at a phase end the simulator does
-    # not reproduce, as the 240/320/240 grid of the sequence does.)
+    # solution have replays that leave their transcription and miss the apex posture, as the
+    # 240/320/240 grid of the sequence does: not diagnosed yet.)
     from pathlib import Path
 
     h = solve_hop(-3.0, doublings=1)
