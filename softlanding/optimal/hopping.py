@@ -433,7 +433,8 @@ def _grid_sequence(base: HopCycle, robot: Robot, impact: Impact, eta: float,
     return cur
 
 
-def _hop_from(tr: Any, robot: Robot, impact: Impact, eta: float, guess: Trajectory | None,
+def _hop_from(tr: Any, robot: Robot, impact: Impact, eta: float,
+              guess: Trajectory | Solution | None,
               ws: Solution | None) -> HopCycle:
     """One solve of the free hop from a start, replayed and evaluated."""
     notes: list[str] = []
