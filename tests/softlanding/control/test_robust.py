@@ -104,6 +104,7 @@ def test_cli_robust(cli, tmp_path):
     assert code == 0, err
     d = json.loads(out)
     assert d["feasible"] and d["robust_feasible"] and d["nominal_feasible"] is False
+    assert d["converged"] is True and d["kkt_residual"] <= 1e-4  # else exit 1 (issue 34)
     assert d["tree_worst_depth"] <= d["robust_worst_depth"] < d["nominal_worst_depth"]
     assert d["clairvoyant_worst_depth"] <= d["tree_worst_depth"] * (1 + 1e-9)
     assert len(d["clairvoyant_depths"]) == 4 and png.stat().st_size > 10_000
