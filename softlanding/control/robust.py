@@ -24,7 +24,7 @@ handful of numbers, on the epigraph form ``min z`` s.t. ``depth_i <= z``; each e
 one exact simulation per ground. Started from the nominal plan, it keeps the best schedule
 it evaluated that holds every limit on every ground, so where the nominal plan holds them its
 worst depth is never above the nominal one. It is a local search within the nominal plan's
-piece structure. SLSQP's quasi-Newton model degrades where the active grounds switch, so a
+piece structure. SLSQP's quasi-Newton model can degrade where the active grounds switch, so a
 run that stops short is restarted from its best point (a fresh model), up to
 :data:`RESTARTS` times. Convergence is then checked independently of SLSQP: the KKT
 conditions of the epigraph problem at the schedule returned, with central-difference
@@ -70,9 +70,11 @@ RESTARTS = 4
 check fails."""
 KKT_TOL = 1e-4
 """Largest KKT stationarity residual (relative to the objective's gradient) of a converged
-schedule. Measured: 2e-5 where SLSQP converged (v0 = -3, four grounds; the rest is the
+schedule. Measured where SLSQP converged: 2e-5 (v0 = -3, four grounds; the rest is the
 finite differences and a flat valley along the long last piece, whose linearised descent
-leaves the constraints at second order), 0.84 where it stopped at its iteration limit."""
+leaves the constraints at second order), 9e-7 and 3e-6 (v0 = -1, -3, the study's 15
+grounds); where it stopped at its iteration limit: 0.84 (v0 = -3, four grounds, first run),
+0.97 and 0.99 (v0 = -6, -10, 15 grounds, after every restart)."""
 KKT_STEP = 1e-6
 """Central-difference step of the KKT check (relative to each variable, at least absolute)."""
 ACTIVE_TOL = 1e-6
