@@ -210,6 +210,10 @@ def test_the_guides_robust_and_tree_columns_are_runs(v0):
     grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
     r = robust_landing(v0, grounds, nominal=solve_landing(v0))
     t = two_stage_landing(r)
-    assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !") + (
-        "" if r.converged else " ~"), r.message
+    if r.converged:
+        assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !"), r.message
+    else:  # an unconverged search's end is sensitive to its path: two decimals, to 0.01
+        value, *marks = cells[2].split()
+        assert marks == ([] if r.feasible else ["!"]) + ["~"] and len(value.split(".")[1]) == 2
+        assert abs(float(value) - r.worst) <= 0.01, (value, r.worst, r.message)
     assert cells[3] == f"{t.worst:.3f}" + ("" if t.feasible else " !")
