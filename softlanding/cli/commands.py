@@ -515,6 +515,11 @@ def _hop_rows(c: Any) -> list[tuple[str, object]]:
         ("paper's CoT of the landing", c.cot), ("energy (optimiser's slack)",
                                                  c.energy_transcribed),
         ("apex posture error", c.apex_error), ("energy balance error", c.balance_error)]
+    if len(c.grids) > 1:  # the grid sequence behind the continuous optimum's estimate
+        rows += [("grids (energy each)", ", ".join(
+                    f"{'/'.join(map(str, g['nodes']))}: {g['energy']:.7g}" for g in c.grids)),
+                 ("continuous optimum (estimate)", c.energy_estimate),
+                 ("its error (estimate)", c.energy_error)]
     if c.starts:  # a non-convex problem: how far apart its local optima are
         rows += [("starts (energy each)", ", ".join(
                     f"{st['energy']:.6g}" if "energy" in st else st["error"] for st in c.starts)),
@@ -530,6 +535,10 @@ def _cmd_hop(a: argparse.Namespace) -> int:
     if a.grid is not None and "impedance" not in legs:
         raise ParameterError("--grid", f"is the impedance gain grid; --leg {a.leg} takes none")
     grid = check_count("--grid", 9 if a.grid is None else a.grid, 2, 41)
+    if a.doublings is not None and "free" not in legs:
+        raise ParameterError("--doublings", f"refines the free leg's grid; --leg {a.leg} has "
+                                            "none")
+    doublings = check_count("--doublings", 1 if a.doublings is None else a.doublings, 0, 4)
     from softlanding.optimal.limits import hop_input
 
     hop_input(robot, a.v0, a.eta)  # checked before the solver loads
@@ -538,7 +547,7 @@ def _cmd_hop(a: argparse.Namespace) -> int:
     cycles: dict[str, Any] = {}
     for leg in legs:
         if leg == "free":
-            cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta)
+            cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta, doublings=doublings)
         elif leg == "rigid":
             cycles[leg] = rigid_hop(Impact(a.v0), robot, a.eta)
         else:
@@ -548,7 +557,10 @@ def _cmd_hop(a: argparse.Namespace) -> int:
                     f"no impedance in the {grid} x {grid} gain grid (k_p in [0.05, 2], "
                     f"k_d in [0, 2]) hops to the apex: no thrust within u_max = "
                     f"{robot.u_max:g} restores it inside the stroke")
-    reasons = {k: c.unverified_reasons() for k, c in cycles.items()}
+    # a verified cycle: its replay closes (apex, energy balance) and its energy is the
+    # continuous optimum, not a grid's value
+    reasons = {k: c.unverified_reasons() + [r for r in [c.unconverged_reason()] if r]
+               for k, c in cycles.items()}
     bad = any(reasons.values())
     written = None
     if plot:
@@ -558,14 +570,19 @@ def _cmd_hop(a: argparse.Namespace) -> int:
     if a.json:
         first = cycles[legs[0]]
         print_json({"verified": not bad, "unverified_reasons": reasons,
-                     "energy": first.energy, "cot": first.cot, "depth": first.depth,
+                     "converged": all(c.converged for c in cycles.values()),
+                     "optimum": "converged" if first.converged else "discretised",
+                     "energy": first.energy, "energy_estimate": first.energy_estimate,
+                     "energy_error": first.energy_error, "cot": first.cot,
+                     "depth": first.depth,
                      "leg": legs[0], "eta": a.eta, "v0": a.v0, "apex_height": first.apex_height,
                      "cycles": {k: c.to_dict() for k, c in cycles.items()}})
     else:
         for leg, c in cycles.items():
             ok = "yes" if not reasons[leg] else "NO: " + "; ".join(reasons[leg])
             print(f"== {leg} leg, v0 = {a.v0:g} (apex {c.apex_height:.6g}), eta = {a.eta:g}")
-            print_table([("verified", ok)] + _hop_rows(c))
+            print_table([("verified", ok), ("optimum", "converged" if c.converged
+                                            else "discretised")] + _hop_rows(c))
             for n in c.notes:
                 print(f"note: {n}")
         if written:

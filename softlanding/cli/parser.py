@@ -196,6 +196,12 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
                         "the optimal push-off; all: the three")
     h.add_argument("--grid", type=int, default=None,
                    help="--leg impedance or all: gain grid per axis (default 9, 2 to 41)")
+    h.add_argument("--doublings", type=int, default=None, metavar="K",
+                   help="--leg free or all: the optimum re-solved on K grids, each with twice "
+                        "the nodes (default 1, 0 to 4); the finest is reported with the "
+                        "continuous optimum extrapolated from the sequence and its error. A "
+                        "grid's energy is a discretised value: unless it has settled to 1e-6 "
+                        "the cycle is not verified (exit 1 without --accept-unverified)")
     _model_args(h, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
     _plot_arg(h, "the hop cycle figure (the first leg), phases shaded")
     _accept_arg(h)
@@ -370,6 +376,9 @@ def _robust(sub: Any) -> argparse.ArgumentParser:
                    help="force pieces added to the nominal plan's before the search (0 to 4, "
                         "default 0)")
     _plot_arg(r, "the depth on every ground")
+    r.add_argument("--accept-unverified", action="store_true",
+                   help="exit 0 even when the search did not converge (its KKT check fails); "
+                        "the output still says 'converged: no' and why")
     return r
 
 

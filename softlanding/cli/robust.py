@@ -80,6 +80,8 @@ def robust_command(a: argparse.Namespace) -> int:
     if a.json:
         print_json({
             "worst_depth": chosen.worst, "feasible": chosen.feasible,
+            "converged": robust.converged, "kkt_residual": robust.kkt_residual,
+            "message": robust.message,
             "robust_worst_depth": robust.worst, "robust_feasible": robust.feasible,
             "tree_worst_depth": None if tree is None else tree.worst,
             "tree_feasible": None if tree is None else tree.feasible,
@@ -104,16 +106,21 @@ def robust_command(a: argparse.Namespace) -> int:
         rows += [("worst: nominal / robust", f"{robust.nominal_worst:.6g} / {robust.worst:.6g}"),
                  ("worst: clairvoyant (a bound)", f"{max(clair_depth):.6g}"),
                  ("robust feasible on every ground", robust.feasible),
+                 ("robust search converged (KKT)", "yes" if robust.converged else
+                  f"NO (KKT residual {robust.kkt_residual:.2g})"),
                  ("nominal feasible on every ground", robust.nominal_feasible),
-                 ("search", f"{robust.message} ({robust.evaluations} points, "
-                            f"{robust.solve_time_s:.3g} s)")]
+                 ("search", f"{robust.message} ({robust.iterations} iterations, "
+                            f"{robust.evaluations} points, {robust.solve_time_s:.3g} s wall, "
+                            f"{robust.cpu_time_s:.3g} s CPU)")]
         if tree is not None:
             rows += [(f"worst: tree (branch at {branch:g})", f"{tree.worst:.6g}"),
                      ("tree feasible on every ground", tree.feasible)]
         print_table(rows)
         if written:
             print(f"figure written to {written}")
-    return EXIT_OK if chosen.feasible else EXIT_FAILURE
+    # an unconverged search's schedule is feasible but not an optimum: say so by the exit code
+    ok = chosen.feasible and (robust.converged or a.accept_unverified)
+    return EXIT_OK if ok else EXIT_FAILURE
 
 
 __all__ = ["ground_set", "robust_command"]

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from ocp import Solution, SolveError, Trajectory
-from softlanding.errors import expect
+from softlanding.errors import check_count, expect
 from softlanding.model.controllers import ForceSchedule, Rigid
 from softlanding.model.dynamics import mechanical_energy
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -53,6 +53,10 @@ SLACK_NOTE = ("the transcription meets its power slack p >= u (v_b - v_f) at its
 
 APEX_TOL = 1e-5
 """Largest apex posture error (relative) accepted from a transcription's replay."""
+
+CONVERGED_RTOL = 1e-6
+"""A cycle's energy is taken as the continuous optimum when it and its grid sequence's
+extrapolation, plus that extrapolation's error estimate, agree to this (relative)."""
 
 
 @dataclass
@@ -100,6 +104,18 @@ class HopCycle:
         start stretched in time) with the energy each converged to (or its error): the
         cycle is the best of them, and their spread shows whether the optimum found is
         unique (local optima of a non-convex problem).
+    grids : list of dict
+        The grid sequence (``nodes`` per phase, replayed ``energy``), coarse to fine; the
+        cycle reported is the finest grid's. Its controls are piecewise constant and the
+        power slack ``p >= P`` holds at nodes and RK4 steps only, so a grid's optimum is
+        above the continuous one by about ``c/N`` (first order, measured).
+    energy_estimate : float
+        The continuous optimum estimated from ``grids`` (Richardson, first order, on the
+        two finest); NaN with one grid.
+    energy_error : float
+        The estimate's error estimate: how far the previous pair's extrapolation is from
+        it (three grids or more), else the extrapolation's own correction; NaN with one
+        grid.
     """
 
     leg: str
@@ -120,6 +136,30 @@ class HopCycle:
     pieces: list[tuple[LandingResult, float, float]] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     starts: list[dict[str, Any]] = field(default_factory=list)
+    grids: list[dict[str, Any]] = field(default_factory=list)
+    energy_estimate: float = math.nan
+    energy_error: float = math.nan
+
+    @property
+    def converged(self) -> bool:
+        """The energy reported is the continuous optimum to :data:`CONVERGED_RTOL`: the grid
+        sequence's extrapolation agrees with it, and its error estimate is below that."""
+        gap = abs(self.energy - self.energy_estimate) + self.energy_error
+        return bool(gap <= CONVERGED_RTOL * max(abs(self.energy_estimate), 1e-300))
+
+    def unconverged_reason(self) -> str:
+        """Why the energy is not the continuous optimum ("" when it is :attr:`converged`)."""
+        if self.converged:
+            return ""
+        nodes = "/".join(map(str, self.grids[-1]["nodes"])) if self.grids else "?"
+        if not math.isfinite(self.energy_estimate):
+            return (f"discretised: the energy is the exact replay of a {nodes}-node grid's "
+                    f"control, above the continuous optimum by an error not estimated (one "
+                    f"grid)")
+        return (f"discretised: the energy is the exact replay of a {nodes}-node grid's "
+                f"control; the continuous optimum is estimated at {self.energy_estimate:.7g} "
+                f"+- {self.energy_error:.2g} from {len(self.grids)} grids (the energy is "
+                f"{self.energy - self.energy_estimate:.2g} above it)")
 
     @property
     def local_optima_spread(self) -> float:
@@ -168,8 +208,13 @@ class HopCycle:
             "ground_loss": self.depth ** 2 / 2, "energy_transcribed": self.energy_transcribed,
             "depth": self.depth, "cot": self.cot, "apex_error": self.apex_error,
             "balance_error": self.balance_error, "gains": self.gains, "times": self.times,
-            "verified": not self.unverified_reasons(),
-            "unverified_reasons": self.unverified_reasons(), "notes": self.notes,
+            "verified": not self.unverified_reasons() and self.converged,
+            "replay_verified": not self.unverified_reasons(),
+            "unverified_reasons": self.unverified_reasons(), "converged": self.converged,
+            "optimum": "converged" if self.converged else "discretised",
+            "unconverged_reason": self.unconverged_reason(),
+            "energy_estimate": self.energy_estimate, "energy_error": self.energy_error,
+            "grids": self.grids, "notes": self.notes,
             "starts": self.starts, "local_optima_spread": self.local_optima_spread,
             "robot": self.robot.to_dict()})
 
@@ -280,13 +325,23 @@ def _hop_guess(robot: Robot, impact: Impact, stretch: float = 1.0) -> Trajectory
 
 
 def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0.0, *,
-              warm_start: HopCycle | None = None) -> HopCycle:
+              warm_start: HopCycle | None = None, doublings: int = 0) -> HopCycle:
     """The minimum-energy hop cycle (free actuator), replayed exactly.
 
     The problem is not convex: it is solved from the deterministic starts of
     :data:`HOP_STARTS` (the mirrored landing, its push-off and flight stretched in time)
     and the best verified cycle is returned, with every start's energy in ``starts`` and
     their ``local_optima_spread``. With ``warm_start`` (continuation) only that start.
+
+    The energy is the exact replay of a grid's piecewise-constant control: a real cycle's
+    energy, above the continuous optimum by the grid's error (first order in the step:
+    the optimum holds the leg at zero power on arcs a constant force cannot follow). With
+    ``doublings`` the best cycle is re-solved on grids of twice, four times ... the nodes
+    (each from the previous one) and the finest is returned, with the grid sequence, the
+    continuous optimum extrapolated from it and an error estimate (``grids``,
+    ``energy_estimate``, ``energy_error``); :attr:`HopCycle.converged` says whether it is
+    the continuous optimum to :data:`CONVERGED_RTOL` (at ``eta = 0`` it is not: it says
+    "discretised", and by how much).
 
     Parameters
     ----------
@@ -298,6 +353,8 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         Regenerative efficiency in ``[0, 1)``.
     warm_start : HopCycle, optional
         A neighbouring optimum (its transcription warm-starts this one).
+    doublings : int
+        Grid doublings after the base grid (0 to 4; 0: one grid, its error not estimated).
 
     Raises
     ------
@@ -307,13 +364,15 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         When the transcription fails (InfeasibleError: no such hop).
     """
     robot, impact = hop_input(robot, impact, eta)
+    doublings = check_count("doublings", doublings, 0, 4)
     if warm_start is not None:
         expect("warm_start", warm_start, HopCycle, "HopCycle (solve_hop's)")
     tr = hop_transcription("touchdown")
     ws = warm_start.transcribed[0] if warm_start is not None and warm_start.transcribed \
         else None
     if ws is not None:  # continuation: the neighbour's optimum is the start
-        return _hop_from(tr, robot, impact, eta, None, ws)
+        return _grid_sequence(_hop_from(tr, robot, impact, eta, None, ws), robot, impact,
+                              eta, doublings)
     best: HopCycle | None = None
     starts: list[dict[str, Any]] = []
     last_error: SolveError | None = None
@@ -334,10 +393,48 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         assert last_error is not None
         raise last_error
     best.starts = starts
-    return best
+    return _grid_sequence(best, robot, impact, eta, doublings)
 
 
-def _hop_from(tr: Any, robot: Robot, impact: Impact, eta: float, guess: Trajectory | None,
+def _grid_row(c: HopCycle) -> dict[str, Any]:
+    sol = c.transcribed[0]
+    return {"nodes": [int(ph.N) for ph in sol.phases], "energy": c.energy,
+            "energy_transcribed": c.energy_transcribed}
+
+
+def _grid_sequence(base: HopCycle, robot: Robot, impact: Impact, eta: float,
+                   doublings: int) -> HopCycle:
+    """The base cycle re-solved on ``doublings`` successively doubled grids (each from the
+    previous grid's solution); the finest verified one with the sequence and its
+    extrapolation (first-order Richardson on the two finest grids, since a grid's excess
+    energy is about ``c h``)."""
+    grids, cur = [_grid_row(base)], base
+    for k in range(1, doublings + 1):
+        prev = cur.transcribed[0]
+        try:
+            c = _hop_from(hop_transcription("touchdown", 1, k), robot, impact, eta, prev, prev)
+        except SolveError as err:
+            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+            cur.notes.append(f"grid sequence stopped: the {2 ** k}x grid failed ({err.status})")
+            break
+        if c.unverified_reasons():
+            cur.notes.append(f"grid sequence stopped: the {2 ** k}x grid's replay fails its "
+                             f"checks ({'; '.join(c.unverified_reasons())})")
+            break
+        c.starts = base.starts
+        grids.append(_grid_row(c))
+        cur = c
+    cur.grids = grids
+    e = [g["energy"] for g in grids]
+    if len(e) >= 2:
+        cur.energy_estimate = 2 * e[-1] - e[-2]
+        cur.energy_error = abs(e[-2] - e[-1]) if len(e) == 2 else \
+            abs(cur.energy_estimate - (2 * e[-2] - e[-3]))
+    return cur
+
+
+def _hop_from(tr: Any, robot: Robot, impact: Impact, eta: float,
+              guess: Trajectory | Solution | None,
               ws: Solution | None) -> HopCycle:
     """One solve of the free hop from a start, replayed and evaluated."""
     notes: list[str] = []
@@ -586,6 +683,7 @@ def impedance_hop(impact: Impact | float, k_p: float, k_d: float,
         st.second
     out.pieces = [(st.first, 0.0, st.t_bottom), (st.second, st.t_bottom, t_lo),
                   (fres, t_lo, t_lo + t_f)]
+    out.grids = [_grid_row(out)]  # the flight's
     return out
 
 
@@ -676,6 +774,7 @@ def rigid_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     out.energy_transcribed, out.transcribed = float(sol.objective), [sol]
     out.pieces = [(land, 0.0, t_rest), (res, t_rest, t_rest + t_f)]
     out.notes = [SLACK_NOTE] + [n for n in notes if "slack p" not in n] if notes else []
+    out.grids = [_grid_row(out)]
     return out
 
 
@@ -741,5 +840,5 @@ def sweep_hops(v0_values, robot: Robot = PAPER_ROBOT, eta: float = 0.0, *,
     return out
 
 
-__all__ = ["APEX_TOL", "HopCycle", "ThrustImpedance", "best_impedance_hop", "impedance_hop",
-           "rigid_hop", "solve_hop", "sweep_hops"]
+__all__ = ["APEX_TOL", "CONVERGED_RTOL", "HopCycle", "ThrustImpedance", "best_impedance_hop",
+           "impedance_hop", "rigid_hop", "solve_hop", "sweep_hops"]

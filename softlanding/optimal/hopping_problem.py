@@ -203,8 +203,9 @@ def _cycle(mp: MultiPhaseProblem, par: dict, stance: list[OptimalControlProblem]
                            name="crater depth carried into the flight")
 
 
-@lru_cache(maxsize=6)
-def hop_transcription(start: str = "touchdown", steps: int = 1) -> MultipleShooting:
+@lru_cache(maxsize=10)
+def hop_transcription(start: str = "touchdown", steps: int = 1,
+                      doublings: int = 0) -> MultipleShooting:
     """The transcribed hop problem, built once per arguments (expanded to SX; path
     constraints also at the RK4 inner steps).
 
@@ -214,10 +215,14 @@ def hop_transcription(start: str = "touchdown", steps: int = 1) -> MultipleShoot
         See :func:`build_hop_problem`.
     steps : {1, 2}
         Yielding steps.
+    doublings : int
+        The base grid's nodes per phase doubled this many times (the grid sequence of
+        :func:`softlanding.optimal.hopping.solve_hop`'s error estimate).
     """
     nodes = {"touchdown": [60, 80, 60], "rest": [80, 60], "lift-off": [40]}[start]
     if steps == 2:
         nodes = [60, 30, 30, 60, 60]
+    nodes = [n * 2 ** doublings for n in nodes]
     return MultipleShooting(build_hop_problem(start, steps), nodes=nodes, integrator="rk4",
                             substeps=4, expand=True, inner_constraints=True,
                             ipopt_options={"max_iter": 1500})

@@ -163,8 +163,10 @@ def _hops_md(h: dict) -> list[str]:
                      "n/a" if r["impedance"] is None else
                      "({k_p:.3g}, {k_d:.3g}, {u_t:.3g})".format(**r["impedance"]["gains"]),
                      field(r["rigid"], "energy"), field(r["rigid"], "depth")] for r in rows]),
-            "", "Energies per cycle in m_t g x_s, evaluated on the exact replay of each control.",
-            ""]
+            "", "Energies per cycle in m_t g x_s, evaluated on the exact replay of each control. "
+            "The optimum's is a grid's value (discretised, one grid per velocity), above the "
+            "continuous optimum by the grid's error: `softlanding hop --doublings K` estimates "
+            "it.", ""]
 
 
 def hybrid_markdown(h: dict) -> list[str]:

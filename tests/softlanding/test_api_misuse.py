@@ -28,6 +28,7 @@ CASES = [
     ("robot", lambda: solve_leg_extension(-3, robot=None)),
     ("eta", lambda: solve_hop(-3, eta="0.5")),
     ("robot", lambda: solve_hop(-3, robot=None)),
+    ("doublings", lambda: solve_hop(-3, doublings=5)),
     ("robot", lambda: optimize_impedance(-3, robot="x")),
     ("warm_start", lambda: solve_landing(-3, warm_start="previous")),
     ("warm_start", lambda: solve_two_phase(-3, warm_start=object())),

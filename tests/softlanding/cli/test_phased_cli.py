@@ -42,10 +42,13 @@ def test_leg_extension_fixed_and_free(cli):
 
 def test_hop_json_and_plot(cli, tmp_path):
     png = tmp_path / "hop.png"
-    code, out, _ = cli("hop", "--v0", "-1.5", "--json", "--plot", png)
-    assert code == 0
+    code, out, _ = cli("hop", "--v0", "-1.5", "--doublings", "0", "--json", "--plot", png)
+    # issue 34: one grid's energy is a discretised value, not a verified optimum: exit 1
+    assert code == 1
     d = json.loads(out)
-    assert d["verified"] is True and d["leg"] == "free"
+    assert d["verified"] is False and d["optimum"] == "discretised" and d["leg"] == "free"
+    assert d["cycles"]["free"]["replay_verified"] is True  # its replay closes all the same
+    assert "discretised" in d["unverified_reasons"]["free"][0]
     assert d["energy"] > 0 and d["energy"] == d["cycles"]["free"]["energy"]
     assert d["cycles"]["free"]["net_work"] == pytest.approx(
         d["cycles"]["free"]["ground_loss"], rel=1e-6)

@@ -61,6 +61,8 @@ BAD = [  # each a distinct class of bad input the CLI once called a bug or ignor
     ["hop", "--v0", "-3", "--grid", "0"],
     ["hop", "--v0", "-3", "--leg", "impedance", "--grid", "100000"],
     ["hop", "--v0", "-3", "--leg", "impedance", "--grid", "1"],
+    ["hop", "--v0", "-3", "--doublings", "5"],
+    ["hop", "--v0", "-3", "--leg", "rigid", "--doublings", "1"],
     ["impedance", "--v0", "-3", "--grid", "100000"],
     ["compare", "--grid", "1"],
     ["solve-sweep", "--nodes", "0"],

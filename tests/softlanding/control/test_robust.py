@@ -104,6 +104,7 @@ def test_cli_robust(cli, tmp_path):
     assert code == 0, err
     d = json.loads(out)
     assert d["feasible"] and d["robust_feasible"] and d["nominal_feasible"] is False
+    assert d["converged"] is True and d["kkt_residual"] <= 1e-4  # else exit 1 (issue 34)
     assert d["tree_worst_depth"] <= d["robust_worst_depth"] < d["nominal_worst_depth"]
     assert d["clairvoyant_worst_depth"] <= d["tree_worst_depth"] * (1 + 1e-9)
     assert len(d["clairvoyant_depths"]) == 4 and png.stat().st_size > 10_000
@@ -160,3 +161,59 @@ def test_a_short_stroke_plan_from_state_replays_its_transcription():
     assert simulate(robot, -3, plan, LinearGround()).depth > 0
     with pytest.raises(ParameterError, match="yield"):
         plan_from_state(robot, LinearGround(), np.array([1.0, 0.0, 0.0, 0.0]))
+
+
+def test_the_kkt_check_tells_a_minimax_optimum_from_a_point_that_is_not():
+    # min z s.t. z >= (x - 1)^2, z >= (x + 1)^2: the optimum x = 0, z = 1 (both active,
+    # multipliers 1/2 each); at x = 0.5 only one is active and z can still decrease
+    from softlanding.control.robust import KKT_TOL, kkt_residual
+
+    def cons(v):
+        return np.array([v[1] - (v[0] - 1) ** 2, v[1] - (v[0] + 1) ** 2])
+
+    lo, hi, grad = np.array([-5.0, 0.0]), np.array([5.0, np.inf]), np.array([0.0, 1.0])
+    assert kkt_residual(cons, np.array([0.0, 1.0]), lo, hi, grad) < 1e-9
+    assert kkt_residual(cons, np.array([0.5, 2.25]), lo, hi, grad) > 0.1
+    assert kkt_residual(cons, np.array([0.0, 0.9]), lo, hi, grad) == np.inf  # infeasible
+    # at a bound the bound's multiplier counts: min z s.t. z >= (x - 1)^2, x <= 0
+    assert kkt_residual(lambda v: cons(v)[:1], np.array([0.0, 1.0]), lo,
+                        np.array([0.0, np.inf]), grad) < KKT_TOL
+
+
+def test_the_search_converges_or_says_so(robust):
+    # issue 34: the schedule is a KKT point of the epigraph problem, checked independently
+    from softlanding.control.robust import KKT_TOL
+
+    assert robust.converged and robust.kkt_residual <= KKT_TOL
+    assert "converged" in robust.message and robust.to_dict()["converged"] is True
+    cut = robust_landing(-3, GROUNDS[:2], max_iterations=1)
+    assert not cut.converged and cut.to_dict()["converged"] is False
+    assert "NOT converged" in cut.message or "none of the" in cut.message
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("v0", [-1.0, -3.0, -6.0, -10.0])
+def test_the_guides_robust_and_tree_columns_are_runs(v0):
+    # issue 34: the unknown-ground guide's worst depths of the robust schedule and the tree
+    # over the study's 15 grounds are these runs' (as the study makes them), marked "~" where
+    # the robust search did not converge (its KKT check failed; minutes at v0 = -10)
+    import itertools
+    import re
+    from pathlib import Path
+
+    from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
+
+    guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground.md"
+    rows = {float(m[1]): m[2].split("|") for m in
+            re.finditer(r"^\| (-[\d.]+) \|(.*)\|$", guide.read_text(), re.M)}
+    cells = [c.strip() for c in rows[v0]]
+    grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
+    r = robust_landing(v0, grounds, nominal=solve_landing(v0))
+    t = two_stage_landing(r)
+    if r.converged:
+        assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !"), r.message
+    else:  # an unconverged search's end is sensitive to its path: two decimals, to 0.01
+        value, *marks = cells[2].split()
+        assert marks == ([] if r.feasible else ["!"]) + ["~"] and len(value.split(".")[1]) == 2
+        assert abs(float(value) - r.worst) <= 0.01, (value, r.worst, r.message)
+    assert cells[3] == f"{t.worst:.3f}" + ("" if t.feasible else " !")

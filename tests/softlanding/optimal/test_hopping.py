@@ -46,6 +46,17 @@ def test_the_optimal_cycle_closes_and_balances(free):
         < free.times["apex"]
 
 
+def test_one_grid_says_it_is_discretised(free):
+    # issue 34: the energy is a grid's (exact replay of its control), not the continuous
+    # optimum; one grid gives no error estimate, and the cycle says both
+    assert not free.converged and math.isnan(free.energy_estimate)
+    assert free.unconverged_reason().startswith("discretised") and "one grid" in \
+        free.unconverged_reason()
+    d = free.to_dict()
+    assert d["verified"] is False and d["replay_verified"] is True
+    assert d["optimum"] == "discretised" and len(d["grids"]) == 1
+
+
 def test_regeneration_lowers_the_energy(free):
     half = solve_hop(-2.0, PAPER_ROBOT, eta=0.5)
     assert half.unverified_reasons() == []
@@ -71,3 +82,27 @@ def test_bad_requests():
         solve_hop(-2.0, eta=1.0)
     with pytest.raises(ParameterError, match="v0"):
         rigid_hop(0.0)
+
+
+@pytest.mark.slow
+def test_the_grid_estimate_brackets_the_continuous_optimum():
+    # issue 34, v0 = -3, eta = 0: the continuous optimum, established independently in the
+    # issue from uniform grids of 120 to 480 nodes per phase, each replayed exactly (9.612566,
+    # 9.596794, 9.587836, 9.580310, 9.575942), is about 9.564 by their 1/N trend; solve_hop's
+    # extrapolation must hold it within its stated error, its energy be above it, and it must
+    # not call itself converged (minutes). (Uniform grids re-solved here from solve_hop's
+    # solution have replays that leave their transcription and miss the apex posture, as the
+    # 240/320/240 grid of the sequence does: not diagnosed yet.)
+    from pathlib import Path
+
+    h = solve_hop(-3.0, doublings=1)
+    assert not h.converged and len(h.grids) == 2 and h.grids[1]["nodes"] == [120, 160, 120]
+    assert h.unverified_reasons() == [] and h.energy < h.grids[0]["energy"]
+    continuous = 9.564  # the issue's 1/N trend; its 480-node replay is 9.575942
+    assert h.energy > 9.575942 > continuous
+    assert abs(h.energy_estimate - continuous) <= h.energy_error
+    # the hybrid guide's figures are this run's
+    guide = (Path(__file__).resolve().parents[3] / "docs" / "guides" / "hybrid.md").read_text()
+    figures = [f"{h.grids[0]['energy']:.6f} (60/80/60", f"{h.energy:.6f} (120/160/120",
+               f"{h.energy_estimate:.3f} +- {h.energy_error:.2g}"]
+    assert all(f in guide for f in figures), figures
