@@ -266,8 +266,9 @@ def output_path(path: str | os.PathLike[str], option: str, force: bool,
     if not str(path):
         raise ParameterError(option, "needs a file name")
     p = Path(path)
-    if not p.name:
-        raise ParameterError(option, f"{p} is a folder; give a file name")
+    # before the suffix is added: "adir/" or an existing folder "adir" must not become adir.png
+    if not p.name or str(path).endswith(("/", os.sep)) or p.is_dir():
+        raise ParameterError(option, f"{path} is a folder; give a file name")
     if default_suffix and not p.suffix:
         p = p.with_name(p.name + default_suffix)
     _check_folder(p.parent, p.name, option, "file")  # first: a long name fails stat() too
