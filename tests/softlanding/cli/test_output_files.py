@@ -209,3 +209,59 @@ def test_the_dask_timeout_default_is_the_library_default():
     from softlanding.cli.parser import DASK_TIMEOUT_S
 
     assert DASK_TIMEOUT_S == sweeps.DASK_TIMEOUT_S
+
+
+# ------------------------------------------------------ a folder named as a file, a full disk
+@pytest.mark.parametrize("args", [
+    ["simulate", "--v0", "-1", "--rigid", "--plot"], ["mpc", "--v0", "-3", "--plot"],
+    ["demo", "--out"]])
+@pytest.mark.parametrize("slash", ["", "/"])
+def test_an_existing_folder_given_as_a_file_exits_2(tmp_path, cli, monkeypatch, args, slash):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "adir").mkdir()
+    code, out, err = cli(*args, "adir" + slash)
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"adir{slash} is a folder; give a file name" in err and not out
+    assert os.listdir(tmp_path) == ["adir"] and os.listdir(tmp_path / "adir") == []
+
+
+def _disk_fills_up(monkeypatch):
+    """The figure's write fails as matplotlib's PDF writer reports a full disk."""
+    from matplotlib.figure import Figure
+
+    def savefig(self, fname, *a, **k):
+        Path(fname).write_bytes(b"%PDF half written")
+        try:
+            raise OSError(28, "No space left on device")
+        except OSError:
+            raise AttributeError("'Stream' object has no attribute 'pos'") from None
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+
+
+def test_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_path, cli, monkeypatch):
+    _disk_fills_up(monkeypatch)
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", tmp_path / "m.nc", "--plot",
+                       tmp_path / "m.pdf")
+    assert (code, err) == (1, f"softlanding: error: no space left on {tmp_path}\n")
+    assert os.listdir(tmp_path) == []  # the dataset placed before is removed too
+
+
+def test_reproduce_onto_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_path, cli,
+                                                                         monkeypatch):
+    import matplotlib.pyplot as plt
+
+    import softlanding.report.reproduction as reproduction
+    from softlanding.util.files import save_figure
+
+    def sections(out, *a, **k):
+        (out / "summary.md").write_text("half")
+        save_figure(plt.figure(), out / "fig1.pdf")
+        raise AssertionError("the full disk went unnoticed")
+
+    _disk_fills_up(monkeypatch)
+    monkeypatch.setattr(reproduction, "_run_sections", sections)
+    out = tmp_path / "R"
+    code, _, err = cli("reproduce", "--quick", "--out", out)
+    assert (code, err) == (1, f"softlanding: error: no space left on {out}\n")
+    assert os.listdir(tmp_path) == []
