@@ -430,8 +430,9 @@ def _cmd_scale(a: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------- demo
 def _cmd_demo(a: argparse.Namespace) -> int:
-    out = target(a, "out") if a.out else None
     from softlanding.report.demo import (
+        DEMO_FIGURE,
+        DEMO_FOLDER,
         DEMO_GAINS,
         STEPPED_KD,
         STEPPED_KP,
@@ -440,10 +441,18 @@ def _cmd_demo(a: argparse.Namespace) -> int:
         plot_demo,
         stepped_intrusions,
     )
+    from softlanding.util.files import atomic_folder, own_folder
 
+    # the default output is the demo's own folder: a re-run replaces it (not a user's file)
+    own = own_folder(DEMO_FOLDER, (DEMO_FIGURE,), "out") if a.out is None else None
+    out = target(a, "out") if a.out else None
     rows = demo_table()
     stepped = stepped_intrusions()
     written = savefig(plot_demo(stepped=stepped), out) if out else None
+    if own is not None:
+        with atomic_folder(own, force=True) as tmp:
+            savefig(plot_demo(stepped=stepped), tmp / DEMO_FIGURE)
+        written = str(own / DEMO_FIGURE)
     if a.json:
         print_json({"table": rows, "stepped_intrusions": [
             {"k_d": kd, "steps": s.steps, "depth": s.depth}

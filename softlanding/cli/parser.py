@@ -304,8 +304,10 @@ def _demo(sub: Any) -> argparse.ArgumentParser:
                        description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "
                                    "-5, -10, print a table (with the analytic rigid depth "
                                    "as a check) and write a figure.")
-    d.add_argument("--out", default="softlanding-demo.png", metavar="FILE.png",
-                   help="figure path (default softlanding-demo.png; '' for none)")
+    d.add_argument("--out", metavar="FILE.png",
+                   help="figure path, a new file unless --force ('' for none); by default "
+                        "softlanding-demo/demo.png, in the demo's own folder, which each "
+                        "run replaces all at once")
     d.add_argument("--json", action="store_true", help="print one JSON object")
     _force_arg(d)
     return d

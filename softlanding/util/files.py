@@ -353,6 +353,41 @@ def output_folder(path: str | os.PathLike[str], option: str, force: bool) -> Pat
     return p
 
 
+def own_folder(path: str | os.PathLike[str], names: tuple[str, ...], option: str) -> Path:
+    """A command's own output folder (a fixed name): missing, or holding only its ``names``.
+
+    Such a folder is the command's to replace on every run (:func:`atomic_folder` with
+    ``force``); a folder of that name holding anything else is someone else's and refused.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The folder.
+    names : tuple of str
+        The files the command writes into it.
+    option : str
+        The option that would name another output, for messages.
+
+    Raises
+    ------
+    ParameterError
+        ``path`` is a file, or a folder holding other entries, or its parent folder takes no
+        new entries.
+    """
+    p = Path(path)
+    _check_folder(p.absolute().parent, p.name, option, "folder")
+    if p.exists() and not p.is_dir():
+        raise ParameterError(option, f"{p} exists and is not a folder; name another output "
+                                     f"with --{option}")
+    if p.is_dir():
+        others = sorted(set(os.listdir(p)) - set(names))
+        if others:
+            raise ParameterError(option, f"{p} holds files this command did not write "
+                                         f"({others[0]}...); name another output with "
+                                         f"--{option}")
+    return p
+
+
 def _backup(path: Path) -> Path | None:
     """A hard link to the file about to be replaced, so a rollback can restore it."""
     name = path.with_name(f"{_temp_prefix(path)}{secrets.token_hex(4)}.backup")

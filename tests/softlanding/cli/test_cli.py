@@ -2,6 +2,7 @@
 real subprocesses."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -152,10 +153,19 @@ def test_scale_preset_takes_overrides(cli):
     assert d["dimensionless"]["u_max"] == pytest.approx(100.0 / (3.0 * 1.62))
 
 
-def test_demo_runs_and_writes_figure(tmp_path, cli):
-    out_png = tmp_path / "demo.png"
-    code, out, err = cli("demo", "--out", str(out_png), "--json")
+def test_demo_runs_and_writes_figure(tmp_path, cli, monkeypatch):
+    """By default into its own folder, replaced by a second run (a user's file is not)."""
+    monkeypatch.chdir(tmp_path)
+    out_png = tmp_path / "softlanding-demo" / "demo.png"
+    out_png.parent.mkdir()
+    out_png.write_bytes(b"the last run's")
+    code, out, err = cli("demo", "--json")
     assert code == 0, err
+    assert os.listdir(tmp_path) == ["softlanding-demo"] and os.listdir(out_png.parent) == [
+        "demo.png"]
+    (tmp_path / "softlanding-demo" / "mine.txt").write_text("a user's file")
+    code, _, err = cli("demo", "--json")
+    assert code == 2 and "softlanding-demo holds files this command did not write" in err
     assert "NaN" not in out  # valid JSON: NaN becomes null
     d = json.loads(out)
     for row in d["table"]:
