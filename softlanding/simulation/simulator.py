@@ -334,6 +334,10 @@ def simulate(
     impact = Impact.of(impact)
     expect("robot", robot, Robot)
     controller = Rigid() if controller is None else controller
+    if isinstance(controller, type):
+        raise ParameterError("controller", f"must be a controller, got the class "
+                                           f"{controller.__name__} (make one: "
+                                           f"{controller.__name__}(...))")
     if not hasattr(controller, "kernel_arrays"):  # duck-typed: variants bring their own laws
         raise ParameterError("controller", f"must be a controller (Rigid, Impedance, "
                                            f"ForceSchedule, ...), got {controller!r:.60}")
