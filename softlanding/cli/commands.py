@@ -30,6 +30,7 @@ from softlanding.cli.output import (
     savefig,
     target,
 )
+from softlanding.cli.parser import dask_timeout
 from softlanding.cli.robust import robust_command
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
@@ -229,12 +230,12 @@ def _cmd_map(a: argparse.Namespace) -> int:
     robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
     out, plot = target(a, "out"), target(a)
     check_count("n", a.n, 2, 2001)
+    timeout = dask_timeout(a)
     from softlanding.studies.impedance import optimize_impedance
     from softlanding.studies.sweeps import depth_map, save_dataset
     from softlanding.util.files import atomic
 
-    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler,
-                   dask_timeout=a.dask_timeout)
+    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler, dask_timeout=timeout)
     opt = optimize_impedance(impact, robot, ground, grid=a.n)
     with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
         save_dataset(ds, tmp)
@@ -289,6 +290,7 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
             Robot(r_m=rm, s=s, u_max=a.umax)
     out, plot, ground = target(a, "out"), target(a), ground_of_args(a)
     grid = check_count("grid", a.grid, 2, 2001)
+    timeout = dask_timeout(a)
     from softlanding.studies.sweeps import (
         optimal_impedance_curves,
         paper_observations,
@@ -298,7 +300,7 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 
     curves = optimal_impedance_curves(v0, robot, ground, r_m=a.rm, s=a.s,
                                       objective=a.objective, grid=grid, scheduler=a.scheduler,
-                                      progress=not a.json, dask_timeout=a.dask_timeout)
+                                      progress=not a.json, dask_timeout=timeout)
     if out:
         with atomic(out) as tmp:
             save_dataset(curves, tmp)

@@ -9,7 +9,7 @@ from typing import Any
 
 from softlanding.cli.ground import ground_args, numbers
 from softlanding.cli.variants import VARIANTS, extension_value
-from softlanding.errors import LIMITS
+from softlanding.errors import LIMITS, ParameterError, plain
 from softlanding.model.robot import PAPER_ROBOT
 
 Handlers = Mapping[str, Callable[[argparse.Namespace], int]]
@@ -90,14 +90,42 @@ def _accept_arg(p: argparse.ArgumentParser) -> None:
 
 DASK_TIMEOUT_S = 600.0
 """Default of ``--dask-timeout`` (that of :mod:`softlanding.studies.sweeps`, not imported: slow)."""
+MAX_DASK_TIMEOUT_S = 86_400.0
+"""Largest ``--dask-timeout`` (:data:`softlanding.studies.sweeps.MAX_DASK_TIMEOUT_S`)."""
+
+
+def dask_timeout(a: argparse.Namespace) -> float:
+    """``--dask-timeout``, checked: only with ``--scheduler``, in ``(0, a day]``.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments with ``scheduler`` and ``dask_timeout`` (None: not given).
+
+    Raises
+    ------
+    ParameterError
+        Given without ``--scheduler`` (a local run has no cluster to wait for), or out of
+        range.
+    """
+    if a.dask_timeout is None:
+        return DASK_TIMEOUT_S
+    if a.scheduler is None:
+        raise ParameterError("dask-timeout", "applies with --scheduler (a local run has no "
+                                             "cluster to wait for)")
+    if not 0 < a.dask_timeout <= MAX_DASK_TIMEOUT_S:  # False for nan too
+        raise ParameterError("dask-timeout", f"must be in (0, {MAX_DASK_TIMEOUT_S:g}] seconds, "
+                                             f"got {plain(a.dask_timeout)}")
+    return float(a.dask_timeout)
 
 
 def _dask_args(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address, help=what)
-    p.add_argument("--dask-timeout", type=float, default=DASK_TIMEOUT_S, metavar="SECONDS",
-                   help="with --scheduler: fail (exit 1, nothing written) when no result has "
-                        "arrived for this long, or no worker is left for "
-                        f"min(this, 30) s (default {DASK_TIMEOUT_S:g})")
+    p.add_argument("--dask-timeout", type=float, default=None, metavar="SECONDS",
+                   help="with --scheduler only: fail (exit 1, nothing written) when no result "
+                        "has arrived for this long, or no worker is left for "
+                        f"min(this, 30) s (default {DASK_TIMEOUT_S:g}, at most "
+                        f"{MAX_DASK_TIMEOUT_S:g})")
 
 
 def _force_arg(p: argparse.ArgumentParser) -> None:

@@ -206,9 +206,28 @@ def test_a_sweep_whose_only_worker_dies_fails(tmp_path, lone_worker, monkeypatch
 
 
 def test_the_dask_timeout_default_is_the_library_default():
-    from softlanding.cli.parser import DASK_TIMEOUT_S
+    from softlanding.cli.parser import DASK_TIMEOUT_S, MAX_DASK_TIMEOUT_S
 
     assert DASK_TIMEOUT_S == sweeps.DASK_TIMEOUT_S
+    assert MAX_DASK_TIMEOUT_S == sweeps.MAX_DASK_TIMEOUT_S
+    with pytest.raises(sweeps.ParameterError, match="dask_timeout: must be in"):
+        sweeps.depth_map(-3.0, n=2, dask_timeout=1e300)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["sweep", "--n", "2", "--grid", "11", "--dask-timeout", "5"], "applies with --scheduler"),
+    (["map", "--v0", "-3", "--n", "11", "--dask-timeout", "5"], "applies with --scheduler"),
+    (["map", "--v0", "-3", "--scheduler", "tcp://127.0.0.1:9", "--dask-timeout", "1e300"],
+     "must be in (0, 86400] seconds, got 1e+300"),
+])
+def test_a_dask_timeout_that_does_not_apply_or_is_unbounded_exits_2(tmp_path, cli, monkeypatch,
+                                                                   args, message):
+    _no_work(monkeypatch)
+    monkeypatch.setattr(sweeps, "optimal_impedance_curves", sweeps.depth_map)  # no work either
+    code, out, err = cli(*args, "--out", tmp_path / "x.nc")
+    assert code == 2 and not out and err.count("\n") == 1, err
+    assert err.startswith("softlanding: error: dask-timeout: ") and message in err
+    assert os.listdir(tmp_path) == []
 
 
 # ------------------------------------------------------ a folder named as a file, a full disk
