@@ -415,10 +415,23 @@ def _robust(sub: Any) -> argparse.ArgumentParser:
     return r
 
 
+def _cache(sub: Any) -> argparse.ArgumentParser:
+    c = sub.add_parser("cache", help="the compiled ground-law cache: size, --clear",
+                       description="Ground laws the exact kernel does not have built in (a "
+                                   "user's ground, a drag ground of stiffness K != 1) are "
+                                   "compiled to C once and kept in $SOFTLANDING_CACHE/laws "
+                                   "(default ~/.cache/softlanding/laws), least recently used "
+                                   "evicted beyond 256 laws or 32 MiB. Shows the folder, the "
+                                   "number of laws and their size.")
+    c.add_argument("--clear", action="store_true", help="remove every compiled law")
+    c.add_argument("--json", action="store_true", help="print one JSON object")
+    return c
+
+
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
             "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc,
-            "robust": _robust}
+            "robust": _robust, "cache": _cache}
 
 
 def build_parser(handlers: Handlers,

@@ -46,7 +46,7 @@ from softlanding.model.dynamics import STATE_NAMES, mode_matrices
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import Impact, Robot
 from softlanding.simulation import kernel as K
-from softlanding.simulation.groundcode import kernel_law, needs_integration
+from softlanding.simulation.groundcode import kernel_law, needs_integration, raise_law_errors
 from softlanding.util.jsonable import json_safe
 
 O_EDRAG, O_EGRAIN = K.N_OUT, K.N_OUT + 1  # the integrated path's extra columns
@@ -355,6 +355,7 @@ def simulate(
         out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
                                          check("t_max", t_max), max_seg, bool(energy),
                                          check("rtol", rtol))
+        raise_law_errors()  # a law evaluated in Python (no C compiler) cannot raise in the kernel
     else:
         out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
                                       check("t_max", t_max), max_seg, bool(energy))
@@ -587,6 +588,7 @@ def simulate_batch(
                 K.run_batch_nl([mats], ridx[a:b], law, Kf[a:b], um[a:b], x0[a:b], ss[a:b],
                                check("t_max", t_max), max_segments, energy, out[a:b],
                                check("rtol", rtol))
+                raise_law_errors()
             else:
                 K.run_batch([mats], ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b],
                             check("t_max", t_max), max_segments, energy, out[a:b])
