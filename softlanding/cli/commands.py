@@ -31,7 +31,7 @@ from softlanding.cli.output import (
     savefig,
     target,
 )
-from softlanding.cli.parser import dask_timeout
+from softlanding.cli.parser import DEMO_FIGURE, DEMO_FOLDER, dask_timeout
 from softlanding.cli.robust import robust_command
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
@@ -433,9 +433,12 @@ def _cmd_scale(a: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------- demo
 def _cmd_demo(a: argparse.Namespace) -> int:
+    from softlanding.util.files import atomic_folder, own_folder
+
+    # the default output is the demo's own folder: a re-run replaces it (not a user's file)
+    own = own_folder(DEMO_FOLDER, (DEMO_FIGURE,), "out") if a.out is None else None
+    out = target(a, "out") if a.out else None
     from softlanding.report.demo import (
-        DEMO_FIGURE,
-        DEMO_FOLDER,
         DEMO_GAINS,
         STEPPED_KD,
         STEPPED_KP,
@@ -444,11 +447,7 @@ def _cmd_demo(a: argparse.Namespace) -> int:
         plot_demo,
         stepped_intrusions,
     )
-    from softlanding.util.files import atomic_folder, own_folder
 
-    # the default output is the demo's own folder: a re-run replaces it (not a user's file)
-    own = own_folder(DEMO_FOLDER, (DEMO_FIGURE,), "out") if a.out is None else None
-    out = target(a, "out") if a.out else None
     rows = demo_table()
     stepped = stepped_intrusions()
     written = savefig(plot_demo(stepped=stepped), out) if out else None

@@ -327,6 +327,12 @@ def _compare(sub: Any) -> argparse.ArgumentParser:
     return cp
 
 
+DEMO_FOLDER = "softlanding-demo"
+"""The demo's own output folder (replaced, all at once, by each run that writes it)."""
+DEMO_FIGURE = "demo.png"
+"""The demo's figure in :data:`DEMO_FOLDER`."""
+
+
 def _demo(sub: Any) -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
                        description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "
@@ -334,7 +340,7 @@ def _demo(sub: Any) -> argparse.ArgumentParser:
                                    "as a check) and write a figure.")
     d.add_argument("--out", metavar="FILE.png",
                    help="figure path, a new file unless --force ('' for none); by default "
-                        "softlanding-demo/demo.png, in the demo's own folder, which each "
+                        f"{DEMO_FOLDER}/{DEMO_FIGURE}, in the demo's own folder, which each "
                         "run replaces all at once")
     d.add_argument("--json", action="store_true", help="print one JSON object")
     _force_arg(d)

@@ -22,10 +22,6 @@ STEPPED_V0 = -1.0
 STEPPED_KP = 0.2
 STEPPED_KD = (0.4, 0.18, 0.0)
 """The paper's stepped-intrusion cases (Fig. 3a): 1, 2 and 3 steps."""
-DEMO_FOLDER = "softlanding-demo"
-"""The demo's own output folder (replaced, all at once, by each run that writes it)."""
-DEMO_FIGURE = "demo.png"
-"""The figure's name in :data:`DEMO_FOLDER`."""
 
 
 def demo_table(robot: Robot = PAPER_IMPEDANCE_ROBOT,
@@ -101,5 +97,4 @@ def plot_demo(robot: Robot = PAPER_IMPEDANCE_ROBOT, impedance: Impedance = DEMO_
     return fig
 
 
-__all__ = ["DEMO_FIGURE", "DEMO_FOLDER", "DEMO_GAINS", "DEMO_V0", "demo_table", "plot_demo",
-           "stepped_intrusions"]
+__all__ = ["DEMO_GAINS", "DEMO_V0", "demo_table", "plot_demo", "stepped_intrusions"]
