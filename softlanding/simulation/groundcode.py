@@ -12,8 +12,9 @@ pointer: the kernel is not recompiled per law.
 The cache is bounded (:data:`LAW_CACHE_MAX_FILES` laws, :data:`LAW_CACHE_MAX_BYTES`): a new
 law evicts the least recently used ones (``softlanding cache`` shows it, ``--clear`` empties
 it). Without a C compiler the law is evaluated in Python instead (a ctypes callback of the
-same CasADi function): the same numbers, about 100 times slower per landing (measured: 400
-drag landings at K = 2, 0.1 s CPU compiled, 9.5 to 11.4 s in Python).
+same CasADi function): the same numbers, 60 to 100 times slower (``benchmarks/
+bench_law_fallback.py``: 400 drag landings at K = 2, 0.17 s CPU compiled with the compiler's
+time, 10.2 s in Python).
 """
 
 from __future__ import annotations
@@ -217,7 +218,7 @@ def _python_law(ground: Ground) -> tuple[Any, int]:
     if not _NOTICE:
         _NOTICE.append("shown")
         print("softlanding: no C compiler (cc, gcc or $CC): this ground's law runs in Python, "
-              "about 100 times slower", file=sys.stderr)
+              "60 to 100 times slower", file=sys.stderr)
     fun = law_expressions(ground).expand()
 
     def law(d: float, v: float, out: Any) -> None:
