@@ -348,9 +348,32 @@ def output_folder(path: str | os.PathLike[str], option: str, force: bool) -> Pat
     _check_folder(p.absolute().parent, p.absolute().name, option, "folder")
     if p.exists() and not p.is_dir():
         raise ParameterError(option, f"{p} exists and is not a folder")
-    if p.is_dir() and any(p.iterdir()) and not force:
-        raise ParameterError(option, f"{p} is not empty; pass --force to replace its files")
+    if p.is_dir() and any(p.iterdir()):
+        if not force:
+            raise ParameterError(option, f"{p} is not empty; pass --force to replace its files")
+        _replaceable(p, option)
     return p
+
+
+MAX_KEPT_ENTRIES = 10_000
+"""Most entries a folder replaced with ``--force`` may hold (they are linked into the new
+folder, :func:`atomic_folder`): a larger folder is not a run's output folder."""
+
+
+def _replaceable(folder: Path, option: str) -> None:
+    """A folder ``--force`` may swap: one file system, at most :data:`MAX_KEPT_ENTRIES`."""
+    dev = folder.stat().st_dev
+    n = 0
+    for root, dirs, files in os.walk(folder):
+        n += len(dirs) + len(files)
+        if n > MAX_KEPT_ENTRIES:
+            raise ParameterError(option, f"{folder} holds more than {MAX_KEPT_ENTRIES} files; "
+                                         "give a new or empty folder")
+        for d in dirs:
+            if os.lstat(os.path.join(root, d)).st_dev != dev:
+                raise ParameterError(option, f"{folder} has another file system mounted "
+                                             f"inside ({os.path.join(root, d)}); give a new "
+                                             "or empty folder")
 
 
 def own_folder(path: str | os.PathLike[str], names: tuple[str, ...], option: str) -> Path:
@@ -502,6 +525,7 @@ def atomic_folder(path: Path, force: bool = True) -> Iterator[Path]:
     DiskFullError
         The disk filled up (nothing of the run is left).
     """
+    path = Path(os.path.abspath(path))  # "." or "out/" named: the folder itself
     tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(path), suffix=".partial", dir=path.parent))
     try:
         with _full_means(path):

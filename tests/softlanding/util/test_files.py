@@ -217,3 +217,13 @@ def test_modes_follow_the_umask(tmp_path, umask, file_mode, dir_mode):
         os.umask(old)
     assert stat.S_IMODE((tmp_path / "f.nc").stat().st_mode) == file_mode
     assert stat.S_IMODE((tmp_path / "D").stat().st_mode) == dir_mode
+
+
+def test_force_refuses_up_front_a_folder_too_big_to_be_a_runs_output(tmp_path, monkeypatch):
+    from softlanding.util.files import output_folder
+
+    d = _old_folder(tmp_path)
+    assert output_folder(d, "out", True) == d
+    monkeypatch.setattr(files, "MAX_KEPT_ENTRIES", 3)  # a home folder, say
+    with pytest.raises(ParameterError, match="holds more than 3 files; give a new or empty"):
+        output_folder(d, "out", True)
