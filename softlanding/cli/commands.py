@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import logging
 import os
 import sys
 import threading
@@ -667,6 +668,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)
+    _quiet_matplotlib_caches()
     with _files_backend(bool(getattr(args, "plot", None) or getattr(args, "out", None))):
         return _run(args)
 
@@ -696,6 +698,24 @@ def console_main() -> int:
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, signal.SIG_IGN)
     return code
+
+
+_MPL_CACHE_NOTES = ("is not a writable directory", "created a temporary cache directory",
+                    "Could not save font_manager cache", "building the font cache")
+
+
+def _not_a_cache_note(record: logging.LogRecord) -> bool:
+    return not any(note in str(record.msg) for note in _MPL_CACHE_NOTES)
+
+
+def _quiet_matplotlib_caches() -> None:
+    """matplotlib's notes on its own caches (a full or read-only home: "Could not save
+    font_manager cache", a temporary config folder) are not the run's business: a run's
+    errors are one line. Set before matplotlib's import (its loggers exist already)."""
+    for name in ("matplotlib", "matplotlib.font_manager"):
+        logger = logging.getLogger(name)
+        if _not_a_cache_note not in logger.filters:
+            logger.addFilter(_not_a_cache_note)
 
 
 @contextlib.contextmanager

@@ -284,3 +284,22 @@ def test_reproduce_onto_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_pa
     code, _, err = cli("reproduce", "--quick", "--out", out)
     assert (code, err) == (1, f"softlanding: error: no space left on {out}\n")
     assert os.listdir(tmp_path) == []
+
+
+def test_matplotlibs_cache_notes_on_a_full_home_are_not_printed(tmp_path, cli, monkeypatch,
+                                                                caplog):
+    """A full disk also fills matplotlib's caches: its notes made a full-disk map 3 lines."""
+    import logging
+
+    real = sweeps.depth_map
+
+    def depth_map(*a, **k):
+        logging.getLogger("matplotlib").warning("%s is not a writable directory", "/home/x")
+        logging.getLogger("matplotlib.font_manager").warning(
+            "Could not save font_manager cache %s", OSError(28, "No space left on device"))
+        return real(*a, **k)
+
+    monkeypatch.setattr(sweeps, "depth_map", depth_map)
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", tmp_path / "m.nc")
+    assert code == 0 and err == ""
+    assert [r for r in caplog.records if r.name.startswith("matplotlib")] == []  # none emitted
