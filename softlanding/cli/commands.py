@@ -669,7 +669,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     _progress.FORCE = bool(args.progress)
     _quiet_matplotlib_caches()
-    with _files_backend(bool(getattr(args, "plot", None) or getattr(args, "out", None))):
+    files = getattr(args, "plot", None) or getattr(args, "out", None) or args.command == "demo"
+    with _files_backend(bool(files)):
         return _run(args)
 
 
