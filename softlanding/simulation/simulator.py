@@ -26,8 +26,9 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -287,6 +288,19 @@ class LandingResult:
 
 
 # ----------------------------------------------------------------------- single
+@contextlib.contextmanager
+def _signal_as_itself() -> Iterator[None]:
+    """A signal handler's exception (Ctrl-C, SIGTERM, an alarm's) raised as a compiled landing
+    returns comes out as itself, not inside numba's SystemError ("returned a result with an
+    exception set"), which the CLI would call a bug."""
+    try:
+        yield
+    except SystemError as exc:
+        if exc.__cause__ is None:
+            raise
+        raise exc.__cause__ from None
+
+
 def simulate(
     robot: Robot,
     impact: Impact | float,
@@ -352,13 +366,15 @@ def simulate(
     max_seg = check_count("max_segments", max_segments, 1, 10**6)
     if integrate:
         law = kernel_law(ground, robot.r_m, lock=isinstance(controller, Rigid), u_max=umax)
-        out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
-                                         check("t_max", t_max), max_seg, bool(energy),
-                                         check("rtol", rtol))
+        with _signal_as_itself():
+            out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
+                                             check("t_max", t_max), max_seg, bool(energy),
+                                             check("rtol", rtol))
         raise_law_errors()  # a law evaluated in Python (no C compiler) cannot raise in the kernel
     else:
-        out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
-                                      check("t_max", t_max), max_seg, bool(energy))
+        with _signal_as_itself():
+            out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
+                                          check("t_max", t_max), max_seg, bool(energy))
     return LandingResult(
         depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
         u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),

@@ -29,3 +29,23 @@ def test_a_signal_raised_in_a_destructor_is_delivered_again_quietly(capsys):
         reached.append("the end")
     assert reached == ["after the destructor"]
     assert "Exception ignored" not in capsys.readouterr().err
+
+
+def test_a_signal_as_a_compiled_landing_returns_comes_out_as_itself(monkeypatch):
+    """numba wraps a handler's exception raised as its kernel returns in a SystemError ("...
+    returned a result with an exception set"): measured with an alarm during robust_landing."""
+    from softlanding.model import Rigid
+    from softlanding.model.robot import PAPER_ROBOT
+    from softlanding.simulation import kernel
+    from softlanding.simulation.simulator import simulate
+
+    def interrupted(*a, **k):
+        try:
+            raise TimeoutError("the alarm's handler")
+        except TimeoutError as exc:
+            raise SystemError("CPUDispatcher(<function landing_entry>) returned a result with "
+                              "an exception set") from exc
+
+    monkeypatch.setattr(kernel, "run_landing", interrupted)
+    with pytest.raises(TimeoutError, match="the alarm's handler"):
+        simulate(PAPER_ROBOT, -1.0, Rigid())
