@@ -66,6 +66,17 @@ class ClusterError(SoftlandingError):
     label = "cluster"
 
 
+class DiskFullError(SoftlandingError):
+    """An output could not be written: its disk is full (or the user's quota is used up).
+
+    The run's outputs are removed (nothing half-written is left); the message names the
+    folder. A failed run (exit 1), not bad input: the same command succeeds with space.
+    """
+
+    exit_code = 1
+    label = "error"
+
+
 def plain(value: Any) -> str:
     """A number as a user typed it (no numpy repr such as ``np.float64(nan)``).
 

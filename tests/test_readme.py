@@ -126,3 +126,15 @@ def test_citation_file_names_the_paper_and_this_version():
            "Yielding Terrain" in cff
     if tex.exists():  # the paper's source, beside the repository where it is checked out
         assert "The Soft Landing Problem" in tex.read_text()
+
+
+def test_ci_runs_exactly_the_readmes_test_commands():
+    """A fresh Debian or Ubuntu refuses ``pip install`` outside a virtual environment: the
+    README's set-up makes one, and ``.ci/run`` runs the README's two test commands verbatim."""
+    setup = README.read_text().split("## Set-up", 1)[1].split("\n## ", 1)[0]
+    commands = [ln.strip() for ln in setup.splitlines() if ln.startswith("    ")]
+    tests = [c for c in commands if "pytest" in c]
+    assert len(tests) == 2 and all(c.startswith("python3 -m venv .venv && . .venv/bin/activate")
+                                   for c in commands if "pip install" in c)
+    ci = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
+    assert [ln for ln in ci if "pytest" in ln] == tests

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import logging
 import os
 import sys
 import threading
 from collections.abc import Iterator, Sequence
 from typing import Any
 
+from softlanding.cli.cache import cache_command
 from softlanding.cli.output import (
     EXIT_FAILURE,
     EXIT_OK,
@@ -30,6 +32,7 @@ from softlanding.cli.output import (
     savefig,
     target,
 )
+from softlanding.cli.parser import DEMO_FIGURE, DEMO_FOLDER, dask_timeout
 from softlanding.cli.robust import robust_command
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
@@ -239,12 +242,12 @@ def _cmd_map(a: argparse.Namespace) -> int:
     robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
     out, plot = target(a, "out"), target(a)
     check_count("n", a.n, 2, 2001)
+    timeout = dask_timeout(a)
     from softlanding.studies.impedance import optimize_impedance
     from softlanding.studies.sweeps import depth_map, save_dataset
     from softlanding.util.files import atomic
 
-    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler,
-                   dask_timeout=a.dask_timeout)
+    ds = depth_map(impact, robot, ground, n=a.n, scheduler=a.scheduler, dask_timeout=timeout)
     opt = optimize_impedance(impact, robot, ground, grid=a.n)
     with atomic(out) as tmp:  # nothing is written unless the whole run succeeded
         save_dataset(ds, tmp)
@@ -299,6 +302,7 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
             Robot(r_m=rm, s=s, u_max=a.umax)
     out, plot, ground = target(a, "out"), target(a), ground_of_args(a)
     grid = check_count("grid", a.grid, 2, 2001)
+    timeout = dask_timeout(a)
     from softlanding.studies.sweeps import (
         optimal_impedance_curves,
         paper_observations,
@@ -308,7 +312,7 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
 
     curves = optimal_impedance_curves(v0, robot, ground, r_m=a.rm, s=a.s,
                                       objective=a.objective, grid=grid, scheduler=a.scheduler,
-                                      progress=not a.json, dask_timeout=a.dask_timeout)
+                                      progress=not a.json, dask_timeout=timeout)
     if out:
         with atomic(out) as tmp:
             save_dataset(curves, tmp)
@@ -440,6 +444,10 @@ def _cmd_scale(a: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------- demo
 def _cmd_demo(a: argparse.Namespace) -> int:
+    from softlanding.util.files import atomic_folder, own_folder
+
+    # the default output is the demo's own folder: a re-run replaces it (not a user's file)
+    own = own_folder(DEMO_FOLDER, (DEMO_FIGURE,), "out") if a.out is None else None
     out = target(a, "out") if a.out else None
     from softlanding.report.demo import (
         DEMO_GAINS,
@@ -454,6 +462,10 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     rows = demo_table()
     stepped = stepped_intrusions()
     written = savefig(plot_demo(stepped=stepped), out) if out else None
+    if own is not None:
+        with atomic_folder(own, force=True) as tmp:
+            savefig(plot_demo(stepped=stepped), tmp / DEMO_FIGURE)
+        written = str(own / DEMO_FIGURE)
     if a.json:
         print_json({"table": rows, "stepped_intrusions": [
             {"k_d": kd, "steps": s.steps, "depth": s.depth}
@@ -661,7 +673,7 @@ HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
             "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
             "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc,
-            "robust": robust_command}
+            "robust": robust_command, "cache": cache_command}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -684,7 +696,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)
-    with _files_backend(bool(getattr(args, "plot", None) or getattr(args, "out", None))):
+    _quiet_matplotlib_caches()
+    files = getattr(args, "plot", None) or getattr(args, "out", None) or args.command == "demo"
+    with _files_backend(bool(files)):
         return _run(args)
 
 
@@ -713,6 +727,24 @@ def console_main() -> int:
         for signum in (signal.SIGINT, signal.SIGTERM):
             signal.signal(signum, signal.SIG_IGN)
     return code
+
+
+_MPL_CACHE_NOTES = ("is not a writable directory", "created a temporary cache directory",
+                    "Could not save font_manager cache", "building the font cache")
+
+
+def _not_a_cache_note(record: logging.LogRecord) -> bool:
+    return not any(note in str(record.msg) for note in _MPL_CACHE_NOTES)
+
+
+def _quiet_matplotlib_caches() -> None:
+    """matplotlib's notes on its own caches (a full or read-only home: "Could not save
+    font_manager cache", a temporary config folder) are not the run's business: a run's
+    errors are one line. Set before matplotlib's import (its loggers exist already)."""
+    for name in ("matplotlib", "matplotlib.font_manager"):
+        logger = logging.getLogger(name)
+        if _not_a_cache_note not in logger.filters:
+            logger.addFilter(_not_a_cache_note)
 
 
 @contextlib.contextmanager

@@ -171,6 +171,13 @@ def report_error(exc: BaseException) -> int:
     if isinstance(exc, SolveError):
         print(f"softlanding: solver failed: {exc} (Ipopt status {exc.status})", file=sys.stderr)
         return EXIT_FAILURE
+    from softlanding.util.files import disk_full
+
+    full = disk_full(exc)  # a full disk outside the outputs (e.g. numba's cache): a failure
+    if full is not None:
+        where = f" ({full.filename})" if full.filename else ""
+        print(f"softlanding: error: no space left on the device{where}", file=sys.stderr)
+        return EXIT_FAILURE
     if isinstance(exc, OSError):  # a file the user named cannot be written or read
         where = f": {exc.filename}" if exc.filename else ""
         print(f"softlanding: error: {exc.strerror or exc}{where}", file=sys.stderr)

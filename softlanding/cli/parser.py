@@ -10,7 +10,7 @@ from typing import Any
 
 from softlanding.cli.ground import ground_args, numbers
 from softlanding.cli.variants import add_variant_options, variants_parser
-from softlanding.errors import LIMITS
+from softlanding.errors import LIMITS, ParameterError, plain
 from softlanding.model.robot import PAPER_ROBOT
 
 Handlers = Mapping[str, Callable[[argparse.Namespace], int]]
@@ -91,14 +91,42 @@ def _accept_arg(p: argparse.ArgumentParser) -> None:
 
 DASK_TIMEOUT_S = 600.0
 """Default of ``--dask-timeout`` (that of :mod:`softlanding.studies.sweeps`, not imported: slow)."""
+MAX_DASK_TIMEOUT_S = 86_400.0
+"""Largest ``--dask-timeout`` (:data:`softlanding.studies.sweeps.MAX_DASK_TIMEOUT_S`)."""
+
+
+def dask_timeout(a: argparse.Namespace) -> float:
+    """``--dask-timeout``, checked: only with ``--scheduler``, in ``(0, a day]``.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments with ``scheduler`` and ``dask_timeout`` (None: not given).
+
+    Raises
+    ------
+    ParameterError
+        Given without ``--scheduler`` (a local run has no cluster to wait for), or out of
+        range.
+    """
+    if a.dask_timeout is None:
+        return DASK_TIMEOUT_S
+    if a.scheduler is None:
+        raise ParameterError("dask-timeout", "applies with --scheduler (a local run has no "
+                                             "cluster to wait for)")
+    if not 0 < a.dask_timeout <= MAX_DASK_TIMEOUT_S:  # False for nan too
+        raise ParameterError("dask-timeout", f"must be in (0, {MAX_DASK_TIMEOUT_S:g}] seconds, "
+                                             f"got {plain(a.dask_timeout)}")
+    return float(a.dask_timeout)
 
 
 def _dask_args(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--scheduler", metavar="tcp://host:port", type=scheduler_address, help=what)
-    p.add_argument("--dask-timeout", type=float, default=DASK_TIMEOUT_S, metavar="SECONDS",
-                   help="with --scheduler: fail (exit 1, nothing written) when no result has "
-                        "arrived for this long, or no worker is left for "
-                        f"min(this, 30) s (default {DASK_TIMEOUT_S:g})")
+    p.add_argument("--dask-timeout", type=float, default=None, metavar="SECONDS",
+                   help="with --scheduler only: fail (exit 1, nothing written) when no result "
+                        "has arrived for this long, or no worker is left for "
+                        f"min(this, 30) s (default {DASK_TIMEOUT_S:g}, at most "
+                        f"{MAX_DASK_TIMEOUT_S:g})")
 
 
 def _force_arg(p: argparse.ArgumentParser) -> None:
@@ -293,13 +321,21 @@ def _compare(sub: Any) -> argparse.ArgumentParser:
     return cp
 
 
+DEMO_FOLDER = "softlanding-demo"
+"""The demo's own output folder (replaced, all at once, by each run that writes it)."""
+DEMO_FIGURE = "demo.png"
+"""The demo's figure in :data:`DEMO_FOLDER`."""
+
+
 def _demo(sub: Any) -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="rigid vs impedance landings at several impact velocities",
                        description="Simulate rigid and impedance landings at v0 = 0, -1, -3, "
                                    "-5, -10, print a table (with the analytic rigid depth "
                                    "as a check) and write a figure.")
-    d.add_argument("--out", default="softlanding-demo.png", metavar="FILE.png",
-                   help="figure path (default softlanding-demo.png; '' for none)")
+    d.add_argument("--out", metavar="FILE.png",
+                   help="figure path, a new file unless --force ('' for none); by default "
+                        f"{DEMO_FOLDER}/{DEMO_FIGURE}, in the demo's own folder, which each "
+                        "run replaces all at once")
     d.add_argument("--json", action="store_true", help="print one JSON object")
     _force_arg(d)
     return d
@@ -382,10 +418,23 @@ def _robust(sub: Any) -> argparse.ArgumentParser:
     return r
 
 
+def _cache(sub: Any) -> argparse.ArgumentParser:
+    c = sub.add_parser("cache", help="the compiled ground-law cache: size, --clear",
+                       description="Ground laws the exact kernel does not have built in (a "
+                                   "user's ground, a drag ground of stiffness K != 1) are "
+                                   "compiled to C once and kept in $SOFTLANDING_CACHE/laws "
+                                   "(default ~/.cache/softlanding/laws), least recently used "
+                                   "evicted beyond 256 laws or 32 MiB. Shows the folder, the "
+                                   "number of laws and their size.")
+    c.add_argument("--clear", action="store_true", help="remove every compiled law")
+    c.add_argument("--json", action="store_true", help="print one JSON object")
+    return c
+
+
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
             "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc,
-            "robust": _robust, "variants": variants_parser}
+            "robust": _robust, "variants": variants_parser, "cache": _cache}
 
 
 def build_parser(handlers: Handlers, parser_class: type[argparse.ArgumentParser],

@@ -15,7 +15,7 @@ from softlanding.cli.output import (
     target,
 )
 from softlanding.errors import ParameterError, check, check_count
-from softlanding.model.ground import Ground, linear_or_drag
+from softlanding.model.ground import MAX_GROUNDS, Ground, linear_or_drag
 from softlanding.model.robot import Impact
 
 
@@ -30,8 +30,14 @@ def ground_set(stiffness: list[float], drag: list[float]) -> list[Ground]:
     Raises
     ------
     ParameterError
-        A bad value or a repeated ground.
+        A bad value, a repeated ground, or more than
+        :data:`~softlanding.model.ground.MAX_GROUNDS` grounds.
     """
+    n = len(stiffness) * len(drag)
+    if n > MAX_GROUNDS:  # refused before anything is built or compiled
+        raise ParameterError("cd" if len(drag) > len(stiffness) else "stiffness",
+                             f"{len(stiffness)} x {len(drag)} = {n} grounds (every --stiffness "
+                             f"with every --cd); at most {MAX_GROUNDS}")
     for k in stiffness:
         check("stiffness", k, (lambda v: v > 0, "must be > 0"))
     for c in drag:
@@ -40,6 +46,13 @@ def ground_set(stiffness: list[float], drag: list[float]) -> list[Ground]:
         raise ParameterError("stiffness" if len(set(stiffness)) < len(stiffness) else "cd",
                              "lists a value twice")
     return [linear_or_drag(k, c) for k, c in itertools.product(stiffness, drag)]
+
+
+def _stiffness_shown(plan: dict) -> dict:
+    """Every ground of the set with its ``stiffness`` (a ground's JSON omits the paper's 1)."""
+    for row in plan["grounds"]:
+        row["ground"].setdefault("stiffness", 1.0)
+    return plan
 
 
 def robust_command(a: argparse.Namespace) -> int:
@@ -90,7 +103,8 @@ def robust_command(a: argparse.Namespace) -> int:
             "clairvoyant_worst_depth": max(clair_depth),
             "clairvoyant_depths": clair_depth,
             "clairvoyant_verified": [not c.unverified_reasons() for c in clair],
-            "robust": robust.to_dict(), "tree": None if tree is None else tree.to_dict()})
+            "robust": _stiffness_shown(robust.to_dict()),
+            "tree": None if tree is None else _stiffness_shown(tree.to_dict())})
     else:
         rows: list[tuple[str, object]] = []
         names = [f"K = {k:g}, c_d = {c:g}" for k, c in itertools.product(a.stiffness, a.cd)]

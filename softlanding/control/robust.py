@@ -50,7 +50,7 @@ from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import ground_numbers, plan_from_state
 from softlanding.errors import InfeasibleLandingError, ParameterError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
-from softlanding.model.ground import Ground
+from softlanding.model.ground import Ground, ground_sequence
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
 from softlanding.optimal.limits import force_limit
@@ -347,11 +347,7 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
     expect("robot", robot, Robot)
     max_iterations = check_count("max_iterations", max_iterations, 1, 100_000)
     extra_pieces = check_count("extra_pieces", extra_pieces, 0, 16)
-    grounds = tuple(grounds) if not isinstance(grounds, Ground) else (grounds,)
-    if not grounds:
-        raise ParameterError("grounds", "needs at least one ground")
-    for g in grounds:
-        expect("grounds", g, Ground, "ground model (softlanding.model.ground)")
+    grounds = ground_sequence(grounds)  # a ground or 1..MAX_GROUNDS of them
     if tree:
         branch_time = check("branch_time", branch_time, (lambda v: v > 0, "must be > 0"))
         for g in grounds:  # the second stage plans on K d + c_d v^2 grounds only

@@ -448,6 +448,47 @@ def ground_of_attrs(attrs: dict[str, Any]) -> dict[str, Any]:
             **{k[7:]: v for k, v in attrs.items() if k.startswith("ground_")}}
 
 
+MAX_GROUNDS = 64
+"""Most grounds one robust plan is searched over. Every point of the search simulates the
+plan on each ground (and a drag ground compiles its law once), so the cost grows with their
+number: measured at v0 = -3, 6 grounds (3 linear, 3 drag) take 52 s CPU with a cold law
+cache, 200 grounds 27 min; 64 are several minutes. Sample a larger set (the project's
+unknown-ground study uses 15)."""
+
+
+def ground_sequence(grounds: Any, name: str = "grounds") -> tuple[Ground, ...]:
+    """A ground, or a non-empty sequence of at most :data:`MAX_GROUNDS` grounds, as a tuple.
+
+    Parameters
+    ----------
+    grounds : Ground or iterable of Ground
+        What was passed.
+    name : str
+        The argument's name, for messages.
+
+    Raises
+    ------
+    ParameterError
+        Not a ground or a sequence of them, empty, or longer than :data:`MAX_GROUNDS`.
+    """
+    if isinstance(grounds, Ground):
+        return (grounds,)
+    if isinstance(grounds, str | bytes) or not hasattr(grounds, "__iter__"):
+        raise ParameterError(name, "must be a ground model or a sequence of them, got "
+                                   f"{type(grounds).__name__} {grounds!r:.60}")
+    out = tuple(grounds)
+    if not out:
+        raise ParameterError(name, "needs at least one ground")
+    if len(out) > MAX_GROUNDS:
+        raise ParameterError(name, f"at most {MAX_GROUNDS} grounds, got {len(out)} (sample "
+                                   "the set: each ground is simulated at every search point)")
+    for g in out:
+        if not isinstance(g, Ground):
+            raise ParameterError(name, "must be ground models (softlanding.model.ground), "
+                                       f"got {type(g).__name__} {g!r:.60}")
+    return out
+
+
 def linear_or_drag(stiffness: float, c_d: float) -> Ground:
     """The ground ``f = K d + c_d v_f^2``: linear when ``c_d = 0`` (the exact path), else drag.
 
@@ -460,4 +501,5 @@ def linear_or_drag(stiffness: float, c_d: float) -> Ground:
 
 
 __all__ = ["AddedMassGround", "CustomGround", "DragGround", "Ground", "LINEAR_GROUND",
-           "LinearGround", "ground_attrs", "ground_label", "ground_of_attrs", "linear_or_drag"]
+           "LinearGround", "MAX_GROUNDS", "ground_attrs", "ground_label", "ground_of_attrs",
+           "ground_sequence", "linear_or_drag"]

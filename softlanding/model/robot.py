@@ -223,6 +223,9 @@ class Impact:
     v0: float
 
     def __post_init__(self) -> None:
+        if np.ndim(self.v0) != 0:
+            raise ParameterError("v0", f"must be one number, got an array of shape "
+                                       f"{np.shape(self.v0)} (many impacts: simulate_batch)")
         object.__setattr__(self, "v0", check("v0", self.v0))
 
     @classmethod

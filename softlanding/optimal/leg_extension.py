@@ -23,7 +23,7 @@ import numpy as np
 
 from ocp import Solution, Trajectory
 from ocp.structure.phase_refinement import RefinedPhases
-from softlanding.errors import ParameterError, expect
+from softlanding.errors import ParameterError, expect, plain
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.ground import LINEAR_GROUND
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -137,8 +137,9 @@ def _bounds(robot: Robot, extension: Any, rate: Any) -> dict[str, float]:
 
     lmin, lmax = pair("extension", extension, (0.0, robot.s))
     if lmin < 0 or lmax > robot.s:
+        given = f"{plain(lmin)}" if lmin == lmax else f"({plain(lmin)}, {plain(lmax)})"
         raise ParameterError("extension", f"the leg length at impact must lie within the "
-                                          f"stroke [0, {robot.s:g}], got [{lmin:g}, {lmax:g}]")
+                                          f"stroke [0, {robot.s:g}], got {given}")
     wmin, wmax = pair("rate", rate, (0.0, 0.0))
     return {"l_min": lmin, "l_max": lmax, "w_min": wmin, "w_max": wmax}
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from ocp import Solution, SolveError, Trajectory
 from ocp.structure.phase_refinement import RefinedPhases
-from softlanding.errors import InfeasibleLandingError, expect
+from softlanding.errors import InfeasibleLandingError, ParameterError, expect, plain
 from softlanding.model.controllers import Rigid
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -264,6 +264,8 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     """
     impact = Impact.of(impact)
     landing_input(robot, ground)
+    if isinstance(steps, bool) or not isinstance(steps, int | np.integer) or steps not in (1, 2):
+        raise ParameterError("steps", f"must be 1 or 2, got {plain(steps)}")
     if warm_start is not None:
         expect("warm_start", warm_start, TwoPhaseLanding, "TwoPhaseLanding (solve_two_phase's)")
     if paper is None:

@@ -8,6 +8,13 @@ is turned into C by CasADi's code generator from its own ``yield_force`` and
 ``$CC``), cached on disk by the hash of the generated code (``$SOFTLANDING_CACHE`` or
 ``~/.cache/softlanding``), loaded with ctypes and handed to the kernel as a function
 pointer: the kernel is not recompiled per law.
+
+The cache is bounded (:data:`LAW_CACHE_MAX_FILES` laws, :data:`LAW_CACHE_MAX_BYTES`): a new
+law evicts the least recently used ones (``softlanding cache`` shows it, ``--clear`` empties
+it). Without a C compiler the law is evaluated in Python instead (a ctypes callback of the
+same CasADi function): the same numbers, 60 to 100 times slower (``benchmarks/
+bench_law_fallback.py``: 400 drag landings at K = 2, 0.17 s CPU compiled with the compiler's
+time, 10.2 s in Python).
 """
 
 from __future__ import annotations
@@ -17,6 +24,7 @@ import hashlib
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 from functools import lru_cache
 from pathlib import Path
@@ -27,7 +35,14 @@ import numpy as np
 from softlanding.errors import ParameterError
 from softlanding.model.ground import AddedMassGround, DragGround, Ground, LinearGround
 
-_LIBS: dict[str, ctypes.CDLL] = {}  # keep the loaded laws alive
+_LIBS: dict[str, Any] = {}  # keep the loaded laws (and Python callbacks) alive
+LAW_CACHE_MAX_FILES = 256
+"""Most compiled laws kept on disk (about 16 kB each); the least recently used go first."""
+LAW_CACHE_MAX_BYTES = 32 * 2**20
+"""Most bytes of compiled laws kept on disk."""
+_LAW_FN = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.POINTER(ctypes.c_double))
+_LAW_ERRORS: list[BaseException] = []  # raised by a Python law: re-raised after the kernel
+_NOTICE: list[str] = []
 
 _WRAPPER = """
 void sl_law(double d, double v, double *out) {{
@@ -100,20 +115,138 @@ def law_expressions(ground: Ground) -> Any:
     return ca.Function("sl_law_core", [d, v], [f, ma, dma, hold, f - hold - dma * v**2])
 
 
-def _compiler() -> str:
-    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-    if not cc:
-        raise ParameterError("ground", "a user-defined ground law is compiled to C, and no C "
-                                       "compiler was found (install gcc, or set $CC)")
-    return cc
+def _compiler() -> str | None:
+    """The C compiler (``$CC``, else ``cc`` or ``gcc`` on the path), or None if there is none."""
+    cc = os.environ.get("CC")
+    if cc:
+        return shutil.which(cc.split()[0]) and cc
+    return shutil.which("cc") or shutil.which("gcc")
 
 
-def _cache_dir() -> Path:
+def law_cache_dir(create: bool = True) -> Path:
+    """The folder of the compiled laws (``$SOFTLANDING_CACHE/laws``, else
+    ``~/.cache/softlanding/laws``).
+
+    Parameters
+    ----------
+    create : bool
+        Create it if missing.
+    """
     root = os.environ.get("SOFTLANDING_CACHE") or os.path.join(
         os.path.expanduser("~"), ".cache", "softlanding")
     path = Path(root) / "laws"
-    path.mkdir(parents=True, exist_ok=True)
+    if create:
+        path.mkdir(parents=True, exist_ok=True)
     return path
+
+
+def _cached_laws(folder: Path) -> list[tuple[float, int, Path]]:
+    out = []
+    for p in folder.glob("law_*"):
+        try:
+            st = p.stat()
+        except OSError:  # removed meanwhile (another process pruning)
+            continue
+        out.append((st.st_mtime, st.st_size, p))
+    return sorted(out)
+
+
+def law_cache_info() -> dict[str, Any]:
+    """What the compiled-law cache holds.
+
+    Returns
+    -------
+    dict
+        ``path``, ``laws`` (how many), ``bytes``, and the bounds ``max_laws``, ``max_bytes``.
+    """
+    folder = law_cache_dir(create=False)
+    laws = _cached_laws(folder) if folder.is_dir() else []
+    return {"path": str(folder), "laws": sum(p.suffix == ".so" for _, _, p in laws),
+            "bytes": sum(size for _, size, _ in laws), "max_laws": LAW_CACHE_MAX_FILES,
+            "max_bytes": LAW_CACHE_MAX_BYTES}
+
+
+def clear_law_cache() -> int:
+    """Remove every compiled law from the disk cache (laws loaded by this process stay loaded).
+
+    Returns
+    -------
+    int
+        How many laws were removed.
+    """
+    folder = law_cache_dir(create=False)
+    n = 0
+    for _, _, p in _cached_laws(folder) if folder.is_dir() else []:
+        try:
+            p.unlink()
+        except FileNotFoundError:
+            continue
+        n += p.suffix == ".so"
+    return n
+
+
+def prune_law_cache(keep: Path | None = None) -> int:
+    """Evict the least recently used laws until the cache is within its bounds.
+
+    Parameters
+    ----------
+    keep : Path, optional
+        A law never evicted (the one just compiled).
+
+    Returns
+    -------
+    int
+        How many files were removed.
+    """
+    laws = [x for x in _cached_laws(law_cache_dir()) if x[2] != keep]
+    count = sum(p.suffix == ".so" for _, _, p in laws) + (keep is not None)
+    size = sum(s for _, s, _ in laws) + (keep.stat().st_size if keep is not None else 0)
+    removed = 0
+    for _, s, p in laws:  # oldest first
+        if count <= LAW_CACHE_MAX_FILES and size <= LAW_CACHE_MAX_BYTES:
+            break
+        try:
+            p.unlink()
+        except FileNotFoundError:
+            pass
+        count, size, removed = count - (p.suffix == ".so"), size - s, removed + 1
+    return removed
+
+
+def _python_law(ground: Ground) -> tuple[Any, int]:
+    """The law as a ctypes callback of its CasADi function: no C compiler needed, slower."""
+    if not _NOTICE:
+        _NOTICE.append("shown")
+        print("softlanding: no C compiler (cc, gcc or $CC): this ground's law runs in Python, "
+              "60 to 100 times slower", file=sys.stderr)
+    fun = law_expressions(ground).expand()
+
+    def law(d: float, v: float, out: Any) -> None:
+        try:
+            for i, x in enumerate(fun(d, v)):
+                out[i] = float(x)
+        except BaseException as exc:  # noqa: BLE001 - a callback cannot raise: kept for later
+            _LAW_ERRORS.append(exc)
+            for i in range(5):
+                out[i] = float("nan")
+
+    cb = _LAW_FN(law)
+    _LIBS[f"python:{id(cb)}"] = cb
+    return cb, ctypes.cast(cb, ctypes.c_void_p).value or 0
+
+
+def raise_law_errors() -> None:
+    """Raise the first error a Python-evaluated law met (a Ctrl-C, say) during the last run.
+
+    Raises
+    ------
+    BaseException
+        That error (the kernel could not be stopped by it: the law returned NaN instead).
+    """
+    if _LAW_ERRORS:
+        exc = _LAW_ERRORS[0]
+        _LAW_ERRORS.clear()
+        raise exc
 
 
 def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
@@ -127,8 +260,9 @@ def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
 
     Returns
     -------
-    lib : ctypes.CDLL
-        The loaded library (kept alive by this module).
+    lib : ctypes.CDLL or ctypes callback
+        The loaded library, or without a C compiler the Python callback (kept alive by this
+        module).
     address : int
         Address of ``void sl_law(double d, double v, double *out)``.
     """
@@ -145,18 +279,31 @@ def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
             n_arg=max(2, fun.sz_arg()), n_res=max(5, fun.sz_res()), n_w=max(1, fun.sz_w()),
             n_iw=max(1, fun.sz_iw()))
     key = hashlib.sha256(src.encode()).hexdigest()[:20]
-    so = _cache_dir() / f"law_{key}.so"
-    if not so.exists():
-        c_file = so.with_suffix(".c")
-        c_file.write_text(src)
-        tmp_so = so.with_suffix(f".{os.getpid()}.so")
-        p = subprocess.run([_compiler(), "-O2", "-shared", "-fPIC", "-o", str(tmp_so),
-                            str(c_file), "-lm"], capture_output=True, text=True)
-        if p.returncode != 0:
-            raise ParameterError("ground", f"the C code of the ground law {ground.name!r} did "
-                                           f"not compile: {p.stderr.strip()[:300]}")
-        os.replace(tmp_so, so)
-    lib = _LIBS.get(str(so)) or ctypes.CDLL(str(so))
+    so = law_cache_dir() / f"law_{key}.so"
+    if str(so) in _LIBS:
+        return _LIBS[str(so)], ctypes.cast(_LIBS[str(so)].sl_law, ctypes.c_void_p).value or 0
+    try:
+        os.utime(so)  # used now: the last to be evicted
+    except FileNotFoundError:
+        cc = _compiler()
+        if cc is None:
+            return _python_law(ground)
+        with tempfile.TemporaryDirectory() as tmp:
+            c_file = Path(tmp) / f"law_{key}.c"
+            c_file.write_text(src)
+            tmp_so = so.with_name(f".law_{key}.{os.getpid()}.so.partial")
+            try:
+                p = subprocess.run([*cc.split(), "-O2", "-shared", "-fPIC", "-o", str(tmp_so),
+                                    str(c_file), "-lm"], capture_output=True, text=True)
+                if p.returncode != 0:
+                    raise ParameterError("ground", f"the C code of the ground law "
+                                                   f"{ground.name!r} did not compile: "
+                                                   f"{p.stderr.strip()[:300]}")
+                os.replace(tmp_so, so)
+            finally:
+                tmp_so.unlink(missing_ok=True)
+        prune_law_cache(keep=so)
+    lib = ctypes.CDLL(str(so))
     _LIBS[str(so)] = lib
     return lib, ctypes.cast(lib.sl_law, ctypes.c_void_p).value or 0
 
@@ -225,5 +372,6 @@ def kernel_law(ground: Ground, r_m: float, *, lock: bool = False,
     return G, _custom_pointer(ground)
 
 
-__all__ = ["compile_law", "hold_stiffness", "kernel_law", "law_expressions",
-           "needs_integration"]
+__all__ = ["LAW_CACHE_MAX_BYTES", "LAW_CACHE_MAX_FILES", "clear_law_cache", "compile_law",
+           "hold_stiffness", "kernel_law", "law_cache_dir", "law_cache_info", "law_expressions",
+           "needs_integration", "prune_law_cache", "raise_law_errors"]

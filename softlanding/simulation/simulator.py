@@ -26,8 +26,9 @@ Example
 
 from __future__ import annotations
 
+import contextlib
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
@@ -47,7 +48,7 @@ from softlanding.model.dynamics import STATE_NAMES, mode_matrices
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import Impact, Robot
 from softlanding.simulation import kernel as K
-from softlanding.simulation.groundcode import kernel_law, needs_integration
+from softlanding.simulation.groundcode import kernel_law, needs_integration, raise_law_errors
 from softlanding.util.jsonable import json_safe
 
 O_EDRAG, O_EGRAIN = K.N_OUT, K.N_OUT + 1  # the integrated path's extra columns
@@ -295,6 +296,19 @@ class LandingResult:
 
 
 # ----------------------------------------------------------------------- single
+@contextlib.contextmanager
+def _signal_as_itself() -> Iterator[None]:
+    """A signal handler's exception (Ctrl-C, SIGTERM, an alarm's) raised as a compiled landing
+    returns comes out as itself, not inside numba's SystemError ("returned a result with an
+    exception set"), which the CLI would call a bug."""
+    try:
+        yield
+    except SystemError as exc:
+        if exc.__cause__ is None:
+            raise
+        raise exc.__cause__ from None
+
+
 def simulate(
     robot: Robot,
     impact: Impact | float,
@@ -342,6 +356,10 @@ def simulate(
     impact = Impact.of(impact)
     expect("robot", robot, Robot)
     controller = Rigid() if controller is None else controller
+    if isinstance(controller, type):
+        raise ParameterError("controller", f"must be a controller, got the class "
+                                           f"{controller.__name__} (make one: "
+                                           f"{controller.__name__}(...))")
     if not hasattr(controller, "kernel_arrays"):  # duck-typed: variants bring their own laws
         raise ParameterError("controller", f"must be a controller (Rigid, Impedance, "
                                            f"ForceSchedule, ...), got {controller!r:.60}")
@@ -356,12 +374,15 @@ def simulate(
     max_seg = check_count("max_segments", max_segments, 1, 10**6)
     if integrate:
         law = kernel_law(ground, robot.r_m, lock=isinstance(controller, Rigid), u_max=umax)
-        out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
-                                         check("t_max", t_max), max_seg, bool(energy),
-                                         check("rtol", rtol))
+        with _signal_as_itself():
+            out, segments = K.run_landing_nl(mats, law, Kf, umax, st, su, z0, robot.s,
+                                             check("t_max", t_max), max_seg, bool(energy),
+                                             check("rtol", rtol))
+        raise_law_errors()  # a law evaluated in Python (no C compiler) cannot raise in the kernel
     else:
-        out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
-                                      check("t_max", t_max), max_seg, bool(energy))
+        with _signal_as_itself():
+            out, segments = K.run_landing(mats, Kf, umax, st, su, z0, robot.s,
+                                          check("t_max", t_max), max_seg, bool(energy))
     return LandingResult(
         depth=float(out[K.O_DEPTH]), steps=int(out[K.O_STEPS]), feasible=bool(out[K.O_FEAS]),
         u_peak=float(out[K.O_UPEAK]), stroke_min=float(out[K.O_SMIN]),
@@ -591,6 +612,7 @@ def simulate_batch(
                 K.run_batch_nl([mats], ridx[a:b], law, Kf[a:b], um[a:b], x0[a:b], ss[a:b],
                                check("t_max", t_max), max_segments, energy, out[a:b],
                                check("rtol", rtol))
+                raise_law_errors()
             else:
                 K.run_batch([mats], ridx[a:b], Kf[a:b], um[a:b], x0[a:b], ss[a:b],
                             check("t_max", t_max), max_segments, energy, out[a:b])

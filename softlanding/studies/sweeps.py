@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import xarray as xr
 
-from softlanding.errors import ClusterError, ParameterError, check_count
+from softlanding.errors import ClusterError, ParameterError, check_count, plain
 from softlanding.model.ground import LINEAR_GROUND, Ground, ground_attrs
 from softlanding.model.robot import PAPER_IMPEDANCE_ROBOT, Impact, Robot
 from softlanding.simulation.simulator import BATCH_FIELDS, check_batch_size, simulate_batch
@@ -33,6 +33,8 @@ WORKER_TIMEOUT_S = 30.0
 """How long a Dask scheduler may go without a worker before the run gives up."""
 DASK_TIMEOUT_S = 600.0
 """Default of ``dask_timeout``: how long a Dask run may go without any result arriving."""
+MAX_DASK_TIMEOUT_S = 86_400.0
+"""Largest ``dask_timeout`` (a day): a longer wait for one result is a stalled cluster."""
 MAX_LANDINGS = 50_000_000
 """Largest dataset (about 6 GiB of results); larger requests are refused up front."""
 
@@ -145,9 +147,10 @@ def impedance_dataset(v0, k_p, k_d, robot: Robot = PAPER_IMPEDANCE_ROBOT,
 
 
 def _check_timeout(timeout: float) -> float:
-    if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
-        raise ParameterError("dask_timeout", f"must be a positive number of seconds, "
-                                             f"got {timeout!r}")
+    if not (isinstance(timeout, int | float) and math.isfinite(timeout)
+            and 0 < timeout <= MAX_DASK_TIMEOUT_S):
+        raise ParameterError("dask_timeout", f"must be in (0, {MAX_DASK_TIMEOUT_S:g}] "
+                                             f"seconds, got {plain(timeout)}")
     return float(timeout)
 
 

@@ -16,12 +16,13 @@ import errno
 import os
 import secrets
 import shutil
+import stat
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from softlanding.errors import ParameterError
+from softlanding.errors import DiskFullError, ParameterError
 from softlanding.util.signals import deferred_signals, raise_if_interrupted
 
 _TMP_STEM = 24
@@ -29,6 +30,47 @@ _TMP_STEM = 24
 # errors of os.link on file systems without hard links (FAT, SMB, some FUSE)
 _NO_HARD_LINKS = {errno.EPERM, errno.ENOTSUP, errno.EOPNOTSUPP, errno.EMLINK, errno.ENOSYS,
                   errno.EXDEV}
+_FULL = {errno.ENOSPC, errno.EDQUOT}
+
+
+def disk_full(exc: BaseException) -> OSError | None:
+    """The "no space left" error behind ``exc``, if any (following its chain of causes).
+
+    A writer may hide it: matplotlib's PDF backend, cleaning up after the failed write,
+    raises ``AttributeError: 'Stream' object has no attribute 'pos'`` with the
+    :class:`OSError` as its context.
+
+    Parameters
+    ----------
+    exc : BaseException
+        The error a write raised.
+
+    Returns
+    -------
+    OSError or None
+        The first error of the chain whose ``errno`` is ``ENOSPC`` or ``EDQUOT``.
+    """
+    seen: set[int] = set()
+    e: BaseException | None = exc
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        if isinstance(e, OSError) and e.errno in _FULL:
+            return e
+        e = e.__cause__ or e.__context__
+    return None
+
+
+@contextlib.contextmanager
+def _full_means(where: Path) -> Iterator[None]:
+    """A full disk inside the body becomes one :class:`DiskFullError` naming ``where``."""
+    try:
+        yield
+    except DiskFullError as exc:  # from a file of a temporary folder: name the final one
+        raise DiskFullError(f"no space left on {where}") from exc.__cause__
+    except Exception as exc:
+        if disk_full(exc) is None:
+            raise
+        raise DiskFullError(f"no space left on {where}") from exc
 
 
 def current_umask() -> int:
@@ -266,8 +308,9 @@ def output_path(path: str | os.PathLike[str], option: str, force: bool,
     if not str(path):
         raise ParameterError(option, "needs a file name")
     p = Path(path)
-    if not p.name:
-        raise ParameterError(option, f"{p} is a folder; give a file name")
+    # before the suffix is added: "adir/" or an existing folder "adir" must not become adir.png
+    if not p.name or str(path).endswith(("/", os.sep)) or os.path.isdir(p):
+        raise ParameterError(option, f"{path} is a folder; give a file name")
     if default_suffix and not p.suffix:
         p = p.with_name(p.name + default_suffix)
     _check_folder(p.parent, p.name, option, "file")  # first: a long name fails stat() too
@@ -305,8 +348,66 @@ def output_folder(path: str | os.PathLike[str], option: str, force: bool) -> Pat
     _check_folder(p.absolute().parent, p.absolute().name, option, "folder")
     if p.exists() and not p.is_dir():
         raise ParameterError(option, f"{p} exists and is not a folder")
-    if p.is_dir() and any(p.iterdir()) and not force:
-        raise ParameterError(option, f"{p} is not empty; pass --force to replace its files")
+    if p.is_dir() and any(p.iterdir()):
+        if not force:
+            raise ParameterError(option, f"{p} is not empty; pass --force to replace its files")
+        _replaceable(p, option)
+    return p
+
+
+MAX_KEPT_ENTRIES = 10_000
+"""Most entries a folder replaced with ``--force`` may hold (they are linked into the new
+folder, :func:`atomic_folder`): a larger folder is not a run's output folder."""
+
+
+def _replaceable(folder: Path, option: str) -> None:
+    """A folder ``--force`` may swap: one file system, at most :data:`MAX_KEPT_ENTRIES`."""
+    dev = folder.stat().st_dev
+    n = 0
+    for root, dirs, files in os.walk(folder):
+        n += len(dirs) + len(files)
+        if n > MAX_KEPT_ENTRIES:
+            raise ParameterError(option, f"{folder} holds more than {MAX_KEPT_ENTRIES} files; "
+                                         "give a new or empty folder")
+        for d in dirs:
+            if os.lstat(os.path.join(root, d)).st_dev != dev:
+                raise ParameterError(option, f"{folder} has another file system mounted "
+                                             f"inside ({os.path.join(root, d)}); give a new "
+                                             "or empty folder")
+
+
+def own_folder(path: str | os.PathLike[str], names: tuple[str, ...], option: str) -> Path:
+    """A command's own output folder (a fixed name): missing, or holding only its ``names``.
+
+    Such a folder is the command's to replace on every run (:func:`atomic_folder` with
+    ``force``); a folder of that name holding anything else is someone else's and refused.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        The folder.
+    names : tuple of str
+        The files the command writes into it.
+    option : str
+        The option that would name another output, for messages.
+
+    Raises
+    ------
+    ParameterError
+        ``path`` is a file, or a folder holding other entries, or its parent folder takes no
+        new entries.
+    """
+    p = Path(path)
+    _check_folder(p.absolute().parent, p.name, option, "folder")
+    if p.exists() and not p.is_dir():
+        raise ParameterError(option, f"{p} exists and is not a folder; name another output "
+                                     f"with --{option}")
+    if p.is_dir():
+        others = sorted(set(os.listdir(p)) - set(names))
+        if others:
+            raise ParameterError(option, f"{p} holds files this command did not write "
+                                         f"({others[0]}...); name another output with "
+                                         f"--{option}")
     return p
 
 
@@ -389,7 +490,8 @@ def atomic(path: Path, force: bool | None = None) -> Iterator[Path]:
     os.close(fd)
     tmp = Path(name)
     try:
-        yield tmp
+        with _full_means(path.parent):
+            yield tmp
         os.chmod(tmp, file_mode())  # mkstemp makes it 0600
         place(tmp, path, force)
     finally:
@@ -399,49 +501,81 @@ def atomic(path: Path, force: bool | None = None) -> Iterator[Path]:
 
 @contextlib.contextmanager
 def atomic_folder(path: Path, force: bool = True) -> Iterator[Path]:
-    """Yield a temporary folder beside ``path``; move it into place on success.
+    """Yield a temporary folder beside ``path``; put it in place, all at once, on success.
 
     If ``path`` does not exist or is an empty folder, the temporary folder is renamed to it
     in one step, which fails if a concurrent run got there first. Otherwise, with ``force``,
-    its files are moved into ``path`` (existing files of the same names replaced).
+    the files of ``path`` the run did not write are linked into the temporary folder (the
+    run's files of the same names replace them) and the two folders are swapped: readers see
+    the old folder or the new one, never a mixture, and a failed or interrupted run leaves
+    the old one as it was.
 
     Parameters
     ----------
     path : Path
         The final folder.
     force : bool
-        Allow filling a non-empty folder.
+        Allow replacing a non-empty folder.
 
     Raises
     ------
     ParameterError
         ``path`` is a non-empty folder (it may have been filled since the check) and
         ``force`` is not set, or it is not a folder.
+    DiskFullError
+        The disk filled up (nothing of the run is left).
     """
+    path = Path(os.path.abspath(path))  # "." or "out/" named: the folder itself
     tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(path), suffix=".partial", dir=path.parent))
     try:
-        yield tmp
-        os.chmod(tmp, folder_mode())  # mkdtemp makes it 0700
-        with deferred_signals():
-            try:
-                os.rename(tmp, path)  # atomic; fails unless path is missing or an empty folder
-                return
-            except OSError as exc:
-                if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR):
-                    raise
-                if not path.is_dir():
-                    raise ParameterError("out", f"{path} exists and is not a folder") from None
-                if not force:
-                    raise ParameterError("out", f"{path} is not empty; pass --force to "
-                                                "replace its files") from None
-            for src in sorted(tmp.rglob("*")):
-                dst = path / src.relative_to(tmp)
-                if src.is_dir():
-                    dst.mkdir(exist_ok=True)
-                else:
-                    os.replace(src, dst)
+        with _full_means(path):
+            yield tmp
+            os.chmod(tmp, folder_mode())  # mkdtemp makes it 0700
+            with deferred_signals():
+                try:
+                    os.rename(tmp, path)  # atomic; fails unless path is missing or empty
+                    return
+                except OSError as exc:
+                    if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR):
+                        raise
+                    if not path.is_dir():
+                        raise ParameterError("out", f"{path} exists and is not a folder") \
+                            from None
+                    if not force:
+                        raise ParameterError("out", f"{path} is not empty; pass --force to "
+                                                    "replace its files") from None
+                _keep_others(path, tmp)
+                _swap(path, tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _keep_others(old: Path, new: Path) -> None:
+    """Link (or copy) into ``new`` every file of ``old`` that ``new`` has no file for."""
+    for src in sorted(old.rglob("*")):
+        dst = new / src.relative_to(old)
+        if src.is_dir() and not src.is_symlink():
+            if not dst.exists():
+                dst.mkdir()
+                shutil.copystat(src, dst)
+        elif not os.path.lexists(dst) and dst.parent.is_dir() and not dst.parent.is_symlink():
+            try:
+                os.link(src, dst, follow_symlinks=False)
+            except OSError:
+                shutil.copy2(src, dst, follow_symlinks=False)
+
+
+def _swap(path: Path, new: Path) -> None:
+    """Put the folder ``new`` at ``path`` and remove the folder that was there."""
+    old = path.with_name(f"{_temp_prefix(path)}{secrets.token_hex(4)}.replaced")
+    os.chmod(new, stat.S_IMODE(os.stat(path).st_mode))  # the folder keeps its mode
+    os.rename(path, old)
+    try:
+        os.rename(new, path)
+    except BaseException:
+        os.rename(old, path)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def save_figure(fig, path: Path, dpi: int = 130, **kw) -> Path:

@@ -10,12 +10,14 @@ and recording it) that must not be split.
 
 from __future__ import annotations
 
+import _thread
 import contextlib
 import signal
 import sys
 import threading
 from collections.abc import Iterator
 from types import FrameType
+from typing import Any
 
 EXIT_INTERRUPTED = 130
 """Exit code after SIGINT (Ctrl-C): 128 + 2, as a shell reports it."""
@@ -59,6 +61,31 @@ def _handler(signum: int, frame: FrameType | None) -> None:
         _pending.append(signum)
         return
     _raise_for(signum)
+
+
+def _quiet_unraisable(hook: Any) -> Any:
+    """``sys.unraisablehook`` that hands back an interruption raised where it cannot propagate.
+
+    The handler's exception may land in a destructor (llvmlite's, while numba compiles) or a
+    C callback: Python prints it there as "Exception ignored" with a traceback, and the run
+    goes on. Instead: print nothing, and deliver the signal again to the main thread, where
+    it raises at the next bytecode.
+    """
+    def unraisable(u: Any) -> None:
+        global _terminated
+        if u.exc_type is not None and issubclass(u.exc_type, KeyboardInterrupt) and _received:
+            signum = _received[-1]
+            if signum == signal.SIGTERM:
+                _terminated = False  # the raise was lost: the repeated delivery must raise
+            # from another thread, once this hook has returned (raised inside the hook, it
+            # would be lost again)
+            t = threading.Timer(0.001, _thread.interrupt_main, (signum,))
+            t.daemon = True
+            t.start()
+            return
+        hook(u)
+
+    return unraisable
 
 
 @contextlib.contextmanager
@@ -113,6 +140,8 @@ def handle_signals() -> Iterator[None]:
             previous[signum] = signal.signal(signum, _handler)
     _terminated = False
     _received.clear()
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_unraisable(previous_hook)
     try:
         yield
     except Exception as exc:  # an interruption swallowed and turned into another error
@@ -120,6 +149,7 @@ def handle_signals() -> Iterator[None]:
             raise _interruption(_received[0]) from exc
         raise
     finally:
+        sys.unraisablehook = previous_hook
         for signum, old in previous.items():
             signal.signal(signum, old)
         _pending.clear()

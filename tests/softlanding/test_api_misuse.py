@@ -1,6 +1,7 @@
 """Misusing the Python API gives the package's own errors naming the argument (issue 23,
 item 9), never an AttributeError or a CasADi shape error from deep inside."""
 
+import numpy as np
 import pytest
 
 from softlanding import (
@@ -12,8 +13,10 @@ from softlanding import (
     solve_leg_extension,
     solve_two_phase,
 )
+from softlanding.control.robust import robust_landing
 from softlanding.errors import ParameterError
-from softlanding.model import Rigid
+from softlanding.model import Impedance, LinearGround, Rigid
+from softlanding.model.ground import MAX_GROUNDS
 from softlanding.simulation.simulator import simulate_batch
 
 CASES = [
@@ -33,6 +36,14 @@ CASES = [
     ("warm_start", lambda: solve_landing(-3, warm_start="previous")),
     ("warm_start", lambda: solve_two_phase(-3, warm_start=object())),
     ("warm_start", lambda: solve_leg_extension(-3, warm_start=object())),
+    # issue 34, item 8: a TypeError, numpy's ValueError or a plain ValueError before
+    ("grounds", lambda: robust_landing(-3, None)),
+    ("grounds", lambda: robust_landing(-3, [LinearGround(), "sand"])),
+    ("grounds", lambda: robust_landing(-3, [LinearGround(1 + i / 1000)
+                                            for i in range(MAX_GROUNDS + 1)])),
+    ("controller", lambda: simulate(PAPER_ROBOT, -1, Impedance)),
+    ("v0", lambda: simulate(PAPER_ROBOT, np.array([-1.0, -2.0]), Rigid())),
+    ("steps", lambda: solve_two_phase(-3, steps=3)),
 ]
 
 

@@ -2,6 +2,7 @@
 real subprocesses."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -152,10 +153,19 @@ def test_scale_preset_takes_overrides(cli):
     assert d["dimensionless"]["u_max"] == pytest.approx(100.0 / (3.0 * 1.62))
 
 
-def test_demo_runs_and_writes_figure(tmp_path, cli):
-    out_png = tmp_path / "demo.png"
-    code, out, err = cli("demo", "--out", str(out_png), "--json")
+def test_demo_runs_and_writes_figure(tmp_path, cli, monkeypatch):
+    """By default into its own folder, replaced by a second run (a user's file is not)."""
+    monkeypatch.chdir(tmp_path)
+    out_png = tmp_path / "softlanding-demo" / "demo.png"
+    out_png.parent.mkdir()
+    out_png.write_bytes(b"the last run's")
+    code, out, err = cli("demo", "--json")
     assert code == 0, err
+    assert os.listdir(tmp_path) == ["softlanding-demo"] and os.listdir(out_png.parent) == [
+        "demo.png"]
+    (tmp_path / "softlanding-demo" / "mine.txt").write_text("a user's file")
+    code, _, err = cli("demo", "--json")
+    assert code == 2 and "softlanding-demo holds files this command did not write" in err
     assert "NaN" not in out  # valid JSON: NaN becomes null
     d = json.loads(out)
     for row in d["table"]:
@@ -266,3 +276,25 @@ def test_huge_sizes_are_refused_at_once(args, cli):
     code, _, err = cli(*args)
     assert code == 2 and err.count("\n") == 1 and "Traceback" not in err
     assert time.process_time() - c < 1.0
+
+
+def test_robust_bounds_its_ground_set_before_any_work(cli):
+    """10,002 grounds were accepted (each drag ground compiled its law): refused, exit 2."""
+    from softlanding.model.ground import MAX_GROUNDS
+
+    drag = ",".join(f"{i / 1000:g}" for i in range(MAX_GROUNDS // 2 + 1))
+    code, out, err = cli("robust", "--v0", "-3", "--stiffness", "1,2", "--cd", drag)
+    assert code == 2 and not out and err.count("\n") == 1
+    assert f"cd: 2 x {MAX_GROUNDS // 2 + 1} = {MAX_GROUNDS + 2} grounds" in err
+    assert f"at most {MAX_GROUNDS}" in err
+
+
+def test_robust_json_gives_every_grounds_stiffness(cli, monkeypatch):
+    import softlanding.control.robust as robust
+
+    real = robust.robust_landing  # a short search: this checks the JSON, not the optimum
+    monkeypatch.setattr(robust, "robust_landing", lambda *a, **k: real(*a, **k, max_iterations=1))
+    code, out, err = cli("robust", "--v0", "-3", "--stiffness", "1,2", "--json")
+    assert code in (0, 1), err
+    rows = json.loads(out)["robust"]["grounds"]
+    assert [r["ground"]["stiffness"] for r in rows] == [1.0, 2.0]

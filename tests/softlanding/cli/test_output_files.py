@@ -137,7 +137,10 @@ def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, 
     chunks, so the signal is taken within a chunk): one line, 128 + the signal, no file."""
     p = subprocess.Popen([*CMD, "map", "--v0", "-10", "--n", "2001", "--out",
                           str(tmp_path / "m.nc"), "--plot", str(tmp_path / "m.png")], env=ENV,
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                         # a suite run as a background job (`pytest &`) ignores SIGINT, and
+                         # its children inherit that (the CLI keeps an ignored SIGINT ignored)
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(3.0)  # imports and the first chunks: the run takes minutes
     assert p.poll() is None
     p.send_signal(signum)
@@ -206,6 +209,100 @@ def test_a_sweep_whose_only_worker_dies_fails(tmp_path, lone_worker, monkeypatch
 
 
 def test_the_dask_timeout_default_is_the_library_default():
-    from softlanding.cli.parser import DASK_TIMEOUT_S
+    from softlanding.cli.parser import DASK_TIMEOUT_S, MAX_DASK_TIMEOUT_S
 
     assert DASK_TIMEOUT_S == sweeps.DASK_TIMEOUT_S
+    assert MAX_DASK_TIMEOUT_S == sweeps.MAX_DASK_TIMEOUT_S
+    with pytest.raises(sweeps.ParameterError, match="dask_timeout: must be in"):
+        sweeps.depth_map(-3.0, n=2, dask_timeout=1e300)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["sweep", "--n", "2", "--grid", "11", "--dask-timeout", "5"], "applies with --scheduler"),
+    (["map", "--v0", "-3", "--n", "11", "--dask-timeout", "5"], "applies with --scheduler"),
+    (["map", "--v0", "-3", "--scheduler", "tcp://127.0.0.1:9", "--dask-timeout", "1e300"],
+     "must be in (0, 86400] seconds, got 1e+300"),
+])
+def test_a_dask_timeout_that_does_not_apply_or_is_unbounded_exits_2(tmp_path, cli, monkeypatch,
+                                                                   args, message):
+    _no_work(monkeypatch)
+    monkeypatch.setattr(sweeps, "optimal_impedance_curves", sweeps.depth_map)  # no work either
+    code, out, err = cli(*args, "--out", tmp_path / "x.nc")
+    assert code == 2 and not out and err.count("\n") == 1, err
+    assert err.startswith("softlanding: error: dask-timeout: ") and message in err
+    assert os.listdir(tmp_path) == []
+
+
+# ------------------------------------------------------ a folder named as a file, a full disk
+@pytest.mark.parametrize("args", [
+    ["simulate", "--v0", "-1", "--rigid", "--plot"], ["mpc", "--v0", "-3", "--plot"],
+    ["demo", "--out"]])
+@pytest.mark.parametrize("slash", ["", "/"])
+def test_an_existing_folder_given_as_a_file_exits_2(tmp_path, cli, monkeypatch, args, slash):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "adir").mkdir()
+    code, out, err = cli(*args, "adir" + slash)
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"adir{slash} is a folder; give a file name" in err and not out
+    assert os.listdir(tmp_path) == ["adir"] and os.listdir(tmp_path / "adir") == []
+
+
+def _disk_fills_up(monkeypatch):
+    """The figure's write fails as matplotlib's PDF writer reports a full disk."""
+    from matplotlib.figure import Figure
+
+    def savefig(self, fname, *a, **k):
+        Path(fname).write_bytes(b"%PDF half written")
+        try:
+            raise OSError(28, "No space left on device")
+        except OSError:
+            raise AttributeError("'Stream' object has no attribute 'pos'") from None
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+
+
+def test_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_path, cli, monkeypatch):
+    _disk_fills_up(monkeypatch)
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", tmp_path / "m.nc", "--plot",
+                       tmp_path / "m.pdf")
+    assert (code, err) == (1, f"softlanding: error: no space left on {tmp_path}\n")
+    assert os.listdir(tmp_path) == []  # the dataset placed before is removed too
+
+
+def test_reproduce_onto_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_path, cli,
+                                                                         monkeypatch):
+    import matplotlib.pyplot as plt
+
+    import softlanding.report.reproduction as reproduction
+    from softlanding.util.files import save_figure
+
+    def sections(out, *a, **k):
+        (out / "summary.md").write_text("half")
+        save_figure(plt.figure(), out / "fig1.pdf")
+        raise AssertionError("the full disk went unnoticed")
+
+    _disk_fills_up(monkeypatch)
+    monkeypatch.setattr(reproduction, "_run_sections", sections)
+    out = tmp_path / "R"
+    code, _, err = cli("reproduce", "--quick", "--out", out)
+    assert (code, err) == (1, f"softlanding: error: no space left on {out}\n")
+    assert os.listdir(tmp_path) == []
+
+
+def test_matplotlibs_cache_notes_on_a_full_home_are_not_printed(tmp_path, cli, monkeypatch,
+                                                                caplog):
+    """A full disk also fills matplotlib's caches: its notes made a full-disk map 3 lines."""
+    import logging
+
+    real = sweeps.depth_map
+
+    def depth_map(*a, **k):
+        logging.getLogger("matplotlib").warning("%s is not a writable directory", "/home/x")
+        logging.getLogger("matplotlib.font_manager").warning(
+            "Could not save font_manager cache %s", OSError(28, "No space left on device"))
+        return real(*a, **k)
+
+    monkeypatch.setattr(sweeps, "depth_map", depth_map)
+    code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", tmp_path / "m.nc")
+    assert code == 0 and err == ""
+    assert [r for r in caplog.records if r.name.startswith("matplotlib")] == []  # none emitted

@@ -114,3 +114,9 @@ def test_sweep_with_no_feasible_gains_reports_it(cli):
     assert code == 0, err
     d = json.loads(out)
     assert d["observations"] == {"feasible_velocities": 0}
+
+
+@pytest.mark.parametrize(("given", "shown"), [("-1", "got -1"), ("1e9", "got 1000000000")])
+def test_an_extension_outside_the_stroke_shows_the_value_given(cli, given, shown):
+    code, _, err = cli("solve", "--v0", "-3", "--variant", "leg-extension", "--extension", given)
+    assert code == 2 and err.rstrip().endswith(f"within the stroke [0, 20], {shown}"), err

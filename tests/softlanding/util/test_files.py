@@ -1,12 +1,14 @@
 """Output files: exclusive placement under a race, rollback of a run, modes from the umask."""
 
+import errno
 import os
 import stat
 import threading
 
 import pytest
 
-from softlanding.errors import ParameterError
+import softlanding.util.files as files
+from softlanding.errors import DiskFullError, ParameterError
 from softlanding.util.files import atomic, atomic_folder, output_path, output_run
 
 
@@ -94,6 +96,82 @@ def test_two_runs_filling_one_new_folder_exactly_one_wins(tmp_path):
     assert os.listdir(tmp_path) == ["D"]  # the loser's temporary folder is removed
 
 
+def _full_disk_as_matplotlib_reports_it():
+    """matplotlib's PDF writer, cleaning up after ENOSPC, raises an AttributeError instead."""
+    try:
+        raise OSError(errno.ENOSPC, "No space left on device")
+    except OSError:
+        raise AttributeError("'Stream' object has no attribute 'pos'") from None
+
+
+def test_a_full_disk_is_one_error_naming_the_folder_and_leaves_nothing(tmp_path):
+    with pytest.raises(DiskFullError, match=f"^no space left on {tmp_path}$"):
+        with atomic(tmp_path / "fig.pdf") as tmp:
+            tmp.write_bytes(b"%PDF half")
+            _full_disk_as_matplotlib_reports_it()
+    out = tmp_path / "D"
+    with pytest.raises(DiskFullError, match=f"^no space left on {out}$"):
+        with atomic_folder(out, force=False) as tmp:
+            (tmp / "a.png").write_bytes(b"png")
+            _full_disk_as_matplotlib_reports_it()
+    assert os.listdir(tmp_path) == []
+
+
+def _old_folder(tmp_path):
+    d = tmp_path / "D"
+    (d / "data").mkdir(parents=True)
+    for name in ("a.txt", "b.txt", "mine.txt", "data/x.nc"):
+        (d / name).write_text("old")
+    return d
+
+
+def test_force_replaces_a_folder_all_at_once_and_keeps_the_users_other_files(tmp_path):
+    d = _old_folder(tmp_path)
+    with atomic_folder(d, force=True) as tmp:
+        (tmp / "data").mkdir()
+        for name in ("a.txt", "b.txt", "data/x.nc"):
+            (tmp / name).write_text("new")
+    assert {str(p.relative_to(d)): p.read_text() for p in d.rglob("*.*")} == {
+        "a.txt": "new", "b.txt": "new", "data/x.nc": "new", "mine.txt": "old"}
+    assert os.listdir(tmp_path) == ["D"]
+
+
+def test_force_into_a_folder_failing_while_placing_leaves_the_old_folder_whole(tmp_path,
+                                                                              monkeypatch):
+    """The placement's third rename or replace fails (an I/O error): all old or all new."""
+    d = _old_folder(tmp_path)
+    calls = []
+
+    def failing(real):
+        def move(src, dst, *a, **k):
+            calls.append(dst)
+            if len(calls) == 3:
+                raise OSError(errno.EIO, "Input/output error")
+            return real(src, dst, *a, **k)
+        return move
+
+    monkeypatch.setattr(files.os, "rename", failing(os.rename))
+    monkeypatch.setattr(files.os, "replace", failing(os.replace))
+    with pytest.raises(OSError, match="Input/output"):
+        with atomic_folder(d, force=True) as tmp:
+            for name in ("a.txt", "b.txt"):
+                (tmp / name).write_text("new")
+    monkeypatch.undo()
+    assert {p.name: p.read_text() for p in d.rglob("*.*")} == {
+        "a.txt": "old", "b.txt": "old", "mine.txt": "old", "x.nc": "old"}
+    assert os.listdir(tmp_path) == ["D"]
+
+
+def test_a_folder_is_refused_as_a_file_with_or_without_a_slash(tmp_path):
+    (tmp_path / "adir").mkdir()
+    for given in (tmp_path / "adir", f"{tmp_path / 'adir'}/"):
+        with pytest.raises(ParameterError, match="adir/? is a folder; give a file name"):
+            output_path(given, "plot", True, default_suffix=".png")
+    with pytest.raises(ParameterError, match="is a folder"):
+        output_path(f"{tmp_path / 'new'}/", "plot", False, default_suffix=".png")
+    assert os.listdir(tmp_path) == ["adir"]
+
+
 @pytest.mark.parametrize("bad", ["/proc/x.png", "/sys/x.png"])
 def test_a_folder_that_takes_no_files_is_refused_up_front(bad):
     with pytest.raises(ParameterError, match="^plot: cannot create files in"):
@@ -139,3 +217,13 @@ def test_modes_follow_the_umask(tmp_path, umask, file_mode, dir_mode):
         os.umask(old)
     assert stat.S_IMODE((tmp_path / "f.nc").stat().st_mode) == file_mode
     assert stat.S_IMODE((tmp_path / "D").stat().st_mode) == dir_mode
+
+
+def test_force_refuses_up_front_a_folder_too_big_to_be_a_runs_output(tmp_path, monkeypatch):
+    from softlanding.util.files import output_folder
+
+    d = _old_folder(tmp_path)
+    assert output_folder(d, "out", True) == d
+    monkeypatch.setattr(files, "MAX_KEPT_ENTRIES", 3)  # a home folder, say
+    with pytest.raises(ParameterError, match="holds more than 3 files; give a new or empty"):
+        output_folder(d, "out", True)
