@@ -12,6 +12,7 @@ skips executing the gallery and the notebooks (a fast structural build).
 from __future__ import annotations
 
 import importlib
+import logging
 import os
 import sys
 from pathlib import Path
@@ -69,6 +70,16 @@ nb_execution_timeout = 600  # per cell; the longest notebook takes about a minut
 nb_execution_in_temp = True
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True  # the traceback in the log when a cell fails
+# A quiet build. The a11y pygments styles (furo's) call logging.basicConfig(level=INFO) on
+# import, which would print every library's INFO (nbclient's "Executing notebook ..."): a
+# root handler first makes that a no-op and shows warnings only. The kernels (ipykernel 7)
+# warn on their stderr that they talk over local TCP unencrypted: only their errors show.
+logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+if nb_execution_mode != "off":
+    from nbclient import NotebookClient
+
+    NotebookClient.class_traits()["extra_arguments"].default_value = [
+        "--IPKernelApp.log_level=ERROR"]
 
 # -- autodoc / numpydoc ----------------------------------------------------------------------
 autosummary_generate = True
