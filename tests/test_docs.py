@@ -1,9 +1,11 @@
 """The documentation site builds with warnings as errors (``make -C docs html``).
 
 The full build executes the gallery (docs/examples; about 50 s with the API pages on 2
-cores, numba's kernels already compiled), so it is ``slow`` (CI runs it with the second test
-command). A structural check of every page, docstring and cross-reference without executing
-the gallery takes about 15 s, too much for the fast suite; run it locally with
+cores, numba's kernels already compiled) and the seven teaching notebooks (myst-nb; about a
+minute each; the whole build took 8 min CPU on a 2-core machine loaded 8-fold), so it is
+``slow`` (CI runs it with the second test command). A structural check of every page,
+docstring and cross-reference without executing the gallery or the notebooks takes about
+15 s, too much for the fast suite; run it locally with
 ``SOFTLANDING_DOCS_GALLERY=0 make -C docs dummy``.
 """
 
