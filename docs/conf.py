@@ -18,6 +18,7 @@ import sys
 from pathlib import Path
 
 import matplotlib
+from nbclient import NotebookClient
 
 matplotlib.use("Agg")
 
@@ -75,11 +76,7 @@ nb_execution_show_tb = True  # the traceback in the log when a cell fails
 # root handler first makes that a no-op and shows warnings only. The kernels (ipykernel 7)
 # warn on their stderr that they talk over local TCP unencrypted: only their errors show.
 logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-if nb_execution_mode != "off":
-    from nbclient import NotebookClient
-
-    NotebookClient.class_traits()["extra_arguments"].default_value = [
-        "--IPKernelApp.log_level=ERROR"]
+NotebookClient.class_traits()["extra_arguments"].default_value = ["--IPKernelApp.log_level=ERROR"]
 
 # -- autodoc / numpydoc ----------------------------------------------------------------------
 autosummary_generate = True
