@@ -2,19 +2,23 @@
 
 Offline and reproducible: no intersphinx, no remote assets. The API reference is generated
 from the front doors' ``__all__`` (see :func:`write_api_pages`), the gallery executes
-``docs/examples/*.py`` (sphinx-gallery), the teaching notebooks are rendered as stored
-(myst-nb, not executed: the test suite executes them). ``SOFTLANDING_DOCS_GALLERY=0`` skips
-the gallery's execution (a fast structural build).
+``docs/examples/*.py`` (sphinx-gallery), the teaching notebooks (stored without outputs) are
+executed by myst-nb at build so that their pages show the figures, cached under
+``_build/.jupyter_cache`` (re-executed only when a notebook changes). MathJax is bundled
+(sphinx-mathjax-offline): the maths renders without a network. ``SOFTLANDING_DOCS_GALLERY=0``
+skips executing the gallery and the notebooks (a fast structural build).
 """
 
 from __future__ import annotations
 
 import importlib
+import logging
 import os
 import sys
 from pathlib import Path
 
 import matplotlib
+from nbclient import NotebookClient
 
 matplotlib.use("Agg")
 
@@ -34,6 +38,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax 3 copied into _static: no CDN (sets mathjax_path)
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_nb",
@@ -54,12 +59,24 @@ html_title = f"softlanding {release}"
 html_static_path = ["_static"]
 html_css_files = ["custom.css"]
 html_show_sourcelink = False
-mathjax_path = "https://cdn.jsdelivr.net/npm/mathjax@3/es5/tex-mml-chtml.js"  # used only if online
 
 # -- MyST / myst-nb --------------------------------------------------------------------------
 myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
-nb_execution_mode = "off"  # the notebooks are stored without outputs; tests execute them
+RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
+# the notebooks are stored without outputs (tests/test_notebooks.py): executed here, each in
+# a temporary folder, a failing cell fails the build
+nb_execution_mode = "cache" if RUN_GALLERY else "off"
+nb_execution_timeout = 600  # per cell; the longest notebook takes about a minute in all
+nb_execution_in_temp = True
+nb_execution_raise_on_error = True
+nb_execution_show_tb = True  # the traceback in the log when a cell fails
+# A quiet build. The a11y pygments styles (furo's) call logging.basicConfig(level=INFO) on
+# import, which would print every library's INFO (nbclient's "Executing notebook ..."): a
+# root handler first makes that a no-op and shows warnings only. The kernels (ipykernel 7)
+# warn on their stderr that they talk over local TCP unencrypted: only their errors show.
+logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+NotebookClient.class_traits()["extra_arguments"].default_value = ["--IPKernelApp.log_level=ERROR"]
 
 # -- autodoc / numpydoc ----------------------------------------------------------------------
 autosummary_generate = True
@@ -73,7 +90,6 @@ numpydoc_attributes_as_param_list = True
 numpydoc_xref_param_type = False
 
 # -- sphinx-gallery --------------------------------------------------------------------------
-RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
 sphinx_gallery_conf = {
     "examples_dirs": ["examples"],
     "gallery_dirs": ["auto_examples"],

@@ -1,9 +1,11 @@
 """The documentation site builds with warnings as errors (``make -C docs html``).
 
 The full build executes the gallery (docs/examples; about 50 s with the API pages on 2
-cores, numba's kernels already compiled), so it is ``slow`` (CI runs it with the second test
-command). A structural check of every page, docstring and cross-reference without executing
-the gallery takes about 15 s, too much for the fast suite; run it locally with
+cores, numba's kernels already compiled) and the seven teaching notebooks (myst-nb; about a
+minute each; the whole build took 8 min CPU on a 2-core machine loaded 8-fold), so it is
+``slow`` (CI runs it with the second test command). A structural check of every page,
+docstring and cross-reference without executing the gallery or the notebooks takes about
+15 s, too much for the fast suite; run it locally with
 ``SOFTLANDING_DOCS_GALLERY=0 make -C docs dummy``.
 """
 
@@ -39,4 +41,16 @@ def test_the_site_builds_with_its_gallery_executed(tmp_path):
     assert len(figures) >= 6, figures
     api = (html / "api" / "generated" / "softlanding.model.Robot.html").read_text()
     assert "r_m" in api and "Parameters" in api
+    # the notebooks are executed at build: their pages show the figures
+    nb = (html / "notebooks" / "07_unknown_ground.html").read_text()
+    assert nb.count("<img") >= 4
+    # MathJax is bundled, no page loads it from the network
+    assert (html / "_static" / "mathjax" / "tex-chtml.js").is_file()
+    maths = (html / "notebooks" / "01_model_scaling_modes.html").read_text()
+    assert "_static/mathjax/tex-chtml.js" in maths and "cdn.jsdelivr" not in maths
+    # the guide's code names link to their API pages
+    guide = (html / "guides" / "unknown_ground.html").read_text()
+    assert "generated/softlanding.control.GroundEstimator.html" in guide
+    # quiet: nothing printed but warnings (none: -W) and errors
+    assert not res.stdout.strip() and not res.stderr.strip(), (res.stdout + res.stderr)[-4000:]
 
