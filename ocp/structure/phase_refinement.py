@@ -685,6 +685,7 @@ def refine_phase_structure(mp: MultiPhaseProblem, modes: PhaseModes, durations: 
     ProblemDefinitionError
         If the problem is outside what the refinement represents.
     """
+    _check_problem(mp)  # before the arcs' flows are built from what it refuses
     pv = mp.param_vector(params)
     durs = [np.maximum(np.asarray(d, dtype=float), 1e-6) for d in durations]
     need = tuple(required_substeps(ph, m, pv, d, np.asarray(x, dtype=float),
