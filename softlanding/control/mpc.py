@@ -45,11 +45,13 @@ from softlanding.control.state_landing import (
     state_parameters,
     state_transcription,
 )
-from softlanding.errors import check, check_count, expect
+from softlanding.errors import ParameterError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
-from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.model.terrain import paper_rig_units
 from softlanding.optimal.landing import (
+    T_MAX,
     affine_laws,
     arrest_schedule,
     landing_schedule,
@@ -65,6 +67,19 @@ from softlanding.util.signals import raise_if_interrupted
 #: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
 #: paper's landings.
 DEFAULT_PERIOD = 0.01
+
+#: The shortest sample period taken: 1e-4 (2.6 us on the paper's rig), about 10,000 samples
+#: over the longest landing of the unknown-ground study (T < 1); a shorter one would run for
+#: hours (1e-9: a million times more samples) and is refused at once.
+MIN_PERIOD = 1e-4
+
+#: The longest sample period taken: the landing problem's horizon bound (``T_MAX``). A period
+#: beyond the landing is one open-loop sample; far beyond it (1e300) the simulation's times
+#: lose every digit of the landing's.
+MAX_PERIOD = T_MAX
+
+#: The controllers :func:`mpc_landing` runs, by name.
+CONTROLLERS = ("replan",)
 
 @dataclass
 class MPCLanding:
@@ -85,7 +100,8 @@ class MPCLanding:
     stroke_min, stroke_max, u_peak : float
         Over the whole landing (every step and the end).
     step_times_ms : list of float
-        The computation of each sample (estimate and re-plan), in ms of wall time.
+        The computation of each sample (its estimate and control update only), in ms of
+        wall time.
     step_cpu_ms : list of float
         The same in the process's CPU time (what a loaded machine's waits do not inflate).
     estimates : list of GroundEstimate
@@ -106,6 +122,13 @@ class MPCLanding:
     setup_ms : float
         The one-time builds before the landing (not a step's time): the re-solves of the
         plan's structure and its suffixes, and the transcription of the last resort.
+    prepare_time_s : float
+        Everything before the impact, in s of wall time: the first plan, the builds
+        (``setup_ms``) and any compilation; never counted in a step's time.
+    controller : str
+        The controller's name (:data:`CONTROLLERS`).
+    sample_limit_hit : bool
+        ``max_samples`` ended the sampling before the foot stopped.
     samples : int
         Samples taken while the foot yielded.
     pieces : list of (float, LandingResult)
@@ -131,6 +154,9 @@ class MPCLanding:
     step_paths: list[str] = field(default_factory=list)
     samples: int = 0
     setup_ms: float = 0.0
+    prepare_time_s: float = 0.0
+    controller: str = "replan"
+    sample_limit_hit: bool = False
     pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
 
     def trajectory(self, n: int = 1500) -> Trajectory:
@@ -157,20 +183,42 @@ class MPCLanding:
         """The stroke held and rest proven at the end."""
         return self.stroke_held and self.result.rest_proven
 
+    def failure(self) -> str | None:
+        """Why the landing is not :attr:`feasible` (one line), or None."""
+        why = []
+        if self.stroke_min < -1e-9 * max(1.0, self.robot.s):
+            why.append(f"the stroke went below 0 ({self.stroke_min:.6g})")
+        if self.stroke_max > self.robot.s * (1 + 1e-9) + 1e-9:
+            why.append(f"the stroke went beyond s = {self.robot.s:g} ({self.stroke_max:.6g})")
+        if not self.result.rest_proven:
+            why.append(f"rest is not proven ({self.result.status})")
+        if self.sample_limit_hit:
+            why.append(f"the foot still moved after max_samples = {self.samples} samples")
+        return "; ".join(why) or None
+
+    def step_stats(self) -> dict[str, float | None]:
+        """Median, 99th percentile and maximum of the step times (wall and CPU, ms); None
+        when no sample computed anything (the foot stopped within the first)."""
+        out: dict[str, float | None] = {}
+        for key, vals in (("time", self.step_times_ms), ("cpu", self.step_cpu_ms)):
+            a = np.asarray(vals, float)
+            for stat, f in (("median", np.median), ("p99", lambda v: np.percentile(v, 99)),
+                            ("max", np.max)):
+                out[f"step_{key}_{stat}_ms"] = float(f(a)) if a.size else None
+        return out
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict."""
-        t = np.array(self.step_times_ms) if self.step_times_ms else np.array([np.nan])
-        c = np.array(self.step_cpu_ms) if self.step_cpu_ms else np.array([np.nan])
         return json_safe({
             "depth": self.depth, "feasible": self.feasible, "stroke_held": self.stroke_held,
             "rest_proven": self.result.rest_proven, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
-            "structure_changes": self.structure_changes,
-            "step_time_median_ms": float(np.median(t)),
-            "step_time_p99_ms": float(np.percentile(t, 99)), "setup_ms": self.setup_ms,
-            "step_cpu_median_ms": float(np.median(c)),
-            "step_cpu_p99_ms": float(np.percentile(c, 99)),
+            "structure_changes": self.structure_changes, "controller": self.controller,
+            "steps": len(self.step_times_ms), **self.step_stats(), "setup_ms": self.setup_ms,
+            "prepare_time_s": self.prepare_time_s,
+            "period_rig_ms": 1e3 * self.period * paper_rig_units().time,
+            "sample_limit_hit": self.sample_limit_hit, "failure": self.failure(),
             "estimate": None if not self.estimates else self.estimates[-1].__dict__,
             "ground": self.ground.to_dict(), "model_ground": self.model.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict()})
@@ -193,7 +241,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     model : LinearGround or DragGround
         What the controller assumes before its first measurement (the paper's ground).
     period : float
-        The sample period (> 0).
+        The sample period, in [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`].
     estimate : bool
         Update the ground estimate from the measurements (else keep ``model``).
     max_samples : int
@@ -212,9 +260,11 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     ocp.SolveError
         The first plan cannot be made.
     """
+    t_start = time.perf_counter()
     impact = Impact.of(impact)
     expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
-    period = check("period", period, (lambda v: v > 0, "must be > 0"))
+    check_model(model)
+    period = check_period("period", period)
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
     first = solve_landing(impact, robot, model, replay=False)
     plan: Any = first.refined if first.refined is not None else first.transcribed
@@ -225,9 +275,14 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         clear_cache(problem)
     est = GroundEstimator(robot, drag=True, prior=ground_numbers(model))
     plant = SteppingPlant(robot, impact, ground)
+    if _plan_time(plan) / period > max_samples:
+        raise ParameterError("period", f"{period:g} takes about "
+                                       f"{_plan_time(plan) / period:.3g} samples over the "
+                                       f"planned landing, more than max_samples = {max_samples}")
     t0 = time.perf_counter()
     _prepare(problem, plan, robot, model, plant.x)  # the builds, before the landing starts
     setup_ms = 1e3 * (time.perf_counter() - t0)
+    prepare_s = time.perf_counter() - t_start
     out_times: list[float] = []
     cpu_times: list[float] = []
     estimates: list[GroundEstimate] = []
@@ -294,7 +349,51 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       replans=replans,
                       fallbacks=fallbacks, samples=samples, setup_ms=setup_ms,
                       structure_changes=paths.count("structure"), step_paths=paths,
-                      pieces=list(plant.history))
+                      pieces=list(plant.history), prepare_time_s=prepare_s,
+                      sample_limit_hit=samples >= max_samples and plant.x[3] < -stop)
+
+
+def check_model(model: Any, name: str = "model") -> Ground:
+    """The controller's model ground: linear or drag (``f = K d + c_d v^2``, what it plans
+    for and estimates).
+
+    Parameters
+    ----------
+    model : LinearGround or DragGround
+        What the caller gave.
+    name : str
+        The argument's name in the message.
+
+    Raises
+    ------
+    ParameterError
+        Another ground model, or not a ground.
+    """
+    if not isinstance(model, LinearGround | DragGround):
+        what = getattr(model, "name", type(model).__name__)
+        raise ParameterError(name, f"the controller plans for a linear or drag ground "
+                                   f"(f = K d + c_d v^2), not the {what} ground")
+    return model
+
+
+def check_period(name: str, period: Any) -> float:
+    """A sample period within [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`].
+
+    Parameters
+    ----------
+    name : str
+        The argument's name in the message (``--period`` on the command line).
+    period : float
+        What the caller gave.
+
+    Raises
+    ------
+    ParameterError
+        Not finite, or out of the range.
+    """
+    return check(name, period, (lambda v: (v >= MIN_PERIOD) & (v <= MAX_PERIOD),
+                                f"must be within [{MIN_PERIOD:g}, {MAX_PERIOD:g}] (the "
+                                f"shortest bounds the samples per landing to about 1e4)"))
 
 
 PLAN_HOLDS_TOL = 1e-8
@@ -517,4 +616,5 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     return found if isinstance(found, Solution) else _checked(found)
 
 
-__all__ = ["DEFAULT_PERIOD", "MPCLanding", "mpc_landing"]
+__all__ = ["CONTROLLERS", "DEFAULT_PERIOD", "MAX_PERIOD", "MIN_PERIOD", "MPCLanding",
+           "check_model", "check_period", "mpc_landing"]
