@@ -53,8 +53,8 @@ MAX_NEWTON, NEWTON_TOL = 30, 1e-13
 
 # the layout of the robot and ground numbers P
 (P_AB0, P_BB, P_AF0, P_BF, P_GF, P_K, P_CD, P_RM, P_S, P_UMAX, P_HOLD0, P_NOISE,
- P_MARGIN) = range(13)
-NP = 13
+ P_MARGIN, P_BUDGET) = range(14)
+NP = 14
 # the layout of the controller's memory M
 (M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
  M_STATUS, M_XBT, M_VBT, M_XFT) = range(14)
@@ -63,9 +63,12 @@ NM = 14
 #: Phases: pushing (both arcs left), pulling (the foot's stop left).
 PUSH, PULL = 0, 1
 #: Statuses of a step: covered (the plan re-solved), and why not.
-OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT = 0, 1, 2, 3
+OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING = 0, 1, 2, 3, 4
 STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
-                PATH_LIMIT: "path limit"}
+                PATH_LIMIT: "path limit", CONVERGING: "converging"}
+
+#: Newton iterations per sample while the switch is more than three samples away.
+BUDGET = 3
 
 
 def force_coefficients(r_m: float) -> tuple[float, float]:
@@ -106,6 +109,7 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
     P[P_HOLD0] = 1.0 / (1.0 + r_m)
     P[P_NOISE] = noise_std
     P[P_MARGIN] = margin
+    P[P_BUDGET] = BUDGET
     return P
 
 
@@ -131,9 +135,11 @@ def new_memory(tau1: float, tau2: float, prior: tuple[float, float],
     return M
 
 
-def workspace() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Work arrays of the compiled step (stages, trial state, new state, state)."""
-    return np.zeros((13, 6)), np.zeros(6), np.zeros(6), np.zeros(6)
+def workspace() -> tuple[np.ndarray, ...]:
+    """Work arrays of the compiled step (stages, trial state, new state, state, Jacobian,
+    residuals, path and end numbers, body, largest v_f): nothing is allocated per sample."""
+    return (np.zeros((13, 6)), np.zeros(6), np.zeros(6), np.zeros(6), np.zeros((2, 2)),
+            np.zeros(2), np.zeros(6), np.zeros(5), np.zeros(1))
 
 
 @njit(**JIT)
@@ -141,10 +147,12 @@ def _rhs(P, u, y, n, out, row):
     """The foot's ``[x_f, v_f]`` (and, ``n = 6``, its transition matrix, row-major) slope."""
     xf, vf = y[0], y[1]
     out[row, 0] = vf
-    out[row, 1] = P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf + P[P_CD] * vf * vf)
+    # (-c_d v_f |v_f|: the law c_d v_f^2 of a descending foot, continued past the stop as a
+    # drag, so that a guess whose pull runs past the stop still marches)
+    out[row, 1] = P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
     if n == 6:
         j10 = -P[P_GF] * P[P_K]
-        j11 = 2.0 * P[P_GF] * P[P_CD] * vf
+        j11 = -2.0 * P[P_GF] * P[P_CD] * abs(vf)
         out[row, 2] = y[4]
         out[row, 3] = y[5]
         out[row, 4] = j10 * y[2] + j11 * y[4]
@@ -224,15 +232,13 @@ def _arrest(P, xb, vb, xf):
 
 
 @njit(**JIT)
-def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim):
-    """Residuals ``r`` (and, ``J`` not empty, their Jacobian in ``(tau1, tau2)``) of the plan
+def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
+    """Residuals ``r`` (and, ``jac``, their Jacobian ``J`` in ``(tau1, tau2)``) of the plan
     ``(tau1, tau2)`` from ``x``; ``lim`` gets ``[max v_f before the stop, S_min, S_max]``.
     False if a march failed."""
     umax = P[P_UMAX]
     a1 = P[P_AB0] + P[P_BB] * umax
     a2 = P[P_AB0] - P[P_BB] * umax
-    body = np.empty(5)
-    vmax = np.empty(1)
     vmax[0] = -np.inf
     S0 = x[0] - x[2]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, S0, S0
@@ -240,7 +246,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim):
     if not _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax):
         return False
     xf1, vf1 = y[0], y[1]
-    acc1 = P[P_AF0] + P[P_BF] * umax + P[P_GF] * (-P[P_K] * xf1 + P[P_CD] * vf1 * vf1)
+    acc1 = P[P_AF0] + P[P_BF] * umax + P[P_GF] * (-P[P_K] * xf1 - P[P_CD] * vf1 * abs(vf1))
     xb1 = x[0] + x[1] * tau1 + 0.5 * a1 * tau1 * tau1
     vb1 = x[1] + a1 * tau1
     y[2], y[3], y[4], y[5] = 1.0, 0.0, 0.0, 1.0
@@ -257,9 +263,9 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim):
     lim[0] = vmax_push
     lim[1], lim[2] = body[3], body[4]
     lim[3], lim[4], lim[5] = xbT, vbT, xfT
-    if J.shape[0] == 0:
+    if not jac:
         return True
-    accT = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * xfT + P[P_CD] * vfT * vfT)
+    accT = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * xfT - P[P_CD] * vfT * abs(vfT))
     # d/dtau1 (tau2 fixed): the pull arc's transition matrix on the push's slope at the switch
     dxf1 = y[2] * vf1 + y[3] * acc1
     dvf1 = y[4] * vf1 + y[5] * acc1
@@ -277,15 +283,14 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim):
 
 
 @njit(**JIT)
-def _solve_push(P, x, M, K, Yt, ynew, y):
-    """Newton on ``(tau1, tau2)`` from ``M``'s (already shifted) plan; the status."""
-    J = np.empty((2, 2))
-    r = np.empty(2)
-    lim = np.empty(6)
+def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
+    """Newton on ``(tau1, tau2)`` from ``M``'s (already shifted) plan, at most ``budget``
+    iterations; the status (:data:`CONVERGING`: the budget ran out, the iterate is kept)."""
     t1, t2 = M[M_TAU1], M[M_TAU2]
-    for it in range(MAX_NEWTON):
+    converged = False
+    for it in range(budget):
         M[M_ITER] = it + 1
-        if not _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim):
+        if not _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim, body, vmax, True):
             return NEWTON_FAILED
         det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
         if det == 0.0 or not math.isfinite(det):
@@ -300,13 +305,19 @@ def _solve_push(P, x, M, K, Yt, ynew, y):
             lam = min(lam, (1.5 * t1 + 0.05 * t2) / d1)
         t1 -= lam * d1
         t2 -= lam * d2
+        if not (t2 > 0.0 and math.isfinite(t1) and math.isfinite(t2)):
+            return NEWTON_FAILED
         if lam == 1.0 and abs(d1) + abs(d2) <= NEWTON_TOL * (1.0 + abs(t1) + t2):
+            converged = True
             break
-    else:
-        return NEWTON_FAILED
+    if not converged:
+        if t1 <= 0.0:
+            return NEWTON_FAILED
+        M[M_TAU1], M[M_TAU2] = t1, t2
+        return CONVERGING
     if t1 < 0.0:  # the switch is due already: pull from now, if the arrest then holds
         M[M_PHASE] = PULL
-        return _solve_pull(P, x, M, K, Yt, ynew, y)
+        return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
     M[M_TAU1], M[M_TAU2] = t1, t2
     M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
     if lim[0] > 1e-9 * (1.0 + abs(x[3])) or lim[1] < -1e-9 or lim[2] > P[P_S] * (1 + 1e-9):
@@ -315,19 +326,16 @@ def _solve_push(P, x, M, K, Yt, ynew, y):
 
 
 @njit(**JIT)
-def _solve_pull(P, x, M, K, Yt, ynew, y):
+def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax):
     """Newton on ``tau2`` for ``v_f = 0`` (the foot's stop) pulling from ``x``; the arrest
     condition then checked; the status."""
-    J = np.empty((0, 0))
-    r = np.empty(2)
-    lim = np.empty(6)
     t2 = M[M_TAU2]
     umax = P[P_UMAX]
     for it in range(MAX_NEWTON):
         M[M_ITER] = it + 1
-        if not _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim):
+        if not _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False):
             return NEWTON_FAILED
-        acc = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * y[0] + P[P_CD] * y[1] * y[1])
+        acc = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * y[0] - P[P_CD] * y[1] * abs(y[1]))
         if not acc > 0.0:
             return NEWTON_FAILED
         d = r[0] / acc
@@ -366,7 +374,7 @@ def _estimate(P, M, x, a_f, u):
 
 
 @njit(**JIT)
-def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y):
+def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax):
     """One sample of the controller, compiled: the estimate updated from the measurement
     (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from
     ``x`` for the estimated ground. Returns the status (:data:`OK` or why not covered);
@@ -386,6 +394,8 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y):
         The sample just applied.
     estimate : bool
         Update the estimate (else keep the ground in ``P``).
+    K, Yt, ynew, y, J, r, lim, body, vmax : arrays
+        :func:`workspace`.
     """
     if estimate and x[3] < 0.0:
         _estimate(P, M, x, a_f, u)
@@ -396,7 +406,10 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y):
     if M[M_PHASE] == PUSH:
         if M[M_TAU1] > h:
             M[M_TAU1] -= h
-            st = _solve_push(P, x, M, K, Yt, ynew, y)
+            # a real-time iteration: a few Newton steps per sample while the switch is far
+            # (the next samples go on converging), to convergence when it is near
+            budget = int(P[P_BUDGET]) if M[M_TAU1] > 3.0 * h else MAX_NEWTON
+            st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget)
             M[M_STATUS] = st
             return st
         # the switch fell within the sample
@@ -404,11 +417,11 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y):
         M[M_PHASE] = PULL
     else:
         M[M_TAU2] = max(M[M_TAU2] - h, 1e-3 * M[M_TAU2])
-    st = _solve_pull(P, x, M, K, Yt, ynew, y)
+    st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
     M[M_STATUS] = st
     return st
 
 
-__all__ = ["ARREST_FAILS", "MAX_NEWTON", "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT",
-           "PULL", "PUSH", "RTOL", "STATUS_NAMES", "control_step", "new_memory",
-           "robot_numbers", "workspace"]
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "MAX_NEWTON", "NEWTON_FAILED", "NEWTON_TOL",
+           "OK", "PATH_LIMIT", "PULL", "PUSH", "RTOL", "STATUS_NAMES", "control_step",
+           "force_coefficients", "new_memory", "robot_numbers", "workspace"]

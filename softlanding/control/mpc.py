@@ -357,8 +357,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             cpu_times.append(1e3 * (time.process_time() - c0))
             if estimate:
                 estimates.append(fast.estimate())
-            if status == bb.OK:
-                paths.append("bangbang")
+            if status in (bb.OK, bb.CONVERGING):
+                paths.append("bangbang" if status == bb.OK else "bangbang (converging)")
                 issued.append((plant.t, fast.schedule(), fast.stop_time()))
                 continue
             # not covered: this sample and the rest of the landing re-plan as the MPC does
