@@ -584,6 +584,14 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     from softlanding.model.ground import DragGround, LinearGround
 
     period = 0.01 if a.period is None else check_period("--period", a.period)
+    from softlanding.errors import check, check_count
+
+    noise = check("--noise-std", a.noise_std, (lambda v: v >= 0, "must be >= 0"))
+    delay = check_count("--delay", a.delay, 0, 1000)
+    seed = check_count("--seed", a.seed, 0, 2**63 - 1)
+    margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
+    if a.margin and a.controller != "bangbang":
+        raise ParameterError("--margin", "applies to --controller bangbang")
     robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
     if a.model_ground == "linear" and a.model_cd is not None:
         raise ParameterError("--model-cd", "applies to --model-ground drag")
@@ -602,7 +610,8 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     from softlanding.simulation.simulator import simulate
 
     m = mpc_landing(impact, robot, ground, model=model, period=period,
-                    estimate=not a.no_estimate)
+                    estimate=not a.no_estimate, controller=a.controller, noise=noise,
+                    delay=delay, seed=seed, margin=margin)
     clair = solve_landing(impact, robot, ground)
     nominal = solve_landing(impact, robot, model)
     ol = simulate(robot, impact, nominal.schedule(), ground)
@@ -614,7 +623,8 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
            "open_loop_status": ol.status,
            "feasible": m.feasible, **{k_: d[k_] for k_ in (
                "failure", "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak",
-               "period", "period_rig_ms", "controller", "samples", "steps", "replans",
+               "period", "period_rig_ms", "controller", "uncovered", "noise", "delay",
+               "seed", "margin", "samples", "steps", "replans",
                "fallbacks", "step_time_median_ms", "step_time_p99_ms", "step_time_max_ms",
                "step_cpu_median_ms", "step_cpu_p99_ms", "step_cpu_max_ms", "prepare_time_s",
                "setup_ms", "estimate", "ground", "model_ground")}}
@@ -640,6 +650,8 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
             ("samples (period)", f"{m.samples} ({m.period:g} = {out['period_rig_ms']:.3g} ms "
                                  f"on the paper's rig)"),
             ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
+            ("samples not covered (bangbang)", m.uncovered),
+            ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"),
             ("step time median / p99 / max [ms]",
              " / ".join(_ms(out[f"step_time_{q}_ms"]) for q in ("median", "p99", "max"))),
             ("preparation before impact [s]", f"{m.prepare_time_s:.3g}"),

@@ -57,8 +57,8 @@ MAX_NEWTON, NEWTON_TOL = 30, 1e-13
 NP = 14
 # the layout of the controller's memory M
 (M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
- M_STATUS, M_XBT, M_VBT, M_XFT) = range(14)
-NM = 14
+ M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED) = range(15)
+NM = 15
 
 #: Phases: pushing (both arcs left), pulling (the foot's stop left).
 PUSH, PULL = 0, 1
@@ -69,6 +69,8 @@ STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest 
 
 #: Newton iterations per sample while the switch is more than three samples away.
 BUDGET = 3
+#: Samples in a row whose Newton has not converged before the state counts as not covered.
+MAX_UNCONVERGED = 8
 
 
 def force_coefficients(r_m: float) -> tuple[float, float]:
@@ -374,6 +376,25 @@ def _estimate(P, M, x, a_f, u):
 
 
 @njit(**JIT)
+def solve_plan(P, M, x, K, Yt, ynew, y, J, r, lim, body, vmax):
+    """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
+    (no estimate, no shift); the status.
+
+    Parameters
+    ----------
+    P, M : arrays
+        :func:`robot_numbers`, :func:`new_memory` (its durations the guess).
+    x : array of 4
+        The state.
+    K, Yt, ynew, y, J, r, lim, body, vmax : arrays
+        :func:`workspace`.
+    """
+    if M[M_PHASE] == PUSH:
+        return _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, MAX_NEWTON)
+    return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+
+
+@njit(**JIT)
 def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax):
     """One sample of the controller, compiled: the estimate updated from the measurement
     (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from
@@ -410,6 +431,9 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, 
             # (the next samples go on converging), to convergence when it is near
             budget = int(P[P_BUDGET]) if M[M_TAU1] > 3.0 * h else MAX_NEWTON
             st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget)
+            M[M_UNCONVERGED] = M[M_UNCONVERGED] + 1 if st == CONVERGING else 0
+            if M[M_UNCONVERGED] > MAX_UNCONVERGED:
+                st = NEWTON_FAILED
             M[M_STATUS] = st
             return st
         # the switch fell within the sample
@@ -422,6 +446,7 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, 
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "MAX_NEWTON", "NEWTON_FAILED", "NEWTON_TOL",
-           "OK", "PATH_LIMIT", "PULL", "PUSH", "RTOL", "STATUS_NAMES", "control_step",
-           "force_coefficients", "new_memory", "robot_numbers", "workspace"]
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "MAX_NEWTON", "MAX_UNCONVERGED",
+           "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PULL", "PUSH", "RTOL",
+           "STATUS_NAMES", "control_step", "solve_plan", "force_coefficients", "new_memory",
+           "robot_numbers", "workspace"]

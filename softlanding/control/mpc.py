@@ -134,6 +134,8 @@ class MPCLanding:
         ``controller="bangbang"``: samples the compiled controller did not cover (its
         structure, push then pull, did not fit the state and estimate); each of them and the
         rest of the landing fell back to the re-planning MPC (``step_paths`` says why).
+    noise, delay, seed, margin
+        The sensing and the margin the landing ran with (:func:`mpc_landing`).
     samples : int
         Samples taken while the foot yielded.
     pieces : list of (float, LandingResult)
@@ -163,6 +165,10 @@ class MPCLanding:
     controller: str = "replan"
     sample_limit_hit: bool = False
     uncovered: int = 0
+    noise: float = 0.0
+    delay: int = 0
+    seed: int = 0
+    margin: float = 0.0
     pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
 
     def trajectory(self, n: int = 1500) -> Trajectory:
@@ -221,7 +227,8 @@ class MPCLanding:
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
             "structure_changes": self.structure_changes, "controller": self.controller,
-            "uncovered": self.uncovered,
+            "uncovered": self.uncovered, "noise": self.noise, "delay": self.delay,
+            "seed": self.seed, "margin": self.margin,
             "steps": len(self.step_times_ms), **self.step_stats(), "setup_ms": self.setup_ms,
             "prepare_time_s": self.prepare_time_s,
             "period_rig_ms": 1e3 * self.period * paper_rig_units().time,
@@ -357,8 +364,13 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             cpu_times.append(1e3 * (time.process_time() - c0))
             if estimate:
                 estimates.append(fast.estimate())
-            if status in (bb.OK, bb.CONVERGING):
-                paths.append("bangbang" if status == bb.OK else "bangbang (converging)")
+            # (an arrest short of the crater's hold while pulling: the pull is still the
+            # fastest stop of the foot, the arrest then digs a little; no plan of this
+            # structure does better, and measurement noise makes it short by rounding)
+            pulling = fast.M[bb.M_PHASE] == bb.PULL
+            if status in (bb.OK, bb.CONVERGING) or (status == bb.ARREST_FAILS and pulling):
+                paths.append("bangbang" if status == bb.OK else
+                             f"bangbang ({bb.STATUS_NAMES[status]})")
                 issued.append((plant.t, fast.schedule(), fast.stop_time()))
                 continue
             # not covered: this sample and the rest of the landing re-plan as the MPC does
@@ -436,7 +448,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       structure_changes=paths.count("structure"), step_paths=paths,
                       pieces=list(plant.history), prepare_time_s=prepare_s,
                       sample_limit_hit=samples >= max_samples and plant.x[3] < -stop,
-                      controller=controller, uncovered=uncovered)
+                      controller=controller, uncovered=uncovered, noise=sensor.noise,
+                      delay=sensor.delay, seed=seed, margin=margin)
 
 
 class Sensor:
