@@ -53,19 +53,24 @@ MAX_NEWTON, NEWTON_TOL = 30, 1e-13
 
 # the layout of the robot and ground numbers P
 (P_AB0, P_BB, P_AF0, P_BF, P_GF, P_K, P_CD, P_RM, P_S, P_UMAX, P_HOLD0, P_NOISE,
- P_MARGIN, P_BUDGET) = range(14)
-NP = 14
+ P_MARGIN, P_BUDGET, P_PERIOD) = range(15)
+NP = 15
 # the layout of the controller's memory M
 (M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
- M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED) = range(15)
-NM = 15
+ M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED, M_PRED, M_PRED_OK, M_KPLAN,
+ M_CPLAN) = (*range(15), 15, 19, 20, 21)
+NM = 22
 
 #: Phases: pushing (both arcs left), pulling (the foot's stop left).
 PUSH, PULL = 0, 1
 #: Statuses of a step: covered (the plan re-solved), and why not.
-OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING = 0, 1, 2, 3, 4
+OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS = 0, 1, 2, 3, 4, 5
 STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
-                PATH_LIMIT: "path limit", CONVERGING: "converging"}
+                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds"}
+
+#: Relative agreement of the measured state with the plan's prediction, and of the estimate
+#: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
+PLAN_HOLDS_TOL = 1e-8
 
 #: Newton iterations per sample while the switch is more than three samples away.
 BUDGET = 3
@@ -86,7 +91,8 @@ def force_coefficients(r_m: float) -> tuple[float, float]:
 
 
 def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: float,
-                  noise_std: float = 1e-6, margin: float = 0.0) -> np.ndarray:
+                  noise_std: float = 1e-6, margin: float = 0.0,
+                  period: float = 0.01) -> np.ndarray:
     """The numbers the compiled step reads (``P``), from the one definition of the dynamics.
 
     Parameters
@@ -99,6 +105,8 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
         Standard deviation of one measured ground force (the estimator's).
     margin : float
         Plan for the estimate less ``margin`` standard deviations.
+    period : float
+        The sample period (the plan-holds check predicts the next sample).
     """
     x = np.zeros(4)
     b0 = robot_rhs(x, 0.0, 0.0, r_m)
@@ -112,6 +120,7 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
     P[P_NOISE] = noise_std
     P[P_MARGIN] = margin
     P[P_BUDGET] = BUDGET
+    P[P_PERIOD] = period
     return P
 
 
@@ -376,6 +385,34 @@ def _estimate(P, M, x, a_f, u):
 
 
 @njit(**JIT)
+def _predict(P, x, M, K, Yt, ynew, y, body, vmax):
+    """The state the plan in ``M`` predicts after the next sample from ``x``, for the
+    plan-holds check (none if that sample ends at the foot's stop)."""
+    t1 = M[M_TAU1] if M[M_PHASE] == PUSH else 0.0
+    hn = P[P_PERIOD]
+    if hn >= t1 + M[M_TAU2]:
+        return
+    umax = P[P_UMAX]
+    a1 = P[P_AB0] + P[P_BB] * umax
+    a2 = P[P_AB0] - P[P_BB] * umax
+    tp = min(hn, t1)
+    y[0], y[1] = x[2], x[3]
+    body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, 0.0, 0.0
+    if not _flow(P, umax, y, 2, tp, K, Yt, ynew, body, vmax):
+        return
+    xb = x[0] + x[1] * tp + 0.5 * a1 * tp * tp
+    vb = x[1] + a1 * tp
+    tq = hn - tp
+    body[0], body[1], body[2] = xb, vb, a2
+    if not _flow(P, -umax, y, 2, tq, K, Yt, ynew, body, vmax):
+        return
+    M[M_PRED], M[M_PRED + 1] = xb + vb * tq + 0.5 * a2 * tq * tq, vb + a2 * tq
+    M[M_PRED + 2], M[M_PRED + 3] = y[0], y[1]
+    M[M_KPLAN], M[M_CPLAN] = P[P_K], P[P_CD]
+    M[M_PRED_OK] = 1.0
+
+
+@njit(**JIT)
 def solve_plan(P, M, x, K, Yt, ynew, y, J, r, lim, body, vmax):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
     (no estimate, no shift); the status.
@@ -424,9 +461,26 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, 
             m = P[P_MARGIN] * P[P_NOISE]
             P[P_K] = max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 1e-3)
             P[P_CD] = max(M[M_TH1] - m * math.sqrt(max(M[M_P11], 0.0)), 0.0)
+    # the sample went as the converged plan predicted, on the ground it was planned for,
+    # which is still the estimate: by the principle of optimality its rest is still optimal
+    holds = M[M_PRED_OK] == 1.0 and abs(P[P_K] - M[M_KPLAN]) <= PLAN_HOLDS_TOL * M[M_KPLAN] \
+        and abs(P[P_CD] - M[M_CPLAN]) <= PLAN_HOLDS_TOL * max(1.0, M[M_CPLAN])
+    if holds:
+        scale = 1.0
+        for i in range(4):
+            scale = max(scale, abs(x[i]))
+        for i in range(4):
+            if abs(x[i] - M[M_PRED + i]) > PLAN_HOLDS_TOL * scale:
+                holds = False
+    M[M_PRED_OK] = 0.0
     if M[M_PHASE] == PUSH:
         if M[M_TAU1] > h:
             M[M_TAU1] -= h
+            if holds:
+                M[M_ITER] = 0
+                _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+                M[M_STATUS] = HOLDS
+                return HOLDS
             # a real-time iteration: a few Newton steps per sample while the switch is far
             # (the next samples go on converging), to convergence when it is near
             budget = int(P[P_BUDGET]) if M[M_TAU1] > 3.0 * h else MAX_NEWTON
@@ -434,6 +488,8 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, 
             M[M_UNCONVERGED] = M[M_UNCONVERGED] + 1 if st == CONVERGING else 0
             if M[M_UNCONVERGED] > MAX_UNCONVERGED:
                 st = NEWTON_FAILED
+            if st == OK:
+                _predict(P, x, M, K, Yt, ynew, y, body, vmax)
             M[M_STATUS] = st
             return st
         # the switch fell within the sample
@@ -441,12 +497,19 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, 
         M[M_PHASE] = PULL
     else:
         M[M_TAU2] = max(M[M_TAU2] - h, 1e-3 * M[M_TAU2])
+    if holds:
+        M[M_ITER] = 0
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+        M[M_STATUS] = HOLDS
+        return HOLDS
     st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+    if st == OK:
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax)
     M[M_STATUS] = st
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "MAX_NEWTON", "MAX_UNCONVERGED",
-           "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PULL", "PUSH", "RTOL",
-           "STATUS_NAMES", "control_step", "solve_plan", "force_coefficients", "new_memory",
-           "robot_numbers", "workspace"]
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
+           "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH",
+           "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "new_memory",
+           "robot_numbers", "solve_plan", "workspace"]

@@ -368,7 +368,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             # fastest stop of the foot, the arrest then digs a little; no plan of this
             # structure does better, and measurement noise makes it short by rounding)
             pulling = fast.M[bb.M_PHASE] == bb.PULL
-            if status in (bb.OK, bb.CONVERGING) or (status == bb.ARREST_FAILS and pulling):
+            if status in (bb.OK, bb.CONVERGING, bb.HOLDS) or (status == bb.ARREST_FAILS
+                                                               and pulling):
                 paths.append("bangbang" if status == bb.OK else
                              f"bangbang ({bb.STATUS_NAMES[status]})")
                 issued.append((plant.t, fast.schedule(), fast.stop_time()))
@@ -515,7 +516,7 @@ class _FastState:
         # the ground force's noise from the acceleration's and the force's
         beta, gamma = bb.force_coefficients(robot.r_m)
         noise = max(sensor.noise * float(np.hypot(1.0, beta)) / abs(gamma), 1e-6)
-        P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin)
+        P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin, period)
         covered = kinds in (("max", "min"), ("min",))
         d = np.asarray(plan.durations, float) if covered else np.array([0.0, 1.0])
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
