@@ -357,6 +357,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             break
         u_end = _force_at_end(schedule, plant.x, h)  # the force the sample ended under
         measured, a_f, u_meas = sensor.measure(plant.x, plant.foot_acceleration(u_end), u_end)
+        # the foot still yields (the loop's condition, a contact sensor's): a noisy v_f that
+        # reads otherwise is clipped (the plans start from a yielding foot)
+        measured[3] = min(measured[3], -stop)
         t0, c0 = time.perf_counter(), time.process_time()
         if fast is not None and fast.active:
             status = fast.step(measured, a_f, u_meas, h, estimate)
@@ -434,11 +437,14 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         cpu_times.append(1e3 * (time.process_time() - c0))
         issued.append((plant.t - elapsed, _schedule(plan, robot), _plan_time(plan)))
     if plant.x[3] >= -stop:
-        final = plant.finish(arrest_schedule(sensor.measure(plant.x)[0], robot.r_m))
+        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m))
     else:
         origin, command, _ = issued[-1]
         final = plant.finish(_shifted(command, plant.t - origin))
-    stroke = [r.stroke_min for _, r in plant.history], [r.stroke_max for _, r in plant.history]
+    # within each sample (a sample's simulation also ranges over the future under its
+    # control), then from the last sample on (the final simulation)
+    stroke = ([lo for lo, _ in plant.stroke_ranges] + [final.stroke_min],
+              [hi for _, hi in plant.stroke_ranges] + [final.stroke_max])
     return MPCLanding(robot=robot, impact=impact, ground=ground, model=model, period=period,
                       result=final, depth=final.depth, stroke_min=min(stroke[0]),
                       stroke_max=max(stroke[1]),
@@ -495,6 +501,39 @@ class Sensor:
         m[2] += e[0]
         m[3] += e[1]
         return m, float(a_f + e[2]), float(u + e[3])
+
+
+    def arrest(self, x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
+        """The body's arrest from the measured state of a stopped foot: exact measurements,
+        the constant force that stops it in the stroke left, then its weight
+        (:func:`~softlanding.optimal.landing.arrest_schedule`). Noisy ones: the stroke left
+        less a reserve of ``ARREST_RESERVE`` standard deviations of the foot's position (a
+        measured stroke may be long), then the weight with a damped hold of the stroke
+        where the body stopped (the open-loop weight alone would let a velocity the noise
+        left drift the body forever)."""
+        if self.noise == 0.0:
+            return arrest_schedule(x, r_m)
+        stroke = float(x[0] - x[2])
+        reserve = min(ARREST_RESERVE * self.noise, 0.5 * stroke)
+        x_r = np.array(x, float)
+        x_r[0] -= reserve  # the arrest sees the stroke less the reserve
+        tail = arrest_schedule(x_r, r_m)
+        assert isinstance(tail, ForceSchedule)
+        w = r_m / (1 + r_m)
+        # where the arrest stops the body (the reserve left), or where it is
+        end = reserve if x[1] < 0 and stroke - reserve > 0 else stroke
+        hold = (-HOLD_GAINS[0], -HOLD_GAINS[1], HOLD_GAINS[0], HOLD_GAINS[1],
+                w + HOLD_GAINS[0] * end)
+        rows = [(0.0, 0.0, 0.0, 0.0, v) for v in tail.values[:-1]] + [hold]
+        return FeedbackSchedule(tail.times, tuple(rows))
+
+
+#: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
+#: arrest.
+ARREST_RESERVE = 3.0
+#: ``k_p, k_d`` of the damped hold of the stroke after a noisy arrest (per unit of the
+#: paper's force; critically damped for the body's mass ``r_m/(1+r_m)`` about 5/6).
+HOLD_GAINS = (1.0, 2.0)
 
 
 class _FastState:
@@ -829,7 +868,9 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     """The landing from ``x`` transcribed (from the rest of the last plan) and refined."""
     if isinstance(plan, Solution):
         return solve_from_state(robot, believed, x, warm_start=plan)
-    found = solve_from_state(robot, believed, x, guess=plan.trajectory(200).after(applied))
+    # (a delayed actuation may have run past the plan's end: then no guess from it)
+    guess = plan.trajectory(200).after(applied) if applied < 0.99 * plan.T else None
+    found = solve_from_state(robot, believed, x, guess=guess)
     return found if isinstance(found, Solution) else _checked(found)
 
 
