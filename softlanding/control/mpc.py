@@ -874,5 +874,6 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     return found if isinstance(found, Solution) else _checked(found)
 
 
-__all__ = ["CONTROLLERS", "DEFAULT_PERIOD", "MAX_PERIOD", "MIN_PERIOD", "MPCLanding",
+__all__ = ["ARREST_RESERVE", "CONTROLLERS", "DEFAULT_PERIOD", "HOLD_GAINS", "MAX_PERIOD",
+           "MIN_PERIOD", "MPCLanding", "Sensor",
            "check_model", "check_period", "mpc_landing"]
