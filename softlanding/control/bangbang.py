@@ -148,11 +148,18 @@ def new_memory(tau1: float, tau2: float, prior: tuple[float, float],
     return M
 
 
-def workspace() -> tuple[np.ndarray, ...]:
-    """Work arrays of the compiled step (stages, trial state, new state, state, Jacobian,
-    residuals, path and end numbers, body, largest v_f): nothing is allocated per sample."""
-    return (np.zeros((13, 6)), np.zeros(6), np.zeros(6), np.zeros(6), np.zeros((2, 2)),
-            np.zeros(2), np.zeros(6), np.zeros(5), np.zeros(1))
+def workspace() -> tuple[np.ndarray, np.ndarray]:
+    """Work arrays of the compiled step: nothing is allocated per sample, and two arrays
+    (not nine) keep the call's dispatch short. ``K``: the 13 stages, then the Jacobian
+    (rows 13-14); ``W``: trial state, new state, state, residuals, path and end numbers,
+    body, largest ``v_f``."""
+    return np.zeros((15, 6)), np.zeros(32)
+
+
+@njit(**JIT, inline="always")
+def _views(K, W):
+    return (W[0:6], W[6:12], W[12:18], K[13:15, 0:2], W[18:20], W[20:26], W[26:31],
+            W[31:32])
 
 
 @njit(**JIT)
@@ -416,7 +423,7 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax):
 
 
 @njit(**JIT)
-def solve_plan(P, M, x, K, Yt, ynew, y, J, r, lim, body, vmax):
+def solve_plan(P, M, x, K, W):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
     (no estimate, no shift); the status.
 
@@ -426,16 +433,17 @@ def solve_plan(P, M, x, K, Yt, ynew, y, J, r, lim, body, vmax):
         :func:`robot_numbers`, :func:`new_memory` (its durations the guess).
     x : array of 4
         The state.
-    K, Yt, ynew, y, J, r, lim, body, vmax : arrays
+    K, W : arrays
         :func:`workspace`.
     """
+    Yt, ynew, y, J, r, lim, body, vmax = _views(K, W)
     if M[M_PHASE] == PUSH:
         return _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, MAX_NEWTON)
     return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
 
 
 @njit(**JIT)
-def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax):
+def control_step(P, M, x, a_f, u, h, estimate, K, W):
     """One sample of the controller, compiled: the estimate updated from the measurement
     (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from
     ``x`` for the estimated ground. Returns the status (:data:`OK` or why not covered);
@@ -455,9 +463,10 @@ def control_step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, 
         The sample just applied.
     estimate : bool
         Update the estimate (else keep the ground in ``P``).
-    K, Yt, ynew, y, J, r, lim, body, vmax : arrays
+    K, W : arrays
         :func:`workspace`.
     """
+    Yt, ynew, y, J, r, lim, body, vmax = _views(K, W)
     if estimate and x[3] < 0.0:
         _estimate(P, M, x, a_f, u)
         if M[M_SAMPLES] >= 2:  # as the re-planning MPC: two samples before the fit is used
