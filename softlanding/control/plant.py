@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from softlanding.errors import ParameterError, check
+from softlanding.errors import ParameterError, RestNotProvenError, check
 from softlanding.model.controllers import Controller
 from softlanding.model.dynamics import VF, robot_rhs
 from softlanding.model.ground import LINEAR_GROUND, Ground
@@ -89,7 +89,13 @@ class SteppingPlant:
             raise ParameterError("x", "the foot has left its crater's bottom: the stepping "
                                       "plant holds the crater only while the foot digs")
         res = simulate(self.robot, self.impact, control, self.ground, x0=self.x, t_max=h)
-        tr = res.trajectory(t_end=h, n=STROKE_POINTS)
+        try:
+            tr = res.trajectory(t_end=h, n=STROKE_POINTS)
+        except RestNotProvenError:
+            # the simulation proved the step's outcome before its end (the foot at rest,
+            # the body leaving without bound): the step ends where its samples do
+            tr = res.trajectory(n=STROKE_POINTS)
+            h = float(tr.t[-1])
         end = tr.x[-1]
         self.stroke_ranges.append(_stroke_range(tr.t, tr.x[:, 0] - tr.x[:, 2]))
         self.history.append((self.t, res))
