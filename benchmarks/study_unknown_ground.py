@@ -2,6 +2,16 @@
 clairvoyant optimum; MPC step times in the paper's units and on the paper's rig.
 
 Run:  python -m benchmarks.study_unknown_ground [--quick] [--period P] [--json FILE]
+      python -m benchmarks.study_unknown_ground --controllers [--quick] [--noise S]
+      [--delay N] [--json FILE]
+
+``--controllers`` runs the controller study of issue 33 instead: per case the clairvoyant
+optimum and the compiled bang-bang controller with exact measurements and with noisy,
+delayed ones (margins 0 and 2 standard deviations); its step times (wall and CPU: median,
+99th percentile, maximum over every step of every landing) against the rig's period, the
+samples it did not cover (fallbacks to the re-planning MPC), and the goals: depth within
+1 % of the clairvoyant one and every limit held where the clairvoyant optimum is bang-bang,
+every limit held and within 3 % with the noise and the delay.
 
 Prints one row per case (true ground K, c_d and v0): depth / clairvoyant depth for the
 nominal open-loop plan, the robust open-loop schedule and the two-stage tree (planned for all
@@ -20,9 +30,12 @@ import time
 
 from softlanding.model.terrain import paper_rig_units
 from softlanding.studies.unknown_ground import (
+    REALISTIC_DELAY,
+    REALISTIC_NOISE,
     STUDY_DRAG,
     STUDY_STIFFNESS,
     STUDY_V0,
+    controller_study,
     study_summary,
     unknown_ground_study,
 )
@@ -38,9 +51,16 @@ def main() -> None:
                                                          "c_d in {0, 1}")
     ap.add_argument("--period", type=float, default=0.01)
     ap.add_argument("--json", help="write every row to this file")
+    ap.add_argument("--controllers", action="store_true",
+                    help="the controller study (bang-bang, exact and noisy) instead")
+    ap.add_argument("--noise", type=float, default=REALISTIC_NOISE)
+    ap.add_argument("--delay", type=int, default=REALISTIC_DELAY)
     a = ap.parse_args()
     grid = ((-3.0, -10.0), (0.5, 2.0), (0.0, 1.0)) if a.quick else (STUDY_V0, STUDY_STIFFNESS,
                                                                     STUDY_DRAG)
+    if a.controllers:
+        controllers(grid, a)
+        return
     t0 = time.perf_counter()
     rows = unknown_ground_study(*grid, period=a.period)
     tau = paper_rig_units().time
@@ -75,6 +95,71 @@ def main() -> None:
           f"{s['step_cpu_median_ms']:.3g} ms, 99th percentile {s['step_cpu_p99_ms']:.3g} ms "
           f"(goals 1 and 5 ms), against a "
           f"sample period of {1e3 * a.period * tau:.3g} ms on the paper's rig")
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(rows, f, default=float)
+
+
+def _c(r: dict) -> str:
+    return f"{r['ratio']:8.5f}{' ' if r['feasible'] else '!'}"
+
+
+def controllers(grid: tuple, a: argparse.Namespace) -> None:
+    """The controller study (``--controllers``)."""
+    import numpy as np
+
+    t0 = time.perf_counter()
+    rows = controller_study(*grid, period=a.period, noise=a.noise, delay=a.delay)
+    rig = 1e3 * a.period * paper_rig_units().time
+    keys = [k for k in rows[0] if k == "exact" or k.startswith("noisy")]
+    print(f"sample period {a.period:g} (= {rig:.3g} ms on the paper's rig); noise "
+          f"{a.noise:g}, delay {a.delay}; {len(rows)} cases in "
+          f"{time.perf_counter() - t0:.0f} s")
+    print(f"{'v0':>6} {'K':>5} {'c_d':>4} {'clairvoyant':>12} "
+          + " ".join(f"{k:>10}" for k in keys) + "  max step ms (wall, CPU)  uncovered")
+    for r in rows:
+        g, e = r["ground"], r["exact"]
+        print(f"{r['v0']:>6.1f} {g.get('stiffness', 1.0):>5.2f} {g.get('c_d', 0.0):>4.1f} "
+              f"{r['clairvoyant_depth']:>11.5f}{' ' if r['clairvoyant_bang_bang'] else '~'} "
+              + " ".join(_c(r[k]) for k in keys)
+              + f"  {e['step_time_max_ms']:.4f}, {e['step_cpu_max_ms']:.4f}"
+              + f"  {' '.join(str(r[k]['uncovered']) for k in keys)}")
+    print("('~': the clairvoyant optimum is not bang-bang (a creep); '!': a limit broken or "
+          "rest not proven)")
+    bang = [r for r in rows if r["clairvoyant_bang_bang"]]
+    out: dict = {"cases": len(rows), "bang_bang_cases": len(bang)}
+    for k in keys:
+        wall = np.concatenate([r[k]["step_times_ms"] for r in rows])
+        cpu = np.concatenate([r[k]["step_cpu_ms"] for r in rows])
+        covered = [r for r in rows if r[k]["uncovered"] == 0]
+        cw = np.concatenate([r[k]["step_times_ms"] for r in covered] + [np.zeros(0)])
+        out[k] = {
+            "feasible": sum(r[k]["feasible"] for r in rows),
+            "feasible_bang_bang": sum(r[k]["feasible"] for r in bang),
+            "max_ratio_bang_bang": max(r[k]["ratio"] for r in bang),
+            "within_1_percent_bang_bang": sum(r[k]["ratio"] <= 1.01 for r in bang),
+            "within_3_percent": sum(r[k]["ratio"] <= 1.03 for r in rows),
+            "max_ratio": max(r[k]["ratio"] for r in rows),
+            "cases_with_uncovered_samples": len(rows) - len(covered),
+            "steps": int(wall.size),
+            "wall_median_ms": float(np.median(wall)),
+            "wall_p99_ms": float(np.percentile(wall, 99)), "wall_max_ms": float(wall.max()),
+            "cpu_median_ms": float(np.median(cpu)),
+            "cpu_p99_ms": float(np.percentile(cpu, 99)), "cpu_max_ms": float(cpu.max()),
+            "covered_wall_max_ms": float(cw.max()) if cw.size else None,
+            "prepare_s_max": max(r[k]["prepare_time_s"] for r in rows)}
+    print(json.dumps(out, indent=1))
+    e = out["exact"]
+    print(f"goals (exact sensing): within 1 % on every bang-bang case: "
+          f"{e['within_1_percent_bang_bang'] == len(bang)}; limits held there: "
+          f"{e['feasible_bang_bang'] == len(bang)}; max step <= {rig:.3g} ms wall on covered "
+          f"landings: {e['covered_wall_max_ms'] is not None and e['covered_wall_max_ms'] <= rig}"
+          f" ({e['covered_wall_max_ms']}); median <= 0.02 ms: {e['wall_median_ms'] <= 0.02}")
+    for k in keys[1:]:
+        n = out[k]
+        print(f"goals ({k}): every limit held in all {len(rows)} cases: "
+              f"{n['feasible'] == len(rows)} ({n['feasible']}); within 3 %: "
+              f"{n['within_3_percent'] == len(rows)} ({n['within_3_percent']})")
     if a.json:
         with open(a.json, "w") as f:
             json.dump(rows, f, default=float)

@@ -604,19 +604,41 @@ def _cmd_hop(a: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------ mpc
+def _ground_text(g: Any) -> str:
+    """A ground in words: its name and parameters (``drag, c_d = 0.2, stiffness = 2``)."""
+    d = g.to_dict()
+    if "stiffness" not in d and hasattr(g, "stiffness"):  # (to_dict leaves out K = 1)
+        d["stiffness"] = g.stiffness
+    rest = [f"{k} = {v:g}" if isinstance(v, float | int) else f"{k} = {v}"
+            for k, v in d.items() if k != "model"]
+    return ", ".join([str(d.get("model", g.name)), *rest])
+
+
+def _ms(v: float | None) -> str:
+    return "none" if v is None else f"{v:.3g}"
+
+
 def _cmd_mpc(a: argparse.Namespace) -> int:
+    from softlanding.control.mpc import check_period
     from softlanding.model.ground import DragGround, LinearGround
 
+    period = 0.01 if a.period is None else check_period("--period", a.period)
+    from softlanding.errors import check, check_count
+
+    noise = check("--noise-std", a.noise_std, (lambda v: v >= 0, "must be >= 0"))
+    delay = check_count("--delay", a.delay, 0, 1000)
+    seed = check_count("--seed", a.seed, 0, 2**63 - 1)
+    margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
+    if a.margin and a.controller != "bangbang":
+        raise ParameterError("--margin", "applies to --controller bangbang")
     robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
     if a.model_ground == "linear" and a.model_cd is not None:
         raise ParameterError("--model-cd", "applies to --model-ground drag")
+    if a.model_ground == "drag" and a.model_cd is None:
+        raise ParameterError("--model-cd", "is required with --model-ground drag (the drag "
+                                           "number the controller assumes)")
     k = 1.0 if a.model_stiffness is None else a.model_stiffness
-    model = (LinearGround(k) if a.model_ground == "linear" else
-             DragGround(0.0 if a.model_cd is None else a.model_cd, k))
-    from softlanding.errors import check
-
-    period = 0.01 if a.period is None else check("period", a.period,
-                                                  (lambda v: v > 0, "must be > 0"))
+    model = LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
     from softlanding.optimal.limits import force_limit
 
     force_limit(robot)
@@ -627,7 +649,8 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     from softlanding.simulation.simulator import simulate
 
     m = mpc_landing(impact, robot, ground, model=model, period=period,
-                    estimate=not a.no_estimate)
+                    estimate=not a.no_estimate, controller=a.controller, noise=noise,
+                    delay=delay, seed=seed, margin=margin)
     clair = solve_landing(impact, robot, ground)
     nominal = solve_landing(impact, robot, model)
     ol = simulate(robot, impact, nominal.schedule(), ground)
@@ -635,11 +658,14 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     out = {"depth": m.depth, "clairvoyant_depth": clair.depth,
            "ratio_to_clairvoyant": m.depth / clair.depth,
            "clairvoyant_verified": not clair.unverified_reasons(),
-           "open_loop_depth": ol.depth if ol.feasible else None,
-           "open_loop_feasible": ol.feasible, "open_loop_status": ol.status,
+           "open_loop_depth": ol.depth, "open_loop_feasible": ol.feasible,
+           "open_loop_status": ol.status,
            "feasible": m.feasible, **{k_: d[k_] for k_ in (
-               "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak", "period",
-               "samples", "replans", "fallbacks", "step_time_median_ms", "step_time_p99_ms",
+               "failure", "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak",
+               "period", "period_rig_ms", "controller", "uncovered", "noise", "delay",
+               "seed", "margin", "samples", "steps", "replans",
+               "fallbacks", "step_time_median_ms", "step_time_p99_ms", "step_time_max_ms",
+               "step_cpu_median_ms", "step_cpu_p99_ms", "step_cpu_max_ms", "prepare_time_s",
                "setup_ms", "estimate", "ground", "model_ground")}}
     written = None
     if plot:
@@ -651,21 +677,29 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     else:
         e = out["estimate"] or {}
         print_table([
-            ("true ground", m.ground.to_dict()), ("model ground", m.model.to_dict()),
+            ("controller", m.controller),
+            ("true ground", _ground_text(m.ground)), ("model ground", _ground_text(m.model)),
             ("depth (MPC)", m.depth), ("clairvoyant depth", clair.depth),
             ("MPC / clairvoyant", out["ratio_to_clairvoyant"]),
             ("clairvoyant verified", out["clairvoyant_verified"]),
             ("open-loop depth (nominal plan)", ol.depth),
             ("open-loop feasible", ol.feasible), ("feasible (MPC)", m.feasible),
             ("stroke min .. max", f"{m.stroke_min:.6g} .. {m.stroke_max:.6g}"),
-            ("peak |u|", m.u_peak), ("samples (period)", f"{m.samples} ({m.period:g})"),
+            ("peak |u|", m.u_peak),
+            ("samples (period)", f"{m.samples} ({m.period:g} = {out['period_rig_ms']:.3g} ms "
+                                 f"on the paper's rig)"),
             ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
-            ("step time median / p99 [ms]",
-             f"{out['step_time_median_ms']:.3g} / {out['step_time_p99_ms']:.3g}"),
+            ("samples not covered (bangbang)", m.uncovered),
+            ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"),
+            ("step time median / p99 / max [ms]",
+             " / ".join(_ms(out[f"step_time_{q}_ms"]) for q in ("median", "p99", "max"))),
+            ("preparation before impact [s]", f"{m.prepare_time_s:.3g}"),
             ("estimate K, c_d", f"{e.get('stiffness', float('nan')):.6g}, "
                                 f"{e.get('c_d', float('nan')):.6g}")])
         if written:
             print(f"figure written to {written}")
+    if not m.feasible:
+        print(f"softlanding: mpc: the landing is not feasible: {m.failure()}", file=sys.stderr)
     return EXIT_OK if m.feasible else EXIT_FAILURE
 
 

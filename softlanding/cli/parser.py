@@ -381,6 +381,22 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
                    help="its drag number (--model-ground drag)")
     m.add_argument("--no-estimate", action="store_true",
                    help="keep the model ground (no on-line estimation)")
+    m.add_argument("--controller", choices=["replan", "bangbang"], default="replan",
+                   help="replan: re-solve the landing every sample (Newton on the plan's "
+                        "structure, else a transcription; default); bangbang: the compiled "
+                        "real-time Newton on the push/pull switching times (microseconds a "
+                        "sample), falling back to replan where that structure does not fit")
+    m.add_argument("--noise-std", type=float, default=0.0, metavar="S",
+                   help="Gaussian noise (standard deviation, paper units) on the measured "
+                        "foot position, velocity, acceleration and force (default 0)")
+    m.add_argument("--delay", type=int, default=0, metavar="N",
+                   help="samples between a measurement and the actuation of its control "
+                        "(default 0)")
+    m.add_argument("--seed", type=int, default=0, metavar="K",
+                   help="the noise's random seed (default 0)")
+    m.add_argument("--margin", type=float, default=0.0, metavar="M",
+                   help="bangbang: plan for the estimate less M standard deviations of K and "
+                        "c_d while it is uncertain (default 0)")
     _plot_arg(m, "the landing's depth and force against time")
     ground_args(m)
     return m

@@ -3,9 +3,10 @@
 :class:`SteppingPlant` (the exact simulator advanced sample by sample),
 :class:`GroundEstimator` (recursive least squares of the ground law from the foot's
 measured acceleration), :func:`mpc_landing` (model-predictive control re-planning from the
-measured state with the current estimate), :func:`robust_landing` and
-:func:`two_stage_landing` (one plan for a set of grounds: open-loop, or shared until the
-ground shows itself) and the state-started landing OCP they share.
+measured state with the current estimate, or the compiled bang-bang controller of
+:mod:`~softlanding.control.bangbang`; :class:`Sensor`: noisy, delayed measurements),
+:func:`robust_landing` and :func:`two_stage_landing` (one plan for a set of grounds:
+open-loop, or shared until the ground shows itself) and the state-started landing OCP they share.
 """
 
 import lazy_loader as _lazy

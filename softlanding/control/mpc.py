@@ -36,6 +36,7 @@ from ocp import (
     refine_structure,
 )
 from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
+from softlanding.control import bangbang as bb
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
@@ -45,11 +46,13 @@ from softlanding.control.state_landing import (
     state_parameters,
     state_transcription,
 )
-from softlanding.errors import check, check_count, expect
+from softlanding.errors import ParameterError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
-from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.model.terrain import paper_rig_units
 from softlanding.optimal.landing import (
+    T_MAX,
     affine_laws,
     arrest_schedule,
     landing_schedule,
@@ -65,6 +68,19 @@ from softlanding.util.signals import raise_if_interrupted
 #: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
 #: paper's landings.
 DEFAULT_PERIOD = 0.01
+
+#: The shortest sample period taken: 1e-4 (2.6 us on the paper's rig), about 10,000 samples
+#: over the longest landing of the unknown-ground study (T < 1); a shorter one would run for
+#: hours (1e-9: a million times more samples) and is refused at once.
+MIN_PERIOD = 1e-4
+
+#: The longest sample period taken: the landing problem's horizon bound (``T_MAX``). A period
+#: beyond the landing is one open-loop sample; far beyond it (1e300) the simulation's times
+#: lose every digit of the landing's.
+MAX_PERIOD = T_MAX
+
+#: The controllers :func:`mpc_landing` runs, by name.
+CONTROLLERS = ("replan", "bangbang")
 
 @dataclass
 class MPCLanding:
@@ -85,7 +101,8 @@ class MPCLanding:
     stroke_min, stroke_max, u_peak : float
         Over the whole landing (every step and the end).
     step_times_ms : list of float
-        The computation of each sample (estimate and re-plan), in ms of wall time.
+        The computation of each sample (its estimate and control update only), in ms of
+        wall time.
     step_cpu_ms : list of float
         The same in the process's CPU time (what a loaded machine's waits do not inflate).
     estimates : list of GroundEstimate
@@ -106,6 +123,19 @@ class MPCLanding:
     setup_ms : float
         The one-time builds before the landing (not a step's time): the re-solves of the
         plan's structure and its suffixes, and the transcription of the last resort.
+    prepare_time_s : float
+        Everything before the impact, in s of wall time: the first plan, the builds
+        (``setup_ms``) and any compilation; never counted in a step's time.
+    controller : str
+        The controller's name (:data:`CONTROLLERS`).
+    sample_limit_hit : bool
+        ``max_samples`` ended the sampling before the foot stopped.
+    uncovered : int
+        ``controller="bangbang"``: samples the compiled controller did not cover (its
+        structure, push then pull, did not fit the state and estimate); each of them and the
+        rest of the landing fell back to the re-planning MPC (``step_paths`` says why).
+    noise, delay, seed, margin
+        The sensing and the margin the landing ran with (:func:`mpc_landing`).
     samples : int
         Samples taken while the foot yielded.
     pieces : list of (float, LandingResult)
@@ -131,6 +161,14 @@ class MPCLanding:
     step_paths: list[str] = field(default_factory=list)
     samples: int = 0
     setup_ms: float = 0.0
+    prepare_time_s: float = 0.0
+    controller: str = "replan"
+    sample_limit_hit: bool = False
+    uncovered: int = 0
+    noise: float = 0.0
+    delay: int = 0
+    seed: int = 0
+    margin: float = 0.0
     pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
 
     def trajectory(self, n: int = 1500) -> Trajectory:
@@ -157,20 +195,44 @@ class MPCLanding:
         """The stroke held and rest proven at the end."""
         return self.stroke_held and self.result.rest_proven
 
+    def failure(self) -> str | None:
+        """Why the landing is not :attr:`feasible` (one line), or None."""
+        why = []
+        if self.stroke_min < -1e-9 * max(1.0, self.robot.s):
+            why.append(f"the stroke went below 0 ({self.stroke_min:.6g})")
+        if self.stroke_max > self.robot.s * (1 + 1e-9) + 1e-9:
+            why.append(f"the stroke went beyond s = {self.robot.s:g} ({self.stroke_max:.6g})")
+        if not self.result.rest_proven:
+            why.append(f"rest is not proven ({self.result.status})")
+        if self.sample_limit_hit:
+            why.append(f"the foot still moved after max_samples = {self.samples} samples")
+        return "; ".join(why) or None
+
+    def step_stats(self) -> dict[str, float | None]:
+        """Median, 99th percentile and maximum of the step times (wall and CPU, ms); None
+        when no sample computed anything (the foot stopped within the first)."""
+        out: dict[str, float | None] = {}
+        for key, vals in (("time", self.step_times_ms), ("cpu", self.step_cpu_ms)):
+            a = np.asarray(vals, float)
+            for stat, f in (("median", np.median), ("p99", lambda v: np.percentile(v, 99)),
+                            ("max", np.max)):
+                out[f"step_{key}_{stat}_ms"] = float(f(a)) if a.size else None
+        return out
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-able dict."""
-        t = np.array(self.step_times_ms) if self.step_times_ms else np.array([np.nan])
-        c = np.array(self.step_cpu_ms) if self.step_cpu_ms else np.array([np.nan])
         return json_safe({
             "depth": self.depth, "feasible": self.feasible, "stroke_held": self.stroke_held,
             "rest_proven": self.result.rest_proven, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
-            "structure_changes": self.structure_changes,
-            "step_time_median_ms": float(np.median(t)),
-            "step_time_p99_ms": float(np.percentile(t, 99)), "setup_ms": self.setup_ms,
-            "step_cpu_median_ms": float(np.median(c)),
-            "step_cpu_p99_ms": float(np.percentile(c, 99)),
+            "structure_changes": self.structure_changes, "controller": self.controller,
+            "uncovered": self.uncovered, "noise": self.noise, "delay": self.delay,
+            "seed": self.seed, "margin": self.margin,
+            "steps": len(self.step_times_ms), **self.step_stats(), "setup_ms": self.setup_ms,
+            "prepare_time_s": self.prepare_time_s,
+            "period_rig_ms": 1e3 * self.period * paper_rig_units().time,
+            "sample_limit_hit": self.sample_limit_hit, "failure": self.failure(),
             "estimate": None if not self.estimates else self.estimates[-1].__dict__,
             "ground": self.ground.to_dict(), "model_ground": self.model.to_dict(),
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict()})
@@ -179,7 +241,9 @@ class MPCLanding:
 def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 ground: Ground = LINEAR_GROUND, *, model: Ground = LINEAR_GROUND,
                 period: float = DEFAULT_PERIOD, estimate: bool = True,
-                max_samples: int = 100_000, reuse: bool = False) -> MPCLanding:
+                max_samples: int = 100_000, reuse: bool = False,
+                controller: str = "replan", noise: float = 0.0, delay: int = 0,
+                seed: int = 0, margin: float = 0.0) -> MPCLanding:
     """Land on ``ground`` under MPC whose first plan assumes ``model``.
 
     Parameters
@@ -193,7 +257,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     model : LinearGround or DragGround
         What the controller assumes before its first measurement (the paper's ground).
     period : float
-        The sample period (> 0).
+        The sample period, in [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`].
     estimate : bool
         Update the ground estimate from the measurements (else keep ``model``).
     max_samples : int
@@ -204,6 +268,26 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         from the last solution of each cached structure, so the landing then depends on
         what ran before it: in the unknown-ground study, 57 of 60 within 2 % and a 99th
         percentile step of 14 ms with reuse, 59 of 60 and 152 ms without.
+    controller : str
+        ``"replan"``: the re-planning MPC above. ``"bangbang"``: the compiled real-time
+        Newton on the push-then-pull plan's switching times
+        (:mod:`softlanding.control.bangbang`; no NLP, no allocation in Python per sample);
+        where that structure does not cover the state (a creep, an arrest that no longer
+        holds), the sample and the rest of the landing fall back to the re-planning MPC
+        (counted in ``uncovered``).
+    noise : float
+        Standard deviation of the Gaussian noise on every measured foot position, velocity,
+        acceleration and force (paper units; 0: exact measurements). The estimator is told
+        this level, so its standard deviations are the estimate's uncertainty.
+    delay : int
+        Samples between a measurement and the actuation of the control computed from it
+        (0: at once); until then the last control computed goes on.
+    seed : int
+        The noise's random seed.
+    margin : float
+        ``controller="bangbang"``: plan for ``K - margin sigma_K``, ``c_d - margin
+        sigma_c`` (the estimate less ``margin`` of its standard deviations) while the
+        estimate is uncertain.
 
     Raises
     ------
@@ -212,9 +296,15 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     ocp.SolveError
         The first plan cannot be made.
     """
+    t_start = time.perf_counter()
     impact = Impact.of(impact)
     expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
-    period = check("period", period, (lambda v: v > 0, "must be > 0"))
+    check_model(model)
+    if controller not in CONTROLLERS:
+        raise ParameterError("controller", f"must be one of {', '.join(CONTROLLERS)}, got "
+                                           f"{controller!r}")
+    period = check_period("period", period)
+    margin = check("margin", margin, (lambda v: v >= 0, "must be >= 0"))
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
     first = solve_landing(impact, robot, model, replay=False)
     plan: Any = first.refined if first.refined is not None else first.transcribed
@@ -223,57 +313,119 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         # the re-solves start from the NLPs cached for this problem: a landing starts from
         # none, so that it does not depend on what ran before it (its setup builds them)
         clear_cache(problem)
-    est = GroundEstimator(robot, drag=True, prior=ground_numbers(model))
     plant = SteppingPlant(robot, impact, ground)
+    if _plan_time(plan) / period > max_samples:
+        raise ParameterError("period", f"{period:g} takes about "
+                                       f"{_plan_time(plan) / period:.3g} samples over the "
+                                       f"planned landing, more than max_samples = {max_samples}")
+    sensor = Sensor(noise, delay, seed)
+    est = GroundEstimator(robot, drag=True, prior=ground_numbers(model),
+                          noise_std=max(sensor.noise, 1e-6))
+    fast = _FastState.start(plan, robot, model, period, sensor, margin) \
+        if controller == "bangbang" else None
     t0 = time.perf_counter()
-    _prepare(problem, plan, robot, model, plant.x)  # the builds, before the landing starts
+    if fast is None or not fast.active:
+        _prepare(problem, plan, robot, model, plant.x)  # the builds, before the landing starts
     setup_ms = 1e3 * (time.perf_counter() - t0)
+    prepare_s = time.perf_counter() - t_start
     out_times: list[float] = []
     cpu_times: list[float] = []
     estimates: list[GroundEstimate] = []
     paths: list[str] = []
-    fallbacks, replans, elapsed, samples = 0, 0, 0.0, 0
+    fallbacks, replans, elapsed, samples, uncovered = 0, 0, 0.0, 0, 0
     believed = planned_for = model
+    # the commands issued, each (its time origin, its schedule from there, the planned stop
+    # of the foot from there); the actuator applies the one issued `delay` samples ago
+    first = (0.0, fast.schedule() if fast is not None and fast.active else _schedule(plan, robot),
+             fast.stop_time() if fast is not None and fast.active else _plan_time(plan))
+    issued = [first]
     # the foot has stopped when it is static, or creeps by rounding at the crater's exact
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
+    measured = sensor.measure(plant.x)[0]
     while plant.x[3] < -stop and samples < max_samples:
-        schedule = _shifted(_schedule(plan, robot), elapsed)
+        origin, command, planned_stop = issued[max(0, len(issued) - 1 - sensor.delay)]
+        schedule = _shifted(command, plant.t - origin)
         # a sample that would pass the planned stop of the foot ends there: the arrest is
         # then computed from the measured state, not from the plan's prediction of it
-        h = min(period, _plan_time(plan) - elapsed)
+        h = min(period, origin + planned_stop - plant.t)
         h = h if h > 1e-9 * period else period
-        x_before = plant.x
+        x_before = measured
         plant.step(schedule, h)  # the schedule's time starts at the step
         samples += 1
         if plant.x[3] >= -stop:  # the foot stopped within the sample: its arrest follows
             break
-        t0, c0 = time.perf_counter(), time.process_time()
         u_end = _force_at_end(schedule, plant.x, h)  # the force the sample ended under
-        if estimate:
-            e = est.update(plant.x, plant.foot_acceleration(u_end), u_end)
+        measured, a_f, u_meas = sensor.measure(plant.x, plant.foot_acceleration(u_end), u_end)
+        # the foot still yields (the loop's condition, a contact sensor's): a noisy v_f that
+        # reads otherwise is clipped (the plans start from a yielding foot)
+        measured[3] = min(measured[3], -stop)
+        t0, c0 = time.perf_counter(), time.process_time()
+        if fast is not None and fast.active:
+            status = fast.step(measured, a_f, u_meas, h, estimate)
+            out_times.append(1e3 * (time.perf_counter() - t0))
+            cpu_times.append(1e3 * (time.process_time() - c0))
+            if estimate:
+                estimates.append(fast.estimate())
+            # (an arrest short of the crater's hold while pulling: the pull is still the
+            # fastest stop of the foot, the arrest then digs a little; no plan of this
+            # structure does better, and measurement noise makes it short by rounding)
+            pulling = fast.M[bb.M_PHASE] == bb.PULL
+            if status in (bb.OK, bb.CONVERGING, bb.HOLDS) or (status == bb.ARREST_FAILS
+                                                               and pulling):
+                paths.append("bangbang" if status == bb.OK else
+                             f"bangbang ({bb.STATUS_NAMES[status]})")
+                issued.append((plant.t, fast.schedule(), fast.stop_time()))
+                continue
+            # not covered: this sample and the rest of the landing re-plan as the MPC does
+            uncovered += 1
+            fast.hand_over(est)
+            believed = planned_for = est.estimate.ground() if est.samples >= 2 else model
+            t0, c0 = time.perf_counter(), time.process_time()
+            try:
+                plan = solve_from_state(robot, believed, measured)
+                paths.append(f"fallback ({bb.STATUS_NAMES[status]})")
+                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
+                elapsed = 0.0
+                replans += 1
+            except SolveError:
+                raise_if_interrupted()
+                fallbacks += 1
+                paths.append(f"kept ({bb.STATUS_NAMES[status]})")
+                issued.append((plant.t, _shifted(command, plant.t - origin),
+                               origin + planned_stop - plant.t))
+                plan, elapsed = None, 0.0
+            out_times[-1] += 1e3 * (time.perf_counter() - t0)
+            cpu_times[-1] += 1e3 * (time.process_time() - c0)
+            continue
+        if plan is None:  # (a fallback that found no plan: the last command goes on)
+            issued.append(issued[-1])
+            continue
+        if estimate and measured[3] < 0:  # (a noisy v_f may read >= 0: nothing to fit)
+            e = est.update(measured, a_f, u_meas)
             estimates.append(e)
             if e.samples >= 2:
                 believed = e.ground()
         # (not at the plan's foot stop: a foot still creeping there needs a new plan, the
         # rest of this one assumes it stopped)
         if elapsed + h < _plan_time(plan) - 1e-12 * period and _plan_holds(
-                robot, impact, schedule, h, x_before, plant.x, planned_for, believed):
+                robot, impact, schedule, h, x_before, measured, planned_for, believed):
             # the plan's own ground explains the sample and is still believed: by the
             # principle of optimality the plan's rest is the optimum from here, no re-solve
             paths.append("plan holds")
             elapsed += h
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
+            issued.append(issued[-1])
             continue
         try:
-            plan, path = _replan(problem, plan, elapsed + h, robot, believed, plant.x,
+            plan, path = _replan(problem, plan, elapsed + h, robot, believed, measured,
                                  planned_for)
             elapsed, planned_for = 0.0, believed
         except SolveError:  # no structure near the last one fits: transcribe and refine anew
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             try:
-                plan = _transcribed_plan(plan, elapsed + h, robot, believed, plant.x)
+                plan = _transcribed_plan(plan, elapsed + h, robot, believed, measured)
                 elapsed, path, planned_for = 0.0, "transcription", believed
                 replans += 1
             except SolveError:  # keep the last plan for this sample
@@ -283,9 +435,16 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         paths.append(path)
         out_times.append(1e3 * (time.perf_counter() - t0))
         cpu_times.append(1e3 * (time.process_time() - c0))
-    final = plant.finish(arrest_schedule(plant.x, robot.r_m) if plant.x[3] >= -stop else
-                         _shifted(_schedule(plan, robot), elapsed))
-    stroke = [r.stroke_min for _, r in plant.history], [r.stroke_max for _, r in plant.history]
+        issued.append((plant.t - elapsed, _schedule(plan, robot), _plan_time(plan)))
+    if plant.x[3] >= -stop:
+        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m))
+    else:
+        origin, command, _ = issued[-1]
+        final = plant.finish(_shifted(command, plant.t - origin))
+    # within each sample (a sample's simulation also ranges over the future under its
+    # control), then from the last sample on (the final simulation)
+    stroke = ([lo for lo, _ in plant.stroke_ranges] + [final.stroke_min],
+              [hi for _, hi in plant.stroke_ranges] + [final.stroke_max])
     return MPCLanding(robot=robot, impact=impact, ground=ground, model=model, period=period,
                       result=final, depth=final.depth, stroke_min=min(stroke[0]),
                       stroke_max=max(stroke[1]),
@@ -294,7 +453,203 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       replans=replans,
                       fallbacks=fallbacks, samples=samples, setup_ms=setup_ms,
                       structure_changes=paths.count("structure"), step_paths=paths,
-                      pieces=list(plant.history))
+                      pieces=list(plant.history), prepare_time_s=prepare_s,
+                      sample_limit_hit=samples >= max_samples and plant.x[3] < -stop,
+                      controller=controller, uncovered=uncovered, noise=sensor.noise,
+                      delay=sensor.delay, seed=seed, margin=margin)
+
+
+class Sensor:
+    """What the controller measures: the state, the foot's acceleration and the force, with
+    Gaussian noise of one standard deviation ``noise`` on the foot's position, velocity,
+    acceleration and the force; and the delay (samples) before its control acts.
+
+    Parameters
+    ----------
+    noise : float
+        Standard deviation (>= 0).
+    delay : int
+        Samples (>= 0).
+    seed : int
+        Random seed.
+    """
+
+    def __init__(self, noise: float = 0.0, delay: int = 0, seed: int = 0) -> None:
+        self.noise = check("noise", noise, (lambda v: v >= 0, "must be >= 0"))
+        if isinstance(delay, bool) or not isinstance(delay, int | np.integer):
+            raise ParameterError("delay", f"must be a whole number of samples, got {delay!r}")
+        self.delay = check_count("delay", int(delay), 0, 1000)
+        if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+            raise ParameterError("seed", f"must be a whole number >= 0, got {seed!r}")
+        self.rng = np.random.default_rng(int(seed))
+
+    def measure(self, x: np.ndarray, a_f: float = 0.0,
+                u: float = 0.0) -> tuple[np.ndarray, float, float]:
+        """The measured state, foot acceleration and force.
+
+        Parameters
+        ----------
+        x : array of 4
+            The true state.
+        a_f, u : float
+            The true foot acceleration and force.
+        """
+        if self.noise == 0.0:
+            return np.array(x, float), float(a_f), float(u)
+        e = self.rng.normal(0.0, self.noise, 4)
+        m = np.array(x, float)
+        m[2] += e[0]
+        m[3] += e[1]
+        return m, float(a_f + e[2]), float(u + e[3])
+
+
+    def arrest(self, x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
+        """The body's arrest from the measured state of a stopped foot: exact measurements,
+        the constant force that stops it in the stroke left, then its weight
+        (:func:`~softlanding.optimal.landing.arrest_schedule`). Noisy ones: the stroke left
+        less a reserve of ``ARREST_RESERVE`` standard deviations of the foot's position (a
+        measured stroke may be long), then the weight with a damped hold of the stroke
+        where the body stopped (the open-loop weight alone would let a velocity the noise
+        left drift the body forever)."""
+        if self.noise == 0.0:
+            return arrest_schedule(x, r_m)
+        stroke = float(x[0] - x[2])
+        reserve = min(ARREST_RESERVE * self.noise, 0.5 * stroke)
+        x_r = np.array(x, float)
+        x_r[0] -= reserve  # the arrest sees the stroke less the reserve
+        tail = arrest_schedule(x_r, r_m)
+        assert isinstance(tail, ForceSchedule)
+        w = r_m / (1 + r_m)
+        # where the arrest stops the body (the reserve left), or where it is
+        end = reserve if x[1] < 0 and stroke - reserve > 0 else stroke
+        hold = (-HOLD_GAINS[0], -HOLD_GAINS[1], HOLD_GAINS[0], HOLD_GAINS[1],
+                w + HOLD_GAINS[0] * end)
+        rows = [(0.0, 0.0, 0.0, 0.0, v) for v in tail.values[:-1]] + [hold]
+        return FeedbackSchedule(tail.times, tuple(rows))
+
+
+#: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
+#: arrest.
+ARREST_RESERVE = 3.0
+#: ``k_p, k_d`` of the damped hold of the stroke after a noisy arrest (per unit of the
+#: paper's force; critically damped for the body's mass ``r_m/(1+r_m)`` about 5/6).
+HOLD_GAINS = (1.0, 2.0)
+
+
+class _FastState:
+    """The compiled controller's numbers, memory and work arrays, and its schedules."""
+
+    def __init__(self, P: np.ndarray, M: np.ndarray, robot: Robot, active: bool) -> None:
+        self.P, self.M, self.active = P, M, active
+        self.u_max, self.r_m = force_limit(robot), robot.r_m
+        self.ws = bb.workspace()
+
+    @classmethod
+    def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
+              sensor: Sensor, margin: float = 0.0) -> _FastState:
+        """From the first plan (covered if it is push then pull, or pull)."""
+        kinds = tuple(m[0].kind for m in plan.modes) if isinstance(plan, RefinedSwitching) \
+            and all(len(m) == 1 for m in plan.modes) else ()
+        u_max = force_limit(robot)
+        k, c_d = ground_numbers(model)
+        # the ground force's noise from the acceleration's and the force's
+        beta, gamma = bb.force_coefficients(robot.r_m)
+        noise = max(sensor.noise * float(np.hypot(1.0, beta)) / abs(gamma), 1e-6)
+        P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin, period)
+        covered = kinds in (("max", "min"), ("min",))
+        d = np.asarray(plan.durations, float) if covered else np.array([0.0, 1.0])
+        t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
+        M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
+        out = cls(P, M, robot, covered)
+        if covered:  # the first plan's state at the foot's stop (its schedule's tail)
+            M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = np.asarray(plan.xT, float)[:3]
+        # compile (or load numba's cache) before impact: a sample must not pay for it
+        probe = M.copy()
+        bb.control_step(P.copy(), probe, np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0,
+                        1e-3 * period, False, *out.ws)
+        return out
+
+    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool) -> int:
+        """One compiled sample; the status."""
+        return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+
+    def schedule(self) -> ForceSchedule | FeedbackSchedule:
+        """The plan's force from now: push until the switch, pull until the foot's stop,
+        then the arrest of the body and its weight (from the plan's state at the stop)."""
+        M = self.M
+        t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
+        t2 = float(M[bb.M_TAU2])
+        x_t = np.array([M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT], 0.0])
+        tail = arrest_schedule(x_t, self.r_m)
+        assert isinstance(tail, ForceSchedule)  # (a constant arrest force, then the weight)
+        times = ((t1,) if t1 > 0 else ()) + (t1 + t2,) + tuple(t1 + t2 + t for t in tail.times)
+        values = ((self.u_max,) if t1 > 0 else ()) + (-self.u_max,) + tuple(tail.values)
+        return ForceSchedule(times, values)
+
+    def stop_time(self) -> float:
+        """When the plan has the foot stop (from now)."""
+        t1 = float(self.M[bb.M_TAU1]) if self.M[bb.M_PHASE] == bb.PUSH else 0.0
+        return t1 + float(self.M[bb.M_TAU2])
+
+    def estimate(self) -> GroundEstimate:
+        """The compiled estimator's fit and standard deviations."""
+        M, noise = self.M, self.P[bb.P_NOISE]
+        return GroundEstimate(float(M[bb.M_TH0]), float(M[bb.M_TH1]),
+                              float(np.sqrt(max(M[bb.M_P00], 0.0)) * noise),
+                              float(np.sqrt(max(M[bb.M_P11], 0.0)) * noise),
+                              int(M[bb.M_SAMPLES]))
+
+    def hand_over(self, est: GroundEstimator) -> None:
+        """Give the estimate to the re-planning MPC's estimator, and stop."""
+        M = self.M
+        est.theta = np.array([M[bb.M_TH0], M[bb.M_TH1]])
+        est.P = np.array([[M[bb.M_P00], M[bb.M_P01]], [M[bb.M_P01], M[bb.M_P11]]])
+        est.noise = float(self.P[bb.P_NOISE])
+        est.samples = int(M[bb.M_SAMPLES])
+        self.active = False
+
+
+def check_model(model: Any, name: str = "model") -> Ground:
+    """The controller's model ground: linear or drag (``f = K d + c_d v^2``, what it plans
+    for and estimates).
+
+    Parameters
+    ----------
+    model : LinearGround or DragGround
+        What the caller gave.
+    name : str
+        The argument's name in the message.
+
+    Raises
+    ------
+    ParameterError
+        Another ground model, or not a ground.
+    """
+    if not isinstance(model, LinearGround | DragGround):
+        what = getattr(model, "name", type(model).__name__)
+        raise ParameterError(name, f"the controller plans for a linear or drag ground "
+                                   f"(f = K d + c_d v^2), not the {what} ground")
+    return model
+
+
+def check_period(name: str, period: Any) -> float:
+    """A sample period within [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`].
+
+    Parameters
+    ----------
+    name : str
+        The argument's name in the message (``--period`` on the command line).
+    period : float
+        What the caller gave.
+
+    Raises
+    ------
+    ParameterError
+        Not finite, or out of the range.
+    """
+    return check(name, period, (lambda v: (v >= MIN_PERIOD) & (v <= MAX_PERIOD),
+                                f"must be within [{MIN_PERIOD:g}, {MAX_PERIOD:g}] (the "
+                                f"shortest bounds the samples per landing to about 1e4)"))
 
 
 PLAN_HOLDS_TOL = 1e-8
@@ -513,8 +868,12 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     """The landing from ``x`` transcribed (from the rest of the last plan) and refined."""
     if isinstance(plan, Solution):
         return solve_from_state(robot, believed, x, warm_start=plan)
-    found = solve_from_state(robot, believed, x, guess=plan.trajectory(200).after(applied))
+    # (a delayed actuation may have run past the plan's end: then no guess from it)
+    guess = plan.trajectory(200).after(applied) if applied < 0.99 * plan.T else None
+    found = solve_from_state(robot, believed, x, guess=guess)
     return found if isinstance(found, Solution) else _checked(found)
 
 
-__all__ = ["DEFAULT_PERIOD", "MPCLanding", "mpc_landing"]
+__all__ = ["ARREST_RESERVE", "CONTROLLERS", "DEFAULT_PERIOD", "HOLD_GAINS", "MAX_PERIOD",
+           "MIN_PERIOD", "MPCLanding", "Sensor",
+           "check_model", "check_period", "mpc_landing"]

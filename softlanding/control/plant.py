@@ -12,12 +12,29 @@ from __future__ import annotations
 
 import numpy as np
 
-from softlanding.errors import ParameterError, check
+from softlanding.errors import ParameterError, RestNotProvenError, check
 from softlanding.model.controllers import Controller
 from softlanding.model.dynamics import VF, robot_rhs
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import Impact, Robot
 from softlanding.simulation.simulator import LandingResult, simulate
+
+#: Exact points of each step on which its stroke range is taken.
+STROKE_POINTS = 65
+
+
+def _stroke_range(t: np.ndarray, s: np.ndarray) -> tuple[float, float]:
+    """``min, max`` of the stroke ``s`` sampled at ``t``, an interior extremum refined by the
+    parabola through it and its neighbours (exact for a quadratic stroke)."""
+    lo, hi = float(np.min(s)), float(np.max(s))
+    for i in (int(np.argmin(s)), int(np.argmax(s))):
+        if 0 < i < len(s) - 1:
+            a, b, c = s[i - 1], s[i], s[i + 1]
+            den = a - 2 * b + c
+            if den != 0:
+                v = b - (c - a) ** 2 / (8 * den)
+                lo, hi = min(lo, v), max(hi, v)
+    return lo, hi
 
 
 class SteppingPlant:
@@ -41,7 +58,11 @@ class SteppingPlant:
     crater : float
         The crater's depth (the deepest the foot has been).
     history : list of (float, LandingResult)
-        Every step's start time and simulation.
+        Every step's start time and simulation (whose stroke range covers the future under
+        the step's control, beyond the step).
+    stroke_ranges : list of (float, float)
+        The stroke's range within each step (on :data:`STROKE_POINTS` exact points of the
+        step, an interior extremum refined by the parabola through its neighbours).
     """
 
     def __init__(self, robot: Robot, impact: Impact | float,
@@ -51,6 +72,7 @@ class SteppingPlant:
         self.t = 0.0
         self.crater = 0.0
         self.history: list[tuple[float, LandingResult]] = []
+        self.stroke_ranges: list[tuple[float, float]] = []
 
     def step(self, control: Controller, duration: float) -> np.ndarray:
         """Apply ``control`` (its time from this step's start) for ``duration``; the new state.
@@ -67,7 +89,15 @@ class SteppingPlant:
             raise ParameterError("x", "the foot has left its crater's bottom: the stepping "
                                       "plant holds the crater only while the foot digs")
         res = simulate(self.robot, self.impact, control, self.ground, x0=self.x, t_max=h)
-        end = res.trajectory(t_end=h, n=2).x[-1]
+        try:
+            tr = res.trajectory(t_end=h, n=STROKE_POINTS)
+        except RestNotProvenError:
+            # the simulation proved the step's outcome before its end (the foot at rest,
+            # the body leaving without bound): the step ends where its samples do
+            tr = res.trajectory(n=STROKE_POINTS)
+            h = float(tr.t[-1])
+        end = tr.x[-1]
+        self.stroke_ranges.append(_stroke_range(tr.t, tr.x[:, 0] - tr.x[:, 2]))
         self.history.append((self.t, res))
         self.x, self.t = np.array(end, float), self.t + h
         self.crater = max(self.crater, -self.x[2])

@@ -153,6 +153,73 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
             for v, i in show_progress(cases, progress, desc="unknown ground", unit="case")]
 
 
+#: The realistic sensing of the controller study (issue 33), in the paper's units on its
+#: rig (x_s = 6.7 mm, tau_s = 26 ms, m_t g = 29 N): a standard deviation of 1e-3 is 7 um of
+#: foot position, 0.26 mm/s of velocity, 1e-3 g of acceleration and 0.03 N of force; one
+#: sample (0.26 ms) between a measurement and its actuation.
+REALISTIC_NOISE, REALISTIC_DELAY = 1e-3, 1
+
+
+def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
+                    period: float = DEFAULT_PERIOD, noise: float = REALISTIC_NOISE,
+                    delay: int = REALISTIC_DELAY, margins: Sequence[float] = (0.0, 2.0),
+                    seed: int = 0) -> dict[str, Any]:
+    """One case of the controller study: the clairvoyant optimum, the compiled bang-bang
+    controller with exact measurements, and with noisy, delayed ones for each margin.
+
+    Parameters
+    ----------
+    v0 : float
+        Impact velocity.
+    ground : Ground
+        The true ground.
+    robot : Robot
+        The robot.
+    period : float
+        The sample period.
+    noise, delay, seed : float, int, int
+        The noisy sensing (:func:`~softlanding.control.mpc_landing`).
+    margins : sequence of float
+        The noisy landings' margins (one landing each, key ``"noisy_m<margin>"``).
+    """
+    clair = solve_landing(v0, robot, ground)
+    row: dict[str, Any] = {"v0": v0, "ground": ground.to_dict(),
+                           "clairvoyant_depth": clair.depth,
+                           "clairvoyant_verified": not clair.unverified_reasons(),
+                           "clairvoyant_bang_bang": clair.refined is not None}
+    runs = {"exact": {}, **{f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed,
+                                              "margin": m} for m in margins}}
+    for key, kw in runs.items():
+        m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)
+        row[key] = {**m.to_dict(), "ratio": m.depth / clair.depth,
+                    "step_times_ms": list(m.step_times_ms), "step_cpu_ms": list(m.step_cpu_ms),
+                    "paths": sorted(set(m.step_paths))}
+    return row
+
+
+def controller_study(v0_values: Sequence[float] = STUDY_V0,
+                     stiffness: Sequence[float] = STUDY_STIFFNESS,
+                     drag: Sequence[float] = STUDY_DRAG, robot: Robot = PAPER_ROBOT, *,
+                     progress: bool | None = None, **kw: Any) -> list[dict[str, Any]]:
+    """:func:`controller_case` on every case of the grid, velocity-major.
+
+    Parameters
+    ----------
+    v0_values, stiffness, drag : sequences of float
+        The grid.
+    robot : Robot
+        The robot.
+    progress : bool, optional
+        A progress bar.
+    **kw
+        To :func:`controller_case`.
+    """
+    cases = [(v, true_ground(k, c)) for v in v0_values for k, c in
+             itertools.product(stiffness, drag)]
+    return [controller_case(v, g, robot, **kw)
+            for v, g in show_progress(cases, progress, desc="controller", unit="case")]
+
+
 def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     """The study's goals checked: MPC within 2 % of the clairvoyant depth and never below it,
     every limit held; the step times' median and 99th percentile over every step of every
@@ -214,5 +281,6 @@ def _worst_cases(rows: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     return out
 
 
-__all__ = ["STUDY_DRAG", "STUDY_STIFFNESS", "STUDY_V0", "study_summary", "true_ground",
+__all__ = ["REALISTIC_DELAY", "REALISTIC_NOISE", "STUDY_DRAG", "controller_case",
+           "controller_study", "STUDY_STIFFNESS", "STUDY_V0", "study_summary", "true_ground",
            "unknown_ground_case", "unknown_ground_study"]

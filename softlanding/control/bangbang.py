@@ -1,0 +1,530 @@
+"""A compiled landing controller: real-time Newton on the bang-bang plan's switching times.
+
+On every ground ``f = K d + c_d v_f^2`` where the optimal landing is bang-bang it is full
+push (``u = u_max``) for ``tau_1``, then full pull (``u = -u_max``) for ``tau_2`` until the
+foot stops, with the body's arrest exactly within the crater's hold (the ``ARREST``
+condition of :func:`softlanding.optimal.landing.landing_stance` active). From a measured
+state the two durations solve two equations,
+
+``v_f(tau_1 + tau_2) = 0`` and
+``S (K d - 1/(1+r_m)) - r_m/(1+r_m) (S + v_b^2/2) = 0`` at the foot's stop
+(``S = x_b - x_f`` the stroke, ``d = -x_f``),
+
+the exact Newton re-solve of the plan's structure that :mod:`softlanding.control.mpc` runs
+through :func:`ocp.refine_structure`, here compiled: the body moves in closed form (its
+acceleration holds no ground), the foot's two states and their sensitivity (the transition
+matrix of the pull arc) by adaptive Dormand-Prince 8(5,3) steps (the simulator's
+coefficients, :mod:`softlanding.simulation.kernel.dop853`) to ``RTOL``. Every sample starts
+Newton from the last plan shifted by the sample (a real-time iteration, iterated to
+convergence: one or two Newton steps once the estimate has settled). Once the push has
+ended only ``tau_2`` is left (the foot's stop), and the arrest condition is checked, not
+solved. The acceleration coefficients come from
+:func:`softlanding.model.dynamics.robot_rhs` (one definition of the dynamics).
+
+The ground estimate is the recursive least squares of
+:class:`~softlanding.control.estimation.GroundEstimator`, compiled into the same step.
+
+A state the structure does not cover (Newton fails, a duration turns negative beyond the
+switch, the arrest cannot hold, a limit on the plan's path) is reported, and the caller
+falls back to the re-planning MPC (:func:`~softlanding.control.mpc.mpc_landing` counts it).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from softlanding.model.dynamics import VB, VF, robot_rhs
+from softlanding.simulation.kernel.dop853 import E3 as DE3
+from softlanding.simulation.kernel.dop853 import E5 as DE5
+from softlanding.simulation.kernel.dop853 import A as DA
+from softlanding.simulation.kernel.dop853 import B as DB
+
+JIT = {"cache": True, "fastmath": False}
+
+#: Relative and absolute tolerance of the foot's integration.
+RTOL = 1e-13
+
+#: Newton's iterations per sample at most, and its tolerance on the durations (relative to
+#: the plan's length).
+MAX_NEWTON, NEWTON_TOL = 30, 1e-13
+
+# the layout of the robot and ground numbers P
+(P_AB0, P_BB, P_AF0, P_BF, P_GF, P_K, P_CD, P_RM, P_S, P_UMAX, P_HOLD0, P_NOISE,
+ P_MARGIN, P_BUDGET, P_PERIOD) = range(15)
+NP = 15
+# the layout of the controller's memory M
+(M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
+ M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED, M_PRED, M_PRED_OK, M_KPLAN,
+ M_CPLAN, M_LAST_STEP) = (*range(15), 15, 19, 20, 21, 22)
+NM = 23
+
+#: Phases: pushing (both arcs left), pulling (the foot's stop left).
+PUSH, PULL = 0, 1
+#: Statuses of a step: covered (the plan re-solved), and why not.
+OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS = 0, 1, 2, 3, 4, 5
+STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
+                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds"}
+
+#: Relative agreement of the measured state with the plan's prediction, and of the estimate
+#: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
+PLAN_HOLDS_TOL = 1e-8
+
+#: Newton iterations per sample while the switch is more than three samples away (one:
+#: acados' real-time iteration).
+BUDGET = 1
+#: Samples in a row whose Newton step is still above a tenth of the period before the
+#: state counts as not covered.
+MAX_UNCONVERGED = 12
+
+
+def force_coefficients(r_m: float) -> tuple[float, float]:
+    """``beta, gamma`` of the foot's acceleration ``alpha + beta u + gamma f_g``.
+
+    Parameters
+    ----------
+    r_m : float
+        Mass ratio.
+    """
+    P = robot_numbers(r_m, 1.0, 1.0, 1.0, 0.0)
+    return float(P[P_BF]), float(P[P_GF])
+
+
+def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: float,
+                  noise_std: float = 1e-6, margin: float = 0.0,
+                  period: float = 0.01) -> np.ndarray:
+    """The numbers the compiled step reads (``P``), from the one definition of the dynamics.
+
+    Parameters
+    ----------
+    r_m, s, u_max : float
+        Mass ratio, stroke, force limit.
+    stiffness, c_d : float
+        The ground's ``K`` and drag number (the plan's).
+    noise_std : float
+        Standard deviation of one measured ground force (the estimator's).
+    margin : float
+        Plan for the estimate less ``margin`` standard deviations.
+    period : float
+        The sample period (the plan-holds check predicts the next sample).
+    """
+    x = np.zeros(4)
+    b0 = robot_rhs(x, 0.0, 0.0, r_m)
+    b1 = robot_rhs(x, 1.0, 0.0, r_m)
+    g1 = robot_rhs(x, 0.0, 1.0, r_m)
+    P = np.zeros(NP)
+    P[P_AB0], P[P_BB] = float(b0[VB]), float(b1[VB] - b0[VB])
+    P[P_AF0], P[P_BF], P[P_GF] = float(b0[VF]), float(b1[VF] - b0[VF]), float(g1[VF] - b0[VF])
+    P[P_K], P[P_CD], P[P_RM], P[P_S], P[P_UMAX] = stiffness, c_d, r_m, s, u_max
+    P[P_HOLD0] = 1.0 / (1.0 + r_m)
+    P[P_NOISE] = noise_std
+    P[P_MARGIN] = margin
+    P[P_BUDGET] = BUDGET
+    P[P_PERIOD] = period
+    return P
+
+
+def new_memory(tau1: float, tau2: float, prior: tuple[float, float],
+               prior_std: tuple[float, float], noise_std: float) -> np.ndarray:
+    """The controller's memory (``M``) before impact: the first plan and the estimator's prior.
+
+    Parameters
+    ----------
+    tau1, tau2 : float
+        The first plan's push and pull durations (``tau1 = 0``: pulling from the start).
+    prior, prior_std : (float, float)
+        The estimator's prior ``(K, c_d)`` and its standard deviations.
+    noise_std : float
+        Standard deviation of one measured ground force.
+    """
+    M = np.zeros(NM)
+    M[M_PHASE] = PUSH if tau1 > 0 else PULL
+    M[M_TAU1], M[M_TAU2] = tau1, tau2
+    M[M_TH0], M[M_TH1] = prior
+    M[M_P00] = (prior_std[0] / noise_std) ** 2
+    M[M_P11] = (prior_std[1] / noise_std) ** 2
+    return M
+
+
+def workspace() -> tuple[np.ndarray, np.ndarray]:
+    """Work arrays of the compiled step: nothing is allocated per sample, and two arrays
+    (not nine) keep the call's dispatch short. ``K``: the 13 stages, then the Jacobian
+    (rows 13-14); ``W``: trial state, new state, state, residuals, path and end numbers,
+    body, largest ``v_f``."""
+    return np.zeros((15, 6)), np.zeros(32)
+
+
+@njit(**JIT, inline="always")
+def _views(K, W):
+    return (W[0:6], W[6:12], W[12:18], K[13:15, 0:2], W[18:20], W[20:26], W[26:31],
+            W[31:32])
+
+
+@njit(**JIT)
+def _rhs(P, u, y, n, out, row):
+    """The foot's ``[x_f, v_f]`` (and, ``n = 6``, its transition matrix, row-major) slope."""
+    xf, vf = y[0], y[1]
+    out[row, 0] = vf
+    # (-c_d v_f |v_f|: the law c_d v_f^2 of a descending foot, continued past the stop as a
+    # drag, so that a guess whose pull runs past the stop still marches)
+    out[row, 1] = P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
+    if n == 6:
+        j10 = -P[P_GF] * P[P_K]
+        j11 = -2.0 * P[P_GF] * P[P_CD] * abs(vf)
+        out[row, 2] = y[4]
+        out[row, 3] = y[5]
+        out[row, 4] = j10 * y[2] + j11 * y[4]
+        out[row, 5] = j10 * y[3] + j11 * y[5]
+
+
+@njit(**JIT)
+def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax):
+    """March ``y`` (the foot, ``n`` states) under force ``u`` for ``tau``, in place; track the
+    largest ``v_f`` and the stroke's range on the steps' nodes (the body from ``body =
+    [x_b, v_b, a_b, S_min, S_max]`` in closed form). Returns False if the march fails."""
+    if tau <= 0.0:
+        return True
+    t = 0.0
+    h = min(tau, 0.02)
+    _rhs(P, u, y, n, K, 0)
+    for _ in range(100000):
+        if t + h >= tau:
+            h = tau - t
+        for s in range(1, 12):
+            for i in range(n):
+                acc = 0.0
+                for j in range(s):
+                    a = DA[s, j]
+                    if a != 0.0:
+                        acc += a * K[j, i]
+                Yt[i] = y[i] + h * acc
+            _rhs(P, u, Yt, n, K, s)
+        for i in range(n):
+            acc = 0.0
+            for j in range(12):
+                acc += DB[j] * K[j, i]
+            ynew[i] = y[i] + h * acc
+        _rhs(P, u, ynew, n, K, 12)
+        e5 = 0.0
+        e3 = 0.0
+        for i in range(n):
+            sc = RTOL + RTOL * max(abs(y[i]), abs(ynew[i]))
+            a5 = 0.0
+            a3 = 0.0
+            for j in range(13):
+                a5 += DE5[j] * K[j, i]
+                a3 += DE3[j] * K[j, i]
+            e5 += (a5 / sc) ** 2
+            e3 += (a3 / sc) ** 2
+        den = e5 + 0.01 * e3
+        err = 0.0 if den == 0.0 else abs(h) * e5 / math.sqrt(den * n)
+        if not math.isfinite(err):
+            return False
+        if err <= 1.0:
+            t += h
+            for i in range(n):
+                y[i] = ynew[i]
+                K[0, i] = K[12, i]
+            xb = body[0] + body[1] * t + 0.5 * body[2] * t * t
+            stroke = xb - y[0]
+            body[3] = min(body[3], stroke)
+            body[4] = max(body[4], stroke)
+            vmax[0] = max(vmax[0], y[1])
+            if t >= tau:
+                return True
+            fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
+            h = h * fac
+        else:
+            h = h * max(0.2, 0.9 * err ** (-1.0 / 8.0))
+        if h < 1e-14 * (1.0 + tau):
+            return False
+    return False
+
+
+@njit(**JIT)
+def _arrest(P, xb, vb, xf):
+    """The arrest condition at the foot's stop (>= 0: the crater holds the body's arrest)."""
+    S = xb - xf
+    c = P[P_RM] / (1.0 + P[P_RM])
+    return S * (P[P_K] * (-xf) - P[P_HOLD0]) - c * (S + 0.5 * vb * vb)
+
+
+@njit(**JIT)
+def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
+    """Residuals ``r`` (and, ``jac``, their Jacobian ``J`` in ``(tau1, tau2)``) of the plan
+    ``(tau1, tau2)`` from ``x``; ``lim`` gets ``[max v_f before the stop, S_min, S_max]``.
+    False if a march failed."""
+    umax = P[P_UMAX]
+    a1 = P[P_AB0] + P[P_BB] * umax
+    a2 = P[P_AB0] - P[P_BB] * umax
+    vmax[0] = -np.inf
+    S0 = x[0] - x[2]
+    body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, S0, S0
+    y[0], y[1] = x[2], x[3]
+    if not _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax):
+        return False
+    xf1, vf1 = y[0], y[1]
+    acc1 = P[P_AF0] + P[P_BF] * umax + P[P_GF] * (-P[P_K] * xf1 - P[P_CD] * vf1 * abs(vf1))
+    xb1 = x[0] + x[1] * tau1 + 0.5 * a1 * tau1 * tau1
+    vb1 = x[1] + a1 * tau1
+    y[2], y[3], y[4], y[5] = 1.0, 0.0, 0.0, 1.0
+    body[0], body[1], body[2] = xb1, vb1, a2
+    vmax[0] = max(vmax[0], vf1)
+    vmax_push = vmax[0]
+    if not _flow(P, -umax, y, 6, tau2, K, Yt, ynew, body, vmax):
+        return False
+    xfT, vfT = y[0], y[1]
+    xbT = xb1 + vb1 * tau2 + 0.5 * a2 * tau2 * tau2
+    vbT = vb1 + a2 * tau2
+    r[0] = vfT
+    r[1] = _arrest(P, xbT, vbT, xfT)
+    lim[0] = vmax_push
+    lim[1], lim[2] = body[3], body[4]
+    lim[3], lim[4], lim[5] = xbT, vbT, xfT
+    if not jac:
+        return True
+    accT = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * xfT - P[P_CD] * vfT * abs(vfT))
+    # d/dtau1 (tau2 fixed): the pull arc's transition matrix on the push's slope at the switch
+    dxf1 = y[2] * vf1 + y[3] * acc1
+    dvf1 = y[4] * vf1 + y[5] * acc1
+    dxb1 = vb1 + a1 * tau2
+    dvb1 = a1
+    # d/dtau2: the pull's slope at the stop
+    dxf2, dvf2, dxb2, dvb2 = vfT, accT, vbT, a2
+    S = xbT - xfT
+    c = P[P_RM] / (1.0 + P[P_RM])
+    hold = P[P_K] * (-xfT) - P[P_HOLD0]
+    J[0, 0], J[0, 1] = dvf1, dvf2
+    J[1, 0] = (dxb1 - dxf1) * hold - S * P[P_K] * dxf1 - c * ((dxb1 - dxf1) + vbT * dvb1)
+    J[1, 1] = (dxb2 - dxf2) * hold - S * P[P_K] * dxf2 - c * ((dxb2 - dxf2) + vbT * dvb2)
+    return True
+
+
+@njit(**JIT)
+def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
+    """Newton on ``(tau1, tau2)`` from ``M``'s (already shifted) plan, at most ``budget``
+    iterations; the status (:data:`CONVERGING`: the budget ran out, the iterate is kept)."""
+    t1, t2 = M[M_TAU1], M[M_TAU2]
+    converged = False
+    for it in range(budget):
+        M[M_ITER] = it + 1
+        if not _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim, body, vmax, True):
+            return NEWTON_FAILED
+        det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
+        if det == 0.0 or not math.isfinite(det):
+            return NEWTON_FAILED
+        d1 = (J[1, 1] * r[0] - J[0, 1] * r[1]) / det
+        d2 = (J[0, 0] * r[1] - J[1, 0] * r[0]) / det
+        # damped: no duration more than halved by one step (a far guess)
+        lam = 1.0
+        if t2 - d2 < 0.5 * t2:
+            lam = min(lam, 0.5 * t2 / d2)
+        if t1 > 0 and t1 - d1 < -0.5 * t1 - 0.05 * t2:
+            lam = min(lam, (1.5 * t1 + 0.05 * t2) / d1)
+        t1 -= lam * d1
+        t2 -= lam * d2
+        M[M_LAST_STEP] = abs(lam * d1) + abs(lam * d2)
+        if not (t2 > 0.0 and math.isfinite(t1) and math.isfinite(t2)):
+            return NEWTON_FAILED
+        if lam == 1.0 and abs(d1) + abs(d2) <= NEWTON_TOL * (1.0 + abs(t1) + t2):
+            converged = True
+            break
+    if not converged:
+        if t1 <= 0.0:
+            return NEWTON_FAILED
+        M[M_TAU1], M[M_TAU2] = t1, t2
+        return CONVERGING
+    if t1 < 0.0:  # the switch is due already: pull from now, if the arrest then holds
+        M[M_PHASE] = PULL
+        return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+    M[M_TAU1], M[M_TAU2] = t1, t2
+    M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
+    if lim[0] > 1e-9 * (1.0 + abs(x[3])) or lim[1] < -1e-9 or lim[2] > P[P_S] * (1 + 1e-9):
+        return PATH_LIMIT
+    return OK
+
+
+@njit(**JIT)
+def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax):
+    """Newton on ``tau2`` for ``v_f = 0`` (the foot's stop) pulling from ``x``; the arrest
+    condition then checked; the status."""
+    t2 = M[M_TAU2]
+    umax = P[P_UMAX]
+    for it in range(MAX_NEWTON):
+        M[M_ITER] = it + 1
+        if not _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False):
+            return NEWTON_FAILED
+        acc = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * y[0] - P[P_CD] * y[1] * abs(y[1]))
+        if not acc > 0.0:
+            return NEWTON_FAILED
+        d = r[0] / acc
+        if t2 - d < 0.5 * t2:
+            d = 0.5 * t2
+        t2 -= d
+        if abs(d) <= NEWTON_TOL * (1.0 + t2):
+            break
+    else:
+        return NEWTON_FAILED
+    M[M_TAU1], M[M_TAU2] = 0.0, t2
+    M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
+    if r[1] < -1e-9 * (1.0 + abs(x[0] - x[2])):
+        return ARREST_FAILS
+    return OK
+
+
+@njit(**JIT)
+def _estimate(P, M, x, a_f, u):
+    """One recursive least-squares update of ``(K, c_d)`` from a yielding foot's measured
+    acceleration (as :meth:`GroundEstimator.update`)."""
+    p0, p1 = -x[2], x[3] * x[3]
+    y = (a_f - P[P_AF0] - P[P_BF] * u) / P[P_GF]
+    q00, q01, q11 = M[M_P00], M[M_P01], M[M_P11]
+    pp0 = q00 * p0 + q01 * p1
+    pp1 = q01 * p0 + q11 * p1
+    den = 1.0 + p0 * pp0 + p1 * pp1
+    k0, k1 = pp0 / den, pp1 / den
+    e = y - (p0 * M[M_TH0] + p1 * M[M_TH1])
+    M[M_TH0] += k0 * e
+    M[M_TH1] += k1 * e
+    M[M_P00] = q00 - k0 * pp0
+    M[M_P01] = q01 - k0 * pp1
+    M[M_P11] = q11 - k1 * pp1
+    M[M_SAMPLES] += 1
+
+
+@njit(**JIT)
+def _predict(P, x, M, K, Yt, ynew, y, body, vmax):
+    """The state the plan in ``M`` predicts after the next sample from ``x``, for the
+    plan-holds check (none if that sample ends at the foot's stop)."""
+    t1 = M[M_TAU1] if M[M_PHASE] == PUSH else 0.0
+    hn = P[P_PERIOD]
+    if hn >= t1 + M[M_TAU2]:
+        return
+    umax = P[P_UMAX]
+    a1 = P[P_AB0] + P[P_BB] * umax
+    a2 = P[P_AB0] - P[P_BB] * umax
+    tp = min(hn, t1)
+    y[0], y[1] = x[2], x[3]
+    body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, 0.0, 0.0
+    if not _flow(P, umax, y, 2, tp, K, Yt, ynew, body, vmax):
+        return
+    xb = x[0] + x[1] * tp + 0.5 * a1 * tp * tp
+    vb = x[1] + a1 * tp
+    tq = hn - tp
+    body[0], body[1], body[2] = xb, vb, a2
+    if not _flow(P, -umax, y, 2, tq, K, Yt, ynew, body, vmax):
+        return
+    M[M_PRED], M[M_PRED + 1] = xb + vb * tq + 0.5 * a2 * tq * tq, vb + a2 * tq
+    M[M_PRED + 2], M[M_PRED + 3] = y[0], y[1]
+    M[M_KPLAN], M[M_CPLAN] = P[P_K], P[P_CD]
+    M[M_PRED_OK] = 1.0
+
+
+@njit(**JIT)
+def solve_plan(P, M, x, K, W):
+    """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
+    (no estimate, no shift); the status.
+
+    Parameters
+    ----------
+    P, M : arrays
+        :func:`robot_numbers`, :func:`new_memory` (its durations the guess).
+    x : array of 4
+        The state.
+    K, W : arrays
+        :func:`workspace`.
+    """
+    Yt, ynew, y, J, r, lim, body, vmax = _views(K, W)
+    if M[M_PHASE] == PUSH:
+        return _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, MAX_NEWTON)
+    return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+
+
+@njit(**JIT)
+def control_step(P, M, x, a_f, u, h, estimate, K, W):
+    """One sample of the controller, compiled: the estimate updated from the measurement
+    (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from
+    ``x`` for the estimated ground. Returns the status (:data:`OK` or why not covered);
+    the plan is in ``M``.
+
+    Parameters
+    ----------
+    P : array
+        :func:`robot_numbers` (its ``K``, ``c_d`` are overwritten by the estimate).
+    M : array
+        :func:`new_memory`, updated in place.
+    x : array of 4
+        The measured state.
+    a_f, u : float
+        The measured foot acceleration and the force the sample ended under.
+    h : float
+        The sample just applied.
+    estimate : bool
+        Update the estimate (else keep the ground in ``P``).
+    K, W : arrays
+        :func:`workspace`.
+    """
+    Yt, ynew, y, J, r, lim, body, vmax = _views(K, W)
+    if estimate and x[3] < 0.0:
+        _estimate(P, M, x, a_f, u)
+        if M[M_SAMPLES] >= 2:  # as the re-planning MPC: two samples before the fit is used
+            m = P[P_MARGIN] * P[P_NOISE]
+            P[P_K] = max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 1e-3)
+            P[P_CD] = max(M[M_TH1] - m * math.sqrt(max(M[M_P11], 0.0)), 0.0)
+    # the sample went as the converged plan predicted, on the ground it was planned for,
+    # which is still the estimate: by the principle of optimality its rest is still optimal
+    holds = M[M_PRED_OK] == 1.0 and abs(P[P_K] - M[M_KPLAN]) <= PLAN_HOLDS_TOL * M[M_KPLAN] \
+        and abs(P[P_CD] - M[M_CPLAN]) <= PLAN_HOLDS_TOL * max(1.0, M[M_CPLAN])
+    if holds:
+        scale = 1.0
+        for i in range(4):
+            scale = max(scale, abs(x[i]))
+        for i in range(4):
+            if abs(x[i] - M[M_PRED + i]) > PLAN_HOLDS_TOL * scale:
+                holds = False
+    M[M_PRED_OK] = 0.0
+    if M[M_PHASE] == PUSH:
+        if M[M_TAU1] > h:
+            M[M_TAU1] -= h
+            if holds:
+                M[M_ITER] = 0
+                _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+                M[M_STATUS] = HOLDS
+                return HOLDS
+            # a real-time iteration: a few Newton steps per sample while the switch is far
+            # (the next samples go on converging), to convergence when it is near
+            budget = int(P[P_BUDGET]) if M[M_TAU1] > 3.0 * h else MAX_NEWTON
+            st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget)
+            # (a run of large Newton steps: with noisy measurements the estimate moves every
+            # sample, and the plan with it, by less than this)
+            far = st == CONVERGING and M[M_LAST_STEP] > 0.1 * P[P_PERIOD]
+            M[M_UNCONVERGED] = M[M_UNCONVERGED] + 1 if far else 0
+            if M[M_UNCONVERGED] > MAX_UNCONVERGED:
+                st = NEWTON_FAILED
+            if st == OK:
+                _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+            M[M_STATUS] = st
+            return st
+        # the switch fell within the sample
+        M[M_TAU2] = max(M[M_TAU2] - (h - M[M_TAU1]), 1e-3 * M[M_TAU2])
+        M[M_PHASE] = PULL
+    else:
+        M[M_TAU2] = max(M[M_TAU2] - h, 1e-3 * M[M_TAU2])
+    if holds:
+        M[M_ITER] = 0
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+        M[M_STATUS] = HOLDS
+        return HOLDS
+    st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+    if st == OK:
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+    M[M_STATUS] = st
+    return st
+
+
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
+           "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH",
+           "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "new_memory",
+           "robot_numbers", "solve_plan", "workspace"]
