@@ -203,7 +203,7 @@ class MultistartResult:
     optima: list[LocalOptimum]
     starts: list[StartResult]
     method: str
-    seed: int | None
+    seed: int | np.random.Generator | None
     wall_time: float
     boxes: dict[str, tuple[float, float, bool]] = field(default_factory=dict)
 
@@ -573,7 +573,7 @@ def _time_coordinates(pre: str, tm: PhaseTimes, linked: bool, spread: float,
 
 
 def _starts(tr: Transcription, params: dict[str, float], coords: list[_Coordinate], n: int,
-            method: str, seed: int | None, guess: Any
+            method: str, seed: int | np.random.Generator | None, guess: Any
             ) -> tuple[list[str], list[dict[str, float]], list[np.ndarray]]:
     """Origins, sampled points and decision vectors of the ``n`` starts."""
     first = tr.default_guess(params) if guess is None else _as_vector(tr, params, guess)

@@ -327,7 +327,9 @@ class CollocationPhase(PhaseDiscretization):
         """Quadrature weight ``h_k B_j`` of every collocation point (normalised time), (N d,)."""
         return (np.diff(self.tau)[:, None] * self.B[None, :]).ravel()
 
-    def dual_from(self, old: CollocationPhase, lam_g: dict[str, np.ndarray],
+    maps_duals = True
+
+    def dual_from(self, old: PhaseDiscretization, lam_g: dict[str, np.ndarray],
                   lam_x: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Multipliers for this mesh from those of the same phase on another mesh.
 
@@ -354,6 +356,8 @@ class CollocationPhase(PhaseDiscretization):
         tuple
             ``(lam_g by block name, lam_x block)`` for this mesh.
         """
+        if not isinstance(old, CollocationPhase):
+            raise TypeError("multipliers map between collocation meshes only")
         nx, nu = self.cp.nx, self.cp.nu
         quad = (old.weights(), self.weights())
         nodal = (np.tile(old.B, old.N), np.tile(self.B, self.N))

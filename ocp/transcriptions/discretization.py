@@ -243,6 +243,25 @@ class PhaseDiscretization:
         """
         raise NotImplementedError
 
+    maps_duals = False
+    """Whether :meth:`dual_from` maps another discretisation's multipliers onto this one."""
+
+    def dual_from(self, old: PhaseDiscretization, lam_g: dict[str, np.ndarray],
+                  lam_x: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+        """Multipliers for this discretisation from those of the same phase on another
+        (only where :attr:`maps_duals`).
+
+        Parameters
+        ----------
+        old : PhaseDiscretization
+            The discretisation the multipliers belong to.
+        lam_g : dict
+            Its constraint multipliers by block name.
+        lam_x : ndarray
+            Its block of the bound multipliers.
+        """
+        raise NotImplementedError(f"{type(self).__name__} does not map multipliers")
+
     def guess_from(self, sample: Any, t0: float, T: float) -> np.ndarray:
         """A block of ``w`` from ``sample(t) -> (x, u)`` over ``[t0, T]``.
 

@@ -273,9 +273,11 @@ class Transcription:
                 sb.set_entries(np.arange(lay.iU.start, lay.iU.stop)[k::ph.nu],
                                sb.ref(name, user, lo, hi, guess))
             if lay.iT is not None:
-                sb.set_entries(lay.iT, sb.ref("time", None, *tm.T_bounds, tm.T_guess))
+                lo, hi = tm.T_bounds
+                sb.set_entries(lay.iT, sb.ref("time", None, lo, hi, tm.T_guess))
             if lay.it0 is not None:
-                sb.set_entries(lay.it0, sb.ref("time", None, *tm.t0_bounds, tm.t0_guess))
+                lo, hi = tm.t0_bounds
+                sb.set_entries(lay.it0, sb.ref("time", None, lo, hi, tm.t0_guess))
             if "path" in lay.blocks:
                 rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
                 sl = lay.blocks["path"]
@@ -528,7 +530,7 @@ class Transcription:
         other = sol.transcription
         same = other.problem is self.problem or other.multiphase is self.multiphase
         if not same or len(sol.phases) != len(self.phases) or \
-                any(not hasattr(d, "dual_from") or type(d) is not type(o)
+                any(not d.maps_duals or type(d) is not type(o)
                     for d, o in zip(self.phases, other.phases, strict=True)):
             return None
         lam_x, lam_g = np.zeros(self.n_w), np.zeros(self.n_g)

@@ -335,7 +335,7 @@ class Collocation(Transcription):
         multipliers interpolated (Ipopt's warm start) when that solution is ``close``
         (see :data:`WARM_REFINE_ERROR`), else (or if that fails) from its primal values
         only, else from the first round's start."""
-        starts = ((None, sol), (sol, None), (guess, None))
+        starts: tuple[tuple[Any, Solution | None], ...] = ((None, sol), (sol, None), (guess, None))
         if not close:
             starts = starts[1:]
         for k, (g, warm) in enumerate(starts):

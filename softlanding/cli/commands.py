@@ -232,12 +232,6 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _ground_text(ground: Any) -> str:
-    d = ground.to_dict()
-    params = [f"{k}={v:g}" for k, v in d.items() if k != "model" and isinstance(v, (int, float))]
-    return " ".join([str(d["model"])] + params)
-
-
 def _cmd_map(a: argparse.Namespace) -> int:
     robot, impact, ground = robot_of(a), Impact(a.v0), ground_of_args(a)
     out, plot = target(a, "out"), target(a)

@@ -32,6 +32,7 @@ falls back to the re-planning MPC (:func:`~softlanding.control.mpc.mpc_landing` 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -42,7 +43,7 @@ from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
 from softlanding.simulation.kernel.dop853 import B as DB
 
-JIT = {"cache": True, "fastmath": False}
+JIT: dict[str, Any] = {"cache": True, "fastmath": False}
 
 #: Relative and absolute tolerance of the foot's integration.
 RTOL = 1e-13

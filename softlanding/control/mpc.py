@@ -336,9 +336,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     believed = planned_for = model
     # the commands issued, each (its time origin, its schedule from there, the planned stop
     # of the foot from there); the actuator applies the one issued `delay` samples ago
-    first = (0.0, fast.schedule() if fast is not None and fast.active else _schedule(plan, robot),
-             fast.stop_time() if fast is not None and fast.active else _plan_time(plan))
-    issued = [first]
+    issued: list[tuple[float, Any, float]] = [
+        (0.0, fast.schedule() if fast is not None and fast.active else _schedule(plan, robot),
+         fast.stop_time() if fast is not None and fast.active else _plan_time(plan))]
     # the foot has stopped when it is static, or creeps by rounding at the crater's exact
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))

@@ -187,7 +187,7 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                            "clairvoyant_depth": clair.depth,
                            "clairvoyant_verified": not clair.unverified_reasons(),
                            "clairvoyant_bang_bang": clair.refined is not None}
-    runs = {"exact": {}, **{f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed,
+    runs: dict[str, dict[str, Any]] = {"exact": {}, **{f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed,
                                               "margin": m} for m in margins}}
     for key, kw in runs.items():
         m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)

@@ -134,7 +134,7 @@ def test_cli_impedance_worst_case_json(cli, optima):
     code, out, err = cli("impedance", "--v0", V0, "--umax", R.u_max, "--grid", GRID,
                          "--stiffness", "0.5,2")
     assert code == 0, err
-    assert "worst ground(s)" in out and "depth on linear stiffness=2" in out
+    assert "worst ground(s)" in out and "depth on linear, stiffness = 2" in out
 
 
 @pytest.mark.parametrize("args, match", [
