@@ -187,8 +187,9 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                            "clairvoyant_depth": clair.depth,
                            "clairvoyant_verified": not clair.unverified_reasons(),
                            "clairvoyant_bang_bang": clair.refined is not None}
-    runs: dict[str, dict[str, Any]] = {"exact": {}, **{f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed,
-                                              "margin": m} for m in margins}}
+    runs: dict[str, dict[str, Any]] = {"exact": {}}
+    runs.update({f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed, "margin": m}
+                 for m in margins})
     for key, kw in runs.items():
         m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)
         row[key] = {**m.to_dict(), "ratio": m.depth / clair.depth,
