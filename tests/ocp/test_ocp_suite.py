@@ -100,6 +100,9 @@ def test_mesh_refinement_builds_once_per_mesh_and_resolves_without_rebuild():
 CERT_SLOW = {"robot_arm"}
 
 
+# the verdict is what is tested: a refined mesh a hair over a state limit between its points
+# (teo_state_constraint, 1.6e-6) is warned and leaves the certificate uncertified, as asserted
+@pytest.mark.filterwarnings("ignore::ocp.definition.errors.PathViolationWarning")
 @pytest.mark.parametrize("name", [
     pytest.param(p.name, marks=pytest.mark.slow) if p.name in CERT_SLOW else p.name
     for p in PROBLEMS if not p.name.startswith(("bryson_denham_3", "pinene", "cannonball"))])
