@@ -510,7 +510,20 @@ class Sensor:
         less a reserve of ``ARREST_RESERVE`` standard deviations of the foot's position (a
         measured stroke may be long), then the weight with a damped hold of the stroke
         where the body stopped (the open-loop weight alone would let a velocity the noise
-        left drift the body forever)."""
+        left drift the body forever).
+
+        Parameters
+        ----------
+        x : ndarray
+            The measured state ``[x_b, v_b, x_f, v_f]`` (the foot stopped).
+        r_m : float
+            The robot's mass ratio.
+
+        Returns
+        -------
+        ForceSchedule or FeedbackSchedule
+            The arrest's force from the sample on.
+        """
         if self.noise == 0.0:
             return arrest_schedule(x, r_m)
         stroke = float(x[0] - x[2])
