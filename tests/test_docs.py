@@ -20,7 +20,10 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def _build(builder: str, out: Path, gallery: bool) -> subprocess.CompletedProcess:
-    env = {**os.environ, "SOFTLANDING_DOCS_GALLERY": "1" if gallery else "0", "MPLBACKEND": "Agg"}
+    # no MPLBACKEND: the notebooks' kernels inherit it, and under Agg their figures are not
+    # shown inline (conf.py selects Agg for the build's own process)
+    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
+    env["SOFTLANDING_DOCS_GALLERY"] = "1" if gallery else "0"
     return subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b",
                            builder, "-d", str(out / "doctrees"), str(DOCS), str(out / builder)],
                           capture_output=True, text=True, env=env, timeout=1200)
