@@ -114,11 +114,10 @@ def path_constraint(pr: OptimalControlProblem, name: str) -> Constraint:
     -------
     Constraint
     """
-    for c in pr.structure_path:
+    for c in pr.path:
         if c.name == name:
             return c
-    have = [c.name for c in pr.structure_path]
-    raise ValueError(f"no path constraint named {name!r}; have {have}")
+    raise ValueError(f"no path constraint named {name!r}; have {[c.name for c in pr.path]}")
 
 
 def has_running_cost(pr: OptimalControlProblem) -> bool:
@@ -203,7 +202,7 @@ class ArcDynamics:
         fixed, values, by_name = [], [], {}
         for name, sym, mode in zip(pr.control_names, usyms, modes, strict=True):
             if not mode.held:
-                lo, hi = pr.control_limits[name]
+                lo, hi = pr.control_bounds[name]
                 bound = hi if mode.kind == "max" else lo
                 if bound.is_constant() and not math.isfinite(float(bound)):
                     raise ValueError(f"control {name!r} has no finite {mode.kind} bound")
@@ -276,7 +275,7 @@ class ArcDynamics:
         kappa = -e0 / J if uB.numel() == 1 else -ca.solve(J, e0)
         out = {}
         for i, name in enumerate(bnames):
-            lo, hi = pr.control_limits[name]
+            lo, hi = pr.control_bounds[name]
             if self.modes[pr.control_names.index(name)].kind == "boundary":
                 # a vertex value is a constant of p, checked once (a constant row at a
                 # bound would leave an interior-point method no slack)
