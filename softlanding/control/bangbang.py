@@ -163,14 +163,20 @@ def _views(K, W):
             W[31:32])
 
 
+@njit(**JIT, inline="always")
+def _foot_acc(P, u, xf, vf):
+    """The foot's acceleration under force ``u`` (``-c_d v_f |v_f|``: the law ``c_d v_f^2`` of
+    a descending foot, continued past the stop as a drag, so that a guess whose pull runs
+    past the stop still marches)."""
+    return P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
+
+
 @njit(**JIT)
 def _rhs(P, u, y, n, out, row):
     """The foot's ``[x_f, v_f]`` (and, ``n = 6``, its transition matrix, row-major) slope."""
     xf, vf = y[0], y[1]
     out[row, 0] = vf
-    # (-c_d v_f |v_f|: the law c_d v_f^2 of a descending foot, continued past the stop as a
-    # drag, so that a guess whose pull runs past the stop still marches)
-    out[row, 1] = P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
+    out[row, 1] = _foot_acc(P, u, xf, vf)
     if n == 6:
         j10 = -P[P_GF] * P[P_K]
         j11 = -2.0 * P[P_GF] * P[P_CD] * abs(vf)
@@ -267,7 +273,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
     if not _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax):
         return False
     xf1, vf1 = y[0], y[1]
-    acc1 = P[P_AF0] + P[P_BF] * umax + P[P_GF] * (-P[P_K] * xf1 - P[P_CD] * vf1 * abs(vf1))
+    acc1 = _foot_acc(P, umax, xf1, vf1)
     xb1 = x[0] + x[1] * tau1 + 0.5 * a1 * tau1 * tau1
     vb1 = x[1] + a1 * tau1
     y[2], y[3], y[4], y[5] = 1.0, 0.0, 0.0, 1.0
@@ -286,7 +292,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
     lim[3], lim[4], lim[5] = xbT, vbT, xfT
     if not jac:
         return True
-    accT = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * xfT - P[P_CD] * vfT * abs(vfT))
+    accT = _foot_acc(P, -umax, xfT, vfT)
     # d/dtau1 (tau2 fixed): the pull arc's transition matrix on the push's slope at the switch
     dxf1 = y[2] * vf1 + y[3] * acc1
     dvf1 = y[4] * vf1 + y[5] * acc1
@@ -357,7 +363,7 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax):
         M[M_ITER] = it + 1
         if not _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False):
             return NEWTON_FAILED
-        acc = P[P_AF0] - P[P_BF] * umax + P[P_GF] * (-P[P_K] * y[0] - P[P_CD] * y[1] * abs(y[1]))
+        acc = _foot_acc(P, -umax, y[0], y[1])
         if not acc > 0.0:
             return NEWTON_FAILED
         d = r[0] / acc
