@@ -101,8 +101,19 @@ def test_the_grid_estimate_brackets_the_continuous_optimum():
     continuous = 9.564  # the 1/N trend; its 480-node replay is 9.575942
     assert h.energy > 9.575942 > continuous
     assert abs(h.energy_estimate - continuous) <= h.energy_error
-    # the hybrid guide's figures are this run's
+    # the hybrid guide's figures are a run of this, to the run-to-run spread it states: the
+    # hop is a non-convex NLP with a flat valley of near-optimal controls, and the local
+    # optimum Ipopt stops at moves with last-bit differences of its start (the order of
+    # earlier solves in the process, the machine's BLAS): a CI run gave 9.629904 and
+    # 9.589214 where the guide's run gave 9.616021 and 9.596944
+    import re
+
     guide = (Path(__file__).resolve().parents[3] / "docs" / "guides" / "hybrid.md").read_text()
-    figures = [f"{h.grids[0]['energy']:.6f} (60/80/60", f"{h.energy:.6f} (120/160/120",
-               f"{h.energy_estimate:.3f} +- {h.energy_error:.2g}"]
-    assert all(f in guide for f in figures), figures
+    m = re.search(r"At `v0 = -3`: ([\d.]+) \(60/80/60 nodes\), ([\d.]+) \(120/160/120\),"
+                  r"\s+continuous optimum estimated at ([\d.]+) \+- ([\d.]+)", guide)
+    assert m, "the hybrid guide's grid figures moved"
+    coarse, fine, estimate, error = (float(v) for v in m.groups())
+    assert abs(coarse / h.grids[0]["energy"] - 1) < 3e-3
+    assert abs(fine / h.energy - 1) < 3e-3
+    assert abs(estimate - h.energy_estimate) <= error + h.energy_error
+    assert "spread" in guide[m.end():m.end() + 600]
