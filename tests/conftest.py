@@ -1,3 +1,5 @@
+import os
+
 import pytest
 
 
@@ -25,3 +27,20 @@ def _no_compile_notice():
     from softlanding.simulation import kernel
 
     kernel._CHECKED.update({"affine", "non-affine"})
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    """With ``SOFTLANDING_TEST_CPU=FILE``, each test's CPU seconds (setup, call and teardown,
+    its subprocesses included) appended to FILE: the README's budget is CPU, which pytest's
+    ``--durations`` (wall) does not show on a shared machine."""
+    path = os.environ.get("SOFTLANDING_TEST_CPU")
+    if not path:
+        yield
+        return
+    t0 = os.times()
+    yield
+    t1 = os.times()
+    cpu = sum(b - a for a, b in zip(t0[:4], t1[:4], strict=True))
+    with open(path, "a") as f:
+        f.write(f"{cpu:.2f}\t{item.nodeid}\n")

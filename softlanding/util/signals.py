@@ -15,6 +15,7 @@ import contextlib
 import signal
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from types import FrameType
 from typing import Any
@@ -78,10 +79,17 @@ def _quiet_unraisable(hook: Any) -> Any:
             if signum == signal.SIGTERM:
                 _terminated = False  # the raise was lost: the repeated delivery must raise
             # from another thread, once this hook has returned (raised inside the hook, it
-            # would be lost again)
-            t = threading.Timer(0.001, _thread.interrupt_main, (signum,))
-            t.daemon = True
-            t.start()
+            # would be lost again): the thread waits for the hook's last statement, since
+            # starting it blocks here (a timer fired within that wait under load)
+            ready = threading.Event()
+
+            def again() -> None:
+                ready.wait()
+                time.sleep(0.001)
+                _thread.interrupt_main(signum)
+
+            threading.Thread(target=again, daemon=True).start()
+            ready.set()
             return
         hook(u)
 

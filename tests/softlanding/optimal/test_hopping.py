@@ -58,7 +58,7 @@ def test_one_grid_says_it_is_discretised(free):
 
 
 def test_regeneration_lowers_the_energy(free):
-    half = solve_hop(-2.0, PAPER_ROBOT, eta=0.5)
+    half = solve_hop(-2.0, PAPER_ROBOT, eta=0.5, warm_start=free)  # continuation in eta
     assert half.unverified_reasons() == []
     assert half.energy < free.energy
     assert half.energy == pytest.approx(half.work.positive - 0.5 * half.work.negative)

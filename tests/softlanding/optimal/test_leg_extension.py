@@ -43,6 +43,14 @@ def test_a_touch_point_of_the_stroke_is_imposed_exactly():
     assert r.replay is not None and r.replay.stroke_max <= PAPER_ROBOT.s + 1e-9
 
 
+def test_a_short_sweep_by_continuation():
+    rows = sweep_leg_extension(np.linspace(-2.5, -4.0, 4))
+    assert [r.refined is not None for r in rows] == [True] * 4
+    assert all(r.gain >= -1e-9 for r in rows)
+    assert rows[-1].gain > rows[0].gain
+
+
+@pytest.mark.slow
 def test_sweep_of_41_velocities():
     rows = sweep_leg_extension(np.linspace(-0.5, -10.0, 41))
     assert len(rows) == 41
