@@ -66,6 +66,8 @@ import math
 import time
 from typing import Any
 
+import casadi as ca
+
 # `name as name`: a re-export (ocp.certificate.certify keeps every public name it had before
 # the split)
 from ..structure.arcs import ArcStructure, SolutionLike, detect_structure, transcribed
@@ -211,7 +213,9 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     tsol = transcribed(sol)
     t0 = time.process_time()
     pr = tsol.problem
-    pmp_functions(pr)  # raises early on problems that are not control-affine
+    # raises early on problems that are not control-affine (a refinement with decision
+    # variables ran on a derived problem, where they are constant states)
+    pmp_functions(refined.problem if refined is not None else pr)
     h = grid_spacing(tsol)
     tol = Tolerances(H=tol_H if tol_H is not None else (1e-6 if refined else 1e-2),
                      sigma=tol_sigma if tol_sigma is not None else (1e-6 if refined else 1e-2),
@@ -223,7 +227,12 @@ def certify(sol: SolutionLike, refined: Any = None, *,
         tol.switch = 1.5 * h if tol_switch is None else tol_switch
         cert = certify_transcription(tsol, tol, verify, tol_switch is None)
     hold_to_structure(cert, detect_structure(tsol) if structure is None else structure)
-    if chattering:
+    in_dynamics = pr.nv and ca.depends_on(ca.vertcat(pr.rhs, pr.lagrange), pr.v)
+    if chattering and in_dynamics:
+        # the transcription's switching functions need the variables' values in f: read
+        # on the refinement only (where they are constant states)
+        cert.reasons.append("chattering not looked for: decision variables in the dynamics")
+    elif chattering:
         found = detect_chattering(tsol, resolve=verify, max_nodes=max_nodes)
         if found is not None:
             cert.chattering = found

@@ -39,6 +39,7 @@ ERROR_MARGIN = 10.0
 """A violation within this factor of the estimated numerical error is not a refutation."""
 
 
+
 @dataclass
 class Tolerances:
     """What the checks allow.
@@ -365,7 +366,7 @@ def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u
     """
     out: dict[str, tuple[float, float, np.ndarray, list[tuple[float, float]]]] = {}
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
-    in_mixed = {n for c, k in zip(pr.path, path_kinds(pr), strict=True) if k == MIXED
+    in_mixed = {n for c, k in zip(pr.structure_path, path_kinds(pr), strict=True) if k == MIXED
                 for n in controls_in(pr, c)}
     for group in coupled_groups(pr, singletons=True):
         if len(group) == 1 and group[0] in in_mixed:

@@ -20,11 +20,18 @@ import casadi as ca
 import numpy as np
 
 from ..definition.problem import OptimalControlProblem
-from ..structure.arcs import TranscribedSolution
+from ..structure.arcs import TranscribedSolution, no_control_crosses
 from ..structure.switching import RefinedSwitching
 from ..transcriptions.gridview import grid_spacing
 from ..transcriptions.solution import along
-from .checks import ERROR_MARGIN, Tolerances, figures, intervals_of, judge, verdict_of
+from .checks import (
+    ERROR_MARGIN,
+    Tolerances,
+    figures,
+    intervals_of,
+    judge,
+    verdict_of,
+)
 from .costates import adjoint_sweep, costates_from_multipliers
 from .result import PMPCertificate, build_certificate
 
@@ -39,7 +46,7 @@ def is_mixed(pr: OptimalControlProblem, name: str | None) -> bool:
     name : str or None
         A path constraint's name (None: False).
     """
-    return any(c.name == name and ca.depends_on(c.expr, pr.u) for c in pr.path)
+    return any(c.name == name and ca.depends_on(c.expr, pr.u) for c in pr.structure_path)
 
 
 def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
@@ -63,9 +70,12 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
     m = len(x)
     los, his = np.empty((m, pr.nu)), np.empty((m, pr.nu))
     for j, name in enumerate(pr.control_names):
-        lo, hi = pr.control_bounds[name]
-        los[:, j], his[:, j] = (float(v) for v in ca.Function("b", [pr.p], [lo, hi])(pv))
-    for c in pr.path:
+        # the control set at each sample: its limits may move with a state (a decision
+        # variable refined as a constant state, ocp.structure.variables)
+        lo, hi = pr.control_limits[name]
+        lo_v, hi_v = along(ca.Function("b", [pr.x, pr.p], [lo, hi]), x, pv)
+        los[:, j], his[:, j] = lo_v.ravel(), hi_v.ravel()
+    for c in pr.structure_path:
         uses = [j for j in range(pr.nu) if ca.depends_on(c.expr, pr.u[j])]
         if len(uses) != 1 or ca.depends_on(ca.jacobian(c.expr, pr.u), pr.u):
             continue
@@ -83,7 +93,8 @@ def effective_bounds(pr: OptimalControlProblem, x: np.ndarray,
 
 
 def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
-                        pv: np.ndarray, tol: float, state_only: bool = False) -> np.ndarray:
+                        pv: np.ndarray, tol: float, state_only: bool = False,
+                        bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Where some path constraint is within ``tol * max(1, |value|)`` of a limit.
 
     Parameters
@@ -96,12 +107,16 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
     tol : float
     state_only : bool
         Leave out the mixed constraints (those involving a control).
+    bounds : (ndarray, ndarray), optional
+        The control set's box at the samples (:func:`effective_bounds`): a state
+        constraint at a limit no admissible control could cross there does not count
+        (:func:`ocp.certificate.checks.no_control_crosses`).
 
     Returns
     -------
     ndarray of bool (m,)
     """
-    cons = [c for c in pr.path if not (state_only and ca.depends_on(c.expr, pr.u))]
+    cons = [c for c in pr.structure_path if not (state_only and ca.depends_on(c.expr, pr.u))]
     if not cons:
         return np.zeros(len(x), dtype=bool)
     fn = ca.Function("hp", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in cons]),
@@ -109,7 +124,15 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
                                                  ca.vertcat(*[c.upper for c in cons])])
     v, lo, hi = along(fn, x, u, pv)
     sc = tol * np.maximum(1.0, np.abs(v))
-    return np.any((np.abs(v - lo) <= sc) | (np.abs(v - hi) <= sc), axis=1)
+    at_lo, at_hi = np.abs(v - lo) <= sc, np.abs(v - hi) <= sc
+    if bounds is not None:
+        for i, c in enumerate(cons):
+            if ca.depends_on(c.expr, pr.u):
+                continue
+            for side, at in (("lower", at_lo), ("upper", at_hi)):
+                if at[:, i].any():
+                    at[:, i] &= ~no_control_crosses(pr, c, side, x, *bounds, pv)
+    return np.any(at_lo | at_hi, axis=1)
 
 
 def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[float]]:
@@ -154,7 +177,8 @@ def constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[float
            if any(m.kind == "boundary" and not is_mixed(pr, m.constraint) for m in ms)]
     last = max((b for _, b in bnd), default=0.0)
     t, x, u, _ = ref.samples(n)
-    act = path_activity_along(pr, x, u, ref.pv, 1e-7, state_only=True) & (t > tiny) & \
+    act = path_activity_along(pr, x, u, ref.pv, 1e-7, state_only=True,
+                              bounds=effective_bounds(pr, x, ref.pv)) & (t > tiny) & \
         (t < T - tiny)
     dense = intervals_of(t, act, 2 * T / max(len(t), 1))
     if ref.nlp is not None and "path" in ref.blocks and len(ref.lam_g):
@@ -197,18 +221,20 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
     tiny = 1e-10 * max(T, 1.0)
     keep = (sw.t >= last - tiny) & (ref.durations[sw.interval] > tiny)
     switches = _effective_switches(ref, last)
+    values = {**ref.params, **ref.variables}  # the control set at the variables' values
     floor = np.zeros(pr.nu)
     args = (switches, tol.sigma)
-    mixed = any(ca.depends_on(c.expr, pr.u) for c in pr.path)
+    mixed = any(ca.depends_on(c.expr, pr.u) for c in pr.structure_path) or any(
+        ca.depends_on(ca.vertcat(*pr.control_limits[n]), pr.x) for n in pr.control_names)
     eff = effective_bounds(pr, sw.x[keep], ref.pv) if mixed else None
-    fig = figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
+    fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                   sw.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
                   tol.singular, bounds=eff)
     base = (ref.integration_error or 0.0) + sw.error_x
     err = {"H": base, "sigma": 0.0, "switch": 0.0, "costate": sw.error_lam, "state": sw.error_x}
     if sw.coarse is not None:
         c = sw.coarse
-        cf = figures(pr, ref.params, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
+        cf = figures(pr, values, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
                      c.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
                      tol.singular, bounds=effective_bounds(pr, c.x[keep], ref.pv)
                      if mixed else None)
@@ -219,7 +245,7 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                              if math.isfinite(fig.gap[k]) and math.isfinite(cf.gap[k])),
                             default=0.0)
         # samples inside the numerical error band of sigma are not judged
-        fig = figures(pr, ref.params, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
+        fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                       sw.H_expected, np.zeros(int(keep.sum()), bool), *args,
                       ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
@@ -244,6 +270,8 @@ def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray,
     if not sel.any() or len(t) < 2:
         return math.nan
     order = np.argsort(t, kind="stable")
+    # (a refinement with decision variables has them as the last states: not in sol)
+    lam = lam[:, :lam_tr.shape[1]]
     lam_i = np.column_stack([np.interp(t_tr[sel], t[order], lam[order, j])
                              for j in range(lam.shape[1])])
     return float(np.max(np.abs(lam_i - lam_tr[sel])) / max(np.max(np.abs(lam)), 1e-300))

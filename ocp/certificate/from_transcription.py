@@ -23,6 +23,7 @@ from ..structure.arcs import (
     active_path_constraints,
     control_bounds_at,
     detect_arcs,
+    known_values,
     transcribed,
 )
 from ..structure.constraint_kinds import MIXED, STATE
@@ -66,7 +67,8 @@ def _constrained_transcription(sol: TranscribedSolution) -> list[tuple[float, fl
     (to 1e-6) over at least one interval, and the boundary arcs :func:`detect_arcs`
     finds (which bridge the zig-zag of a transcription along a constraint)."""
     # control-only constraints shape the control set: they are no state constraint
-    act = active_path_constraints(sol, 1e-6, kinds=(STATE, MIXED))
+    # (a state constraint at a limit no admissible control could cross is not held there)
+    act = active_path_constraints(sol, 1e-6, kinds=(STATE, MIXED), crossable=True)
     act_nodes = act.any(axis=1) if act.size else np.zeros(sol.N + 1, dtype=bool)
     spans = intervals_of(sol.t, np.asarray(act_nodes), _shortest_interval(sol) - 1e-12)
     for name in sol.problem.control_names:
@@ -106,7 +108,7 @@ def _transcription_figures(sol: TranscribedSolution, tol: Tolerances
         st = detect_arcs(sol, name)
         switches[name] = [a.end for a, b in zip(st.arcs[:-1], st.arcs[1:], strict=True)
                           if a.kind in ("max", "min") and b.kind in ("max", "min")]
-    fig = figures(pr, sol.params, t, x, u, lam, H_exp, constrained, switches, tol.sigma,
+    fig = figures(pr, known_values(sol), t, x, u, lam, H_exp, constrained, switches, tol.sigma,
                   np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
     if is_collocation(sol):
         _rescore_H(fig, ~constrained & ~_kinked_points(sol, switches), H_exp)
@@ -123,7 +125,7 @@ def _kinked_points(sol: TranscribedSolution, switches: dict[str, list[float]]) -
     N, d = len(mesh) - 1, len(sol.t[1:]) // max(len(mesh) - 1, 1)
     out = np.zeros(len(sol.t) - 1, dtype=bool)
     for j, name in enumerate(pr.control_names):
-        lo, hi = control_bounds_at(pr, name, sol.params)
+        lo, hi = control_bounds_at(pr, name, known_values(sol))
         room = 1e-3 * max(1.0, hi - lo) if np.isfinite(hi - lo) else 0.0
         U = np.asarray(sol.u)[:, j].reshape(N, d)
         one_bound = np.all(np.abs(U - hi) <= room, axis=1) | np.all(np.abs(U - lo) <= room,

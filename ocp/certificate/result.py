@@ -213,8 +213,8 @@ def _signature(pr: Any) -> tuple:
     if hasattr(pr, "phases"):
         return tuple(_signature(ph) for ph in pr.phases)
     return (pr.name, tuple(pr.state_names), tuple(pr.control_names), tuple(pr.param_names),
-            str(pr.rhs), str(pr.lagrange), str(pr.state_bounds), str(pr.control_bounds),
-            str([(c.name, c.expr, c.lower, c.upper) for c in pr.path]))
+            str(pr.rhs), str(pr.lagrange), str(pr.state_bounds), str(pr.control_limits),
+            str([(c.name, c.expr, c.lower, c.upper) for c in pr.structure_path]))
 
 
 def _other_candidate(sol: Any, refined: Any) -> str:
@@ -222,7 +222,9 @@ def _other_candidate(sol: Any, refined: Any) -> str:
     other parameter values, or started from a transcription with another objective."""
     if sol is None or refined is None:
         return ""
-    if _signature(getattr(refined, "problem", None)) != _signature(getattr(sol, "problem", None)):
+    # a refinement with decision variables ran on a problem derived from sol's (origin)
+    mine = getattr(refined, "origin", None) or getattr(refined, "problem", None)
+    if _signature(mine) != _signature(getattr(sol, "problem", None)):
         return "it belongs to another problem"
     a, b = getattr(sol, "params", None) or {}, getattr(refined, "params", None) or {}
     differ = sorted(k for k in set(a) | set(b) if k not in a or k not in b

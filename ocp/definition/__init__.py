@@ -2,7 +2,8 @@
 
 :mod:`~ocp.definition.problem` (one phase), :mod:`~ocp.definition.multiphase` (phases in
 sequence, links, shared parameters), :mod:`~ocp.definition.symbols` (helpers on CasADi
-symbols and bounds), :mod:`~ocp.definition.compiled` (a phase's expressions as CasADi
+symbols and bounds), :mod:`~ocp.definition.normal_form` (one form for bounds however they
+are written), :mod:`~ocp.definition.compiled` (a phase's expressions as CasADi
 Functions), :mod:`~ocp.definition.guess` (default guesses), :mod:`~ocp.definition.sizes`
 and :mod:`~ocp.definition.scaling` (the sizes of the unknowns and the NLP's scaling),
 :mod:`~ocp.definition.trajectory` (sampled trajectories), :mod:`~ocp.definition.errors`.

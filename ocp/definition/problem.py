@@ -45,6 +45,7 @@ import numpy as np
 from numpy import ndarray
 
 from .errors import ProblemDefinitionError
+from .normal_form import normal_form
 from .symbols import (
     INF,
     Constraint,
@@ -107,6 +108,22 @@ class Shared:
         """
         b = to_sx(value, what)
         require_only(b, self.params, what, "bounds and guesses may depend on parameters only")
+        return b
+
+    def limit(self, value: Bound, what: str) -> ca.SX:
+        """A control's bound: a number or an expression of the parameters and the decision
+        variables (``u <= peak``: the control set moves with the variable).
+
+        Parameters
+        ----------
+        value : float or SX
+            A number or an expression of the parameters and variables.
+        what : str
+            Named in the error if ``value`` is not acceptable.
+        """
+        b = to_sx(value, what)
+        require_only(b, [*self.params, *self.vars], what,
+                     "a control's bounds may depend on parameters and decision variables only")
         return b
 
 
@@ -201,13 +218,21 @@ class OptimalControlProblem:
         self._u0: list[ca.SX] = []
         self._uT: list[ca.SX] = []
         self._rhs: dict[str, ca.SX] = {}
+        # as declared (state/bound_state, control/bound_control); the attributes the rest of
+        # ocp reads are their views (ocp.definition.normal_form), set by _normalise
+        self.declared_state_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
+        self.declared_control_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
         self.state_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
         self.control_bounds: dict[str, tuple[ca.SX, ca.SX]] = {}
+        self.control_limits: dict[str, tuple[ca.SX, ca.SX]] = {}
+        self.structure_path: list[Constraint] = []
+        self.bound_names: dict[str, str] = {}
+        self.path_written: list[Constraint] = []
         self.state_guess: dict[str, Any] = {}
         self.control_guess: dict[str, Any] = {}
         self.state_ref: dict[str, tuple[float, float] | None] = {}
         self.control_ref: dict[str, tuple[float, float] | None] = {}
-        self.path: list[Constraint] = []
+        self.path: list[Constraint] = []  # the transcription's rows (see path_written)
         self.initial: list[Constraint] = []
         self.terminal: list[Constraint] = []
         self.boundary: list[Constraint] = []
@@ -240,7 +265,9 @@ class OptimalControlProblem:
         name : str
             Unique within the phase (phases may share state names; links use them).
         lower, upper : float, parameter expression or None
-            Bounds on the state along the whole trajectory (None: unbounded).
+            Bounds on the state along the whole trajectory (None: unbounded). A path
+            constraint on this state alone is the same bound for structure detection,
+            refinement and the certificate (:mod:`ocp.definition.normal_form`).
         guess : float, parameter expression or (start, end) pair, optional
             Initial guess (a pair is interpolated linearly in time). Default:
             the fixed initial/final values where the constraints fix them, else
@@ -275,14 +302,20 @@ class OptimalControlProblem:
         name : str
             Unique within the phase.
         lower, upper : float, parameter expression or None
-            Control bounds.
+            Control bounds. They may also involve decision variables (``-peak <= u <=
+            peak`` with ``peak = p.variable("peak")``: the control set moves with the
+            variable; the transcription imposes such a limit as the row ``u - peak <=
+            0``, structure detection and the certificate read the control set at the
+            variable's value). A path constraint on this control alone is the same bound
+            for structure detection (:mod:`ocp.definition.normal_form`).
         guess : float or parameter expression, optional
             Initial guess (default: midpoint of finite bounds, else 0 clipped).
         ref, ref0 : float, optional
             Scaling: the NLP works with ``(u - ref0) / ref`` (see :meth:`state`).
         """
         self._check_new(name, phase=True)
-        self._checked_bounds(lower, upper, f"control {name!r}")  # before anything is declared
+        # before anything is declared
+        self._checked_bounds(lower, upper, f"control {name!r}", variables=True)
         sref = scale_ref(ref, ref0, f"control {name!r}")
         s = ca.SX.sym(name)
         self.control_names.append(name)
@@ -346,12 +379,14 @@ class OptimalControlProblem:
         ----------
         name : str
             A declared control.
-        lower, upper : float, parameter expression or None
+        lower, upper : float, parameter or decision-variable expression, or None
             The bounds (``lower <= upper`` where both are numbers).
         """
         if name not in self.control_names:
             raise ProblemDefinitionError(f"unknown control {name!r}")
-        self.control_bounds[name] = self._checked_bounds(lower, upper, f"control {name!r}")
+        self.declared_control_bounds[name] = self._checked_bounds(
+            lower, upper, f"control {name!r}", variables=True)
+        self._normalise()
 
     def bound_state(self, name: str, lower: Bound | None = -INF,
                     upper: Bound | None = INF) -> None:
@@ -366,17 +401,32 @@ class OptimalControlProblem:
         """
         if name not in self.state_names:
             raise ProblemDefinitionError(f"unknown state {name!r}")
-        self.state_bounds[name] = self._checked_bounds(lower, upper, f"state {name!r}")
+        self.declared_state_bounds[name] = self._checked_bounds(lower, upper, f"state {name!r}")
+        self._normalise()
 
     def _checked_bounds(self, lower: Bound | None, upper: Bound | None,
-                        what: str) -> tuple[ca.SX, ca.SX]:
+                        what: str, variables: bool = False) -> tuple[ca.SX, ca.SX]:
         # None is Python's "no value": no bound on that side (as scipy's Bounds reads it)
         lower = -INF if lower is None else lower
         upper = INF if upper is None else upper
-        lo = self._shared.bound(lower, f"{what} lower bound")
-        hi = self._shared.bound(upper, f"{what} upper bound")
+        if variables:  # a control's limits may move with decision variables (u <= peak)
+            lo, hi = (self._shared.limit(b, f"{what} {s} bound")
+                      for b, s in ((lower, "lower"), (upper, "upper")))
+        else:
+            lo = self._shared.bound(lower, f"{what} lower bound")
+            hi = self._shared.bound(upper, f"{what} upper bound")
         check_bounds(lo, hi, what)
         return lo, hi
+
+    def _normalise(self) -> None:
+        """Bounds and path constraints in their one form (:mod:`ocp.definition.normal_form`)."""
+        nf = normal_form(self.declared_state_bounds, self.declared_control_bounds,
+                         self.path_written, self.x, self.state_names, self.u,
+                         self.control_names, self._shared.v,
+                         ca.vertcat(self.t, self.t0, self.T))
+        self.state_bounds, self.control_bounds = nf.state_bounds, nf.control_bounds
+        self.control_limits, self.path = nf.control_limits, nf.path
+        self.structure_path, self.bound_names = nf.structure_path, nf.bound_names
 
     def _check_new(self, name: str, phase: bool) -> None:
         if not isinstance(name, str) or not name:
@@ -459,6 +509,13 @@ class OptimalControlProblem:
         integrator's inner steps with ``inner_constraints=True``) or at the
         collocation points, and checked on a fine grid after every solve.
 
+        A constraint on one state or one control alone (``v <= 0.8``, ``u - peak <=
+        0``) is that variable's bound for structure detection, refinement and the
+        certificate (:mod:`ocp.definition.normal_form`): the arcs, the refined
+        solution and the verdict do not depend on how the bound was written. The
+        transcription imposes it as written (rows). ``path_written`` keeps every path
+        constraint as given; ``path`` holds the rows a transcription imposes.
+
         Parameters
         ----------
         expr : SX
@@ -472,7 +529,14 @@ class OptimalControlProblem:
             Typical size of ``expr``: its NLP rows are divided by it (default:
             automatic, see :mod:`ocp.definition.scaling`).
         """
-        return self._constraint(self.path, expr, lower, upper, name, "path", ref)
+        c = self._constraint(self.path_written, expr, lower, upper, name, "path", ref)
+        try:
+            self._normalise()
+        except ProblemDefinitionError:
+            self.path_written.pop()  # refused (it was the last added): the problem as it was
+            self._normalise()
+            raise
+        return c
 
     def initial_constraint(self, expr: Any, lower: Bound, upper: Bound | None = None,
                            name: str | None = None, *,
@@ -861,6 +925,18 @@ class OptimalControlProblem:
     def q(self) -> ca.SX:
         """Symbols of the integrals declared by :meth:`integral`."""
         return ca.vertcat(*[s for s, _ in self.integrals]) if self.integrals else ca.SX(0, 1)
+
+    def variable_bounds(self, name: str) -> tuple[ca.SX, ca.SX]:
+        """The bounds of decision variable ``name`` (parameter expressions).
+
+        Parameters
+        ----------
+        name : str
+            A declared decision variable.
+        """
+        if name not in self._shared.var_bounds:
+            raise ProblemDefinitionError(f"unknown variable {name!r}")
+        return self._shared.var_bounds[name]
 
     @property
     def param_names(self) -> list[str]:

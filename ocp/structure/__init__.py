@@ -6,6 +6,7 @@ control-only path constraints), :mod:`~ocp.structure.control_set` (the polytope 
 controls), :mod:`~ocp.structure.flows` (the dynamics on each arc),
 :mod:`~ocp.structure.refinement` (the NLP over arc durations),
 :mod:`~ocp.structure.active_set_newton` (Newton re-solves on a square active set),
+:mod:`~ocp.structure.variables` (decision variables refined as constant states),
 :mod:`~ocp.structure.switching` (:func:`~ocp.refine_switching`,
 :func:`~ocp.refine_structure`) and :mod:`~ocp.structure.phase_refinement`
 (:func:`~ocp.refine_phases`). Imports only :mod:`ocp.definition` and

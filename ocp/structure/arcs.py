@@ -32,7 +32,7 @@ import numpy as np
 
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.gridview import grid_spacing, is_collocation, mesh_level
-from ..transcriptions.solution import Solution
+from ..transcriptions.solution import Solution, along
 from .constraint_kinds import (
     CONTROL,
     KINDS,
@@ -59,6 +59,7 @@ class TranscribedSolution(Protocol):
     T: float
     N: int
     params: dict[str, float]
+    variables: dict[str, float]
     multipliers: dict[str, np.ndarray]
     objective: float
 
@@ -330,7 +331,12 @@ def _arc_at(s: SwitchingStructure, t: float) -> Arc:
 
 def control_bounds_at(problem: OptimalControlProblem, name: str,
                       params: dict[str, float]) -> tuple[float, float]:
-    """Numeric ``(lower, upper)`` bounds of control ``name`` at parameter values ``params``.
+    """Numeric ``(lower, upper)`` bounds of control ``name`` at the values ``params``.
+
+    The control's limits (``problem.control_limits``, :mod:`ocp.definition.normal_form`)
+    may involve decision variables (``u <= peak``), and in a problem derived for the
+    refinement, the states that stand for them: their values are looked up by name in
+    ``params`` too (:func:`known_values` of a solution has them).
 
     Parameters
     ----------
@@ -338,17 +344,46 @@ def control_bounds_at(problem: OptimalControlProblem, name: str,
     name : str
         A control's name.
     params : dict
-        A value for every parameter of the problem.
+        A value for every parameter of the problem (and for every decision variable
+        or state the limits involve).
 
     Returns
     -------
     (float, float)
+
+    Raises
+    ------
+    ValueError
+        When the limits involve a variable whose value ``params`` does not give.
     """
-    lo, hi = problem.control_bounds[name]
-    f = ca.Function("b", [problem.p], [lo, hi])
-    pv = [params[k] for k in problem.param_names]
-    a, b = (float(v) for v in f(pv))
+    lo, hi = problem.control_limits[name]
+    both = ca.vertcat(lo, hi)
+    if both.is_constant():
+        return float(ca.DM(lo)), float(ca.DM(hi))
+    syms, vals = [], []
+    for names, vec in ((problem.param_names, problem.p), (problem.var_names, problem.v),
+                       (problem.state_names, problem.x)):
+        for i, n in enumerate(names):
+            if ca.depends_on(both, vec[i]):
+                if n not in params:
+                    raise ValueError(f"the bounds of control {name!r} depend on {n!r}: "
+                                     "its value is needed")
+                syms.append(vec[i])
+                vals.append(float(params[n]))
+    f = ca.Function("b", [ca.vertcat(*syms)], [lo, hi])
+    a, b = (float(v) for v in f(vals))
     return a, b
+
+
+def known_values(sol: SolutionLike) -> dict[str, float]:
+    """A solution's parameter values and its decision variables' optimised values.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed (or refined) solution.
+    """
+    return {**transcribed(sol).params, **(getattr(sol, "variables", None) or {})}
 
 
 def path_activity(sol: SolutionLike, tol: float,
@@ -373,11 +408,11 @@ def path_activity(sol: SolutionLike, tol: float,
     tsol = transcribed(sol)
     pr = tsol.problem
     n = tsol.N + 1
-    if not pr.path:
+    if not pr.structure_path:
         return np.zeros((n, 0), dtype=bool), np.zeros((n, 0), dtype=bool)
     pv = [tsol.params[k] for k in pr.param_names]
     lows, ups = [], []
-    for c, kind in zip(pr.path, path_kinds(pr), strict=True):
+    for c, kind in zip(pr.structure_path, path_kinds(pr), strict=True):
         if kind not in kinds:
             lows.append(np.zeros(n, dtype=bool))
             ups.append(np.zeros(n, dtype=bool))
@@ -391,7 +426,8 @@ def path_activity(sol: SolutionLike, tol: float,
 
 
 def active_path_constraints(sol: SolutionLike, tol: float,
-                            kinds: tuple[str, ...] = KINDS) -> np.ndarray:
+                            kinds: tuple[str, ...] = KINDS,
+                            crossable: bool = False) -> np.ndarray:
     """Which path constraints are active (at either limit) at every node.
 
     Parameters
@@ -402,6 +438,9 @@ def active_path_constraints(sol: SolutionLike, tol: float,
         As in :func:`path_activity`.
     kinds : tuple of str
         As in :func:`path_activity`.
+    crossable : bool
+        Count a state constraint at a limit only where some admissible control could
+        cross it (:func:`no_control_crosses`).
 
     Returns
     -------
@@ -409,7 +448,60 @@ def active_path_constraints(sol: SolutionLike, tol: float,
     """
     tsol = transcribed(sol)
     lo, up = path_activity(tsol, tol, kinds)
+    if crossable:
+        _drop_uncrossable(tsol, lo, up)
     return lo | up
+
+
+def no_control_crosses(pr: OptimalControlProblem, c: Any, side: str, x: np.ndarray,
+                       los: np.ndarray, his: np.ndarray, pv: np.ndarray,
+                       tol: float = 1e-9) -> np.ndarray:
+    """Where no admissible control could push state constraint ``c`` across its ``side``
+    limit: ``dc/dt = a(x) + b(x) u`` is on the feasible side for every ``u`` in the box.
+
+    A state at such a limit is not held there by the constraint (``m <= 1`` while
+    ``m' = -u/E`` with ``u >= 0``): touching it is no constrained arc, and the costate
+    does not jump there. A constraint whose first derivative does not involve the
+    controls (relative degree 2 or more), or involves them nonlinearly, can always be
+    crossed here (False).
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    c : Constraint
+        A state constraint (no control in it).
+    side : {"lower", "upper"}
+    x : ndarray (m, nx)
+        States at the samples.
+    los, his : ndarray (m, nu)
+        The control set's box at the samples.
+    pv : ndarray
+        Parameter values.
+    tol : float
+        Allowed push across, relative to the size of the terms.
+
+    Returns
+    -------
+    ndarray of bool (m,)
+    """
+    dc = ca.jtimes(c.expr, pr.x, pr.rhs)
+    b = ca.jacobian(dc, pr.u)
+    if pr.nu == 0 or ca.depends_on(b, pr.u) or not ca.depends_on(dc, pr.u) \
+            or ca.depends_on(dc, ca.vertcat(pr.t, pr.t0, pr.T, pr.v)):
+        return np.zeros(len(x), dtype=bool)
+    a = ca.substitute(dc, pr.u, ca.DM.zeros(pr.nu))
+    av, bv = along(ca.Function("ab", [pr.x, pr.p], [a, b.T]), x, pv)
+    av = av.ravel()
+    with np.errstate(invalid="ignore"):
+        ends = np.stack([bv * los, bv * his])  # (2, m, nu); 0 * inf is nan: no push
+    ends = np.where(bv[None] == 0.0, 0.0, ends)
+    push = av + (np.sum(np.max(ends, axis=0), axis=1) if side == "upper"
+                 else np.sum(np.min(ends, axis=0), axis=1))
+    size = np.abs(av) + np.sum(np.abs(np.where(np.isfinite(ends), ends, 0.0)), axis=(0, 2))
+    scale = tol * np.maximum(1.0, size)
+    ok = push <= scale if side == "upper" else push >= -scale
+    return np.isfinite(push) & ok
+
 
 
 def _runs(labels: list[str]) -> list[list]:
@@ -435,6 +527,24 @@ def _clusters(active: np.ndarray, max_gap: int) -> list[tuple[int, int, int]]:
     return out
 
 
+def _drop_uncrossable(sol: TranscribedSolution, at_lo: np.ndarray, at_up: np.ndarray) -> None:
+    """Clear the nodes where a state constraint sits at a limit no admissible control
+    could cross there (:func:`no_control_crosses`): not held by the constraint."""
+    pr = sol.problem
+    if not (at_lo.any() or at_up.any()):
+        return
+    values = known_values(sol)
+    box = [control_bounds_at(pr, n, values) for n in pr.control_names]
+    x = np.asarray(sol.x, dtype=float)
+    los = np.tile([b[0] for b in box], (len(x), 1))
+    his = np.tile([b[1] for b in box], (len(x), 1))
+    pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
+    for i, c in enumerate(pr.structure_path):
+        for side, at in (("lower", at_lo), ("upper", at_up)):
+            if at[:, i].any() and not ca.depends_on(c.expr, pr.u):
+                at[:, i] &= ~no_control_crosses(pr, c, side, x, los, his, pv)
+
+
 def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_gap: int,
                      min_nodes: int, control: str) -> None:
     """Relabel as ``"boundary:<i>:<side>"`` the intervals between the first and the last
@@ -445,9 +555,10 @@ def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_g
     control-only constraint is a face of the control set, not a boundary arc)."""
     pr = sol.problem
     at_lo, at_up = path_activity(sol, tol, kinds=("state", "mixed"))
+    _drop_uncrossable(sol, at_lo, at_up)
     for i in range(at_lo.shape[1]):
         if not (at_lo[:, i].any() or at_up[:, i].any()) or \
-                control not in riding_controls(pr, pr.path[i]):
+                control not in riding_controls(pr, pr.structure_path[i]):
             continue
         for side, act in (("lower", at_lo[:, i]), ("upper", at_up[:, i])):
             for a, b, count in _clusters(act, max_gap):
@@ -513,7 +624,7 @@ def _absorb_end_transitions(runs: list[list], max_transition: int,
 
 def _arcs_from_runs(sol: TranscribedSolution, runs: list[list], u: np.ndarray, h: float, lo: float,
                     hi: float, max_transition: int) -> list[Arc]:
-    names = [c.name for c in sol.problem.path]
+    names = [c.name for c in sol.problem.structure_path]
     t = np.asarray(sol.t, dtype=float)
     arcs: list[Arc] = []
     for i, (label, a, b) in enumerate(runs):
@@ -598,9 +709,9 @@ def _label_active(sol: TranscribedSolution, arcs: list[Arc], h: float, tol: floa
         k0 = int(round(arc.start / h)) if h > 0 else 0
         k1 = max(k0 + 1, int(round(arc.end / h)))
         nodes = act[k0 + 1:k1] if k1 - k0 > 1 else act[k0:k1]
-        held = [i for i in range(len(pr.path)) if nodes.shape[0] and nodes[:, i].all()]
-        arc.active = tuple(pr.path[i].name for i in held if kinds[i] != CONTROL)
-        arc.faces = tuple(pr.path[i].name for i in held if kinds[i] == CONTROL)
+        held = [i for i in range(len(pr.structure_path)) if nodes.shape[0] and nodes[:, i].all()]
+        arc.active = tuple(pr.structure_path[i].name for i in held if kinds[i] != CONTROL)
+        arc.faces = tuple(pr.structure_path[i].name for i in held if kinds[i] == CONTROL)
         if arc.constraint is not None and arc.constraint not in arc.active:
             arc.active = (arc.constraint, *arc.active)
 
@@ -648,7 +759,7 @@ def detect_arcs(sol: SolutionLike, control: str | None = None, tol: float = 1e-4
     tsol = transcribed(mesh_level(sol))
     pr = tsol.problem
     name = control or pr.control_names[0]
-    lo, hi = control_bounds_at(pr, name, tsol.params)
+    lo, hi = control_bounds_at(pr, name, known_values(tsol))
     u = tsol.control(name)
     h = 1.0
     at_hi = np.isfinite(hi) & (np.abs(u - hi) <= tol * max(1.0, abs(hi)))
@@ -768,7 +879,7 @@ def snap_to_control_set(sol: SolutionLike, st: ArcStructure, short: float,
         return st
     for _ in range(len(st.intervals)):
         bad = [iv for iv in st.intervals[1:-1] if iv.duration <= short
-               and outside_control_set(pr, iv.modes, tsol.params)]
+               and outside_control_set(pr, iv.modes, known_values(tsol))]
         if not bad:
             return st
         a, b = bad[0].start, bad[0].end

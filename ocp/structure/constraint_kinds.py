@@ -51,10 +51,10 @@ MAX_RELATIVE_DEGREE = 3
 def _constraint(pr: OptimalControlProblem, c: Constraint | str) -> Constraint:
     if not isinstance(c, str):
         return c
-    for con in pr.path:
+    for con in pr.structure_path:
         if con.name == c:
             return con
-    raise ValueError(f"no path constraint named {c!r}; have {[k.name for k in pr.path]}")
+    raise ValueError(f"no path constraint named {c!r}; have {[k.name for k in pr.structure_path]}")
 
 
 def constraint_kind(pr: OptimalControlProblem, c: Constraint | str) -> str:
@@ -98,14 +98,14 @@ def is_control_only(pr: OptimalControlProblem, c: Constraint | str | None) -> bo
 
 
 def path_kinds(pr: OptimalControlProblem) -> list[str]:
-    """:func:`constraint_kind` of every path constraint, in ``pr.path`` order.
+    """:func:`constraint_kind` of every path constraint, in ``pr.structure_path`` order.
 
     Parameters
     ----------
     pr : OptimalControlProblem
         The problem.
     """
-    return [constraint_kind(pr, c) for c in pr.path]
+    return [constraint_kind(pr, c) for c in pr.structure_path]
 
 
 def control_constraints(pr: OptimalControlProblem, linear: bool = False) -> list[Constraint]:
@@ -121,7 +121,7 @@ def control_constraints(pr: OptimalControlProblem, linear: bool = False) -> list
     -------
     list of Constraint
     """
-    out = [c for c in pr.path if constraint_kind(pr, c) == CONTROL]
+    out = [c for c in pr.structure_path if constraint_kind(pr, c) == CONTROL]
     if linear and out:
         u = pr.u
 

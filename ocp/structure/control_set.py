@@ -260,7 +260,7 @@ def vertex_faces(pr: OptimalControlProblem, poly: ControlPolytope, vertex: np.nd
     Returns
     -------
     dict
-        Control name -> ``(index of the constraint in pr.path, "lower" or "upper")``;
+        Control name -> ``(index of the constraint in pr.structure_path, "lower" or "upper")``;
         the controls at a bound of their own are not in it.
     """
     u = np.zeros(pr.nu)
@@ -268,7 +268,7 @@ def vertex_faces(pr: OptimalControlProblem, poly: ControlPolytope, vertex: np.nd
     group = set(poly.controls)
     faces: list[tuple[int, str, set[str]]] = []
     linear = {c.name for c in control_constraints(pr, linear=True)}
-    for i, c in enumerate(pr.path):
+    for i, c in enumerate(pr.structure_path):
         names = set(controls_in(pr, c))
         if c.name not in linear or not names <= group:
             continue

@@ -114,10 +114,11 @@ def path_constraint(pr: OptimalControlProblem, name: str) -> Constraint:
     -------
     Constraint
     """
-    for c in pr.path:
+    for c in pr.structure_path:
         if c.name == name:
             return c
-    raise ValueError(f"no path constraint named {name!r}; have {[c.name for c in pr.path]}")
+    have = [c.name for c in pr.structure_path]
+    raise ValueError(f"no path constraint named {name!r}; have {have}")
 
 
 def has_running_cost(pr: OptimalControlProblem) -> bool:
@@ -202,7 +203,7 @@ class ArcDynamics:
         fixed, values, by_name = [], [], {}
         for name, sym, mode in zip(pr.control_names, usyms, modes, strict=True):
             if not mode.held:
-                lo, hi = pr.control_bounds[name]
+                lo, hi = pr.control_limits[name]
                 bound = hi if mode.kind == "max" else lo
                 if bound.is_constant() and not math.isfinite(float(bound)):
                     raise ValueError(f"control {name!r} has no finite {mode.kind} bound")
@@ -275,7 +276,7 @@ class ArcDynamics:
         kappa = -e0 / J if uB.numel() == 1 else -ca.solve(J, e0)
         out = {}
         for i, name in enumerate(bnames):
-            lo, hi = pr.control_bounds[name]
+            lo, hi = pr.control_limits[name]
             if self.modes[pr.control_names.index(name)].kind == "boundary":
                 # a vertex value is a constant of p, checked once (a constant row at a
                 # bound would leave an interior-point method no slack)

@@ -71,6 +71,11 @@ def _check_problem(mp: MultiPhaseProblem) -> None:
         if ph.integrals:
             raise ProblemDefinitionError(f"phase {ph.name!r}: integrals in boundary terms are "
                                          "not supported by the switching refinement")
+        limits = [b for n in ph.control_names for b in ph.control_limits[n]]
+        if limits and ca.depends_on(ca.vertcat(*limits), ph.v):
+            raise ProblemDefinitionError(
+                f"phase {ph.name!r}: control limits that move with a decision variable are "
+                "refined in single-phase problems only (ocp.refine_switching)")
 
 
 def _start_links(mp: MultiPhaseProblem) -> dict[int, int]:

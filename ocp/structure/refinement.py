@@ -699,11 +699,15 @@ class SwitchingNLP:
         xT, T, J, _ = self.out_fn(w, p)
         theta = [ca.mmax(ca.sum1(ca.fabs(d.A_fn(p)[0]))) * w[k] / self.substeps[k]
                  if d.exact else ca.SX(0) for k, d in enumerate(self.dyns)]
-        cb = ca.vertcat(*[ca.vertcat(*pr.control_bounds[n]) for n in pr.control_names])
+        cb = ca.vertcat(*[ca.vertcat(*pr.control_limits[n]) for n in pr.control_names])
+        # limits that move with a state (a decision variable refined as a constant state,
+        # ocp.structure.variables): their values at the start
+        cb = ca.substitute(cb, pr.x, w[K:K + pr.nx])
         viol = ca.SX(0)
-        if pr.path:
-            h = ca.vertcat(*[c.expr for c in pr.path])
-            lo, hi = (ca.vertcat(*[getattr(c, s) for c in pr.path]) for s in ("lower", "upper"))
+        if pr.structure_path:
+            h = ca.vertcat(*[c.expr for c in pr.structure_path])
+            lo, hi = (ca.vertcat(*[getattr(c, s) for c in pr.structure_path])
+                      for s in ("lower", "upper"))
             for x, d in ((w[K:K + pr.nx], self.dyns[0]), (xT, self.dyns[-1])):
                 he = ca.substitute(ca.substitute(h, pr.u, d.u), pr.x, x)
                 viol = ca.fmax(viol, ca.mmax(ca.vertcat(lo - he, he - hi, 0)))
@@ -840,12 +844,12 @@ def build_intervals(G: ConstraintBlocks, pr: OptimalControlProblem, dyns: list[A
         The end state and the junction states (start first).
     """
     nx = pr.nx
-    names = [c.name for c in pr.path]
+    names = [c.name for c in pr.structure_path]
     control_only = {c.name for c in control_constraints(pr)}
-    hfn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.path])]) \
-        if pr.path else None
-    hlo = ca.vertcat(*[c.lower for c in pr.path]) if pr.path else ca.SX(0, 1)
-    hhi = ca.vertcat(*[c.upper for c in pr.path]) if pr.path else ca.SX(0, 1)
+    hfn = ca.Function("h", [pr.x, pr.u, pr.p], [ca.vertcat(*[c.expr for c in pr.structure_path])]) \
+        if pr.structure_path else None
+    hlo = ca.vertcat(*[c.lower for c in pr.structure_path]) if pr.structure_path else ca.SX(0, 1)
+    hhi = ca.vertcat(*[c.upper for c in pr.structure_path]) if pr.structure_path else ca.SX(0, 1)
     ends = [z]
     held_prev: tuple[str, ...] = ()
     for k, d in enumerate(dyns):
@@ -930,8 +934,11 @@ def check_control_set(problem: OptimalControlProblem, modes: Modes, pv: np.ndarr
             raise ValueError(f"interval {k} ({labels}) violates the control-only constraint "
                              f"{bad!r}: not a vertex of the control set")
         for j, (name, mm) in enumerate(zip(problem.control_names, m, strict=True)):
-            blo, bhi = (float(b) for b in ca.Function("b", [problem.p],
-                                                      list(problem.control_bounds[name]))(pv))
+            limits = ca.vertcat(*problem.control_limits[name])
+            if ca.depends_on(limits, problem.x):
+                continue  # a limit that moves with a (constant) state: a row of the NLP
+            fb = ca.Function("b", [problem.p], [limits])
+            blo, bhi = (float(b) for b in fb(pv).full().ravel())
             if mm.kind == "vertex" and not blo - tol <= u[j] <= bhi + tol:
                 raise ValueError(f"interval {k} ({labels}): the vertex value {u[j]:.6g} of "
                                  f"{name!r} is outside its bounds [{blo:g}, {bhi:g}]")

@@ -65,6 +65,7 @@ from .refinement import (
     solved_nlp,
     switching_nlp,
 )
+from .variables import variables_as_states
 
 __all__ = [
     "Arc", "ArcStructure", "DEFAULT_TOL", "Interval", "Mode", "REFINE_IPOPT", "RefinedSwitching",
@@ -122,6 +123,12 @@ class RefinedSwitching:
         E.g. intervals that shrank to zero length, rebuilds for accuracy.
     problem, params
         The problem and parameter values refined.
+    variables : dict
+        The decision variables' refined values (refined together with the switching
+        times: ``problem`` is then :func:`ocp.structure.variables.variables_as_states` of
+        ``origin``, the variables its last states).
+    origin : OptimalControlProblem or None
+        The problem as the user wrote it, when ``problem`` was derived from it.
     control, controls
         The (first) control's name and every control's name.
     lam_g, lam_x : ndarray
@@ -167,6 +174,8 @@ class RefinedSwitching:
     lam_x: np.ndarray = field(repr=False, default_factory=lambda: np.zeros(0))
     terminal_costate: tuple[np.ndarray, float | None] | None = field(repr=False, default=None)
     success: bool = True
+    variables: dict[str, float] = field(default_factory=dict)
+    origin: OptimalControlProblem | None = field(repr=False, default=None)
 
     # ------------------------------------------------------------- structure
     @property
@@ -238,7 +247,8 @@ class RefinedSwitching:
             vals = self.values[k] if len(self.controls) != 1 else (self.values[k],)
             ms = []
             for name, m, v in zip(self.controls, modes, vals, strict=True):
-                lo, hi = control_bounds_at(self.problem, name, self.params)
+                lo, hi = control_bounds_at(self.problem, name, {**self.params,
+                                                                **self.variables})
                 if m.kind in ("max", "min") and np.isfinite(v):
                     m = Mode("max") if abs(v - hi) <= abs(v - lo) else Mode("min")
                 ms.append(m)
@@ -346,8 +356,8 @@ class RefinedSwitching:
         pr = self.problem
         t, x, u, _ = self.samples(n)
         viol = 0.0
-        cons = [(c.expr, c.lower, c.upper) for c in pr.path]
-        cons += [(pr.u[j], *pr.control_bounds[nm]) for j, nm in enumerate(pr.control_names)]
+        cons = [(c.expr, c.lower, c.upper) for c in pr.structure_path]
+        cons += [(pr.u[j], *pr.control_limits[nm]) for j, nm in enumerate(pr.control_names)]
         for e, lo, hi in cons:
             fn = ca.Function("c", [pr.x, pr.u, pr.p], [e, lo, hi])
             v, a, b = along(fn, x, u, self.pv)
@@ -477,14 +487,27 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
                             "interior_samples": interior_samples,
                             "ipopt_options": ipopt_options, "tol": tol, "fast": fast}
 
+    pr, x0 = tsol.problem, np.asarray(tsol.x[0], dtype=float)
+    if pr.nv or pr.boundary or not ca.SX(pr.boundary_cost).is_zero():
+        # decision variables: refined with the switching times, as constant states; end-point
+        # terms (p.minimize, boundary_constraint) read at T (refused if they cannot be)
+        pr = variables_as_states(tsol.problem)
+        x0 = np.r_[x0, [float(tsol.variables[n]) for n in tsol.problem.var_names]]
+
     def attempt(s: ArcStructure) -> RefinedSwitching:
         modes, durs = list(s.modes), list(s.durations)
         if extra_arcs:
             if len(s.controls) != 1:
                 raise ValueError("extra_arcs supports single-control problems")
             insert_extra_arcs(modes, durs, extra_arcs)
-        return refine_structure(tsol.problem, tuple(modes), np.asarray(durs, dtype=float),
-                                np.asarray(tsol.x[0], dtype=float), params, **opts)
+        out = refine_structure(pr, tuple(modes), np.asarray(durs, dtype=float), x0, params,
+                               **opts)
+        if pr is not tsol.problem:
+            nx = tsol.problem.nx
+            out.origin = tsol.problem
+            out.variables = dict(zip(tsol.problem.var_names, map(float, out.x0[nx:]),
+                                     strict=True))
+        return out
 
     try:
         return attempt(st)
@@ -586,6 +609,11 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
     SolveError, InfeasibleError
         If Ipopt fails, or the accuracy is not reached after ``max_rebuilds``.
     """
+    if problem.nv:
+        raise ValueError(
+            "a problem with decision variables is refined as "
+            "ocp.structure.variables.variables_as_states(problem), with the variables' "
+            "guesses after the states in x0 (refine_switching does this)")
     pv = np.array([float(params[k]) for k in problem.param_names])
     check_control_set(problem, modes, pv)
     durations = np.maximum(np.asarray(durations, dtype=float), 1e-6)

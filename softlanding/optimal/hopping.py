@@ -421,6 +421,11 @@ def _grid_sequence(base: HopCycle, robot: Robot, impact: Impact, eta: float,
             cur.notes.append(f"grid sequence stopped: the {2 ** k}x grid's replay fails its "
                              f"checks ({'; '.join(c.unverified_reasons())})")
             break
+        if c.energy > cur.energy:  # the coarse control is on this grid: Ipopt left its basin
+            cur.notes.append(f"grid sequence stopped: the {2 ** k}x grid's optimum "
+                             f"({c.energy:.9g}) is above the coarser grid's ({cur.energy:.9g}), "
+                             "whose control it contains (another local optimum)")
+            break
         c.starts = base.starts
         grids.append(_grid_row(c))
         cur = c

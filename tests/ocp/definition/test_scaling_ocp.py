@@ -284,14 +284,15 @@ def test_bad_refs_are_rejected_naming_the_argument(kw, arg):
 
 def test_constraint_ref_is_honoured():
     p = double_integrator()
-    p.path_constraint(p.x[1], -1e4, 1e4, name="speed", ref=2.0)  # user refs always apply
+    # (a constraint on two states: on one state alone it would be that state's bound)
+    p.path_constraint(p.x[1] + 1e-3 * p.x[0], -1e4, 1e4, name="speed", ref=2.0)  # user refs apply
     p.initial_constraint(p.u[0], 0.0, ref=4.0)
     ms = MultipleShooting(p, nodes=10)
     r = ms.scaling.r
     assert np.all(r[ms.layout.blocks["path"]] == 0.5)
     assert r[ms.layout.blocks["initial"]][-1] == 0.25
     q = double_integrator()  # no ref: from the bounds, 1e4 being far from 1
-    q.path_constraint(q.x[1], -1e4, 1e4, name="speed")
+    q.path_constraint(q.x[1] + 1e-3 * q.x[0], -1e4, 1e4, name="speed")
     ms = MultipleShooting(q, nodes=10)
     assert np.all(ms.scaling.r[ms.layout.blocks["path"]] == 1e-4)
     assert ms.solve({"d": 2.0}).T == pytest.approx(2 * math.sqrt(2.0), rel=1e-8)

@@ -91,7 +91,8 @@ def test_constraint_kinds():
     q.set_dynamics({"x": v, "v": a})
     q.path_constraint(x, upper=1.0, name="x <= 1")
     q.path_constraint(b + v, upper=1.0, name="b + v <= 1")
-    assert [constraint_kind(q, c) for c in q.path] == [STATE, MIXED]
+    # x <= 1 on x alone is x's bound: structure detection sees it as a state constraint
+    assert [constraint_kind(q, c) for c in q.structure_path] == [MIXED, STATE]
     # x'' = a: only a can hold x <= 1 (relative degree 2); b is not in it
     assert riding_controls(q, "x <= 1") == ("a",)
 
@@ -231,8 +232,10 @@ def test_single_control_cap(box):
     """Minimum time 0 -> 1 of x'' = u, u in [-1, 1/2] (with a box [-1, 1] and the cap
     u <= 1/2 a control-only constraint, or with no box and -1 <= u <= 1/2 the constraint):
     u = 1/2 for t1 then -1 for t1/2, 0.375 t1^2 = 1, T = 1.5 sqrt(8/3) (closed form).
-    The capped arc is a vertex arc of the interval [-1, 1/2] (before, with the box:
-    'boundary' then 'interior', not refinable)."""
+    The cap on u alone is u's bound (ocp.definition.normal_form): the arcs are bang arcs
+    "max" (at 1/2) and "min", however the bounds are written (before the normal form:
+    vertex arcs of the interval [-1, 1/2]; before issue 21, 'boundary' then 'interior',
+    not refinable)."""
     p = OptimalControlProblem("capped_double_integrator")
     x, v = p.state("x"), p.state("v")
     u = p.control("u", -1, 1) if box else p.control("u")
@@ -245,7 +248,7 @@ def test_single_control_cap(box):
     p.minimize_terminal(p.T)
     sol = MultipleShooting(p, nodes=40).solve()
     kinds = [a.kind for a in detect_structure(sol).per_control[0].arcs]
-    assert kinds == (["vertex", "min"] if box else ["vertex", "vertex"])
+    assert kinds == ["max", "min"]
     r = refine_switching(sol)
     assert r.T == pytest.approx(1.5 * np.sqrt(8 / 3), rel=1e-12)
     assert r.values == pytest.approx([0.5, -1.0], abs=1e-15)
