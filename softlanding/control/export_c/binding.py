@@ -1,0 +1,112 @@
+"""The exported C controller compiled with the system's C compiler and called through
+:mod:`ctypes` (for its check against the Python controller and its benchmark)."""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+
+from softlanding.control import bangbang as bb
+from softlanding.control.export_c.writer import SOURCE
+
+#: The flags the README gives (C99, no fused multiply-adds: it rounds as numba does).
+CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off")
+
+
+def find_compiler() -> list[str] | None:
+    """The C compiler's command (``$CC``, else ``cc`` or ``gcc`` on the path), or None."""
+    cc = os.environ.get("CC")
+    if cc:
+        return cc.split() if shutil.which(cc.split()[0]) else None
+    found = shutil.which("cc") or shutil.which("gcc")
+    return [found] if found else None
+
+
+def compile_shared(folder: Path, extra: tuple[str, ...] = (), name: str = "libsl.so") -> Path:
+    """Compile the exported files of ``folder`` (and the C files ``extra``) into a shared
+    library in ``folder``.
+
+    Parameters
+    ----------
+    folder : Path
+        Holds the exported files (:func:`~softlanding.control.export_c.writer.write_controller`).
+    extra : tuple of str
+        More C files to link in (a benchmark's timing wrapper).
+    name : str
+        The library's file name.
+
+    Raises
+    ------
+    RuntimeError
+        No C compiler, or the code did not compile (the compiler's message).
+    """
+    cc = find_compiler()
+    if cc is None:
+        raise RuntimeError("no C compiler (cc, gcc or $CC) on this system")
+    out = Path(folder) / name
+    p = subprocess.run([*cc, *CFLAGS, "-Wall", "-Wextra", "-shared", "-fPIC", "-I", str(folder),
+                        "-o", str(out), str(Path(folder) / SOURCE), *extra, "-lm"],
+                       capture_output=True, text=True)
+    if p.returncode != 0 or p.stderr.strip():  # a warning is a defect of the template too
+        raise RuntimeError(f"the exported controller did not compile cleanly: "
+                           f"{p.stderr.strip()[:600]}")
+    return out
+
+
+def _ptr(a: np.ndarray) -> ctypes._Pointer:  # type: ignore[type-arg]
+    if a.dtype != np.float64 or not a.flags.c_contiguous:
+        raise TypeError("arrays passed to C must be contiguous float64")
+    return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+class CController:
+    """The exported controller's four functions, called through :mod:`ctypes`.
+
+    Parameters
+    ----------
+    library : Path
+        :func:`compile_shared`'s library.
+    """
+
+    def __init__(self, library: Path) -> None:
+        self.lib = lib = ctypes.CDLL(str(library))
+        d, p, i = ctypes.c_double, ctypes.POINTER(ctypes.c_double), ctypes.c_int
+        lib.sl_control_step.argtypes = [p, p, p, d, d, d, i]
+        lib.sl_control_step.restype = i
+        lib.sl_solve_plan.argtypes = [p, p, p]
+        lib.sl_solve_plan.restype = i
+        lib.sl_new_memory.argtypes = [p, d, d, d, d, d, d, d]
+        lib.sl_new_memory.restype = None
+        lib.sl_force.argtypes = [p, p, d]
+        lib.sl_force.restype = d
+        self.robot_numbers = np.ctypeslib.as_array(
+            (ctypes.c_double * bb.NP).in_dll(lib, "SL_ROBOT_NUMBERS")).copy()
+
+    def control_step(self, P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: float,
+                     h: float, estimate: bool) -> int:
+        """``sl_control_step`` (as :func:`~softlanding.control.bangbang.control_step`)."""
+        return int(self.lib.sl_control_step(_ptr(P), _ptr(M), _ptr(x), a_f, u, h,
+                                            int(estimate)))
+
+    def solve_plan(self, P: np.ndarray, M: np.ndarray, x: np.ndarray) -> int:
+        """``sl_solve_plan`` (as :func:`~softlanding.control.bangbang.solve_plan`)."""
+        return int(self.lib.sl_solve_plan(_ptr(P), _ptr(M), _ptr(x)))
+
+    def new_memory(self, tau1: float, tau2: float, prior: tuple[float, float],
+                   prior_std: tuple[float, float], noise_std: float) -> np.ndarray:
+        """``sl_new_memory`` (as :func:`~softlanding.control.bangbang.new_memory`)."""
+        M = np.zeros(bb.NM)
+        self.lib.sl_new_memory(_ptr(M), tau1, tau2, *prior, *prior_std, noise_std)
+        return M
+
+    def force(self, P: np.ndarray, M: np.ndarray, t: float) -> float:
+        """``sl_force``: the plan's force ``t`` after the last step."""
+        return float(self.lib.sl_force(_ptr(P), _ptr(M), t))
+
+
+__all__ = ["CFLAGS", "CController", "compile_shared", "find_compiler"]
