@@ -13,6 +13,7 @@ import numpy as np
 
 from softlanding.control import bangbang as bb
 from softlanding.control.export_c.writer import SOURCE
+from softlanding.errors import ExportError
 
 #: The flags the README gives (C99, no fused multiply-adds: it rounds as numba does).
 CFLAGS = ("-std=c99", "-O2", "-ffp-contract=off")
@@ -27,35 +28,40 @@ def find_compiler() -> list[str] | None:
     return [found] if found else None
 
 
-def compile_shared(folder: Path, extra: tuple[str, ...] = (), name: str = "libsl.so") -> Path:
-    """Compile the exported files of ``folder`` (and the C files ``extra``) into a shared
-    library in ``folder``.
+def compile_shared(folder: Path, library: Path, extra: tuple[str, ...] = ()) -> Path:
+    """Compile the exported files of ``folder`` (and the C files ``extra``) into the shared
+    library ``library``.
 
     Parameters
     ----------
     folder : Path
         Holds the exported files (:func:`~softlanding.control.export_c.writer.write_controller`).
+    library : Path
+        The library to write.
     extra : tuple of str
         More C files to link in (a benchmark's timing wrapper).
-    name : str
-        The library's file name.
+
+    Returns
+    -------
+    Path
+        ``library``.
 
     Raises
     ------
-    RuntimeError
-        No C compiler, or the code did not compile (the compiler's message).
+    ExportError
+        No C compiler, or the code did not compile without a warning (the compiler's
+        message).
     """
     cc = find_compiler()
     if cc is None:
-        raise RuntimeError("no C compiler (cc, gcc or $CC) on this system")
-    out = Path(folder) / name
+        raise ExportError("no C compiler (cc, gcc or $CC) on this system")
     p = subprocess.run([*cc, *CFLAGS, "-Wall", "-Wextra", "-shared", "-fPIC", "-I", str(folder),
-                        "-o", str(out), str(Path(folder) / SOURCE), *extra, "-lm"],
+                        "-o", str(library), str(Path(folder) / SOURCE), *extra, "-lm"],
                        capture_output=True, text=True)
     if p.returncode != 0 or p.stderr.strip():  # a warning is a defect of the template too
-        raise RuntimeError(f"the exported controller did not compile cleanly: "
-                           f"{p.stderr.strip()[:600]}")
-    return out
+        raise ExportError(f"the exported controller did not compile cleanly with "
+                          f"{' '.join(cc)}: {' '.join(p.stderr.split())[:400]}")
+    return Path(library)
 
 
 def _ptr(a: np.ndarray) -> ctypes._Pointer:  # type: ignore[type-arg]
