@@ -64,10 +64,11 @@ def compile_shared(folder: Path, library: Path, extra: tuple[str, ...] = ()) -> 
     return Path(library)
 
 
-def _ptr(a: np.ndarray) -> ctypes._Pointer:  # type: ignore[type-arg]
+def _ptr(a: np.ndarray) -> int:
+    """The address of ``a``'s data (for a ``double *`` argument)."""
     if a.dtype != np.float64 or not a.flags.c_contiguous:
         raise TypeError("arrays passed to C must be contiguous float64")
-    return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+    return int(a.ctypes.data)
 
 
 class CController:
@@ -81,7 +82,7 @@ class CController:
 
     def __init__(self, library: Path) -> None:
         self.lib = lib = ctypes.CDLL(str(library))
-        d, p, i = ctypes.c_double, ctypes.POINTER(ctypes.c_double), ctypes.c_int
+        d, p, i = ctypes.c_double, ctypes.c_void_p, ctypes.c_int
         lib.sl_control_step.argtypes = [p, p, p, d, d, d, i]
         lib.sl_control_step.restype = i
         lib.sl_solve_plan.argtypes = [p, p, p]

@@ -190,7 +190,9 @@ def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
             if sample == 0:
                 sp, sc = int(bb.solve_plan(Pp, Mp, x, *ws)), c.solve_plan(Pc, Mc, x)
             else:
-                u = float(plan_forces(Pp, Mp, np.array([h]))[0])  # the force the sample ends under
+                # the force the sample ended under (the plan's stop is more than h away)
+                push = Mp[bb.M_PHASE] == bb.PUSH and Mp[bb.M_TAU1] > h
+                u = float(Pp[bb.P_UMAX]) if push else -float(Pp[bb.P_UMAX])
                 x = _measured(Mp, x, h, case.noise, rng)
                 a_f = float(Pp[bb.P_AF0] + Pp[bb.P_BF] * u + Pp[bb.P_GF] * (
                     case.truth[0] * -x[2] + case.truth[1] * x[3] ** 2)) \
