@@ -1,23 +1,14 @@
 """The exported C controller against the Python (numba) one, on random states and grounds.
 
-A case is a landing: the paper's robot on a random ground ``(K, c_d)`` at a random impact
-velocity, with a random sample period, sensor noise and margin. Its first plan is solved
-from the impact state (:func:`~softlanding.control.bangbang.solve_plan`), then the samples
-follow (:func:`~softlanding.control.bangbang.control_step`), each from the state the last
-plan predicted, perturbed (the plant's ground differs from the prior: the true ground's
-``K`` is off by up to 50 %; and the measurements are noisy), with the foot's acceleration
-that the true ground gives, until the plan's foot stop. Both controllers run every call
-from the same inputs (made from the Python side's outputs); compared are the statuses,
-``P`` and ``M`` after every call and the plan's force at three times after each, the
-force of the Python side from :func:`~softlanding.optimal.landing.arrest_schedule` (not
-from the C's formula).
+Both run every recorded call of random landings (:mod:`.samples`) from the same inputs;
+compared are the statuses, ``P`` and ``M`` after every call and the plan's force at three
+times after each, the force of the Python side from
+:func:`~softlanding.optimal.landing.arrest_schedule` (not from the C's formula).
 """
 
 from __future__ import annotations
 
-import itertools
 import tempfile
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,69 +16,14 @@ import numpy as np
 
 from softlanding.control import bangbang as bb
 from softlanding.control.export_c.binding import CController, compile_shared
+from softlanding.control.export_c.samples import recorded_calls
 from softlanding.errors import ExportError
 from softlanding.model.controllers import ForceSchedule
-from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.model.robot import Robot
 from softlanding.optimal.landing import arrest_schedule
-from softlanding.optimal.limits import force_limit
 
-#: Samples of one landing at most (more landings, more grounds, for the same number).
-MAX_SAMPLES = 20
 #: Largest relative difference of any output the C may have from the Python controller.
 TOLERANCE = 1e-12
-
-
-@dataclass(frozen=True)
-class Landing:
-    """One landing's inputs.
-
-    Attributes
-    ----------
-    P : array
-        The robot's numbers (the ground's ``K``, ``c_d``: the controller's prior).
-    guess : (float, float)
-        The first plan's durations before Newton.
-    x0 : array of 4
-        The state at impact.
-    truth : (float, float)
-        The ground's ``(K, c_d)`` the measured accelerations come from.
-    noise : float
-        Relative standard deviation of the measured state.
-    seed : int
-        Of the measurements' noise.
-    """
-
-    P: np.ndarray
-    guess: tuple[float, float]
-    x0: np.ndarray
-    truth: tuple[float, float]
-    noise: float
-    seed: int
-
-
-def random_landings(robot: Robot = PAPER_ROBOT, seed: int = 0) -> Iterator[Landing]:
-    """Random landings of ``robot``, one after another.
-
-    Parameters
-    ----------
-    robot : Robot
-        With a force limit.
-    seed : int
-        Of :func:`numpy.random.default_rng`.
-    """
-    rng = np.random.default_rng(seed)
-    r = robot
-    u_max = force_limit(robot)
-    for i in itertools.count():
-        k = float(np.exp(rng.uniform(np.log(0.3), np.log(3.0))))
-        c_d = 0.0 if rng.random() < 0.2 else float(rng.uniform(0.0, 1.0))
-        noise = float(rng.choice([0.0, 1e-6, 1e-4]))
-        P = bb.robot_numbers(r.r_m, r.s, u_max, k, c_d, max(noise, 1e-6),
-                             float(rng.choice([0.0, 2.0])), float(rng.uniform(0.005, 0.03)))
-        truth = (k * float(rng.uniform(0.5, 1.5)), c_d * float(rng.uniform(0.5, 1.5)))
-        x0 = Impact(float(rng.uniform(-10.0, -0.5))).initial_state(r)
-        yield Landing(P, (float(rng.uniform(0.05, 0.2)), float(rng.uniform(0.05, 0.2))), x0,
-                      truth, noise, seed * 100_003 + i)
 
 
 def plan_forces(P: np.ndarray, M: np.ndarray, times: np.ndarray) -> np.ndarray:
@@ -155,10 +91,21 @@ class Comparison:
                 f"{d['M']:.3g}; statuses {'the same' if d['status'] == 0 else 'differ'})")
 
 
+def robot_of_numbers(P: np.ndarray) -> Robot:
+    """The robot whose ``r_m``, ``s``, ``u_max`` the numbers ``P`` hold.
+
+    Parameters
+    ----------
+    P : array
+        :func:`~softlanding.control.bangbang.robot_numbers`.
+    """
+    return Robot(r_m=float(P[bb.P_RM]), s=float(P[bb.P_S]), u_max=float(P[bb.P_UMAX]))
+
+
 def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
-    """Run random landings (:func:`random_landings`) of the robot the export is for (its
-    ``SL_ROBOT_NUMBERS``' ``r_m``, ``s``, ``u_max``) through both controllers,
-    ``n_steps`` samples in all, and compare their outputs.
+    """Run the calls of random landings (:func:`~.samples.recorded_calls`) of the robot the
+    export is for (its ``SL_ROBOT_NUMBERS``) through both controllers, ``n_steps`` samples
+    in all, and compare their outputs.
 
     Parameters
     ----------
@@ -169,53 +116,32 @@ def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
     seed : int
         Of the landings.
     """
-    out = Comparison()
+    calls, landings = recorded_calls(robot_of_numbers(c.robot_numbers), n_steps, seed)
+    out = Comparison(landings=landings, steps=sum(not k.first for k in calls))
     ws = bb.workspace()
     got: dict[str, list[np.ndarray]] = {k: [] for k in ("P", "M", "force")}
     want: dict[str, list[np.ndarray]] = {k: [] for k in ("P", "M", "force")}
-    P0 = c.robot_numbers
-    landings = random_landings(Robot(r_m=float(P0[bb.P_RM]), s=float(P0[bb.P_S]),
-                                     u_max=float(P0[bb.P_UMAX])), seed)
-    while out.steps < n_steps:
-        case = next(landings)
-        out.landings += 1
-        rng = np.random.default_rng(case.seed)
-        Pp, Pc = case.P.copy(), case.P.copy()
-        prior, noise = (float(Pp[bb.P_K]), float(Pp[bb.P_CD])), float(Pp[bb.P_NOISE])
-        Mp = bb.new_memory(*case.guess, prior, (1.0, 1.0), noise)
-        Mc = c.new_memory(*case.guess, prior, (1.0, 1.0), noise)
-        x = np.ascontiguousarray(case.x0, float)
-        h = float(Pp[bb.P_PERIOD])
-        for sample in range(MAX_SAMPLES + 1):
-            if sample == 0:
-                sp, sc = int(bb.solve_plan(Pp, Mp, x, *ws)), c.solve_plan(Pc, Mc, x)
-            else:
-                # the force the sample ended under (the plan's stop is more than h away)
-                push = Mp[bb.M_PHASE] == bb.PUSH and Mp[bb.M_TAU1] > h
-                u = float(Pp[bb.P_UMAX]) if push else -float(Pp[bb.P_UMAX])
-                x = _measured(Mp, x, h, case.noise, rng)
-                a_f = float(Pp[bb.P_AF0] + Pp[bb.P_BF] * u + Pp[bb.P_GF] * (
-                    case.truth[0] * -x[2] + case.truth[1] * x[3] ** 2)) \
-                    * (1 + case.noise * rng.standard_normal())
-                sp = int(bb.control_step(Pp, Mp, x, a_f, u, h, True, *ws))
-                sc = c.control_step(Pc, Mc, x, a_f, u, h, True)
-                out.steps += 1
-            name = bb.STATUS_NAMES[sp]
-            out.statuses[name] = out.statuses.get(name, 0) + 1
-            out.max_relative["status"] = max(out.max_relative["status"], float(sp != sc))
-            length = (Mp[bb.M_TAU1] if Mp[bb.M_PHASE] == bb.PUSH else 0.0) + Mp[bb.M_TAU2]
-            times = np.array([0.5 * h, 0.5, 1.2]) * np.array([1.0, length, length])
-            got["P"].append(Pc.copy())
-            want["P"].append(Pp.copy())
-            got["M"].append(Mc.copy())
-            want["M"].append(Mp.copy())
-            got["force"].append(np.array([c.force(Pc, Mc, t) for t in times]))
-            want["force"].append(plan_forces(Pp, Mp, times))
-            if out.steps >= n_steps or length <= h or sp not in (bb.OK, bb.CONVERGING, bb.HOLDS):
-                break  # the foot's stop within the next sample, or a state not covered
-    for k in got:
-        out.max_relative[k] = relative_difference(np.concatenate(got[k]),
-                                                  np.concatenate(want[k]))
+    for k in calls:
+        Pp, Pc, Mp, Mc = k.P.copy(), k.P.copy(), k.M.copy(), k.M.copy()
+        if k.first:
+            sp, sc = int(bb.solve_plan(Pp, Mp, k.x, *ws)), c.solve_plan(Pc, Mc, k.x)
+        else:
+            sp = int(bb.control_step(Pp, Mp, k.x, k.a_f, k.u, k.h, True, *ws))
+            sc = c.control_step(Pc, Mc, k.x, k.a_f, k.u, k.h, True)
+        name = bb.STATUS_NAMES[sp]
+        out.statuses[name] = out.statuses.get(name, 0) + 1
+        out.max_relative["status"] = max(out.max_relative["status"], float(sp != sc))
+        length = (Mp[bb.M_TAU1] if Mp[bb.M_PHASE] == bb.PUSH else 0.0) + Mp[bb.M_TAU2]
+        times = np.array([0.5 * Pp[bb.P_PERIOD], 0.5 * length, 1.2 * length])
+        got["P"].append(Pc)
+        want["P"].append(Pp)
+        got["M"].append(Mc)
+        want["M"].append(Mp)
+        got["force"].append(np.array([c.force(Pc, Mc, t) for t in times]))
+        want["force"].append(plan_forces(Pp, Mp, times))
+    for key in got:
+        out.max_relative[key] = relative_difference(np.concatenate(got[key]),
+                                                    np.concatenate(want[key]))
     return out
 
 
@@ -245,16 +171,5 @@ def check_export(folder: Path, n_steps: int = 1000, seed: int = 0) -> Comparison
     return result
 
 
-def _measured(M: np.ndarray, x: np.ndarray, h: float, noise: float,
-              rng: np.random.Generator) -> np.ndarray:
-    """The next sample's measured state: the plan's prediction (else ``x`` moved on), off
-    by the model's error and the sensors' noise, the foot still sinking."""
-    pred = M[bb.M_PRED:bb.M_PRED + 4] if M[bb.M_PRED_OK] == 1.0 else \
-        x + h * np.array([x[1], 0.0, x[3], 0.0])
-    out = pred * (1.0 + noise * rng.standard_normal(4))
-    out[3] = min(out[3], -1e-6)
-    return np.ascontiguousarray(out)
-
-
-__all__ = ["Comparison", "Landing", "MAX_SAMPLES", "TOLERANCE", "check_export", "compare",
-           "plan_forces", "random_landings", "relative_difference"]
+__all__ = ["TOLERANCE", "Comparison", "check_export", "compare", "plan_forces",
+           "relative_difference", "robot_of_numbers"]
