@@ -77,6 +77,7 @@ def export_command(a: argparse.Namespace) -> int:
          "numbers": {names[i][2:]: float(v) for i, v in enumerate(P)},
          "check": None if result is None else {
              "landings": result.landings, "samples": result.steps,
+             "pull_samples": result.pull_steps,
              "max_relative_difference": result.max_relative, "statuses": result.statuses}}
     if a.json:
         print_json(d)

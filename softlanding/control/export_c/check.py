@@ -66,6 +66,8 @@ class Comparison:
     ----------
     landings, steps : int
         Landings run, samples (control steps) compared (each landing's first plan besides).
+    pull_steps : int
+        Samples that ended pulling (the switch passed).
     max_relative : dict
         ``"status"`` (1 if any status differs, else 0), ``"P"``, ``"M"``, ``"force"``: the
         largest relative difference of each over every call.
@@ -75,6 +77,7 @@ class Comparison:
 
     landings: int = 0
     steps: int = 0
+    pull_steps: int = 0
     max_relative: dict[str, float] = field(
         default_factory=lambda: {"status": 0.0, "P": 0.0, "M": 0.0, "force": 0.0})
     statuses: dict[str, int] = field(default_factory=dict)
@@ -86,7 +89,8 @@ class Comparison:
     def describe(self) -> str:
         """One line: what was compared and how far apart."""
         d = self.max_relative
-        return (f"{self.steps} samples of {self.landings} landings, largest relative "
+        return (f"{self.steps} samples ({self.pull_steps} pulling) of {self.landings} "
+                f"landings, largest relative "
                 f"difference {self.worst():.3g} (force {d['force']:.3g}, P {d['P']:.3g}, M "
                 f"{d['M']:.3g}; statuses {'the same' if d['status'] == 0 else 'differ'})")
 
@@ -117,7 +121,9 @@ def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
         Of the landings.
     """
     calls, landings = recorded_calls(robot_of_numbers(c.robot_numbers), n_steps, seed)
-    out = Comparison(landings=landings, steps=sum(not k.first for k in calls))
+    out = Comparison(landings=landings, steps=sum(not k.first for k in calls),
+                     pull_steps=sum(not k.first and (k.M[bb.M_PHASE] == bb.PULL
+                                                     or k.M[bb.M_TAU1] <= k.h) for k in calls))
     ws = bb.workspace()
     got: dict[str, list[np.ndarray]] = {k: [] for k in ("P", "M", "force")}
     want: dict[str, list[np.ndarray]] = {k: [] for k in ("P", "M", "force")}
