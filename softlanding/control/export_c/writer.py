@@ -7,6 +7,7 @@ C and text with ``@NAME@`` placeholders; :mod:`.layout` gives the numbers.
 from __future__ import annotations
 
 import re
+import textwrap
 from importlib import resources
 from pathlib import Path
 
@@ -41,8 +42,7 @@ def _fill(text: str, values: dict[str, str]) -> str:
     return text
 
 
-def controller_sources(P: np.ndarray, robot_text: str,
-                       guess: tuple[float, float] = (0.1, 0.1)) -> dict[str, str]:
+def controller_sources(P: np.ndarray, robot_text: str) -> dict[str, str]:
     """The exported files' texts, by file name (:data:`FILES`).
 
     Parameters
@@ -52,8 +52,6 @@ def controller_sources(P: np.ndarray, robot_text: str,
         ``SL_ROBOT_NUMBERS`` holds.
     robot_text : str
         What they are, in words (the header and the README say it).
-    guess : (float, float)
-        The first plan's push and pull durations the README's example starts Newton from.
 
     Raises
     ------
@@ -72,9 +70,7 @@ def controller_sources(P: np.ndarray, robot_text: str,
     source = _fill(_template("controller.c.in"), {
         **common, "DOP853": dop853_text(), "ROBOT": "\n".join(robot_lines(P))})
     readme = _fill(_template("README.txt.in"), {
-        **common, "TAU1": repr(float(guess[0])), "TAU2": repr(float(guess[1])),
-        "TAU_NOTE": "The guess above is the one softlanding's tests start from; a plan solved "
-                    "offline for the expected impact is a closer one."})
+        **common, "EXPORTED_FOR": textwrap.fill(f"Exported for: {robot_text}.", 90)})
     return {HEADER: header, SOURCE: source, README: readme}
 
 
