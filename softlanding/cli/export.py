@@ -58,6 +58,7 @@ def export_command(a: argparse.Namespace) -> int:
                                         "none found")
     out = output_folder(a.out, "out", a.force)
     from softlanding.control.export_c.check import check_export
+    from softlanding.control.export_c.layout import indices
     from softlanding.control.export_c.writer import FILES, controller_sources, write_controller
 
     P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d,
@@ -72,7 +73,7 @@ def export_command(a: argparse.Namespace) -> int:
         if a.check:  # before the files are put in place: a failed check leaves nothing
             result = check_export(tmp)
     files = [str(out / name) for name in FILES]
-    names = {v: k_ for k_, v in bb.__dict__.items() if k_.startswith("P_") and type(v) is int}
+    names = {i: k_ for k_, i in indices("P_").items()}
     d = {"out": str(out), "files": files, "robot": text,
          "numbers": {names[i][2:]: float(v) for i, v in enumerate(P)},
          "check": None if result is None else {

@@ -96,23 +96,61 @@ class CController:
 
     def control_step(self, P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: float,
                      h: float, estimate: bool) -> int:
-        """``sl_control_step`` (as :func:`~softlanding.control.bangbang.control_step`)."""
+        """``sl_control_step`` (as :func:`~softlanding.control.bangbang.control_step`).
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory, updated in place.
+        x : array of 4
+            The measured state.
+        a_f, u, h : float
+            The measured foot acceleration, the force the sample ended under, its length.
+        estimate : bool
+            Update the estimate.
+        """
         return int(self.lib.sl_control_step(_ptr(P), _ptr(M), _ptr(x), a_f, u, h,
                                             int(estimate)))
 
     def solve_plan(self, P: np.ndarray, M: np.ndarray, x: np.ndarray) -> int:
-        """``sl_solve_plan`` (as :func:`~softlanding.control.bangbang.solve_plan`)."""
+        """``sl_solve_plan`` (as :func:`~softlanding.control.bangbang.solve_plan`).
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers, the memory (its durations the guess; updated in place).
+        x : array of 4
+            The state.
+        """
         return int(self.lib.sl_solve_plan(_ptr(P), _ptr(M), _ptr(x)))
 
     def new_memory(self, tau1: float, tau2: float, prior: tuple[float, float],
                    prior_std: tuple[float, float], noise_std: float) -> np.ndarray:
-        """``sl_new_memory`` (as :func:`~softlanding.control.bangbang.new_memory`)."""
+        """``sl_new_memory`` (as :func:`~softlanding.control.bangbang.new_memory`).
+
+        Parameters
+        ----------
+        tau1, tau2 : float
+            The first plan's push and pull durations.
+        prior, prior_std : (float, float)
+            The estimator's prior ``(K, c_d)`` and its standard deviations.
+        noise_std : float
+            Standard deviation of one measured ground force.
+        """
         M = np.zeros(bb.NM)
         self.lib.sl_new_memory(_ptr(M), tau1, tau2, *prior, *prior_std, noise_std)
         return M
 
     def force(self, P: np.ndarray, M: np.ndarray, t: float) -> float:
-        """``sl_force``: the plan's force ``t`` after the last step."""
+        """``sl_force``: the plan's force ``t`` after the last step.
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory.
+        t : float
+            Time after the step.
+        """
         return float(self.lib.sl_force(_ptr(P), _ptr(M), t))
 
 

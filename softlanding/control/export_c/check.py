@@ -49,7 +49,13 @@ def plan_forces(P: np.ndarray, M: np.ndarray, times: np.ndarray) -> np.ndarray:
 
 def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
     """Largest ``|a - b| / max(|a|, |b|)`` (0 where both are 0; inf where one is not finite
-    and they differ)."""
+    and they differ).
+
+    Parameters
+    ----------
+    a, b : array
+        Same shape.
+    """
     a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))
     same = (a == b) | (np.isnan(a) & np.isnan(b))
     with np.errstate(invalid="ignore", divide="ignore"):
