@@ -106,8 +106,9 @@ def test_c_and_numba_agree_on_1000_samples_of_random_landings(exported):
 @pytest.mark.slow
 @needs_cc
 def test_the_comparison_sees_a_changed_constant(exported, tmp_path):
-    # an honest comparison: one coefficient off in its last digits shows
+    # an honest comparison: the step-size control's exponent off by 1e-7 shows
     src = (exported[0] / SOURCE).read_text()
+    assert src.count("-1.0 / 8.0") == 2
     mutant = tmp_path / "mutant"
     mutant.mkdir()
     (mutant / HEADER).write_text((exported[0] / HEADER).read_text())
