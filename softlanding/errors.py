@@ -66,6 +66,14 @@ class ClusterError(SoftlandingError):
     label = "cluster"
 
 
+class ExportError(SoftlandingError):
+    """The exported C controller did not compile, or does not compute what the Python one does
+    (``softlanding export-controller --check``)."""
+
+    exit_code = 1
+    label = "export"
+
+
 class DiskFullError(SoftlandingError):
     """An output could not be written: its disk is full (or the user's quota is used up).
 

@@ -19,6 +19,7 @@ from collections.abc import Iterator, Sequence
 from typing import Any
 
 from softlanding.cli.cache import cache_command
+from softlanding.cli.export import export_command
 from softlanding.cli.output import (
     EXIT_FAILURE,
     EXIT_OK,
@@ -701,7 +702,8 @@ HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
             "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
             "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc,
-            "robust": robust_command, "cache": cache_command}
+            "robust": robust_command, "export-controller": export_command,
+            "cache": cache_command}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -402,6 +402,49 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
     return m
 
 
+def _export_controller(sub: Any) -> argparse.ArgumentParser:
+    e = sub.add_parser("export-controller",
+                       help="write the compiled landing controller as C source (libm only)",
+                       description="Write the landing controller that `mpc --controller "
+                                   "bangbang` runs (a real-time Newton on the push/pull "
+                                   "durations with a least-squares ground estimator) as C99 "
+                                   "source for a robot: DIR/softlanding_controller.c and .h "
+                                   "(the step function, the layout of its parameter and memory "
+                                   "arrays) and README.txt (how to compile and call it). It "
+                                   "needs nothing beyond libm. The robot's and the ground's "
+                                   "numbers are runtime parameters (the array P); the options "
+                                   "below give the values written as SL_ROBOT_NUMBERS. --check "
+                                   "compiles it with the system's C compiler and compares it "
+                                   "with the Python controller on 1,000 samples of random "
+                                   "landings (exit 1 unless every output agrees to 1e-12).")
+    e.add_argument("--out", required=True, metavar="DIR",
+                   help="folder to write: new or empty, or with --force an existing one whose "
+                        "files of the same names are replaced (written in a temporary folder, "
+                        "put in place at the end)")
+    _force_arg(e)
+    _model_args(e, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    e.add_argument("--period", type=float, default=None,
+                   help="sample period in sqrt(m_t/k_g) (default 0.01: 0.26 ms on the paper's "
+                        "rig)")
+    e.add_argument("--model-ground", choices=["linear", "drag"], default="linear",
+                   help="the ground the controller assumes before measuring (default linear)")
+    e.add_argument("--model-stiffness", type=float, default=None, metavar="K",
+                   help="its stiffness factor (default 1)")
+    e.add_argument("--model-cd", type=float, default=None, metavar="C",
+                   help="its drag number (--model-ground drag)")
+    e.add_argument("--noise-std", type=float, default=0.0, metavar="S",
+                   help="the sensors' noise (standard deviation of the measured foot "
+                        "acceleration and force, paper units), which weighs the estimator "
+                        "(default 0)")
+    e.add_argument("--margin", type=float, default=0.0, metavar="M",
+                   help="plan for the estimate less M standard deviations of K and c_d "
+                        "(default 0)")
+    e.add_argument("--check", action="store_true",
+                   help="compile the files with the system's C compiler (cc, gcc or $CC) and "
+                        "compare them with the Python controller before writing them")
+    return e
+
+
 def _robust(sub: Any) -> argparse.ArgumentParser:
     r = sub.add_parser("robust", help="one landing plan for a set of grounds (robust, tree)",
                        description="Plan the landing for every ground of a set (the products "
@@ -450,7 +493,8 @@ def _cache(sub: Any) -> argparse.ArgumentParser:
 BUILDERS = {"simulate": _simulate, "scale": _scale, "solve": _solve, "solve-sweep": _solve_sweep,
             "impedance": _impedance, "map": _map, "sweep": _sweep, "compare": _compare,
             "demo": _demo, "reproduce": _reproduce, "hop": _hop, "mpc": _mpc,
-            "robust": _robust, "variants": variants_parser, "cache": _cache}
+            "robust": _robust, "export-controller": _export_controller,
+            "variants": variants_parser, "cache": _cache}
 
 
 def build_parser(handlers: Handlers, parser_class: type[argparse.ArgumentParser],

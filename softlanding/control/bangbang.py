@@ -93,6 +93,22 @@ def force_coefficients(r_m: float) -> tuple[float, float]:
     return float(P[P_BF]), float(P[P_GF])
 
 
+def ground_force_noise(r_m: float, sensor_noise: float) -> float:
+    """Standard deviation of one ground force the estimator derives from the foot's measured
+    acceleration and force, each with noise ``sensor_noise`` (at least ``1e-6``: the
+    estimator's weight of an exact measurement).
+
+    Parameters
+    ----------
+    r_m : float
+        Mass ratio.
+    sensor_noise : float
+        Standard deviation of the measured acceleration and force.
+    """
+    beta, gamma = force_coefficients(r_m)
+    return max(sensor_noise * float(np.hypot(1.0, beta)) / abs(gamma), 1e-6)
+
+
 def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: float,
                   noise_std: float = 1e-6, margin: float = 0.0,
                   period: float = 0.01) -> np.ndarray:
@@ -533,5 +549,5 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
 
 __all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
            "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH",
-           "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "new_memory",
-           "robot_numbers", "solve_plan", "workspace"]
+           "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "ground_force_noise",
+           "new_memory", "robot_numbers", "solve_plan", "workspace"]

@@ -565,9 +565,7 @@ class _FastState:
             and all(len(m) == 1 for m in plan.modes) else ()
         u_max = force_limit(robot)
         k, c_d = ground_numbers(model)
-        # the ground force's noise from the acceleration's and the force's
-        beta, gamma = bb.force_coefficients(robot.r_m)
-        noise = max(sensor.noise * float(np.hypot(1.0, beta)) / abs(gamma), 1e-6)
+        noise = bb.ground_force_noise(robot.r_m, sensor.noise)
         P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin, period)
         covered = kinds in (("max", "min"), ("min",))
         d = np.asarray(plan.durations, float) if covered else np.array([0.0, 1.0])

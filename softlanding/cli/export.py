@@ -1,0 +1,94 @@
+"""``softlanding export-controller``: the compiled landing controller written as C source."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from softlanding.cli.output import EXIT_OK, print_json, print_table, robot_of
+from softlanding.errors import ParameterError, check
+
+
+def model_ground(a: argparse.Namespace) -> Any:
+    """The ground the controller assumes before measuring (``--model-ground``,
+    ``--model-stiffness``, ``--model-cd``), checked.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments.
+    """
+    from softlanding.model.ground import DragGround, LinearGround
+
+    if a.model_ground == "linear" and a.model_cd is not None:
+        raise ParameterError("--model-cd", "applies to --model-ground drag")
+    if a.model_ground == "drag" and a.model_cd is None:
+        raise ParameterError("--model-cd", "is required with --model-ground drag (the drag "
+                                           "number the controller assumes)")
+    k = 1.0 if a.model_stiffness is None else a.model_stiffness
+    return LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
+
+
+def export_command(a: argparse.Namespace) -> int:
+    """Run ``softlanding export-controller`` (the parsed arguments; the exit code).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments.
+    """
+    from softlanding.control import bangbang as bb
+    from softlanding.control.export_c.binding import find_compiler
+    from softlanding.control.mpc import DEFAULT_PERIOD, check_period
+    from softlanding.control.state_landing import ground_numbers
+    from softlanding.optimal.limits import force_limit
+    from softlanding.util.files import atomic_folder, output_folder
+
+    if a.l0 is not None:
+        raise ParameterError("--l0", "does not apply: the controller does not use the leg's "
+                                     "rest length")
+    period = DEFAULT_PERIOD if a.period is None else check_period("--period", a.period)
+    noise = check("--noise-std", a.noise_std, (lambda v: v >= 0, "must be >= 0"))
+    margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
+    robot = robot_of(a)
+    u_max = force_limit(robot)
+    k, c_d = ground_numbers(model_ground(a))
+    if a.check and find_compiler() is None:
+        raise ParameterError("--check", "needs a C compiler (cc, gcc or $CC on the path); "
+                                        "none found")
+    out = output_folder(a.out, "out", a.force)
+    from softlanding.control.export_c.check import check_export
+    from softlanding.control.export_c.layout import indices
+    from softlanding.control.export_c.writer import FILES, controller_sources, write_controller
+
+    P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d,
+                         bb.ground_force_noise(robot.r_m, noise), margin, period)
+    text = (f"r_m = {robot.r_m:g}, s = {robot.s:g}, u_max = {u_max:g}; prior ground K = {k:g}, "
+            f"c_d = {c_d:g}; sample period {period:g}; sensor noise {noise:g}; margin "
+            f"{margin:g}")
+    sources = controller_sources(P, text)
+    result = None
+    with atomic_folder(out, force=a.force) as tmp:
+        write_controller(tmp, sources)
+        if a.check:  # before the files are put in place: a failed check leaves nothing
+            result = check_export(tmp)
+    files = [str(out / name) for name in FILES]
+    names = {i: k_ for k_, i in indices("P_").items()}
+    d = {"out": str(out), "files": files, "robot": text,
+         "numbers": {names[i][2:]: float(v) for i, v in enumerate(P)},
+         "check": None if result is None else {
+             "landings": result.landings, "samples": result.steps,
+             "pull_samples": result.pull_steps,
+             "max_relative_difference": result.max_relative, "statuses": result.statuses}}
+    if a.json:
+        print_json(d)
+        return EXIT_OK
+    rows: list[tuple[str, object]] = [("written to", str(out)),
+                                      ("files", ", ".join(FILES)), ("exported for", text)]
+    if result is not None:
+        rows.append(("check against Python", result.describe()))
+    print_table(rows)
+    return EXIT_OK
+
+
+__all__ = ["export_command", "model_ground"]

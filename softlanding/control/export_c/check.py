@@ -1,0 +1,187 @@
+"""The exported C controller against the Python (numba) one, on random states and grounds.
+
+Both run every recorded call of random landings (:mod:`.samples`) from the same inputs;
+compared are the statuses, ``P`` and ``M`` after every call and the plan's force at three
+times after each, the force of the Python side from
+:func:`~softlanding.optimal.landing.arrest_schedule` (not from the C's formula).
+"""
+
+from __future__ import annotations
+
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from softlanding.control import bangbang as bb
+from softlanding.control.export_c.binding import CController, compile_shared
+from softlanding.control.export_c.samples import recorded_calls
+from softlanding.errors import ExportError
+from softlanding.model.controllers import ForceSchedule
+from softlanding.model.robot import Robot
+from softlanding.optimal.landing import arrest_schedule
+
+#: Largest relative difference of any output the C may have from the Python controller.
+TOLERANCE = 1e-12
+
+
+def plan_forces(P: np.ndarray, M: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """The force of the plan in ``M`` at ``times`` after the step, from the Python schedule
+    (push, pull, then :func:`~softlanding.optimal.landing.arrest_schedule`).
+
+    Parameters
+    ----------
+    P, M : arrays
+        The controller's numbers and memory.
+    times : array
+        Times after the step.
+    """
+    t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
+    t2 = t1 + float(M[bb.M_TAU2])
+    u_max = float(P[bb.P_UMAX])
+    tail = arrest_schedule(np.array([M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT], 0.0]),
+                           float(P[bb.P_RM]))
+    assert isinstance(tail, ForceSchedule)  # (a constant arrest force, then the weight)
+    after = np.array(tail.values)[np.searchsorted(tail.times, times - t2, side="right")]
+    return np.where(times < t1, u_max, np.where(times < t2, -u_max, after))
+
+
+def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
+    """Largest ``|a - b| / max(|a|, |b|)`` (0 where both are 0; inf where one is not finite
+    and they differ).
+
+    Parameters
+    ----------
+    a, b : array
+        Same shape.
+    """
+    a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))
+    same = (a == b) | (np.isnan(a) & np.isnan(b))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rel = np.abs(a - b) / np.maximum(np.abs(a), np.abs(b))
+    rel = np.where(same, 0.0, np.where(np.isfinite(rel), rel, np.inf))
+    return float(rel.max(initial=0.0))
+
+
+@dataclass
+class Comparison:
+    """How far the C controller's outputs are from the Python controller's.
+
+    Attributes
+    ----------
+    landings, steps : int
+        Landings run, samples (control steps) compared (each landing's first plan besides).
+    pull_steps : int
+        Samples that ended pulling (the switch passed).
+    max_relative : dict
+        ``"status"`` (1 if any status differs, else 0), ``"P"``, ``"M"``, ``"force"``: the
+        largest relative difference of each over every call.
+    statuses : dict
+        Status name -> how many calls of the Python controller returned it.
+    """
+
+    landings: int = 0
+    steps: int = 0
+    pull_steps: int = 0
+    max_relative: dict[str, float] = field(
+        default_factory=lambda: {"status": 0.0, "P": 0.0, "M": 0.0, "force": 0.0})
+    statuses: dict[str, int] = field(default_factory=dict)
+
+    def worst(self) -> float:
+        """The largest relative difference of any output."""
+        return max(self.max_relative.values())
+
+    def describe(self) -> str:
+        """One line: what was compared and how far apart."""
+        d = self.max_relative
+        return (f"{self.steps} samples ({self.pull_steps} pulling) of {self.landings} "
+                f"landings, largest relative "
+                f"difference {self.worst():.3g} (force {d['force']:.3g}, P {d['P']:.3g}, M "
+                f"{d['M']:.3g}; statuses {'the same' if d['status'] == 0 else 'differ'})")
+
+
+def robot_of_numbers(P: np.ndarray) -> Robot:
+    """The robot whose ``r_m``, ``s``, ``u_max`` the numbers ``P`` hold.
+
+    Parameters
+    ----------
+    P : array
+        :func:`~softlanding.control.bangbang.robot_numbers`.
+    """
+    return Robot(r_m=float(P[bb.P_RM]), s=float(P[bb.P_S]), u_max=float(P[bb.P_UMAX]))
+
+
+def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
+    """Run the calls of random landings (:func:`~.samples.recorded_calls`) of the robot the
+    export is for (its ``SL_ROBOT_NUMBERS``) through both controllers, ``n_steps`` samples
+    in all, and compare their outputs.
+
+    Parameters
+    ----------
+    c : CController
+        The compiled export.
+    n_steps : int
+        Samples (control steps) compared; each landing's first plan comes on top.
+    seed : int
+        Of the landings.
+    """
+    calls, landings = recorded_calls(robot_of_numbers(c.robot_numbers), n_steps, seed)
+    out = Comparison(landings=landings, steps=sum(not k.first for k in calls),
+                     pull_steps=sum(not k.first and (k.M[bb.M_PHASE] == bb.PULL
+                                                     or k.M[bb.M_TAU1] <= k.h) for k in calls))
+    ws = bb.workspace()
+    got: dict[str, list[np.ndarray]] = {k: [] for k in ("P", "M", "force")}
+    want: dict[str, list[np.ndarray]] = {k: [] for k in ("P", "M", "force")}
+    for k in calls:
+        Pp, Pc, Mp, Mc = k.P.copy(), k.P.copy(), k.M.copy(), k.M.copy()
+        if k.first:
+            sp, sc = int(bb.solve_plan(Pp, Mp, k.x, *ws)), c.solve_plan(Pc, Mc, k.x)
+        else:
+            sp = int(bb.control_step(Pp, Mp, k.x, k.a_f, k.u, k.h, True, *ws))
+            sc = c.control_step(Pc, Mc, k.x, k.a_f, k.u, k.h, True)
+        name = bb.STATUS_NAMES[sp]
+        out.statuses[name] = out.statuses.get(name, 0) + 1
+        out.max_relative["status"] = max(out.max_relative["status"], float(sp != sc))
+        length = (Mp[bb.M_TAU1] if Mp[bb.M_PHASE] == bb.PUSH else 0.0) + Mp[bb.M_TAU2]
+        times = np.array([0.5 * Pp[bb.P_PERIOD], 0.5 * length, 1.2 * length])
+        got["P"].append(Pc)
+        want["P"].append(Pp)
+        got["M"].append(Mc)
+        want["M"].append(Mp)
+        got["force"].append(np.array([c.force(Pc, Mc, t) for t in times]))
+        want["force"].append(plan_forces(Pp, Mp, times))
+    for key in got:
+        out.max_relative[key] = relative_difference(np.concatenate(got[key]),
+                                                    np.concatenate(want[key]))
+    return out
+
+
+def check_export(folder: Path, n_steps: int = 1000, seed: int = 0) -> Comparison:
+    """Compile the export in ``folder`` with the system's C compiler (into a temporary
+    folder) and :func:`compare` it with the Python controller.
+
+    Parameters
+    ----------
+    folder : Path
+        The exported files.
+    n_steps, seed : int
+        As :func:`compare`.
+
+    Raises
+    ------
+    ExportError
+        No C compiler, the code does not compile cleanly, or an output differs by more than
+        :data:`TOLERANCE` (relative) or a status differs.
+    """
+    with tempfile.TemporaryDirectory(prefix="softlanding-export-") as tmp:
+        lib = compile_shared(Path(folder), Path(tmp) / "libsl.so")
+        result = compare(CController(lib), n_steps, seed)
+    if result.worst() > TOLERANCE:
+        raise ExportError(f"the compiled C differs from the Python controller: "
+                          f"{result.describe()}")
+    return result
+
+
+__all__ = ["TOLERANCE", "Comparison", "check_export", "compare", "plan_forces",
+           "relative_difference", "robot_of_numbers"]

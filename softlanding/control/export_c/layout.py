@@ -1,0 +1,165 @@
+"""The numbers the exported C takes from the Python controller: the layout of ``P`` and
+``M``, the phases, statuses and tolerances of :mod:`softlanding.control.bangbang`, and the
+Dormand-Prince coefficients of :mod:`softlanding.simulation.kernel.dop853`, as C text.
+
+Every index is read from :mod:`~softlanding.control.bangbang` (its ``P_*`` and ``M_*``
+constants), never written here: a new entry there without a description here fails the
+export (:func:`layout_lines`), so the C cannot drift from the Python.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+
+from softlanding.control import bangbang as bb
+from softlanding.simulation.kernel import dop853
+
+#: What each entry of ``P`` holds (the header's comments).
+P_DOC = {
+    "P_AB0": "body's acceleration at u = 0: a_b = AB0 + BB u",
+    "P_BB": "body's acceleration per unit force",
+    "P_AF0": "foot's acceleration at u = 0, f = 0: a_f = AF0 + BF u + GF f",
+    "P_BF": "foot's acceleration per unit force",
+    "P_GF": "foot's acceleration per unit ground force",
+    "P_K": "ground stiffness factor K planned for (overwritten by the estimate)",
+    "P_CD": "ground drag number c_d planned for (overwritten by the estimate)",
+    "P_RM": "mass ratio r_m = m_b / m_f",
+    "P_S": "stroke s (0 <= x_b - x_f <= s)",
+    "P_UMAX": "force limit u_max (the push +u_max, the pull -u_max)",
+    "P_HOLD0": "1 / (1 + r_m): the foot's share of the weight in the arrest condition",
+    "P_NOISE": "standard deviation of one measured ground force (the estimator's)",
+    "P_MARGIN": "plan for the estimate less MARGIN standard deviations of K and c_d",
+    "P_BUDGET": "Newton iterations per sample while the switch is > 3 samples away",
+    "P_PERIOD": "the sample period (the plan-holds check predicts the next sample)",
+}
+
+#: What each entry of ``M`` holds.
+M_DOC = {
+    "M_PHASE": "SL_PUSH (both arcs left) or SL_PULL (the foot's stop left)",
+    "M_TAU1": "push left from the last step (while SL_PUSH)",
+    "M_TAU2": "pull from the switch (SL_PUSH) or from the last step (SL_PULL) to the stop",
+    "M_TH0": "estimate of K",
+    "M_TH1": "estimate of c_d",
+    "M_P00": "estimator's covariance [K, K] / NOISE^2",
+    "M_P01": "estimator's covariance [K, c_d] / NOISE^2",
+    "M_P11": "estimator's covariance [c_d, c_d] / NOISE^2",
+    "M_SAMPLES": "measurements the estimate holds",
+    "M_ITER": "Newton iterations of the last call",
+    "M_STATUS": "status of the last step",
+    "M_XBT": "planned body height at the foot's stop",
+    "M_VBT": "planned body velocity at the foot's stop",
+    "M_XFT": "planned foot height at the foot's stop",
+    "M_UNCONVERGED": "samples in a row with a large unconverged Newton step",
+    "M_PRED": "predicted state after the next sample, 4 entries [x_b, v_b, x_f, v_f]",
+    "M_PRED_OK": "1 if M_PRED holds a prediction",
+    "M_KPLAN": "K the prediction was made for",
+    "M_CPLAN": "c_d the prediction was made for",
+    "M_LAST_STEP": "size |dtau1| + |dtau2| of the last Newton step",
+}
+
+#: The phases and statuses, and the tolerances the C uses (names of
+#: :mod:`~softlanding.control.bangbang`).
+STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS")
+CONSTANTS = ("PUSH", "PULL", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL", "PLAN_HOLDS_TOL",
+             "MAX_UNCONVERGED")
+
+
+def c_double(v: float) -> str:
+    """A C literal of the double ``v``, exact (Python's shortest round-trip repr).
+
+    Parameters
+    ----------
+    v : float
+        A finite number.
+
+    Raises
+    ------
+    ValueError
+        ``v`` is not finite (C has no literal for it).
+    """
+    v = float(v)
+    if not np.isfinite(v):
+        raise ValueError(f"no C literal for {v}")
+    text = repr(v)
+    return text if any(c in text for c in ".en") else text + ".0"
+
+
+def indices(prefix: str) -> dict[str, int]:
+    """The ``P_*`` (``prefix = "P_"``) or ``M_*`` constants of the controller, by index.
+
+    Parameters
+    ----------
+    prefix : str
+        ``"P_"`` or ``"M_"``.
+    """
+    found = {k: v for k, v in vars(bb).items() if k.startswith(prefix) and type(v) is int}
+    return dict(sorted(found.items(), key=lambda kv: kv[1]))
+
+
+def layout_lines(prefix: str) -> list[str]:
+    """``#define SL_P_K 5  /* ... */`` lines of every ``P_*`` or ``M_*`` index, then the size.
+
+    Parameters
+    ----------
+    prefix : str
+        ``"P_"`` or ``"M_"``.
+
+    Raises
+    ------
+    KeyError
+        The controller has an entry this module does not describe.
+    """
+    doc = P_DOC if prefix == "P_" else M_DOC
+    found = indices(prefix)
+    missing = sorted(set(found) - set(doc))
+    if missing:
+        raise KeyError(f"softlanding.control.bangbang has {', '.join(missing)}, which the C "
+                       "export does not describe: add it to export_c.layout")
+    lines = [f"#define SL_{k:<14} {v:2d}  /* {doc[k]} */" for k, v in found.items()]
+    size = "NP" if prefix == "P_" else "NM"
+    lines.append(f"#define SL_{size:<14} {getattr(bb, size):2d}  /* entries */")
+    return lines
+
+
+def constant_lines() -> list[str]:
+    """``#define`` lines of :data:`CONSTANTS` (the status's meaning in its comment)."""
+    lines = []
+    for name in CONSTANTS:
+        v = getattr(bb, name)
+        value = str(v) if type(v) is int else c_double(v)
+        note = bb.STATUS_NAMES[v] if name in STATUSES else None
+        lines.append(f"#define SL_{name:<16} {value}" + (f"  /* {note} */" if note else ""))
+    return lines
+
+
+def _array(values: Iterable[float]) -> str:
+    return "{" + ", ".join(c_double(v) for v in values) + "}"
+
+
+def dop853_text() -> str:
+    """The C arrays ``SL_DA`` (12 x 12), ``SL_DB`` (12), ``SL_DE5``, ``SL_DE3`` (13)."""
+    rows = ",\n    ".join(_array(r) for r in dop853.A)
+    return "\n".join([
+        f"static const double SL_DA[{dop853.A.shape[0]}][{dop853.A.shape[1]}] = {{\n    "
+        f"{rows}}};",
+        f"static const double SL_DB[{dop853.B.size}] = {_array(dop853.B)};",
+        f"static const double SL_DE5[{dop853.E5.size}] = {_array(dop853.E5)};",
+        f"static const double SL_DE3[{dop853.E3.size}] = {_array(dop853.E3)};"])
+
+
+def robot_lines(P: np.ndarray) -> list[str]:
+    """The initializer lines of ``SL_ROBOT_NUMBERS``: each value with its entry's name.
+
+    Parameters
+    ----------
+    P : array
+        :func:`~softlanding.control.bangbang.robot_numbers`.
+    """
+    names = {v: k for k, v in indices("P_").items()}
+    return [f"    {c_double(v)},  /* {names[i]} */" for i, v in enumerate(P)]
+
+
+__all__ = ["CONSTANTS", "M_DOC", "P_DOC", "STATUSES", "c_double", "constant_lines", "dop853_text",
+           "indices", "layout_lines", "robot_lines"]

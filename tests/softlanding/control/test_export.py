@@ -1,0 +1,221 @@
+"""The controller exported as C (``softlanding export-controller``): its numbers against the
+Python modules', compiled with the system's C compiler and compared with the numba
+controller on 1,000 samples of random landings, a C program that follows the README, and
+the command's bad input and output folder."""
+
+import contextlib
+import io
+import json
+import re
+import subprocess
+
+import numpy as np
+import pytest
+
+from softlanding.cli import main
+from softlanding.control import bangbang as bb
+from softlanding.control.export_c import layout
+from softlanding.control.export_c.binding import CFLAGS, CController, compile_shared, find_compiler
+from softlanding.control.export_c.check import TOLERANCE, compare, plan_forces
+from softlanding.control.export_c.writer import HEADER, README, SOURCE
+from softlanding.model.robot import PAPER_ROBOT
+from softlanding.simulation.kernel import dop853
+
+needs_cc = pytest.mark.skipif(find_compiler() is None,
+                              reason="no C compiler (cc, gcc or $CC) on this system")
+
+
+def _run(*args):
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            code = main([str(a) for a in args])
+        except SystemExit as e:
+            code = e.code
+    return code, out.getvalue(), err.getvalue()
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    """The paper's robot exported (with the check against numba, where there is a compiler):
+    the folder and the command's JSON."""
+    folder = tmp_path_factory.mktemp("export") / "controller"
+    check = ("--check",) if find_compiler() is not None else ()
+    code, out, err = _run("export-controller", "--out", folder, "--json", *check)
+    assert code == 0, err
+    return folder, json.loads(out)
+
+
+def _defines(text):
+    return dict(re.findall(r"^#define SL_(\w+)\s+(\S+)", text, re.M))
+
+
+def _array(text, name):
+    """The numbers of the C array ``name``'s initializer (its comments left out)."""
+    body = re.search(rf"{name}\[[^=]*= \{{(.*?)\}};", text, re.S).group(1)
+    body = re.sub(r"/\*.*?\*/", "", body, flags=re.S)
+    return np.array([float(v) for v in re.findall(r"-?\d+\.?\d*(?:e[-+]?\d+)?", body)])
+
+
+def test_the_files_and_json(exported):
+    folder, d = exported
+    assert sorted(p.name for p in folder.iterdir()) == sorted([HEADER, SOURCE, README])
+    assert d["files"] == [str(folder / n) for n in (HEADER, SOURCE, README)]
+    r = PAPER_ROBOT
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0)
+    assert d["numbers"] == {k[2:]: P[i] for k, i in layout.indices("P_").items()}
+
+
+def test_the_header_holds_the_python_modules_numbers(exported):
+    folder, _ = exported
+    got = _defines((folder / HEADER).read_text())
+    for prefix in ("P_", "M_"):
+        idx = layout.indices(prefix)
+        assert idx and all(int(got[k]) == v for k, v in idx.items())
+    assert int(got["NP"]) == bb.NP and int(got["NM"]) == bb.NM
+    assert max(layout.indices("P_").values()) < bb.NP and bb.M_PRED + 4 <= bb.NM
+    for name in layout.CONSTANTS:
+        assert float(got[name]) == getattr(bb, name)
+    src = (folder / SOURCE).read_text()
+    assert np.array_equal(_array(src, "SL_DA"), dop853.A.ravel())
+    for name, want in (("SL_DB", dop853.B), ("SL_DE5", dop853.E5), ("SL_DE3", dop853.E3)):
+        assert np.array_equal(_array(src, name), want)
+    r = PAPER_ROBOT
+    assert np.array_equal(_array(src, "SL_ROBOT_NUMBERS"),
+                          bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0))
+
+
+def test_an_entry_the_export_does_not_describe_fails_the_export(monkeypatch):
+    monkeypatch.setattr(bb, "M_NEW", bb.NM, raising=False)
+    with pytest.raises(KeyError, match="M_NEW"):
+        layout.layout_lines("M_")
+
+
+@needs_cc
+def test_c_and_numba_agree_on_1000_samples_of_random_landings(exported):
+    check = exported[1]["check"]
+    assert check["samples"] == 1000 and check["landings"] >= 40  # as many grounds
+    assert all(v <= TOLERANCE for v in check["max_relative_difference"].values()), check
+    # the comparison went through every path of the step, not only the easy ones
+    st = check["statuses"]
+    assert all(st.get(s, 0) >= 50 for s in ("ok", "converging", "plan holds")), st
+    assert check["pull_samples"] >= 50  # and after the switch
+    assert sum(st.values()) == 1000 + check["landings"]
+
+
+@pytest.mark.slow
+@needs_cc
+def test_the_comparison_sees_a_changed_constant(exported, tmp_path):
+    # an honest comparison: the step-size control's exponent off by 1e-7 shows
+    src = (exported[0] / SOURCE).read_text()
+    assert src.count("-1.0 / 8.0") == 2
+    mutant = tmp_path / "mutant"
+    mutant.mkdir()
+    (mutant / HEADER).write_text((exported[0] / HEADER).read_text())
+    (mutant / SOURCE).write_text(src.replace("-1.0 / 8.0", "-1.0 / 8.000001"))
+    c = CController(compile_shared(mutant, tmp_path / "mutant.so"))
+    assert compare(c, 30).worst() > 1e-9
+
+
+ROBOT_C = """
+#include <stdio.h>
+#include <string.h>
+#include "softlanding_controller.h"
+int main(void) {
+    double P[SL_NP], M[SL_NM], x[4] = {10.0, -3.0, 0.0, -3.0};
+    double h;
+    int st, k;
+    memcpy(P, SL_ROBOT_NUMBERS, sizeof P);
+    h = P[SL_P_PERIOD];
+    sl_new_memory(M, 0.1, 0.1, P[SL_P_K], P[SL_P_CD], 1.0, 1.0, P[SL_P_NOISE]);
+    st = sl_solve_plan(P, M, x);
+    printf("%d %.17g %.17g %.17g\\n", st, M[SL_M_TAU1], M[SL_M_TAU2], sl_force(P, M, 0.0));
+    for (k = 0; k < 8; k++) {  /* the state the plan predicted, else moved on at its speed */
+        if (M[SL_M_PRED_OK] == 1.0) {
+            memcpy(x, M + SL_M_PRED, sizeof x);
+        } else {
+            x[0] += h * x[1];
+            x[2] += h * x[3];
+        }
+        st = sl_control_step(P, M, x, 0.0, P[SL_P_UMAX], h, 0);
+        printf("%d %.17g %.17g %.17g\\n", st, M[SL_M_TAU1], M[SL_M_TAU2], sl_force(P, M, h));
+    }
+    return 0;
+}
+"""
+
+
+@needs_cc
+def test_a_c_program_following_the_readme_runs_as_the_python_controller(exported, tmp_path):
+    folder = exported[0]
+    assert f"cc -std=c99 -O2 -ffp-contract=off -o robot robot.c {SOURCE} -lm" in \
+        (folder / README).read_text()
+    (tmp_path / "robot.c").write_text(ROBOT_C)
+    exe = tmp_path / "robot"
+    subprocess.run([*find_compiler(), *CFLAGS, "-pedantic", "-Wall", "-Werror", "-I",
+                    str(folder), "-o", str(exe), str(tmp_path / "robot.c"),
+                    str(folder / SOURCE), "-lm"], check=True)
+    got = [[float(v) for v in ln.split()] for ln in subprocess.run(
+        [str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()]
+    # the same calls in Python
+    r = PAPER_ROBOT
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0)
+    M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
+    x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
+    st = bb.solve_plan(P, M, x, *ws)
+    want = [[st, M[bb.M_TAU1], M[bb.M_TAU2], float(plan_forces(P, M, 0.0))]]
+    for _ in range(8):
+        if M[bb.M_PRED_OK] == 1.0:
+            x = M[bb.M_PRED:bb.M_PRED + 4].copy()
+        else:
+            x = x + h * np.array([x[1], 0.0, x[3], 0.0])
+        st = bb.control_step(P, M, x, 0.0, r.u_max, h, False, *ws)
+        want.append([st, M[bb.M_TAU1], M[bb.M_TAU2], float(plan_forces(P, M, h))])
+    assert got == want
+    assert want[0][0] == bb.OK and {w[0] for w in want[1:]} <= {bb.OK, bb.CONVERGING, bb.HOLDS}
+    assert len({w[1] for w in want}) == len(want)  # a new plan every sample
+
+
+@pytest.mark.parametrize("args,match", [
+    (("--period", "0"), "--period"), (("--noise-std", "nan"), "--noise-std"),
+    (("--margin", "-1"), "--margin"), (("--l0", "3"), "does not apply"),
+    (("--model-cd", "0.2"), "applies to --model-ground drag"),
+    (("--model-ground", "drag"), "is required"), (("--rm", "-1"), "r_m")])
+def test_bad_input_one_line_exit_2_nothing_written(args, match, tmp_path, cli):
+    code, out, err = cli("export-controller", "--out", tmp_path / "c", *args)
+    assert code == 2 and match in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "c").exists() and out == ""
+
+
+def test_an_existing_folder_is_kept_unless_force(tmp_path, cli):
+    folder = tmp_path / "c"
+    folder.mkdir()
+    (folder / "mine.txt").write_text("keep")
+    code, _, err = cli("export-controller", "--out", folder)
+    assert code == 2 and "--force" in err and sorted(p.name for p in folder.iterdir()) == \
+        ["mine.txt"]
+    code, out, _ = cli("export-controller", "--out", folder, "--force", "--s", "10")
+    assert code == 0 and "s = 10" in out
+    assert (folder / "mine.txt").read_text() == "keep" and (folder / SOURCE).exists()
+    assert not [p for p in tmp_path.iterdir() if p.name != "c"]  # no temporary left
+
+
+def test_a_failed_check_leaves_nothing(tmp_path, cli, monkeypatch):
+    monkeypatch.setenv("CC", str(tmp_path / "no-such-cc"))
+    code, _, err = cli("export-controller", "--out", tmp_path / "c", "--check")
+    assert code == 2 and "needs a C compiler" in err
+    from softlanding.control.export_c import check
+    from softlanding.errors import ExportError
+
+    def fails(folder):
+        raise ExportError("the compiled C differs")
+
+    monkeypatch.delenv("CC")
+    monkeypatch.setattr(check, "check_export", fails)
+    code, _, err = cli("export-controller", "--out", tmp_path / "c", "--check")
+    assert code == 1 and "differs" in err and list(tmp_path.iterdir()) == []
+
+
+def test_help_explains(cli):
+    code, out, _ = cli("export-controller", "--help")
+    assert code == 0 and "libm" in out and "--check" in out and "SL_ROBOT_NUMBERS" in out
