@@ -86,7 +86,7 @@ def _quiet_unraisable(hook: Any) -> Any:
             def again() -> None:
                 ready.wait()
                 time.sleep(0.001)
-                _thread.interrupt_main(signum)
+                _thread.interrupt_main(signal.Signals(signum))
 
             threading.Thread(target=again, daemon=True).start()
             ready.set()
