@@ -208,8 +208,8 @@ class PhaseSwitchingNLP(SwitchingNLP):
                                       check_start=i > 0)
             if q is not ph:  # a derived flow problem has parameter symbols of its own
                 G.substitute(first, q.p, p)
-                z, ends = (ca.substitute(e, q.p, p) for e in (z, ca.horzcat(*ends)))
-                ends = ca.horzsplit(ends)
+                z = ca.substitute(z, q.p, p)
+                ends = [ca.substitute(e, q.p, p) for e in ends]
             self.phase_rows.append(np.arange(n0, G.n))
             row_phase += [i] * (G.n - n0)
             xT = z[:ph.nx]

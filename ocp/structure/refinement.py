@@ -907,9 +907,9 @@ def _law_rows(G: ConstraintBlocks, pr: OptimalControlProblem, k: int, d: ArcDyna
             continue
         # limits that move with a state (a decision variable refined as a constant state,
         # ocp.structure.variables): rows of the unknowns, one per finite side
-        for b, rng in ((lo, (0, INF)), (hi, (-INF, 0))):
+        for b, low, high in ((lo, 0.0, INF), (hi, -INF, 0.0)):
             if constant(b) not in (-INF, INF):
-                G.add("law", at - ca.substitute(b, pr.x, z[:pr.nx]), *rng, (k, j))
+                G.add("law", at - ca.substitute(b, pr.x, z[:pr.nx]), low, high, (k, j))
 
 
 def _entry_owners(d: ArcDynamics) -> list[str]:
