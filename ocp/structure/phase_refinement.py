@@ -239,9 +239,9 @@ class PhaseSwitchingNLP(SwitchingNLP):
         t0_all = ca.vertcat(*[v["t0"] for v in values])
         self.out_fn = ca.Function("out", [w, p], [xT_all, T_all, J, t0_all, *ends_all])
         self.kkt_fn = ca.Function("kkt", [w, p], [g, ca.jacobian(g, w), ca.gradient(J, w)])
-        self.var_bounds_fn = ca.Function("vb", [p], [
-            ca.vertcat(*[mp._shared.var_bounds[n][0] for n in mp.var_names]),
-            ca.vertcat(*[mp._shared.var_bounds[n][1] for n in mp.var_names])])
+        vb = [mp.phases[0].variable_bounds(n) for n in mp.var_names]  # (shared by phases)
+        self.var_bounds_fn = ca.Function("vb", [p], [ca.vertcat(*[lo for lo, _ in vb]),
+                                                     ca.vertcat(*[hi for _, hi in vb])])
 
     def _boundary(self, G: ConstraintBlocks, values: list[dict[str, ca.SX]], p: ca.SX, V: ca.SX,
                   row_phase: list[int]) -> None:
@@ -899,5 +899,5 @@ def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *
         interior_samples=interior_samples, ipopt_options=ipopt_options, tol=tol, fast=fast)
 
 
-__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "detect_phase_structures", "local_phase",
-           "phase_switching_nlp", "refine_phase_structure", "refine_phases"]
+__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "detect_phase_structures", "flow_problem",
+           "local_phase", "phase_switching_nlp", "refine_phase_structure", "refine_phases"]

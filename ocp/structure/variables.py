@@ -14,6 +14,12 @@ What the derived problem cannot carry is refused: an initial time other than the
 default, integrals in boundary terms, and boundary terms on the initial state or on
 the end-point controls (the refinement reads the end-point cost and constraints at
 ``T`` only).
+
+A phase of a multi-phase problem is flowed the same way
+(:func:`phase_variables_as_states`: the phase's flows only, when
+:func:`moves_with_variables` says it involves a variable); the multi-phase refinement
+(:mod:`ocp.structure.phase_refinement`) keeps the variables as unknowns of its own and
+imposes the end-point terms on the whole problem.
 """
 
 from __future__ import annotations
@@ -188,3 +194,6 @@ def _at_T(pr: OptimalControlProblem, e: ca.SX, sub, what: str) -> ca.SX:
                          "values or end-point controls; write it with final states, "
                          "variables and T")
     return sub(ca.substitute(e, pr.xT, pr.x))
+
+
+__all__ = ["moves_with_variables", "phase_variables_as_states", "variables_as_states"]
