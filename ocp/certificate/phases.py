@@ -85,8 +85,9 @@ def _junction_gap(r: Any, lam0: np.ndarray, n: int) -> tuple[float, float]:
     if last > 0:  # a state constraint before: the costate may jump, no sweep to the start
         return math.nan, 0.0
     sw = adjoint_sweep(r, 0.0, n)
-    scale = max(float(np.max(np.abs(sw.lam))), float(np.max(np.abs(lam0))), 1e-300)
-    return float(np.max(np.abs(sw.lam[0] - lam0))) / scale, sw.error_lam + sw.error_x
+    lam = sw.lam[:, :len(lam0)]  # the phase's states (not the variables a flow problem has)
+    scale = max(float(np.max(np.abs(lam))), float(np.max(np.abs(lam0))), 1e-300)
+    return float(np.max(np.abs(lam[0] - lam0))) / scale, sw.error_lam + sw.error_x
 
 
 class _NoTranscription:

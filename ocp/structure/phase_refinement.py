@@ -13,10 +13,18 @@ at the start of every phase but the first. The NLP is built once per problem,
 structure and step counts and cached, so a new parameter value re-solves it
 (Newton's fast path first, as in the single-phase case).
 
-Limitations (each raises a clear error): dynamics may not depend on decision
-variables or time (``t``, ``t0``, ``T``), and a phase may not declare integrals
-used in boundary terms; a phase's initial time must be fixed (the first phase)
-or time-linked to an earlier phase.
+Decision variables may appear in a phase's dynamics, running cost, path
+constraints and control limits (``-peak <= u <= peak``, the epigraph form of
+``min max |u|``): that phase's arcs are flowed on the phase with the variables
+as constant states (:func:`flow_problem`, as the single-phase refinement does,
+:mod:`ocp.structure.variables`), their values being the NLP's own unknowns, so
+the switching times, the phase durations and the variables are refined
+together, and an arc at ``u = peak`` is a bang arc.
+
+Limitations (each raises a clear error): dynamics may not depend on time
+(``t``, ``t0``, ``T``), and a phase may not declare integrals used in boundary
+terms; a phase's initial time must be fixed (the first phase) or time-linked
+to an earlier phase.
 
 Example (accelerate, then brake with no control; :func:`refine_phases` of a
 transcribed solution)::
@@ -38,6 +46,7 @@ import numpy as np
 
 from ..definition.errors import InfeasibleError, ProblemDefinitionError, SolveError
 from ..definition.multiphase import MultiPhaseProblem
+from ..definition.problem import OptimalControlProblem
 from ..definition.trajectory import Trajectory
 from ..transcriptions.solution import Solution
 from .arcs import ArcStructure, control_bounds_at, detect_structure
@@ -53,6 +62,7 @@ from .refinement import (
     rk8_of,
 )
 from .switching import RefinedSwitching, insert_extra_arcs
+from .variables import moves_with_variables, phase_variables_as_states
 
 Modes = tuple[tuple[Mode, ...], ...]
 PhaseModes = tuple[Modes, ...]
@@ -63,19 +73,27 @@ _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 def _check_problem(mp: MultiPhaseProblem) -> None:
     """Refuse what the refinement cannot represent (see the module docstring)."""
     for ph in mp.phases:
-        other = ca.vertcat(ph.t, ph.t0, ph.T, ph.v)
-        if ca.depends_on(ca.vertcat(ph.rhs, ph.lagrange), other):
+        if ca.depends_on(ca.vertcat(ph.rhs, ph.lagrange), ca.vertcat(ph.t, ph.t0, ph.T)):
             raise ProblemDefinitionError(
                 f"phase {ph.name!r}: switching refinement needs dynamics and running cost "
-                "free of t, t0, T and decision variables")
+                "free of t, t0 and T")
         if ph.integrals:
             raise ProblemDefinitionError(f"phase {ph.name!r}: integrals in boundary terms are "
                                          "not supported by the switching refinement")
-        limits = [b for n in ph.control_names for b in ph.control_limits[n]]
-        if limits and ca.depends_on(ca.vertcat(*limits), ph.v):
-            raise ProblemDefinitionError(
-                f"phase {ph.name!r}: control limits that move with a decision variable are "
-                "refined in single-phase problems only (ocp.refine_switching)")
+
+
+def flow_problem(ph: OptimalControlProblem) -> OptimalControlProblem:
+    """The problem a phase's arcs are flowed on: the phase itself, or, when its dynamics,
+    running cost, path constraints or control limits involve decision variables, the
+    phase with the variables as constant states
+    (:func:`ocp.structure.variables.phase_variables_as_states`).
+
+    Parameters
+    ----------
+    ph : OptimalControlProblem
+        A phase.
+    """
+    return phase_variables_as_states(ph) if moves_with_variables(ph) else ph
 
 
 def _start_links(mp: MultiPhaseProblem) -> dict[int, int]:
@@ -145,8 +163,11 @@ class PhaseSwitchingNLP(SwitchingNLP):
         self.phase_modes = tuple(tuple(m) for m in modes)
         self.phase_substeps = tuple(tuple(s) for s in substeps)
         self.samples = int(samples)
-        self.phase_dyns = [[arc_dynamics(ph, m) for m in ms]
-                           for ph, ms in zip(mp.phases, self.phase_modes, strict=True)]
+        # each phase's arcs flow on its flow problem (the variables as constant states
+        # where the phase involves them; their values are the last entries of w)
+        self.flow_problems = [flow_problem(ph) for ph in mp.phases]
+        self.phase_dyns = [[arc_dynamics(q, m) for m in ms]
+                           for q, ms in zip(self.flow_problems, self.phase_modes, strict=True)]
         self.phase_K = [len(ms) for ms in self.phase_modes]
         self.links = _start_links(mp)
         sizes = [k + ph.nx for k, ph in zip(self.phase_K, mp.phases, strict=True)]
@@ -177,23 +198,30 @@ class PhaseSwitchingNLP(SwitchingNLP):
         for i, ph in enumerate(mp.phases):
             o, K = self.offsets[i], self.phase_K[i]
             tau, x0 = w[o:o + K], w[o + K:o + K + ph.nx]
-            has_quad = has_running_cost(ph)
-            z = ca.vertcat(x0, 0) if has_quad else x0
-            n0 = G.n
-            z, ends = build_intervals(G, ph, self.phase_dyns[i], self.phase_substeps[i],
-                                      self.samples, tau, z, p, self.entry_names,
+            q = self.flow_problems[i]
+            xq0 = ca.vertcat(x0, V) if q is not ph else x0  # the flow problem's states
+            has_quad = has_running_cost(q)
+            z = ca.vertcat(xq0, 0) if has_quad else xq0
+            n0, first = G.n, len(G.exprs)
+            z, ends = build_intervals(G, q, self.phase_dyns[i], self.phase_substeps[i],
+                                      self.samples, tau, z, q.p, self.entry_names,
                                       check_start=i > 0)
+            if q is not ph:  # a derived flow problem has parameter symbols of its own
+                G.substitute(first, q.p, p)
+                z = ca.substitute(z, q.p, p)
+                ends = [ca.substitute(e, q.p, p) for e in ends]
             self.phase_rows.append(np.arange(n0, G.n))
             row_phase += [i] * (G.n - n0)
             xT = z[:ph.nx]
             if has_quad:
-                quad = quad + z[ph.nx]
+                quad = quad + z[q.nx]
             t0 = values[self.links[i]]["T"] if i in self.links else ca.SX(mp.times()[i]
                                                                            .t0_bounds[0])
             d0, d1 = self.phase_dyns[i][0], self.phase_dyns[i][-1]
-            values.append({"x0": x0, "u0": ca.substitute(d0.u, ph.x, x0), "xT": xT,
-                           "uT": ca.substitute(d1.u, ph.x, xT), "t0": t0,
-                           "T": t0 + ca.sum1(tau)})
+            own = ca.vertcat(q.x, q.p)
+            values.append({"x0": x0, "u0": ca.substitute(d0.u, own, ca.vertcat(xq0, p)),
+                           "xT": xT, "uT": ca.substitute(d1.u, own, ca.vertcat(z[:q.nx], p)),
+                           "t0": t0, "T": t0 + ca.sum1(tau)})
             ends_all.append(ca.horzcat(*ends))
         self._values = values
         self._boundary(G, values, p, V, row_phase)
@@ -211,9 +239,9 @@ class PhaseSwitchingNLP(SwitchingNLP):
         t0_all = ca.vertcat(*[v["t0"] for v in values])
         self.out_fn = ca.Function("out", [w, p], [xT_all, T_all, J, t0_all, *ends_all])
         self.kkt_fn = ca.Function("kkt", [w, p], [g, ca.jacobian(g, w), ca.gradient(J, w)])
-        self.var_bounds_fn = ca.Function("vb", [p], [
-            ca.vertcat(*[mp._shared.var_bounds[n][0] for n in mp.var_names]),
-            ca.vertcat(*[mp._shared.var_bounds[n][1] for n in mp.var_names])])
+        vb = [mp.phases[0].variable_bounds(n) for n in mp.var_names]  # (shared by phases)
+        self.var_bounds_fn = ca.Function("vb", [p], [ca.vertcat(*[lo for lo, _ in vb]),
+                                                     ca.vertcat(*[hi for _, hi in vb])])
 
     def _boundary(self, G: ConstraintBlocks, values: list[dict[str, ca.SX]], p: ca.SX, V: ca.SX,
                   row_phase: list[int]) -> None:
@@ -230,8 +258,8 @@ class PhaseSwitchingNLP(SwitchingNLP):
             highs.append(c.upper)
             names.append(kind)
         for ph, tm in zip(mp.phases, mp.times(), strict=True):
-            if tm.span is not None:
-                continue  # a duration constraint is among the blocks already
+            # (a duration's bounds are among the blocks, its T_bounds infinite; a linked
+            # phase's final time keeps its own bounds besides its span T - t0 >= 0)
             lo, hi = tm.T_bounds if tm.T_free else (tm.T_bounds[0], tm.T_bounds[0])
             if math.isfinite(lo) or math.isfinite(hi):
                 exprs.append(ph.T)
@@ -368,7 +396,10 @@ class PhaseSwitchingNLP(SwitchingNLP):
         over independent end-point symbols: ``lambda_i(T_i) = d B / d xT_i`` (through
         the control law at the end), ``lambda_i(t0_i) = -d B / d x0_i``; H of the last
         phase of a time chain is ``-dB/dT``, and across a time link ``a -> b``,
-        ``H_a = H_b - dB/dt0_b - dB/dT_a`` (None where a final time is fixed).
+        ``H_a = H_b - dB/dt0_b - dB/dT_a`` (None where a final time is fixed). A phase
+        flowed with the decision variables as constant states (:func:`flow_problem`) gets
+        ``lambda_i(T_i)`` for those states too: 0 (they do not enter H, their rate being
+        0); ``lambda_i(t0_i)`` is the phase's states' only.
 
         Parameters
         ----------
@@ -398,8 +429,11 @@ class PhaseSwitchingNLP(SwitchingNLP):
             dT.append(float(grad[pos + 2 * nx + 2 * nu_ + 1]))
             pos += 2 * nx + 2 * nu_ + 2
             K0, K1 = self._law_jacobians(i, pv)
-            lam_end.append(gT + K1.T @ guT)
-            lam_start.append(-(g0 + K0.T @ gu0))
+            # (a flow problem's variable states: their costates do not enter H, their
+            # rate being 0; swept from 0 at the phase's end)
+            extra = np.zeros(self.flow_problems[i].nx - nx)
+            lam_end.append(np.r_[gT + K1[:, :nx].T @ guT, extra])
+            lam_start.append(-(g0 + K0[:, :nx].T @ gu0))
         H: list[float | None] = [None] * len(mp.phases)
         nxt = {a: b for b, a in self.links.items()}
         for i in range(len(mp.phases) - 1, -1, -1):
@@ -416,10 +450,10 @@ class PhaseSwitchingNLP(SwitchingNLP):
         """``du/dx`` of the first and last interval's control law of phase ``i`` (affine
         laws; zero for bang arcs)."""
         out = []
-        ph = self.multiphase.phases[i]
+        q = self.flow_problems[i]
         for d in (self.phase_dyns[i][0], self.phase_dyns[i][-1]):
             aff = d.control_law_affine(pv)
-            out.append(aff[0] if aff is not None else np.zeros((ph.nu, ph.nx)))
+            out.append(aff[0] if aff is not None else np.zeros((q.nu, q.nx)))
         return out[0], out[1]
 
 
@@ -531,8 +565,9 @@ class RefinedPhases:
 
     @property
     def xT(self) -> np.ndarray:
-        """Final state of the last phase."""
-        return self.phases[-1].xT
+        """Final state of the last phase (its own states: the decision variables are in
+        :attr:`variables`)."""
+        return self.phases[-1].xT[:self.problem.phases[-1].nx]
 
     @property
     def durations(self) -> list[np.ndarray]:
@@ -566,9 +601,9 @@ class RefinedPhases:
         """
         snames: list[str] = []
         cnames: list[str] = []
-        for r in self.phases:
-            snames += [s for s in r.problem.state_names if s not in snames]
-            cnames += [c for c in r.problem.control_names if c not in cnames]
+        for own in self.problem.phases:  # (not the variables a flow problem carries)
+            snames += [s for s in own.state_names if s not in snames]
+            cnames += [c for c in own.control_names if c not in cnames]
         total = max(self.T - float(self.t0[0]), 1e-300)
         ts, xs, us, ph, md = [], [], [], [], []
         for i, (t0, r) in enumerate(zip(self.t0, self.phases, strict=True)):
@@ -576,7 +611,8 @@ class RefinedPhases:
             tr = r.trajectory(k)
             X = np.full((len(tr.t), len(snames)), np.nan)
             U = np.full((len(tr.t), len(cnames)), np.nan)
-            X[:, [snames.index(s) for s in tr.state_names]] = tr.x
+            own = self.problem.phases[i]  # a flow problem's states begin with the phase's
+            X[:, [snames.index(s) for s in own.state_names]] = tr.x[:, :own.nx]
             if tr.control_names:
                 U[:, [cnames.index(c) for c in tr.control_names]] = tr.u
             ts.append(tr.t + t0)
@@ -610,17 +646,24 @@ class RefinedPhases:
 def _phase_result(nlp: PhaseSwitchingNLP, i: int, res: dict, pv: np.ndarray, params: dict,
                   outs: dict, lam_end: np.ndarray, H: float | None, err: float,
                   transcribed_objective: float) -> RefinedSwitching:
-    """Phase ``i`` of a solved multi-phase NLP as a :class:`RefinedSwitching` (local time)."""
-    ph = nlp.multiphase.phases[i]
+    """Phase ``i`` of a solved multi-phase NLP as a :class:`RefinedSwitching` (local time).
+
+    Its ``problem`` is the phase's flow problem (:func:`flow_problem`; ``origin`` the phase
+    when that was derived, its states then carrying the variables after the phase's)."""
+    mp = nlp.multiphase
+    ph, q = mp.phases[i], nlp.flow_problems[i]
     w = res["w"]
     sl = nlp.phase_slice(i)
     K = nlp.phase_K[i]
+    V = w[nlp.n_w - mp.nv:]
+    variables = dict(zip(mp.var_names, map(float, V), strict=True))
+    carried = V if q is not ph else np.zeros(0)  # the flow problem's variable states
     values, kinds = [], []
     single = ph.nu == 1
     for modes in nlp.phase_modes[i]:
         vals = []
         for name, m in zip(ph.control_names, modes, strict=True):
-            lo, hi = control_bounds_at(ph, name, params)
+            lo, hi = control_bounds_at(ph, name, {**params, **variables})
             vals.append(hi if m.kind == "max" else lo if m.kind == "min" else math.nan)
         values.append(vals[0] if single else tuple(vals))
         kinds.append(modes[0].kind if single else tuple(m.kind for m in modes))
@@ -629,9 +672,10 @@ def _phase_result(nlp: PhaseSwitchingNLP, i: int, res: dict, pv: np.ndarray, par
              if np.isin(rows, v).any()}
     dur = w[sl][:K].copy()
     return RefinedSwitching(
-        problem=ph, params=dict(params), control=ph.control_names[0] if ph.nu else "",
+        problem=q, params=dict(params), control=ph.control_names[0] if ph.nu else "",
         kinds=kinds, values=values, durations=dur, T=float(np.sum(dur)),
-        objective=outs["J"], x0=w[sl][K:].copy(), xT=outs["xT"][i], exact=all(
+        objective=outs["J"], x0=np.r_[w[sl][K:], carried], xT=np.r_[outs["xT"][i], carried],
+        variables=variables, origin=ph if q is not ph else None, exact=all(
             d.exact for d in nlp.phase_dyns[i]), status=res["status"],
         iterations=res["iterations"], solve_time=res["time"],
         transcribed_objective=transcribed_objective, lam_g=res["lam_g"][rows], blocks=local,
@@ -656,7 +700,8 @@ def refine_phase_structure(mp: MultiPhaseProblem, modes: PhaseModes, durations: 
     durations : list of array
         Guessed interval durations per phase.
     x0s : list of array
-        Guessed initial state of every phase.
+        Guessed initial state of every phase (its states; a refined phase's ``x0``, with
+        the decision variables after them, is read for its states).
     params : dict
         A value for every parameter.
     variables : dict, optional
@@ -688,12 +733,14 @@ def refine_phase_structure(mp: MultiPhaseProblem, modes: PhaseModes, durations: 
     _check_problem(mp)  # before the arcs' flows are built from what it refuses
     pv = mp.param_vector(params)
     durs = [np.maximum(np.asarray(d, dtype=float), 1e-6) for d in durations]
-    need = tuple(required_substeps(ph, m, pv, d, np.asarray(x, dtype=float),
-                                   interior_samples, tol)
-                 for ph, m, d, x in zip(mp.phases, modes, durs, x0s, strict=True))
+    # a phase's own states (a refined phase's x0 has the variables after them)
+    starts = [np.asarray(x, dtype=float)[:ph.nx] for ph, x in zip(mp.phases, x0s, strict=True)]
     vguess = _variable_guess(mp, pv, variables)
-    w0 = np.concatenate([np.r_[d, np.asarray(x, dtype=float)] for d, x in
-                         zip(durs, x0s, strict=True)] + [vguess])
+    flows = [flow_problem(ph) for ph in mp.phases]
+    need = tuple(required_substeps(q, m, pv, d, x if q is ph else np.r_[x, vguess],
+                                   interior_samples, tol)
+                 for ph, q, m, d, x in zip(mp.phases, flows, modes, durs, starts, strict=True))
+    w0 = np.concatenate([np.r_[d, x] for d, x in zip(durs, starts, strict=True)] + [vguess])
     notes: list[str] = []
     warm: tuple[Any, Any] = (None, None)
     for _ in range(max_rebuilds + 1):
@@ -852,5 +899,5 @@ def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *
         interior_samples=interior_samples, ipopt_options=ipopt_options, tol=tol, fast=fast)
 
 
-__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "detect_phase_structures", "local_phase",
-           "phase_switching_nlp", "refine_phase_structure", "refine_phases"]
+__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "detect_phase_structures", "flow_problem",
+           "local_phase", "phase_switching_nlp", "refine_phase_structure", "refine_phases"]

@@ -44,6 +44,7 @@ import casadi as ca
 import numpy as np
 
 from ..definition.problem import OptimalControlProblem
+from ..definition.symbols import INF, constant
 from .active_set_newton import ActiveSetNewton
 from .constraint_kinds import control_constraints
 from .control_set import violated_control_constraint
@@ -210,6 +211,20 @@ class ConstraintBlocks:
         self.index.setdefault(name, []).extend(range(self.n, self.n + k))
         self.times.extend([where] * k)
         self.n += k
+
+    def substitute(self, first: int, old: ca.SX, new: ca.SX) -> None:
+        """Replace the symbols ``old`` by ``new`` in the rows and bounds of the blocks added
+        from the ``first``-th on (e.g. a derived phase's parameters by the problem's).
+
+        Parameters
+        ----------
+        first : int
+            Index of the first block (``len(exprs)`` before adding them).
+        old, new : casadi.SX
+            Symbols and what replaces them.
+        """
+        for store in (self.exprs, self.lower, self.upper):
+            store[first:] = [ca.substitute(e, old, new) for e in store[first:]]
 
 
 class SwitchingNLP:
@@ -886,7 +901,15 @@ def _entry_rows(G: ConstraintBlocks, pr: OptimalControlProblem, k: int, d: ArcDy
 def _law_rows(G: ConstraintBlocks, pr: OptimalControlProblem, k: int, d: ArcDynamics, z: ca.SX,
               j: int) -> None:
     for _, e, lo, hi in d.law_bounds:
-        G.add("law", ca.substitute(e, pr.x, z[:pr.nx]), lo, hi, (k, j))
+        at = ca.substitute(e, pr.x, z[:pr.nx])
+        if not ca.depends_on(ca.vertcat(lo, hi), pr.x):
+            G.add("law", at, lo, hi, (k, j))
+            continue
+        # limits that move with a state (a decision variable refined as a constant state,
+        # ocp.structure.variables): rows of the unknowns, one per finite side
+        for b, low, high in ((lo, 0.0, INF), (hi, -INF, 0.0)):
+            if constant(b) not in (-INF, INF):
+                G.add("law", at - ca.substitute(b, pr.x, z[:pr.nx]), low, high, (k, j))
 
 
 def _entry_owners(d: ArcDynamics) -> list[str]:

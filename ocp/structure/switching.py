@@ -126,9 +126,11 @@ class RefinedSwitching:
     variables : dict
         The decision variables' refined values (refined together with the switching
         times: ``problem`` is then :func:`ocp.structure.variables.variables_as_states` of
-        ``origin``, the variables its last states).
+        ``origin``, or :func:`~ocp.structure.variables.phase_variables_as_states` of a
+        phase, the variables its last states; a phase's result has them also when its
+        problem does not involve them).
     origin : OptimalControlProblem or None
-        The problem as the user wrote it, when ``problem`` was derived from it.
+        The problem (or phase) as the user wrote it, when ``problem`` was derived from it.
     control, controls
         The (first) control's name and every control's name.
     lam_g, lam_x : ndarray
@@ -215,7 +217,10 @@ class RefinedSwitching:
         relative degree), ``expression`` (CasADi text of ``u(x, p)``) and, when
         the law is affine in the state, ``gain`` K and ``offset`` k0 with
         ``u = K x + k0`` at this solution's parameters (a replay can use them).
+        With decision variables refined as constant states (:attr:`origin`), ``x``
+        is the origin's states and k0 holds the variables' part at their values.
         """
+        nx = self.origin.nx if self.origin is not None else self.problem.nx
         out: list[dict[str, Any] | None] = []
         for modes in self.modes:
             if all(m.kind != "boundary" for m in modes):
@@ -232,8 +237,9 @@ class RefinedSwitching:
                                 for m in modes if m.constraint is not None],
                 "expression": [str(d.u[i]) for i in idx]}
             if aff is not None:
-                entry["gain"] = aff[0][idx].tolist()
-                entry["offset"] = aff[1][idx].tolist()
+                K, k0 = aff[0][idx], aff[1][idx] + aff[0][idx][:, nx:] @ self.x0[nx:]
+                entry["gain"] = K[:, :nx].tolist()
+                entry["offset"] = k0.tolist()
             out.append(entry)
         return out
 

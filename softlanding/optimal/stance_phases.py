@@ -25,7 +25,7 @@ from functools import lru_cache
 
 import casadi as ca
 
-from ocp import MultiPhaseProblem, OptimalControlProblem, ProblemDefinitionError
+from ocp import MultiPhaseProblem, OptimalControlProblem
 from softlanding.model.dynamics import STATE_NAMES, VF, robot_rhs, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 
@@ -44,7 +44,6 @@ NO_PULL = "ground cannot pull (support force >= 0)"
 BODY_DESCENDING = "body descending v_b <= 0 until it stops"
 ABOVE_SURFACE = "foot above the ground x_f >= 0"
 ABOVE_CRATER = "foot above the crater bottom"
-PEAK = "force within the peak |u| <= peak"
 
 
 def parameters(mp: MultiPhaseProblem) -> dict[str, ca.SX]:
@@ -75,9 +74,8 @@ def bounded_by(ph: OptimalControlProblem, par: dict[str, ca.SX],
     """Declare the control ``u`` of ``ph``, ``|u| <= u_bound`` (default ``u_max``).
 
     A ``u_bound`` that is a decision variable (the epigraph of the peak force) is the
-    control's bounds where :mod:`ocp` takes a variable there (the arcs at the bound are
-    then boundary arcs of the control); otherwise ``|u| <= u_max`` are the bounds and
-    ``|u| <= u_bound`` two path constraints (:data:`PEAK`).
+    control's bounds too: :mod:`ocp` reads the control set at the variable's value, so the
+    arcs at the bound are bang arcs, refined with the variable.
 
     Parameters
     ----------
@@ -88,17 +86,8 @@ def bounded_by(ph: OptimalControlProblem, par: dict[str, ca.SX],
     u_bound : casadi expression, optional
         The bound (default ``par["u_max"]``).
     """
-    if u_bound is None:
-        ph.control("u", lower=-par["u_max"], upper=par["u_max"])
-        return
-    try:
-        ph.control("u", lower=-u_bound, upper=u_bound)
-        return
-    except ProblemDefinitionError:  # ocp refuses a decision variable in bounds (checked first)
-        pass
-    ph.control("u", lower=-par["u_max"], upper=par["u_max"])
-    ph.path_constraint(ph.u[0] - u_bound, -ca.inf, 0.0, name=PEAK + " (upper)")
-    ph.path_constraint(ph.u[0] + u_bound, 0.0, ca.inf, name=PEAK + " (lower)")
+    bound = par["u_max"] if u_bound is None else u_bound
+    ph.control("u", lower=-bound, upper=bound)
 
 
 @lru_cache(maxsize=1)
@@ -240,6 +229,6 @@ def impact_state(ph: OptimalControlProblem, par: dict[str, ca.SX]) -> None:
 
 
 __all__ = ["ABOVE_CRATER", "ABOVE_SURFACE", "ARREST_MAX", "BODY_DESCENDING", "CRATER",
-           "DESCENDING", "NO_PULL", "PARAMETERS", "PEAK", "STROKE", "T_MAX", "add_flight",
+           "DESCENDING", "NO_PULL", "PARAMETERS", "STROKE", "T_MAX", "add_flight",
            "add_static", "add_yielding", "arrest_to_rest", "bounded_by", "crater_capacity",
            "impact_state", "parameters", "support_force"]

@@ -225,6 +225,29 @@ def test_peak_force_in_the_control_bounds_refines_and_certifies(form):
     assert c.verdict == CERTIFIED, c.reasons
 
 
+def test_peak_force_with_a_boundary_arc_refines():
+    """min peak with a speed limit v <= 0.8 that binds: +peak, then cruise on the boundary
+    arc (u = 0, a boundary law kept within [-peak, peak]: rows of the refinement, the limits
+    moving with the variable), then -peak; peak = vm^2 / (vm T - d). Before: a CasADi
+    "free variables [peak]" crash."""
+    d, T, vm = 1.0, 2.0, 0.8
+    p = OptimalControlProblem("peak_speed")
+    x, v = p.state("x"), p.state("v", upper=vm)
+    peak = p.variable("peak", 0.0, 10.0, guess=2.0)
+    u = p.control("u", lower=-peak, upper=peak)
+    p.set_dynamics({"x": v, "v": u})
+    for s, a, b in ((x, 0.0, d), (v, 0.0, 0.0)):
+        p.initial_constraint(s, a)
+        p.terminal_constraint(s, b)
+    p.fixed_final_time(T)
+    p.minimize(peak)
+    r = refine_switching(MultipleShooting(p, nodes=30).solve())
+    P = vm**2 / (vm * T - d)
+    assert r.kinds == ["max", "boundary", "min"]
+    assert r.variables["peak"] == pytest.approx(P, rel=1e-13)
+    assert r.switch_times == pytest.approx([vm / P, T - vm / P], abs=1e-12)
+
+
 def test_decision_variable_in_the_dynamics_is_refined_with_the_switches():
     """x'' = u + w, |u| <= 1, w a free drift in [-0.2, 0.2]: minimum time 0 -> 1 at rest is
     T = 2 / sqrt(1 - w^2), least at w = 0 (T = 2, switch at 1). Before: the refinement

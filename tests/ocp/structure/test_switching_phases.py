@@ -155,3 +155,93 @@ def test_local_phase_views_start_at_zero():
     assert loc.t[0] == 0.0 and loc.T == pytest.approx(sol.phases[1].T - sol.phases[1].t0)
     st = detect_phase_structures(sol)
     assert st[0].kinds == [("max",)] and st[1].controls == ()
+
+
+# ------------------------------------------------------------ decision variables
+def _peak_two_gains(form: str, gain: float, d: float = 1.0, T1: float = 0.5, T: float = 2.0):
+    """The smallest peak force, min peak with -peak <= u <= peak (the epigraph of min max |u|),
+    0 -> d at rest in the fixed time T: x'' = u until T1, x'' = gain u after. The limit
+    written as the control's bounds or as two path constraints."""
+    mp = MultiPhaseProblem("peak_two_gains")
+    peak = mp.variable("peak", 0.0, 10.0, guess=2.0)
+    a, b = mp.phase("a"), mp.phase("b")
+    for ph, k in ((a, 1.0), (b, gain)):
+        ph.state("x")
+        v = ph.state("v")
+        if form == "bounds":
+            u = ph.control("u", lower=-peak, upper=peak)
+        else:
+            u = ph.control("u")
+            ph.path_constraint(u - peak, upper=0.0, name="u <= peak")
+            ph.path_constraint(u + peak, lower=0.0, name="u >= -peak")
+        ph.set_dynamics({"x": v, "v": k * u})
+    a.initial_constraint(a.x[0], 0.0)
+    a.initial_constraint(a.x[1], 0.0)
+    a.fixed_final_time(T1)
+    b.terminal_constraint(b.x[0] - d, 0.0)
+    b.terminal_constraint(b.x[1], 0.0)
+    b.fixed_final_time(T)
+    mp.link(a, b)
+    mp.minimize(peak)
+    return mp
+
+
+def _peak_closed_form(gain: float, d: float, T1: float, T: float) -> tuple[float, float]:
+    """Peak and switch time: u = +peak until ts (in the second phase), -peak after.
+    Rest at T: T1 + gain (ts - T1) = gain (T - ts); the distance per unit peak is
+    T1^2 / 2 + (T1 + w)(ts - T1) / 2 + w (T - ts) / 2 with w = gain (T - ts)."""
+    ts = (T + T1 - T1 / gain) / 2
+    w = gain * (T - ts)
+    return d / (T1**2 / 2 + (T1 + w) * (ts - T1) / 2 + w * (T - ts) / 2), ts
+
+
+@pytest.mark.parametrize("form", ["bounds", "path"])
+def test_peak_force_across_phases_refines_with_the_switches_and_certifies(form):
+    """A decision variable in the control limits of every phase (issue 32): the switching
+    times, the phase durations and the peak refined together (the closed form to 1e-12),
+    and each phase's certificate minimises H over [-peak, peak] at the refined peak.
+    Before: refused ("refined in single-phase problems only")."""
+    gain, d, T1, T = 2.0, 1.0, 0.5, 2.0
+    P, ts = _peak_closed_form(gain, d, T1, T)
+    sol = MultipleShooting(_peak_two_gains(form, gain, d, T1, T), nodes=[6, 18]).solve()
+    assert P == pytest.approx(32 / 51, rel=1e-15)  # by hand: 1 / (1/8 + 45/64 + 49/64)
+    assert sol.variables["peak"] == pytest.approx(P, rel=1e-2)  # the grid's answer
+    r = refine_phases(sol)
+    assert r.kinds == [["max"], ["max", "min"]] and r.exact
+    assert r.variables["peak"] == pytest.approx(P, rel=1e-12)
+    assert r.objective == pytest.approx(P, rel=1e-12)
+    assert r.switch_times[1][0] == pytest.approx(ts, abs=1e-12)
+    assert r.t0[1] == pytest.approx(T1, abs=1e-14) and r.T == pytest.approx(T, abs=1e-14)
+    assert r.phases[1].values == pytest.approx([P, -P], rel=1e-12)  # the control set at P
+    np.testing.assert_allclose(r.xT, [d, 0.0], atol=1e-12)  # the phase's own states
+    c = certify(sol, r)
+    assert c.verdict == "bang-bang certified", c.reasons
+    assert max(c.junction_gaps) < 1e-9 and c.H_max_abs < 1e-9
+
+
+def test_decision_variable_in_the_dynamics_of_phases():
+    """x'' = u + w in both phases (|u| <= 1, the first of fixed length 0.4), w a drift in
+    [0.1, 0.3]: minimum time 0 -> 1 at rest is T = 2 / sqrt(1 - w^2), least at w = 0.1,
+    switching at sqrt((1 - w) / (1 + w))."""
+    mp = MultiPhaseProblem("drift_phases")
+    w = mp.variable("w", 0.1, 0.3, guess=0.2)
+    a, b = mp.phase("a"), mp.phase("b")
+    for ph in (a, b):
+        ph.state("x")
+        v = ph.state("v")
+        u = ph.control("u", -1, 1)
+        ph.set_dynamics({"x": v, "v": u + w})
+    a.initial_constraint(a.x[0], 0.0)
+    a.initial_constraint(a.x[1], 0.0)
+    a.fixed_final_time(0.4)
+    b.terminal_constraint(b.x[0] - 1.0, 0.0)
+    b.terminal_constraint(b.x[1], 0.0)
+    b.free_duration(0.05, 20, guess=2.0)
+    mp.link(a, b)
+    mp.minimize(b.T)
+    sol = MultipleShooting(mp, nodes=[6, 24]).solve()
+    r = refine_phases(sol)
+    assert r.variables["w"] == pytest.approx(0.1, abs=1e-14)
+    assert r.T == pytest.approx(2 / math.sqrt(0.99), abs=1e-12)
+    assert r.switch_times[1][0] == pytest.approx(math.sqrt(0.9 / 1.1), abs=1e-12)
+    assert certify(sol, r).verdict == "bang-bang certified"

@@ -93,24 +93,24 @@ def test_a_copy_outside_the_package_runs_like_the_packaged_variant(tmp_path, mon
 
 @pytest.mark.slow
 def test_min_peak_force_is_the_inverse_of_the_two_phase_depth(cli):
-    """The least peak P for the budget D = least depth + 0.5: the two-phase landing with
-    u_max = P lands at depth D (1e-6), and a budget only just above the least depth needs
-    the robot's whole force limit."""
+    """The least peak P for the budget D = least depth + 0.5, refined with exact arcs (the
+    peak with the switching times and phase durations) and certified like the two-phase
+    landing: the two-phase landing with u_max = P lands at depth D (1e-6; the two problems
+    are dual), and a budget below the least depth is refused."""
     budget = LEAST + 0.5
     code, out, err = cli("solve", "--v0", str(V0), "--variant", "min-peak-force",
                          "--depth-max", str(budget), "--pmp", "--json")
-    assert code in (0, 1), err
+    assert code == 0, err
     d = json.loads(out)
-    assert "pmp" in d and (d["pmp"]["verdict"] is not None or d["pmp"]["why_none"])
-    assert d["depth"] == pytest.approx(budget, abs=1e-6)
+    assert d["verified"] is True and "refined" in d, d["unverified_reasons"]
+    assert d["pmp"]["verdict"] == "bang-bang certified", d["pmp"]
+    assert d["depth"] == pytest.approx(budget, abs=1e-9)
+    assert d["replay"]["difference"] < 1e-9
     assert 0 < d["peak"] < 8.2
     code, out, err = cli("solve", "--v0", str(V0), "--variant", "two-phase", "--umax",
                          repr(d["peak"]), "--json")
     assert code == 0, err
-    # refined: exact arcs; transcribed only (while ocp reads u = peak as an interior arc):
-    # the peak carries the transcription's grid error, ~1e-5 in depth
-    tol = 1e-6 if "refined" in d else 1e-4
-    assert json.loads(out)["depth"] == pytest.approx(budget, abs=tol)
+    assert json.loads(out)["depth"] == pytest.approx(budget, abs=1e-6)
     # a budget below the least depth is an impossible limit: one line, exit 2
     code, out, err = cli("solve", "--v0", str(V0), "--variant", "min-peak-force",
                          "--depth-max", str(LEAST - 0.01))
