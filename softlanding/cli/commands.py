@@ -569,6 +569,7 @@ def _cmd_hop(a: argparse.Namespace) -> int:
     reasons = {k: c.unverified_reasons() + [r for r in [c.unconverged_reason()] if r]
                for k, c in cycles.items()}
     bad = any(reasons.values())
+    no_cert = {k: c.uncertified_reason() for k, c in cycles.items()} if a.pmp else {}
     written = None
     if plot:
         from softlanding.plots.phased import plot_hop
@@ -583,7 +584,9 @@ def _cmd_hop(a: argparse.Namespace) -> int:
                      "energy_error": first.energy_error, "cot": first.cot,
                      "depth": first.depth,
                      "leg": legs[0], "eta": a.eta, "v0": a.v0, "apex_height": first.apex_height,
-                     "cycles": {k: c.to_dict() for k, c in cycles.items()}})
+                     "cycles": {k: c.to_dict() for k, c in cycles.items()},
+                     **({"pmp": {k: {"verdict": None, "why_none": why}
+                                 for k, why in no_cert.items()}} if a.pmp else {})})
     else:
         for leg, c in cycles.items():
             ok = "yes" if not reasons[leg] else "NO: " + "; ".join(reasons[leg])
@@ -592,6 +595,8 @@ def _cmd_hop(a: argparse.Namespace) -> int:
                                             else "discretised")] + _hop_rows(c))
             for n in c.notes:
                 print(f"note: {n}")
+            if a.pmp:
+                print(f"PMP: {no_cert[leg]}")
         if written:
             print(f"figure written to {written}")
     return EXIT_OK if not bad or a.accept_unverified else EXIT_FAILURE

@@ -231,6 +231,9 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
                         "grid's energy is a discretised value: unless it has settled to 1e-6 "
                         "the cycle is not verified (exit 1 without --accept-unverified)")
     _model_args(h, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
+    h.add_argument("--pmp", action="store_true", default=None,
+                   help="say, for every leg, why there is no Pontryagin certificate (the "
+                        "hop's optimum is not bang-bang: its arc structure is named)")
     _plot_arg(h, "the hop cycle figure (the first leg), phases shaded")
     _accept_arg(h)
     return h

@@ -188,6 +188,30 @@ class HopCycle:
         """Energy per cycle over the apex height (``m_t g h``)."""
         return self.energy / self.apex_height
 
+    def uncertified_reason(self) -> str:
+        """Why the cycle gets no PMP certificate, in one line (``hop --pmp``).
+
+        ``ocp``'s certificate checks Pontryagin's conditions on refined, exact arcs; the
+        free and rigid legs' transcriptions are read for their arc structure, and the one
+        that is not bang-bang is named (the optimum holds the leg at zero power on arcs
+        whose force follows the ground's, which the detection reads as interior arcs)."""
+        if not self.transcribed:
+            return ("no PMP certificate: an impedance leg is a feedback law with a thrust, "
+                    "not an optimal control")
+        from ocp.structure.phase_refinement import detect_phase_structures
+
+        sol = self.transcribed[0]
+        for ph, st in zip(sol.phases, detect_phase_structures(sol), strict=True):
+            if not st.refinable:
+                kinds = "; ".join(f"{c.control}: {', '.join(c.kinds)}" for c in st.per_control
+                                  if not c.refinable)
+                return (f"no PMP certificate: the transcribed optimum is not bang-bang (phase "
+                        f"{ph.problem.name!r}, arcs {kinds}), so there are no exact arcs to "
+                        "check Pontryagin's conditions on; its energy is the exact replay of "
+                        "the grid's control")
+        return ("no PMP certificate: the hop's arcs are not refined (its transcription is "
+                "replayed as a grid's control), and the certificate needs refined arcs")
+
     def unverified_reasons(self) -> list[str]:
         """Why this cycle cannot be taken as exact (empty: every check passed)."""
         out = []

@@ -45,7 +45,8 @@ def test_hop_json_and_plot(cli, tmp_path, monkeypatch):
 
     monkeypatch.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])  # the CLI, not the search
     png = tmp_path / "hop.png"
-    code, out, _ = cli("hop", "--v0", "-1.5", "--doublings", "0", "--json", "--plot", png)
+    code, out, _ = cli("hop", "--v0", "-1.5", "--doublings", "0", "--json", "--plot", png,
+                       "--pmp")
     # issue 34: one grid's energy is a discretised value, not a verified optimum: exit 1
     assert code == 1
     d = json.loads(out)
@@ -56,6 +57,9 @@ def test_hop_json_and_plot(cli, tmp_path, monkeypatch):
     assert d["cycles"]["free"]["net_work"] == pytest.approx(
         d["cycles"]["free"]["ground_loss"], rel=1e-6)
     assert png.stat().st_size > 1000
+    # issue 32: no certificate, and one line naming why (the structure ocp detects)
+    pmp = d["pmp"]["free"]
+    assert pmp["verdict"] is None and "not bang-bang" in pmp["why_none"], pmp
 
 
 def test_bad_input_exit_2(cli):
