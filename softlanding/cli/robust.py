@@ -35,15 +35,15 @@ def ground_set(stiffness: list[float], drag: list[float]) -> list[Ground]:
     """
     n = len(stiffness) * len(drag)
     if n > MAX_GROUNDS:  # refused before anything is built or compiled
-        raise ParameterError("cd" if len(drag) > len(stiffness) else "stiffness",
+        raise ParameterError("--cd" if len(drag) > len(stiffness) else "--stiffness",
                              f"{len(stiffness)} x {len(drag)} = {n} grounds (every --stiffness "
                              f"with every --cd); at most {MAX_GROUNDS}")
     for k in stiffness:
-        check("stiffness", k, (lambda v: v > 0, "must be > 0"))
+        check("--stiffness", k, (lambda v: v > 0, "must be > 0"))
     for c in drag:
-        check("cd", c, (lambda v: v >= 0, "must be >= 0"))
+        check("--cd", c, (lambda v: v >= 0, "must be >= 0"))
     if len(set(stiffness)) < len(stiffness) or len(set(drag)) < len(drag):
-        raise ParameterError("stiffness" if len(set(stiffness)) < len(stiffness) else "cd",
+        raise ParameterError("--stiffness" if len(set(stiffness)) < len(stiffness) else "--cd",
                              "lists a value twice")
     return [linear_or_drag(k, c) for k, c in itertools.product(stiffness, drag)]
 

@@ -285,8 +285,10 @@ def test_robust_bounds_its_ground_set_before_any_work(cli):
     drag = ",".join(f"{i / 1000:g}" for i in range(MAX_GROUNDS // 2 + 1))
     code, out, err = cli("robust", "--v0", "-3", "--stiffness", "1,2", "--cd", drag)
     assert code == 2 and not out and err.count("\n") == 1
-    assert f"cd: 2 x {MAX_GROUNDS // 2 + 1} = {MAX_GROUNDS + 2} grounds" in err
+    assert f"--cd: 2 x {MAX_GROUNDS // 2 + 1} = {MAX_GROUNDS + 2} grounds" in err
     assert f"at most {MAX_GROUNDS}" in err
+    code, _, err = cli("robust", "--v0", "-3", "--cd", "0,-1")  # the option, by its name
+    assert code == 2 and err.strip().endswith("--cd: must be >= 0, got -1")
 
 
 def test_robust_json_gives_every_grounds_stiffness(cli, monkeypatch):
