@@ -121,7 +121,7 @@ class GridFree:
             plain.append(state_ends(ph, _previous_ends(mp, i, plain)))
             controls.append(control_guess(ph, choices))
         return cls(mp, mp.times(), [CompiledPhase(ph) for ph in mp.phases], choices, ends,
-                   plain, controls, variable_guess(mp._shared, choices))
+                   plain, controls, variable_guess(mp.shared, choices))
 
 
 def _previous_ends(mp: MultiPhaseProblem, i: int, ends: list) -> dict[str, ca.SX] | None:
@@ -282,7 +282,7 @@ class Transcription:
                 rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
                 sl = lay.blocks["path"]
                 sb.r[sl] = np.tile(rs, (sl.stop - sl.start) // max(len(rs), 1))
-        sh = mp._shared
+        sh = mp.shared
         for k, name in enumerate(sh.var_names):
             sb.set_entries(self.iV.start + k, sb.ref(name, sh.var_ref.get(name),
                                                       *sh.var_bounds[name],
@@ -300,7 +300,7 @@ class Transcription:
         mp = self.multiphase
         if not self.scaling_options["auto"]:
             return [[None] * ph.nx for ph in mp.phases]
-        vg = variable_guess(mp._shared)
+        vg = variable_guess(mp.shared)
         out: list[list[float | None]] = []
         for i, (ph, tm, (a, b)) in enumerate(zip(mp.phases, self.times, ends, strict=True)):
             prev = next((j for j, k in mp.time_links if k == i and j < i), None)
