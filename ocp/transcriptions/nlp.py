@@ -330,7 +330,7 @@ class Transcription:
         return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
 
     def _var_bounds(self, side: int) -> list[ca.SX]:
-        sh = self.multiphase._shared
+        sh = self.multiphase.shared
         return [sh.var_bounds[n][side] for n in sh.var_names]
 
     @staticmethod
@@ -397,6 +397,12 @@ class Transcription:
             raise AttributeError("a multi-phase transcription has one layout per phase: "
                                  "use .layouts")
         return self.layouts[0]
+
+    @property
+    def bounds_function(self) -> ca.Function:
+        """``p -> (lbw, ubw, lbg, ubg)``: the bounds of the decision vector and of the
+        constraints at the parameter values ``p`` (unchecked, as posed)."""
+        return self._bounds
 
     def _solver(self, warm: bool, expand: bool | None = None) -> Any:
         """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers
