@@ -154,7 +154,7 @@ def _rockit_guess(ocp: Any, pr: OptimalControlProblem, X: Any, U: Any, V: Any,
         else:
             ocp.set_initial(U[i], float(ug[i]))
     if pr.nv:
-        ocp.set_initial(V, np.array(ca.evalf(variable_guess(pr._shared))).ravel())
+        ocp.set_initial(V, np.array(ca.evalf(variable_guess(pr.shared))).ravel())
 
 
 def rockit_round(sp: SuiteProblem, N: int) -> dict[str, float]:

@@ -293,7 +293,7 @@ def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> Adjoi
         tau = float(ref.durations[k])
         ja = _joint(pr, modes[k])
         q = max(8, int(np.ceil(points * tau / max(T, 1e-300))))
-        n = 0 if ja.exact else factor * max(ref._steps(k), q)
+        n = 0 if ja.exact else factor * max(ref.rk8_steps(k), q)
         Y = ja.backward(y, tau, pv, q, n) if tau > 0 else np.tile(y, (2, 1))
         xs = Y[:, :pr.nx]
         err_x = max(err_x, float(np.max(np.abs(xs[0] - Z[k][:pr.nx]))

@@ -224,13 +224,12 @@ def state_ends(ph: OptimalControlProblem, previous: dict[str, ca.SX] | None = No
         Registers the states whose guess is a bare default, so that a solve
         can replace it (see :func:`repair_default`).
     """
-    others_x0 = [*ph._u0, *ph._xT, *ph._uT, ph.t0, ph.T, *[s for s, _ in ph.integrals],
-                 *ph._shared.vars]
-    others_xT = [*ph._u0, *ph._x0, *ph._uT, ph.t0, ph.T, *[s for s, _ in ph.integrals],
-                 *ph._shared.vars]
+    x0, xT, u0, uT = (ca.vertsplit(e) for e in (ph.x0, ph.xT, ph.u0, ph.uT))
+    others_x0 = [*u0, *xT, *uT, ph.t0, ph.T, *[s for s, _ in ph.integrals], *ph.shared.vars]
+    others_xT = [*u0, *x0, *uT, ph.t0, ph.T, *[s for s, _ in ph.integrals], *ph.shared.vars]
     b_rows = _rows(ph.boundary, lambda e: e)
-    fix0 = _fixed_values(_rows(ph.initial, ph.at_t0) + b_rows, ph._x0, others_x0)
-    fixT = _fixed_values(_rows(ph.terminal, ph.at_tf) + b_rows, ph._xT, others_xT)
+    fix0 = _fixed_values(_rows(ph.initial, ph.at_t0) + b_rows, x0, others_x0)
+    fixT = _fixed_values(_rows(ph.terminal, ph.at_tf) + b_rows, xT, others_xT)
     starts, ends = [], []
     for i, name in enumerate(ph.state_names):
         lo, hi = ph.state_bounds[name]

@@ -98,7 +98,7 @@ class MultiPhaseProblem:
             The only phase.
         """
         mp = cls(problem.name)
-        mp._shared = problem._shared
+        mp._shared = problem.shared
         mp._anchor = problem
         mp.phases = [problem]
         return mp
@@ -273,6 +273,12 @@ class MultiPhaseProblem:
     def v(self) -> ca.SX:
         """The decision variables, stacked."""
         return self._shared.v
+
+    @property
+    def shared(self) -> Shared:
+        """Parameters and decision variables, shared by all phases (read it; declare through
+        :meth:`parameter` and :meth:`variable`)."""
+        return self._shared
 
     def param_vector(self, params: Mapping[str, float]) -> ndarray:
         """Parameter values in declaration order, checked (see

@@ -902,6 +902,12 @@ class OptimalControlProblem:
         return self._shared.v
 
     @property
+    def shared(self) -> Shared:
+        """Parameters and decision variables, shared by all phases (read it; declare through
+        :meth:`parameter` and :meth:`variable`)."""
+        return self._shared
+
+    @property
     def x0(self) -> ca.SX:
         """The states at ``t0`` (end-point symbols), stacked."""
         return ca.vertcat(*self._x0) if self._x0 else ca.SX(0, 1)

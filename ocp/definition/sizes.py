@@ -112,7 +112,7 @@ def boundary_size(ph: OptimalControlProblem, i: int, rows: list[tuple[ca.SX, Any
         The state's bounds.
     """
     best: float | None = None
-    for target in (ph._x0[i], ph._xT[i]):
+    for target in (ph.x0[i], ph.xT[i]):
         for e, lower, upper in rows:
             s = _row_size(e, lower, upper, target, ph, values, lo, hi)
             if s is not None and (best is None or s < best):
@@ -178,7 +178,7 @@ def dynamics_sizes(ph: OptimalControlProblem, points: Sequence[np.ndarray], u: n
     """
     out = np.full(ph.nx, np.nan)
     rhs = ph.rhs
-    fixed = [ph.t0, ph.T, *ph._shared.vars]
+    fixed = [ph.t0, ph.T, *ph.shared.vars]
     if ca.depends_on(rhs, ph.p) or any(statics.get(s.name()) is None for s in fixed):
         return out
     xu = ca.vertcat(ph.x, ph.u)
@@ -228,10 +228,10 @@ def phase_state_sizes(ph: OptimalControlProblem, starts: ca.SX, ends: ca.SX,
     u = [_num(ug[k]) for k in range(ph.nu)]
     vg = [_num(var_guess[k]) for k in range(var_guess.numel())]
     statics: dict[str, float | None] = {ph.t0.name(): times[0], ph.T.name(): times[1]}
-    statics |= {s.name(): v for s, v in zip(ph._shared.vars, vg, strict=True)}
+    statics |= {s.name(): v for s, v in zip(ph.shared.vars, vg, strict=True)}
     values = dict(statics)
-    for syms, vals in ((ph._x0, a), (ph._xT, b), (ph._u0, u), (ph._uT, u)):
-        values |= {s.name(): v for s, v in zip(syms, vals, strict=True)}
+    for syms, vals in ((ph.x0, a), (ph.xT, b), (ph.u0, u), (ph.uT, u)):
+        values |= {s.name(): v for s, v in zip(ca.vertsplit(syms), vals, strict=True)}
     bounds = [_float_bounds(*ph.state_bounds[n]) for n in ph.state_names]
     rows = boundary_rows(ph)
     for i in todo:

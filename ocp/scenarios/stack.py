@@ -92,7 +92,7 @@ class _Stacker:
     # ------------------------------------------------------------ symbols
     def _declare_symbols(self) -> None:
         pr, mp, S = self.pr, self.mp, self.S
-        sh = pr._shared
+        sh = pr.shared
         self.common = {n: mp.parameter(n) for n in self.common_names}
         self.scen = [{n: mp.parameter(f"{n}[{i}]") for n in self.names} for i in range(S)]
         self.weight = ([mp.parameter(f"weight[{i}]") for i in range(S)]
@@ -266,7 +266,7 @@ class _Stacker:
                 J = J + self.phases[-1].at_tf(self._state(self.phases[-1],
                                                           f"{self.running_state}[{i}]"))
             costs.append(J)
-        ref = pr._shared.objective_ref
+        ref = pr.shared.objective_ref
         if self.objective == "worst":
             z = mp.variable(EPIGRAPH)
             for i, J in enumerate(costs):

@@ -774,7 +774,7 @@ def _variable_guess(mp: MultiPhaseProblem, pv: np.ndarray,
         return np.zeros(0)
     from ..definition.guess import variable_guess
 
-    g = np.array(ca.Function("vg", [mp.p], [variable_guess(mp._shared)])(pv),
+    g = np.array(ca.Function("vg", [mp.p], [variable_guess(mp.shared)])(pv),
                  dtype=float).ravel()
     for k, name in enumerate(mp.var_names):
         if variables is not None and name in variables:

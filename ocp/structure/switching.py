@@ -261,8 +261,15 @@ class RefinedSwitching:
             out.append(tuple(ms))
         return tuple(out)
 
-    def _steps(self, k: int) -> int:
-        """RK8 steps of interval k (the refinement's), for non-affine arcs."""
+    def rk8_steps(self, k: int) -> int:
+        """RK8 steps of interval ``k`` in the refinement (64 where it has none), for the flows
+        of non-affine arcs.
+
+        Parameters
+        ----------
+        k : int
+            The interval.
+        """
         if self.nlp is not None and k < len(self.nlp.substeps):
             return int(self.nlp.substeps[k])
         return 64
@@ -273,7 +280,7 @@ class RefinedSwitching:
         if d.exact:
             A, b = d.affine_numeric(self.pv)
             return numeric_affine_flow(A, b, z, tau, points)
-        per = max(1, -(-self._steps(k) // points))
+        per = max(1, -(-self.rk8_steps(k) // points))
         return numeric_rk8_flow(rk8_of(d), z, tau, per * points, self.pv)[::per]
 
     def junctions(self) -> np.ndarray:

@@ -121,7 +121,7 @@ class GridFree:
             plain.append(state_ends(ph, _previous_ends(mp, i, plain)))
             controls.append(control_guess(ph, choices))
         return cls(mp, mp.times(), [CompiledPhase(ph) for ph in mp.phases], choices, ends,
-                   plain, controls, variable_guess(mp._shared, choices))
+                   plain, controls, variable_guess(mp.shared, choices))
 
 
 def _previous_ends(mp: MultiPhaseProblem, i: int, ends: list) -> dict[str, ca.SX] | None:
@@ -282,7 +282,7 @@ class Transcription:
                 rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
                 sl = lay.blocks["path"]
                 sb.r[sl] = np.tile(rs, (sl.stop - sl.start) // max(len(rs), 1))
-        sh = mp._shared
+        sh = mp.shared
         for k, name in enumerate(sh.var_names):
             sb.set_entries(self.iV.start + k, sb.ref(name, sh.var_ref.get(name),
                                                       *sh.var_bounds[name],
@@ -300,7 +300,7 @@ class Transcription:
         mp = self.multiphase
         if not self.scaling_options["auto"]:
             return [[None] * ph.nx for ph in mp.phases]
-        vg = variable_guess(mp._shared)
+        vg = variable_guess(mp.shared)
         out: list[list[float | None]] = []
         for i, (ph, tm, (a, b)) in enumerate(zip(mp.phases, self.times, ends, strict=True)):
             prev = next((j for j, k in mp.time_links if k == i and j < i), None)
@@ -330,7 +330,7 @@ class Transcription:
         return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
 
     def _var_bounds(self, side: int) -> list[ca.SX]:
-        sh = self.multiphase._shared
+        sh = self.multiphase.shared
         return [sh.var_bounds[n][side] for n in sh.var_names]
 
     @staticmethod
@@ -397,6 +397,12 @@ class Transcription:
             raise AttributeError("a multi-phase transcription has one layout per phase: "
                                  "use .layouts")
         return self.layouts[0]
+
+    @property
+    def bounds_function(self) -> ca.Function:
+        """``p -> (lbw, ubw, lbg, ubg)``: the bounds of the decision vector and of the
+        constraints at the parameter values ``p`` (unchecked, as posed)."""
+        return self._bounds
 
     def _solver(self, warm: bool, expand: bool | None = None) -> Any:
         """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers

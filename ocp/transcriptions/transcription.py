@@ -413,7 +413,7 @@ def decision_bounds(transcription: Transcription, params: dict[str, float] | Non
         Parameter values (every declared parameter).
     """
     pv = transcription.param_vector({} if params is None else params)
-    lbw, ubw = transcription._bounds(pv)[:2]
+    lbw, ubw = transcription.bounds_function(pv)[:2]
     return np.array(lbw, dtype=float).ravel(), np.array(ubw, dtype=float).ravel()
 
 
