@@ -15,7 +15,13 @@ from softlanding.simulation.actuator_work import segment_work
 
 @pytest.fixture(scope="module")
 def free():
-    return solve_hop(-2.0, PAPER_ROBOT, eta=0.0)
+    # from the first of HOP_STARTS only (the search over the three runs in the slow grid
+    # test): these tests check the cycle, not the search
+    import softlanding.optimal.hopping as hopping
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])
+        return solve_hop(-2.0, PAPER_ROBOT, eta=0.0)
 
 
 def test_segment_work_is_exact_on_a_flight_arc():
@@ -69,7 +75,7 @@ def test_rigid_and_impedance_cycles_close_too(free):
     assert rig.unverified_reasons() == []
     assert rig.depth == pytest.approx(1 + math.sqrt(1 + 4.0), rel=1e-12)  # the rigid crater
     assert rig.energy > free.energy  # the optimum is at least as good as a rigid landing
-    imp = best_impedance_hop(-2.0, grid=5)
+    imp = best_impedance_hop(-2.0, grid=3)
     assert imp is not None and imp.unverified_reasons() == []
     assert imp.energy > free.energy
     assert set(imp.gains) == {"k_p", "k_d", "u_t"}
