@@ -24,7 +24,6 @@ the body's weight, is replayed in the exact hybrid simulator as a check.
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
@@ -33,7 +32,6 @@ import casadi as ca
 import numpy as np
 
 from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
-from ocp.definition.errors import PathViolationWarning
 from ocp.structure.switching import (
     RefinedSwitching,
     detect_arcs,
@@ -46,6 +44,7 @@ from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.limits import force_limit, landing_input
+from softlanding.optimal.phase_solve import transcribed_solve
 from softlanding.optimal.pipeline import continuation, landing_parameters
 from softlanding.optimal.stance_phases import crater_capacity
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
@@ -512,31 +511,16 @@ def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: G
 
 def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Ground,
                  nodes: int, warm_start: Solution | None, notes: list[str]) -> Solution:
-    """The transcribed solve (warm-started if possible); infeasibility is explained.
-
-    A transcription that violates a path constraint between its nodes is noted (its
-    ``verified`` flag is False); the refined solution and the exact replay are checked
-    instead.
-    """
-    params = landing_parameters(robot, impact)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", PathViolationWarning)
-        try:
-            sol = None
-            if warm_start is not None:
-                try:
-                    sol = tr.solve(params, warm_start=warm_start)
-                except SolveError:
-                    raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-                    pass
-            if sol is None:
-                sol = tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
-        except InfeasibleError as err:
-            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-            raise _explain_infeasible(err, robot, impact, ground, nodes) from None
-    notes += [f"transcription: {w.message}".split("; refine the grid")[0] for w in caught
-              if issubclass(w.category, PathViolationWarning)]
-    return sol
+    """The pipeline's transcription step (:func:`~softlanding.optimal.phase_solve.
+    transcribed_solve`: warm-started if possible, else from the rigid-leg guess; a path
+    constraint violated between nodes is noted, and the refined solution and the exact replay
+    are checked instead), with infeasibility explained in words."""
+    try:
+        return transcribed_solve(tr, landing_parameters(robot, impact),
+                                 rigid_guess(tr, robot, impact, ground), warm_start, notes)
+    except InfeasibleError as err:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+        raise _explain_infeasible(err, robot, impact, ground, nodes) from None
 
 
 def _refined(sol: Solution, extra_arcs: int,
