@@ -60,6 +60,8 @@ def _assert_identical(o0, s0, o1, s1):
         assert same(s0[key], s1[key]).all(), key
 
 
+# the frozen kernel compiles for about 20 s CPU on a cold cache (as in CI): slow
+@pytest.mark.slow
 @pytest.mark.parametrize("energy", [False, True])
 def test_impedance_sample_identical_to_frozen_kernel(K0, energy):
     for kp, kd, v0, umax, r_m, s in _cases():
@@ -78,6 +80,7 @@ def test_impedance_sample_identical_to_frozen_kernel(K0, energy):
         _assert_identical(o0, s0, o1, s1)
 
 
+@pytest.mark.slow
 def test_rigid_and_open_loop_identical_to_frozen_kernel(K0):
     rng = np.random.default_rng(5)
     for _ in range(12):
