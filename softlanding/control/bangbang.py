@@ -65,9 +65,10 @@ NM = 23
 #: Phases: pushing (both arcs left), pulling (the foot's stop left).
 PUSH, PULL = 0, 1
 #: Statuses of a step: covered (the plan re-solved), and why not.
-OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS = 0, 1, 2, 3, 4, 5
+OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP = 0, 1, 2, 3, 4, 5, 6
 STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
-                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds"}
+                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds",
+                CREEP: "creep"}
 
 #: Relative agreement of the measured state with the plan's prediction, and of the estimate
 #: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
@@ -366,6 +367,8 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
     M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
     if lim[0] > 1e-9 * (1.0 + abs(x[3])) or lim[1] < -1e-9 or lim[2] > P[P_S] * (1 + 1e-9):
         return PATH_LIMIT
+    if lim[4] >= 0.0:  # the body rises at the foot's stop: a creep (the arrest's other root)
+        return CREEP
     return OK
 
 
@@ -392,6 +395,8 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax):
         return NEWTON_FAILED
     M[M_TAU1], M[M_TAU2] = 0.0, t2
     M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
+    if lim[4] >= 0.0:  # the body rises at the foot's stop: a creep (the arrest's other root)
+        return CREEP
     if r[1] < -1e-9 * (1.0 + abs(x[0] - x[2])):
         return ARREST_FAILS
     return OK
@@ -547,7 +552,7 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
            "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH",
            "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "ground_force_noise",
            "new_memory", "robot_numbers", "solve_plan", "workspace"]
