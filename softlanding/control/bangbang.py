@@ -552,7 +552,8 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
-           "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH",
-           "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "ground_force_noise",
-           "new_memory", "robot_numbers", "solve_plan", "workspace"]
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "HOLDS", "MAX_NEWTON",
+           "MAX_UNCONVERGED", "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT",
+           "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "STATUS_NAMES", "control_step",
+           "force_coefficients", "ground_force_noise", "new_memory", "robot_numbers",
+           "solve_plan", "workspace"]
