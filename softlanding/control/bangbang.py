@@ -356,10 +356,13 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
             converged = True
             break
     if not converged:
-        if t1 <= 0.0:
+        if t1 > 0.0:
+            M[M_TAU1], M[M_TAU2] = t1, t2
+            return CONVERGING
+        if budget < MAX_NEWTON:
             return NEWTON_FAILED
-        M[M_TAU1], M[M_TAU2] = t1, t2
-        return CONVERGING
+        # to convergence, near the switch: the damping held back a switch overdue by more
+        # than half the push left (an estimate that stiffened); as a converged one
     if t1 < 0.0:  # the switch is due already: pull from now, if the arrest then holds
         M[M_PHASE] = PULL
         return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
@@ -499,7 +502,10 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
         _estimate(P, M, x, a_f, u)
         if M[M_SAMPLES] >= 2:  # as the re-planning MPC: two samples before the fit is used
             m = P[P_MARGIN] * P[P_NOISE]
-            P[P_K] = max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 1e-3)
+            # (at most half the estimate off: while it is still far from the truth, the
+            # first samples', a plan for K - m sigma_K near 0 is far from any landing)
+            P[P_K] = max(max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 0.5 * M[M_TH0]),
+                         1e-3)
             P[P_CD] = max(M[M_TH1] - m * math.sqrt(max(M[M_P11], 0.0)), 0.0)
     # the sample went as the converged plan predicted, on the ground it was planned for,
     # which is still the estimate: by the principle of optimality its rest is still optimal

@@ -168,3 +168,29 @@ def test_an_exact_arrest_of_a_rising_body_holds_the_stroke_damped():
     # a descending body: the exact arrest (a constant force), unchanged
     assert isinstance(Sensor().arrest(np.array([10.3, -0.5, -0.67, 0.0]), PAPER_ROBOT.r_m),
                       ForceSchedule)
+
+
+def test_the_margin_takes_at_most_half_the_estimate():
+    # an estimate still far from the truth (its first samples, sigma_K about the estimate):
+    # the plan is for K - margin sigma_K, but never below K / 2 (a plan for a ground near
+    # K = 0 is far from any landing and its Newton fails)
+    r = PAPER_ROBOT
+    noise = bb.ground_force_noise(r.r_m, 1e-3)
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, noise, 2.0)
+    M = bb.new_memory(0.12, 0.14, (1.0, 0.0), (1.0, 1.0), noise)
+    x = Impact(-1.0).initial_state(r)
+    for _ in range(2):
+        x = x + np.array([-0.01, 0.0, -0.01, 0.0])
+        bb.control_step(P, M, x, 0.5, r.u_max, 0.01, True, *bb.workspace())
+    sigma = noise * np.sqrt(M[bb.M_P00])
+    assert M[bb.M_TH0] - 2 * sigma < 0.5 * M[bb.M_TH0]  # (the margin would take more)
+    assert P[bb.P_K] == 0.5 * M[bb.M_TH0]
+
+
+def test_noisy_landing_at_low_speed_with_a_margin_stays_covered():
+    # v0 = -1, K = 0.75, margin 2: the estimate is uncertain for most of the 20 samples;
+    # with the margin bounded (and an overdue switch pulled from now) the compiled
+    # controller covers every sample (before: its Newton failed at the 4th, fallback)
+    m = mpc_landing(-1, PAPER_ROBOT, LinearGround(0.75), controller="bangbang", noise=1e-3,
+                    delay=1, margin=2.0)
+    assert m.feasible and m.uncovered == 0
