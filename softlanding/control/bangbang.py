@@ -65,9 +65,10 @@ NM = 23
 #: Phases: pushing (both arcs left), pulling (the foot's stop left).
 PUSH, PULL = 0, 1
 #: Statuses of a step: covered (the plan re-solved), and why not.
-OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS = 0, 1, 2, 3, 4, 5
+OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP = 0, 1, 2, 3, 4, 5, 6
 STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
-                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds"}
+                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds",
+                CREEP: "creep"}
 
 #: Relative agreement of the measured state with the plan's prediction, and of the estimate
 #: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
@@ -355,10 +356,13 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
             converged = True
             break
     if not converged:
-        if t1 <= 0.0:
+        if t1 > 0.0:
+            M[M_TAU1], M[M_TAU2] = t1, t2
+            return CONVERGING
+        if budget < MAX_NEWTON:
             return NEWTON_FAILED
-        M[M_TAU1], M[M_TAU2] = t1, t2
-        return CONVERGING
+        # to convergence, near the switch: the damping held back a switch overdue by more
+        # than half the push left (an estimate that stiffened); as a converged one
     if t1 < 0.0:  # the switch is due already: pull from now, if the arrest then holds
         M[M_PHASE] = PULL
         return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
@@ -366,6 +370,8 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
     M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
     if lim[0] > 1e-9 * (1.0 + abs(x[3])) or lim[1] < -1e-9 or lim[2] > P[P_S] * (1 + 1e-9):
         return PATH_LIMIT
+    if lim[4] >= 0.0:  # the body rises at the foot's stop: a creep (the arrest's other root)
+        return CREEP
     return OK
 
 
@@ -392,6 +398,8 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax):
         return NEWTON_FAILED
     M[M_TAU1], M[M_TAU2] = 0.0, t2
     M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
+    if lim[4] >= 0.0:  # the body rises at the foot's stop: a creep (the arrest's other root)
+        return CREEP
     if r[1] < -1e-9 * (1.0 + abs(x[0] - x[2])):
         return ARREST_FAILS
     return OK
@@ -494,7 +502,10 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
         _estimate(P, M, x, a_f, u)
         if M[M_SAMPLES] >= 2:  # as the re-planning MPC: two samples before the fit is used
             m = P[P_MARGIN] * P[P_NOISE]
-            P[P_K] = max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 1e-3)
+            # (at most half the estimate off: while it is still far from the truth, the
+            # first samples', a plan for K - m sigma_K near 0 is far from any landing)
+            P[P_K] = max(max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 0.5 * M[M_TH0]),
+                         1e-3)
             P[P_CD] = max(M[M_TH1] - m * math.sqrt(max(M[M_P11], 0.0)), 0.0)
     # the sample went as the converged plan predicted, on the ground it was planned for,
     # which is still the estimate: by the principle of optimality its rest is still optimal
@@ -547,7 +558,8 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "HOLDS", "MAX_NEWTON", "MAX_UNCONVERGED",
-           "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH",
-           "RTOL", "STATUS_NAMES", "control_step", "force_coefficients", "ground_force_noise",
-           "new_memory", "robot_numbers", "solve_plan", "workspace"]
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "HOLDS", "MAX_NEWTON",
+           "MAX_UNCONVERGED", "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT",
+           "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "STATUS_NAMES", "control_step",
+           "force_coefficients", "ground_force_noise", "new_memory", "robot_numbers",
+           "solve_plan", "workspace"]

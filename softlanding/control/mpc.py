@@ -510,7 +510,9 @@ class Sensor:
         less a reserve of ``ARREST_RESERVE`` standard deviations of the foot's position (a
         measured stroke may be long), then the weight with a damped hold of the stroke
         where the body stopped (the open-loop weight alone would let a velocity the noise
-        left drift the body forever).
+        left drift the body forever). A body that no longer descends (the end of a creep,
+        where the foot stops with the body rising by rounding) gets that damped hold where
+        it is, with exact measurements too.
 
         Parameters
         ----------
@@ -524,7 +526,7 @@ class Sensor:
         ForceSchedule or FeedbackSchedule
             The arrest's force from the sample on.
         """
-        if self.noise == 0.0:
+        if self.noise == 0.0 and x[1] < 0:
             return arrest_schedule(x, r_m)
         stroke = float(x[0] - x[2])
         reserve = min(ARREST_RESERVE * self.noise, 0.5 * stroke)

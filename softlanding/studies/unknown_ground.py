@@ -163,7 +163,7 @@ REALISTIC_NOISE, REALISTIC_DELAY = 1e-3, 1
 def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                     period: float = DEFAULT_PERIOD, noise: float = REALISTIC_NOISE,
                     delay: int = REALISTIC_DELAY, margins: Sequence[float] = (0.0, 2.0),
-                    seed: int = 0) -> dict[str, Any]:
+                    seed: int = 0, bang_bang: bool | None = None) -> dict[str, Any] | None:
     """One case of the controller study: the clairvoyant optimum, the compiled bang-bang
     controller with exact measurements, and with noisy, delayed ones for each margin.
 
@@ -181,8 +181,13 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
         The noisy sensing (:func:`~softlanding.control.mpc_landing`).
     margins : sequence of float
         The noisy landings' margins (one landing each, key ``"noisy_m<margin>"``).
+    bang_bang : bool, optional
+        Only a case whose clairvoyant optimum is bang-bang (True) or a creep (False): else
+        None, without the landings.
     """
     clair = solve_landing(v0, robot, ground)
+    if bang_bang is not None and (clair.refined is not None) != bang_bang:
+        return None
     row: dict[str, Any] = {"v0": v0, "ground": ground.to_dict(),
                            "clairvoyant_depth": clair.depth,
                            "clairvoyant_verified": not clair.unverified_reasons(),
@@ -213,12 +218,13 @@ def controller_study(v0_values: Sequence[float] = STUDY_V0,
     progress : bool, optional
         A progress bar.
     **kw
-        To :func:`controller_case`.
+        To :func:`controller_case` (``bang_bang``: only those cases).
     """
     cases = [(v, true_ground(k, c)) for v in v0_values for k, c in
              itertools.product(stiffness, drag)]
-    return [controller_case(v, g, robot, **kw)
+    rows = [controller_case(v, g, robot, **kw)
             for v, g in show_progress(cases, progress, desc="controller", unit="case")]
+    return [r for r in rows if r is not None]
 
 
 def study_summary(rows: list[dict[str, Any]]) -> dict[str, Any]:

@@ -61,7 +61,8 @@ M_DOC = {
 
 #: The phases and statuses, and the tolerances the C uses (names of
 #: :mod:`~softlanding.control.bangbang`).
-STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS")
+STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS",
+            "CREEP")
 CONSTANTS = ("PUSH", "PULL", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL", "PLAN_HOLDS_TOL",
              "MAX_UNCONVERGED")
 

@@ -10,8 +10,8 @@ from softlanding.control import bangbang as bb
 from softlanding.control import mpc_landing
 from softlanding.control.mpc import Sensor
 from softlanding.errors import ParameterError
-from softlanding.model.controllers import ForceSchedule
-from softlanding.model.ground import DragGround, LinearGround
+from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
+from softlanding.model.ground import DragGround, LinearGround, linear_or_drag
 from softlanding.model.robot import Impact
 
 
@@ -118,3 +118,79 @@ def test_cli_bangbang_with_noise_and_delay(cli):
     d = json.loads(out)
     assert d["controller"] == "bangbang" and d["delay"] == 1 and d["noise"] == 1e-3
     assert d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
+
+
+def test_a_creep_falls_back_and_holds_the_stroke():
+    # a creep (v0 = -1, K = 2, c_d = 1: the drag stops the foot before the crater holds the
+    # robot's weight; the clairvoyant optimum is not bang-bang, it creeps down to d = 1/K):
+    # the compiled Newton's push-pull plan has the body rising at the foot's stop, which
+    # the weight alone let leave the stroke; it is reported as not covered and the landing
+    # goes on as the re-planning MPC's
+    fast = mpc_landing(-1, PAPER_ROBOT, linear_or_drag(2.0, 1.0), controller="bangbang")
+    assert fast.stroke_held and fast.uncovered == 1 and "fallback (creep)" in fast.step_paths
+    assert 0.5 * (1 - 1e-9) <= fast.depth <= 0.5 * (1 + 1e-3)  # the creep's d = 1/K
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("v0,k,c", [(-1, 0.75, 1.0), (-1, 1.5, 1.0), (-3, 0.75, 1.0)])
+def test_a_creep_holds_every_limit_the_re_planning_mpc_holds(v0, k, c):
+    ground = linear_or_drag(k, c)
+    fast = mpc_landing(v0, PAPER_ROBOT, ground, controller="bangbang")
+    slow = mpc_landing(v0, PAPER_ROBOT, ground, controller="replan")
+    assert slow.stroke_held and fast.stroke_held and fast.uncovered == 1
+    assert fast.failure() in (None, slow.failure())
+    assert fast.depth == pytest.approx(slow.depth, rel=1e-4)
+
+
+def test_the_compiled_plan_of_a_creep_is_not_covered():
+    # the push-pull plan from the creep's state after a few samples, on the true ground:
+    # Newton converges (the arrest condition holds at the foot's stop) with the body rising
+    # there, an independent check by the exact simulator of the plan
+    r, k, c = PAPER_ROBOT, 1.5, 1.0
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, k, c)
+    M = bb.new_memory(0.05, 0.04, (k, c), (1.0, 1.0), 1e-6)
+    x = np.array([9.9768, 0.768, -0.5035, -2.7782])
+    assert bb.solve_plan(P, M, x, *bb.workspace()) == bb.CREEP
+    t1, t2 = M[bb.M_TAU1], M[bb.M_TAU2]
+    res = simulate(r, x[3], ForceSchedule((t1, t1 + t2), (r.u_max, -r.u_max, 0.0)),
+                   linear_or_drag(k, c), x0=x, t_max=t1 + t2)
+    x_t = res.trajectory(t_end=t1 + t2, n=2).x[-1]
+    assert abs(x_t[3]) < 1e-9 and x_t[1] > 0.1  # the foot stops with the body rising
+    assert x_t[1] == pytest.approx(M[bb.M_VBT], rel=1e-9)
+
+
+def test_an_exact_arrest_of_a_rising_body_holds_the_stroke_damped():
+    x = np.array([10.3, 5e-8, -0.67, 0.0])  # the foot stopped, the body rising by rounding
+    tail = Sensor().arrest(x, PAPER_ROBOT.r_m)
+    assert isinstance(tail, FeedbackSchedule)
+    res = simulate(PAPER_ROBOT, -1.0, tail, LinearGround(1.5), x0=x, t_max=50.0)
+    assert res.rest_proven and res.stroke_max < x[0] - x[2] + 1e-6
+    # a descending body: the exact arrest (a constant force), unchanged
+    assert isinstance(Sensor().arrest(np.array([10.3, -0.5, -0.67, 0.0]), PAPER_ROBOT.r_m),
+                      ForceSchedule)
+
+
+def test_the_margin_takes_at_most_half_the_estimate():
+    # an estimate still far from the truth (its first samples, sigma_K about the estimate):
+    # the plan is for K - margin sigma_K, but never below K / 2 (a plan for a ground near
+    # K = 0 is far from any landing and its Newton fails)
+    r = PAPER_ROBOT
+    noise = bb.ground_force_noise(r.r_m, 1e-3)
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, noise, 2.0)
+    M = bb.new_memory(0.12, 0.14, (1.0, 0.0), (1.0, 1.0), noise)
+    x = Impact(-1.0).initial_state(r)
+    for _ in range(2):
+        x = x + np.array([-0.01, 0.0, -0.01, 0.0])
+        bb.control_step(P, M, x, 0.5, r.u_max, 0.01, True, *bb.workspace())
+    sigma = noise * np.sqrt(M[bb.M_P00])
+    assert M[bb.M_TH0] - 2 * sigma < 0.5 * M[bb.M_TH0]  # (the margin would take more)
+    assert P[bb.P_K] == 0.5 * M[bb.M_TH0]
+
+
+def test_noisy_landing_at_low_speed_with_a_margin_stays_covered():
+    # v0 = -1, K = 0.75, margin 2: the estimate is uncertain for most of the 20 samples;
+    # with the margin bounded (and an overdue switch pulled from now) the compiled
+    # controller covers every sample (before: its Newton failed at the 4th, fallback)
+    m = mpc_landing(-1, PAPER_ROBOT, LinearGround(0.75), controller="bangbang", noise=1e-3,
+                    delay=1, margin=2.0)
+    assert m.feasible and m.uncovered == 0
