@@ -43,7 +43,7 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
+from softlanding.simulation.kernel.const import ENTRY, EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
 from softlanding.simulation.kernel.linalg import expm, row
 from softlanding.simulation.kernel.model import (
     M_FU,
@@ -76,7 +76,7 @@ def hop_state():
     return hk
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def hop_eligible(Kf, umax, open_loop):
     """True if the leg is a conservative spring ``u = k (l0 - s)`` in every ground mode."""
     if open_loop or umax < np.inf:
@@ -149,7 +149,7 @@ def limit_depth(P, A, cu, z0, d, energy):
     return d + x
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def first_symmetric_hop(P, cu, s_lift, T):
     """Lower bound of the first root of ``Delta(tau)`` on ``(0, T/2]`` (the half-flight time of
     the shortest symmetric hop), ``inf`` if ``Delta`` keeps its sign there, NaN if the flight
