@@ -44,7 +44,7 @@ import numpy as np
 from numba import njit
 
 from softlanding.simulation.kernel.const import ENTRY, EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
-from softlanding.simulation.kernel.linalg import expm, row
+from softlanding.simulation.kernel.linalg import expm, row5
 from softlanding.simulation.kernel.model import (
     M_FU,
     M_FZ,
@@ -156,7 +156,7 @@ def first_symmetric_hop(P, cu, s_lift, T):
     is not translation-invariant or too long to scan. ``Delta`` is scanned with the exact
     step map, eight points per unit of ``||A|| tau``.
     """
-    Af = closed_loop(P, FLIGHT, cu)
+    Af = closed_loop(P, np.int64(FLIGHT), cu)  # not a literal: one closed_loop for all modes
     nrm = 0.0
     for i in range(4):
         if Af[i, 0] + Af[i, 2] != 0.0:
@@ -209,7 +209,7 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     """
     if hk[H_EREF] == np.inf or hk[H_T] != hk[H_T]:
         return False  # the balance failed once, or no flight yet
-    lo, hi = future_range(A, z, row(C, 0))
+    lo, hi = future_range(A, z, row5(C[0]))
     if hi > 0.0:
         hk[H_N], hk[H_EPS] = 0.0, np.nan
         return False  # the stance itself may yield
