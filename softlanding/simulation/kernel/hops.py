@@ -44,7 +44,7 @@ import numpy as np
 from numba import njit
 
 from softlanding.simulation.kernel.const import ENTRY, EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
-from softlanding.simulation.kernel.linalg import expm, row5
+from softlanding.simulation.kernel.linalg import DGEMV, KIND_D, TRANS, expm, row5
 from softlanding.simulation.kernel.model import (
     M_FU,
     M_FZ,
@@ -175,25 +175,20 @@ def first_symmetric_hop(P, cu, s_lift, T):
     za[0], za[4] = s_lift, 1.0
     zb = np.zeros(5)
     zb[1] = 1.0
+    ya, yb = np.zeros(5), np.zeros(5)
+    ab = np.zeros(2)
+    ab[0] = 1.0  # BLAS's alpha and beta
     prev = 0.0
     for k in range(1, n + 1):
-        za, zb = Phi @ za, Phi @ zb
+        # za, zb = Phi @ za, Phi @ zb (the BLAS calls numba's @ makes)
+        DGEMV(KIND_D, TRANS, 5, 5, ab.ctypes, Phi.ctypes, 5, za.ctypes, ab[1:].ctypes, ya.ctypes)
+        DGEMV(KIND_D, TRANS, 5, 5, ab.ctypes, Phi.ctypes, 5, zb.ctypes, ab[1:].ctypes, yb.ctypes)
+        za, ya, zb, yb = ya, za, yb, zb
         det = za[1] * zb[3] - za[3] * zb[1]
         if k > 1 and prev != 0.0 and prev * det <= 0.0:
             return (k - 1) * h
         prev = det
     return np.inf
-
-
-@njit(**JIT)
-def _toward_threshold(P, cu, hk):
-    """True if no symmetric hop is shorter than the last flight (the scan of ``(0, T/2]``
-    is kept while the flight time does not grow beyond the one scanned)."""
-    T = hk[H_T]
-    if hk[H_SYM] != hk[H_SYM] or T > hk[H_TSCAN]:
-        hk[H_SYM] = first_symmetric_hop(P, cu, hk[H_SL], T)
-        hk[H_TSCAN] = T
-    return hk[H_SYM] > 0.5 * T
 
 
 @njit(**JIT)
@@ -222,7 +217,16 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     eps = energy - threshold_energy(P, A, cu, z0, d)
     last = hk[H_EPS]
     hk[H_EPS] = eps
-    if not (eps > 0.0 and last == last and _toward_threshold(P, cu, hk)):
+    if not (eps > 0.0 and last == last):
+        hk[H_N] = 0.0
+        return False
+    # no symmetric hop shorter than the last flight (the scan of (0, T/2] is kept while the
+    # flight time does not grow beyond the one scanned)
+    T = hk[H_T]
+    if hk[H_SYM] != hk[H_SYM] or T > hk[H_TSCAN]:
+        hk[H_SYM] = first_symmetric_hop(P, cu, hk[H_SL], T)
+        hk[H_TSCAN] = T
+    if not hk[H_SYM] > 0.5 * T:
         hk[H_N] = 0.0
         return False
     r = (last - eps) / last
