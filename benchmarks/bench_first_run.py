@@ -1,14 +1,16 @@
 """A new user's first ``softlanding demo``: compile on an empty numba cache, then cached.
 
-Run:  python -m benchmarks.bench_first_run [--baseline REV] [--repeats 3]
+Run:  python -m benchmarks.bench_first_run [--baseline REV | --baseline-tree DIR] [--repeats 3]
 
 Each run is a fresh process of ``softlanding demo --out FILE.png`` timed from outside
 (``resource.getrusage`` of the child: user + system CPU, and wall time). A cold run gets an
-empty ``NUMBA_CACHE_DIR`` of its own, as a fresh install has; a cached run reuses the cache
-of a cold run. With ``--baseline REV`` the revision ``REV`` is checked out into a temporary
-git worktree and the two trees alternate run by run (the other one first every second
-repeat), so a drift of the shared machine's load falls on both. The depths printed by both
-must agree.
+empty ``NUMBA_CACHE_DIR`` and an empty ``XDG_CACHE_HOME`` (the compiled ground laws) of its
+own, as a fresh install has; a cached run reuses the caches of a cold run. With
+``--baseline REV`` the revision ``REV`` is checked out into a temporary git worktree (with
+``--baseline-tree DIR``, a source tree already there, e.g. ``git archive main | tar -x -C
+DIR``) and the two trees alternate run by run (the other one first every second repeat), so
+a drift of the shared machine's load falls on both; the medians' ratio now / baseline is
+printed. The tables printed by both must agree.
 """
 
 from __future__ import annotations
@@ -28,8 +30,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def run_demo(tree: Path, cache: Path, out: Path) -> tuple[float, float, str, str]:
     """CPU and wall seconds, stdout and stderr of one ``softlanding demo`` with ``tree`` first
-    on the path and numba's cache in ``cache``."""
-    env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=str(cache))
+    on the path, numba's cache in ``cache / "numba"`` and the user cache in ``cache``."""
+    env = dict(os.environ, PYTHONPATH=str(tree), NUMBA_CACHE_DIR=str(cache / "numba"),
+               XDG_CACHE_HOME=str(cache))
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     wall = time.perf_counter()
     p = subprocess.run([sys.executable, "-m", "softlanding", "demo", "--out", str(out),
@@ -43,12 +46,17 @@ def run_demo(tree: Path, cache: Path, out: Path) -> tuple[float, float, str, str
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--baseline", help="git revision to compare against (default: none)")
+    base = ap.add_mutually_exclusive_group()
+    base.add_argument("--baseline", help="git revision to compare against (default: none)")
+    base.add_argument("--baseline-tree", type=Path,
+                      help="source tree to compare against (default: none)")
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="bench-first-run-") as tmp:
         trees = {"now": ROOT}
-        if args.baseline:
+        if args.baseline_tree:
+            trees = {"base": args.baseline_tree.resolve(), "now": ROOT}
+        elif args.baseline:
             trees = {"base": Path(tmp) / "baseline", "now": ROOT}
             subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q",
                             str(trees["base"]), args.baseline], check=True)
@@ -59,10 +67,12 @@ def main() -> None:
                 order = list(trees) if r % 2 == 0 else list(trees)[::-1]
                 for key in order:
                     cache = Path(tmp) / f"cache-{key}-{r}"
+                    cache.mkdir()
                     png = Path(tmp) / f"demo-{key}.png"
                     cpu, wall, out, err = run_demo(trees[key], cache, png)
                     rows[key]["cold"].append((cpu, wall))
-                    tables[key].add(out.split("\nStepped")[0])
+                    tables[key].add("\n".join(line for line in out.splitlines()
+                                              if not line.startswith("figure written")))
                     print(f"{key:5s} cold   cpu {cpu:6.2f} s  wall {wall:6.2f} s  "
                           f"stderr {err.strip()!r}", flush=True)
                     cpu, wall, out, err = run_demo(trees[key], cache, png)
@@ -71,10 +81,17 @@ def main() -> None:
                           f"stderr {err.strip()!r}", flush=True)
             print(f"medians of {args.repeats} ({os.cpu_count()} cores, load average "
                   f"{os.getloadavg()[0]:.1f})")
+            med = {(key, kind, i): statistics.median(x[i] for x in xs)
+                   for key, kinds in rows.items() for kind, xs in kinds.items() for i in (0, 1)}
             for key, kinds in rows.items():
-                for kind, xs in kinds.items():
-                    print(f"  {key:5s} {kind:6s} cpu {statistics.median(x[0] for x in xs):6.2f} s"
-                          f"  wall {statistics.median(x[1] for x in xs):6.2f} s")
+                for kind in kinds:
+                    print(f"  {key:5s} {kind:6s} cpu {med[key, kind, 0]:6.2f} s"
+                          f"  wall {med[key, kind, 1]:6.2f} s")
+            if "base" in trees:
+                for kind in ("cold", "cached"):
+                    print(f"  ratio now/base {kind:6s} cpu "
+                          f"{med['now', kind, 0] / med['base', kind, 0]:.2f}  wall "
+                          f"{med['now', kind, 1] / med['base', kind, 1]:.2f}")
             same = len(set().union(*tables.values())) == 1
             print(f"demo tables of all runs: {'identical' if same else 'DIFFERENT'}")
         finally:

@@ -14,8 +14,6 @@ import numpy as np
 
 from softlanding.model.ground import LINEAR_GROUND, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.landing import sweep_landing
-from softlanding.studies.impedance import optimize_impedance
 from softlanding.util.progress import progress as show_progress
 
 
@@ -73,6 +71,11 @@ def compare_controllers(v0: Sequence[float], robot: Robot = PAPER_ROBOT,
         ``impedance_k_d``, peak force ``impedance_u_peak``), ``bang_bang`` (refined
         depth, ``bang_bang_switch``, ``bang_bang_T``), all depths in ``x_s``.
     """
+    # imported here: the optimal-control stack (CasADi, ocp) is 0.2 s of imports that
+    # rigid_depth, all the demo needs, does without
+    from softlanding.optimal.landing import sweep_landing
+    from softlanding.studies.impedance import optimize_impedance
+
     impacts = [Impact.of(x) for x in v0]
     bang = sweep_landing([i.v0 for i in impacts], robot, ground, progress=progress)
     imp_robot = robot if saturate_impedance else robot.without_force_limit()

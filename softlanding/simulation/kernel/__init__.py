@@ -329,7 +329,7 @@ def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
     _in_chunks(batch_range, args, len(args[4]), out, threads, chunk, (16, 1024))
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def _sample(ts, A, z, grid, idx, out):
     for i in range(grid.shape[0]):
         k = idx[i]

@@ -31,6 +31,10 @@ TIE = 1e-12  # relative tolerance on the ground's yield threshold
 FEAS_TOL = 1e-9  # tolerance on the stroke limits (rounding at an exact boundary)
 SMALL = 1e-12  # what counts as zero drift in the rest proof
 
-# compile options of every compiled function: cached on disk, and no C-callable wrapper
-# (nothing takes a kernel function's C address; the wrappers were a tenth of the first compile)
-JIT: dict[str, Any] = {"cache": True, "no_cfunc_wrapper": True}
+# compile options of every compiled function: cached on disk, no C-callable wrapper (nothing
+# takes a kernel function's C address; the wrappers were a tenth of the first compile) and no
+# Python entry: these are called from compiled code only (each one's Python wrapper, which
+# unboxes its arguments, was compiled for nothing: ~10 % of the first compile). A call from
+# Python to a JIT function would crash: the functions Python calls take ENTRY instead.
+JIT: dict[str, Any] = {"cache": True, "no_cfunc_wrapper": True, "no_cpython_wrapper": True}
+ENTRY: dict[str, Any] = {"cache": True, "no_cfunc_wrapper": True}

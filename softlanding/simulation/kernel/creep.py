@@ -30,11 +30,24 @@ march goes on and the proof is tried again one step later (the transients decay)
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.np.linalg import F_INT_nptype
 
 from softlanding.simulation.kernel.const import JIT
 
 MARGIN = 1e-12  # relative margin per unit condition number of the eigenvectors
+
+# LAPACK's zgeev, zgetrf and zgetri through numba's own C helpers, the calls np.linalg.eig,
+# det and inv make (same routines, arguments and workspace queries: bitwise the same
+# results), without compiling np.linalg's generic wrappers (finite checks, Fortran copies,
+# error paths): they were about 2 s of the simulator's first compile. Each returns LAPACK's
+# info (0: success).
+_C, _N, _P = types.char, types.intp, types.voidptr
+ZGEEV = types.ExternalFunction("numba_ez_cgeev", types.intc(_C, _C, _C, _N, _P, _N, _P, _P, _N,
+                                                             _P, _N))
+ZGETRF = types.ExternalFunction("numba_xxgetrf", types.intc(_C, _N, _N, _P, _N, _P))
+ZGETRI = types.ExternalFunction("numba_ez_xxgetri", types.intc(_C, _N, _P, _N, _P))
+KIND, NO, YES = ord("z"), ord("N"), ord("V")  # complex128; left vectors no, right yes
 
 
 @njit(**JIT)
@@ -76,6 +89,52 @@ def _norm_inf3(M):
 
 
 @njit(**JIT)
+def eig3(A):
+    """Eigenvalues and right eigenvectors of the 3 x 3 block ``A[1:4, 1:4]`` (as
+    ``np.linalg.eig``): ``(info, w, vr)`` with eigenvector ``k`` in ``vr[3 k:3 k + 3]``."""
+    a = np.empty(9, dtype=np.complex128)  # Fortran order
+    for i in range(3):
+        for j in range(3):
+            a[3 * j + i] = A[1 + i, 1 + j]
+    w = np.empty(3, dtype=np.complex128)
+    vl = np.empty(3, dtype=np.complex128)  # not referenced (no left vectors)
+    vr = np.empty(9, dtype=np.complex128)
+    info = ZGEEV(KIND, NO, YES, 3, a.ctypes, 3, w.ctypes, vl.ctypes, 1, vr.ctypes, 3)
+    return info, w, vr
+
+
+@njit(**JIT)
+def det_inv3(V):
+    """Determinant and inverse of a complex 3 x 3 matrix by one LU factorisation, as
+    ``np.linalg.det`` (the sign of the pivots times ``exp`` of the sum of the logs of the
+    diagonal's moduli) and ``np.linalg.inv`` compute them: ``(info, det, inverse)``."""
+    lu = np.empty(9, dtype=np.complex128)  # Fortran order
+    for i in range(3):
+        for j in range(3):
+            lu[3 * j + i] = V[i, j]
+    ipiv = np.empty(3, dtype=F_INT_nptype)
+    inv = np.empty((3, 3), dtype=np.complex128)
+    info = ZGETRF(KIND, 3, 3, lu.ctypes, 3, ipiv.ctypes)
+    if info != 0:
+        return info, 0.0j, inv
+    swaps = 1
+    for k in range(3):
+        swaps = swaps + (ipiv[k] != (k + 1))
+    csgn = 1.0 + 0.0j if swaps & 1 else -1.0 + 0.0j
+    acc = 0.0
+    for k in range(3):
+        absel = np.abs(lu[4 * k])
+        csgn = csgn * (lu[4 * k] / absel)
+        acc = acc + np.log(absel)
+    det = csgn * np.exp(acc)
+    info = ZGETRI(KIND, 3, lu.ctypes, 3, ipiv.ctypes)
+    for i in range(3):
+        for j in range(3):
+            inv[i, j] = lu[3 * j + i]
+    return info, det, inv
+
+
+@njit(**JIT)
 def creep_setup(A, cu, C, ne, data):
     """Eigen-data of the ``x_b``-free yielding subsystem; returns False if not applicable.
 
@@ -96,15 +155,13 @@ def creep_setup(A, cu, C, ne, data):
     for k in range(ne):
         if C[k, 0] != 0.0:
             return False
-    M = np.empty((3, 3), dtype=np.complex128)
-    for i in range(3):
-        for j in range(3):
-            M[i, j] = A[1 + i, 1 + j]
     for i in range(3):
         for j in range(3):
             if not np.isfinite(A[1 + i, 1 + j]):
                 return False
-    lam0, V0 = np.linalg.eig(M)
+    info, lam0, V0 = eig3(A)
+    if info != 0:
+        return False
     for i in range(3):
         if not lam0[i].real < 0.0:
             return False
@@ -114,11 +171,10 @@ def creep_setup(A, cu, C, ne, data):
     for k in range(3):
         lam[k] = lam0[order[k]]
         for i in range(3):
-            V[i, k] = V0[i, order[k]]
-    det = np.linalg.det(V)
-    if not abs(det) > 1e-8:
+            V[i, k] = V0[3 * order[k] + i]
+    info, det, Vi = det_inv3(V)
+    if info != 0 or not abs(det) > 1e-8:
         return False
-    Vi = np.linalg.inv(V)
     kappa = _norm_inf3(V) * _norm_inf3(Vi)
     # equilibrium: v_f* = 0 exactly (x_f' = v_f); then v_b*, x_f* from the other two rows
     # M[0,0] vb + M[0,1] xf = -b0 ; M[2,0] vb + M[2,1] xf = -b2

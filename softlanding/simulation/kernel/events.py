@@ -29,7 +29,15 @@ from softlanding.simulation.kernel.const import (
     TIE,
     YIELDING,
 )
-from softlanding.simulation.kernel.linalg import dot, hermite_root, prop4_t, refine_t, row, scaled
+from softlanding.simulation.kernel.linalg import (
+    dot,
+    hermite_root,
+    prop4_t,
+    refine_t,
+    row,
+    row5,
+    scaled,
+)
 from softlanding.simulation.kernel.model import M_FU, support_Fz
 
 
@@ -69,7 +77,7 @@ def contact_mode(P, z, hold, Kf, umax, open_loop, k_ol):
     if open_loop:
         u = dot(k_ol, z)
     else:
-        u = dot(row(Kf, STATIC), z)
+        u = dot(Kf[STATIC], z)
         u = min(umax, max(-umax, u))
     freq = dot(support_Fz(P), z) + P[M_FU] * u
     tol = TIE * max(1.0, hold)
@@ -140,8 +148,9 @@ def due_event(C, dC, ne, z):
 
 @njit(**JIT, forceinline=True)
 def rows4(C):
-    """The four rows of a (4, 5) array as a tuple of 5-tuples."""
-    return (row(C, 0), row(C, 1), row(C, 2), row(C, 3))
+    """The four rows of a (4, 5) array as a tuple of 5-tuples (``row(C, 0)`` would compile a
+    specialisation of ``row`` for each literal index)."""
+    return (row5(C[0]), row5(C[1]), row5(C[2]), row5(C[3]))
 
 
 @njit(**JIT, forceinline=True)

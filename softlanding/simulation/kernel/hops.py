@@ -43,8 +43,8 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
-from softlanding.simulation.kernel.linalg import expm, row
+from softlanding.simulation.kernel.const import ENTRY, EV_LAND, EV_LIFT, FLIGHT, JIT, THETA, TIE
+from softlanding.simulation.kernel.linalg import DGEMV, KIND_D, TRANS, expm, row5
 from softlanding.simulation.kernel.model import (
     M_FU,
     M_FZ,
@@ -76,7 +76,7 @@ def hop_state():
     return hk
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def hop_eligible(Kf, umax, open_loop):
     """True if the leg is a conservative spring ``u = k (l0 - s)`` in every ground mode."""
     if open_loop or umax < np.inf:
@@ -149,14 +149,14 @@ def limit_depth(P, A, cu, z0, d, energy):
     return d + x
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def first_symmetric_hop(P, cu, s_lift, T):
     """Lower bound of the first root of ``Delta(tau)`` on ``(0, T/2]`` (the half-flight time of
     the shortest symmetric hop), ``inf`` if ``Delta`` keeps its sign there, NaN if the flight
     is not translation-invariant or too long to scan. ``Delta`` is scanned with the exact
     step map, eight points per unit of ``||A|| tau``.
     """
-    Af = closed_loop(P, FLIGHT, cu)
+    Af = closed_loop(P, np.int64(FLIGHT), cu)  # not a literal: one closed_loop for all modes
     nrm = 0.0
     for i in range(4):
         if Af[i, 0] + Af[i, 2] != 0.0:
@@ -175,25 +175,20 @@ def first_symmetric_hop(P, cu, s_lift, T):
     za[0], za[4] = s_lift, 1.0
     zb = np.zeros(5)
     zb[1] = 1.0
+    ya, yb = np.zeros(5), np.zeros(5)
+    ab = np.zeros(2)
+    ab[0] = 1.0  # BLAS's alpha and beta
     prev = 0.0
     for k in range(1, n + 1):
-        za, zb = Phi @ za, Phi @ zb
+        # za, zb = Phi @ za, Phi @ zb (the BLAS calls numba's @ makes)
+        DGEMV(KIND_D, TRANS, 5, 5, ab.ctypes, Phi.ctypes, 5, za.ctypes, ab[1:].ctypes, ya.ctypes)
+        DGEMV(KIND_D, TRANS, 5, 5, ab.ctypes, Phi.ctypes, 5, zb.ctypes, ab[1:].ctypes, yb.ctypes)
+        za, ya, zb, yb = ya, za, yb, zb
         det = za[1] * zb[3] - za[3] * zb[1]
         if k > 1 and prev != 0.0 and prev * det <= 0.0:
             return (k - 1) * h
         prev = det
     return np.inf
-
-
-@njit(**JIT)
-def _toward_threshold(P, cu, hk):
-    """True if no symmetric hop is shorter than the last flight (the scan of ``(0, T/2]``
-    is kept while the flight time does not grow beyond the one scanned)."""
-    T = hk[H_T]
-    if hk[H_SYM] != hk[H_SYM] or T > hk[H_TSCAN]:
-        hk[H_SYM] = first_symmetric_hop(P, cu, hk[H_SL], T)
-        hk[H_TSCAN] = T
-    return hk[H_SYM] > 0.5 * T
 
 
 @njit(**JIT)
@@ -209,7 +204,7 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     """
     if hk[H_EREF] == np.inf or hk[H_T] != hk[H_T]:
         return False  # the balance failed once, or no flight yet
-    lo, hi = future_range(A, z, row(C, 0))
+    lo, hi = future_range(A, z, row5(C[0]))
     if hi > 0.0:
         hk[H_N], hk[H_EPS] = 0.0, np.nan
         return False  # the stance itself may yield
@@ -222,7 +217,16 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     eps = energy - threshold_energy(P, A, cu, z0, d)
     last = hk[H_EPS]
     hk[H_EPS] = eps
-    if not (eps > 0.0 and last == last and _toward_threshold(P, cu, hk)):
+    if not (eps > 0.0 and last == last):
+        hk[H_N] = 0.0
+        return False
+    # no symmetric hop shorter than the last flight (the scan of (0, T/2] is kept while the
+    # flight time does not grow beyond the one scanned)
+    T = hk[H_T]
+    if hk[H_SYM] != hk[H_SYM] or T > hk[H_TSCAN]:
+        hk[H_SYM] = first_symmetric_hop(P, cu, hk[H_SL], T)
+        hk[H_TSCAN] = T
+    if not hk[H_SYM] > 0.5 * T:
         hk[H_N] = 0.0
         return False
     r = (last - eps) / last

@@ -22,6 +22,7 @@ from numba import njit
 from softlanding.simulation.kernel.const import (
     BODY_FLIES_OFF,
     BODY_THROUGH_FOOT,
+    ENTRY,
     EV_LAND,
     EV_LIFT,
     EV_SAT_HIGH,
@@ -566,7 +567,7 @@ def simulate_one(P, pol, x0, lim, out, rec):
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
 
 
-@njit(**JIT, nogil=True)
+@njit(**ENTRY, nogil=True)
 def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy, max_steps,
                   nrec):
     """One landing with its segment records (``nrec`` rows first; re-run with as many
@@ -589,7 +590,7 @@ def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, ener
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
-@njit(**JIT, nogil=True)
+@njit(**ENTRY, nogil=True)
 def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps, out, i0,
                 i1):
     """Feedback-policy landings ``i0 <= i < i1``; row i uses the packed model ``Ps[ridx[i]]``.

@@ -10,9 +10,18 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from softlanding.simulation.kernel.const import JIT, MAX_SUBSTEPS
+
+# BLAS dgemv through numba's own C helper: the call numba's ``M @ x`` makes for a C-ordered
+# square ``M`` (``DGEMV(KIND_D, TRANS, n, n, alpha, M, n, x, beta, y)`` with ``alpha = 1``,
+# ``beta = 0``: the transposed product on the Fortran view), so bitwise its result, without
+# compiling ``np.dot``'s generic wrapper. Returns 0 on success.
+DGEMV = types.ExternalFunction("numba_xxgemv", types.intc(
+    types.char, types.char, types.intp, types.intp, types.voidptr, types.voidptr, types.intp,
+    types.voidptr, types.voidptr, types.voidptr))
+KIND_D, TRANS = ord("d"), ord("t")  # float64; the C-ordered matrix as its transpose
 
 
 @njit(**JIT)

@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from softlanding.simulation.kernel.const import (
+    ENTRY,
     EV_LAND,
     EV_LIFT,
     EV_SAT_HIGH,
@@ -277,7 +278,7 @@ def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, b
     out[O_EGRAIN] = acc[A_GRAIN] if foot_rests else np.nan
 
 
-@njit(**JIT, nogil=True)
+@njit(**ENTRY, nogil=True)
 def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy,
                      max_steps, rtol, nrec):
     """One non-affine landing with its segment records (as :func:`.landing.landing_entry`).
@@ -299,7 +300,7 @@ def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max
             rec[3][:n].copy(), rec[4][:n].copy())
 
 
-@njit(**JIT, nogil=True)
+@njit(**ENTRY, nogil=True)
 def batch_range_nl(Ps, ridx, G, fp, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_steps,
                    rtol, out, i0, i1):
     """Feedback landings ``i0 <= i < i1`` on one non-affine ground (as
@@ -315,7 +316,7 @@ def batch_range_nl(Ps, ridx, G, fp, Kfs, umaxs, x0s, s_lims, t_max, max_seg, ene
                         rec)
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def sample_nl(P, G, fp, rtol, ts, A, z, cu, mode, grid, idx, out, uout):
     """States ``out`` (n, 5) and forces ``uout`` at the sorted times ``grid`` (segment
     ``idx[i]``): exact propagation in the affine modes, DOP853 in the yielding ones."""

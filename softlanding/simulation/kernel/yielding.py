@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.const import HORIZON, JIT, STEP_BUDGET
+from softlanding.simulation.kernel.const import ENTRY, HORIZON, JIT, STEP_BUDGET
 from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
@@ -50,7 +50,7 @@ SAFETY, MIN_FACTOR, MAX_FACTOR = 0.9, 0.2, 10.0
 ERR_EXP = -1.0 / 8.0  # DOP853's error estimator is of order 7
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def workspace_nl(rtol):
     """Work arrays of the yielding march: stages ``K`` and ``K2`` (trial steps), states, the
     law's output buffer, and cells ``[last step, rtol]``."""
@@ -379,7 +379,7 @@ def advance(sysd, y, span, wsn):
         cells[H_LAST] = h
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def fixed_steps(sysd, y, span, n, wsn):
     """``n`` equal DOP853 steps over ``span`` (no error control): the method's order shows in
     the error's decrease with ``n`` (used by the tests and the benchmark)."""
