@@ -45,7 +45,12 @@ def test_suite_covers_what_the_issue_asks():
     assert sum(math.isfinite(p.published) for p in PROBLEMS) >= 10
 
 
-@pytest.mark.parametrize("name", [p.name for p in PROBLEMS])
+REACH_SLOW = {"pinene", "hanging_chain"}  # 3.7 and 2.8 s CPU: the README's command's budget
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(p.name, marks=pytest.mark.slow) if p.name in REACH_SLOW else p.name
+    for p in PROBLEMS])
 def test_reaches_the_published_value(name):
     sp = BY_NAME[name]
     sol = refined(name)

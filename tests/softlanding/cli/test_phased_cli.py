@@ -23,6 +23,7 @@ def test_two_phase_table_pmp_and_plot(cli, tmp_path):
     assert png.read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_two_steps(cli):
     code, out, _ = cli("solve", "--v0", "-1", "--variant", "two-phase", "--steps", "2",
                        "--json")
@@ -30,6 +31,7 @@ def test_two_steps(cli):
     assert code == 0 and d["collapsed"] is True and d["gain"] <= 1e-9
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_leg_extension_fixed_and_free(cli):
     code, out, _ = cli("solve", "--v0", "-1", "--variant", "leg-extension", "--extension",
                        "10", "--json")

@@ -121,6 +121,7 @@ def test_cli_robust_bad_input(cli, args, message):
     assert code == 2 and message in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_a_set_no_schedule_can_hold_is_reported_not_hidden(cli):
     # stiffness 0.1 and 10 at v0 = -10: the stroke cannot absorb both feet's stops
     r = robust_landing(-10, [LinearGround(0.1), LinearGround(10.0)], max_iterations=30)

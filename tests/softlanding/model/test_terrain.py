@@ -168,6 +168,7 @@ def test_custom_ground_with_added_mass_gets_the_momentum_flux():
     assert r.energy.grains > 0
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_batch_equals_single_landings_under_drag():
     g = DragGround(0.2)
     kp, kd = np.array([0.1, 0.4, 0.8]), np.array([0.2, 0.6])

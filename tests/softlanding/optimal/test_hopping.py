@@ -63,6 +63,7 @@ def test_one_grid_says_it_is_discretised(free):
     assert d["optimum"] == "discretised" and len(d["grids"]) == 1
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_regeneration_lowers_the_energy(free):
     half = solve_hop(-2.0, PAPER_ROBOT, eta=0.5, warm_start=free)  # continuation in eta
     assert half.unverified_reasons() == []
@@ -70,6 +71,7 @@ def test_regeneration_lowers_the_energy(free):
     assert half.energy == pytest.approx(half.work.positive - 0.5 * half.work.negative)
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_rigid_and_impedance_cycles_close_too(free):
     rig = rigid_hop(-2.0)
     assert rig.unverified_reasons() == []

@@ -110,6 +110,7 @@ def test_cli_solve_json_and_infeasible(tmp_path, cli):
     assert err.count("\n") == 1
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_cli_compare_orders_the_three_legs(cli):
     code, out, err = cli("compare", "--n", "3", "--v0-min", "-8", "--grid", "41", "--json")
     assert code == 0, err

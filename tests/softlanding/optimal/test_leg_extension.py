@@ -43,6 +43,7 @@ def test_a_touch_point_of_the_stroke_is_imposed_exactly():
     assert r.replay is not None and r.replay.stroke_max <= PAPER_ROBOT.s + 1e-9
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_a_short_sweep_by_continuation():
     rows = sweep_leg_extension(np.linspace(-2.5, -4.0, 4))
     assert [r.refined is not None for r in rows] == [True] * 4
@@ -60,6 +61,7 @@ def test_sweep_of_41_velocities():
     assert gains[-1] > gains[0]  # extension matters more the faster the impact
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_drop_with_a_flight_phase():
     r = solve_leg_extension(-3.0, mode="drop")
     assert r.depth < r.paper_depth
@@ -68,6 +70,7 @@ def test_drop_with_a_flight_phase():
     assert abs(r.com_velocity) < 3.0  # touching down early: the centre of mass is slower
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_relative_velocity_freed_within_bounds():
     r0 = solve_leg_extension(-3.0)
     r = solve_leg_extension(-3.0, rate=(-1.0, 1.0))
@@ -84,6 +87,7 @@ def test_bad_requests():
         solve_leg_extension(0.0, mode="drop")
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_second_start_refines_where_the_first_transcription_dives_through_the_stroke():
     """The rescue used when a transcription cannot be refined (its solution dives through
     the stroke limit between the nodes): inner constraints first, then the plain grid."""

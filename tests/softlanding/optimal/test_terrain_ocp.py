@@ -42,6 +42,7 @@ def test_user_law_through_the_ocp():
     assert r.refined is not None and r.replay_difference < 1e-8
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_impedance_optimum_under_drag():
     o = optimize_impedance(Impact(-4.8), PAPER_IMPEDANCE_ROBOT, DragGround(0.2), grid=41)
     lin = optimize_impedance(Impact(-4.8), PAPER_IMPEDANCE_ROBOT, grid=41)

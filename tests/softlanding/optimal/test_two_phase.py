@@ -63,6 +63,7 @@ def test_matches_the_paper_with_another_robot():
     assert r.unverified_reasons() == []
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_a_second_yielding_step_does_not_lower_the_depth():
     c = two_step_check(-1.0)
     assert c.collapsed

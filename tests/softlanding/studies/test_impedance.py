@@ -49,6 +49,7 @@ def test_lossless_cot_is_ground_loss_over_impact_energy(map_v1):
     assert r.energy.cot_lossless == 0.5 * r.depth**2 / (0.5 * 16.0)
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_min_cot_gains_against_min_gains():
     # Lossless rendering: CoT is depth^2 / v0^2, so its optimum is the depth optimum.
     depth = {v0: optimize_impedance(v0) for v0 in (-1.0, -4.0)}

@@ -28,6 +28,7 @@ def optima():
     return soft, stiff, worst
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_one_ground_in_a_sequence_is_that_ground_bitwise(optima):
     soft = optima[0]
     for seq in ([SOFT], (SOFT,)):
