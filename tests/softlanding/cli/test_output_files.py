@@ -131,7 +131,7 @@ def test_reproduce_into_an_unusable_folder_exits_2_before_any_work(cli):
 # ------------------------------------------------------------------------- signals
 @pytest.mark.parametrize(("signum", "code", "line"), [
     (signal.SIGTERM, 143, "softlanding: terminated (SIGTERM)"),
-    (signal.SIGINT, 130, "softlanding: interrupted")])
+    pytest.param(signal.SIGINT, 130, "softlanding: interrupted", marks=pytest.mark.slow)])
 def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, code, line):
     """Mid-way through the simulations of a large map (numba returns to Python between its
     chunks, so the signal is taken within a chunk): one line, 128 + the signal, no file."""

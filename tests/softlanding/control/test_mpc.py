@@ -119,6 +119,7 @@ def test_an_arc_ending_within_a_sample_is_dropped_and_newton_goes_on():
     assert m.depth >= clair.depth * (1 - 1e-12)
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_a_failed_re_solve_is_transcribed_and_lands_as_before():
     from ocp.structure.switching import clear_cache
 

@@ -93,6 +93,7 @@ def test_bad_parameters(kwargs, name):
         solve_landing(v0, PAPER_ROBOT.replace(**kwargs))
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_cli_solve_json_and_infeasible(tmp_path, cli):
     png = tmp_path / "bb.png"
     code, out, err = cli("solve", "--v0", "-3", "--json", "--plot", png)

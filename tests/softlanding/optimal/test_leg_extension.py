@@ -13,6 +13,7 @@ from softlanding.optimal.phase_schedule import feedback_available
 NEEDS_FEEDBACK = "replaying a boundary arc with state feedback needs FeedbackSchedule"
 
 
+@pytest.mark.slow  # long: the README's command keeps its CPU budget
 def test_fixed_at_half_the_stroke_gives_the_papers_depth():
     for v0 in (-0.5, -3.0, -10.0):
         r = solve_leg_extension(v0, extension=PAPER_ROBOT.s / 2)

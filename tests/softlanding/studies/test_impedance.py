@@ -23,7 +23,7 @@ def test_intrusion_step_map_reproduces_paper_cases(map_v1):
     assert steps.tolist() == [1, 2, 3]
 
 
-@pytest.mark.parametrize("v0", [-1.0, -3.0, -10.0])
+@pytest.mark.parametrize("v0", [-1.0, -3.0, pytest.param(-10.0, marks=pytest.mark.slow)])
 def test_refined_optimum_is_feasible_best_and_on_the_boundary(v0):
     ds = depth_map(v0, n=101)
     opt = optimize_impedance(v0)
