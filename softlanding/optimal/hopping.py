@@ -315,6 +315,12 @@ def _two_phase_landing(robot: Robot, impact: Impact) -> Any:
 HOP_STARTS = (1.0, 0.7, 1.4)
 
 
+def _rounded(a: np.ndarray, bits: int = 30) -> np.ndarray:
+    """``a`` with its mantissas rounded to ``bits`` bits (about 9 significant digits)."""
+    m, e = np.frexp(a)
+    return np.ldexp(np.round(m * 2.0 ** bits) / 2.0 ** bits, e)
+
+
 def _hop_guess(robot: Robot, impact: Impact, stretch: float = 1.0) -> Trajectory:
     """The landing optimum, its arrest mirrored into a push-off, a flight to the apex; the
     push-off and the flight stretched in time by ``stretch`` (other starts)."""
@@ -342,7 +348,11 @@ def _hop_guess(robot: Robot, impact: Impact, stretch: float = 1.0) -> Trajectory
     crater = -tr.x[y][-1, 2]
     cols = [np.column_stack([x, np.full(len(tt), crater)]) for tt, x, _ in parts]
     us2 = [np.column_stack([u, np.maximum(u * (x[:, 1] - x[:, 3]), 0)]) for _, x, u in parts]
-    return Trajectory(np.concatenate([p[0] for p in parts]), np.vstack(cols), np.vstack(us2),
+    # rounded to 30 bits: the hop NLP's flat valley turns last-bit differences of the
+    # landing it mirrors (which depend on what was solved before in the process) into other
+    # local optima; a rounded start gives one answer whatever ran before
+    return Trajectory(*(_rounded(a) for a in (np.concatenate([p[0] for p in parts]),
+                                              np.vstack(cols), np.vstack(us2))),
                       ("x_b", "v_b", "x_f", "v_f", "crater"), ("u", "p"),
                       phase=np.concatenate([np.full(len(p[0]), i)
                                             for i, p in enumerate(parts)]))
