@@ -142,6 +142,9 @@ def test_speed_limit_same_answer_as_bound_or_path_constraint(speed_solutions):
     assert "state constraint active" in c_a.reasons[-1]
 
 
+# the refined answers and verdicts are what is tested: the transcriptions they start from are
+# a hair over a limit between their nodes on these coarse grids, and say so (provoked)
+@pytest.mark.filterwarnings("ignore::ocp.definition.errors.PathViolationWarning")
 @pytest.mark.slow
 @pytest.mark.parametrize("problem", ["speed", "bryson_denham", "mixed"])
 def test_every_way_of_writing_gives_one_answer(problem):
