@@ -20,6 +20,7 @@ from typing import Any
 
 from softlanding.cli.cache import cache_command
 from softlanding.cli.export import export_command
+from softlanding.cli.ground import model_ground
 from softlanding.cli.output import (
     EXIT_FAILURE,
     EXIT_OK,
@@ -620,7 +621,6 @@ def _ms(v: float | None) -> str:
 
 def _cmd_mpc(a: argparse.Namespace) -> int:
     from softlanding.control.mpc import check_period
-    from softlanding.model.ground import DragGround, LinearGround
 
     period = 0.01 if a.period is None else check_period("--period", a.period)
     from softlanding.errors import check, check_count
@@ -632,13 +632,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     if a.margin and a.controller != "bangbang":
         raise ParameterError("--margin", "applies to --controller bangbang")
     robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
-    if a.model_ground == "linear" and a.model_cd is not None:
-        raise ParameterError("--model-cd", "applies to --model-ground drag")
-    if a.model_ground == "drag" and a.model_cd is None:
-        raise ParameterError("--model-cd", "is required with --model-ground drag (the drag "
-                                           "number the controller assumes)")
-    k = 1.0 if a.model_stiffness is None else a.model_stiffness
-    model = LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
+    model = model_ground(a)
     from softlanding.optimal.limits import force_limit
 
     force_limit(robot)

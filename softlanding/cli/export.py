@@ -3,30 +3,10 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any
 
+from softlanding.cli.ground import model_ground
 from softlanding.cli.output import EXIT_OK, print_json, print_table, robot_of
 from softlanding.errors import ParameterError, check
-
-
-def model_ground(a: argparse.Namespace) -> Any:
-    """The ground the controller assumes before measuring (``--model-ground``,
-    ``--model-stiffness``, ``--model-cd``), checked.
-
-    Parameters
-    ----------
-    a : argparse.Namespace
-        Parsed arguments.
-    """
-    from softlanding.model.ground import DragGround, LinearGround
-
-    if a.model_ground == "linear" and a.model_cd is not None:
-        raise ParameterError("--model-cd", "applies to --model-ground drag")
-    if a.model_ground == "drag" and a.model_cd is None:
-        raise ParameterError("--model-cd", "is required with --model-ground drag (the drag "
-                                           "number the controller assumes)")
-    k = 1.0 if a.model_stiffness is None else a.model_stiffness
-    return LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
 
 
 def export_command(a: argparse.Namespace) -> int:

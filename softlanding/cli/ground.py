@@ -165,6 +165,26 @@ def grounds_of(a: argparse.Namespace) -> Any:
     return grounds[0] if len(grounds) == 1 else grounds
 
 
+def model_ground(a: argparse.Namespace) -> Any:
+    """The ground the controller assumes before measuring (``--model-ground``,
+    ``--model-stiffness``, ``--model-cd``), checked.
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        Parsed arguments.
+    """
+    from softlanding.model.ground import DragGround, LinearGround
+
+    if a.model_ground == "linear" and a.model_cd is not None:
+        raise ParameterError("--model-cd", "applies to --model-ground drag")
+    if a.model_ground == "drag" and a.model_cd is None:
+        raise ParameterError("--model-cd", "is required with --model-ground drag (the drag "
+                                           "number the controller assumes)")
+    k = 1.0 if a.model_stiffness is None else a.model_stiffness
+    return LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
+
+
 def rft_stiffness_of(a: argparse.Namespace) -> float:
     """``k_g`` [N/m] of ``--medium`` and ``--foot-diameter`` (resistive force theory).
 
@@ -189,4 +209,5 @@ def rft_stiffness_of(a: argparse.Namespace) -> float:
     return rft_stiffness(medium(a.medium), d)
 
 
-__all__ = ["GROUNDS", "ground_args", "ground_of", "grounds_of", "numbers", "rft_stiffness_of"]
+__all__ = ["GROUNDS", "ground_args", "ground_of", "grounds_of", "model_ground", "numbers",
+           "rft_stiffness_of"]

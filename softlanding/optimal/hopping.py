@@ -351,8 +351,8 @@ def _hop_guess(robot: Robot, impact: Impact, stretch: float = 1.0) -> Trajectory
     # rounded to 30 bits: the hop NLP's flat valley turns last-bit differences of the
     # landing it mirrors (which depend on what was solved before in the process) into other
     # local optima; a rounded start gives one answer whatever ran before
-    return Trajectory(*(_rounded(a) for a in (np.concatenate([p[0] for p in parts]),
-                                              np.vstack(cols), np.vstack(us2))),
+    return Trajectory(_rounded(np.concatenate([p[0] for p in parts])),
+                      _rounded(np.vstack(cols)), _rounded(np.vstack(us2)),
                       ("x_b", "v_b", "x_f", "v_f", "crater"), ("u", "p"),
                       phase=np.concatenate([np.full(len(p[0]), i)
                                             for i, p in enumerate(parts)]))
