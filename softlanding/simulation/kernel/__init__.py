@@ -18,6 +18,10 @@ The compiled parts are this package's modules:
 * :mod:`.creep` -- the proof that a yielding foot creeps toward a limit depth forever;
 * :mod:`.landing` -- the segment loop of one landing, its GIL-free entry points.
 
+Compiled functions take the options :data:`.const.JIT`: they have no Python wrapper, as only
+compiled code calls them (a call from Python would crash); the few that Python calls (the
+entry points, and helpers the tests call) take :data:`.const.ENTRY`.
+
 This module holds the Python entry points :func:`run_landing` and :func:`run_batch` used by
 :mod:`softlanding.simulation.simulator`, and re-exports the output layout and status codes.
 The mode data are read from :func:`softlanding.model.dynamics.mode_matrices`
@@ -146,16 +150,16 @@ def compile_notice(kind: str = "affine") -> str | None:
     from softlanding.simulation.kernel import landing
 
     if kind == "affine":
-        entries, inner, seconds, what = (landing_entry, batch_range), landing.simulate_one, 8, ""
+        entries, inner, seconds, what = (landing_entry, batch_range), landing.simulate_one, 5, ""
     else:
         from softlanding.simulation.kernel import nonaffine
 
         entries = (nonaffine.landing_entry_nl, nonaffine.batch_range_nl)
-        inner, seconds, what = nonaffine.simulate_one_nl, 12, " for non-affine grounds"
+        inner, seconds, what = nonaffine.simulate_one_nl, 10, " for non-affine grounds"
     if compiled_before(inner) or all(compiled_before(e) for e in entries):
         return None
     if not compiled_before(landing.march):  # the parts both simulators share
-        seconds += 8
+        seconds += 5
     notice = f"softlanding: compiling the simulator{what} (once, about {seconds} s)..."
     import sys
 
