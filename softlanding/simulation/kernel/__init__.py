@@ -160,7 +160,7 @@ def compile_notice(kind: str = "affine") -> str | None:
         inner, seconds, what = nonaffine.simulate_one_nl, 10, " for non-affine grounds"
     if compiled_before(inner) or all(compiled_before(e) for e in entries):
         return None
-    if not compiled_before(landing.march):  # the parts both simulators share
+    if not compiled_before(landing.step_map):  # the parts both simulators share
         seconds += 5
     notice = f"softlanding: compiling the simulator{what} (once, about {seconds} s)..."
     import sys
