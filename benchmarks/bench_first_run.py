@@ -84,9 +84,10 @@ def main() -> None:
             med = {(key, kind, i): statistics.median(x[i] for x in xs)
                    for key, kinds in rows.items() for kind, xs in kinds.items() for i in (0, 1)}
             for key, kinds in rows.items():
-                for kind in kinds:
+                for kind, xs in kinds.items():
                     print(f"  {key:5s} {kind:6s} cpu {med[key, kind, 0]:6.2f} s"
-                          f"  wall {med[key, kind, 1]:6.2f} s")
+                          f"  wall {med[key, kind, 1]:6.2f} s  (least cpu "
+                          f"{min(x[0] for x in xs):6.2f} s)")
             if "base" in trees:
                 for kind in ("cold", "cached"):
                     print(f"  ratio now/base {kind:6s} cpu "

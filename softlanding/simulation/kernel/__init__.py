@@ -18,6 +18,10 @@ The compiled parts are this package's modules:
 * :mod:`.creep` -- the proof that a yielding foot creeps toward a limit depth forever;
 * :mod:`.landing` -- the segment loop of one landing, its GIL-free entry points.
 
+Compiled functions take the options :data:`.const.JIT`: they have no Python wrapper, as only
+compiled code calls them (a call from Python would crash); the few that Python calls (the
+entry points, and helpers the tests call) take :data:`.const.ENTRY`.
+
 This module holds the Python entry points :func:`run_landing` and :func:`run_batch` used by
 :mod:`softlanding.simulation.simulator`, and re-exports the output layout and status codes.
 The mode data are read from :func:`softlanding.model.dynamics.mode_matrices`
@@ -40,6 +44,8 @@ shrinking hops' limit depth, else NaN) and
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from numba import njit
 
@@ -51,7 +57,7 @@ drop_stale_cache()  # before any compiled module is loaded (numba misses inlined
 from softlanding.simulation.kernel.const import *  # noqa: E402, F403
 
 # ruff: noqa: F405  (the codes used below come from the star import above)
-from softlanding.simulation.kernel.landing import batch_range, landing_entry  # noqa: E402
+from softlanding.simulation.kernel.landing import batch_range, simulate_one  # noqa: E402
 from softlanding.simulation.kernel.linalg import flat25, norm_rows4, prop4_t, row5  # noqa: E402
 from softlanding.simulation.kernel.model import pack_model  # noqa: E402
 
@@ -146,16 +152,16 @@ def compile_notice(kind: str = "affine") -> str | None:
     from softlanding.simulation.kernel import landing
 
     if kind == "affine":
-        entries, inner, seconds, what = (landing_entry, batch_range), landing.simulate_one, 8, ""
+        entries, inner, seconds, what = (simulate_one, batch_range), simulate_one, 5, ""
     else:
         from softlanding.simulation.kernel import nonaffine
 
         entries = (nonaffine.landing_entry_nl, nonaffine.batch_range_nl)
-        inner, seconds, what = nonaffine.simulate_one_nl, 12, " for non-affine grounds"
+        inner, seconds, what = nonaffine.simulate_one_nl, 10, " for non-affine grounds"
     if compiled_before(inner) or all(compiled_before(e) for e in entries):
         return None
-    if not compiled_before(landing.march):  # the parts both simulators share
-        seconds += 8
+    if not compiled_before(landing.step_map):  # the parts both simulators share
+        seconds += 5
     notice = f"softlanding: compiling the simulator{what} (once, about {seconds} s)..."
     import sys
 
@@ -166,6 +172,7 @@ def compile_notice(kind: str = "affine") -> str | None:
 _PACKED: dict[int, tuple[dict, np.ndarray]] = {}
 _POOL: list = []  # [ThreadPoolExecutor, its size]
 RECORDS_FIRST = 64  # segment records allocated first; a longer landing is re-run with all
+_RECORDS = threading.local()  # per thread: the RECORDS_FIRST records landings fill, reused
 
 
 def packed_model(mats: dict) -> np.ndarray:
@@ -237,10 +244,29 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
         states, control functionals and ground modes.
     """
     compile_notice("affine")
-    out, t, A, z, cu, mode = landing_entry(
-        packed_model(mats), _f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u), _f64(x0),
-        float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps), RECORDS_FIRST)
-    return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode}
+    args = (packed_model(mats), (_f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u)),
+            _f64(x0), (float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps)))
+    # this thread's records, taken while in use (a landing run meanwhile, by a signal
+    # handler, makes its own)
+    first = _RECORDS.__dict__.pop("rec", None) or _new_records(RECORDS_FIRST)
+    first[0][0] = np.nan  # the end time of a landing not simulated (the other rows used are set)
+    rec, out = first, np.zeros(N_OUT)
+    simulate_one(*args, out, rec)
+    n = int(out[O_NSEG])
+    if n > RECORDS_FIRST:  # more segments than records: once more, with room for all
+        rec, out = _new_records(n), np.zeros(N_OUT)
+        simulate_one(*args, out, rec)
+    seg = {"t": rec[0][:n + 1].copy(), "A": rec[1][:n].copy(), "z": rec[2][:n].copy(),
+           "cu": rec[3][:n].copy(), "mode": rec[4][:n].copy()}
+    _RECORDS.rec = first
+    return out, seg
+
+
+def _new_records(n: int) -> tuple:
+    """Segment records for ``n`` segments (start times and the end time, closed-loop
+    matrices, start states, control functionals, modes)."""
+    return (np.full(n + 1, np.nan), np.empty((n, 5, 5)), np.empty((n, 5)), np.empty((n, 5)),
+            np.empty(n, dtype=np.int64))
 
 
 def _pool(threads: int):

@@ -123,8 +123,13 @@ def det_inv3(V):
     csgn = 1.0 + 0.0j if swaps & 1 else -1.0 + 0.0j
     acc = 0.0
     for k in range(3):
-        absel = np.abs(lu[4 * k])
-        csgn = csgn * (lu[4 * k] / absel)
+        p = lu[4 * k]
+        absel = np.abs(p)
+        # p / absel as numba divides by the complex absel + 0j (CPython's algorithm, its
+        # steps written out: numba's division, with its error paths, compiles slowly)
+        ratio = 0.0 / absel
+        den = absel + 0.0 * ratio
+        csgn = csgn * complex((p.real + p.imag * ratio) / den, (p.imag - p.real * ratio) / den)
         acc = acc + np.log(absel)
     det = csgn * np.exp(acc)
     info = ZGETRI(KIND, 3, lu.ctypes, 3, ipiv.ctypes)

@@ -5,7 +5,7 @@ inlines from another file does (``forceinline`` across ``linalg``, ``events``, `
 ...): after an upgrade that edits one kernel module, the others would load machine code
 compiled from the old source, a silent wrong number. So the kernel's sources are hashed
 together, the hash is stamped beside the cache, and the cache is dropped when they differ
-(the next landing recompiles, about 16 s). This module is plain Python: it runs before any
+(the next landing recompiles, about 10 s). This module is plain Python: it runs before any
 compiled module is loaded.
 """
 

@@ -5,7 +5,8 @@
 * :func:`march` -- propagation on the exact step map, event search on each step,
   stroke and force extrema and the actuator's work on the way;
 * :func:`apply_event` -- the finite state machine's transition at an event;
-* :func:`simulate_one` -- the loop over segments, and :func:`simulate_batch`.
+* :func:`simulate_one` -- the loop over segments (Python's entry for one landing), and
+  :func:`batch_range`.
 
 Per-landing bookkeeping lives in two small arrays: ``ext`` (extrema of the
 stroke and the force, the actuator work) and ``bk`` (first stop time, rest
@@ -35,7 +36,6 @@ from softlanding.simulation.kernel.const import (
     HORIZON,
     JIT,
     LINEAR,
-    N_OUT,
     NEVER_RESTS_CREEP,
     O_DEPTH,
     O_DLIM,
@@ -213,9 +213,13 @@ def step_map(A, mode, key, Qe, energy, phic, gc, hc):
     return hstep, Phi, G
 
 
-@njit(**JIT)
+@njit(**JIT, inline="always")
 def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext, creep, ws):
     """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
+
+    Inlined (numba's IR) into each segment loop: as a compiled function of its own, every
+    library above it optimised and emitted its machine code once more (0.5-2 s of the first
+    compile); it is typed once per loop instead.
 
     ``ws`` is the landing's :func:`workspace`. The step map ``exp(A h)`` (and the
     energy Gramian) of a closed loop are cached under ``key`` (mode and regime;
@@ -483,9 +487,14 @@ def fresh_landing(x0, sched_K):
     return z, z.copy(), open_loop, k_ol, ext, np.full(4, np.nan)
 
 
-@njit(**JIT)
+@njit(**ENTRY, nogil=True)
 def simulate_one(P, pol, x0, lim, out, rec):
     """Simulate one landing; fill ``out`` (layout ``O_*``) and the segment records.
+
+    Python calls it for one landing (:func:`softlanding.simulation.kernel.run_landing`:
+    records allocated there, trimmed there; a compiled entry wrapping it was a second
+    compile of the whole loop, about 2 s of the first one), :func:`batch_range` for each
+    landing of a batch. Releases the GIL.
 
     Parameters
     ----------
@@ -565,29 +574,6 @@ def simulate_one(P, pol, x0, lim, out, rec):
         rec[0][nseg] = t
     status, d = final_status(status, d, ext, cdata, cres)
     write_output(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, bk)
-
-
-@njit(**ENTRY, nogil=True)
-def landing_entry(P, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy, max_steps,
-                  nrec):
-    """One landing with its segment records (``nrec`` rows first; re-run with as many
-    rows as segments if that was too few).
-
-    Returns ``(out, t, A, z, cu, mode)``, the records trimmed to the segments run.
-    Releases the GIL.
-    """
-    while True:
-        out = np.zeros(N_OUT)
-        rec = (np.full(nrec + 1, np.nan), np.empty((nrec, 5, 5)), np.empty((nrec, 5)),
-               np.empty((nrec, 5)), np.empty(nrec, dtype=np.int64))
-        simulate_one(P, (Kf, umax, sched_t, sched_K), x0,
-                     (s_lim, t_max, max_seg, energy, max_steps), out, rec)
-        n = int(out[O_NSEG])
-        if n <= nrec:
-            break
-        nrec = n
-    return (out, rec[0][:n + 1].copy(), rec[1][:n].copy(), rec[2][:n].copy(),
-            rec[3][:n].copy(), rec[4][:n].copy())
 
 
 @njit(**ENTRY, nogil=True)

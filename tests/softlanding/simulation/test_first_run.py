@@ -26,8 +26,8 @@ def _run(args, cache_dir=None):
 def test_the_notice_is_printed_on_a_cold_cache_once_per_kind(tmp_path):
     p = _run(["-c", CHECK], cache_dir=tmp_path)  # an empty cache: nothing compiled yet
     lines = p.stderr.splitlines()
-    assert lines == [f"{NOTICE} (once, about 16 s)...",
-                     f"{NOTICE} for non-affine grounds (once, about 20 s)..."], p.stderr
+    assert lines == [f"{NOTICE} (once, about 10 s)...",
+                     f"{NOTICE} for non-affine grounds (once, about 15 s)..."], p.stderr
     assert p.stdout.split() == ["True", "True"]  # returned when printed; once per process
 
 
@@ -42,7 +42,7 @@ def test_no_notice_once_compiled():
 
 @pytest.mark.slow
 def test_a_cold_demo_says_so_on_stderr_first_and_a_warm_one_says_nothing(tmp_path):
-    """End to end in a fresh cache (compiles the exact simulator: ~15 s)."""
+    """End to end in a fresh cache (compiles the exact simulator: ~10 s)."""
     cold = _run(["-m", "softlanding", "demo", "--json", "--out", ""], cache_dir=tmp_path)
     assert cold.stderr.startswith(NOTICE) and cold.stderr.count("\n") == 1, cold.stderr
     warm = _run(["-m", "softlanding", "demo", "--json", "--out", ""], cache_dir=tmp_path)
