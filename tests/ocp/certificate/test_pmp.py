@@ -3,8 +3,6 @@
 import dataclasses
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -107,13 +105,11 @@ def test_transcription_alone_flags_the_constrained_tail():
     assert c.state_constraint_active_intervals
 
 
-def test_cli_pmp_json(tmp_path):
+def test_cli_pmp_json(tmp_path, cli):
     png = tmp_path / "bb.png"
-    p = subprocess.run([sys.executable, "-m", "softlanding", "solve", "--v0", "-2", "--pmp",
-                        "--json", "--plot", str(png)], capture_output=True, text=True,
-                       timeout=300)
-    assert p.returncode == 0, p.stderr
-    d = json.loads(p.stdout)["pmp"]
+    code, out, err = cli("solve", "--v0", "-2", "--pmp", "--json", "--plot", png)
+    assert code == 0, err
+    d = json.loads(out)["pmp"]
     for k in ("verdict", "H_max_abs", "H_variation", "sigma_sign_agreement", "switch_sigma_gap",
               "singular_intervals", "state_constraint_active_intervals",
               "costate_estimates_gap"):

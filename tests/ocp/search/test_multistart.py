@@ -39,6 +39,7 @@ def coarse(seed, workers=None, method="sobol", n=3):
     return multistart(coarse_transcription, n=n, seed=seed, workers=workers, method=method)
 
 
+@pytest.mark.slow  # the shared 8-start run(): about 8 s CPU together
 def test_default_guess_lands_on_a_local_optimum_and_multistart_finds_the_best():
     res = run()
     local = res.starts[0]  # the default guess, solved as the user would
@@ -57,6 +58,7 @@ def test_default_guess_lands_on_a_local_optimum_and_multistart_finds_the_best():
     assert "distinct local optima" in res.message
 
 
+@pytest.mark.slow  # the shared 8-start run(): about 8 s CPU together
 def test_the_best_refines_to_the_independent_value():
     best = run().best
     sol = Collocation(build(), intervals=50).refine(tol=1e-7, guess=best)
@@ -64,6 +66,7 @@ def test_the_best_refines_to_the_independent_value():
     assert sol.objective == pytest.approx(REFERENCE, rel=1e-6)
 
 
+@pytest.mark.slow  # the shared 8-start run(): about 8 s CPU together
 def test_starts_cover_the_box_and_are_deterministic():
     res = run()
     pts = [s.point for s in res.starts[1:]]

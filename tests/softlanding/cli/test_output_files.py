@@ -1,7 +1,8 @@
 """Output files of the console script: races, checks before any work, signals, modes, Dask.
 
 In-process through ``main(argv)`` (the ``cli`` fixture) where a monkeypatch stages the race
-deterministically; real subprocesses for concurrency, signals and the umask.
+deterministically, and for the umask (set after every import); real subprocesses for
+concurrency and signals.
 """
 
 import os
@@ -154,12 +155,15 @@ def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, 
 
 # --------------------------------------------------------------------------- modes
 @pytest.mark.parametrize(("umask", "mode"), [(0o022, 0o644), (0o077, 0o600)])
-def test_files_get_the_modes_of_the_umask(tmp_path, umask, mode):
+def test_files_get_the_modes_of_the_umask(tmp_path, cli, umask, mode):
+    # in-process: the umask set after every import, so a value read at import time would fail
     png = tmp_path / "t.png"
-    p = subprocess.run([*CMD, "simulate", "--v0", "-1", "--rigid", "--plot", str(png)], env=ENV,
-                       capture_output=True, text=True, timeout=60,
-                       preexec_fn=lambda: os.umask(umask))
-    assert p.returncode == 0, p.stderr
+    old = os.umask(umask)
+    try:
+        code, _, err = cli("simulate", "--v0", "-1", "--rigid", "--plot", png)
+    finally:
+        os.umask(old)
+    assert code == 0, err
     assert stat.S_IMODE(png.stat().st_mode) == mode
 
 

@@ -76,6 +76,10 @@ def test_a_second_yielding_step_does_not_lower_the_depth():
 def test_infeasible_request_names_the_condition():
     with pytest.raises(InfeasibleLandingError, match="u_max"):
         solve_two_phase(Impact(-10.0), Robot(r_m=5, s=20, u_max=0.5))
+
+
+@pytest.mark.slow  # four relaxed solves (1.7 s); the CLI's twin in test_phased_cli is fast
+def test_infeasible_arrest_is_named():
     with pytest.raises(InfeasibleLandingError, match="u_b <= u_max cannot be met"):
         solve_two_phase(Impact(-10.0), Robot(r_m=5, s=20, u_max=2.0))
 

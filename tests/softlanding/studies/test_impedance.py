@@ -133,7 +133,7 @@ def test_cli_map_writes_dataset_and_plot(tmp_path, cli):
 
 def test_cli_sweep_json_and_observations(tmp_path, cli):
     nc = tmp_path / "curves.nc"
-    code, out, err = cli("sweep", "--v0-min", "-6", "--n", "4", "--grid", "41", "--out", nc,
+    code, out, err = cli("sweep", "--v0-min", "-6", "--n", "4", "--grid", "21", "--out", nc,
                          "--json")
     assert code == 0, err
     d = json.loads(out)
