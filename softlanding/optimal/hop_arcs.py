@@ -399,15 +399,17 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
     except RuntimeError:
         status = str(opti.stats().get("return_status", "failed"))
         val = opti.debug.value
-    durs, gains, out_arcs = [], [], []
+    durs: list[float] = []
+    gains: list[list[float]] = []
+    out_arcs: list[Arc] = []
     for arc, t_arc, f_arc in zip(guess.arcs, taus, forces, strict=True):
         d_vals = tuple(max(float(val(t)), 0.0) for t in t_arc)
-        f_vals = tuple(float(np.clip(val(f), -u_max, u_max)) for f in f_arc) \
-            if arc.free else ()
+        f_vals = tuple(float(np.clip(val(f), -u_max, u_max)) for f in f_arc
+                       if f is not None)
         out_arcs.append(Arc(arc.mode, arc.kind, d_vals, f_vals))
-        for k, tau in enumerate(d_vals):
+        for k, dur in enumerate(d_vals):
             K = _law(arc, k, f_vals[k] if arc.free else None, rows)
-            durs.append(tau)
+            durs.append(dur)
             gains.append([float(v) for v in np.asarray(ca.DM(K)).ravel()])
     keep = [k for k, t in enumerate(durs) if t > 0]
     durs = [durs[k] for k in keep]
