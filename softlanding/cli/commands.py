@@ -520,8 +520,9 @@ def _hop_rows(c: Any) -> list[tuple[str, object]]:
         ("energy per cycle", c.energy), ("energy / apex height", c.specific_energy),
         ("positive work", c.work.positive), ("negative work", c.work.negative),
         ("ground loss d^2/2", c.depth ** 2 / 2), ("crater depth", c.depth),
-        ("paper's CoT of the landing", c.cot), ("energy (optimiser's slack)",
-                                                 c.energy_transcribed),
+        ("paper's CoT of the landing", c.cot),
+        ("energy (refined NLP)" if c.exact_arcs else "energy (optimiser's slack)",
+         c.energy_transcribed),
         ("apex posture error", c.apex_error), ("energy balance error", c.balance_error)]
     if len(c.grids) > 1:  # the grid sequence behind the continuous optimum's estimate
         rows += [("grids (energy each)", ", ".join(

@@ -227,9 +227,11 @@ def _hop(sub: Any) -> argparse.ArgumentParser:
     h.add_argument("--doublings", type=int, default=None, metavar="K",
                    help="--leg free or all: the optimum re-solved on K grids, each with twice "
                         "the nodes (default 1, 0 to 4); the finest is reported with the "
-                        "continuous optimum extrapolated from the sequence and its error. A "
-                        "grid's energy is a discretised value: unless it has settled to 1e-6 "
-                        "the cycle is not verified (exit 1 without --accept-unverified)")
+                        "continuous optimum extrapolated from the sequence and its error; its "
+                        "arcs are then refined exactly and replayed (converged when the "
+                        "refined energy and its replay agree to 1e-6). Where that fails the "
+                        "grid's energy, a discretised value, is reported and the cycle is not "
+                        "verified (exit 1 without --accept-unverified)")
     _model_args(h, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
     h.add_argument("--pmp", action="store_true", default=None,
                    help="say, for every leg, why there is no Pontryagin certificate (the "

@@ -115,7 +115,12 @@ class HopCycle:
     energy_error : float
         The estimate's error estimate: how far the previous pair's extrapolation is from
         it (three grids or more), else the extrapolation's own correction; NaN with one
-        grid.
+        grid. With ``exact_arcs``: the energy is the estimate, and the error is how far the
+        refined NLP's energy (the arcs' works) is from the exact replay's.
+    exact_arcs : list of dict
+        The arcs of the exact-arc refinement (:mod:`softlanding.optimal.hop_arcs`:
+        ``mode``, ``kind``, ``durations``, ``forces``) when the cycle reported is its
+        replay; empty when it is a grid's.
     """
 
     leg: str
@@ -139,6 +144,7 @@ class HopCycle:
     grids: list[dict[str, Any]] = field(default_factory=list)
     energy_estimate: float = math.nan
     energy_error: float = math.nan
+    exact_arcs: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def converged(self) -> bool:
@@ -151,6 +157,10 @@ class HopCycle:
         """Why the energy is not the continuous optimum ("" when it is :attr:`converged`)."""
         if self.converged:
             return ""
+        if self.exact_arcs:
+            return (f"refined on exact arcs, but the refined NLP's energy "
+                    f"({self.energy_transcribed:.10g}) and its exact replay's "
+                    f"({self.energy:.10g}) differ by {self.energy_error:.2g}")
         nodes = "/".join(map(str, self.grids[-1]["nodes"])) if self.grids else "?"
         if not math.isfinite(self.energy_estimate):
             return (f"discretised: the energy is the exact replay of a {nodes}-node grid's "
@@ -198,6 +208,13 @@ class HopCycle:
         if not self.transcribed:
             return ("no PMP certificate: an impedance leg is a feedback law with a thrust, "
                     "not an optimal control")
+        if self.exact_arcs:
+            return ("no PMP certificate: the cycle is refined on exact arcs ("
+                    + ", ".join(f"{a['mode']} {a['kind']}" for a in self.exact_arcs)
+                    + "), but on its arcs of one-signed power (+/-) the control is not "
+                    "unique (their cost is the work between their end states), which ocp's "
+                    "certificate does not cover; the energy is the exact replay of the "
+                    "refined schedule")
         from ocp.structure.phase_refinement import detect_phase_structures
 
         sol = self.transcribed[0]
@@ -236,6 +253,8 @@ class HopCycle:
             "replay_verified": not self.unverified_reasons(),
             "unverified_reasons": self.unverified_reasons(), "converged": self.converged,
             "optimum": "converged" if self.converged else "discretised",
+            "method": "exact arcs" if self.exact_arcs else "grid",
+            "exact_arcs": self.exact_arcs,
             "unconverged_reason": self.unconverged_reason(),
             "energy_estimate": self.energy_estimate, "energy_error": self.energy_error,
             "grids": self.grids, "notes": self.notes,
@@ -359,7 +378,8 @@ def _hop_guess(robot: Robot, impact: Impact, stretch: float = 1.0) -> Trajectory
 
 
 def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0.0, *,
-              warm_start: HopCycle | None = None, doublings: int = 0) -> HopCycle:
+              warm_start: HopCycle | None = None, doublings: int = 0,
+              refine: bool = True) -> HopCycle:
     """The minimum-energy hop cycle (free actuator), replayed exactly.
 
     The problem is not convex: it is solved from the deterministic starts of
@@ -373,9 +393,15 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     ``doublings`` the best cycle is re-solved on grids of twice, four times ... the nodes
     (each from the previous one) and the finest is returned, with the grid sequence, the
     continuous optimum extrapolated from it and an error estimate (``grids``,
-    ``energy_estimate``, ``energy_error``); :attr:`HopCycle.converged` says whether it is
-    the continuous optimum to :data:`CONVERGED_RTOL` (at ``eta = 0`` it is not: it says
-    "discretised", and by how much).
+    ``energy_estimate``, ``energy_error``).
+
+    With ``refine`` the finest grid's arcs are then refined exactly
+    (:mod:`softlanding.optimal.hop_arcs`: switching times and phase durations, every arc
+    flowed exactly) and the refined schedule is replayed; it is reported when its replay
+    closes and is below the grid's (``exact_arcs``), and it is the continuous optimum to
+    :data:`CONVERGED_RTOL` when the refined NLP's energy and the exact replay's agree to
+    that (:attr:`HopCycle.converged`). Otherwise the grid's cycle is reported and says
+    "discretised", and by how much.
 
     Parameters
     ----------
@@ -389,6 +415,8 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         A neighbouring optimum (its transcription warm-starts this one).
     doublings : int
         Grid doublings after the base grid (0 to 4; 0: one grid, its error not estimated).
+    refine : bool
+        Refine the finest grid's arcs exactly (above).
 
     Raises
     ------
@@ -405,8 +433,9 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     ws = warm_start.transcribed[0] if warm_start is not None and warm_start.transcribed \
         else None
     if ws is not None:  # continuation: the neighbour's optimum is the start
-        return _grid_sequence(_hop_from(tr, robot, impact, eta, None, ws), robot, impact,
-                              eta, doublings)
+        out = _grid_sequence(_hop_from(tr, robot, impact, eta, None, ws), robot, impact,
+                             eta, doublings)
+        return _exact_arcs(out, robot, impact, eta) if refine else out
     best: HopCycle | None = None
     starts: list[dict[str, Any]] = []
     last_error: SolveError | None = None
@@ -427,7 +456,51 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
         assert last_error is not None
         raise last_error
     best.starts = starts
-    return _grid_sequence(best, robot, impact, eta, doublings)
+    out = _grid_sequence(best, robot, impact, eta, doublings)
+    return _exact_arcs(out, robot, impact, eta) if refine else out
+
+
+def _exact_arcs(c: HopCycle, robot: Robot, impact: Impact, eta: float) -> HopCycle:
+    """The grid cycle ``c`` refined on exact arcs and replayed, or ``c`` with a note saying
+    why not (:mod:`softlanding.optimal.hop_arcs`)."""
+    from softlanding.optimal.hop_arcs import detect_arcs, refine_arcs
+
+    try:
+        r = refine_arcs(detect_arcs(c.transcribed[0], robot), robot, impact, eta)
+    except ValueError as err:
+        c.notes.append(f"exact arcs not refined: {err}")
+        return c
+    if r.status != "Solve_Succeeded":
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+        c.notes.append(f"exact arcs not refined: the refinement NLP stopped ({r.status})")
+        return c
+    x0 = impact.initial_state(robot.replace(l0=None))
+    res = simulate(robot, impact, r.schedule, x0=x0, t_max=r.duration + 1.0)
+    out = _evaluate("free", robot, impact, eta, res, r.duration, Work(),
+                    float(mechanical_energy(x0, robot.r_m)))
+    if out.unverified_reasons() or not out.energy <= c.energy:
+        why = "; ".join(out.unverified_reasons()) or (
+            f"its energy {out.energy:.9g} is above the grid's {c.energy:.9g}")
+        c.notes.append(f"exact arcs not used: the refined schedule's replay fails ({why})")
+        return c
+    out.energy_transcribed = r.energy
+    out.transcribed, out.pieces, out.starts, out.grids = c.transcribed, [
+        (res, 0.0, r.duration)], c.starts, c.grids
+    # arcs the refinement shrank to nothing (a grid's blips) are left out of the report
+    kept = [a for a in r.arcs if sum(a.durations) > 1e-6]
+    out.exact_arcs = [{"mode": a.mode, "kind": a.kind, "durations": list(a.durations),
+                       "forces": list(a.forces)} for a in kept]
+    out.energy_estimate, out.energy_error = out.energy, abs(out.energy - r.energy)
+    out.notes = [n for n in c.notes if n != SLACK_NOTE] + [
+        f"exact arcs: {len(kept)} arcs ({', '.join(a.mode + ' ' + a.kind for a in kept)}), "
+        f"switching times and "
+        f"forces refined with every arc flowed exactly; the energy is the exact replay of "
+        f"the refined schedule, {c.energy - out.energy:.3g} below the finest grid's"]
+    if math.isfinite(c.energy_estimate):
+        out.notes.append(f"the grid sequence's extrapolation, {c.energy_estimate:.7g} +- "
+                         f"{c.energy_error:.2g}, is {out.energy - c.energy_estimate:+.2g} "
+                         "from it")
+    return out
 
 
 def _grid_row(c: HopCycle) -> dict[str, Any]:

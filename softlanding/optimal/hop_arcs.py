@@ -1,0 +1,424 @@
+"""Exact-arc refinement of the free hop: its switching times, not a grid.
+
+The hop's optimum (:func:`softlanding.optimal.hopping.solve_hop`) is not bang-bang, but
+every arc of it is one of five kinds, each exact in the affine modes of the model
+(:func:`softlanding.model.dynamics.mode_matrices`):
+
+* ``"coast"``: ``u = 0`` (no power);
+* ``"lock"``: the leg held at constant length, ``u`` the lock force of the ground mode
+  (:func:`softlanding.model.controllers.rigid_lock_gains`; no power);
+* ``"capacity"``: the foot at rest on its crater, the support force at the crater's
+  capacity (``u`` a feedback law in the state: the boundary arc of that constraint), the
+  leg absorbing (``P <= 0``);
+* ``"+"`` / ``"-"``: arcs where the actuator's power ``P = u (v_b - v_f)`` keeps one sign.
+  On them the cost is the arc's work ``int P dt``, which depends on the arc's end states
+  only (the robot's mechanical energy, plus the ground's ``K x_f^2 / 2`` while yielding):
+  the optimum's control there is not unique (a flat valley, hence the transcription's
+  "interior" arcs), and a few constant pieces of free length reach the same end states
+  at the same cost.
+
+The arcs are read off a transcription (:func:`detect_arcs`); the unknowns are every
+piece's duration (and force, on ``+``/``-`` arcs), the state at every arc's start and
+the crater depth; each piece is flowed exactly (the matrix exponential of its affine
+mode, by scaling and squaring), path constraints are sampled inside every piece, and the
+cost is the sum of the arcs' works (``1`` on ``+`` arcs, ``eta`` on the others, where
+``P <= 0``). The result is a :class:`~softlanding.model.controllers.FeedbackSchedule`,
+which the exact simulator replays.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from softlanding.model.controllers import FeedbackSchedule, rigid_lock_gains
+from softlanding.model.dynamics import mode_matrices
+from softlanding.model.robot import Impact, Robot
+
+MODES = ("yielding", "static", "flight")
+KINDS = ("coast", "lock", "capacity", "+", "-")
+PIECES = 2
+"""Constant pieces per ``+``/``-`` arc (their end states are what matters)."""
+SAMPLES = 12
+"""Path-constraint samples per piece (besides its ends)."""
+SQUARINGS, TERMS = 10, 12
+"""The matrix exponential: Taylor terms after scaling by ``2^-SQUARINGS``."""
+
+
+@dataclass(frozen=True)
+class Arc:
+    """One arc of the hop: its ground mode, its kind and its pieces.
+
+    Attributes
+    ----------
+    mode : {"yielding", "static", "flight"}
+    kind : {"coast", "lock", "capacity", "+", "-"}
+    durations : tuple of float
+        Its pieces' lengths (one, or :data:`PIECES` on ``+``/``-`` arcs).
+    forces : tuple of float
+        The constant force of each piece (``+``/``-`` arcs; empty otherwise).
+    """
+
+    mode: str
+    kind: str
+    durations: tuple[float, ...]
+    forces: tuple[float, ...] = ()
+
+    @property
+    def free(self) -> bool:
+        """Its forces are unknowns (a ``+`` or ``-`` arc)."""
+        return self.kind in ("+", "-")
+
+
+@dataclass
+class ArcGuess:
+    """The arcs read off a transcription, with the states at their starts and the depth."""
+
+    arcs: list[Arc]
+    starts: list[np.ndarray]
+    depth: float
+
+    @property
+    def kinds(self) -> list[str]:
+        """``mode kind`` per arc."""
+        return [f"{a.mode} {a.kind}" for a in self.arcs]
+
+
+@dataclass
+class RefinedHop:
+    """The refined arcs and their schedule.
+
+    Attributes
+    ----------
+    arcs : list of Arc
+    schedule : FeedbackSchedule
+        The control of the whole cycle (one row per piece), from touchdown.
+    duration : float
+        Touchdown to apex.
+    depth : float
+        The crater depth.
+    energy : float
+        The NLP's energy (the arcs' works); the exact replay's is reported.
+    status : str
+        Ipopt's return status.
+    states : list of array
+        The state at every arc's start (the NLP's).
+    """
+
+    arcs: list[Arc]
+    schedule: FeedbackSchedule
+    duration: float
+    depth: float
+    energy: float
+    status: str
+    states: list[np.ndarray] = field(default_factory=list)
+
+    @property
+    def kinds(self) -> list[str]:
+        """``mode kind`` per arc."""
+        return [f"{a.mode} {a.kind}" for a in self.arcs]
+
+
+# ------------------------------------------------------------------ detection
+def _phase_mode(name: str) -> str:
+    return "flight" if name.startswith("flight") else (
+        "static" if name.startswith("static") else "yielding")
+
+
+def _runs(labels: list[tuple[str, str]]) -> list[list[Any]]:
+    """Runs of equal labels: ``[label, first, last]`` (inclusive indices)."""
+    out: list[list[Any]] = []
+    for i, lab in enumerate(labels):
+        if out and out[-1][0] == lab:
+            out[-1][2] = i
+        else:
+            out.append([lab, i, i])
+    return out
+
+
+def _merge_short(runs: list[list[Any]], short: int = 2) -> list[list[Any]]:
+    """Blips merged into their neighbours: a run of at most ``short`` intervals between
+    two runs of one label (a grid's chattering; a spurious arc left would only shrink to
+    zero length in the refinement)."""
+    changed = True
+    while changed:
+        changed = False
+        for i in range(1, len(runs) - 1):
+            a, b, c = runs[i - 1], runs[i], runs[i + 1]
+            if a[0] == c[0] and b[2] - b[1] < short:
+                runs[i - 1:i + 2] = [[a[0], a[1], c[2]]]
+                changed = True
+                break
+    return runs
+
+
+def detect_arcs(sol: Any, robot: Robot, pieces: int = PIECES,
+                tol: float = 1e-5, lock_tol: float = 1e-2) -> ArcGuess:
+    """The arcs of a transcribed hop (:func:`softlanding.optimal.hopping_problem.
+    hop_transcription`), as a start for :func:`refine_arcs`.
+
+    Every interval is labelled (``capacity`` where the foot rests and the support force is
+    at the crater's capacity, ``coast`` where ``u = 0``, ``lock`` where the leg's rate is 0
+    while yielding, ``+`` where the power slack is positive, else ``-``); runs of labels
+    are arcs, blips of a few intervals are merged into their neighbours.
+
+    Parameters
+    ----------
+    sol : ocp.Solution
+        The transcribed hop (phases yielding, static, flight up).
+    robot : Robot
+        The robot.
+    pieces : int
+        Constant pieces per ``+``/``-`` arc.
+    tol : float
+        Force and power tolerance of the labels.
+    lock_tol : float
+        Largest leg rate at both ends of a ``lock`` interval (a grid's constant force
+        holds the leg only to about its step times the force's rate).
+
+    Raises
+    ------
+    ValueError
+        When the transcription is not a touchdown-to-apex hop.
+    """
+    names = [ph.problem.name for ph in sol.phases]
+    if [_phase_mode(n) for n in names] != ["yielding", "static", "flight"]:
+        raise ValueError(f"exact arcs need the one-step hop (yielding, static, flight), got "
+                         f"phases {names}")
+    mf = robot.foot_mass
+    depth = float(-np.asarray(sol.phases[0].x)[-1, 2])
+    labels: list[tuple[str, str]] = []
+    rows: list[tuple[float, float, np.ndarray]] = []  # (h, u, state at the start)
+    for ph in sol.phases:
+        mode = _phase_mode(ph.problem.name)
+        x, u = np.asarray(ph.x, float), np.asarray(ph.u, float)
+        h = float(ph.T - ph.t0) / ph.N
+        for k in range(ph.N):
+            uk, pk = u[k, 0], u[k, 1]
+            vl = (x[k, 1] - x[k, 3], x[k + 1, 1] - x[k + 1, 3])
+            resting = mode == "static" or max(abs(x[k, 3]), abs(x[k + 1, 3])) < 1e-6
+            if mode != "flight" and resting and abs(uk + mf - depth) < tol * 10 and \
+                    pk <= tol:
+                lab = ("static", "capacity")
+            elif abs(uk) < tol:
+                lab = (mode, "coast")
+            elif mode == "yielding" and max(map(abs, vl)) < lock_tol:
+                lab = (mode, "lock")
+            else:
+                lab = (mode, "+" if pk > tol else "-")
+            labels.append(lab)
+            rows.append((h, float(uk), x[k, :4].copy()))
+    arcs, starts = [], []
+    for (mode, kind), i, j in _merge_short(_runs(labels)):
+        hs = np.array([r[0] for r in rows[i:j + 1]])
+        starts.append(rows[i][2])
+        if kind in ("+", "-"):
+            us = np.array([r[1] for r in rows[i:j + 1]])
+            chunks = [c for c in np.array_split(np.arange(len(hs)), pieces) if len(c)]
+            durs = tuple(float(hs[c].sum()) for c in chunks)
+            forces = tuple(float(np.average(us[c], weights=hs[c])) for c in chunks)
+            arcs.append(Arc(mode, kind, durs, forces))
+        else:
+            arcs.append(Arc(mode, kind, (float(hs.sum()),)))
+    return ArcGuess(arcs, starts, depth)
+
+
+# ---------------------------------------------------------------- the NLP
+@lru_cache(maxsize=1)
+def _expm() -> ca.Function:
+    """``exp(M)`` of a 5x5 matrix: Taylor series after scaling, then squaring."""
+    M = ca.SX.sym("M", 5, 5)
+    S = M / 2.0 ** SQUARINGS
+    term = ca.SX.eye(5)
+    E = ca.SX.eye(5)
+    for k in range(1, TERMS + 1):
+        term = ca.mtimes(term, S) / k
+        E = E + term
+    for _ in range(SQUARINGS):
+        E = ca.mtimes(E, E)
+    return ca.Function("expm5", [M], [E])
+
+
+def _rows(robot: Robot) -> dict[str, np.ndarray]:
+    """Feedback rows of the law kinds that depend only on the state."""
+    mats = mode_matrices(robot.r_m)
+    lock = rigid_lock_gains(mats)
+    # static capacity: support Fz.z + Fu u = hold (-x_f)
+    cap = -np.asarray(mats["Fz"], float).copy()
+    cap[2] -= float(mats["hold"])
+    cap /= float(mats["Fu"])
+    return {"lock yielding": lock[0], "lock static": lock[1], "lock flight": lock[2],
+            "capacity": cap}
+
+
+def _law(arc: Arc, k: int, force: Any, rows: dict[str, np.ndarray]) -> Any:
+    """The feedback row of piece ``k`` (``force``: that piece's unknown force)."""
+    if arc.kind == "coast":
+        return ca.DM.zeros(1, 5)
+    if arc.kind == "lock":
+        return ca.DM(rows[f"lock {arc.mode}"]).T
+    if arc.kind == "capacity":
+        return ca.DM(rows["capacity"]).T
+    return ca.horzcat(0, 0, 0, 0, force)
+
+
+def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
+                samples: int = SAMPLES, ipopt: dict | None = None) -> RefinedHop:
+    """The hop on the arcs of ``guess``, their pieces' durations and forces optimised,
+    every piece flowed exactly.
+
+    Parameters
+    ----------
+    guess : ArcGuess
+        The arcs and a start (:func:`detect_arcs`).
+    robot, impact, eta
+        The robot, the touchdown and the regenerative efficiency.
+    samples : int
+        Path-constraint samples inside every piece.
+    ipopt : dict, optional
+        Extra Ipopt options.
+    """
+    mats = mode_matrices(robot.r_m)
+    A, B = mats["A"], mats["B"]
+    Fz, Fu = ca.DM(mats["Fz"]).T, float(mats["Fu"])
+    EQ, Ec, Wg, hold = ca.DM(mats["EQ"]), ca.DM(mats["Ec"]).T, float(mats["Wg"]), \
+        float(mats["hold"])
+    rows = _rows(robot)
+    expm = _expm()
+    u_max, s = float(robot.u_max), float(robot.s)  # type: ignore[arg-type]
+    u_in = u_max
+    mb, mf = robot.body_mass, robot.foot_mass
+
+    def energy(z: Any) -> Any:
+        return 0.5 * ca.mtimes(z.T, ca.mtimes(EQ, z)) + ca.mtimes(Ec, z)
+
+    opti = ca.Opti()
+    d = opti.variable()
+    opti.set_initial(d, guess.depth)
+    opti.subject_to(d >= 0)
+    zs = []
+    for x0 in guess.starts:
+        z = opti.variable(4)
+        opti.set_initial(z, x0)
+        zs.append(z)
+    x_td = impact.initial_state(robot.replace(l0=None))
+    opti.subject_to(zs[0] == ca.DM(x_td[:4]))
+    cost: Any = 0
+    taus: list[list[Any]] = []
+    forces: list[list[Any]] = []
+    prev_mode = "yielding"
+    z_end: Any = None
+    for i, arc in enumerate(guess.arcs):
+        z = ca.vertcat(zs[i], 1)
+        if i:
+            opti.subject_to(zs[i] == z_end[:4])
+        m = MODES.index(arc.mode)
+        if arc.mode != prev_mode:  # the ground mode changes here
+            if (prev_mode, arc.mode) == ("yielding", "static"):
+                opti.subject_to(z[3] == 0)  # the foot stops
+                opti.subject_to(d == -z[2])
+            elif (prev_mode, arc.mode) != ("static", "flight"):
+                raise ValueError(f"exact arcs: no {prev_mode} -> {arc.mode} transition")
+        if arc.kind == "lock":
+            opti.subject_to(z[1] - z[3] == 0)
+        t_arc, f_arc = [], []
+        z_a = z
+        for k, dur in enumerate(arc.durations):
+            tau = opti.variable()
+            opti.set_initial(tau, max(dur, 1e-6))
+            opti.subject_to(tau >= 0)
+            f = None
+            if arc.free:
+                f = opti.variable()
+                opti.set_initial(f, arc.forces[k])
+                opti.subject_to(opti.bounded(-u_in, f, u_in))
+            K = _law(arc, k, f, rows)
+            M = ca.DM(A[m]) + ca.mtimes(ca.DM(B[m]), K)
+            pts = [ca.mtimes(expm(M * (tau * j / (samples + 1))), z) for j in
+                   range(samples + 2)]
+            for j, zj in enumerate(pts):
+                u = ca.mtimes(K, zj)
+                leg = zj[0] - zj[2]
+                opti.subject_to(opti.bounded(0, leg, s))
+                if arc.kind in ("lock", "capacity"):  # (free forces have bounds)
+                    opti.subject_to(opti.bounded(-u_in, u, u_in))
+                power = u * (zj[1] - zj[3])
+                if arc.kind == "+":
+                    opti.subject_to(power >= 0)
+                elif arc.kind in ("-", "capacity"):
+                    opti.subject_to(power <= 0)
+                if arc.mode == "yielding":
+                    opti.subject_to(zj[3] <= 0)
+                elif arc.mode == "static":
+                    sup = ca.mtimes(Fz, zj) + Fu * u
+                    opti.subject_to(sup >= 0)
+                    opti.subject_to(sup <= hold * d)
+                elif j > 0:
+                    opti.subject_to(zj[2] >= -d)  # above the crater bottom
+            if arc.mode == "flight" and prev_mode == "static" and k == 0:
+                u0 = ca.mtimes(K, z)  # lift-off: the ground would have to pull
+                opti.subject_to(ca.mtimes(Fz, z) + Fu * u0 <= 0)
+            z = pts[-1]
+            t_arc.append(tau)
+            f_arc.append(f)
+        work = energy(z) - energy(z_a)
+        if arc.mode == "yielding":
+            work = work + Wg * (z[2] ** 2 - z_a[2] ** 2)
+        if arc.kind == "+":
+            cost = cost + work
+        elif arc.kind in ("-", "capacity") and eta:
+            cost = cost + eta * work
+        taus.append(t_arc)
+        forces.append(f_arc)
+        prev_mode = arc.mode
+        z_end = z
+    if prev_mode != "flight":
+        raise ValueError("exact arcs: the cycle does not end in flight")
+    zT = z_end
+    opti.subject_to(mb * zT[0] + mf * zT[2] == impact.energy + mb * s / 2)
+    opti.subject_to(mb * zT[1] + mf * zT[3] == 0)
+    opti.subject_to(zT[0] - zT[2] == s / 2)
+    opti.subject_to(zT[1] - zT[3] == 0)
+    opti.minimize(cost)
+    # (a tighter constr_viol_tol sends Ipopt wandering in the flat valley: the replay, not
+    # the NLP, is the figure reported, and the two are compared)
+    opts = {"tol": 1e-12, "acceptable_tol": 1e-10, "max_iter": 500, "print_level": 0,
+            "mu_strategy": "adaptive", **(ipopt or {})}
+    # the forces' limits as simple bounds, which Ipopt honours exactly on return (a
+    # general constraint is met only to 1e-8 of its size: clipped back, the apex moves)
+    opti.solver("ipopt", {"print_time": False, "expand": True,
+                          "detect_simple_bounds": True}, opts)
+    try:
+        sol = opti.solve()
+        status = "Solve_Succeeded"
+        val = sol.value
+    except RuntimeError:
+        status = str(opti.stats().get("return_status", "failed"))
+        val = opti.debug.value
+    durs: list[float] = []
+    gains: list[list[float]] = []
+    out_arcs: list[Arc] = []
+    for arc, t_arc, f_arc in zip(guess.arcs, taus, forces, strict=True):
+        d_vals = tuple(max(float(val(t)), 0.0) for t in t_arc)
+        f_vals = tuple(float(np.clip(val(f), -u_max, u_max)) for f in f_arc
+                       if f is not None)
+        out_arcs.append(Arc(arc.mode, arc.kind, d_vals, f_vals))
+        for k, dur in enumerate(d_vals):
+            K = _law(arc, k, f_vals[k] if arc.free else None, rows)
+            durs.append(dur)
+            gains.append([float(v) for v in np.asarray(ca.DM(K)).ravel()])
+    keep = [k for k, t in enumerate(durs) if t > 0]
+    durs = [durs[k] for k in keep]
+    gains = [gains[k] for k in keep]
+    sched = FeedbackSchedule.from_arcs(durs, gains + [[0.0] * 5])
+    return RefinedHop(out_arcs, sched, float(np.sum(durs)), float(val(d)),
+                      float(val(cost)) if not isinstance(cost, int) else 0.0, status,
+                      [np.asarray(val(z), float).ravel() for z in zs])
+
+
+__all__ = ["KINDS", "MODES", "PIECES", "Arc", "ArcGuess", "RefinedHop", "detect_arcs",
+           "refine_arcs"]
