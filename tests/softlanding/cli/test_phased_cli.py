@@ -42,13 +42,34 @@ def test_leg_extension_fixed_and_free(cli):
     assert code == 0 and d["gain"] > 0 and d["extension"] > 10
 
 
-def test_hop_json_and_plot(cli, tmp_path, monkeypatch):
+def test_hop_json_and_plot(cli, tmp_path, monkeypatch, grid_hop):
+    # the CLI's rendering of a one-grid cycle (the solve is the shared fixture's; the whole
+    # command end to end is the slow test below)
+    import softlanding.optimal.hopping as hopping
+
+    def solve_hop(impact, robot, eta, *, doublings):
+        assert (impact.v0, eta, doublings) == (-2.0, 0.0, 0)
+        return grid_hop
+
+    monkeypatch.setattr(hopping, "solve_hop", solve_hop)
+    png = tmp_path / "hop.png"
+    code, out, _ = cli("hop", "--v0", "-2", "--doublings", "0", "--json", "--plot", png,
+                       "--pmp")
+    _check_hop_json(code, out, png)
+
+
+@pytest.mark.slow  # the hop end to end from one start: about 9 s CPU
+def test_hop_json_and_plot_end_to_end(cli, tmp_path, monkeypatch):
     import softlanding.optimal.hopping as hopping
 
     monkeypatch.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])  # the CLI, not the search
     png = tmp_path / "hop.png"
     code, out, _ = cli("hop", "--v0", "-1.5", "--doublings", "0", "--json", "--plot", png,
                        "--pmp")
+    _check_hop_json(code, out, png)
+
+
+def _check_hop_json(code, out, png):
     # issue 34: one grid's energy is a discretised value, not a verified optimum: exit 1
     assert code == 1
     d = json.loads(out)

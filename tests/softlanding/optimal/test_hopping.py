@@ -14,15 +14,9 @@ from softlanding.simulation.actuator_work import segment_work
 
 
 @pytest.fixture(scope="module")
-def free():
-    # from the first of HOP_STARTS only (the search over the three runs in the slow grid
-    # test): these tests check the cycle, not the search
-    import softlanding.optimal.hopping as hopping
-
-    with pytest.MonkeyPatch.context() as m:
-        m.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])
-        # the grid's cycle (the exact-arc refinement is checked by the slow tests)
-        return solve_hop(-2.0, PAPER_ROBOT, eta=0.0, refine=False)
+def free(grid_hop):
+    # these tests check the cycle, not the search (tests/softlanding/conftest.py)
+    return grid_hop
 
 
 def test_segment_work_is_exact_on_a_flight_arc():

@@ -1,0 +1,14 @@
+import pytest
+
+
+@pytest.fixture(scope="session")
+def grid_hop():
+    """The free hop at ``v0 = -2``, ``eta = 0`` from the first of ``HOP_STARTS`` only, one
+    grid, no exact-arc refinement: shared by the tests of the cycle and of the CLI's
+    rendering of it (the search, the doubled grids and the refinement run in slow tests)."""
+    import softlanding.optimal.hopping as hopping
+    from softlanding import PAPER_ROBOT
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])
+        return hopping.solve_hop(-2.0, PAPER_ROBOT, eta=0.0, refine=False)
