@@ -27,6 +27,13 @@ from softlanding.optimal.limits import force_limit
 #: Samples of one landing at most (more landings, more grounds, for the same number).
 MAX_SAMPLES = 30
 
+#: A creep's state (``K = 1.5``, ``c_d = 1``, the paper's robot, a few samples after impact)
+#: whose push-pull plan stops the foot with the body rising: the paper's robot's first plan
+#: from it is not covered (status ``CREEP``), a path random landings reach only by chance. Its
+#: first plan is compared too (for another robot whatever its status is).
+CREEP_PROBE = {"K": 1.5, "c_d": 1.0, "guess": (0.05, 0.04),
+               "x": (9.9768, 0.768, -0.5035, -2.7782)}
+
 
 @dataclass(frozen=True)
 class Landing:
@@ -130,9 +137,9 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
     Returns
     -------
     calls : list of Call
-        In order.
+        In order, and last the first plan from :data:`CREEP_PROBE`'s state.
     landings : int
-        How many landings they make.
+        How many landings they make (the probe not counted).
     """
     ws = bb.workspace()
     calls: list[Call] = []
@@ -171,6 +178,11 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
             length = (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2]
             if steps >= n_steps or length <= h or st not in (bb.OK, bb.CONVERGING, bb.HOLDS):
                 break  # the foot's stop within the next sample, or a state not covered
+    P = bb.robot_numbers(robot.r_m, robot.s, force_limit(robot), CREEP_PROBE["K"],
+                         CREEP_PROBE["c_d"])
+    M = bb.new_memory(*CREEP_PROBE["guess"], (CREEP_PROBE["K"], CREEP_PROBE["c_d"]),
+                      (1.0, 1.0), 1e-6)
+    calls.append(Call(P, M, np.array(CREEP_PROBE["x"], float), 0.0, 0.0, 0.0, True))
     return calls, n_landings
 
 
@@ -194,4 +206,4 @@ def _plant(P: np.ndarray, M: np.ndarray, x: np.ndarray, h: float,
     return np.array([xb, vb, xf, vf]), u, a_f
 
 
-__all__ = ["MAX_SAMPLES", "Call", "Landing", "random_landings", "recorded_calls"]
+__all__ = ["CREEP_PROBE", "MAX_SAMPLES", "Call", "Landing", "random_landings", "recorded_calls"]
