@@ -8,6 +8,7 @@
   :func:`refined_switching` the same for a one-phase problem (one switching structure);
 * :func:`structure_resolve`: a neighbour's refined structure re-solved directly for new
   parameters (Newton or a small NLP, no transcription), kept only while it still holds;
+  :func:`switching_resolve` the same for a one-phase structure;
 * :func:`phase_guess`: an exact-simulator trajectory cut into phases at given times, as a
   starting guess for a transcription.
 """
