@@ -11,21 +11,14 @@ constraints, dynamics and objective are the landing's own
 
 from __future__ import annotations
 
-import warnings
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ocp import (
-    MultipleShooting,
-    OptimalControlProblem,
-    PathViolationWarning,
-    Solution,
-    SolveError,
-    Trajectory,
-)
-from ocp.structure.switching import RefinedSwitching, detect_arcs, refine_switching
+from ocp import MultipleShooting, OptimalControlProblem, Solution, Trajectory
+from ocp.structure.switching import RefinedSwitching
 from softlanding.errors import ParameterError
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.dynamics import STATE_NAMES
@@ -38,7 +31,8 @@ from softlanding.optimal.landing import (
     transcribed_schedule,
 )
 from softlanding.optimal.limits import force_limit
-from softlanding.util.signals import raise_if_interrupted
+from softlanding.optimal.phase_solve import refined_switching
+from softlanding.optimal.pipeline import PhasedVariant, solve_phased
 
 STATE_NODES = 60
 """Shooting intervals of :func:`state_transcription` (the MPC's re-plan of last resort and
@@ -144,12 +138,115 @@ def state_transcription() -> MultipleShooting:
                             substeps=4, expand=True)
 
 
+@dataclass
+class StatePlan:
+    """A landing planned from a mid-landing state (what :func:`solve_from_state` reads).
+
+    Attributes
+    ----------
+    refined : RefinedSwitching or None
+        The refined arcs, when they are an exact schedule (else the transcription is the
+        plan).
+    transcribed : ocp.Solution or None
+        The transcription.
+    notes : list of str
+        What the solve noticed.
+    refine_requested : bool
+        Whether the switching times were to be refined.
+    """
+
+    refined: RefinedSwitching | None
+    transcribed: Solution | None
+    notes: list[str] = field(default_factory=list)
+    refine_requested: bool = True
+
+
+class StateStarted(PhasedVariant[StatePlan]):
+    """The state-started landing's hooks in the pipeline
+    (:func:`~softlanding.optimal.pipeline.solve_phased`): the transcription of
+    :func:`state_landing_problem` from the neighbour's solution, else ``guess``, else Ipopt's
+    default start; its switching structure refined as the single-phase landing's
+    (:func:`~softlanding.optimal.phase_solve.refined_switching`) and kept when it is an exact
+    schedule. No replay: the controller's plant is the replay.
+
+    Parameters
+    ----------
+    robot : Robot
+        The robot (with a force limit).
+    ground : LinearGround or DragGround
+        The ground.
+    x : array of 4
+        The state (a yielding foot); it stands for the impact, which the hooks do not read.
+    guess : ocp.Trajectory or None
+        A start for the solver (times from the state's instant).
+    """
+
+    default_start = True  # a guess from the last plan's rest may mislead from a new state
+
+    def __init__(self, robot: Robot, ground: Ground, x: np.ndarray,
+                 guess: Trajectory | None) -> None:
+        self.robot, self.ground, self.x, self.start = robot, ground, x, guess
+
+    def parameters(self) -> dict[str, float]:
+        """:func:`state_parameters` of the state."""
+        return state_parameters(self.robot, self.ground, self.x)
+
+    def transcription(self) -> MultipleShooting:
+        """:func:`state_transcription`."""
+        return state_transcription()
+
+    def guess(self) -> Trajectory | None:
+        """The caller's guess (None: Ipopt's default start)."""
+        return self.start
+
+    def refinement(self, sol: Solution, notes: list[str]) -> RefinedSwitching | None:
+        """The arcs refined, if finite, with no arc collapsed and an exact schedule (every
+        law affine): else None, and the transcription is the plan.
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription.
+        notes : list of str
+            Receives why there is no refinement.
+        """
+        refined, _ = refined_switching(sol, notes)
+        if refined is None:
+            return None
+        if (np.all(np.isfinite(refined.durations)) and np.all(np.isfinite(refined.xT))
+                and np.min(refined.durations) > 1e-9 * refined.T and affine_laws(refined)):
+            return refined
+        notes.append("the refined arcs are not an exact schedule; the transcription is "
+                     "the plan")
+        return None
+
+    def assemble(self, sol: Solution | None, ref: RefinedSwitching | None, notes: list[str],
+                 path: str) -> StatePlan:
+        """The plan.
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription.
+        ref : RefinedSwitching or None
+            The accepted refinement.
+        notes : list of str
+            What the solve noticed.
+        path : str
+            Always ``"transcription"`` (no neighbour's structure is re-solved here).
+        """
+        return StatePlan(ref, sol, notes)
+
+
 def solve_from_state(robot: Robot, ground: Ground, x: np.ndarray, *,
                      guess: Trajectory | None = None,
                      warm_start: Solution | None = None) -> RefinedSwitching | Solution:
     """The optimal landing from a mid-landing state on a known ground: refined arcs when the
     transcription's structure is bang-bang and every arc's law is affine (an exact schedule),
     else the transcription itself.
+
+    It runs on the variants' pipeline (:func:`~softlanding.optimal.pipeline.solve_phased`,
+    :class:`StateStarted`): the same fallback order of starts and the same refinement.
 
     Parameters
     ----------
@@ -163,7 +260,8 @@ def solve_from_state(robot: Robot, ground: Ground, x: np.ndarray, *,
         A start for the solver (times from the state's instant); Ipopt's default start if
         it is not given or fails.
     warm_start : ocp.Solution, optional
-        A solution of :func:`state_transcription` to start from (instead of ``guess``).
+        A solution of :func:`state_transcription` to start from (then ``guess``, then
+        Ipopt's default start, if it fails).
 
     Raises
     ------
@@ -177,32 +275,11 @@ def solve_from_state(robot: Robot, ground: Ground, x: np.ndarray, *,
         raise ParameterError("x", f"needs 4 finite numbers (x_b, v_b, x_f, v_f), got {x!r}")
     if not x[3] < 0:
         raise ParameterError("x", "the foot must still yield (v_f < 0) to plan its landing")
-    tr = state_transcription()
-    params = state_parameters(robot, ground, x)
-    sol = None
-    with warnings.catch_warnings():
-        # the plan is judged by its exact replay, not by the transcription's nodes
-        warnings.simplefilter("ignore", PathViolationWarning)
-        if warm_start is not None and warm_start.transcription is tr:
-            sol = tr.solve(params, warm_start=warm_start)
-        elif guess is not None:
-            try:
-                sol = tr.solve(params, guess=guess)
-            except SolveError:
-                raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-        if sol is None:
-            sol = tr.solve(params)
-    structure = detect_arcs(sol).without_trailing_constrained()
-    if structure.refinable:  # else not bang-bang (a singular creep): the transcription
-        try:
-            refined = refine_switching(sol, structure)
-            # finite, no arc collapsed, an exact schedule: else the transcription is the plan
-            if (np.all(np.isfinite(refined.durations)) and np.all(np.isfinite(refined.xT))
-                    and np.min(refined.durations) > 1e-9 * refined.T and affine_laws(refined)):
-                return refined
-        except SolveError:
-            raise_if_interrupted()
-    return sol
+    plan = solve_phased(StateStarted(robot, ground, x, guess), warm_start, replay=False)
+    if plan.refined is not None:
+        return plan.refined
+    assert plan.transcribed is not None
+    return plan.transcribed
 
 
 def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
@@ -235,6 +312,6 @@ def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
     return landing_schedule(plan, robot.r_m)
 
 
-__all__ = ["STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "ground_numbers",
-           "plan_from_state", "solve_from_state", "state_landing_problem", "state_parameters",
-           "state_transcription"]
+__all__ = ["STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "StatePlan", "StateStarted",
+           "ground_numbers", "plan_from_state", "solve_from_state", "state_landing_problem",
+           "state_parameters", "state_transcription"]

@@ -8,8 +8,9 @@
   problem in :mod:`.leg_extension_problem`;
 * :mod:`.hopping` -- the minimum-energy hop cycle (:func:`solve_hop`), problem in
   :mod:`.hopping_problem`;
-* :mod:`.pipeline` -- what the phased variants share: :class:`PhasedVariant` (the hooks a
-  variant fills), :func:`solve_phased`, :func:`continuation`;
+* :mod:`.pipeline` -- what every variant shares: :class:`PhasedVariant` (the hooks a
+  variant fills), :func:`solve_phased`, :func:`continuation` (the single-phase landing and
+  the MPC's state-started solve run on it too, with one-phase refinement hooks);
 * :mod:`.result` -- :class:`PhasedLanding`, the result every phased variant extends;
 * :mod:`.stance_phases` -- the ground modes as phases of an ``ocp.MultiPhaseProblem``;
 * :mod:`.phase_solve`, :mod:`.phase_schedule`, :mod:`.verification` -- transcribe, refine,

@@ -31,21 +31,21 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ocp import InfeasibleError, MultipleShooting, OptimalControlProblem, Solution, SolveError
-from ocp.structure.switching import (
-    RefinedSwitching,
-    detect_arcs,
-    refine_structure,
-    refine_switching,
-)
+from ocp import MultipleShooting, OptimalControlProblem, Solution, SolveError
+from ocp.structure.switching import RefinedSwitching, detect_arcs
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule, Rigid
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.limits import force_limit, landing_input
-from softlanding.optimal.phase_solve import transcribed_solve
-from softlanding.optimal.pipeline import continuation, landing_parameters
+from softlanding.optimal.phase_solve import refined_switching, switching_resolve
+from softlanding.optimal.pipeline import (
+    PhasedVariant,
+    continuation,
+    landing_parameters,
+    solve_phased,
+)
 from softlanding.optimal.stance_phases import crater_capacity
 from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
@@ -509,44 +509,6 @@ def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: G
         f"s={robot.s:g}, u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
 
 
-def _transcribed(tr: MultipleShooting, robot: Robot, impact: Impact, ground: Ground,
-                 nodes: int, warm_start: Solution | None, notes: list[str]) -> Solution:
-    """The pipeline's transcription step (:func:`~softlanding.optimal.phase_solve.
-    transcribed_solve`: warm-started if possible, else from the rigid-leg guess; a path
-    constraint violated between nodes is noted, and the refined solution and the exact replay
-    are checked instead), with infeasibility explained in words."""
-    try:
-        return transcribed_solve(tr, landing_parameters(robot, impact),
-                                 rigid_guess(tr, robot, impact, ground), warm_start, notes)
-    except InfeasibleError as err:
-        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-        raise _explain_infeasible(err, robot, impact, ground, nodes) from None
-
-
-def _refined(sol: Solution, extra_arcs: int,
-             notes: list[str]) -> tuple[RefinedSwitching | None, Any]:
-    """Detect the bang-bang structure and refine it (None when not bang-bang or failed)."""
-    st = detect_arcs(sol)
-    trimmed = st.without_trailing_constrained()
-    if trimmed is not st and trimmed.refinable:
-        notes.append(
-            f"dropped the final {st.arcs[-1].duration:.4g}-long arc on which "
-            f"{' and '.join(st.arcs[-1].active)} is active: the foot has already stopped "
-            "and the force holds the crater's yield load, which is the body-arrest phase")
-        st = trimmed
-    if not st.refinable:
-        notes.append(f"structure {st.kinds} has arcs that are neither bang nor on a "
-                     "constraint; not refined")
-        return None, st
-    try:
-        return refine_switching(sol, st, extra_arcs=extra_arcs), st
-    except SolveError as err:
-        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-        notes.append(f"switching-time refinement failed ({err.status}); "
-                     "reporting the transcribed solution")
-        return None, st
-
-
 def build_landing_problem_of(nodes: int, ground: Ground) -> OptimalControlProblem:
     """The (cached) landing problem of :func:`landing_transcription` (one phase).
 
@@ -562,46 +524,136 @@ def build_landing_problem_of(nodes: int, ground: Ground) -> OptimalControlProble
     return problem
 
 
-def _structure_resolve(prev: BangBangLanding, robot: Robot, impact: Impact, ground: Ground,
-                       nodes: int) -> RefinedSwitching | None:
-    """The neighbour's arc structure re-solved for this landing (None if it does not hold)."""
-    if prev.refined is None or prev.ground != ground:
-        return None
-    problem = build_landing_problem_of(nodes, ground)
-    try:
-        r = refine_structure(problem, prev.refined.modes, prev.refined.durations,
-                             impact.initial_state(robot), landing_parameters(robot, impact))
-    except SolveError:
-        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-        return None
-    # the structure must still be the optimum's: an arc that collapsed sends the solve back
-    # to the transcription (path constraints are checked inside every arc by the re-solve,
-    # and exactly by the replay)
-    if min(r.durations) <= 1e-9 * r.T:
-        return None
-    return r
+class PaperLanding(PhasedVariant[BangBangLanding]):
+    """The paper's single-phase landing's hooks in the pipeline
+    (:func:`~softlanding.optimal.pipeline.solve_phased`): one phase, refined as one
+    switching structure (:func:`~softlanding.optimal.phase_solve.refined_switching`) and
+    re-solved from a neighbour's by :func:`~softlanding.optimal.phase_solve.
+    switching_resolve`.
 
+    Parameters
+    ----------
+    robot, impact, ground
+        The problem.
+    nodes : int
+        Shooting intervals.
+    extra_arcs : int
+        Also try this many more bang arcs (no structure re-solve then).
+    """
 
-def _landing(robot: Robot, impact: Impact, ground: Ground, sol: Solution | None,
-             refined: RefinedSwitching | None, structure: Any, notes: list[str],
-             refine: bool, path: str) -> BangBangLanding:
-    """Assemble the result (depth, arrest condition, arcs) from what was solved."""
-    assert refined is not None or sol is not None
-    xT = refined.xT if refined is not None else sol.x[-1]  # type: ignore[union-attr]
-    depth = -xT[2]
-    u_b = arrest_force(robot.r_m, xT)
-    gap = float(crater_capacity(xT, ground)) - robot.foot_mass - u_b
-    src = refined if refined is not None else structure
-    return BangBangLanding(
-        robot=robot, impact=impact, ground=ground, depth=float(depth),
-        depth_transcribed=float(-sol.x[-1, 2]) if sol is not None else math.nan,
-        T=float(refined.T if refined is not None else sol.T),  # type: ignore[union-attr]
-        arcs=list(src.kinds), switch_times=[float(t) for t in src.switch_times],
-        u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
-        status=sol.status if sol is not None else refined.status,  # type: ignore[union-attr]
-        iterations=sol.iterations if sol is not None else refined.iterations,  # type: ignore
-        solve_time_s=sol.solve_time if sol is not None else refined.solve_time,  # type: ignore
-        refined=refined, transcribed=sol, notes=notes, refine_requested=refine, path=path)
+    def __init__(self, robot: Robot, impact: Impact, ground: Ground, nodes: int,
+                 extra_arcs: int) -> None:
+        super().__init__(robot, impact)
+        self.ground, self.nodes, self.extra_arcs = ground, nodes, extra_arcs
+        self.structure: Any = None  # the detected (trimmed) arcs, when refinement was tried
+
+    def transcription(self) -> MultipleShooting:
+        """The (cached) :func:`landing_transcription`."""
+        return landing_transcription(self.nodes, ground=self.ground)
+
+    def guess(self) -> np.ndarray:
+        """The rigid-leg landing (:func:`rigid_guess`)."""
+        return rigid_guess(self.transcription(), self.robot, self.impact, self.ground)
+
+    def accepts(self, neighbour: BangBangLanding) -> bool:
+        """A neighbour on the same ground, when no extra arcs are asked for.
+
+        Parameters
+        ----------
+        neighbour : BangBangLanding
+            The warm start.
+        """
+        return self.extra_arcs == 0 and neighbour.ground == self.ground
+
+    def refinement(self, sol: Solution, notes: list[str]) -> RefinedSwitching | None:
+        """One switching structure refined (:func:`~softlanding.optimal.phase_solve.
+        refined_switching`).
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription.
+        notes : list of str
+            Receives what was dropped, or why there is no refinement.
+        """
+        refined, self.structure = refined_switching(sol, notes, self.extra_arcs)
+        return refined
+
+    def resolve(self, neighbour: BangBangLanding,
+                params: dict[str, float]) -> RefinedSwitching | None:
+        """The neighbour's arcs re-solved for this landing (None if they do not hold).
+
+        Parameters
+        ----------
+        neighbour : BangBangLanding
+            The warm start (refined).
+        params : dict
+            This landing's parameter values.
+        """
+        assert neighbour.refined is not None
+        return switching_resolve(neighbour.refined, build_landing_problem_of(
+            self.nodes, self.ground), self.impact.initial_state(self.robot), params)
+
+    def explain(self, err: SolveError, guess: Any) -> Exception:
+        """Name the condition(s) whose removal makes the request feasible.
+
+        Parameters
+        ----------
+        err : ocp.SolveError
+            Ipopt's verdict.
+        guess : object
+            Unused (each diagnosis starts from its own rigid guess).
+        """
+        return _explain_infeasible(err, self.robot, self.impact, self.ground, self.nodes)
+
+    def assemble(self, sol: Solution | None, ref: RefinedSwitching | None, notes: list[str],
+                 path: str) -> BangBangLanding:
+        """The result (depth, arrest condition, arcs) from what was solved.
+
+        Parameters
+        ----------
+        sol : ocp.Solution or None
+            The transcription (None on the structure path).
+        ref : RefinedSwitching or None
+            The refinement.
+        notes : list of str
+            What the solve noticed.
+        path : str
+            ``"transcription"`` or ``"structure"``.
+        """
+        assert ref is not None or sol is not None
+        robot, ground = self.robot, self.ground
+        xT = ref.xT if ref is not None else sol.x[-1]  # type: ignore[union-attr]
+        depth = -xT[2]
+        u_b = arrest_force(robot.r_m, xT)
+        gap = float(crater_capacity(xT, ground)) - robot.foot_mass - u_b
+        if ref is not None:
+            src: Any = ref
+        elif self.structure is not None:  # the structure refinement was tried on
+            src = self.structure
+        else:
+            assert sol is not None
+            src = detect_arcs(sol)
+        done = sol if sol is not None else ref
+        return BangBangLanding(
+            robot=robot, impact=self.impact, ground=ground, depth=float(depth),
+            depth_transcribed=float(-sol.x[-1, 2]) if sol is not None else math.nan,
+            T=float(ref.T if ref is not None else sol.T),  # type: ignore[union-attr]
+            arcs=list(src.kinds), switch_times=[float(t) for t in src.switch_times],
+            u_b=float(u_b), arrest_active=bool(abs(gap) <= 1e-8 * max(1.0, depth)),
+            status=done.status, iterations=done.iterations,  # type: ignore[union-attr]
+            solve_time_s=done.solve_time,  # type: ignore[union-attr]
+            refined=ref, transcribed=sol, notes=notes, path=path)
+
+    def replay(self, result: BangBangLanding) -> None:
+        """The landing's schedule replayed in the exact simulator.
+
+        Parameters
+        ----------
+        result : BangBangLanding
+            The result (its ``replay`` is set).
+        """
+        result.replay = simulate(self.robot, self.impact, result.schedule(), self.ground)
 
 
 def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
@@ -652,26 +704,12 @@ def solve_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     if warm_start is not None:
         expect("warm_start", warm_start, (Solution, BangBangLanding),
                "BangBangLanding or ocp.Solution of this landing problem")
-    out = None
-    if isinstance(warm_start, BangBangLanding):
-        if refine and extra_arcs == 0:
-            r = _structure_resolve(warm_start, robot, impact, ground, nodes)
-            if r is not None:
-                out = _landing(robot, impact, ground, None, r, None, [], True, "structure")
-        warm_start = warm_start.transcribed
-    if out is None:
-        tr = landing_transcription(nodes, ground=ground)
-        notes: list[str] = []
-        sol = _transcribed(tr, robot, impact, ground, nodes, warm_start, notes)
-        refined, st = _refined(sol, extra_arcs, notes) if refine else (None, None)
-        out = _landing(robot, impact, ground, sol, refined, st or detect_arcs(sol), notes,
-                       refine, "transcription")
-    if replay:
-        out.replay = simulate(robot, impact, out.schedule(), ground)
-        if out.path == "structure" and out.unverified_reasons():
-            # the neighbour's structure does not hold here: solve it properly
-            return solve_landing(impact, robot, ground, nodes=nodes, refine=refine,
-                                 warm_start=out.transcribed, replay=replay)
+    out = solve_phased(PaperLanding(robot, impact, ground, nodes, extra_arcs), warm_start,
+                       refine=refine, replay=replay)
+    if replay and out.path == "structure" and out.unverified_reasons():
+        # the neighbour's structure does not hold here: solve it properly
+        return solve_landing(impact, robot, ground, nodes=nodes, refine=refine,
+                             warm_start=out.transcribed, replay=replay)
     return out
 
 
@@ -708,7 +746,8 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
         progress, "bang-bang sweep")
 
 
-__all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "ParameterError",
+__all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "PaperLanding",
+           "ParameterError",
            "arrest_force", "arrest_schedule", "build_landing_problem", "landing_schedule",
            "landing_stance", "landing_transcription", "solve_landing", "sweep_landing",
            "transcribed_schedule"]

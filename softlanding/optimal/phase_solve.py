@@ -1,11 +1,14 @@
-"""Solve, refine and re-solve a multi-phase landing problem: the steps the variants share.
+"""Solve, refine and re-solve a landing problem: the steps the variants share.
 
-* :func:`transcribed_solve`: the transcribed NLP from a guess or a neighbour's solution
-  (a transcription that violates a path constraint between its nodes is noted);
+* :func:`transcribed_solve`: the transcribed NLP from a neighbour's solution, else a guess
+  (else, if asked, Ipopt's default start); a transcription that violates a path constraint
+  between its nodes is noted;
 * :func:`refined_phases`: the arc structure of every phase refined with exact arcs
   (None, with a note, when a phase is not bang-bang or the refinement fails);
+  :func:`refined_switching` the same for a one-phase problem (one switching structure);
 * :func:`structure_resolve`: a neighbour's refined structure re-solved directly for new
   parameters (Newton or a small NLP, no transcription), kept only while it still holds;
+  :func:`switching_resolve` the same for a one-phase structure;
 * :func:`phase_guess`: an exact-simulator trajectory cut into phases at given times, as a
   starting guess for a transcription.
 """
@@ -28,13 +31,21 @@ from ocp.structure.phase_refinement import (
     refine_phase_structure,
     refine_phases,
 )
+from ocp.structure.switching import (
+    RefinedSwitching,
+    detect_arcs,
+    refine_structure,
+    refine_switching,
+)
 from softlanding.optimal.stance_phases import CRATER, STROKE
 from softlanding.util.signals import raise_if_interrupted
 
 
 def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any,
-                      warm_start: Solution | None, notes: list[str]) -> Solution:
-    """Solve the transcription: from ``warm_start`` if given (falling back to ``guess``).
+                      warm_start: Solution | None, notes: list[str], *,
+                      default_start: bool = False) -> Solution:
+    """Solve the transcription: from ``warm_start`` if given, falling back to ``guess``
+    (then, with ``default_start``, to Ipopt's default start).
 
     Parameters
     ----------
@@ -48,11 +59,14 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
         A neighbouring solution of the same transcription.
     notes : list of str
         Receives a note when the solution violates a path constraint between nodes.
+    default_start : bool
+        When the start from ``guess`` fails too, solve once more from the transcription's
+        default guess (a guess from a state far from any solved one can mislead Ipopt).
 
     Raises
     ------
     ocp.SolveError
-        From the cold start (InfeasibleError when Ipopt finds the problem infeasible).
+        From the last start (InfeasibleError when Ipopt finds the problem infeasible).
     """
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PathViolationWarning)
@@ -63,6 +77,13 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
             except (SolveError, ValueError):  # failed, or a solution of another problem
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 sol = None
+        if sol is None and default_start and guess is not None:
+            try:
+                sol = tr.solve(params, guess=guess)
+            except SolveError:
+                raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+                sol = None
+                guess = None
         if sol is None:
             sol = tr.solve(params, guess=guess)
     notes += [f"transcription: {w.message}".split("; refine the grid")[0] for w in caught
@@ -110,6 +131,50 @@ def refined_phases(sol: Solution, notes: list[str],
         return r
     notes.append(why + "; reporting the transcribed solution")
     return None
+
+
+def refined_switching(sol: Solution, notes: list[str], extra_arcs: int = 0
+                      ) -> tuple[RefinedSwitching | None, Any]:
+    """A one-phase transcription's switching structure detected and refined with exact arcs
+    (:func:`ocp.refine_switching`), and the structure; None and a note when it has arcs that
+    are neither bang nor on a constraint, or the refinement fails.
+
+    A final constrained arc after the last bang arc (the foot already stopped, the force
+    holding the crater's yield load: the body-arrest phase, which the terminal conditions
+    account for) is dropped, with a note.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcribed one-phase solution.
+    notes : list of str
+        Receives what was dropped, or why there is no refinement.
+    extra_arcs : int
+        Also try this many more bang arcs.
+
+    Returns
+    -------
+    (RefinedSwitching or None, SwitchingStructure)
+    """
+    st = detect_arcs(sol)
+    trimmed = st.without_trailing_constrained()
+    if trimmed is not st and trimmed.refinable:
+        notes.append(
+            f"dropped the final {st.arcs[-1].duration:.4g}-long arc on which "
+            f"{' and '.join(st.arcs[-1].active)} is active: the foot has already stopped "
+            "and the force holds the crater's yield load, which is the body-arrest phase")
+        st = trimmed
+    if not st.refinable:
+        notes.append(f"structure {st.kinds} has arcs that are neither bang nor on a "
+                     "constraint; not refined")
+        return None, st
+    try:
+        return refine_switching(sol, st, extra_arcs=extra_arcs), st
+    except SolveError as err:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+        notes.append(f"switching-time refinement failed ({err.status}); "
+                     "reporting the transcribed solution")
+        return None, st
 
 
 def second_start(inner: MultipleShooting, tr: MultipleShooting, params: dict[str, float],
@@ -286,6 +351,34 @@ def structure_resolve(prev: RefinedPhases, params: dict[str, float],
     return r
 
 
+def switching_resolve(prev: RefinedSwitching, problem: Any, x0: np.ndarray,
+                      params: dict[str, float]) -> RefinedSwitching | None:
+    """A neighbour's refined one-phase structure re-solved for new parameters
+    (:func:`ocp.refine_structure`; None if it fails or an arc collapses: the structure is
+    then no longer the optimum's, and the caller transcribes). Path constraints are checked
+    inside every arc by the re-solve.
+
+    Parameters
+    ----------
+    prev : RefinedSwitching
+        The neighbour's refinement.
+    problem : ocp.OptimalControlProblem
+        The problem it refined.
+    x0 : array
+        The start.
+    params : dict
+        The new parameter values.
+    """
+    try:
+        r = refine_structure(problem, prev.modes, prev.durations, x0, params)
+    except SolveError:
+        raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+        return None
+    if min(r.durations) <= 1e-9 * r.T:
+        return None
+    return r
+
+
 def phase_guess(traj: Trajectory, edges: list[float]) -> Trajectory:
     """``traj`` cut into phases at the times ``edges`` (one fewer than the phases), the
     junction samples repeated so each phase has its own ends; a phase of zero length
@@ -315,5 +408,5 @@ def phase_guess(traj: Trajectory, edges: list[float]) -> Trajectory:
                       traj.control_names, phase=np.concatenate(ph))
 
 
-__all__ = ["phase_guess", "refined_phases", "repaired_structures", "structure_resolve",
-           "transcribed_solve"]
+__all__ = ["phase_guess", "refined_phases", "refined_switching", "repaired_structures",
+           "structure_resolve", "switching_resolve", "transcribed_solve"]

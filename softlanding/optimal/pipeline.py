@@ -10,6 +10,10 @@ A variant is a problem (an ``ocp`` multi-phase problem and its transcription) pl
   PhasedLanding` subclass) from a transcription and/or refined phases;
 * optionally :meth:`PhasedVariant.accepts` (which neighbours' structures may be re-solved),
   :meth:`PhasedVariant.bound` (a depth no re-solved structure may exceed),
+  :meth:`PhasedVariant.refinement` and :meth:`PhasedVariant.resolve` (a one-phase problem
+  refines one switching structure, :func:`~softlanding.optimal.phase_solve.
+  refined_switching`, instead of phases), :attr:`PhasedVariant.default_start` (Ipopt's
+  default start after a failed guess),
   :meth:`PhasedVariant.explain` (an infeasible problem, in words),
   :meth:`PhasedVariant.retry` (a second attempt when refinement fails),
   :meth:`PhasedVariant.finish` and :meth:`PhasedVariant.replay`.
@@ -25,18 +29,27 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Iterable
-from typing import Any, TypeVar
+from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
 from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
-from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve
-from softlanding.optimal.result import PhasedLanding
 from softlanding.util.progress import progress as show_progress
 from softlanding.util.signals import raise_if_interrupted
 
 R = TypeVar("R")
+
+
+class Solved(Protocol):
+    """What :func:`solve_phased` reads and sets on a result (a neighbour's, or its own)."""
+
+    refined: Any
+    transcribed: Solution | None
+    refine_requested: bool
+
+
+L = TypeVar("L", bound=Solved)
 
 
 def landing_parameters(robot: Robot, impact: Impact) -> dict[str, float]:
@@ -83,8 +96,10 @@ def continuation(impacts: Iterable[Impact], solve_one: Callable[[Impact, R | Non
     return out
 
 
-class PhasedVariant:
-    """One landing problem to solve through :func:`solve_phased` (fill the hooks).
+class PhasedVariant(Generic[L]):
+    """One landing problem to solve through :func:`solve_phased` (fill the hooks), whose
+    result is an ``L`` (a :class:`~softlanding.optimal.result.PhasedLanding` unless the
+    variant says otherwise).
 
     Parameters
     ----------
@@ -93,6 +108,10 @@ class PhasedVariant:
     impact : Impact
         The impact.
     """
+
+    default_start: ClassVar[bool] = False
+    """When the start from :meth:`guess` fails too, start once more from Ipopt's default
+    (for a guess that may mislead, e.g. one from a state far from any solved one)."""
 
     def __init__(self, robot: Robot, impact: Impact) -> None:
         self.robot, self.impact = robot, impact
@@ -109,8 +128,7 @@ class PhasedVariant:
         """The cold-start guess (a trajectory cut into the phases)."""
         raise NotImplementedError
 
-    def assemble(self, sol: Solution | None, ref: RefinedPhases | None, notes: list[str],
-                 path: str) -> PhasedLanding:
+    def assemble(self, sol: Solution | None, ref: Any, notes: list[str], path: str) -> L:
         """The result.
 
         Parameters
@@ -118,7 +136,8 @@ class PhasedVariant:
         sol : ocp.Solution or None
             The transcription (None on the structure path).
         ref : RefinedPhases or None
-            The refined phases (None when refinement was off or failed).
+            The refinement (None when it was off or failed): what :meth:`refinement` or
+            :meth:`resolve` gave.
         notes : list of str
             What the solve noticed.
         path : str
@@ -126,7 +145,7 @@ class PhasedVariant:
         """
         raise NotImplementedError
 
-    def accepts(self, neighbour: PhasedLanding) -> bool:
+    def accepts(self, neighbour: L) -> bool:
         """Whether ``neighbour``'s refined structure may be re-solved for this problem.
 
         Parameters
@@ -135,6 +154,33 @@ class PhasedVariant:
             The warm start.
         """
         return True
+
+    def refinement(self, sol: Solution, notes: list[str]) -> Any:
+        """The switching times refined with exact arcs, or None (default: every phase's,
+        :func:`~softlanding.optimal.phase_solve.refined_phases`).
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription.
+        notes : list of str
+            Receives why there is no refinement, or what was repaired.
+        """
+        return refined_phases(sol, notes)
+
+    def resolve(self, neighbour: L, params: dict[str, float]) -> Any:
+        """``neighbour``'s refined structure re-solved directly for ``params``, or None when
+        it does not hold here (default: :func:`~softlanding.optimal.phase_solve.
+        structure_resolve` under :meth:`bound`).
+
+        Parameters
+        ----------
+        neighbour : PhasedLanding
+            The warm start (refined, and accepted).
+        params : dict
+            This problem's parameter values.
+        """
+        return structure_resolve(neighbour.refined, params, bound=self.bound())
 
     def bound(self) -> float | None:
         """A depth that a re-solved structure must not exceed (None: no bound)."""
@@ -152,8 +198,8 @@ class PhasedVariant:
         """
         return err
 
-    def retry(self, sol: Solution, ref: RefinedPhases | None, guess: Any,
-              notes: list[str]) -> tuple[Solution, RefinedPhases | None]:
+    def retry(self, sol: Solution, ref: Any, guess: Any,
+              notes: list[str]) -> tuple[Solution, Any]:
         """A second attempt when the refinement failed (default: none).
 
         Parameters
@@ -169,7 +215,7 @@ class PhasedVariant:
         """
         return sol, ref
 
-    def finish(self, result: PhasedLanding) -> PhasedLanding:
+    def finish(self, result: L) -> L:
         """Last changes to a transcribed result before the replay (default: none).
 
         Parameters
@@ -179,7 +225,7 @@ class PhasedVariant:
         """
         return result
 
-    def replay(self, result: PhasedLanding) -> None:
+    def replay(self, result: L) -> None:
         """Replay ``result`` in the exact simulator, in place (default: none).
 
         Parameters
@@ -189,17 +235,18 @@ class PhasedVariant:
         """
 
 
-def solve_phased(variant: PhasedVariant, warm_start: PhasedLanding | None = None, *,
-                 refine: bool = True, replay: bool = True) -> PhasedLanding:
+def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = None, *,
+                 refine: bool = True, replay: bool = True) -> L:
     """Solve a phased landing: structure re-solve or transcription, refinement, replay.
 
     Parameters
     ----------
     variant : PhasedVariant
         The problem and its hooks.
-    warm_start : PhasedLanding, optional
+    warm_start : PhasedLanding or ocp.Solution, optional
         A neighbouring solution: its refined structure is re-solved directly first (when
-        ``variant.accepts`` it), then its transcription warm-starts the NLP.
+        ``variant.accepts`` it), then its transcription warm-starts the NLP (a bare
+        transcription only warm-starts the NLP).
     refine : bool
         Refine the switching times of every phase with exact arcs.
     replay : bool
@@ -213,22 +260,27 @@ def solve_phased(variant: PhasedVariant, warm_start: PhasedLanding | None = None
     """
     params = variant.parameters()
     out = None
-    if warm_start is not None and warm_start.refined is not None and refine and \
-            variant.accepts(warm_start):
-        r = structure_resolve(warm_start.refined, params, bound=variant.bound())
+    neighbour: L | None = None
+    warm: Solution | None = None
+    if isinstance(warm_start, Solution):
+        warm = warm_start
+    elif warm_start is not None:
+        neighbour, warm = warm_start, warm_start.transcribed
+    if neighbour is not None and neighbour.refined is not None and refine and \
+            variant.accepts(neighbour):
+        r = variant.resolve(neighbour, params)
         if r is not None:
             out = variant.assemble(None, r, [], "structure")
     if out is None:
         notes: list[str] = []
         guess = variant.guess()
         try:
-            sol = transcribed_solve(variant.transcription(), params, guess,
-                                    warm_start.transcribed if warm_start is not None else None,
-                                    notes)
+            sol = transcribed_solve(variant.transcription(), params, guess, warm, notes,
+                                    default_start=variant.default_start)
         except InfeasibleError as err:
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             raise variant.explain(err, guess) from None
-        ref = refined_phases(sol, notes) if refine else None
+        ref = variant.refinement(sol, notes) if refine else None
         if refine:
             sol, ref = variant.retry(sol, ref, guess, notes)
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))

@@ -164,6 +164,38 @@ def test_a_short_stroke_plan_from_state_replays_its_transcription():
         plan_from_state(robot, LinearGround(), np.array([1.0, 0.0, 0.0, 0.0]))
 
 
+def test_the_state_started_solve_falls_back_as_every_variant(monkeypatch):
+    # on the pipeline: a failed warm start falls back to the guess, a failed guess to
+    # Ipopt's default start (before, a failed warm start failed the MPC's sample)
+    from ocp import SolveError
+    from ocp.structure.switching import RefinedSwitching
+    from softlanding.control.state_landing import (
+        solve_from_state,
+        state_parameters,
+        state_transcription,
+    )
+
+    x = np.array([1.0, -2.0, -0.3, -2.5])
+    tr = state_transcription()
+    real, starts = tr.solve, []
+    default = real(state_parameters(PAPER_ROBOT, LinearGround(), x))
+
+    def solve(params, guess=None, warm_start=None):
+        starts.append("warm" if warm_start is not None else "guess" if guess is not None
+                      else "default")
+        if starts[-1] != "default":
+            raise SolveError("Maximum_Iterations_Exceeded")
+        return real(params, guess=guess, warm_start=warm_start)
+
+    monkeypatch.setattr(tr, "solve", solve)
+    plan = solve_from_state(PAPER_ROBOT, LinearGround(), x, warm_start=default,
+                            guess=default.trajectory())
+    assert starts == ["warm", "guess", "default"]
+    # refined from the default start's transcription (60 nodes: depth to ~1e-4)
+    assert isinstance(plan, RefinedSwitching)
+    assert plan.xT[2] == pytest.approx(default.x[-1, 2], rel=1e-3)
+
+
 def test_the_kkt_check_tells_a_minimax_optimum_from_a_point_that_is_not():
     # min z s.t. z >= (x - 1)^2, z >= (x + 1)^2: the optimum x = 0, z = 1 (both active,
     # multipliers 1/2 each); at x = 0.5 only one is active and z can still decrease

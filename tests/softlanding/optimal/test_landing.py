@@ -130,13 +130,14 @@ def test_cli_compare_orders_the_three_legs(cli):
 def test_an_unverified_result_is_not_a_plain_success(cli, monkeypatch):
     """A refinement that fails leaves the transcribed answer: JSON says verified false with
     the reason, the table says so first, and the exit code is 1 unless accepted."""
-    import softlanding.optimal.landing as landing
+    import softlanding.optimal.phase_solve as phase_solve
     from ocp import SolveError
 
     def fails(*a, **k):
         raise SolveError("Search_Direction_Becomes_Too_Small")
 
-    monkeypatch.setattr(landing, "refine_switching", fails)
+    # (the pipeline's one-phase refinement step, which the paper's landing runs)
+    monkeypatch.setattr(phase_solve, "refine_switching", fails)
     code, out, _ = cli("solve", "--v0", "-3", "--json")
     d = json.loads(out)
     assert code == 1 and d["verified"] is False
