@@ -27,12 +27,31 @@ from softlanding.optimal.limits import force_limit
 #: Samples of one landing at most (more landings, more grounds, for the same number).
 MAX_SAMPLES = 30
 
+@dataclass(frozen=True)
+class Probe:
+    """A first plan every comparison runs.
+
+    Attributes
+    ----------
+    K, c_d : float
+        The ground (the controller's prior).
+    guess : (float, float)
+        The push and pull durations Newton starts from.
+    x : (float, float, float, float)
+        The state.
+    """
+
+    K: float
+    c_d: float
+    guess: tuple[float, float]
+    x: tuple[float, float, float, float]
+
+
 #: A creep's state (``K = 1.5``, ``c_d = 1``, the paper's robot, a few samples after impact)
 #: whose push-pull plan stops the foot with the body rising: the paper's robot's first plan
-#: from it is not covered (status ``CREEP``), a path random landings reach only by chance. Its
-#: first plan is compared too (for another robot whatever its status is).
-CREEP_PROBE = {"K": 1.5, "c_d": 1.0, "guess": (0.05, 0.04),
-               "x": (9.9768, 0.768, -0.5035, -2.7782)}
+#: from it is not covered (status ``CREEP``), a path random landings reach only by chance.
+#: Its first plan is compared too (for another robot whatever its status is).
+CREEP_PROBE = Probe(1.5, 1.0, (0.05, 0.04), (9.9768, 0.768, -0.5035, -2.7782))
 
 
 @dataclass(frozen=True)
@@ -178,11 +197,10 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
             length = (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2]
             if steps >= n_steps or length <= h or st not in (bb.OK, bb.CONVERGING, bb.HOLDS):
                 break  # the foot's stop within the next sample, or a state not covered
-    P = bb.robot_numbers(robot.r_m, robot.s, force_limit(robot), CREEP_PROBE["K"],
-                         CREEP_PROBE["c_d"])
-    M = bb.new_memory(*CREEP_PROBE["guess"], (CREEP_PROBE["K"], CREEP_PROBE["c_d"]),
-                      (1.0, 1.0), 1e-6)
-    calls.append(Call(P, M, np.array(CREEP_PROBE["x"], float), 0.0, 0.0, 0.0, True))
+    pr = CREEP_PROBE
+    P = bb.robot_numbers(robot.r_m, robot.s, force_limit(robot), pr.K, pr.c_d)
+    M = bb.new_memory(*pr.guess, (pr.K, pr.c_d), (1.0, 1.0), 1e-6)
+    calls.append(Call(P, M, np.array(pr.x, float), 0.0, 0.0, 0.0, True))
     return calls, n_landings
 
 
@@ -206,4 +224,5 @@ def _plant(P: np.ndarray, M: np.ndarray, x: np.ndarray, h: float,
     return np.array([xb, vb, xf, vf]), u, a_f
 
 
-__all__ = ["CREEP_PROBE", "MAX_SAMPLES", "Call", "Landing", "random_landings", "recorded_calls"]
+__all__ = ["CREEP_PROBE", "MAX_SAMPLES", "Call", "Landing", "Probe", "random_landings",
+           "recorded_calls"]
