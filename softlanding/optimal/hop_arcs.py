@@ -76,7 +76,17 @@ class Arc:
 
 @dataclass
 class ArcGuess:
-    """The arcs read off a transcription, with the states at their starts and the depth."""
+    """The arcs read off a transcription, with the states at their starts and the depth.
+
+    Attributes
+    ----------
+    arcs : list of Arc
+        In order, from touchdown.
+    starts : list of array
+        The transcription's state at each arc's start.
+    depth : float
+        The transcription's crater depth.
+    """
 
     arcs: list[Arc]
     starts: list[np.ndarray]
