@@ -34,6 +34,7 @@ from ..definition.guess import (
     DefaultChoices,
     control_guess,
     diagnose_nonfinite,
+    fixed_ends,
     raise_if_nonfinite,
     repair_default,
     state_ends,
@@ -117,8 +118,9 @@ class GridFree:
         plain: list[tuple[ca.SX, ca.SX]] = []
         controls = []
         for i, ph in enumerate(mp.phases):
-            ends.append(state_ends(ph, _previous_ends(mp, i, ends), choices))
-            plain.append(state_ends(ph, _previous_ends(mp, i, plain)))
+            fixed = fixed_ends(ph)  # the costly part, shared by both
+            ends.append(state_ends(ph, _previous_ends(mp, i, ends), choices, fixed))
+            plain.append(state_ends(ph, _previous_ends(mp, i, plain), fixed=fixed))
             controls.append(control_guess(ph, choices))
         return cls(mp, mp.times(), [CompiledPhase(ph) for ph in mp.phases], choices, ends,
                    plain, controls, variable_guess(mp.shared, choices))
