@@ -47,7 +47,7 @@ def _fixed_values(expr_rows: list[tuple[ca.SX, ca.SX, ca.SX]], syms: Sequence[ca
             continue
         s = syms[deps[0]]
         coef = ca.jacobian(e, s)
-        if ca.depends_on(coef, s) or (coef.is_constant() and float(ca.DM(coef)) == 0.0):
+        if ca.depends_on(coef, s) or (coef.is_constant() and float(coef) == 0.0):
             continue
         out[deps[0]] = (lo - ca.substitute(e, s, ca.SX(0))) / coef
     return out
