@@ -39,10 +39,12 @@ def _fixed_values(expr_rows: list[tuple[ca.SX, ca.SX, ca.SX]], syms: Sequence[ca
     """Values of ``syms[i]`` fixed by an equality affine in that symbol alone."""
     out: dict[int, ca.SX] = {}
     other_v = ca.vertcat(*others) if others else ca.SX(0, 1)
+    sym_v = ca.vertcat(*syms) if syms else ca.SX(0, 1)
     for e, lo, hi in expr_rows:
         if not ca.is_equal(lo, hi, 10):
             continue
-        deps = [i for i, s in enumerate(syms) if ca.depends_on(e, s)]
+        # one dependency sweep for all the symbols (depends_on's, one at a time)
+        deps = [i for i, d in enumerate(ca.which_depends(e, sym_v, 1, False)) if d]
         if len(deps) != 1 or deps[0] in out or ca.depends_on(e, other_v):
             continue
         s = syms[deps[0]]

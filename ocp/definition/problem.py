@@ -220,6 +220,7 @@ class OptimalControlProblem:
         # stacked symbol vectors, by key, with the declaration counts they were made at
         # (each SX that CasADi's Python layer returns costs ~30 us; a build reads them often)
         self._stacks: dict[str, tuple[tuple[int, ...], ca.SX]] = {}
+        self._end_values: dict[tuple[str, int], tuple[Any, ca.SX]] = {}  # see _at_end
         self._rhs: dict[str, ca.SX] = {}
         # as declared (state/bound_state, control/bound_control); the attributes the rest of
         # ocp reads are their views (ocp.definition.normal_form), set by _normalise
@@ -649,9 +650,7 @@ class OptimalControlProblem:
         expr : SX
             Expression of the states, controls and ``t``.
         """
-        e = to_sx(expr, "at_t0()")
-        return ca.substitute(e, self._stacked("running", [*self._x, *self._u, self.t]),
-                             self._stacked("at_t0", [*self._x0, *self._u0, self.t0]))
+        return self._at_end(expr, "at_t0", [*self._x0, *self._u0, self.t0])
 
     def at_tf(self, expr: Any) -> ca.SX:
         """``expr`` evaluated at ``T`` (states, controls and t at the final time).
@@ -661,9 +660,21 @@ class OptimalControlProblem:
         expr : SX
             Expression of the states, controls and ``t``.
         """
-        e = to_sx(expr, "at_tf()")
-        return ca.substitute(e, self._stacked("running", [*self._x, *self._u, self.t]),
-                             self._stacked("at_tf", [*self._xT, *self._uT, self.T]))
+        return self._at_end(expr, "at_tf", [*self._xT, *self._uT, self.T])
+
+    def _at_end(self, expr: Any, key: str, ends: list[ca.SX]) -> ca.SX:
+        """``expr`` with the running symbols replaced by ``ends``; kept by the identity
+        of ``expr`` (a build substitutes each boundary constraint several times: guesses,
+        scaling sizes, NLP rows). Symbols are only appended, and an expression cannot
+        hold one declared after it, so a kept result never goes stale."""
+        hit = self._end_values.get((key, id(expr)))
+        if hit is not None and hit[0] is expr:
+            return hit[1]
+        e = to_sx(expr, f"{key}()")
+        out = ca.substitute(e, self._stacked("running", [*self._x, *self._u, self.t]),
+                            self._stacked(key, ends))
+        self._end_values[(key, id(expr))] = (expr, out)  # expr kept: its id stays unique
+        return out
 
     def integral(self, integrand: Any) -> ca.SX:
         """A symbol standing for ``int_t0^T integrand dt`` (use in boundary terms).
