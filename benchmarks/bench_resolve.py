@@ -17,7 +17,8 @@ Run:  pip install -e ".[bench]" && python -m benchmarks.bench_resolve [--baselin
 2. **Small builds** (the baseline revision, ``--baseline``, loaded from git into a
    temporary directory and run in fresh processes, alternating with the current tree
    process by process): brachistochrone, Radau N = 5, build + solve, and
-   ``refine(tol=1e-6)``. Goal: no slower than the baseline.
+   ``refine(tol=1e-6)``; the moon lander, Radau N = 5, build + solve. Goal: no slower
+   than the baseline (0.2.0: ``--baseline 95cc625``).
 
 3. **Alp rider** (``--alp``; Betts 2010, pp. 163-165, J* = 2030.85609): Radau from
    N = 20 with ``refine(tol=1e-6)``, CPU per run, current and baseline alternating.
@@ -46,18 +47,20 @@ import json, sys, time, warnings
 import numpy as np
 from ocp import Collocation
 try:
-    from tests.oracles.ocp_suite.problems import brachistochrone
+    from tests.oracles.ocp_suite.problems import brachistochrone, moon_lander
 except ImportError:  # a revision before the oracles folder (0.2.0: tests/ocp_suite)
-    from tests.ocp_suite.problems import brachistochrone
+    from tests.ocp_suite.problems import brachistochrone, moon_lander
 warnings.simplefilter("ignore")
 repeats = int(sys.argv[1])
 def one():
     return Collocation(brachistochrone(), intervals=5).solve()
 def ref():
     return Collocation(brachistochrone(), intervals=5).refine(tol=1e-6)
-one(); ref()  # imports, CasADi's first calls
+def moon():
+    return Collocation(moon_lander(), intervals=5).solve()
+one(); ref(); moon()  # imports, CasADi's first calls
 out = {}
-for name, f in (("build_solve", one), ("refine", ref)):
+for name, f in (("build_solve", one), ("refine", ref), ("moon_build_solve", moon)):
     ts = []
     for _ in range(repeats):
         c = time.process_time(); s = f(); ts.append(time.process_time() - c)
@@ -203,12 +206,13 @@ def baseline_runs(base: Path, args: Any) -> None:
 def small(base: Path, args: Any) -> None:
     """Brachistochrone builds, baseline and current in alternating fresh processes."""
     old, new = alternate(base, SMALL, args.processes, str(max(3, args.repeats // 4)))
-    print(f"brachistochrone Radau N = 5 (median CPU per process, {args.processes} "
-          f"processes each, alternating): baseline {args.baseline} / now")
-    for key in ("build_solve", "refine"):
+    print(f"brachistochrone (build_solve, refine) and moon lander (moon_build_solve), Radau "
+          f"N = 5 (median CPU per process, {args.processes} processes each, alternating): "
+          f"baseline {args.baseline} / now")
+    for key in ("build_solve", "refine", "moon_build_solve"):
         a = [r[key] * 1e3 for r in old]
         b = [r[key] * 1e3 for r in new]
-        print(f"  {key:12s} {' '.join(f'{v:6.1f}' for v in a)} ms / "
+        print(f"  {key:16s} {' '.join(f'{v:6.1f}' for v in a)} ms / "
               f"{' '.join(f'{v:6.1f}' for v in b)} ms; ratio of medians "
               f"{statistics.median(b) / statistics.median(a):.2f}; objectives "
               f"{old[0][key + '_J']:.12g} / {new[0][key + '_J']:.12g}")

@@ -39,15 +39,17 @@ def _fixed_values(expr_rows: list[tuple[ca.SX, ca.SX, ca.SX]], syms: Sequence[ca
     """Values of ``syms[i]`` fixed by an equality affine in that symbol alone."""
     out: dict[int, ca.SX] = {}
     other_v = ca.vertcat(*others) if others else ca.SX(0, 1)
+    sym_v = ca.vertcat(*syms) if syms else ca.SX(0, 1)
     for e, lo, hi in expr_rows:
         if not ca.is_equal(lo, hi, 10):
             continue
-        deps = [i for i, s in enumerate(syms) if ca.depends_on(e, s)]
+        # one dependency sweep for all the symbols (depends_on's, one at a time)
+        deps = [i for i, d in enumerate(ca.which_depends(e, sym_v, 1, False)) if d]
         if len(deps) != 1 or deps[0] in out or ca.depends_on(e, other_v):
             continue
         s = syms[deps[0]]
         coef = ca.jacobian(e, s)
-        if ca.depends_on(coef, s) or (coef.is_constant() and float(ca.DM(coef)) == 0.0):
+        if ca.depends_on(coef, s) or (coef.is_constant() and float(coef) == 0.0):
             continue
         out[deps[0]] = (lo - ca.substitute(e, s, ca.SX(0))) / coef
     return out
@@ -210,8 +212,30 @@ def repair_default(count_nonfinite: Callable[[np.ndarray, np.ndarray], int],
     return use, val
 
 
+def fixed_ends(ph: OptimalControlProblem) -> tuple[dict[int, ca.SX], dict[int, ca.SX]]:
+    """The start and end values of states that an equality fixes, by state index.
+
+    An equality among the initial (terminal) and boundary constraints that is affine
+    in one state's start (end) value and involves no other unknown fixes it
+    (``x(0) = 1``, ``m(T) - m_dry = 0``); the values are SX in the parameters.
+
+    Parameters
+    ----------
+    ph : OptimalControlProblem
+        The phase.
+    """
+    x0, xT, u0, uT = (ca.vertsplit(e) for e in (ph.x0, ph.xT, ph.u0, ph.uT))
+    others_x0 = [*u0, *xT, *uT, ph.t0, ph.T, *[s for s, _ in ph.integrals], *ph.shared.vars]
+    others_xT = [*u0, *x0, *uT, ph.t0, ph.T, *[s for s, _ in ph.integrals], *ph.shared.vars]
+    b_rows = _rows(ph.boundary, lambda e: e)
+    return (_fixed_values(_rows(ph.initial, ph.at_t0) + b_rows, x0, others_x0),
+            _fixed_values(_rows(ph.terminal, ph.at_tf) + b_rows, xT, others_xT))
+
+
 def state_ends(ph: OptimalControlProblem, previous: dict[str, ca.SX] | None = None,
-               choices: DefaultChoices | None = None) -> tuple[ca.SX, ca.SX]:
+               choices: DefaultChoices | None = None,
+               fixed: tuple[dict[int, ca.SX], dict[int, ca.SX]] | None = None,
+               ) -> tuple[ca.SX, ca.SX]:
     """Start and end guesses of every state (SX vectors in the parameters).
 
     Parameters
@@ -223,13 +247,11 @@ def state_ends(ph: OptimalControlProblem, previous: dict[str, ca.SX] | None = No
     choices : DefaultChoices, optional
         Registers the states whose guess is a bare default, so that a solve
         can replace it (see :func:`repair_default`).
+    fixed : tuple of dict, optional
+        :func:`fixed_ends` of the phase, if already derived (a build derives the
+        guesses with and without ``choices`` from one).
     """
-    x0, xT, u0, uT = (ca.vertsplit(e) for e in (ph.x0, ph.xT, ph.u0, ph.uT))
-    others_x0 = [*u0, *xT, *uT, ph.t0, ph.T, *[s for s, _ in ph.integrals], *ph.shared.vars]
-    others_xT = [*u0, *x0, *uT, ph.t0, ph.T, *[s for s, _ in ph.integrals], *ph.shared.vars]
-    b_rows = _rows(ph.boundary, lambda e: e)
-    fix0 = _fixed_values(_rows(ph.initial, ph.at_t0) + b_rows, x0, others_x0)
-    fixT = _fixed_values(_rows(ph.terminal, ph.at_tf) + b_rows, xT, others_xT)
+    fix0, fixT = fixed_ends(ph) if fixed is None else fixed
     starts, ends = [], []
     for i, name in enumerate(ph.state_names):
         lo, hi = ph.state_bounds[name]

@@ -217,6 +217,10 @@ class OptimalControlProblem:
         self._xT: list[ca.SX] = []
         self._u0: list[ca.SX] = []
         self._uT: list[ca.SX] = []
+        # stacked symbol vectors, by key, with the declaration counts they were made at
+        # (each SX that CasADi's Python layer returns costs ~30 us; a build reads them often)
+        self._stacks: dict[str, tuple[tuple[int, ...], ca.SX]] = {}
+        self._end_values: dict[tuple[str, int], tuple[Any, ca.SX]] = {}  # see _at_end
         self._rhs: dict[str, ca.SX] = {}
         # as declared (state/bound_state, control/bound_control); the attributes the rest of
         # ocp reads are their views (ocp.definition.normal_form), set by _normalise
@@ -646,9 +650,7 @@ class OptimalControlProblem:
         expr : SX
             Expression of the states, controls and ``t``.
         """
-        e = to_sx(expr, "at_t0()")
-        return ca.substitute(e, ca.vertcat(self.x, self.u, self.t),
-                             ca.vertcat(self.x0, self.u0, self.t0))
+        return self._at_end(expr, "at_t0", [*self._x0, *self._u0, self.t0])
 
     def at_tf(self, expr: Any) -> ca.SX:
         """``expr`` evaluated at ``T`` (states, controls and t at the final time).
@@ -658,9 +660,21 @@ class OptimalControlProblem:
         expr : SX
             Expression of the states, controls and ``t``.
         """
-        e = to_sx(expr, "at_tf()")
-        return ca.substitute(e, ca.vertcat(self.x, self.u, self.t),
-                             ca.vertcat(self.xT, self.uT, self.T))
+        return self._at_end(expr, "at_tf", [*self._xT, *self._uT, self.T])
+
+    def _at_end(self, expr: Any, key: str, ends: list[ca.SX]) -> ca.SX:
+        """``expr`` with the running symbols replaced by ``ends``; kept by the identity
+        of ``expr`` (a build substitutes each boundary constraint several times: guesses,
+        scaling sizes, NLP rows). Symbols are only appended, and an expression cannot
+        hold one declared after it, so a kept result never goes stale."""
+        hit = self._end_values.get((key, id(expr)))
+        if hit is not None and hit[0] is expr:
+            return hit[1]
+        e = to_sx(expr, f"{key}()")
+        out = ca.substitute(e, self._stacked("running", [*self._x, *self._u, self.t]),
+                            self._stacked(key, ends))
+        self._end_values[(key, id(expr))] = (expr, out)  # expr kept: its id stays unique
+        return out
 
     def integral(self, integrand: Any) -> ca.SX:
         """A symbol standing for ``int_t0^T integrand dt`` (use in boundary terms).
@@ -881,15 +895,25 @@ class OptimalControlProblem:
         self.duration_guess = d
 
     # ---------------------------------------------------------------- access
+    def _stacked(self, key: str, syms: list[ca.SX]) -> ca.SX:
+        """``vertcat(*syms)``, made again only after a state or control is declared
+        (symbols are only ever appended, so the counts tell whether it changed)."""
+        counts = (len(self._x), len(self._u))
+        hit = self._stacks.get(key)
+        if hit is None or hit[0] != counts:
+            hit = (counts, ca.vertcat(*syms) if syms else ca.SX(0, 1))
+            self._stacks[key] = hit
+        return hit[1]
+
     @property
     def x(self) -> ca.SX:
         """The states, stacked."""
-        return ca.vertcat(*self._x) if self._x else ca.SX(0, 1)
+        return self._stacked("x", self._x)
 
     @property
     def u(self) -> ca.SX:
         """The controls, stacked."""
-        return ca.vertcat(*self._u) if self._u else ca.SX(0, 1)
+        return self._stacked("u", self._u)
 
     @property
     def p(self) -> ca.SX:
@@ -910,22 +934,22 @@ class OptimalControlProblem:
     @property
     def x0(self) -> ca.SX:
         """The states at ``t0`` (end-point symbols), stacked."""
-        return ca.vertcat(*self._x0) if self._x0 else ca.SX(0, 1)
+        return self._stacked("x0", self._x0)
 
     @property
     def xT(self) -> ca.SX:
         """The states at ``T`` (end-point symbols), stacked."""
-        return ca.vertcat(*self._xT) if self._xT else ca.SX(0, 1)
+        return self._stacked("xT", self._xT)
 
     @property
     def u0(self) -> ca.SX:
         """The controls at ``t0`` (end-point symbols), stacked."""
-        return ca.vertcat(*self._u0) if self._u0 else ca.SX(0, 1)
+        return self._stacked("u0", self._u0)
 
     @property
     def uT(self) -> ca.SX:
         """The controls at ``T`` (end-point symbols), stacked."""
-        return ca.vertcat(*self._uT) if self._uT else ca.SX(0, 1)
+        return self._stacked("uT", self._uT)
 
     @property
     def q(self) -> ca.SX:

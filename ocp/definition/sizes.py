@@ -185,7 +185,7 @@ def dynamics_sizes(ph: OptimalControlProblem, points: Sequence[np.ndarray], u: n
     jac = ca.jacobian(rhs, xu)
     fn = ca.Function("rate", [ph.x, ph.u, ph.t, ca.vertcat(*fixed)], [rhs, jac])
     sv = np.array([statics[s.name()] for s in fixed], dtype=float)
-    size = np.r_[sx, su]
+    size = np.concatenate([sx, su])
     for x, t in zip(points, sv[:2], strict=False):  # fixed starts with t0, T
         with np.errstate(all="ignore"):
             f, J = (np.array(a, dtype=float) for a in fn(x, u, t, sv))

@@ -68,7 +68,7 @@ def constant(value: ca.SX) -> float | None:
         A scalar expression.
     """
     if value.numel() == 1 and value.is_constant():
-        return float(ca.DM(value))
+        return float(value)  # the same double as through DM, without making one (~30 us)
     return None
 
 

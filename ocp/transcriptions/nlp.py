@@ -34,6 +34,7 @@ from ..definition.guess import (
     DefaultChoices,
     control_guess,
     diagnose_nonfinite,
+    fixed_ends,
     raise_if_nonfinite,
     repair_default,
     state_ends,
@@ -117,8 +118,9 @@ class GridFree:
         plain: list[tuple[ca.SX, ca.SX]] = []
         controls = []
         for i, ph in enumerate(mp.phases):
-            ends.append(state_ends(ph, _previous_ends(mp, i, ends), choices))
-            plain.append(state_ends(ph, _previous_ends(mp, i, plain)))
+            fixed = fixed_ends(ph)  # the costly part, shared by both
+            ends.append(state_ends(ph, _previous_ends(mp, i, ends), choices, fixed))
+            plain.append(state_ends(ph, _previous_ends(mp, i, plain), fixed=fixed))
             controls.append(control_guess(ph, choices))
         return cls(mp, mp.times(), [CompiledPhase(ph) for ph in mp.phases], choices, ends,
                    plain, controls, variable_guess(mp.shared, choices))
@@ -233,7 +235,6 @@ class Transcription:
         self._bounds = ca.Function("bounds", [mp.p], [lbw, ubw, lbg, ubg])
         self._guess = ca.Function("guess", [mp.p, *choices.symbols], [w0])
         self._choices = choices
-        self._choice_bounds = choices.bound_function(mp.p)
         self._nlp = {"x": w, "p": P, "f": J, "g": g}
         self.n_w, self.n_g = nw, int(g.numel())
         self.scaling = self._scaling(gf.plain)
@@ -473,18 +474,27 @@ class Transcription:
             with np.errstate(all="ignore"):
                 return np.array(self._guess(pv, use, val), dtype=float).ravel()
 
+        last: dict[str, np.ndarray] = {}
+
         def count(use: np.ndarray, val: np.ndarray) -> int:
-            w = at(use, val)
+            w = last["w"] = at(use, val)
             if not np.all(np.isfinite(w)):
                 return w.size + self.n_g + 1
             with np.errstate(all="ignore"):
                 f, g = (np.array(v, dtype=float) for v in self._nlp_function()(w, pv))
-            return int(np.sum(~np.isfinite(f)) + np.sum(~np.isfinite(g)))
+            bad = int(np.sum(~np.isfinite(f)) + np.sum(~np.isfinite(g)))
+            if bad == 0:  # what _check_start finds at this start: kept, not evaluated again
+                self._last_start = (pv.tobytes() + w.tobytes(), float(f.ravel()[0]))
+            return bad
 
         zeros = np.zeros(n)
-        if n == 0 or count(zeros, zeros) == 0:
+        if n == 0:
             return at(zeros, zeros)
-        lo, hi = (np.array(v, dtype=float).ravel() for v in self._choice_bounds(pv))
+        if count(zeros, zeros) == 0:
+            return last["w"]
+        # the bounds of the bare defaults: only built when one needs replacing
+        bounds = self._choices.bound_function(self.multiphase.p)
+        lo, hi = (np.array(v, dtype=float).ravel() for v in bounds(pv))
         use, val = repair_default(count, lo, hi, self._choices.refs)
         return at(use, val)
 
