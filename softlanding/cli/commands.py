@@ -515,6 +515,14 @@ def _cmd_reproduce(a: argparse.Namespace) -> int:
 
 
 # ------------------------------------------------------------------------ hop
+def _hop_optimum(c: Any) -> str:
+    if not c.converged:
+        return "discretised"
+    if c.exact_arcs:
+        return "converged (exact arcs; a local optimum, not certified)"
+    return "converged"
+
+
 def _hop_rows(c: Any) -> list[tuple[str, object]]:
     rows: list[tuple[str, object]] = [
         ("energy per cycle", c.energy), ("energy / apex height", c.specific_energy),
@@ -527,8 +535,11 @@ def _hop_rows(c: Any) -> list[tuple[str, object]]:
     if len(c.grids) > 1:  # the grid sequence behind the continuous optimum's estimate
         rows += [("grids (energy each)", ", ".join(
                     f"{'/'.join(map(str, g['nodes']))}: {g['energy']:.7g}" for g in c.grids)),
-                 ("continuous optimum (estimate)", c.energy_estimate),
+                 ("grids' extrapolation" if c.exact_arcs else "continuous optimum (estimate)",
+                  c.energy_estimate),
                  ("its error (estimate)", c.energy_error)]
+    if c.exact_arcs:  # the second computation of the refined schedule's energy
+        rows.append(("refined NLP vs replay", c.refined_gap))
     if c.starts:  # a non-convex problem: how far apart its local optima are
         rows += [("starts (energy each)", ", ".join(
                     f"{st['energy']:.6g}" if "energy" in st else st["error"] for st in c.starts)),
@@ -593,8 +604,7 @@ def _cmd_hop(a: argparse.Namespace) -> int:
         for leg, c in cycles.items():
             ok = "yes" if not reasons[leg] else "NO: " + "; ".join(reasons[leg])
             print(f"== {leg} leg, v0 = {a.v0:g} (apex {c.apex_height:.6g}), eta = {a.eta:g}")
-            print_table([("verified", ok), ("optimum", "converged" if c.converged
-                                            else "discretised")] + _hop_rows(c))
+            print_table([("verified", ok), ("optimum", _hop_optimum(c))] + _hop_rows(c))
             for n in c.notes:
                 print(f"note: {n}")
             if a.pmp:

@@ -261,7 +261,8 @@ def solve_from_state(robot: Robot, ground: Ground, x: np.ndarray, *,
         it is not given or fails.
     warm_start : ocp.Solution, optional
         A solution of :func:`state_transcription` to start from (then ``guess``, then
-        Ipopt's default start, if it fails).
+        Ipopt's default start, if it fails); a solution of another transcription is not
+        used.
 
     Raises
     ------
@@ -275,6 +276,10 @@ def solve_from_state(robot: Robot, ground: Ground, x: np.ndarray, *,
         raise ParameterError("x", f"needs 4 finite numbers (x_b, v_b, x_f, v_f), got {x!r}")
     if not x[3] < 0:
         raise ParameterError("x", "the foot must still yield (v_f < 0) to plan its landing")
+    if warm_start is not None and warm_start.transcription is not state_transcription():
+        # another problem's solution (the first landing's transcription, unrefined): not
+        # resampled as a start, which took Ipopt more iterations than the guess
+        warm_start = None
     plan = solve_phased(StateStarted(robot, ground, x, guess), warm_start, replay=False)
     if plan.refined is not None:
         return plan.refined

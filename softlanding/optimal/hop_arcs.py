@@ -265,8 +265,8 @@ def _rows(robot: Robot) -> dict[str, np.ndarray]:
             "capacity": cap}
 
 
-def _law(arc: Arc, k: int, force: Any, rows: dict[str, np.ndarray]) -> Any:
-    """The feedback row of piece ``k`` (``force``: that piece's unknown force)."""
+def _law(arc: Arc, force: Any, rows: dict[str, np.ndarray]) -> Any:
+    """The feedback row of one piece of ``arc`` (``force``: that piece's unknown force)."""
     if arc.kind == "coast":
         return ca.DM.zeros(1, 5)
     if arc.kind == "lock":
@@ -300,7 +300,6 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
     rows = _rows(robot)
     expm = _expm()
     u_max, s = float(robot.u_max), float(robot.s)  # type: ignore[arg-type]
-    u_in = u_max
     mb, mf = robot.body_mass, robot.foot_mass
 
     def energy(z: Any) -> Any:
@@ -345,8 +344,8 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
             if arc.free:
                 f = opti.variable()
                 opti.set_initial(f, arc.forces[k])
-                opti.subject_to(opti.bounded(-u_in, f, u_in))
-            K = _law(arc, k, f, rows)
+                opti.subject_to(opti.bounded(-u_max, f, u_max))
+            K = _law(arc, f, rows)
             M = ca.DM(A[m]) + ca.mtimes(ca.DM(B[m]), K)
             pts = [ca.mtimes(expm(M * (tau * j / (samples + 1))), z) for j in
                    range(samples + 2)]
@@ -355,7 +354,7 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
                 leg = zj[0] - zj[2]
                 opti.subject_to(opti.bounded(0, leg, s))
                 if arc.kind in ("lock", "capacity"):  # (free forces have bounds)
-                    opti.subject_to(opti.bounded(-u_in, u, u_in))
+                    opti.subject_to(opti.bounded(-u_max, u, u_max))
                 power = u * (zj[1] - zj[3])
                 if arc.kind == "+":
                     opti.subject_to(power >= 0)
@@ -403,12 +402,14 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
     opti.solver("ipopt", {"print_time": False, "expand": True,
                           "detect_simple_bounds": True}, opts)
     try:
-        sol = opti.solve()
-        status = "Solve_Succeeded"
-        val = sol.value
-    except RuntimeError:
-        status = str(opti.stats().get("return_status", "failed"))
+        val = opti.solve().value
+    except RuntimeError:  # Ipopt stopped short: its status says how (else a CasADi error)
+        if "return_status" not in opti.stats():
+            raise
         val = opti.debug.value
+    # Ipopt's own word: opti.solve() also returns on Solved_To_Acceptable_Level, which the
+    # caller does not take for an optimum
+    status = str(opti.stats()["return_status"])
     durs: list[float] = []
     gains: list[list[float]] = []
     out_arcs: list[Arc] = []
@@ -418,7 +419,7 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
                        if f is not None)
         out_arcs.append(Arc(arc.mode, arc.kind, d_vals, f_vals))
         for k, dur in enumerate(d_vals):
-            K = _law(arc, k, f_vals[k] if arc.free else None, rows)
+            K = _law(arc, f_vals[k] if arc.free else None, rows)
             durs.append(dur)
             gains.append([float(v) for v in np.asarray(ca.DM(K)).ravel()])
     keep = [k for k, t in enumerate(durs) if t > 0]

@@ -55,8 +55,10 @@ APEX_TOL = 1e-5
 """Largest apex posture error (relative) accepted from a transcription's replay."""
 
 CONVERGED_RTOL = 1e-6
-"""A cycle's energy is taken as the continuous optimum when it and its grid sequence's
-extrapolation, plus that extrapolation's error estimate, agree to this (relative)."""
+"""A cycle's energy is taken as the continuous optimum (a local one: the hop is not convex)
+when, refined on exact arcs, the refined NLP's energy and the exact replay's agree to this
+(relative) and the energy lies within the grid sequence's extrapolation and its error; or,
+a grid's, when that extrapolation and its error agree with it to this."""
 
 
 @dataclass
@@ -76,7 +78,8 @@ class HopCycle:
     work : Work
         Positive and negative actuator work over the cycle.
     energy_transcribed : float
-        The optimiser's own figure (its slack on a grid; NaN where none).
+        The optimiser's own figure: the refined NLP's (the arcs' works) with
+        ``exact_arcs``, else its slack on a grid (NaN where none).
     depth : float
         Crater depth.
     cot : float
@@ -115,8 +118,8 @@ class HopCycle:
     energy_error : float
         The estimate's error estimate: how far the previous pair's extrapolation is from
         it (three grids or more), else the extrapolation's own correction; NaN with one
-        grid. With ``exact_arcs``: the energy is the estimate, and the error is how far the
-        refined NLP's energy (the arcs' works) is from the exact replay's.
+        grid. With ``exact_arcs`` the same (the grids behind the refinement), which the
+        refined energy must lie within to be :attr:`converged`.
     exact_arcs : list of dict
         The arcs of the exact-arc refinement (:mod:`softlanding.optimal.hop_arcs`:
         ``mode``, ``kind``, ``durations``, ``forces``) when the cycle reported is its
@@ -147,9 +150,24 @@ class HopCycle:
     exact_arcs: list[dict[str, Any]] = field(default_factory=list)
 
     @property
+    def refined_gap(self) -> float:
+        """With ``exact_arcs``: how far the refined NLP's energy is from the exact replay's
+        (relative; a second computation of the same schedule's cost), else NaN."""
+        if not self.exact_arcs:
+            return math.nan
+        return abs(self.energy - self.energy_transcribed) / max(abs(self.energy), 1e-300)
+
+    @property
     def converged(self) -> bool:
-        """The energy reported is the continuous optimum to :data:`CONVERGED_RTOL`: the grid
-        sequence's extrapolation agrees with it, and its error estimate is below that."""
+        """The energy reported is the continuous optimum (a local one) to
+        :data:`CONVERGED_RTOL`. Refined on exact arcs: the refined NLP's energy and the
+        replay's agree to it, and the energy lies within the grid sequence's extrapolation
+        and its error (an independent, coarser estimate; none with one grid: not
+        converged). A grid's: the extrapolation agrees with it, and its error is below
+        that."""
+        if self.exact_arcs:
+            return bool(self.refined_gap <= CONVERGED_RTOL
+                        and abs(self.energy - self.energy_estimate) <= self.energy_error)
         gap = abs(self.energy - self.energy_estimate) + self.energy_error
         return bool(gap <= CONVERGED_RTOL * max(abs(self.energy_estimate), 1e-300))
 
@@ -157,10 +175,17 @@ class HopCycle:
         """Why the energy is not the continuous optimum ("" when it is :attr:`converged`)."""
         if self.converged:
             return ""
-        if self.exact_arcs:
+        if self.exact_arcs and not self.refined_gap <= CONVERGED_RTOL:
             return (f"refined on exact arcs, but the refined NLP's energy "
                     f"({self.energy_transcribed:.10g}) and its exact replay's "
-                    f"({self.energy:.10g}) differ by {self.energy_error:.2g}")
+                    f"({self.energy:.10g}) differ by {self.refined_gap:.2g} (relative)")
+        if self.exact_arcs and not math.isfinite(self.energy_estimate):
+            return ("refined on exact arcs, not cross-checked: one grid, no extrapolation "
+                    "to compare with (doublings >= 1)")
+        if self.exact_arcs:
+            return (f"refined on exact arcs, but outside the grid sequence's extrapolation "
+                    f"{self.energy_estimate:.7g} +- {self.energy_error:.2g}: another optimum "
+                    f"than the grids'")
         nodes = "/".join(map(str, self.grids[-1]["nodes"])) if self.grids else "?"
         if not math.isfinite(self.energy_estimate):
             return (f"discretised: the energy is the exact replay of a {nodes}-node grid's "
@@ -257,6 +282,7 @@ class HopCycle:
             "exact_arcs": self.exact_arcs,
             "unconverged_reason": self.unconverged_reason(),
             "energy_estimate": self.energy_estimate, "energy_error": self.energy_error,
+            "refined_gap": self.refined_gap,
             "grids": self.grids, "notes": self.notes,
             "starts": self.starts, "local_optima_spread": self.local_optima_spread,
             "robot": self.robot.to_dict()})
@@ -398,10 +424,13 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
     With ``refine`` the finest grid's arcs are then refined exactly
     (:mod:`softlanding.optimal.hop_arcs`: switching times and phase durations, every arc
     flowed exactly) and the refined schedule is replayed; it is reported when its replay
-    closes and is below the grid's (``exact_arcs``), and it is the continuous optimum to
+    closes and is below the grid's (``exact_arcs``; only when Ipopt says
+    ``Solve_Succeeded``), and it is taken as the continuous optimum to
     :data:`CONVERGED_RTOL` when the refined NLP's energy and the exact replay's agree to
-    that (:attr:`HopCycle.converged`). Otherwise the grid's cycle is reported and says
-    "discretised", and by how much.
+    that and it lies within the grids' extrapolation and its error
+    (:attr:`HopCycle.converged`): a local optimum on the arc structure read off the grid,
+    not certified (the control on arcs of one-signed power is not unique). Otherwise the
+    grid's cycle is reported and says "discretised", and by how much.
 
     Parameters
     ----------
@@ -490,16 +519,12 @@ def _exact_arcs(c: HopCycle, robot: Robot, impact: Impact, eta: float) -> HopCyc
     kept = [a for a in r.arcs if sum(a.durations) > 1e-6]
     out.exact_arcs = [{"mode": a.mode, "kind": a.kind, "durations": list(a.durations),
                        "forces": list(a.forces)} for a in kept]
-    out.energy_estimate, out.energy_error = out.energy, abs(out.energy - r.energy)
+    out.energy_estimate, out.energy_error = c.energy_estimate, c.energy_error
     out.notes = [n for n in c.notes if n != SLACK_NOTE] + [
         f"exact arcs: {len(kept)} arcs ({', '.join(a.mode + ' ' + a.kind for a in kept)}), "
         f"switching times and "
         f"forces refined with every arc flowed exactly; the energy is the exact replay of "
         f"the refined schedule, {c.energy - out.energy:.3g} below the finest grid's"]
-    if math.isfinite(c.energy_estimate):
-        out.notes.append(f"the grid sequence's extrapolation, {c.energy_estimate:.7g} +- "
-                         f"{c.energy_error:.2g}, is {out.energy - c.energy_estimate:+.2g} "
-                         "from it")
     return out
 
 

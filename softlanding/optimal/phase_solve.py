@@ -88,6 +88,9 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
             sol = tr.solve(params, guess=guess)
     notes += [f"transcription: {w.message}".split("; refine the grid")[0] for w in caught
               if issubclass(w.category, PathViolationWarning)]
+    for w in caught:  # the rest as they came (recording caught them all)
+        if not issubclass(w.category, PathViolationWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return sol
 
 

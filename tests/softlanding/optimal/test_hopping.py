@@ -1,6 +1,7 @@
 """Minimum-energy hopping (softlanding.optimal.hopping): the cycle closes on the exact replay, the
 energy bookkeeping is exact, and the three legs compare as they must."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -45,6 +46,22 @@ def test_the_optimal_cycle_closes_and_balances(free):
     assert free.energy >= free.depth ** 2 / 2
     assert free.times["touchdown"] < free.times["foot_stop"] < free.times["lift_off"] \
         < free.times["apex"]
+
+
+def test_exact_arcs_converge_only_cross_checked_and_agreeing(free):
+    # the rule (issue 34 review): a refined cycle is converged when its NLP and its replay
+    # agree to 1e-6 AND it lies within the grids' extrapolation and its error
+    arcs = [{"mode": "flight", "kind": "coast", "durations": [0.1], "forces": []}]
+    e = free.energy
+    one = dataclasses.replace(free, exact_arcs=arcs, energy_transcribed=e * (1 + 1e-8))
+    assert one.refined_gap == pytest.approx(1e-8, rel=1e-6)
+    assert not one.converged and "not cross-checked" in one.unconverged_reason()
+    two = dataclasses.replace(one, energy_estimate=e + 0.01, energy_error=0.02)
+    assert two.converged and two.unconverged_reason() == ""
+    far = dataclasses.replace(two, energy_estimate=e + 0.05)
+    assert not far.converged and "outside" in far.unconverged_reason()
+    gap = dataclasses.replace(two, energy_transcribed=e * (1 + 1e-5))
+    assert not gap.converged and "differ" in gap.unconverged_reason()
 
 
 def test_one_grid_says_it_is_discretised(free):
@@ -116,16 +133,19 @@ def test_the_exact_arcs_reach_the_continuous_optimum(hop3):
         assert k in kinds
     assert h.exact_arcs[0]["kind"] == "+" and h.exact_arcs[0]["forces"][0] == pytest.approx(
         PAPER_ROBOT.u_max)
-    # the grid extrapolation (Richardson on the two grids) holds it within its error
-    assert any("extrapolation" in n for n in h.notes)
+    # the grid extrapolation (Richardson on the two grids) holds it within its error, and
+    # is what the cycle reports as the grids' estimate (converged needs both)
     est = 2 * h.grids[1]["energy"] - h.grids[0]["energy"]
-    assert abs(est - h.energy) <= abs(h.grids[1]["energy"] - h.grids[0]["energy"])
+    assert h.energy_estimate == est
+    assert abs(est - h.energy) <= h.energy_error == abs(h.grids[1]["energy"]
+                                                        - h.grids[0]["energy"])
+    assert h.refined_gap <= 1e-6 and h.to_dict()["refined_gap"] == h.refined_gap
 
 
 @pytest.mark.slow
 def test_the_exact_arcs_do_not_depend_on_their_pieces(hop3):
     # on the arcs of one-signed power the cost is their end states' work: more constant
-    # pieces per arc reach the same optimum (a coarser grid's arcs too)
+    # pieces per arc reach the same optimum
     from softlanding.model.robot import Impact
     from softlanding.optimal.hop_arcs import detect_arcs, refine_arcs
 
