@@ -488,6 +488,22 @@ def phase_switching_nlp(mp: MultiPhaseProblem, modes: PhaseModes,
     return nlp
 
 
+def clear_cache(mp: MultiPhaseProblem | None = None) -> None:
+    """Forget the cached phase refinement NLPs (of one problem, or all): the next refinement
+    builds its NLP for its own step counts instead of reusing a neighbour's (whose results
+    differ in the last bits), as in a fresh process.
+
+    Parameters
+    ----------
+    mp : MultiPhaseProblem, optional
+        Forget only this problem's NLPs (default: all).
+    """
+    if mp is None:
+        _CACHE.clear()
+    else:
+        _CACHE.pop(mp, None)
+
+
 # ------------------------------------------------------------------ result
 class _PhaseRows:
     """What the certificate reads of a phase's NLP rows (step counts, row times)."""
@@ -899,5 +915,6 @@ def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *
         interior_samples=interior_samples, ipopt_options=ipopt_options, tol=tol, fast=fast)
 
 
-__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "detect_phase_structures", "flow_problem",
+__all__ = ["PhaseSwitchingNLP", "RefinedPhases", "clear_cache", "detect_phase_structures",
+           "flow_problem",
            "local_phase", "phase_switching_nlp", "refine_phase_structure", "refine_phases"]

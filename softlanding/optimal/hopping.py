@@ -349,8 +349,15 @@ def _evaluate(leg: str, robot: Robot, impact: Impact, eta: float, res: LandingRe
 # -------------------------------------------------------------- the optimum
 @lru_cache(maxsize=8)
 def _two_phase_landing(robot: Robot, impact: Impact) -> Any:
-    """The two-phase landing every start mirrors (solved once per landing)."""
+    """The two-phase landing every start mirrors (solved once per landing), from empty
+    refinement caches: as in a fresh process, whatever was refined before (a neighbour's
+    cached NLP gives other last bits, and the hop NLP's flat valley turned those into
+    another local optimum)."""
+    from ocp.structure import phase_refinement, refinement
     from softlanding.optimal.two_phase import solve_two_phase
+
+    refinement.clear_cache()
+    phase_refinement.clear_cache()
 
     return solve_two_phase(impact, robot.replace(l0=None), replay=False)
 
