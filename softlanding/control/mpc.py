@@ -341,7 +341,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     filt = new_filter(plant.x) if filtered else None
     beta = bb.force_coefficients(robot.r_m)[0]
     est = GroundEstimator(robot, drag=True, prior=ground_numbers(model),
-                          noise_std=max(sensor.noise, 1e-6))
+                          noise_std=bb.ground_force_noise(robot.r_m, sensor.noise, True)
+                          if filtered else max(sensor.noise, 1e-6))
     fast = _FastState.start(plan, robot, model, period, sensor, margin, filtered) \
         if controller == "bangbang" else None
     t0 = time.perf_counter()
@@ -423,8 +424,26 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             out_times[-1] += 1e3 * (time.perf_counter() - t0)
             cpu_times[-1] += 1e3 * (time.process_time() - c0)
             continue
-        if plan is None:  # (a fallback that found no plan: the last command goes on)
-            issued.append(issued[-1])
+        if plan is None:  # a fallback that found no plan: the estimate goes on, and the
+            # re-plan is tried again from this sample's state (else the last command goes on)
+            if estimate and measured[3] < 0:
+                e = est.update(measured, a_f, u_meas)
+                estimates.append(e)
+                if e.samples >= 2:
+                    believed = e.ground()
+            try:
+                plan = solve_from_state(robot, believed, measured)
+                elapsed, planned_for = 0.0, believed
+                replans += 1
+                paths.append("fallback (retried)")
+                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
+            except SolveError:
+                raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+                fallbacks += 1
+                paths.append("kept")
+                issued.append(issued[-1])
+            out_times.append(1e3 * (time.perf_counter() - t0))
+            cpu_times.append(1e3 * (time.process_time() - c0))
             continue
         if estimate and measured[3] < 0:  # (a noisy v_f may read >= 0: nothing to fit)
             e = est.update(measured, a_f, u_meas)
