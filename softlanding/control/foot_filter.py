@@ -22,9 +22,14 @@ JIT = {"cache": True, "fastmath": False}
 # the filter's memory F: estimate, covariance (in units of the noise variance), the last
 # two samples' continuous accelerations, samples done, the last sample's length, and the
 # first sample's start and force integrals (re-integrated once its second value is known)
+# (the first two samples' force integrals at F_U1, F_U2 and two on)
 (F_X, F_V, F_P00, F_P01, F_P11, F_G1, F_G0, F_N, F_H, F_X0, F_V0, F_U1, F_U2,
- F_H0) = range(14)
-NF = 14
+ F_H0) = (*range(13), 15)
+NF = 16
+
+#: Samples whose filtered state is provisional (redone at the third, once a quadratic
+#: through three accelerations covers the first sample).
+PROVISIONAL = 2
 
 #: Process noise of a sample (relative to the noise's ``h sigma`` on the velocity): the
 #: interpolation's error, allowed for.
@@ -48,6 +53,36 @@ def new_filter(x0: np.ndarray) -> np.ndarray:
     F[F_V] = F[F_V0] = x0[3]
     F[F_P00] = F[F_P11] = START_STD ** 2
     return F
+
+
+@njit(**JIT)
+def _quad_integrals(g1, g2, g3, a, h):
+    """``int g`` and ``int (b - s) g`` over ``[a h, (a + 1) h]`` of the quadratic through
+    ``g1, g2, g3`` at ``h, 2 h, 3 h`` (two Gauss points: exact)."""
+    dv = 0.0
+    dx = 0.0
+    r = 0.5 / np.sqrt(3.0)
+    for q in (0.5 - r, 0.5 + r):
+        s = a + q
+        g = (g1 * (s - 2.0) * (s - 3.0) / 2.0 - g2 * (s - 1.0) * (s - 3.0)
+             + g3 * (s - 1.0) * (s - 2.0) / 2.0)
+        dv += 0.5 * h * g
+        dx += 0.5 * h * h * (1.0 - q) * g
+    return dv, dx
+
+
+@njit(**JIT)
+def _redo(F, g3, h, beta):
+    """The first two samples again from the impact state, on the quadratic through the
+    first three samples' values: the state at the start of the third."""
+    g1, g2 = F[F_G0], F[F_G1]
+    x, v = F[F_X0], F[F_V0]
+    for a in range(2):
+        dv, dx = _quad_integrals(g1, g2, g3, float(a), h)
+        u1, u2 = F[F_U1 + 2 * a], F[F_U2 + 2 * a]
+        x = x + h * v + dx + beta * u2
+        v = v + dv + beta * u1
+    F[F_X], F[F_V] = x, v
 
 
 @njit(**JIT)
@@ -78,15 +113,20 @@ def filter_step(F, x, g, U1, U2, h, beta):
     if n == 0.0:  # no value at the impact: the sample's end value, for now
         dv, dx, cv, cx = h * g, 0.5 * h * h * g, 1.0, 0.25
         F[F_U1], F[F_U2], F[F_H0] = U1, U2, h
-    elif n == 1.0 and same:
-        # the first sample again, from the impact, with the line through its end value
-        # and this one's; this one on the chord
-        g1, h0 = F[F_G1], F[F_H0]
-        v1 = F[F_V0] + h0 * (3.0 * g1 - g) / 2.0 + beta * F[F_U1]
-        F[F_X] = F[F_X0] + h0 * F[F_V0] + h0 * h0 * (5.0 * g1 - 2.0 * g) / 6.0 + beta * F[F_U2]
-        F[F_V] = v1
+    elif n == 1.0:  # the chord, for now
+        g1 = F[F_G1]
         dv, dx = 0.5 * h * (g1 + g), h * h * (2.0 * g1 + g) / 6.0
-        cv, cx = 0.5 + 2.5, 5.0 / 36.0 + 0.8
+        cv, cx = 0.5, 5.0 / 36.0
+        F[F_U1 + 2], F[F_U2 + 2] = U1, U2
+        if not (same and abs(F[F_H0] - h) <= 1e-12 * h):
+            F[F_H0] = -1.0  # (unequal samples: no redo)
+    elif n == 2.0 and same and F[F_H0] > 0.0:
+        # the first two samples again, from the impact, with the quadratic through the
+        # three samples' values (the drag's curvature at the impact, v_f^2 growing fast
+        # under the push, is far beyond a chord's accuracy); then this one on it
+        _redo(F, g, h, beta)
+        dv, dx = _quad_integrals(F[F_G0], F[F_G1], g, 2.0, h)
+        cv, cx = 1.0, 0.25
     elif n >= 2.0 and same:  # a quadratic through the last three samples' values
         g0, g1 = F[F_G0], F[F_G1]
         dv = h * (-g0 + 8.0 * g1 + 5.0 * g) / 12.0
@@ -124,4 +164,4 @@ def filter_step(F, x, g, U1, U2, h, beta):
     x[2], x[3] = F[F_X], F[F_V]
 
 
-__all__ = ["NF", "PROCESS", "filter_step", "new_filter"]
+__all__ = ["NF", "PROCESS", "PROVISIONAL", "filter_step", "new_filter"]

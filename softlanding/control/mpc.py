@@ -39,7 +39,7 @@ from ocp import (
 from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control import bangbang as bb
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
-from softlanding.control.foot_filter import filter_step, new_filter
+from softlanding.control.foot_filter import PROVISIONAL, filter_step, new_filter
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
     ground_numbers,
@@ -388,7 +388,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         measured[3] = min(measured[3], -stop)
         t0, c0 = time.perf_counter(), time.process_time()
         if fast is not None and fast.active:
-            status = fast.step(measured, a_f, u_meas, h, estimate)
+            # (the filter's first states are provisional: no fit from them)
+            status = fast.step(measured, a_f, u_meas, h, estimate and (
+                filt is None or samples > PROVISIONAL))
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             if estimate:
@@ -426,7 +428,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             continue
         if plan is None:  # a fallback that found no plan: the estimate goes on, and the
             # re-plan is tried again from this sample's state (else the last command goes on)
-            if estimate and measured[3] < 0:
+            if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
                 e = est.update(measured, a_f, u_meas)
                 estimates.append(e)
                 if e.samples >= 2:
@@ -445,7 +447,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             continue
-        if estimate and measured[3] < 0:  # (a noisy v_f may read >= 0: nothing to fit)
+        if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
+            # (a noisy v_f may read >= 0: nothing to fit)
             e = est.update(measured, a_f, u_meas)
             estimates.append(e)
             if e.samples >= 2:
