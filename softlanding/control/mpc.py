@@ -381,7 +381,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         measured, a_f, u_meas = sensor.measure(plant.x, plant.foot_acceleration(u_end), u_end)
         if filt is not None:  # the foot's filtered state; the force as applied
             filter_step(filt, measured, a_f - beta * u_end, *_force_integrals(schedule, h),
-                        h, beta)
+                        h, beta, sensor.noise)
             u_meas = u_end
         # the foot still yields (the loop's condition, a contact sensor's): a noisy v_f that
         # reads otherwise is clipped (the plans start from a yielding foot)
