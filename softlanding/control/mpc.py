@@ -48,7 +48,7 @@ from softlanding.control.state_landing import (
     state_parameters,
     state_transcription,
 )
-from softlanding.errors import ParameterError, check, check_count, expect
+from softlanding.errors import ParameterError, RestNotProvenError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -725,8 +725,11 @@ def _plan_holds(robot: Robot, impact: Impact, schedule: Any, h: float, x_before:
     k1, c1 = ground_numbers(believed)
     if abs(k1 - k0) > PLAN_HOLDS_TOL * k0 or abs(c1 - c0) > PLAN_HOLDS_TOL * max(1.0, c0):
         return False
-    predicted = simulate(robot, impact, schedule, planned_for, x0=x_before, t_max=h,
-                         energy=False).trajectory(t_end=h, n=2).x[-1]
+    try:
+        predicted = simulate(robot, impact, schedule, planned_for, x0=x_before, t_max=h,
+                             energy=False).trajectory(t_end=h, n=2).x[-1]
+    except RestNotProvenError:  # (the plan's own sample ends off the stroke: it does not hold)
+        return False
     scale = max(1.0, float(np.max(np.abs(x))))
     return bool(np.max(np.abs(predicted - x)) <= PLAN_HOLDS_TOL * scale)
 
