@@ -55,6 +55,11 @@ def main() -> None:
                     help="the controller study (bang-bang, exact and noisy) instead")
     ap.add_argument("--noise", type=float, default=REALISTIC_NOISE)
     ap.add_argument("--delay", type=int, default=REALISTIC_DELAY)
+    ap.add_argument("--estimator", choices=("measured", "filtered"), default="measured",
+                    help="--controllers: the noisy landings' ground estimator (filtered: the "
+                         "force as applied and the foot's state filtered)")
+    ap.add_argument("--margins", default="0,2",
+                    help="--controllers: the noisy landings' margins, comma-separated")
     ap.add_argument("--cases", choices=("all", "bang-bang", "creep"), default="all",
                     help="--controllers: only the cases whose clairvoyant optimum is "
                          "bang-bang, or only the creeps (default: all)")
@@ -115,12 +120,13 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
 
     t0 = time.perf_counter()
     only = {"all": None, "bang-bang": True, "creep": False}[a.cases]
+    margins = tuple(float(m) for m in a.margins.split(","))
     rows = controller_study(*grid, period=a.period, noise=a.noise, delay=a.delay,
-                            bang_bang=only)
+                            bang_bang=only, estimator=a.estimator, margins=margins)
     rig = 1e3 * a.period * paper_rig_units().time
     keys = [k for k in rows[0] if k == "exact" or k.startswith("noisy")]
     print(f"sample period {a.period:g} (= {rig:.3g} ms on the paper's rig); noise "
-          f"{a.noise:g}, delay {a.delay}; {len(rows)} cases in "
+          f"{a.noise:g}, delay {a.delay}, estimator {a.estimator}; {len(rows)} cases in "
           f"{time.perf_counter() - t0:.0f} s")
     print(f"{'v0':>6} {'K':>5} {'c_d':>4} {'clairvoyant':>12} "
           + " ".join(f"{k:>10}" for k in keys) + "  max step ms (wall, CPU)  uncovered")

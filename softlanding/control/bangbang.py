@@ -94,7 +94,7 @@ def force_coefficients(r_m: float) -> tuple[float, float]:
     return float(P[P_BF]), float(P[P_GF])
 
 
-def ground_force_noise(r_m: float, sensor_noise: float) -> float:
+def ground_force_noise(r_m: float, sensor_noise: float, filtered: bool = False) -> float:
     """Standard deviation of one ground force the estimator derives from the foot's measured
     acceleration and force, each with noise ``sensor_noise`` (at least ``1e-6``: the
     estimator's weight of an exact measurement).
@@ -105,9 +105,21 @@ def ground_force_noise(r_m: float, sensor_noise: float) -> float:
         Mass ratio.
     sensor_noise : float
         Standard deviation of the measured acceleration and force.
+    filtered : bool
+        The force is the one applied (known) and the foot's state filtered
+        (:mod:`softlanding.control.foot_filter`): the acceleration's noise, and
+        :data:`FILTERED_REGRESSOR` for the filtered state's error in the regressors.
     """
     beta, gamma = force_coefficients(r_m)
+    if filtered:
+        return max(sensor_noise * float(np.hypot(1.0 / gamma, FILTERED_REGRESSOR)), 1e-6)
     return max(sensor_noise * float(np.hypot(1.0, beta)) / abs(gamma), 1e-6)
+
+
+#: The ground force's error from the filtered foot state in the regressors (its position
+#: times ``K``, its velocity times ``2 c_d |v_f|``), relative to the sensor's noise: about
+#: 1e-2 and 5e-2 of it measured at ``v0 = -1``; 0.1 (0.3: deeper on 4 of 5 cases).
+FILTERED_REGRESSOR = 0.1
 
 
 def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: float,

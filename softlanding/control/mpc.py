@@ -20,6 +20,7 @@ re-solving it every sample changed the study's depths by at most 4e-9.
 from __future__ import annotations
 
 import contextlib
+import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -38,6 +39,7 @@ from ocp import (
 from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control import bangbang as bb
 from softlanding.control.estimation import GroundEstimate, GroundEstimator
+from softlanding.control.foot_filter import PROVISIONAL, filter_step, new_filter
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
     ground_numbers,
@@ -46,7 +48,7 @@ from softlanding.control.state_landing import (
     state_parameters,
     state_transcription,
 )
-from softlanding.errors import ParameterError, check, check_count, expect
+from softlanding.errors import ParameterError, RestNotProvenError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -81,6 +83,9 @@ MAX_PERIOD = T_MAX
 
 #: The controllers :func:`mpc_landing` runs, by name.
 CONTROLLERS = ("replan", "bangbang")
+
+#: What the ground estimate regresses (:func:`mpc_landing`'s ``estimator``).
+ESTIMATORS = ("measured", "filtered")
 
 @dataclass
 class MPCLanding:
@@ -243,7 +248,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 period: float = DEFAULT_PERIOD, estimate: bool = True,
                 max_samples: int = 100_000, reuse: bool = False,
                 controller: str = "replan", noise: float = 0.0, delay: int = 0,
-                seed: int = 0, margin: float = 0.0) -> MPCLanding:
+                seed: int = 0, margin: float = 0.0,
+                estimator: str = "measured") -> MPCLanding:
     """Land on ``ground`` under MPC whose first plan assumes ``model``.
 
     Parameters
@@ -288,6 +294,14 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         ``controller="bangbang"``: plan for ``K - margin sigma_K``, ``c_d - margin
         sigma_c`` (the estimate less ``margin`` of its standard deviations) while the
         estimate is uncertain.
+    estimator : str
+        What the ground estimate regresses (:data:`ESTIMATORS`). ``"measured"``: the
+        measured foot position, velocity, acceleration and force, as they come.
+        ``"filtered"``: the force the controller applied (it commanded it, the plant applies
+        it exactly, saturated at ``u_max``) instead of its noisy measurement, and the foot's
+        position and velocity filtered with its measured acceleration
+        (:mod:`softlanding.control.foot_filter`); the plans start from the filtered state
+        too. With exact measurements both are the same.
 
     Raises
     ------
@@ -305,6 +319,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                                            f"{controller!r}")
     period = check_period("period", period)
     margin = check("margin", margin, (lambda v: v >= 0, "must be >= 0"))
+    if estimator not in ESTIMATORS:
+        raise ParameterError("estimator", f"must be one of {', '.join(ESTIMATORS)}, got "
+                                          f"{estimator!r}")
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
     first = solve_landing(impact, robot, model, replay=False)
     plan: Any = first.refined if first.refined is not None else first.transcribed
@@ -319,9 +336,14 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                                        f"{_plan_time(plan) / period:.3g} samples over the "
                                        f"planned landing, more than max_samples = {max_samples}")
     sensor = Sensor(noise, delay, seed)
+    # (exact measurements need no filter: its estimate would be the measurement)
+    filtered = estimator == "filtered" and sensor.noise > 0
+    filt = new_filter(plant.x) if filtered else None
+    beta = bb.force_coefficients(robot.r_m)[0]
     est = GroundEstimator(robot, drag=True, prior=ground_numbers(model),
-                          noise_std=max(sensor.noise, 1e-6))
-    fast = _FastState.start(plan, robot, model, period, sensor, margin) \
+                          noise_std=bb.ground_force_noise(robot.r_m, sensor.noise, True)
+                          if filtered else max(sensor.noise, 1e-6))
+    fast = _FastState.start(plan, robot, model, period, sensor, margin, filtered) \
         if controller == "bangbang" else None
     t0 = time.perf_counter()
     if fast is None or not fast.active:
@@ -357,12 +379,18 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             break
         u_end = _force_at_end(schedule, plant.x, h)  # the force the sample ended under
         measured, a_f, u_meas = sensor.measure(plant.x, plant.foot_acceleration(u_end), u_end)
+        if filt is not None:  # the foot's filtered state; the force as applied
+            filter_step(filt, measured, a_f - beta * u_end, *_force_integrals(schedule, h),
+                        h, beta, sensor.noise)
+            u_meas = u_end
         # the foot still yields (the loop's condition, a contact sensor's): a noisy v_f that
         # reads otherwise is clipped (the plans start from a yielding foot)
         measured[3] = min(measured[3], -stop)
         t0, c0 = time.perf_counter(), time.process_time()
         if fast is not None and fast.active:
-            status = fast.step(measured, a_f, u_meas, h, estimate)
+            # (the filter's first states are provisional: no fit from them)
+            status = fast.step(measured, a_f, u_meas, h, estimate and (
+                filt is None or samples > PROVISIONAL))
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             if estimate:
@@ -398,10 +426,29 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             out_times[-1] += 1e3 * (time.perf_counter() - t0)
             cpu_times[-1] += 1e3 * (time.process_time() - c0)
             continue
-        if plan is None:  # (a fallback that found no plan: the last command goes on)
-            issued.append(issued[-1])
+        if plan is None:  # a fallback that found no plan: the estimate goes on, and the
+            # re-plan is tried again from this sample's state (else the last command goes on)
+            if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
+                e = est.update(measured, a_f, u_meas)
+                estimates.append(e)
+                if e.samples >= 2:
+                    believed = e.ground()
+            try:
+                plan = solve_from_state(robot, believed, measured)
+                elapsed, planned_for = 0.0, believed
+                replans += 1
+                paths.append("fallback (retried)")
+                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
+            except SolveError:
+                raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+                fallbacks += 1
+                paths.append("kept")
+                issued.append(issued[-1])
+            out_times.append(1e3 * (time.perf_counter() - t0))
+            cpu_times.append(1e3 * (time.process_time() - c0))
             continue
-        if estimate and measured[3] < 0:  # (a noisy v_f may read >= 0: nothing to fit)
+        if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
+            # (a noisy v_f may read >= 0: nothing to fit)
             e = est.update(measured, a_f, u_meas)
             estimates.append(e)
             if e.samples >= 2:
@@ -561,13 +608,13 @@ class _FastState:
 
     @classmethod
     def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
-              sensor: Sensor, margin: float = 0.0) -> _FastState:
+              sensor: Sensor, margin: float = 0.0, filtered: bool = False) -> _FastState:
         """From the first plan (covered if it is push then pull, or pull)."""
         kinds = tuple(m[0].kind for m in plan.modes) if isinstance(plan, RefinedSwitching) \
             and all(len(m) == 1 for m in plan.modes) else ()
         u_max = force_limit(robot)
         k, c_d = ground_numbers(model)
-        noise = bb.ground_force_noise(robot.r_m, sensor.noise)
+        noise = bb.ground_force_noise(robot.r_m, sensor.noise, filtered)
         P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin, period)
         covered = kinds in (("max", "min"), ("min",))
         d = np.asarray(plan.durations, float) if covered else np.array([0.0, 1.0])
@@ -678,8 +725,11 @@ def _plan_holds(robot: Robot, impact: Impact, schedule: Any, h: float, x_before:
     k1, c1 = ground_numbers(believed)
     if abs(k1 - k0) > PLAN_HOLDS_TOL * k0 or abs(c1 - c0) > PLAN_HOLDS_TOL * max(1.0, c0):
         return False
-    predicted = simulate(robot, impact, schedule, planned_for, x0=x_before, t_max=h,
-                         energy=False).trajectory(t_end=h, n=2).x[-1]
+    try:
+        predicted = simulate(robot, impact, schedule, planned_for, x0=x_before, t_max=h,
+                             energy=False).trajectory(t_end=h, n=2).x[-1]
+    except RestNotProvenError:  # (the plan's own sample ends off the stroke: it does not hold)
+        return False
     scale = max(1.0, float(np.max(np.abs(x))))
     return bool(np.max(np.abs(predicted - x)) <= PLAN_HOLDS_TOL * scale)
 
@@ -699,6 +749,24 @@ def _shifted(schedule: Any, skip: float) -> Any:
     if isinstance(schedule, ForceSchedule):
         return ForceSchedule(rest, tuple(schedule.values[i:]))
     return FeedbackSchedule(rest, tuple(schedule.gains[i:]))
+
+
+def _force_integrals(schedule: Any, h: float) -> tuple[float, float]:
+    """``int_0^h u dt`` and ``int_0^h (h - t) u dt`` of a force schedule over a sample
+    (a feedback schedule, the arrest's, which no yielding foot runs: its force at the end)."""
+    if not isinstance(schedule, ForceSchedule):
+        u = float(schedule.gains[-1][4])
+        return u * h, 0.5 * u * h * h
+    u1 = u2 = t0 = 0.0
+    for t, u in zip((*schedule.times, math.inf), schedule.values, strict=True):
+        t1 = min(float(t), h)
+        if t1 > t0:  # (h - t)^2 / 2 from t0 to t1
+            u1 += u * (t1 - t0)
+            u2 += u * 0.5 * ((h - t0) ** 2 - (h - t1) ** 2)
+            t0 = t1
+        if t1 >= h:
+            break
+    return u1, u2
 
 
 def _force_at_end(schedule: Any, x: np.ndarray, t: float) -> float:
@@ -887,6 +955,6 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     return found if isinstance(found, Solution) else _checked(found)
 
 
-__all__ = ["ARREST_RESERVE", "CONTROLLERS", "DEFAULT_PERIOD", "HOLD_GAINS", "MAX_PERIOD",
-           "MIN_PERIOD", "MPCLanding", "Sensor",
+__all__ = ["ARREST_RESERVE", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS", "HOLD_GAINS",
+           "MAX_PERIOD", "MIN_PERIOD", "MPCLanding", "Sensor",
            "check_model", "check_period", "mpc_landing"]

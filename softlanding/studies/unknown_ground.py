@@ -163,7 +163,8 @@ REALISTIC_NOISE, REALISTIC_DELAY = 1e-3, 1
 def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                     period: float = DEFAULT_PERIOD, noise: float = REALISTIC_NOISE,
                     delay: int = REALISTIC_DELAY, margins: Sequence[float] = (0.0, 2.0),
-                    seed: int = 0, bang_bang: bool | None = None) -> dict[str, Any] | None:
+                    seed: int = 0, bang_bang: bool | None = None,
+                    estimator: str = "measured") -> dict[str, Any] | None:
     """One case of the controller study: the clairvoyant optimum, the compiled bang-bang
     controller with exact measurements, and with noisy, delayed ones for each margin.
 
@@ -184,6 +185,8 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
     bang_bang : bool, optional
         Only a case whose clairvoyant optimum is bang-bang (True) or a creep (False): else
         None, without the landings.
+    estimator : str
+        The noisy landings' ground estimator (:func:`~softlanding.control.mpc_landing`).
     """
     clair = solve_landing(v0, robot, ground)
     if bang_bang is not None and (clair.refined is not None) != bang_bang:
@@ -193,8 +196,8 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                            "clairvoyant_verified": not clair.unverified_reasons(),
                            "clairvoyant_bang_bang": clair.refined is not None}
     runs: dict[str, dict[str, Any]] = {"exact": {}}
-    runs.update({f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed, "margin": m}
-                 for m in margins})
+    runs.update({f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed, "margin": m,
+                                   "estimator": estimator} for m in margins})
     for key, kw in runs.items():
         m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)
         row[key] = {**m.to_dict(), "ratio": m.depth / clair.depth,
