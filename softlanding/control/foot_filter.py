@@ -14,10 +14,12 @@ the measured position and velocity.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit
 
-JIT = {"cache": True, "fastmath": False}
+JIT: dict[str, Any] = {"cache": True, "fastmath": False}
 
 # the filter's memory F: estimate, covariance (in units of the noise variance), the last
 # two samples' continuous accelerations, samples done, the last sample's length, and the
