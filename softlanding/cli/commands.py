@@ -642,6 +642,9 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
     if a.margin and a.controller != "bangbang":
         raise ParameterError("--margin", "applies to --controller bangbang")
+    if a.estimator != "measured" and not noise:
+        raise ParameterError("--estimator", "applies with --noise-std > 0 (exact "
+                                            "measurements need no filter)")
     robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
     model = model_ground(a)
     from softlanding.optimal.limits import force_limit
@@ -655,7 +658,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
 
     m = mpc_landing(impact, robot, ground, model=model, period=period,
                     estimate=not a.no_estimate, controller=a.controller, noise=noise,
-                    delay=delay, seed=seed, margin=margin)
+                    delay=delay, seed=seed, margin=margin, estimator=a.estimator)
     clair = solve_landing(impact, robot, ground)
     nominal = solve_landing(impact, robot, model)
     ol = simulate(robot, impact, nominal.schedule(), ground)
@@ -668,7 +671,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
            "feasible": m.feasible, **{k_: d[k_] for k_ in (
                "failure", "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak",
                "period", "period_rig_ms", "controller", "uncovered", "noise", "delay",
-               "seed", "margin", "samples", "steps", "replans",
+               "seed", "margin", "estimator", "samples", "steps", "replans",
                "fallbacks", "step_time_median_ms", "step_time_p99_ms", "step_time_max_ms",
                "step_cpu_median_ms", "step_cpu_p99_ms", "step_cpu_max_ms", "prepare_time_s",
                "setup_ms", "estimate", "ground", "model_ground")}}
@@ -695,7 +698,9 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
                                  f"on the paper's rig)"),
             ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
             ("samples not covered (bangbang)", m.uncovered),
-            ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"),
+            ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"
+                                           + (", filtered estimate" if m.estimator == "filtered"
+                                              else "")),
             ("step time median / p99 / max [ms]",
              " / ".join(_ms(out[f"step_time_{q}_ms"]) for q in ("median", "p99", "max"))),
             ("preparation before impact [s]", f"{m.prepare_time_s:.3g}"),

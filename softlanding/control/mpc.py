@@ -139,8 +139,9 @@ class MPCLanding:
         ``controller="bangbang"``: samples the compiled controller did not cover (its
         structure, push then pull, did not fit the state and estimate); each of them and the
         rest of the landing fell back to the re-planning MPC (``step_paths`` says why).
-    noise, delay, seed, margin
-        The sensing and the margin the landing ran with (:func:`mpc_landing`).
+    noise, delay, seed, margin, estimator
+        The sensing, the margin and the ground estimate's regression the landing ran with
+        (:func:`mpc_landing`).
     samples : int
         Samples taken while the foot yielded.
     pieces : list of (float, LandingResult)
@@ -174,6 +175,7 @@ class MPCLanding:
     delay: int = 0
     seed: int = 0
     margin: float = 0.0
+    estimator: str = "measured"
     pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
 
     def trajectory(self, n: int = 1500) -> Trajectory:
@@ -233,7 +235,7 @@ class MPCLanding:
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
             "structure_changes": self.structure_changes, "controller": self.controller,
             "uncovered": self.uncovered, "noise": self.noise, "delay": self.delay,
-            "seed": self.seed, "margin": self.margin,
+            "seed": self.seed, "margin": self.margin, "estimator": self.estimator,
             "steps": len(self.step_times_ms), **self.step_stats(), "setup_ms": self.setup_ms,
             "prepare_time_s": self.prepare_time_s,
             "period_rig_ms": 1e3 * self.period * paper_rig_units().time,
@@ -503,7 +505,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       pieces=list(plant.history), prepare_time_s=prepare_s,
                       sample_limit_hit=samples >= max_samples and plant.x[3] < -stop,
                       controller=controller, uncovered=uncovered, noise=sensor.noise,
-                      delay=sensor.delay, seed=seed, margin=margin)
+                      delay=sensor.delay, seed=seed, margin=margin, estimator=estimator)
 
 
 class Sensor:

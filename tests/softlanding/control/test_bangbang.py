@@ -101,7 +101,8 @@ def test_an_unknown_controller_is_refused_at_once():
 
 @pytest.mark.parametrize("args", [["--noise-std", "-1"], ["--noise-std", "nan"],
                                   ["--delay", "1.5"], ["--delay", "-1"], ["--seed", "-1"],
-                                  ["--margin", "1"], ["--controller", "x"]])
+                                  ["--margin", "1"], ["--controller", "x"],
+                                  ["--estimator", "x"], ["--estimator", "filtered"]])
 def test_cli_bad_sensing_one_line_exit_2(cli, args):
     code, _, err = cli("mpc", "--v0", "-3", *args)
     assert code == 2 and err.count("\n") == 1
@@ -118,6 +119,14 @@ def test_cli_bangbang_with_noise_and_delay(cli):
     d = json.loads(out)
     assert d["controller"] == "bangbang" and d["delay"] == 1 and d["noise"] == 1e-3
     assert d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
+    assert d["estimator"] == "measured"
+    # the filtered estimate from the command line (mpc_landing's estimator="filtered")
+    code, out, err = cli("mpc", "--v0", "-3", "--ground", "linear", "--stiffness", "2",
+                         "--controller", "bangbang", "--noise-std", "1e-3", "--delay", "1",
+                         "--margin", "2", "--estimator", "filtered", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["estimator"] == "filtered" and d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
 
 
 def test_a_creep_falls_back_and_holds_the_stroke():
