@@ -20,7 +20,13 @@ Run:  pip install -e ".[bench]" && python -m benchmarks.bench_resolve [--baselin
    ``refine(tol=1e-6)``; the moon lander, Radau N = 5, build + solve. Goal: no slower
    than the baseline (0.2.0: ``--baseline 95cc625``).
 
-3. **Alp rider** (``--alp``; Betts 2010, pp. 163-165, J* = 2030.85609): Radau from
+3. **The landing's 41-velocity warm sweep** (``--sweep``): ``sweep_landing`` over
+   ``v0 = 0 ... -10`` (41 values, as ``softlanding solve-sweep --n 41``; each solve
+   warm-starts the next), CPU of the first sweep in a fresh process (the NLP's build
+   included) and of the same sweep repeated there; current and baseline in alternating
+   fresh processes. Goal: at least 2x faster than the baseline (the tree the issue measured).
+
+4. **Alp rider** (``--alp``; Betts 2010, pp. 163-165, J* = 2030.85609): Radau from
    N = 20 with ``refine(tol=1e-6)``, CPU per run, current and baseline alternating.
    Goal: <= 5 s CPU.
 """
@@ -39,6 +45,8 @@ import time
 import warnings
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -83,11 +91,31 @@ print(json.dumps({"cpu": time.process_time() - c, "J": sol.objective,
 """
 
 
+SWEEP = r"""
+import json, time, warnings
+import numpy as np
+warnings.simplefilter("ignore")
+from softlanding.optimal.landing import sweep_landing
+v = np.linspace(0.0, -10.0, 41)
+out = {}
+for key in ("first", "again", "transcribed"):
+    c = time.process_time(); w = time.perf_counter()
+    res = sweep_landing(v, refine=key != "transcribed")
+    out[key], out[key + "_wall"] = time.process_time() - c, time.perf_counter() - w
+    if key == "again":
+        out["depth"] = [r.depth for r in res]
+        out["paths"] = [getattr(r, "path", "") for r in res]
+out["depth_transcribed"] = [r.depth for r in res]
+print(json.dumps(out))
+"""
+
+
 def baseline_tree(rev: str) -> Path:
-    """The baseline's ``ocp`` and ``tests`` in a temporary directory (``git archive``)."""
+    """The baseline's ``ocp``, ``softlanding`` and ``tests`` in a temporary directory
+    (``git archive``)."""
     tmp = Path(tempfile.mkdtemp(prefix="ocp_baseline_"))
-    arch = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "ocp", "tests"],
-                          check=True, capture_output=True).stdout
+    arch = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "ocp", "softlanding",
+                           "tests"], check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(tmp)], input=arch, check=True)
     alp = "tests/oracles/ocp_suite/alp_rider.py"  # the problem, if the baseline lacks it
     if (tmp / alp).parent.is_dir() and not (tmp / alp).exists():
@@ -175,6 +203,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=30)
     ap.add_argument("--processes", type=int, default=3, help="fresh processes per tree")
     ap.add_argument("--alp", action="store_true", help="also the alp rider (minutes)")
+    ap.add_argument("--sweep", action="store_true",
+                    help="also the landing's 41-velocity warm sweep")
     ap.add_argument("--skip-moon", action="store_true")
     ap.add_argument("--skip-small", action="store_true")
     args = ap.parse_args()
@@ -195,12 +225,33 @@ def baseline_runs(base: Path, args: Any) -> None:
     """The brachistochrone and alp rider runs against the baseline tree ``base``."""
     if not args.skip_small:
         small(base, args)
+    if args.sweep:
+        sweep(base, args)
     if args.alp:
         old, new = alternate(base, ALP, 1)
         for who, r in (("baseline", old[0]), ("now", new[0])):
             print(f"alp rider, refine(1e-6) from N = 20, {who}: {r['cpu']:.2f} s CPU, "
                   f"J = {r['J']:.8f} (published 2030.85609), {r['rounds']} rounds, final "
                   f"N = {r['N']}, iterations {r['iterations']}, converged {r['converged']}")
+
+
+def sweep(base: Path, args: Any) -> None:
+    """The landing's 41-velocity sweep, baseline and current in alternating processes."""
+    old, new = alternate(base, SWEEP, args.processes)
+    print(f"landing, sweep_landing over 41 v0 in [-10, 0] (CPU s per sweep, "
+          f"{args.processes} fresh processes each, alternating): baseline {args.baseline} / now")
+    for key, what in (("first", "first sweep (build included)"),
+                      ("again", "the sweep repeated"),
+                      ("transcribed", "transcribed (refine=False)")):
+        a, b = [r[key] for r in old], [r[key] for r in new]
+        print(f"  {what:30s} {' '.join(f'{x:6.3f}' for x in a)} / "
+              f"{' '.join(f'{x:6.3f}' for x in b)}; ratio of medians "
+              f"{statistics.median(b) / statistics.median(a):.2f} (goal <= 0.5)")
+    da, db = np.array(old[0]["depth"]), np.array(new[0]["depth"])
+    ta, tb = np.array(old[0]["depth_transcribed"]), np.array(new[0]["depth_transcribed"])
+    print(f"  largest depth difference {np.max(np.abs(da - db)):.2e} (transcribed "
+          f"{np.max(np.abs(ta - tb)):.2e}); paths now "
+          f"{dict(zip(*np.unique(new[0]['paths'], return_counts=True), strict=True))}")
 
 
 def small(base: Path, args: Any) -> None:

@@ -680,7 +680,7 @@ class Transcription:
 
     def _solve(self, params: dict[str, float] | None, guess: Any,
                warm_start: Solution | None, verify_mode: str,
-               expand: bool | None = None) -> Solution:
+               expand: bool | None = None, objective_scale: float | None = None) -> Solution:
         params = {} if params is None else params
         pv = self.param_vector(params)
         lbw, ubw, lbg, ubg = self._bounds_at(pv)
@@ -694,7 +694,8 @@ class Transcription:
             f0, fref = warm_start.objective, warm_start.objective_scale
         else:
             f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
-            fref = self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
+            fref = objective_scale if objective_scale is not None else \
+                self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
         solver = self._solver(warm_start is not None and "lam_g0" in args, expand)
         t0 = time.perf_counter()
         res = self._unscale(solver(**self._scale_args(args, fref)), fref)

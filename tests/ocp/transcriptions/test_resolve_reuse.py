@@ -67,3 +67,18 @@ def test_degree_matrices_once_per_degree():
     assert degree_matrices(3)[0] is degree_matrices(3)[0]
     for a, b in zip(degree_matrices(4), collocation_matrices(radau_points(4)), strict=True):
         assert np.array_equal(a, b) and not a.flags.writeable
+
+
+@pytest.mark.slow
+def test_refinement_rounds_keep_the_first_rounds_objective_scale():
+    """Betts' alp rider: its second round starts from the coarse solution, whose objective
+    varies ten times less than the first start's; re-deriving the scale there (1e3 instead
+    of 1e4) took Ipopt 2,937 iterations on that round, the first round's scale 150."""
+    from tests.oracles.ocp_suite.alp_rider import alp_rider
+
+    tr = Collocation(alp_rider(), intervals=20)
+    first = tr.solve()
+    sol = tr.refine(tol=1e-6, max_rounds=1)
+    assert sol.objective_scale == first.objective_scale == 1e4
+    assert len(sol.mesh_history) == 2 and sol.mesh_history[1].iterations < 500
+    assert sol.mesh_history[1].objective == pytest.approx(2061.85, rel=1e-3)
