@@ -57,11 +57,13 @@ class FilterCall:
 
 @dataclass(frozen=True)
 class PlanCall:
-    """A plan's force integrated over a sample: ``P``, ``M`` after the step, the sample."""
+    """A plan's force integrated over a sample: ``P``, ``M`` after the step, the sample, and
+    the integrals of the Python schedule (:func:`~.reference.plan_force_integrals`)."""
 
     P: np.ndarray
     M: np.ndarray
     h: float
+    U: np.ndarray
 
 
 def _foot_acc(P: np.ndarray, u: float, xf: float, vf: float, truth: tuple[float, float]
@@ -125,8 +127,8 @@ def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[f
         h = min(first if sample == 0 else period, float(length))
         if h <= 1e-9 * period:
             break
-        plan_calls.append(PlanCall(P.copy(), M.copy(), h))
-        U1, U2 = plan_force_integrals(P, M, h)
+        U1, U2 = U = plan_force_integrals(P, M, h)
+        plan_calls.append(PlanCall(P.copy(), M.copy(), h, U))
         x, u_end = _plant(P, M, x, h, truth)
         if x[3] >= 0.0:  # the foot stopped within the sample
             break
@@ -288,7 +290,7 @@ def compare_filter(c: CController, n_steps: int = 600, seed: int = 0) -> FilterC
             want[key].append(b)
     for pc in pcalls:
         got["force integrals"].append(c.force_integrals(pc.P, pc.M, pc.h))
-        want["force integrals"].append(plan_force_integrals(pc.P, pc.M, pc.h))
+        want["force integrals"].append(pc.U)
     for key in got:
         if got[key]:
             out.max_relative[key] = relative_difference(np.concatenate(got[key]),
