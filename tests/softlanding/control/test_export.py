@@ -379,3 +379,12 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
     assert len(want) == 12 and got == want
     assert {w[0] for w in want} <= {bb.OK, bb.CONVERGING, bb.HOLDS}
     assert want[1][6] == 1.0 and want[2][6] != 1.0  # no fit from the provisional samples
+
+
+@pytest.mark.slow
+@needs_cc
+def test_c_and_numba_filters_agree_on_5000_more_samples(exported, tmp_path):
+    c = CController(compile_shared(exported[0], tmp_path / "lib.so"))
+    result = compare_filter(c, 5000, seed=1)
+    assert result.steps == 5000 and result.worst() == 0.0, result.describe()
+    assert result.paths["widened"] >= 100 and result.paths["redo"] >= 100, result.paths
