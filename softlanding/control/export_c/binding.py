@@ -94,6 +94,8 @@ class CController:
         lib.sl_force.restype = d
         lib.sl_force_integrals.argtypes = [p, p, d, p]
         lib.sl_force_integrals.restype = None
+        lib.sl_ground_estimate.argtypes = [p, p, p]
+        lib.sl_ground_estimate.restype = None
         lib.sl_filter_init.argtypes = [p, p]
         lib.sl_filter_init.restype = None
         lib.sl_filter_step.argtypes = [p, p, d, d, d, d, d, d]
@@ -175,6 +177,18 @@ class CController:
         U = np.zeros(2)
         self.lib.sl_force_integrals(_ptr(P), _ptr(M), h, _ptr(U))
         return U
+
+    def ground_estimate(self, P: np.ndarray, M: np.ndarray) -> np.ndarray:
+        """``sl_ground_estimate``: ``[K, c_d, std K, std c_d]`` of the estimate in ``M``.
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory.
+        """
+        E = np.zeros(4)
+        self.lib.sl_ground_estimate(_ptr(P), _ptr(M), _ptr(E))
+        return E
 
     def filter_init(self, x0: np.ndarray) -> np.ndarray:
         """``sl_filter_init`` (as :func:`~softlanding.control.foot_filter.new_filter`).

@@ -1,5 +1,6 @@
 """The exported C foot filter against the Python (numba) one, on the measurements of random
-noisy landings of the filtered controller.
+noisy landings of the filtered controller (and the plans' force integrals and ground
+estimates on them).
 
 A landing is the exported robot on a random ground, off the controller's prior, at a random
 impact velocity, sample period and sensor noise, landed as ``mpc_landing(...,
@@ -23,8 +24,10 @@ import numpy as np
 
 from softlanding.control import bangbang as bb
 from softlanding.control import foot_filter as ff
+from softlanding.control.estimation import GroundEstimator
 from softlanding.control.export_c.binding import CController
 from softlanding.control.export_c.reference import (
+    ground_estimate,
     plan_force_integrals,
     plan_schedule,
     relative_difference,
@@ -213,8 +216,9 @@ class FilterComparison:
         Plans whose force integrals were compared.
     max_relative : dict
         ``"F"``, ``"x"``, ``"widened"`` (1 if the C's flag ever differs from numba's),
-        ``"force integrals"`` (the C's ``sl_force_integrals`` against the Python schedule's):
-        the largest relative difference of each.
+        ``"force integrals"`` (the C's ``sl_force_integrals`` against the Python schedule's),
+        ``"estimate"`` (``sl_ground_estimate`` against the Python estimator's, at every
+        plan): the largest relative difference of each.
     """
 
     landings: int = 0
@@ -222,7 +226,7 @@ class FilterComparison:
     plans: int = 0
     paths: dict[str, int] = field(default_factory=dict)
     max_relative: dict[str, float] = field(default_factory=lambda: {
-        "F": 0.0, "x": 0.0, "widened": 0.0, "force integrals": 0.0})
+        "F": 0.0, "x": 0.0, "widened": 0.0, "force integrals": 0.0, "estimate": 0.0})
 
     def worst(self) -> float:
         """The largest relative difference of any output."""
@@ -234,7 +238,8 @@ class FilterComparison:
         p = ", ".join(f"{k} {v}" for k, v in self.paths.items())
         return (f"{self.steps} filter steps of {self.landings} noisy landings ({p}), largest "
                 f"relative difference {max(d['F'], d['x'], d['widened']):.3g}; the force "
-                f"integrals of {self.plans} plans {d['force integrals']:.3g}")
+                f"integrals of {self.plans} plans {d['force integrals']:.3g}, their ground "
+                f"estimates {d['estimate']:.3g}")
 
 
 def filter_path(F: np.ndarray, h: float) -> str:
@@ -272,7 +277,9 @@ def compare_filter(c: CController, n_steps: int = 600, seed: int = 0) -> FilterC
     robot = Robot(r_m=float(r[bb.P_RM]), s=float(r[bb.P_S]), u_max=float(r[bb.P_UMAX]))
     fcalls, pcalls, landings = filtered_calls(robot, n_steps, seed)
     out = FilterComparison(landings=landings, steps=len(fcalls), plans=len(pcalls))
-    got: dict[str, list[np.ndarray]] = {"F": [], "x": [], "widened": [], "force integrals": []}
+    est = GroundEstimator(robot)
+    got: dict[str, list[np.ndarray]] = {"F": [], "x": [], "widened": [], "force integrals": [],
+                                        "estimate": []}
     want: dict[str, list[np.ndarray]] = {k: [] for k in got}
     for k in fcalls:
         path = filter_path(k.F, k.h)
@@ -291,6 +298,8 @@ def compare_filter(c: CController, n_steps: int = 600, seed: int = 0) -> FilterC
     for pc in pcalls:
         got["force integrals"].append(c.force_integrals(pc.P, pc.M, pc.h))
         want["force integrals"].append(pc.U)
+        got["estimate"].append(c.ground_estimate(pc.P, pc.M))
+        want["estimate"].append(ground_estimate(pc.P, pc.M, est))
     for key in got:
         if got[key]:
             out.max_relative[key] = relative_difference(np.concatenate(got[key]),

@@ -1,12 +1,14 @@
 """What the exported C is compared with, from the Python modules: the plan's force (the
-Python schedule, not the C's formula), its integrals over a sample, and the relative
-difference of two results."""
+Python schedule, not the C's formula), its integrals over a sample, the ground estimate
+(:class:`~softlanding.control.estimation.GroundEstimator`'s), and the relative difference
+of two results."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from softlanding.control import bangbang as bb
+from softlanding.control.estimation import GroundEstimator
 from softlanding.model.controllers import ForceSchedule
 from softlanding.optimal.landing import arrest_schedule
 
@@ -67,6 +69,25 @@ def plan_force_integrals(P: np.ndarray, M: np.ndarray, h: float) -> np.ndarray:
     return U
 
 
+def ground_estimate(P: np.ndarray, M: np.ndarray, est: GroundEstimator) -> np.ndarray:
+    """``[K, c_d, std K, std c_d]`` of the compiled controller's estimate in ``M``, given
+    to the Python estimator ``est`` (as ``mpc_landing`` hands it over) and read from its
+    :attr:`~softlanding.control.estimation.GroundEstimator.estimate`.
+
+    Parameters
+    ----------
+    P, M : arrays
+        The controller's numbers and memory.
+    est : GroundEstimator
+        Any, with drag (its fit and covariance replaced).
+    """
+    est.theta = np.array([M[bb.M_TH0], M[bb.M_TH1]])
+    est.P = np.array([[M[bb.M_P00], M[bb.M_P01]], [M[bb.M_P01], M[bb.M_P11]]])
+    est.noise = float(P[bb.P_NOISE])
+    e = est.estimate
+    return np.array([e.stiffness, e.c_d, e.stiffness_std, e.c_d_std])
+
+
 def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
     """Largest ``|a - b| / max(|a|, |b|)`` (0 where both are 0; inf where one is not finite
     and they differ).
@@ -84,4 +105,5 @@ def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
     return float(rel.max(initial=0.0))
 
 
-__all__ = ["plan_force_integrals", "plan_forces", "plan_schedule", "relative_difference"]
+__all__ = ["ground_estimate", "plan_force_integrals", "plan_forces", "plan_schedule",
+           "relative_difference"]

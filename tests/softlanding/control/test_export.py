@@ -16,11 +16,12 @@ import pytest
 from softlanding.cli import main
 from softlanding.control import bangbang as bb
 from softlanding.control import foot_filter as ff
+from softlanding.control.estimation import GroundEstimator
 from softlanding.control.export_c import layout
 from softlanding.control.export_c.binding import CFLAGS, CController, compile_shared, find_compiler
 from softlanding.control.export_c.check import TOLERANCE, compare, plan_forces
 from softlanding.control.export_c.filter_check import PROBES, compare_filter
-from softlanding.control.export_c.reference import plan_force_integrals
+from softlanding.control.export_c.reference import ground_estimate, plan_force_integrals
 from softlanding.control.export_c.writer import HEADER, README, SOURCE
 from softlanding.model.robot import PAPER_ROBOT
 from softlanding.simulation.kernel import dop853
@@ -304,7 +305,7 @@ FILTER_C = """
 #include <string.h>
 #include "softlanding_controller.h"
 int main(void) {
-    double P[SL_NP], M[SL_NM], F[SL_NF], U[2], x[4] = {10.0, -3.0, 0.0, -3.0}, e[3];
+    double P[SL_NP], M[SL_NM], F[SL_NF], U[2], x[4] = {10.0, -3.0, 0.0, -3.0}, e[3], E[4];
     double h, u, a_f;
     int st, k, j, widened;
     memcpy(P, SL_ROBOT_NUMBERS, sizeof P);
@@ -330,8 +331,9 @@ int main(void) {
         widened = sl_filter_step(F, x, a_f - P[SL_P_BF] * u, U[0], U[1], h, P[SL_P_BF],
                                  SL_SENSOR_NOISE);
         st = sl_control_step(P, M, x, a_f, u, h, F[SL_F_N] > SL_FILTER_PROVISIONAL);
-        printf("%d %d %.17g %.17g %.17g %.17g %.17g\\n", st, widened, x[2], x[3], M[SL_M_TAU1],
-               M[SL_M_TAU2], M[SL_M_TH0]);
+        sl_ground_estimate(P, M, E);
+        printf("%d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\\n", st, widened, x[2],
+               x[3], M[SL_M_TAU1], M[SL_M_TAU2], E[0], E[1], E[2], E[3]);
     }
     return 0;
 }
@@ -357,6 +359,7 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
     x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
     bb.solve_plan(P, M, x, *ws)
     F = ff.new_filter(x)
+    est = GroundEstimator(r)
     want = []
     for k in range(12):
         U = plan_force_integrals(P, M, h)
@@ -375,10 +378,11 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
         ff.filter_step(F, x, a_f - P[bb.P_BF] * u, U[0], U[1], h, P[bb.P_BF], NOISE)
         st = bb.control_step(P, M, x, a_f, u, h, bool(F[ff.F_N] > ff.PROVISIONAL), *ws)
         want.append([st, float(not np.array_equal(F, G)), x[2], x[3], M[bb.M_TAU1],
-                     M[bb.M_TAU2], M[bb.M_TH0]])
+                     M[bb.M_TAU2], *ground_estimate(P, M, est)])
     assert len(want) == 12 and got == want
     assert {w[0] for w in want} <= {bb.OK, bb.CONVERGING, bb.HOLDS}
     assert want[1][6] == 1.0 and want[2][6] != 1.0  # no fit from the provisional samples
+    assert want[-1][8] < 0.1 * want[1][8]  # the estimate's uncertainty fell
 
 
 @pytest.mark.slow
