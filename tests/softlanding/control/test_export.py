@@ -283,7 +283,7 @@ def test_c_and_numba_filters_agree_on_600_samples_of_noisy_landings(exported):
 
 @needs_cc
 def test_the_filter_comparison_sees_a_changed_constant(exported_filtered, tmp_path):
-    # an honest comparison: the process noise off by 2e-7 shows, the probes alone (the fast
+    # an honest comparison: the process noise off by 1e-7 shows, the probes alone (the fast
     # draggy impact's 40 samples, the innovation check's path among them)
     folder = exported_filtered[0]
     mutant = tmp_path / "mutant"
