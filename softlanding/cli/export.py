@@ -30,6 +30,10 @@ def export_command(a: argparse.Namespace) -> int:
     period = DEFAULT_PERIOD if a.period is None else check_period("--period", a.period)
     noise = check("--noise-std", a.noise_std, (lambda v: v >= 0, "must be >= 0"))
     margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
+    filtered = a.estimator == "filtered"
+    if filtered and not noise:
+        raise ParameterError("--estimator", "filtered applies with --noise-std > 0 (exact "
+                                            "measurements have nothing to filter)")
     robot = robot_of(a)
     u_max = force_limit(robot)
     k, c_d = ground_numbers(model_ground(a))
@@ -42,11 +46,11 @@ def export_command(a: argparse.Namespace) -> int:
     from softlanding.control.export_c.writer import FILES, controller_sources, write_controller
 
     P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d,
-                         bb.ground_force_noise(robot.r_m, noise), margin, period)
+                         bb.ground_force_noise(robot.r_m, noise, filtered), margin, period)
     text = (f"r_m = {robot.r_m:g}, s = {robot.s:g}, u_max = {u_max:g}; prior ground K = {k:g}, "
             f"c_d = {c_d:g}; sample period {period:g}; sensor noise {noise:g}; margin "
-            f"{margin:g}")
-    sources = controller_sources(P, text)
+            f"{margin:g}; {a.estimator} estimate")
+    sources = controller_sources(P, text, noise)
     result = None
     with atomic_folder(out, force=a.force) as tmp:
         write_controller(tmp, sources)
@@ -54,12 +58,17 @@ def export_command(a: argparse.Namespace) -> int:
             result = check_export(tmp)
     files = [str(out / name) for name in FILES]
     names = {i: k_ for k_, i in indices("P_").items()}
-    d = {"out": str(out), "files": files, "robot": text,
+    fc = None if result is None else result.filter
+    d = {"out": str(out), "files": files, "robot": text, "estimator": a.estimator,
+         "sensor_noise": noise,
          "numbers": {names[i][2:]: float(v) for i, v in enumerate(P)},
          "check": None if result is None else {
              "landings": result.landings, "samples": result.steps,
              "pull_samples": result.pull_steps,
-             "max_relative_difference": result.max_relative, "statuses": result.statuses}}
+             "max_relative_difference": result.max_relative, "statuses": result.statuses,
+             "filter": None if fc is None else {
+                 "landings": fc.landings, "steps": fc.steps, "plans": fc.plans,
+                 "paths": fc.paths, "max_relative_difference": fc.max_relative}}}
     if a.json:
         print_json(d)
         return EXIT_OK

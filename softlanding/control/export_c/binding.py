@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from softlanding.control import bangbang as bb
+from softlanding.control import foot_filter as ff
 from softlanding.control.export_c.writer import SOURCE
 from softlanding.errors import ExportError
 
@@ -91,6 +92,15 @@ class CController:
         lib.sl_new_memory.restype = None
         lib.sl_force.argtypes = [p, p, d]
         lib.sl_force.restype = d
+        lib.sl_force_integrals.argtypes = [p, p, d, p]
+        lib.sl_force_integrals.restype = None
+        lib.sl_ground_estimate.argtypes = [p, p, p]
+        lib.sl_ground_estimate.restype = None
+        lib.sl_filter_init.argtypes = [p, p]
+        lib.sl_filter_init.restype = None
+        lib.sl_filter_step.argtypes = [p, p, d, d, d, d, d, d]
+        lib.sl_filter_step.restype = i
+        self.sensor_noise = float(d.in_dll(lib, "SL_SENSOR_NOISE").value)
         self.robot_numbers = np.ctypeslib.as_array(
             (ctypes.c_double * bb.NP).in_dll(lib, "SL_ROBOT_NUMBERS")).copy()
 
@@ -152,6 +162,61 @@ class CController:
             Time after the step.
         """
         return float(self.lib.sl_force(_ptr(P), _ptr(M), t))
+
+    def force_integrals(self, P: np.ndarray, M: np.ndarray, h: float) -> np.ndarray:
+        """``sl_force_integrals``: ``int_0^h u dt`` and ``int_0^h (h - t) u dt`` of the
+        plan's force after the last step.
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory.
+        h : float
+            The sample.
+        """
+        U = np.zeros(2)
+        self.lib.sl_force_integrals(_ptr(P), _ptr(M), h, _ptr(U))
+        return U
+
+    def ground_estimate(self, P: np.ndarray, M: np.ndarray) -> np.ndarray:
+        """``sl_ground_estimate``: ``[K, c_d, std K, std c_d]`` of the estimate in ``M``.
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory.
+        """
+        E = np.zeros(4)
+        self.lib.sl_ground_estimate(_ptr(P), _ptr(M), _ptr(E))
+        return E
+
+    def filter_init(self, x0: np.ndarray) -> np.ndarray:
+        """``sl_filter_init`` (as :func:`~softlanding.control.foot_filter.new_filter`).
+
+        Parameters
+        ----------
+        x0 : array of 4
+            The impact state.
+        """
+        F = np.zeros(ff.NF)
+        self.lib.sl_filter_init(_ptr(F), _ptr(np.ascontiguousarray(x0, float)))
+        return F
+
+    def filter_step(self, F: np.ndarray, x: np.ndarray, g: float, U1: float, U2: float,
+                    h: float, beta: float, noise: float) -> bool:
+        """``sl_filter_step`` (as :func:`~softlanding.control.foot_filter.filter_step`): ``F``
+        and ``x`` updated in place; whether the innovation check widened the prediction.
+
+        Parameters
+        ----------
+        F : array
+            The filter's memory.
+        x : array of 4
+            The measured state (its foot's entries replaced by the filter's).
+        g, U1, U2, h, beta, noise : float
+            As :func:`~softlanding.control.foot_filter.filter_step`.
+        """
+        return bool(self.lib.sl_filter_step(_ptr(F), _ptr(x), g, U1, U2, h, beta, noise))
 
 
 __all__ = ["CFLAGS", "CController", "compile_shared", "find_compiler"]

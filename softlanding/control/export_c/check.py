@@ -3,7 +3,9 @@
 Both run every recorded call of random landings (:mod:`.samples`) from the same inputs;
 compared are the statuses, ``P`` and ``M`` after every call and the plan's force at three
 times after each, the force of the Python side from
-:func:`~softlanding.optimal.landing.arrest_schedule` (not from the C's formula).
+:func:`~softlanding.optimal.landing.arrest_schedule` (not from the C's formula). The foot
+filter and the plan's force integrals are compared on noisy filtered landings
+(:mod:`.filter_check`).
 """
 
 from __future__ import annotations
@@ -16,52 +18,14 @@ import numpy as np
 
 from softlanding.control import bangbang as bb
 from softlanding.control.export_c.binding import CController, compile_shared
+from softlanding.control.export_c.filter_check import FilterComparison, compare_filter
+from softlanding.control.export_c.reference import plan_forces, relative_difference
 from softlanding.control.export_c.samples import recorded_calls
 from softlanding.errors import ExportError
-from softlanding.model.controllers import ForceSchedule
 from softlanding.model.robot import Robot
-from softlanding.optimal.landing import arrest_schedule
 
 #: Largest relative difference of any output the C may have from the Python controller.
 TOLERANCE = 1e-12
-
-
-def plan_forces(P: np.ndarray, M: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """The force of the plan in ``M`` at ``times`` after the step, from the Python schedule
-    (push, pull, then :func:`~softlanding.optimal.landing.arrest_schedule`).
-
-    Parameters
-    ----------
-    P, M : arrays
-        The controller's numbers and memory.
-    times : array
-        Times after the step.
-    """
-    t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
-    t2 = t1 + float(M[bb.M_TAU2])
-    u_max = float(P[bb.P_UMAX])
-    tail = arrest_schedule(np.array([M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT], 0.0]),
-                           float(P[bb.P_RM]))
-    assert isinstance(tail, ForceSchedule)  # (a constant arrest force, then the weight)
-    after = np.array(tail.values)[np.searchsorted(tail.times, times - t2, side="right")]
-    return np.where(times < t1, u_max, np.where(times < t2, -u_max, after))
-
-
-def relative_difference(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest ``|a - b| / max(|a|, |b|)`` (0 where both are 0; inf where one is not finite
-    and they differ).
-
-    Parameters
-    ----------
-    a, b : array
-        Same shape.
-    """
-    a, b = np.atleast_1d(np.asarray(a, float)), np.atleast_1d(np.asarray(b, float))
-    same = (a == b) | (np.isnan(a) & np.isnan(b))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        rel = np.abs(a - b) / np.maximum(np.abs(a), np.abs(b))
-    rel = np.where(same, 0.0, np.where(np.isfinite(rel), rel, np.inf))
-    return float(rel.max(initial=0.0))
 
 
 @dataclass
@@ -79,6 +43,8 @@ class Comparison:
         largest relative difference of each over every call.
     statuses : dict
         Status name -> how many calls of the Python controller returned it.
+    filter : FilterComparison or None
+        The foot filter's and the force integrals' comparison (:mod:`.filter_check`).
     """
 
     landings: int = 0
@@ -87,10 +53,12 @@ class Comparison:
     max_relative: dict[str, float] = field(
         default_factory=lambda: {"status": 0.0, "P": 0.0, "M": 0.0, "force": 0.0})
     statuses: dict[str, int] = field(default_factory=dict)
+    filter: FilterComparison | None = None
 
     def worst(self) -> float:
-        """The largest relative difference of any output."""
-        return max(self.max_relative.values())
+        """The largest relative difference of any output (the filter's too)."""
+        return max(*self.max_relative.values(),
+                   self.filter.worst() if self.filter is not None else 0.0)
 
     def describe(self) -> str:
         """One line: what was compared and how far apart."""
@@ -98,7 +66,8 @@ class Comparison:
         return (f"{self.steps} samples ({self.pull_steps} pulling) of {self.landings} "
                 f"landings, largest relative "
                 f"difference {self.worst():.3g} (force {d['force']:.3g}, P {d['P']:.3g}, M "
-                f"{d['M']:.3g}; statuses {'the same' if d['status'] == 0 else 'differ'})")
+                f"{d['M']:.3g}; statuses {'the same' if d['status'] == 0 else 'differ'})"
+                + (f"; the foot filter: {self.filter.describe()}" if self.filter else ""))
 
 
 def robot_of_numbers(P: np.ndarray) -> Robot:
@@ -157,9 +126,11 @@ def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
     return out
 
 
-def check_export(folder: Path, n_steps: int = 1000, seed: int = 0) -> Comparison:
+def check_export(folder: Path, n_steps: int = 1000, seed: int = 0,
+                 filter_steps: int = 600) -> Comparison:
     """Compile the export in ``folder`` with the system's C compiler (into a temporary
-    folder) and :func:`compare` it with the Python controller.
+    folder), :func:`compare` it with the Python controller and its foot filter with the
+    Python filter (:func:`~.filter_check.compare_filter`).
 
     Parameters
     ----------
@@ -167,6 +138,8 @@ def check_export(folder: Path, n_steps: int = 1000, seed: int = 0) -> Comparison
         The exported files.
     n_steps, seed : int
         As :func:`compare`.
+    filter_steps : int
+        Filter steps compared.
 
     Raises
     ------
@@ -176,7 +149,9 @@ def check_export(folder: Path, n_steps: int = 1000, seed: int = 0) -> Comparison
     """
     with tempfile.TemporaryDirectory(prefix="softlanding-export-") as tmp:
         lib = compile_shared(Path(folder), Path(tmp) / "libsl.so")
-        result = compare(CController(lib), n_steps, seed)
+        c = CController(lib)
+        result = compare(c, n_steps, seed)
+        result.filter = compare_filter(c, filter_steps, seed)
     if result.worst() > TOLERANCE:
         raise ExportError(f"the compiled C differs from the Python controller: "
                           f"{result.describe()}")

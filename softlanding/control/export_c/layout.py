@@ -1,10 +1,13 @@
 """The numbers the exported C takes from the Python controller: the layout of ``P`` and
-``M``, the phases, statuses and tolerances of :mod:`softlanding.control.bangbang`, and the
-Dormand-Prince coefficients of :mod:`softlanding.simulation.kernel.dop853`, as C text.
+``M``, the phases, statuses and tolerances of :mod:`softlanding.control.bangbang`, the
+layout of the foot filter's memory ``F`` and its constants
+(:mod:`softlanding.control.foot_filter`), and the Dormand-Prince coefficients of
+:mod:`softlanding.simulation.kernel.dop853`, as C text.
 
 Every index is read from :mod:`~softlanding.control.bangbang` (its ``P_*`` and ``M_*``
-constants), never written here: a new entry there without a description here fails the
-export (:func:`layout_lines`), so the C cannot drift from the Python.
+constants) or :mod:`~softlanding.control.foot_filter` (its ``F_*``), never written here: a
+new entry there without a description here fails the export (:func:`layout_lines`), so the
+C cannot drift from the Python.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from softlanding.control import bangbang as bb
+from softlanding.control import foot_filter as ff
 from softlanding.simulation.kernel import dop853
 
 #: What each entry of ``P`` holds (the header's comments).
@@ -59,6 +63,27 @@ M_DOC = {
     "M_LAST_STEP": "size |dtau1| + |dtau2| of the last Newton step",
 }
 
+#: What each entry of the foot filter's memory ``F`` holds.
+F_DOC = {
+    "F_X": "filtered foot position x_f (the last step's output)",
+    "F_V": "filtered foot velocity v_f (the last step's output)",
+    "F_P00": "covariance [x_f, x_f] / noise^2",
+    "F_P01": "covariance [x_f, v_f] / noise^2",
+    "F_P11": "covariance [v_f, v_f] / noise^2",
+    "F_G1": "the last sample's g (the foot's acceleration less BF u)",
+    "F_G0": "the sample before's g",
+    "F_N": "samples filtered",
+    "F_H": "the last sample's length",
+    "F_X0": "the impact's foot position (the first samples are redone from it)",
+    "F_V0": "the impact's foot velocity",
+    "F_U1": "the first sample's int u dt (F_U1 + 2: the second sample's)",
+    "F_U2": "the first sample's int (h - t) u dt (F_U2 + 2: the second sample's)",
+    "F_H0": "the first sample's length (-1: unequal first samples, no redo)",
+}
+
+#: The foot filter's constants (names of :mod:`~softlanding.control.foot_filter`).
+FILTER_CONSTANTS = ("PROVISIONAL", "PROCESS", "INNOVATION", "START_STD")
+
 #: The phases and statuses, and the tolerances the C uses (names of
 #: :mod:`~softlanding.control.bangbang`).
 STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS",
@@ -88,39 +113,42 @@ def c_double(v: float) -> str:
 
 
 def indices(prefix: str) -> dict[str, int]:
-    """The ``P_*`` (``prefix = "P_"``) or ``M_*`` constants of the controller, by index.
+    """The ``P_*`` (``prefix = "P_"``) or ``M_*`` constants of the controller, or the
+    ``F_*`` of the foot filter, by index.
 
     Parameters
     ----------
     prefix : str
-        ``"P_"`` or ``"M_"``.
+        ``"P_"``, ``"M_"`` or ``"F_"``.
     """
-    found = {k: v for k, v in vars(bb).items() if k.startswith(prefix) and type(v) is int}
+    module = ff if prefix == "F_" else bb
+    found = {k: v for k, v in vars(module).items() if k.startswith(prefix) and type(v) is int}
     return dict(sorted(found.items(), key=lambda kv: kv[1]))
 
 
 def layout_lines(prefix: str) -> list[str]:
-    """``#define SL_P_K 5  /* ... */`` lines of every ``P_*`` or ``M_*`` index, then the size.
+    """``#define SL_P_K 5  /* ... */`` lines of every ``P_*``, ``M_*`` or ``F_*`` index,
+    then the size.
 
     Parameters
     ----------
     prefix : str
-        ``"P_"`` or ``"M_"``.
+        ``"P_"``, ``"M_"`` or ``"F_"``.
 
     Raises
     ------
     KeyError
-        The controller has an entry this module does not describe.
+        The controller (or the filter) has an entry this module does not describe.
     """
-    doc = P_DOC if prefix == "P_" else M_DOC
+    doc, module, size = {"P_": (P_DOC, bb, "NP"), "M_": (M_DOC, bb, "NM"),
+                         "F_": (F_DOC, ff, "NF")}[prefix]
     found = indices(prefix)
     missing = sorted(set(found) - set(doc))
     if missing:
-        raise KeyError(f"softlanding.control.bangbang has {', '.join(missing)}, which the C "
+        raise KeyError(f"{module.__name__} has {', '.join(missing)}, which the C "
                        "export does not describe: add it to export_c.layout")
     lines = [f"#define SL_{k:<14} {v:2d}  /* {doc[k]} */" for k, v in found.items()]
-    size = "NP" if prefix == "P_" else "NM"
-    lines.append(f"#define SL_{size:<14} {getattr(bb, size):2d}  /* entries */")
+    lines.append(f"#define SL_{size:<14} {getattr(module, size):2d}  /* entries */")
     return lines
 
 
@@ -132,6 +160,18 @@ def constant_lines() -> list[str]:
         value = str(v) if type(v) is int else c_double(v)
         note = bb.STATUS_NAMES[v] if name in STATUSES else None
         lines.append(f"#define SL_{name:<16} {value}" + (f"  /* {note} */" if note else ""))
+    return lines
+
+
+def filter_constant_lines() -> list[str]:
+    """``#define SL_FILTER_*`` lines of :data:`FILTER_CONSTANTS`, and the impact state's
+    variance ``START_STD ** 2`` (as Python squares it)."""
+    lines = []
+    for name in FILTER_CONSTANTS:
+        v = getattr(ff, name)
+        value = str(v) if type(v) is int else c_double(v)
+        lines.append(f"#define SL_FILTER_{name:<12} {value}")
+    lines.append(f"#define SL_FILTER_{'START_VAR':<12} {c_double(ff.START_STD ** 2)}")
     return lines
 
 
@@ -162,5 +202,6 @@ def robot_lines(P: np.ndarray) -> list[str]:
     return [f"    {c_double(v)},  /* {names[i]} */" for i, v in enumerate(P)]
 
 
-__all__ = ["CONSTANTS", "M_DOC", "P_DOC", "STATUSES", "c_double", "constant_lines", "dop853_text",
-           "indices", "layout_lines", "robot_lines"]
+__all__ = ["CONSTANTS", "FILTER_CONSTANTS", "F_DOC", "M_DOC", "P_DOC", "STATUSES", "c_double",
+           "constant_lines", "dop853_text", "filter_constant_lines", "indices", "layout_lines",
+           "robot_lines"]

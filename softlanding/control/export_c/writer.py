@@ -1,4 +1,5 @@
-"""Fill the C templates of this folder with the controller's numbers and write the files.
+"""Fill the C templates of this folder with the controller's (and the foot filter's)
+numbers and write the files.
 
 The templates (``controller.c.in``, ``controller.h.in``, ``README.txt.in``) are hand-written
 C and text with ``@NAME@`` placeholders; :mod:`.layout` gives the numbers.
@@ -16,8 +17,10 @@ import numpy as np
 from softlanding._version import __version__
 from softlanding.control import bangbang as bb
 from softlanding.control.export_c.layout import (
+    c_double,
     constant_lines,
     dop853_text,
+    filter_constant_lines,
     layout_lines,
     robot_lines,
 )
@@ -42,7 +45,8 @@ def _fill(text: str, values: dict[str, str]) -> str:
     return text
 
 
-def controller_sources(P: np.ndarray, robot_text: str) -> dict[str, str]:
+def controller_sources(P: np.ndarray, robot_text: str,
+                       sensor_noise: float = 0.0) -> dict[str, str]:
     """The exported files' texts, by file name (:data:`FILES`).
 
     Parameters
@@ -52,23 +56,30 @@ def controller_sources(P: np.ndarray, robot_text: str) -> dict[str, str]:
         ``SL_ROBOT_NUMBERS`` holds.
     robot_text : str
         What they are, in words (the header and the README say it).
+    sensor_noise : float
+        The sensors' noise the foot filter is exported for (``SL_SENSOR_NOISE``).
 
     Raises
     ------
     ValueError
-        ``P`` has not :data:`~softlanding.control.bangbang.NP` finite entries.
+        ``P`` has not :data:`~softlanding.control.bangbang.NP` finite entries, or the noise
+        is not finite and >= 0.
     """
     P = np.asarray(P, float)
     if P.shape != (bb.NP,) or not np.all(np.isfinite(P)):
         raise ValueError(f"P must hold {bb.NP} finite numbers")
+    if not (np.isfinite(sensor_noise) and sensor_noise >= 0):
+        raise ValueError("sensor_noise must be finite and >= 0")
     common = {"VERSION": __version__, "HEADER": HEADER, "SOURCE": SOURCE,
               "ROBOT_TEXT": robot_text}
     header = _fill(_template("controller.h.in"), {
         **common, "GUARD": "SOFTLANDING_CONTROLLER_H",
         "P_LAYOUT": "\n".join(layout_lines("P_")), "M_LAYOUT": "\n".join(layout_lines("M_")),
-        "CONSTANTS": "\n".join(constant_lines())})
+        "CONSTANTS": "\n".join(constant_lines()), "F_LAYOUT": "\n".join(layout_lines("F_")),
+        "FILTER_CONSTANTS": "\n".join(filter_constant_lines())})
     source = _fill(_template("controller.c.in"), {
-        **common, "DOP853": dop853_text(), "ROBOT": "\n".join(robot_lines(P))})
+        **common, "DOP853": dop853_text(), "ROBOT": "\n".join(robot_lines(P)),
+        "SENSOR_NOISE": c_double(sensor_noise)})
     readme = _fill(_template("README.txt.in"), {
         **common, "EXPORTED_FOR": textwrap.fill(f"Exported for: {robot_text}.", 90)})
     return {HEADER: header, SOURCE: source, README: readme}

@@ -1,7 +1,8 @@
 """The controller exported as C (``softlanding export-controller``): its numbers against the
 Python modules', compiled with the system's C compiler and compared with the numba
-controller on 1,000 samples of random landings, a C program that follows the README, and
-the command's bad input and output folder."""
+controller on 1,000 samples of random landings and with the numba foot filter on 600
+samples of noisy landings, C programs that follow the README, and the command's bad input
+and output folder."""
 
 import contextlib
 import io
@@ -14,9 +15,13 @@ import pytest
 
 from softlanding.cli import main
 from softlanding.control import bangbang as bb
+from softlanding.control import foot_filter as ff
+from softlanding.control.estimation import GroundEstimator
 from softlanding.control.export_c import layout
 from softlanding.control.export_c.binding import CFLAGS, CController, compile_shared, find_compiler
 from softlanding.control.export_c.check import TOLERANCE, compare, plan_forces
+from softlanding.control.export_c.filter_check import PROBES, compare_filter
+from softlanding.control.export_c.reference import ground_estimate, plan_force_integrals
 from softlanding.control.export_c.writer import HEADER, README, SOURCE
 from softlanding.model.robot import PAPER_ROBOT
 from softlanding.simulation.kernel import dop853
@@ -181,7 +186,8 @@ def test_a_c_program_following_the_readme_runs_as_the_python_controller(exported
     (("--period", "0"), "--period"), (("--noise-std", "nan"), "--noise-std"),
     (("--margin", "-1"), "--margin"), (("--l0", "3"), "does not apply"),
     (("--model-cd", "0.2"), "applies to --model-ground drag"),
-    (("--model-ground", "drag"), "is required"), (("--rm", "-1"), "r_m")])
+    (("--model-ground", "drag"), "is required"), (("--rm", "-1"), "r_m"),
+    (("--estimator", "filtered"), "--noise-std > 0")])
 def test_bad_input_one_line_exit_2_nothing_written(args, match, tmp_path, cli):
     code, out, err = cli("export-controller", "--out", tmp_path / "c", *args)
     assert code == 2 and match in err and len(err.strip().splitlines()) == 1, err
@@ -220,3 +226,169 @@ def test_a_failed_check_leaves_nothing(tmp_path, cli, monkeypatch):
 def test_help_explains(cli):
     code, out, _ = cli("export-controller", "--help")
     assert code == 0 and "libm" in out and "--check" in out and "SL_ROBOT_NUMBERS" in out
+
+
+# ---- the foot filter ----------------------------------------------------------------------
+
+NOISE = 1e-3
+
+
+@pytest.fixture(scope="module")
+def exported_filtered(tmp_path_factory):
+    """The paper's robot exported for the filtered estimate at sensor noise 1e-3 (no check)."""
+    folder = tmp_path_factory.mktemp("export") / "filtered"
+    code, out, err = _run("export-controller", "--out", folder, "--json", "--noise-std", NOISE,
+                          "--estimator", "filtered")
+    assert code == 0, err
+    return folder, json.loads(out)
+
+
+def test_the_header_holds_the_filters_numbers(exported_filtered):
+    folder, d = exported_filtered
+    got = _defines((folder / HEADER).read_text())
+    idx = layout.indices("F_")
+    assert idx == {k: v for k, v in vars(ff).items() if k.startswith("F_")}
+    assert all(int(got[k]) == v for k, v in idx.items()) and int(got["NF"]) == ff.NF
+    for name in layout.FILTER_CONSTANTS:
+        assert float(got[f"FILTER_{name}"]) == getattr(ff, name)
+    assert float(got["FILTER_START_VAR"]) == ff.START_STD ** 2
+    assert max(idx.values()) < ff.NF and ff.F_U2 + 2 < ff.NF  # the second sample's integrals
+    # the numbers are the filtered estimate's, the sensor noise the filter's
+    r = PAPER_ROBOT
+    assert d["estimator"] == "filtered" and d["sensor_noise"] == NOISE
+    assert d["numbers"]["NOISE"] == bb.ground_force_noise(r.r_m, NOISE, True) != \
+        bb.ground_force_noise(r.r_m, NOISE)
+    src = (folder / SOURCE).read_text()
+    assert re.search(r"const double SL_SENSOR_NOISE = (\S+);", src).group(1) == "0.001"
+
+
+def test_a_filter_entry_the_export_does_not_describe_fails_the_export(monkeypatch):
+    monkeypatch.setattr(ff, "F_NEW", ff.NF, raising=False)
+    with pytest.raises(KeyError, match="foot_filter has F_NEW"):
+        layout.layout_lines("F_")
+
+
+@needs_cc
+def test_c_and_numba_filters_agree_on_600_samples_of_noisy_landings(exported):
+    f = exported[1]["check"]["filter"]
+    assert f["steps"] == 600 and f["landings"] >= 15, f
+    assert all(v <= TOLERANCE for v in f["max_relative_difference"].values()), f
+    # every path of the filter: the provisional first two, their redo at the third, the
+    # quadratic, the chord of a sample of another length, and the innovation check
+    p = f["paths"]
+    assert p["first"] == p["second"] == f["landings"] and p["redo"] >= 10, p
+    assert p["quadratic"] >= 100 and p["chord"] >= 20 and p["widened"] >= 20, p
+    assert f["plans"] >= f["steps"]  # the force integrals of each sample's plan
+
+
+@needs_cc
+def test_the_filter_comparison_sees_a_changed_constant(exported_filtered, tmp_path):
+    # an honest comparison: the process noise off by 1e-7 shows, the probes alone (the fast
+    # draggy impact's 40 samples, the innovation check's path among them)
+    folder = exported_filtered[0]
+    mutant = tmp_path / "mutant"
+    mutant.mkdir()
+    header = (folder / HEADER).read_text()
+    assert header.count("#define SL_FILTER_PROCESS      0.5\n") == 1
+    (mutant / HEADER).write_text(header.replace("#define SL_FILTER_PROCESS      0.5\n",
+                                                "#define SL_FILTER_PROCESS      0.5000001\n"))
+    (mutant / SOURCE).write_text((folder / SOURCE).read_text())
+    c = CController(compile_shared(mutant, tmp_path / "mutant.so"))
+    assert PROBES[0][:3] == (-10.0, 0.5, 1.0)
+    result = compare_filter(c, 40)
+    assert result.paths["widened"] >= 1  # the probe went through the innovation check
+    assert result.max_relative["F"] > 1e-9 and result.max_relative["force integrals"] == 0
+
+
+FILTER_C = """
+#include <stdio.h>
+#include <string.h>
+#include "softlanding_controller.h"
+int main(void) {
+    double P[SL_NP], M[SL_NM], F[SL_NF], U[2], x[4] = {10.0, -3.0, 0.0, -3.0}, e[3], E[4];
+    double h, u, a_f;
+    int st, k, j, widened;
+    memcpy(P, SL_ROBOT_NUMBERS, sizeof P);
+    h = P[SL_P_PERIOD];
+    sl_new_memory(M, 0.1, 0.1, P[SL_P_K], P[SL_P_CD], 1.0, 1.0, P[SL_P_NOISE]);
+    st = sl_solve_plan(P, M, x);
+    sl_filter_init(F, x);
+    for (k = 0; k < 12; k++) {
+        sl_force_integrals(P, M, h, U);  /* the force over the sample, before the step */
+        u = sl_force(P, M, h);
+        if (M[SL_M_PRED_OK] == 1.0) {  /* the plan's prediction, measured with noise */
+            memcpy(x, M + SL_M_PRED, sizeof x);
+        } else {
+            x[0] += h * x[1];
+            x[2] += h * x[3];
+        }
+        a_f = P[SL_P_AF0] + P[SL_P_BF] * u + P[SL_P_GF] * (P[SL_P_K] * -x[2]);
+        for (j = 0; j < 3; j++)
+            e[j] = SL_SENSOR_NOISE * (((k * 7 + j * 3) % 11 - 5) / 2.0);
+        x[2] += e[0];
+        x[3] += e[1];
+        a_f += e[2];
+        widened = sl_filter_step(F, x, a_f - P[SL_P_BF] * u, U[0], U[1], h, P[SL_P_BF],
+                                 SL_SENSOR_NOISE);
+        st = sl_control_step(P, M, x, a_f, u, h, F[SL_F_N] > SL_FILTER_PROVISIONAL);
+        sl_ground_estimate(P, M, E);
+        printf("%d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\\n", st, widened, x[2],
+               x[3], M[SL_M_TAU1], M[SL_M_TAU2], E[0], E[1], E[2], E[3]);
+    }
+    return 0;
+}
+"""
+
+
+@needs_cc
+def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, tmp_path):
+    folder = exported_filtered[0]
+    readme = (folder / README).read_text()
+    assert "sl_filter_step(F, x, a_f - P[SL_P_BF] * u, U[0], U[1], h, P[SL_P_BF]," in readme
+    (tmp_path / "robot.c").write_text(FILTER_C)
+    exe = tmp_path / "robot"
+    subprocess.run([*find_compiler(), *CFLAGS, "-pedantic", "-Wall", "-Werror", "-I",
+                    str(folder), "-o", str(exe), str(tmp_path / "robot.c"),
+                    str(folder / SOURCE), "-lm"], check=True)
+    got = [[float(v) for v in ln.split()] for ln in subprocess.run(
+        [str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()]
+    # the same in Python: the numba controller and filter, the Python schedule's integrals
+    r = PAPER_ROBOT
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, bb.ground_force_noise(r.r_m, NOISE, True))
+    M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
+    x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
+    bb.solve_plan(P, M, x, *ws)
+    F = ff.new_filter(x)
+    est = GroundEstimator(r)
+    want = []
+    for k in range(12):
+        U = plan_force_integrals(P, M, h)
+        u = float(plan_forces(P, M, h))
+        if M[bb.M_PRED_OK] == 1.0:
+            x = M[bb.M_PRED:bb.M_PRED + 4].copy()
+        else:
+            x = x + h * np.array([x[1], 0.0, x[3], 0.0])
+        a_f = P[bb.P_AF0] + P[bb.P_BF] * u + P[bb.P_GF] * (P[bb.P_K] * -x[2])
+        e = [NOISE * (((k * 7 + j * 3) % 11 - 5) / 2.0) for j in range(3)]
+        x[2] += e[0]
+        x[3] += e[1]
+        a_f += e[2]
+        G = F.copy()  # (without the innovation check: differs where it widened)
+        ff.filter_step(G, x.copy(), a_f - P[bb.P_BF] * u, U[0], U[1], h, P[bb.P_BF], 0.0)
+        ff.filter_step(F, x, a_f - P[bb.P_BF] * u, U[0], U[1], h, P[bb.P_BF], NOISE)
+        st = bb.control_step(P, M, x, a_f, u, h, bool(F[ff.F_N] > ff.PROVISIONAL), *ws)
+        want.append([st, float(not np.array_equal(F, G)), x[2], x[3], M[bb.M_TAU1],
+                     M[bb.M_TAU2], *ground_estimate(P, M, est)])
+    assert len(want) == 12 and got == want
+    assert {w[0] for w in want} <= {bb.OK, bb.CONVERGING, bb.HOLDS}
+    assert want[1][6] == 1.0 and want[2][6] != 1.0  # no fit from the provisional samples
+    assert want[-1][8] < 0.1 * want[1][8]  # the estimate's uncertainty fell
+
+
+@pytest.mark.slow
+@needs_cc
+def test_c_and_numba_filters_agree_on_5000_more_samples(exported, tmp_path):
+    c = CController(compile_shared(exported[0], tmp_path / "lib.so"))
+    result = compare_filter(c, 5000, seed=1)
+    assert result.steps == 5000 and result.worst() == 0.0, result.describe()
+    assert result.paths["widened"] >= 100 and result.paths["redo"] >= 100, result.paths
