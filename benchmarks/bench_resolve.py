@@ -9,6 +9,8 @@ Run:  pip install -e ".[bench]" && python -m benchmarks.bench_resolve [--baselin
 
    * this toolkit's ``solve(warm_start=sol)`` at its own solution (Ipopt: 1 iteration);
    * this toolkit's ``solve()`` from the default guess;
+   * the same with ``expand=True`` (shooting) and with ``codegen=True`` (compiled NLP
+     functions, cached on disk: the first run compiles);
    * rockit's re-solve of its built ``Ocp`` from the same guess (the same problem through
      ``benchmarks.ocp_suite``'s translation, same N, scheme and Ipopt options).
 
@@ -170,6 +172,13 @@ def moon(repeats: int) -> None:
             trx = MultipleShooting(moon_lander(), nodes=20, expand=True)
             trx.solve()
             fns["expanded"] = trx.solve
+        # compiled NLP functions (opt-in; the first solve compiles unless cached on disk)
+        trc = MultipleShooting(moon_lander(), nodes=20, codegen=True) if method == "ms" else \
+            Collocation(moon_lander(), intervals=10, codegen=True)
+        c = time.perf_counter()
+        trc.solve()
+        first_codegen = time.perf_counter() - c
+        fns["codegen"] = trc.solve
         runs: dict[str, list[float]] = {k: [] for k in fns}
         iters: dict[str, int] = {}
         for k in range(repeats):
@@ -187,11 +196,14 @@ def moon(repeats: int) -> None:
         for name, what in (("warm", "toolkit solve(warm_start=sol)"),
                            ("guess", "toolkit solve() from the guess"),
                            ("expanded", "the same, expand=True"),
+                           ("codegen", "the same, codegen=True"),
                            ("rockit", "rockit re-solve from the guess")):
             if name in med:
                 print(f"  {what:34s} {med[name]:7.3f} ms  {iters[name]:3d} it")
         extra = (f", expanded / rockit {med['expanded'] / med['rockit']:.2f}"
                  if "expanded" in med else "")
+        extra += (f", codegen / rockit {med['codegen'] / med['rockit']:.2f} (its first solve "
+                  f"{first_codegen:.1f} s wall, compile or cache load included)")
         print(f"  ratio warm / rockit {med['warm'] / med['rockit']:.2f} (goal <= 0.25); "
               f"guess / rockit {med['guess'] / med['rockit']:.2f} (goal <= 1){extra}; "
               f"objective {sol.objective:.10f}, rockit {J:.10f}")

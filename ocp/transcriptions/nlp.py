@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import casadi as ca
@@ -52,6 +53,7 @@ from ..definition.scaling import (
 from ..definition.sizes import phase_state_sizes
 from ..definition.symbols import positive_int
 from ..definition.trajectory import Trajectory
+from .codegen import compiled_library
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
 from .solution import Solution
 from .verify import VERIFY_MODES, verify
@@ -166,6 +168,12 @@ class Transcription:
     grid_free : GridFree, optional
         The grid-independent part of another transcription of the same problem
         (:attr:`grid_free`), reused instead of compiled again (mesh refinement).
+    codegen : bool
+        Hand Ipopt the NLP's functions compiled to machine code (CasADi's generated C and
+        the system C compiler; see :mod:`ocp.transcriptions.codegen`), cached on disk by
+        the generated source's hash. Opt-in: compiling takes seconds to a minute, once per
+        NLP and machine, and pays for re-solves (sweeps, MPC); results agree with the
+        uncompiled NLP's to rounding.
 
     Attributes
     ----------
@@ -182,8 +190,12 @@ class Transcription:
                  ipopt_options: dict | None = None, expand: bool = False,
                  verify: str = "warn", verify_tol: float = 1e-6,
                  verify_points: int = 10, scaling: Any = "auto",
-                 grid_free: GridFree | None = None) -> None:
+                 grid_free: GridFree | None = None, *, codegen: bool = False) -> None:
         self.scaling_options = check_scaling(scaling)
+        if not isinstance(codegen, bool):
+            raise ProblemDefinitionError(f"codegen must be True or False, got {codegen!r}")
+        self.codegen = codegen
+        self._library: Path | None = None  # the compiled NLP functions (codegen)
         if grid_free is None:
             mp = as_multiphase(problem)
             mp.validate()
@@ -421,7 +433,13 @@ class Transcription:
                                     "calc_lam_p": False}
             name = f"{self.multiphase.name}_{self.method}"
             nlp: Any = self._scaled
-            self._solvers[key] = ca.nlpsol(name, "ipopt", nlp, opts)
+            solver = ca.nlpsol(name, "ipopt", nlp, opts)
+            if self.codegen:  # the same functions for every key: compiled once
+                if self._library is None:
+                    self._library = compiled_library(solver)
+                del opts["expand"]
+                solver = ca.nlpsol(name, "ipopt", str(self._library), opts)
+            self._solvers[key] = solver
         return self._solvers[key]
 
     # ------------------------------------------------------------------ solve

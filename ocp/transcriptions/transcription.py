@@ -97,6 +97,8 @@ class MultipleShooting(Transcription):
     scaling : {"auto", "none"} or dict
         Scaling of the NLP (see :class:`ocp.transcriptions.nlp.Transcription` and
         :mod:`ocp.definition.scaling`).
+    codegen : bool
+        Compiled NLP functions (RK4 only; see :class:`ocp.transcriptions.nlp.Transcription`).
 
     Attributes
     ----------
@@ -111,17 +113,20 @@ class MultipleShooting(Transcription):
                  ipopt_options: dict | None = None, expand: bool = False, *,
                  inner_constraints: bool = False, verify: str = "warn",
                  verify_tol: float = 1e-6, verify_points: int = 10,
-                 scaling: Any = "auto") -> None:
+                 scaling: Any = "auto", codegen: bool = False) -> None:
         if integrator not in ("rk4", "cvodes"):
             raise ProblemDefinitionError(f"integrator must be 'rk4' or 'cvodes', got "
                                          f"{integrator!r}")
+        if codegen is True and integrator == "cvodes":
+            raise ProblemDefinitionError("codegen=True applies to integrator='rk4' (CVODES "
+                                         "is a solver CasADi cannot generate C for)")
         n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
         self.nodes = [positive_int(n, "nodes") for n in _per_phase(nodes, n_ph, "nodes")]
         self.integrator = integrator
         self.substeps = positive_int(substeps, "substeps")
         self.inner_constraints = bool(inner_constraints)
         super().__init__(problem, ipopt_options, bool(expand) and integrator == "rk4",
-                         verify, verify_tol, verify_points, scaling)
+                         verify, verify_tol, verify_points, scaling, codegen=codegen)
         self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
         self.F = self.phases[0].F  # type: ignore[attr-defined]
 
@@ -183,6 +188,9 @@ class Collocation(Transcription):
     grid_free : GridFree, optional
         Reuse another transcription's compiled problem (see
         :class:`ocp.transcriptions.nlp.Transcription`).
+    codegen : bool
+        Compiled NLP functions (see :class:`ocp.transcriptions.nlp.Transcription`;
+        not with :meth:`refine`, which builds an NLP per mesh).
 
     Notes
     -----
@@ -200,7 +208,7 @@ class Collocation(Transcription):
                  mesh: Any = None, ipopt_options: dict | None = None, expand: bool = True, *,
                  verify: str = "warn", verify_tol: float = 1e-6,
                  verify_points: int = 10, scaling: Any = "auto",
-                 grid_free: GridFree | None = None) -> None:
+                 grid_free: GridFree | None = None, codegen: bool = False) -> None:
         n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
         self.scaling_arg = scaling
         self.degree = positive_int(degree, "degree")
@@ -212,7 +220,7 @@ class Collocation(Transcription):
             meshes = [mesh] if n_ph == 1 and np.ndim(mesh[0]) == 0 else list(mesh)
             self.meshes = [_check_mesh(m) for m in _per_phase(meshes, n_ph, "mesh")]
         super().__init__(problem, ipopt_options, expand, verify, verify_tol, verify_points,
-                         scaling, grid_free)
+                         scaling, grid_free, codegen=codegen)
         counts = [m.size - 1 for m in self.meshes]
         self.N: int | list[int] = counts[0] if n_ph == 1 else counts
 
@@ -243,7 +251,7 @@ class Collocation(Transcription):
                            ipopt_options=self.ipopt_options, expand=self.expand,
                            verify=verify or self.verify, verify_tol=self.verify_tol,
                            verify_points=self.verify_points, scaling=self.scaling_arg,
-                           grid_free=self.grid_free)
+                           grid_free=self.grid_free, codegen=self.codegen)
 
     def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
                max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
@@ -299,6 +307,11 @@ class Collocation(Transcription):
         states; once none does, by the objective, splitting the intervals with
         the largest estimates (:func:`ocp.transcriptions.mesh.objective_threshold`).
         """
+        if self.codegen:
+            raise ProblemDefinitionError(
+                "refine() builds a new NLP on every mesh, which codegen=True would compile "
+                "each time: refine without it, then re-solve on the final mesh with "
+                "Collocation(problem, mesh=sol.transcription.meshes, codegen=True)")
         tol = relative_tolerance(tol, "refine(tol)")
         otol = max(tol, self.objective_floor()) if objective_tol is None \
             else relative_tolerance(objective_tol, "refine(objective_tol)", allow_inf=True)
