@@ -46,7 +46,26 @@ PROBES = ((-10.0, 0.5, 1.0, 1e-3, 0.01), (-6.0, 0.5, 1.0, 1e-2, 0.01))
 
 @dataclass(frozen=True)
 class FilterCall:
-    """One call of the foot filter: its inputs (``F`` and ``x`` before it)."""
+    """One call of the foot filter: its inputs (``F`` and ``x`` before it), as
+    :func:`~softlanding.control.foot_filter.filter_step` takes them.
+
+    Attributes
+    ----------
+    F : ndarray
+        The filter's memory before the call.
+    x : ndarray
+        The measured state before the call.
+    g : float
+        The measured foot acceleration less ``beta u`` at the sample's end.
+    U1, U2 : float
+        The force's integrals over the sample.
+    h : float
+        The sample.
+    beta : float
+        The foot's acceleration per unit of the robot's force.
+    noise : float
+        The measurements' standard deviation.
+    """
 
     F: np.ndarray
     x: np.ndarray
@@ -61,7 +80,17 @@ class FilterCall:
 @dataclass(frozen=True)
 class PlanCall:
     """A plan's force integrated over a sample: ``P``, ``M`` after the step, the sample, and
-    the integrals of the Python schedule (:func:`~.reference.plan_force_integrals`)."""
+    the integrals of the Python schedule (:func:`~.reference.plan_force_integrals`).
+
+    Attributes
+    ----------
+    P, M : ndarray
+        The controller's numbers and memory after the step.
+    h : float
+        The sample.
+    U : ndarray
+        The Python schedule's integrals over the sample.
+    """
 
     P: np.ndarray
     M: np.ndarray
