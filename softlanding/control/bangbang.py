@@ -14,9 +14,13 @@ the exact Newton re-solve of the plan's structure that :mod:`softlanding.control
 through :func:`ocp.refine_structure`, here compiled: the body moves in closed form (its
 acceleration holds no ground), the foot's two states and their sensitivity (the transition
 matrix of the pull arc) by adaptive Dormand-Prince 8(5,3) steps (the simulator's
-coefficients, :mod:`softlanding.simulation.kernel.dop853`) to ``RTOL``. Every sample starts
-Newton from the last plan shifted by the sample (a real-time iteration, iterated to
-convergence: one or two Newton steps once the estimate has settled). Once the push has
+coefficients, :mod:`softlanding.simulation.kernel.dop853`) to ``RTOL`` (to
+``LOOSE_RTOL``, about 4 times fewer steps, while Newton's steps are far above that error:
+the first ones after the estimate moved). Every sample starts Newton from the last plan
+shifted by the sample (a real-time iteration, iterated to convergence: one or two Newton
+steps once the estimate has settled). One sample takes at most ``WORK`` integrator steps
+(the bound on its time): one that runs out keeps the last whole iterate, or the last plan,
+and the next sample's Newton goes on from there (status ``DEFERRED``). Once the push has
 ended only ``tau_2`` is left (the foot's stop), and the arrest condition is checked, not
 solved. The acceleration coefficients come from
 :func:`softlanding.model.dynamics.robot_rhs` (one definition of the dynamics).
@@ -45,7 +49,7 @@ from softlanding.simulation.kernel.dop853 import B as DB
 
 JIT: dict[str, Any] = {"cache": True, "fastmath": False}
 
-#: Relative and absolute tolerance of the foot's integration.
+#: Relative and absolute tolerance of the foot's integration (Newton's last steps).
 RTOL = 1e-13
 
 #: Newton's iterations per sample at most, and its tolerance on the durations (relative to
@@ -61,7 +65,7 @@ LOOSE_RTOL, TIGHTEN = 1e-8, 1e-6
 #: The integrator steps (taken or rejected) one sample may spend: the hard bound on its
 #: work. A sample that runs out keeps the last whole Newton iterate (or the last plan,
 #: shifted) and the next sample's Newton goes on from there (``M_DEFERRED`` counts them).
-WORK = 200
+WORK = 100
 
 #: What :func:`_flow` returns: the arc marched, the march failed, no integrator step left.
 MARCH_FAILED, MARCHED, SPENT = 0, 1, 2
@@ -362,6 +366,18 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
 
 
 @njit(**JIT)
+def _converged(d, prev, scale):
+    """Newton has converged: its last whole step ``d`` (at :data:`RTOL`) is below
+    :data:`NEWTON_TOL` of ``scale``, or, in the quadratic regime (``d`` below
+    :data:`TIGHTEN`), the next one would be: ``d^3 / prev^2``, the rate ``d / prev^2`` from
+    the step before, ``prev`` (``< 0``: none). The iterate's error is then about that next
+    step; the step that would only confirm it, and its arcs, are saved."""
+    if d <= NEWTON_TOL * scale:
+        return True
+    return prev > 0.0 and d <= TIGHTEN * scale and d * d * d <= NEWTON_TOL * scale * prev * prev
+
+
+@njit(**JIT)
 def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, budget):
     """Newton on ``(tau1, tau2)`` from ``M``'s (already shifted) plan, at most ``budget``
     iterations and ``left[0]`` integrator steps; the status (:data:`CONVERGING`: the
@@ -370,6 +386,7 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, budget):
     there)."""
     t1, t2 = M[M_TAU1], M[M_TAU2]
     converged = False
+    prev = -1.0  # the last whole step of this call (none yet)
     for it in range(budget):
         M[M_ITER] = it + 1
         # (the arcs to LOOSE_RTOL while Newton's steps are far larger than its error)
@@ -399,9 +416,12 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, budget):
         M[M_LAST_STEP] = abs(lam * d1) + abs(lam * d2)
         if not (t2 > 0.0 and math.isfinite(t1) and math.isfinite(t2)):
             return NEWTON_FAILED
-        if tight and lam == 1.0 and abs(d1) + abs(d2) <= NEWTON_TOL * (1.0 + abs(t1) + t2):
+        if tight and lam == 1.0 and _converged(abs(d1) + abs(d2), prev, 1.0 + abs(t1) + t2):
             converged = True
             break
+        # (a loose step as well: its arcs' error only makes it larger, the rate d / prev^2
+        # then over-estimated, the test stricter)
+        prev = abs(d1) + abs(d2) if lam == 1.0 else -1.0
     if not converged:
         if t1 > 0.0:
             M[M_TAU1], M[M_TAU2] = t1, t2
@@ -429,6 +449,7 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left):
     ran out, the last whole iterate kept, the sample counted in ``M_DEFERRED``)."""
     t2 = M[M_TAU2]
     umax = P[P_UMAX]
+    prev = -1.0  # the last whole step (none yet)
     for it in range(MAX_NEWTON):
         M[M_ITER] = it + 1
         st = _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False, RTOL, left)
@@ -442,11 +463,14 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left):
         if not acc > 0.0:
             return NEWTON_FAILED
         d = r[0] / acc
+        whole = True
         if t2 - d < 0.5 * t2:
             d = 0.5 * t2
+            whole = False
         t2 -= d
-        if abs(d) <= NEWTON_TOL * (1.0 + t2):
+        if whole and _converged(abs(d), prev, 1.0 + t2):
             break
+        prev = abs(d) if whole else -1.0
     else:
         return NEWTON_FAILED
     M[M_TAU1], M[M_TAU2] = 0.0, t2
