@@ -584,7 +584,7 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     return st
 
 
-@njit(**JIT)
+@njit(**JIT, inline="always")  # (a call would pass its nine arrays, refcounted)
 def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left):
     """:func:`control_step` on the views of its work arrays."""
     k_was, c_was = P[P_K], P[P_CD]

@@ -120,6 +120,7 @@ def test_cli_bangbang_with_noise_and_delay(cli):
     assert d["controller"] == "bangbang" and d["delay"] == 1 and d["noise"] == 1e-3
     assert d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
     assert d["estimator"] == "measured"
+    assert d["deferred"] >= 0 and 0 < d["step_work_max"] <= bb.WORK
     # the filtered estimate from the command line (mpc_landing's estimator="filtered")
     code, out, err = cli("mpc", "--v0", "-3", "--ground", "linear", "--stiffness", "2",
                          "--controller", "bangbang", "--noise-std", "1e-3", "--delay", "1",
