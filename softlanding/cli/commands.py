@@ -699,7 +699,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
                                  f"on the paper's rig)"),
             ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
             ("samples not covered (bangbang)", m.uncovered),
-            ("samples deferred (bangbang: work bound)", m.deferred),
+            ("samples deferred (bangbang)", m.deferred),
             ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"
                                            + (", filtered estimate" if m.estimator == "filtered"
                                               else "")),
