@@ -114,6 +114,25 @@ def _c(r: dict) -> str:
     return f"{r['ratio']:8.5f}{' ' if r['feasible'] else '!'}"
 
 
+def _compiled(rows: list[dict], key: str) -> dict:
+    """Step times of the compiled controller's own samples (its fallbacks to the
+    re-planning MPC left out) in every landing ``key``, its deferred samples and the most
+    integrator steps of one sample."""
+    import numpy as np
+
+    w = np.concatenate([r[key]["compiled_times_ms"] for r in rows] + [np.zeros(0)])
+    c = np.concatenate([r[key]["compiled_cpu_ms"] for r in rows] + [np.zeros(0)])
+    return {"compiled_steps": int(w.size),
+            "compiled_wall_median_ms": float(np.median(w)) if w.size else None,
+            "compiled_wall_p99_ms": float(np.percentile(w, 99)) if w.size else None,
+            "compiled_wall_max_ms": float(w.max()) if w.size else None,
+            "compiled_cpu_median_ms": float(np.median(c)) if c.size else None,
+            "compiled_cpu_p99_ms": float(np.percentile(c, 99)) if c.size else None,
+            "compiled_cpu_max_ms": float(c.max()) if c.size else None,
+            "deferred": sum(r[key]["deferred"] for r in rows),
+            "step_work_max": max((r[key]["step_work_max"] or 0 for r in rows), default=0)}
+
+
 def controllers(grid: tuple, a: argparse.Namespace) -> None:
     """The controller study (``--controllers``)."""
     import numpy as np
@@ -161,6 +180,7 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
             "cpu_median_ms": float(np.median(cpu)),
             "cpu_p99_ms": float(np.percentile(cpu, 99)), "cpu_max_ms": float(cpu.max()),
             "covered_wall_max_ms": float(cw.max()) if cw.size else None,
+            **_compiled(rows, k),
             "prepare_s_max": max(r[k]["prepare_time_s"] for r in rows)}
     print(json.dumps(out, indent=1))
     e = out["exact"]
@@ -169,6 +189,13 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
           f"{e['feasible_bang_bang'] == len(bang)}; max step <= {rig:.3g} ms wall on covered "
           f"landings: {e['covered_wall_max_ms'] is not None and e['covered_wall_max_ms'] <= rig}"
           f" ({e['covered_wall_max_ms']}); median <= 0.02 ms: {e['wall_median_ms'] <= 0.02}")
+    for k in keys:
+        n = out[k]
+        print(f"compiled controller's own samples ({k}): CPU median / p99 / max "
+              f"{n['compiled_cpu_median_ms']:.4f} / {n['compiled_cpu_p99_ms']:.4f} / "
+              f"{n['compiled_cpu_max_ms']:.4f} ms, wall max {n['compiled_wall_max_ms']:.4f} "
+              f"ms; max CPU <= {rig:.3g} ms: {n['compiled_cpu_max_ms'] <= rig}; deferred "
+              f"{n['deferred']}, most integrator steps of a sample {n['step_work_max']}")
     for k in keys[1:]:
         n = out[k]
         print(f"goals ({k}): every limit held in all {len(rows)} cases: "

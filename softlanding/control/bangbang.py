@@ -14,9 +14,13 @@ the exact Newton re-solve of the plan's structure that :mod:`softlanding.control
 through :func:`ocp.refine_structure`, here compiled: the body moves in closed form (its
 acceleration holds no ground), the foot's two states and their sensitivity (the transition
 matrix of the pull arc) by adaptive Dormand-Prince 8(5,3) steps (the simulator's
-coefficients, :mod:`softlanding.simulation.kernel.dop853`) to ``RTOL``. Every sample starts
-Newton from the last plan shifted by the sample (a real-time iteration, iterated to
-convergence: one or two Newton steps once the estimate has settled). Once the push has
+coefficients, :mod:`softlanding.simulation.kernel.dop853`) to ``RTOL`` (to
+``LOOSE_RTOL``, about 4 times fewer steps, while Newton's steps are far above that error:
+the first ones after the estimate moved). Every sample starts Newton from the last plan
+shifted by the sample (a real-time iteration, iterated to convergence: one or two Newton
+steps once the estimate has settled). One sample takes at most ``WORK`` integrator steps
+(the bound on its time): one that runs out keeps the last whole iterate, or the last plan,
+and the next sample's Newton goes on from there (status ``DEFERRED``). Once the push has
 ended only ``tau_2`` is left (the foot's stop), and the arrest condition is checked, not
 solved. The acceleration coefficients come from
 :func:`softlanding.model.dynamics.robot_rhs` (one definition of the dynamics).
@@ -45,30 +49,45 @@ from softlanding.simulation.kernel.dop853 import B as DB
 
 JIT: dict[str, Any] = {"cache": True, "fastmath": False}
 
-#: Relative and absolute tolerance of the foot's integration.
+#: Relative and absolute tolerance of the foot's integration (Newton's last steps).
 RTOL = 1e-13
 
 #: Newton's iterations per sample at most, and its tolerance on the durations (relative to
 #: the plan's length).
 MAX_NEWTON, NEWTON_TOL = 30, 1e-13
 
+#: The relative tolerance of the arcs while Newton's last step (relative to the plan's
+#: length) is above ``TIGHTEN`` (the error of the arcs is then far below the step: the step
+#: is as good; the last steps, to convergence, are at :data:`RTOL`), and the relative change
+#: of the estimated ground after which a sample's first step counts as large.
+LOOSE_RTOL, TIGHTEN = 1e-8, 1e-6
+
+#: The integrator steps (taken or rejected) one sample may spend: the hard bound on its
+#: work. A sample that runs out keeps the last whole Newton iterate (or the last plan,
+#: shifted) and the next sample's Newton goes on from there (``M_DEFERRED`` counts them).
+WORK = 100
+
+#: What :func:`_flow` returns: the arc marched, the march failed, no integrator step left.
+MARCH_FAILED, MARCHED, SPENT = 0, 1, 2
+
 # the layout of the robot and ground numbers P
 (P_AB0, P_BB, P_AF0, P_BF, P_GF, P_K, P_CD, P_RM, P_S, P_UMAX, P_HOLD0, P_NOISE,
- P_MARGIN, P_BUDGET, P_PERIOD) = range(15)
-NP = 15
+ P_MARGIN, P_BUDGET, P_PERIOD, P_WORK) = range(16)
+NP = 16
 # the layout of the controller's memory M
 (M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
  M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED, M_PRED, M_PRED_OK, M_KPLAN,
- M_CPLAN, M_LAST_STEP) = (*range(15), 15, 19, 20, 21, 22)
-NM = 23
+ M_CPLAN, M_LAST_STEP, M_WORK, M_DEFERRED) = (*range(15), 15, 19, 20, 21, 22, 23, 24)
+NM = 25
 
 #: Phases: pushing (both arcs left), pulling (the foot's stop left).
 PUSH, PULL = 0, 1
 #: Statuses of a step: covered (the plan re-solved), and why not.
-OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP = 0, 1, 2, 3, 4, 5, 6
+#: (:data:`DEFERRED`: the sample's integrator steps ran out, see :data:`WORK`.)
+OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP, DEFERRED = range(8)
 STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
                 PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds",
-                CREEP: "creep"}
+                CREEP: "creep", DEFERRED: "deferred"}
 
 #: Relative agreement of the measured state with the plan's prediction, and of the estimate
 #: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
@@ -153,6 +172,7 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
     P[P_MARGIN] = margin
     P[P_BUDGET] = BUDGET
     P[P_PERIOD] = period
+    P[P_WORK] = WORK
     return P
 
 
@@ -182,14 +202,14 @@ def workspace() -> tuple[np.ndarray, np.ndarray]:
     """Work arrays of the compiled step: nothing is allocated per sample, and two arrays
     (not nine) keep the call's dispatch short. ``K``: the 13 stages, then the Jacobian
     (rows 13-14); ``W``: trial state, new state, state, residuals, path and end numbers,
-    body, largest ``v_f``."""
-    return np.zeros((15, 6)), np.zeros(32)
+    body, largest ``v_f``, integrator steps left."""
+    return np.zeros((15, 6)), np.zeros(33)
 
 
 @njit(**JIT, inline="always")
 def _views(K, W):
     return (W[0:6], W[6:12], W[12:18], K[13:15, 0:2], W[18:20], W[20:26], W[26:31],
-            W[31:32])
+            W[31:32], W[32:33])
 
 
 @njit(**JIT, inline="always")
@@ -216,16 +236,21 @@ def _rhs(P, u, y, n, out, row):
 
 
 @njit(**JIT)
-def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax):
-    """March ``y`` (the foot, ``n`` states) under force ``u`` for ``tau``, in place; track the
-    largest ``v_f`` and the stroke's range on the steps' nodes (the body from ``body =
-    [x_b, v_b, a_b, S_min, S_max]`` in closed form). Returns False if the march fails."""
+def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax, tol, left):
+    """March ``y`` (the foot, ``n`` states) under force ``u`` for ``tau`` to the relative
+    tolerance ``tol``, in place; track the largest ``v_f`` and the stroke's range on the
+    steps' nodes (the body from ``body = [x_b, v_b, a_b, S_min, S_max]`` in closed form).
+    Each step (taken or rejected) spends one of the sample's ``left[0]``. Returns
+    :data:`MARCHED`, :data:`MARCH_FAILED` or :data:`SPENT` (none left: ``y`` half-marched)."""
     if tau <= 0.0:
-        return True
+        return MARCHED
     t = 0.0
     h = min(tau, 0.02)
     _rhs(P, u, y, n, K, 0)
     for _ in range(100000):
+        if left[0] <= 0.0:
+            return SPENT
+        left[0] -= 1.0
         if t + h >= tau:
             h = tau - t
         for s in range(1, 12):
@@ -246,7 +271,7 @@ def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax):
         e5 = 0.0
         e3 = 0.0
         for i in range(n):
-            sc = RTOL + RTOL * max(abs(y[i]), abs(ynew[i]))
+            sc = tol + tol * max(abs(y[i]), abs(ynew[i]))
             a5 = 0.0
             a3 = 0.0
             for j in range(13):
@@ -257,7 +282,7 @@ def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax):
         den = e5 + 0.01 * e3
         err = 0.0 if den == 0.0 else abs(h) * e5 / math.sqrt(den * n)
         if not math.isfinite(err):
-            return False
+            return MARCH_FAILED
         if err <= 1.0:
             t += h
             for i in range(n):
@@ -269,14 +294,14 @@ def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax):
             body[4] = max(body[4], stroke)
             vmax[0] = max(vmax[0], y[1])
             if t >= tau:
-                return True
+                return MARCHED
             fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** (-1.0 / 8.0))
             h = h * fac
         else:
             h = h * max(0.2, 0.9 * err ** (-1.0 / 8.0))
         if h < 1e-14 * (1.0 + tau):
-            return False
-    return False
+            return MARCH_FAILED
+    return MARCH_FAILED
 
 
 @njit(**JIT)
@@ -288,10 +313,10 @@ def _arrest(P, xb, vb, xf):
 
 
 @njit(**JIT)
-def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
+def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, left):
     """Residuals ``r`` (and, ``jac``, their Jacobian ``J`` in ``(tau1, tau2)``) of the plan
-    ``(tau1, tau2)`` from ``x``; ``lim`` gets ``[max v_f before the stop, S_min, S_max]``.
-    False if a march failed."""
+    ``(tau1, tau2)`` from ``x``, the arcs marched to ``tol``; ``lim`` gets ``[max v_f before
+    the stop, S_min, S_max]``. :data:`MARCHED`, or the march's failure or :data:`SPENT`."""
     umax = P[P_UMAX]
     a1 = P[P_AB0] + P[P_BB] * umax
     a2 = P[P_AB0] - P[P_BB] * umax
@@ -299,8 +324,9 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
     S0 = x[0] - x[2]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, S0, S0
     y[0], y[1] = x[2], x[3]
-    if not _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax):
-        return False
+    st = _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax, tol, left)
+    if st != MARCHED:
+        return st
     xf1, vf1 = y[0], y[1]
     acc1 = _foot_acc(P, umax, xf1, vf1)
     xb1 = x[0] + x[1] * tau1 + 0.5 * a1 * tau1 * tau1
@@ -309,8 +335,9 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
     body[0], body[1], body[2] = xb1, vb1, a2
     vmax[0] = max(vmax[0], vf1)
     vmax_push = vmax[0]
-    if not _flow(P, -umax, y, 6, tau2, K, Yt, ynew, body, vmax):
-        return False
+    st = _flow(P, -umax, y, 6, tau2, K, Yt, ynew, body, vmax, tol, left)
+    if st != MARCHED:
+        return st
     xfT, vfT = y[0], y[1]
     xbT = xb1 + vb1 * tau2 + 0.5 * a2 * tau2 * tau2
     vbT = vb1 + a2 * tau2
@@ -320,7 +347,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
     lim[1], lim[2] = body[3], body[4]
     lim[3], lim[4], lim[5] = xbT, vbT, xfT
     if not jac:
-        return True
+        return MARCHED
     accT = _foot_acc(P, -umax, xfT, vfT)
     # d/dtau1 (tau2 fixed): the pull arc's transition matrix on the push's slope at the switch
     dxf1 = y[2] * vf1 + y[3] * acc1
@@ -335,18 +362,43 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac):
     J[0, 0], J[0, 1] = dvf1, dvf2
     J[1, 0] = (dxb1 - dxf1) * hold - S * P[P_K] * dxf1 - c * ((dxb1 - dxf1) + vbT * dvb1)
     J[1, 1] = (dxb2 - dxf2) * hold - S * P[P_K] * dxf2 - c * ((dxb2 - dxf2) + vbT * dvb2)
-    return True
+    return MARCHED
 
 
 @njit(**JIT)
-def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
+def _converged(d, prev, scale):
+    """Newton has converged: its last whole step ``d`` (at :data:`RTOL`) is below
+    :data:`NEWTON_TOL` of ``scale``, or, in the quadratic regime (``d`` below
+    :data:`TIGHTEN`), the next one would be: ``d^3 / prev^2``, the rate ``d / prev^2`` from
+    the step before, ``prev`` (``< 0``: none). The iterate's error is then about that next
+    step; the step that would only confirm it, and its arcs, are saved."""
+    if d <= NEWTON_TOL * scale:
+        return True
+    return prev > 0.0 and d <= TIGHTEN * scale and d * d * d <= NEWTON_TOL * scale * prev * prev
+
+
+@njit(**JIT)
+def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, budget):
     """Newton on ``(tau1, tau2)`` from ``M``'s (already shifted) plan, at most ``budget``
-    iterations; the status (:data:`CONVERGING`: the budget ran out, the iterate is kept)."""
+    iterations and ``left[0]`` integrator steps; the status (:data:`CONVERGING`: the
+    budget ran out, the iterate is kept; :data:`DEFERRED`: the steps ran out, the last whole
+    iterate is kept, the sample counted in ``M_DEFERRED``, the next sample goes on from
+    there)."""
     t1, t2 = M[M_TAU1], M[M_TAU2]
     converged = False
+    prev = -1.0  # the last whole step of this call (none yet)
     for it in range(budget):
         M[M_ITER] = it + 1
-        if not _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim, body, vmax, True):
+        # (the arcs to LOOSE_RTOL while Newton's steps are far larger than its error)
+        tight = M[M_LAST_STEP] <= TIGHTEN * (1.0 + abs(t1) + t2)
+        st = _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim, body, vmax, True,
+                   RTOL if tight else LOOSE_RTOL, left)
+        if st == SPENT:
+            M[M_DEFERRED] += 1
+            if t1 > 0.0:
+                M[M_TAU1], M[M_TAU2] = t1, t2
+            return DEFERRED
+        if st != MARCHED:
             return NEWTON_FAILED
         det = J[0, 0] * J[1, 1] - J[0, 1] * J[1, 0]
         if det == 0.0 or not math.isfinite(det):
@@ -364,9 +416,12 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
         M[M_LAST_STEP] = abs(lam * d1) + abs(lam * d2)
         if not (t2 > 0.0 and math.isfinite(t1) and math.isfinite(t2)):
             return NEWTON_FAILED
-        if lam == 1.0 and abs(d1) + abs(d2) <= NEWTON_TOL * (1.0 + abs(t1) + t2):
+        if tight and lam == 1.0 and _converged(abs(d1) + abs(d2), prev, 1.0 + abs(t1) + t2):
             converged = True
             break
+        # (a loose step as well: its arcs' error only makes it larger, the rate d / prev^2
+        # then over-estimated, the test stricter)
+        prev = abs(d1) + abs(d2) if lam == 1.0 else -1.0
     if not converged:
         if t1 > 0.0:
             M[M_TAU1], M[M_TAU2] = t1, t2
@@ -377,7 +432,7 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
         # than half the push left (an estimate that stiffened); as a converged one
     if t1 < 0.0:  # the switch is due already: pull from now, if the arrest then holds
         M[M_PHASE] = PULL
-        return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+        return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
     M[M_TAU1], M[M_TAU2] = t1, t2
     M[M_XBT], M[M_VBT], M[M_XFT] = lim[3], lim[4], lim[5]
     if lim[0] > 1e-9 * (1.0 + abs(x[3])) or lim[1] < -1e-9 or lim[2] > P[P_S] * (1 + 1e-9):
@@ -388,24 +443,34 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget):
 
 
 @njit(**JIT)
-def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax):
+def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left):
     """Newton on ``tau2`` for ``v_f = 0`` (the foot's stop) pulling from ``x``; the arrest
-    condition then checked; the status."""
+    condition then checked; the status (:data:`DEFERRED`: the integrator steps ``left[0]``
+    ran out, the last whole iterate kept, the sample counted in ``M_DEFERRED``)."""
     t2 = M[M_TAU2]
     umax = P[P_UMAX]
+    prev = -1.0  # the last whole step (none yet)
     for it in range(MAX_NEWTON):
         M[M_ITER] = it + 1
-        if not _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False):
+        st = _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False, RTOL, left)
+        if st == SPENT:
+            M[M_DEFERRED] += 1
+            M[M_TAU1], M[M_TAU2] = 0.0, t2
+            return DEFERRED
+        if st != MARCHED:
             return NEWTON_FAILED
         acc = _foot_acc(P, -umax, y[0], y[1])
         if not acc > 0.0:
             return NEWTON_FAILED
         d = r[0] / acc
+        whole = True
         if t2 - d < 0.5 * t2:
             d = 0.5 * t2
+            whole = False
         t2 -= d
-        if abs(d) <= NEWTON_TOL * (1.0 + t2):
+        if whole and _converged(abs(d), prev, 1.0 + t2):
             break
+        prev = abs(d) if whole else -1.0
     else:
         return NEWTON_FAILED
     M[M_TAU1], M[M_TAU2] = 0.0, t2
@@ -438,9 +503,10 @@ def _estimate(P, M, x, a_f, u):
 
 
 @njit(**JIT)
-def _predict(P, x, M, K, Yt, ynew, y, body, vmax):
+def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
     """The state the plan in ``M`` predicts after the next sample from ``x``, for the
-    plan-holds check (none if that sample ends at the foot's stop)."""
+    plan-holds check (none if that sample ends at the foot's stop, or the integrator steps
+    ``left[0]`` run out: the next sample then re-solves)."""
     t1 = M[M_TAU1] if M[M_PHASE] == PUSH else 0.0
     hn = P[P_PERIOD]
     if hn >= t1 + M[M_TAU2]:
@@ -451,13 +517,13 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax):
     tp = min(hn, t1)
     y[0], y[1] = x[2], x[3]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, 0.0, 0.0
-    if not _flow(P, umax, y, 2, tp, K, Yt, ynew, body, vmax):
+    if _flow(P, umax, y, 2, tp, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
         return
     xb = x[0] + x[1] * tp + 0.5 * a1 * tp * tp
     vb = x[1] + a1 * tp
     tq = hn - tp
     body[0], body[1], body[2] = xb, vb, a2
-    if not _flow(P, -umax, y, 2, tq, K, Yt, ynew, body, vmax):
+    if _flow(P, -umax, y, 2, tq, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
         return
     M[M_PRED], M[M_PRED + 1] = xb + vb * tq + 0.5 * a2 * tq * tq, vb + a2 * tq
     M[M_PRED + 2], M[M_PRED + 3] = y[0], y[1]
@@ -479,18 +545,20 @@ def solve_plan(P, M, x, K, W):
     K, W : arrays
         :func:`workspace`.
     """
-    Yt, ynew, y, J, r, lim, body, vmax = _views(K, W)
+    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
+    left[0] = np.inf  # (before impact: no sample to keep)
     if M[M_PHASE] == PUSH:
-        return _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, MAX_NEWTON)
-    return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+        return _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, MAX_NEWTON)
+    return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
 
 
 @njit(**JIT)
 def control_step(P, M, x, a_f, u, h, estimate, K, W):
     """One sample of the controller, compiled: the estimate updated from the measurement
     (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from
-    ``x`` for the estimated ground. Returns the status (:data:`OK` or why not covered);
-    the plan is in ``M``.
+    ``x`` for the estimated ground, in at most ``P[P_WORK]`` integrator steps (``M_WORK``
+    says how many). Returns the status (:data:`OK` or why not covered); the plan is in
+    ``M``.
 
     Parameters
     ----------
@@ -509,7 +577,17 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     K, W : arrays
         :func:`workspace`.
     """
-    Yt, ynew, y, J, r, lim, body, vmax = _views(K, W)
+    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
+    left[0] = P[P_WORK]
+    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
+    M[M_WORK] = P[P_WORK] - left[0]
+    return st
+
+
+@njit(**JIT, inline="always")  # (a call would pass its nine arrays, refcounted)
+def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left):
+    """:func:`control_step` on the views of its work arrays."""
+    k_was, c_was = P[P_K], P[P_CD]
     if estimate and x[3] < 0.0:
         _estimate(P, M, x, a_f, u)
         if M[M_SAMPLES] >= 2:  # as the re-planning MPC: two samples before the fit is used
@@ -519,6 +597,9 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
             P[P_K] = max(max(M[M_TH0] - m * math.sqrt(max(M[M_P00], 0.0)), 0.5 * M[M_TH0]),
                          1e-3)
             P[P_CD] = max(M[M_TH1] - m * math.sqrt(max(M[M_P11], 0.0)), 0.0)
+    # a ground that moved: the last Newton step no longer says how far the plan is
+    if abs(P[P_K] - k_was) > TIGHTEN * k_was or abs(P[P_CD] - c_was) > TIGHTEN * max(1.0, c_was):
+        M[M_LAST_STEP] = np.inf
     # the sample went as the converged plan predicted, on the ground it was planned for,
     # which is still the estimate: by the principle of optimality its rest is still optimal
     holds = M[M_PRED_OK] == 1.0 and abs(P[P_K] - M[M_KPLAN]) <= PLAN_HOLDS_TOL * M[M_KPLAN] \
@@ -536,21 +617,22 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
             M[M_TAU1] -= h
             if holds:
                 M[M_ITER] = 0
-                _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+                _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
                 M[M_STATUS] = HOLDS
                 return HOLDS
             # a real-time iteration: a few Newton steps per sample while the switch is far
             # (the next samples go on converging), to convergence when it is near
             budget = int(P[P_BUDGET]) if M[M_TAU1] > 3.0 * h else MAX_NEWTON
-            st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, budget)
+            st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, budget)
             # (a run of large Newton steps: with noisy measurements the estimate moves every
             # sample, and the plan with it, by less than this)
             far = st == CONVERGING and M[M_LAST_STEP] > 0.1 * P[P_PERIOD]
-            M[M_UNCONVERGED] = M[M_UNCONVERGED] + 1 if far else 0
+            if st != DEFERRED:  # (a deferred sample counts neither way)
+                M[M_UNCONVERGED] = M[M_UNCONVERGED] + 1 if far else 0
             if M[M_UNCONVERGED] > MAX_UNCONVERGED:
                 st = NEWTON_FAILED
             if st == OK:
-                _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+                _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
             M[M_STATUS] = st
             return st
         # the switch fell within the sample
@@ -560,18 +642,19 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
         M[M_TAU2] = max(M[M_TAU2] - h, 1e-3 * M[M_TAU2])
     if holds:
         M[M_ITER] = 0
-        _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
         M[M_STATUS] = HOLDS
         return HOLDS
-    st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax)
+    st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
     if st == OK:
-        _predict(P, x, M, K, Yt, ynew, y, body, vmax)
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
     M[M_STATUS] = st
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "HOLDS", "MAX_NEWTON",
-           "MAX_UNCONVERGED", "NEWTON_FAILED", "NEWTON_TOL", "OK", "PATH_LIMIT",
-           "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "STATUS_NAMES", "control_step",
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "DEFERRED", "HOLDS", "LOOSE_RTOL",
+           "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "NEWTON_FAILED",
+           "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "SPENT",
+           "TIGHTEN", "WORK", "STATUS_NAMES", "control_step",
            "force_coefficients", "ground_force_noise", "new_memory", "robot_numbers",
            "solve_plan", "workspace"]

@@ -139,6 +139,14 @@ class MPCLanding:
         ``controller="bangbang"``: samples the compiled controller did not cover (its
         structure, push then pull, did not fit the state and estimate); each of them and the
         rest of the landing fell back to the re-planning MPC (``step_paths`` says why).
+    deferred : int
+        ``controller="bangbang"``: samples whose integrator steps ran out (the bound on one
+        sample's work, :data:`softlanding.control.bangbang.WORK`): each applied the last
+        whole Newton iterate, or the last plan, and the next sample's Newton went on from
+        there (``step_paths``: ``"bangbang (deferred)"``).
+    step_work : list of int
+        ``controller="bangbang"``: the integrator steps of each sample the compiled
+        controller ran (at most :data:`softlanding.control.bangbang.WORK`).
     noise, delay, seed, margin, estimator
         The sensing, the margin and the ground estimate's regression the landing ran with
         (:func:`mpc_landing`).
@@ -171,6 +179,8 @@ class MPCLanding:
     controller: str = "replan"
     sample_limit_hit: bool = False
     uncovered: int = 0
+    deferred: int = 0
+    step_work: list[int] = field(default_factory=list)
     noise: float = 0.0
     delay: int = 0
     seed: int = 0
@@ -234,7 +244,9 @@ class MPCLanding:
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
             "structure_changes": self.structure_changes, "controller": self.controller,
-            "uncovered": self.uncovered, "noise": self.noise, "delay": self.delay,
+            "uncovered": self.uncovered, "deferred": self.deferred,
+            "step_work_max": max(self.step_work, default=None), "noise": self.noise,
+            "delay": self.delay,
             "seed": self.seed, "margin": self.margin, "estimator": self.estimator,
             "steps": len(self.step_times_ms), **self.step_stats(), "setup_ms": self.setup_ms,
             "prepare_time_s": self.prepare_time_s,
@@ -354,6 +366,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     prepare_s = time.perf_counter() - t_start
     out_times: list[float] = []
     cpu_times: list[float] = []
+    step_work: list[int] = []
     estimates: list[GroundEstimate] = []
     paths: list[str] = []
     fallbacks, replans, elapsed, samples, uncovered = 0, 0, 0.0, 0, 0
@@ -395,14 +408,15 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 filt is None or samples > PROVISIONAL))
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
+            step_work.append(int(fast.M[bb.M_WORK]))
             if estimate:
                 estimates.append(fast.estimate())
             # (an arrest short of the crater's hold while pulling: the pull is still the
             # fastest stop of the foot, the arrest then digs a little; no plan of this
             # structure does better, and measurement noise makes it short by rounding)
             pulling = fast.M[bb.M_PHASE] == bb.PULL
-            if status in (bb.OK, bb.CONVERGING, bb.HOLDS) or (status == bb.ARREST_FAILS
-                                                               and pulling):
+            if status in (bb.OK, bb.CONVERGING, bb.HOLDS, bb.DEFERRED) or (
+                    status == bb.ARREST_FAILS and pulling):
                 paths.append("bangbang" if status == bb.OK else
                              f"bangbang ({bb.STATUS_NAMES[status]})")
                 issued.append((plant.t, fast.schedule(), fast.stop_time()))
@@ -504,7 +518,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       structure_changes=paths.count("structure"), step_paths=paths,
                       pieces=list(plant.history), prepare_time_s=prepare_s,
                       sample_limit_hit=samples >= max_samples and plant.x[3] < -stop,
-                      controller=controller, uncovered=uncovered, noise=sensor.noise,
+                      controller=controller, uncovered=uncovered,
+                      deferred=paths.count("bangbang (deferred)"), step_work=step_work,
+                      noise=sensor.noise,
                       delay=sensor.delay, seed=seed, margin=margin, estimator=estimator)
 
 

@@ -200,9 +200,13 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                                    "estimator": estimator} for m in margins})
     for key, kw in runs.items():
         m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)
+        own = [i for i, p in enumerate(m.step_paths) if p.startswith("bangbang")]
         row[key] = {**m.to_dict(), "ratio": m.depth / clair.depth,
                     "step_times_ms": list(m.step_times_ms), "step_cpu_ms": list(m.step_cpu_ms),
-                    "paths": sorted(set(m.step_paths))}
+                    "paths": sorted(set(m.step_paths)),
+                    # (the compiled controller's own samples, without its fallbacks)
+                    "compiled_times_ms": [m.step_times_ms[i] for i in own],
+                    "compiled_cpu_ms": [m.step_cpu_ms[i] for i in own]}
     return row
 
 

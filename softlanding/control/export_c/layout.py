@@ -37,6 +37,7 @@ P_DOC = {
     "P_MARGIN": "plan for the estimate less MARGIN standard deviations of K and c_d",
     "P_BUDGET": "Newton iterations per sample while the switch is > 3 samples away",
     "P_PERIOD": "the sample period (the plan-holds check predicts the next sample)",
+    "P_WORK": "integrator steps one call may take (its bound; then SL_DEFERRED)",
 }
 
 #: What each entry of ``M`` holds.
@@ -61,6 +62,8 @@ M_DOC = {
     "M_KPLAN": "K the prediction was made for",
     "M_CPLAN": "c_d the prediction was made for",
     "M_LAST_STEP": "size |dtau1| + |dtau2| of the last Newton step",
+    "M_WORK": "integrator steps of the last sl_control_step (at most P[SL_P_WORK])",
+    "M_DEFERRED": "calls whose integrator steps ran out (SL_DEFERRED)",
 }
 
 #: What each entry of the foot filter's memory ``F`` holds.
@@ -87,9 +90,9 @@ FILTER_CONSTANTS = ("PROVISIONAL", "PROCESS", "INNOVATION", "START_STD")
 #: The phases and statuses, and the tolerances the C uses (names of
 #: :mod:`~softlanding.control.bangbang`).
 STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS",
-            "CREEP")
+            "CREEP", "DEFERRED")
 CONSTANTS = ("PUSH", "PULL", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL", "PLAN_HOLDS_TOL",
-             "MAX_UNCONVERGED")
+             "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED", "MARCHED", "SPENT")
 
 
 def c_double(v: float) -> str:

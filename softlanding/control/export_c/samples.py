@@ -106,6 +106,8 @@ def random_landings(robot: Robot, seed: int = 0) -> Iterator[Landing]:
         margin = 0.0 if exact else float(rng.choice([0.0, 2.0]))
         P = bb.robot_numbers(r.r_m, r.s, u_max, k, c_d, max(noise, 1e-6), margin,
                              float(rng.uniform(0.005, 0.03)))
+        if i % 5 == 4:  # a tight bound on a sample's work: the deferred samples too
+            P[bb.P_WORK] = 30.0
         truth = (k, c_d) if exact else (k * float(rng.uniform(0.5, 1.5)),
                                          c_d * float(rng.uniform(0.5, 1.5)))
         x0 = Impact(float(rng.uniform(-10.0, -0.5))).initial_state(r)
@@ -195,7 +197,8 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
                 st = int(bb.control_step(P, M, x, a_f, u, hk, True, *ws))
                 steps += 1
             length = (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2]
-            if steps >= n_steps or length <= h or st not in (bb.OK, bb.CONVERGING, bb.HOLDS):
+            if steps >= n_steps or length <= h or st not in (bb.OK, bb.CONVERGING, bb.HOLDS,
+                                                                  bb.DEFERRED):
                 break  # the foot's stop within the next sample, or a state not covered
     pr = CREEP_PROBE
     P = bb.robot_numbers(robot.r_m, robot.s, force_limit(robot), pr.K, pr.c_d)

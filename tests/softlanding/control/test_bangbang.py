@@ -120,6 +120,7 @@ def test_cli_bangbang_with_noise_and_delay(cli):
     assert d["controller"] == "bangbang" and d["delay"] == 1 and d["noise"] == 1e-3
     assert d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
     assert d["estimator"] == "measured"
+    assert d["deferred"] >= 0 and 0 < d["step_work_max"] <= bb.WORK
     # the filtered estimate from the command line (mpc_landing's estimator="filtered")
     code, out, err = cli("mpc", "--v0", "-3", "--ground", "linear", "--stiffness", "2",
                          "--controller", "bangbang", "--noise-std", "1e-3", "--delay", "1",
@@ -203,3 +204,37 @@ def test_noisy_landing_at_low_speed_with_a_margin_stays_covered():
     m = mpc_landing(-1, PAPER_ROBOT, LinearGround(0.75), controller="bangbang", noise=1e-3,
                     delay=1, margin=2.0)
     assert m.feasible and m.uncovered == 0
+
+
+@pytest.mark.parametrize("work", [bb.WORK, 40])
+def test_the_work_bound_holds_every_sample_and_keeps_the_depth(monkeypatch, work):
+    # the draggy ground whose first drag estimate takes the most integrator steps of the
+    # benchmark's cases (107 in one sample, Newton to convergence near the switch): bounded,
+    # a sample runs out, keeps its last whole iterate, and the next ones go on converging
+    # before the switch; the landing's depth is the unbounded one's
+    ground = linear_or_drag(2.0, 1.0)
+    monkeypatch.setattr(bb, "WORK", 1e9)
+    free = mpc_landing(-3, PAPER_ROBOT, ground, controller="bangbang")
+    assert free.deferred == 0 and max(free.step_work) > work
+    monkeypatch.setattr(bb, "WORK", work)
+    tight = mpc_landing(-3, PAPER_ROBOT, ground, controller="bangbang")
+    assert max(tight.step_work) <= work and tight.deferred >= 1
+    assert tight.step_paths.count("bangbang (deferred)") == tight.deferred
+    assert tight.uncovered == 0 and tight.feasible
+    assert tight.u_peak <= PAPER_ROBOT.u_max * (1 + 1e-12)
+    assert tight.depth == pytest.approx(free.depth, rel=1e-8)
+    assert tight.to_dict()["deferred"] == tight.deferred
+
+
+def test_a_sample_without_work_keeps_the_last_plan_shifted():
+    r, k, c = PAPER_ROBOT, 1.0, 1.0
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, k, c)
+    M = bb.new_memory(0.2, 0.2, (k, c), (1.0, 1.0), 1e-6)
+    x = Impact(-6.0).initial_state(r)
+    assert bb.solve_plan(P, M, x, *bb.workspace()) == bb.OK
+    t1, t2, h = M[bb.M_TAU1], M[bb.M_TAU2], 0.01
+    P[bb.P_WORK] = 0.0
+    x = x + h * np.array([x[1], 0.0, x[3], 0.0])  # (not the plan's prediction)
+    assert bb.control_step(P, M, x, 0.0, r.u_max, h, False, *bb.workspace()) == bb.DEFERRED
+    assert M[bb.M_TAU1] == t1 - h and M[bb.M_TAU2] == t2
+    assert M[bb.M_WORK] == 0 and M[bb.M_DEFERRED] == 1 and M[bb.M_PRED_OK] == 0
