@@ -176,7 +176,7 @@ def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[f
         measured[3] = min(measured[3], -1e-9 * max(1.0, abs(v0)))
         st = int(bb.control_step(P, M, measured, a_f, u_end, h,
                                  bool(F[ff.F_N] > ff.PROVISIONAL), *ws))
-        if st not in (bb.OK, bb.CONVERGING, bb.HOLDS) and not (
+        if st not in (bb.OK, bb.CONVERGING, bb.HOLDS, bb.DEFERRED) and not (
                 st == bb.ARREST_FAILS and M[bb.M_PHASE] == bb.PULL):
             break  # a state the controller does not cover: the MPC would take over
     return done
