@@ -38,8 +38,8 @@ from ocp import (
 )
 from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control import bangbang as bb
-from softlanding.control.estimation import GroundEstimate, GroundEstimator
-from softlanding.control.foot_filter import PROVISIONAL, filter_step, new_filter
+from softlanding.control.estimation import GroundEstimate, GroundEstimator, filtered_weight
+from softlanding.control.foot_filter import PROVISIONAL, covariance, filter_step, new_filter
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
     ground_numbers,
@@ -347,6 +347,20 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                           if filtered else max(sensor.noise, 1e-6))
     fast = _FastState.start(plan, robot, model, period, sensor, margin, filtered) \
         if controller == "bangbang" else None
+    # the filtered regression's per-sample weights: one force's variance from the
+    # acceleration's noise, and the filtered state's error the estimator's noise allows for
+    # (both in units of the sensor's noise variance)
+    force_var, allowance = 1.0 / bb.force_coefficients(robot.r_m)[1] ** 2, bb.FILTERED_REGRESSOR
+
+    def weight_of(x: np.ndarray, a_f: float, u: float) -> float:
+        """The fallback estimator's weight of a sample (1 unless filtered)."""
+        if filt is None:
+            return 1.0
+        e = est.estimate
+        return filtered_weight(x, est.ground_force(a_f, u), (e.stiffness, e.c_d),
+                               (e.stiffness_std, e.c_d_std), covariance(filt), force_var,
+                               allowance)
+
     t0 = time.perf_counter()
     if fast is None or not fast.active:
         _prepare(problem, plan, robot, model, plant.x)  # the builds, before the landing starts
@@ -391,8 +405,14 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         t0, c0 = time.perf_counter(), time.process_time()
         if fast is not None and fast.active:
             # (the filter's first states are provisional: no fit from them)
-            status = fast.step(measured, a_f, u_meas, h, estimate and (
-                filt is None or samples > PROVISIONAL))
+            fit = estimate and (filt is None or samples > PROVISIONAL)
+            weight = 1.0
+            if fit and filt is not None:
+                e = fast.estimate()
+                weight = filtered_weight(
+                    measured, fast.force(a_f, u_meas), (e.stiffness, e.c_d),
+                    (e.stiffness_std, e.c_d_std), covariance(filt), force_var, allowance)
+            status = fast.step(measured, a_f, u_meas, h, fit, weight)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             if estimate:
@@ -431,7 +451,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         if plan is None:  # a fallback that found no plan: the estimate goes on, and the
             # re-plan is tried again from this sample's state (else the last command goes on)
             if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
-                e = est.update(measured, a_f, u_meas)
+                e = est.update(measured, a_f, u_meas, weight_of(measured, a_f, u_meas))
                 estimates.append(e)
                 if e.samples >= 2:
                     believed = e.ground()
@@ -451,7 +471,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             continue
         if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
             # (a noisy v_f may read >= 0: nothing to fit)
-            e = est.update(measured, a_f, u_meas)
+            e = est.update(measured, a_f, u_meas, weight_of(measured, a_f, u_meas))
             estimates.append(e)
             if e.samples >= 2:
                 believed = e.ground()
@@ -599,6 +619,10 @@ ARREST_RESERVE = 3.0
 #: paper's force; critically damped for the body's mass ``r_m/(1+r_m)`` about 5/6).
 HOLD_GAINS = (1.0, 2.0)
 
+#: The relative move of the planned ground (``K`` or ``c_d``, the latter relative to at
+#: least 1e-2) after which a push still converging is tested for a creep again.
+CREEP_TEST_MOVE = 1e-2
+
 
 class _FastState:
     """The compiled controller's numbers, memory and work arrays, and its schedules."""
@@ -607,6 +631,11 @@ class _FastState:
         self.P, self.M, self.active = P, M, active
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
+        # the creep test's (the filtered estimate's, :meth:`creep_test`) own work arrays,
+        # and the ground it last tested
+        self.probe_ws = bb.workspace()
+        self.tested = (math.nan, math.nan)
+        self.test_creep = False
 
     @classmethod
     def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
@@ -623,6 +652,7 @@ class _FastState:
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
         M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
         out = cls(P, M, robot, covered)
+        out.test_creep = filtered
         if covered:  # the first plan's state at the foot's stop (its schedule's tail)
             M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = np.asarray(plan.xT, float)[:3]
         # compile (or load numba's cache) before impact: a sample must not pay for it
@@ -631,9 +661,53 @@ class _FastState:
                         1e-3 * period, False, *out.ws)
         return out
 
-    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool) -> int:
-        """One compiled sample; the status."""
-        return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool,
+             weight: float = 1.0) -> int:
+        """One compiled sample; the status. ``weight``: the estimate's update weighs the
+        sample so (:func:`~softlanding.control.estimation.filtered_weight`)."""
+        if weight == 1.0 or not estimate:
+            st = int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+            return self.creep_test(x) if st == bb.CONVERGING and self.test_creep else st
+        # a weighted update is the plain one on the covariance times the weight (the gain is
+        # the same, the covariance comes out times it): scaled in and out around the step,
+        # the noise over its square root meanwhile (the margin's standard deviations)
+        P, M = self.P, self.M
+        noise = P[bb.P_NOISE]
+        M[bb.M_P00] *= weight
+        M[bb.M_P01] *= weight
+        M[bb.M_P11] *= weight
+        P[bb.P_NOISE] = noise / np.sqrt(weight)
+        try:
+            st = int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
+        finally:
+            P[bb.P_NOISE] = noise
+            M[bb.M_P00] /= weight
+            M[bb.M_P01] /= weight
+            M[bb.M_P11] /= weight
+        return self.creep_test(x) if st == bb.CONVERGING and self.test_creep else st
+
+    def creep_test(self, x: np.ndarray) -> int:
+        """A push whose Newton iterate is near (its last step within a tenth of the period)
+        but not converged: the plan to convergence, on copies, for the ground it is planned
+        for, whenever that ground moved by more than :data:`CREEP_TEST_MOVE` since the last
+        test. :data:`~softlanding.control.bangbang.CREEP` if that plan's body rises at the
+        foot's stop (the creep the controller finds only at convergence, near the switch,
+        when the estimate moves every sample: with the push nearly spent), else
+        :data:`~softlanding.control.bangbang.CONVERGING`."""
+        P, M = self.P, self.M
+        ground = (float(P[bb.P_K]), float(P[bb.P_CD]))
+        if M[bb.M_PHASE] != bb.PUSH or not M[bb.M_LAST_STEP] <= 0.1 * P[bb.P_PERIOD] or all(
+                abs(g - t) <= CREEP_TEST_MOVE * max(abs(t), 1e-2)
+                for g, t in zip(ground, self.tested, strict=True)):
+            return bb.CONVERGING
+        self.tested = ground
+        st = int(bb.solve_plan(P.copy(), M.copy(), np.array(x, float), *self.probe_ws))
+        return bb.CREEP if st == bb.CREEP else bb.CONVERGING
+
+    def force(self, a_f: float, u: float) -> float:
+        """The ground force a foot acceleration implies under the force ``u``."""
+        P = self.P
+        return float((a_f - P[bb.P_AF0] - P[bb.P_BF] * u) / P[bb.P_GF])
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The plan's force from now: push until the switch, pull until the foot's stop,
