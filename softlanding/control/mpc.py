@@ -50,6 +50,7 @@ from softlanding.control.state_landing import (
 )
 from softlanding.errors import ParameterError, RestNotProvenError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
+from softlanding.model.dynamics import VB, robot_rhs
 from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.model.terrain import paper_rig_units
@@ -358,8 +359,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             return 1.0
         e = est.estimate
         return filtered_weight(x, est.ground_force(a_f, u), (e.stiffness, e.c_d),
-                               (e.stiffness_std, e.c_d_std), covariance(filt), force_var,
-                               allowance)
+                               covariance(filt), force_var, allowance)
 
     t0 = time.perf_counter()
     if fast is None or not fast.active:
@@ -409,9 +409,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             weight = 1.0
             if fit and filt is not None:
                 e = fast.estimate()
-                weight = filtered_weight(
-                    measured, fast.force(a_f, u_meas), (e.stiffness, e.c_d),
-                    (e.stiffness_std, e.c_d_std), covariance(filt), force_var, allowance)
+                weight = filtered_weight(measured, fast.force(a_f, u_meas),
+                                         (e.stiffness, e.c_d), covariance(filt), force_var,
+                                         allowance)
             status = fast.step(measured, a_f, u_meas, h, fit, weight)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
@@ -506,7 +506,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         cpu_times.append(1e3 * (time.process_time() - c0))
         issued.append((plant.t - elapsed, _schedule(plan, robot), _plan_time(plan)))
     if plant.x[3] >= -stop:
-        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m))
+        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m, robot.s))
     else:
         origin, command, _ = issued[-1]
         final = plant.finish(_shifted(command, plant.t - origin))
@@ -572,7 +572,8 @@ class Sensor:
         return m, float(a_f + e[2]), float(u + e[3])
 
 
-    def arrest(self, x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
+    def arrest(self, x: np.ndarray, r_m: float, stroke_max: float = math.inf
+               ) -> ForceSchedule | FeedbackSchedule:
         """The body's arrest from the measured state of a stopped foot: exact measurements,
         the constant force that stops it in the stroke left, then its weight
         (:func:`~softlanding.optimal.landing.arrest_schedule`). Noisy ones: the stroke left
@@ -589,6 +590,9 @@ class Sensor:
             The measured state ``[x_b, v_b, x_f, v_f]`` (the foot stopped).
         r_m : float
             The robot's mass ratio.
+        stroke_max : float
+            The stroke's limit (a noisy arrest lets a rising body coast up to its top, at
+            no force, where that is within it).
 
         Returns
         -------
@@ -606,10 +610,18 @@ class Sensor:
         w = r_m / (1 + r_m)
         # where the arrest stops the body (the reserve left), or where it is
         end = reserve if x[1] < 0 and stroke - reserve > 0 else stroke
+        times, forces = tail.times, tail.values[:-1]
+        if x[1] > 0 and self.noise > 0:
+            # a body still rising (a re-planned creep's pull may leave it so): no force until
+            # its weight alone stops it, then the hold at that stroke (held where it is, the
+            # damped hold would brake it by pushing the foot into ground at its capacity)
+            a = float(robot_rhs(np.asarray(x, float), 0.0, 0.0, r_m)[VB])
+            if a < 0 and stroke - 0.5 * x[1] ** 2 / a < stroke_max:
+                times, forces, end = (-x[1] / a,), (0.0,), stroke - 0.5 * x[1] ** 2 / a
         hold = (-HOLD_GAINS[0], -HOLD_GAINS[1], HOLD_GAINS[0], HOLD_GAINS[1],
                 w + HOLD_GAINS[0] * end)
-        rows = [(0.0, 0.0, 0.0, 0.0, v) for v in tail.values[:-1]] + [hold]
-        return FeedbackSchedule(tail.times, tuple(rows))
+        rows = [(0.0, 0.0, 0.0, 0.0, v) for v in forces] + [hold]
+        return FeedbackSchedule(times, tuple(rows))
 
 
 #: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
@@ -619,10 +631,6 @@ ARREST_RESERVE = 3.0
 #: paper's force; critically damped for the body's mass ``r_m/(1+r_m)`` about 5/6).
 HOLD_GAINS = (1.0, 2.0)
 
-#: The relative move of the planned ground (``K`` or ``c_d``, the latter relative to at
-#: least 1e-2) after which a push still converging is tested for a creep again.
-CREEP_TEST_MOVE = 1e-2
-
 
 class _FastState:
     """The compiled controller's numbers, memory and work arrays, and its schedules."""
@@ -631,11 +639,6 @@ class _FastState:
         self.P, self.M, self.active = P, M, active
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
-        # the creep test's (the filtered estimate's, :meth:`creep_test`) own work arrays,
-        # and the ground it last tested
-        self.probe_ws = bb.workspace()
-        self.tested = (math.nan, math.nan)
-        self.test_creep = False
 
     @classmethod
     def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
@@ -652,7 +655,6 @@ class _FastState:
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
         M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
         out = cls(P, M, robot, covered)
-        out.test_creep = filtered
         if covered:  # the first plan's state at the foot's stop (its schedule's tail)
             M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = np.asarray(plan.xT, float)[:3]
         # compile (or load numba's cache) before impact: a sample must not pay for it
@@ -666,8 +668,7 @@ class _FastState:
         """One compiled sample; the status. ``weight``: the estimate's update weighs the
         sample so (:func:`~softlanding.control.estimation.filtered_weight`)."""
         if weight == 1.0 or not estimate:
-            st = int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
-            return self.creep_test(x) if st == bb.CONVERGING and self.test_creep else st
+            return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
         # a weighted update is the plain one on the covariance times the weight (the gain is
         # the same, the covariance comes out times it): scaled in and out around the step,
         # the noise over its square root meanwhile (the margin's standard deviations)
@@ -678,31 +679,12 @@ class _FastState:
         M[bb.M_P11] *= weight
         P[bb.P_NOISE] = noise / np.sqrt(weight)
         try:
-            st = int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
+            return int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
         finally:
             P[bb.P_NOISE] = noise
             M[bb.M_P00] /= weight
             M[bb.M_P01] /= weight
             M[bb.M_P11] /= weight
-        return self.creep_test(x) if st == bb.CONVERGING and self.test_creep else st
-
-    def creep_test(self, x: np.ndarray) -> int:
-        """A push whose Newton iterate is near (its last step within a tenth of the period)
-        but not converged: the plan to convergence, on copies, for the ground it is planned
-        for, whenever that ground moved by more than :data:`CREEP_TEST_MOVE` since the last
-        test. :data:`~softlanding.control.bangbang.CREEP` if that plan's body rises at the
-        foot's stop (the creep the controller finds only at convergence, near the switch,
-        when the estimate moves every sample: with the push nearly spent), else
-        :data:`~softlanding.control.bangbang.CONVERGING`."""
-        P, M = self.P, self.M
-        ground = (float(P[bb.P_K]), float(P[bb.P_CD]))
-        if M[bb.M_PHASE] != bb.PUSH or not M[bb.M_LAST_STEP] <= 0.1 * P[bb.P_PERIOD] or all(
-                abs(g - t) <= CREEP_TEST_MOVE * max(abs(t), 1e-2)
-                for g, t in zip(ground, self.tested, strict=True)):
-            return bb.CONVERGING
-        self.tested = ground
-        st = int(bb.solve_plan(P.copy(), M.copy(), np.array(x, float), *self.probe_ws))
-        return bb.CREEP if st == bb.CREEP else bb.CONVERGING
 
     def force(self, a_f: float, u: float) -> float:
         """The ground force a foot acceleration implies under the force ``u``."""
