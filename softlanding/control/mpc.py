@@ -408,10 +408,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             fit = estimate and (filt is None or samples > PROVISIONAL)
             weight = 1.0
             if fit and filt is not None:
-                e = fast.estimate()
-                weight = filtered_weight(measured, fast.force(a_f, u_meas),
-                                         (e.stiffness, e.c_d), covariance(filt), force_var,
-                                         allowance)
+                weight = filtered_weight(measured, fast.force(a_f, u_meas), fast.theta(),
+                                         covariance(filt), force_var, allowance)
             status = fast.step(measured, a_f, u_meas, h, fit, weight)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
@@ -685,6 +683,10 @@ class _FastState:
             M[bb.M_P00] /= weight
             M[bb.M_P01] /= weight
             M[bb.M_P11] /= weight
+
+    def theta(self) -> tuple[float, float]:
+        """The compiled estimator's fit ``(K, c_d)``."""
+        return float(self.M[bb.M_TH0]), float(self.M[bb.M_TH1])
 
     def force(self, a_f: float, u: float) -> float:
         """The ground force a foot acceleration implies under the force ``u``."""
