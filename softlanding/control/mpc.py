@@ -304,7 +304,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         it exactly, saturated at ``u_max``) instead of its noisy measurement, and the foot's
         position and velocity filtered with its measured acceleration
         (:mod:`softlanding.control.foot_filter`); the plans start from the filtered state
-        too. With exact measurements both are the same.
+        too. Each sample weighs by the filtered state's error in its force
+        (:func:`~softlanding.control.estimation.filtered_weight`). With exact measurements
+        both are the same.
 
     Raises
     ------
