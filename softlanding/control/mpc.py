@@ -639,6 +639,7 @@ class _FastState:
         self.P, self.M, self.active = P, M, active
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
+        self.recover = False  # (:meth:`recovered`: the filtered estimate's)
 
     @classmethod
     def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
@@ -655,6 +656,7 @@ class _FastState:
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
         M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
         out = cls(P, M, robot, covered)
+        out.recover = filtered
         if covered:  # the first plan's state at the foot's stop (its schedule's tail)
             M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = np.asarray(plan.xT, float)[:3]
         # compile (or load numba's cache) before impact: a sample must not pay for it
@@ -668,7 +670,8 @@ class _FastState:
         """One compiled sample; the status. ``weight``: the estimate's update weighs the
         sample so (:func:`~softlanding.control.estimation.filtered_weight`)."""
         if weight == 1.0 or not estimate:
-            return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+            return self.recovered(
+                int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws)), x)
         # a weighted update is the plain one on the covariance times the weight (the gain is
         # the same, the covariance comes out times it): scaled in and out around the step,
         # the noise over its square root meanwhile (the margin's standard deviations)
@@ -679,12 +682,31 @@ class _FastState:
         M[bb.M_P11] *= weight
         P[bb.P_NOISE] = noise / np.sqrt(weight)
         try:
-            return int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
+            st = int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
         finally:
             P[bb.P_NOISE] = noise
             M[bb.M_P00] /= weight
             M[bb.M_P01] /= weight
             M[bb.M_P11] /= weight
+        return self.recovered(st, x)
+
+    def recovered(self, status: int, x: np.ndarray) -> int:
+        """The filtered estimate's push whose real-time iteration ran out of samples
+        (its Newton steps above a tenth of the period for
+        :data:`~softlanding.control.bangbang.MAX_UNCONVERGED` samples in a row: the plan's
+        ground, the estimate less ``margin`` honest standard deviations, moves every sample
+        as they shrink): the plan solved to convergence from ``x`` instead, and kept if it
+        covers the state (:data:`~softlanding.control.bangbang.OK`), before a fallback."""
+        M = self.M
+        if not (self.recover and status == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH
+                and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED):
+            return status
+        trial = M.copy()
+        if int(bb.solve_plan(self.P, trial, np.array(x, float), *self.ws)) != bb.OK:
+            return status
+        trial[bb.M_UNCONVERGED] = 0
+        M[:] = trial
+        return bb.OK
 
     def theta(self) -> tuple[float, float]:
         """The compiled estimator's fit ``(K, c_d)``."""
