@@ -663,6 +663,8 @@ class _FastState:
         probe = M.copy()
         bb.control_step(P.copy(), probe, np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0,
                         1e-3 * period, False, *out.ws)
+        if filtered:  # (and the full solve :meth:`recovered` may need)
+            bb.solve_plan(P.copy(), M.copy(), np.array([10.0, -1.0, -0.1, -1.0]), *out.ws)
         return out
 
     def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool,
