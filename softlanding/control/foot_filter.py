@@ -184,4 +184,15 @@ def filter_step(F, x, g, U1, U2, h, beta, noise=0.0):
     x[2], x[3] = F[F_X], F[F_V]
 
 
-__all__ = ["NF", "PROCESS", "PROVISIONAL", "filter_step", "new_filter"]
+def covariance(F: np.ndarray) -> tuple[float, float, float]:
+    """The filtered state's covariance ``P_xx, P_xv, P_vv``, in units of the noise variance.
+
+    Parameters
+    ----------
+    F : array
+        :func:`new_filter`, after its steps.
+    """
+    return float(F[F_P00]), float(F[F_P01]), float(F[F_P11])
+
+
+__all__ = ["NF", "PROCESS", "PROVISIONAL", "covariance", "filter_step", "new_filter"]

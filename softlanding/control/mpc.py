@@ -38,8 +38,8 @@ from ocp import (
 )
 from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control import bangbang as bb
-from softlanding.control.estimation import GroundEstimate, GroundEstimator
-from softlanding.control.foot_filter import PROVISIONAL, filter_step, new_filter
+from softlanding.control.estimation import GroundEstimate, GroundEstimator, filtered_weight
+from softlanding.control.foot_filter import PROVISIONAL, covariance, filter_step, new_filter
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
     ground_numbers,
@@ -50,6 +50,7 @@ from softlanding.control.state_landing import (
 )
 from softlanding.errors import ParameterError, RestNotProvenError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
+from softlanding.model.dynamics import VB, robot_rhs
 from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.model.terrain import paper_rig_units
@@ -315,7 +316,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         it exactly, saturated at ``u_max``) instead of its noisy measurement, and the foot's
         position and velocity filtered with its measured acceleration
         (:mod:`softlanding.control.foot_filter`); the plans start from the filtered state
-        too. With exact measurements both are the same.
+        too. Each sample weighs by the filtered state's error in its force
+        (:func:`~softlanding.control.estimation.filtered_weight`). With exact measurements
+        both are the same.
 
     Raises
     ------
@@ -359,6 +362,19 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                           if filtered else max(sensor.noise, 1e-6))
     fast = _FastState.start(plan, robot, model, period, sensor, margin, filtered) \
         if controller == "bangbang" else None
+    # the filtered regression's per-sample weights: one force's variance from the
+    # acceleration's noise, and the filtered state's error the estimator's noise allows for
+    # (both in units of the sensor's noise variance)
+    force_var, allowance = 1.0 / bb.force_coefficients(robot.r_m)[1] ** 2, bb.FILTERED_REGRESSOR
+
+    def weight_of(x: np.ndarray, a_f: float, u: float) -> float:
+        """The fallback estimator's weight of a sample (1 unless filtered)."""
+        if filt is None:
+            return 1.0
+        e = est.estimate
+        return filtered_weight(x, est.ground_force(a_f, u), (e.stiffness, e.c_d),
+                               covariance(filt), force_var, allowance)
+
     t0 = time.perf_counter()
     if fast is None or not fast.active:
         _prepare(problem, plan, robot, model, plant.x)  # the builds, before the landing starts
@@ -404,8 +420,12 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         t0, c0 = time.perf_counter(), time.process_time()
         if fast is not None and fast.active:
             # (the filter's first states are provisional: no fit from them)
-            status = fast.step(measured, a_f, u_meas, h, estimate and (
-                filt is None or samples > PROVISIONAL))
+            fit = estimate and (filt is None or samples > PROVISIONAL)
+            weight = 1.0
+            if fit and filt is not None:
+                weight = filtered_weight(measured, fast.force(a_f, u_meas), fast.theta(),
+                                         covariance(filt), force_var, allowance)
+            status = fast.step(measured, a_f, u_meas, h, fit, weight)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             step_work.append(int(fast.M[bb.M_WORK]))
@@ -445,7 +465,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         if plan is None:  # a fallback that found no plan: the estimate goes on, and the
             # re-plan is tried again from this sample's state (else the last command goes on)
             if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
-                e = est.update(measured, a_f, u_meas)
+                e = est.update(measured, a_f, u_meas, weight_of(measured, a_f, u_meas))
                 estimates.append(e)
                 if e.samples >= 2:
                     believed = e.ground()
@@ -465,7 +485,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             continue
         if estimate and measured[3] < 0 and (filt is None or samples > PROVISIONAL):
             # (a noisy v_f may read >= 0: nothing to fit)
-            e = est.update(measured, a_f, u_meas)
+            e = est.update(measured, a_f, u_meas, weight_of(measured, a_f, u_meas))
             estimates.append(e)
             if e.samples >= 2:
                 believed = e.ground()
@@ -500,7 +520,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         cpu_times.append(1e3 * (time.process_time() - c0))
         issued.append((plant.t - elapsed, _schedule(plan, robot), _plan_time(plan)))
     if plant.x[3] >= -stop:
-        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m))
+        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m, robot.s))
     else:
         origin, command, _ = issued[-1]
         final = plant.finish(_shifted(command, plant.t - origin))
@@ -568,7 +588,8 @@ class Sensor:
         return m, float(a_f + e[2]), float(u + e[3])
 
 
-    def arrest(self, x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
+    def arrest(self, x: np.ndarray, r_m: float, stroke_max: float = math.inf
+               ) -> ForceSchedule | FeedbackSchedule:
         """The body's arrest from the measured state of a stopped foot: exact measurements,
         the constant force that stops it in the stroke left, then its weight
         (:func:`~softlanding.optimal.landing.arrest_schedule`). Noisy ones: the stroke left
@@ -585,6 +606,9 @@ class Sensor:
             The measured state ``[x_b, v_b, x_f, v_f]`` (the foot stopped).
         r_m : float
             The robot's mass ratio.
+        stroke_max : float
+            The stroke's limit (a noisy arrest lets a rising body coast up to its top, at
+            no force, where that is within it).
 
         Returns
         -------
@@ -602,10 +626,18 @@ class Sensor:
         w = r_m / (1 + r_m)
         # where the arrest stops the body (the reserve left), or where it is
         end = reserve if x[1] < 0 and stroke - reserve > 0 else stroke
+        times, forces = tail.times, tail.values[:-1]
+        if x[1] > 0 and self.noise > 0:
+            # a body still rising (a re-planned creep's pull may leave it so): no force until
+            # its weight alone stops it, then the hold at that stroke (held where it is, the
+            # damped hold would brake it by pushing the foot into ground at its capacity)
+            a = float(robot_rhs(np.asarray(x, float), 0.0, 0.0, r_m)[VB])
+            if a < 0 and stroke - 0.5 * x[1] ** 2 / a < stroke_max:
+                times, forces, end = (-x[1] / a,), (0.0,), stroke - 0.5 * x[1] ** 2 / a
         hold = (-HOLD_GAINS[0], -HOLD_GAINS[1], HOLD_GAINS[0], HOLD_GAINS[1],
                 w + HOLD_GAINS[0] * end)
-        rows = [(0.0, 0.0, 0.0, 0.0, v) for v in tail.values[:-1]] + [hold]
-        return FeedbackSchedule(tail.times, tuple(rows))
+        rows = [(0.0, 0.0, 0.0, 0.0, v) for v in forces] + [hold]
+        return FeedbackSchedule(times, tuple(rows))
 
 
 #: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
@@ -623,6 +655,7 @@ class _FastState:
         self.P, self.M, self.active = P, M, active
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
+        self.recover = False  # (:meth:`recovered`: the filtered estimate's)
 
     @classmethod
     def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
@@ -639,17 +672,68 @@ class _FastState:
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
         M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
         out = cls(P, M, robot, covered)
+        out.recover = filtered
         if covered:  # the first plan's state at the foot's stop (its schedule's tail)
             M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = np.asarray(plan.xT, float)[:3]
         # compile (or load numba's cache) before impact: a sample must not pay for it
         probe = M.copy()
         bb.control_step(P.copy(), probe, np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0,
                         1e-3 * period, False, *out.ws)
+        if filtered:  # (and the full solve :meth:`recovered` may need)
+            bb.solve_plan(P.copy(), M.copy(), np.array([10.0, -1.0, -0.1, -1.0]), *out.ws)
         return out
 
-    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool) -> int:
-        """One compiled sample; the status."""
-        return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool,
+             weight: float = 1.0) -> int:
+        """One compiled sample; the status. ``weight``: the estimate's update weighs the
+        sample so (:func:`~softlanding.control.estimation.filtered_weight`)."""
+        if weight == 1.0 or not estimate:
+            return self.recovered(
+                int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws)), x)
+        # a weighted update is the plain one on the covariance times the weight (the gain is
+        # the same, the covariance comes out times it): scaled in and out around the step,
+        # the noise over its square root meanwhile (the margin's standard deviations)
+        P, M = self.P, self.M
+        noise = P[bb.P_NOISE]
+        M[bb.M_P00] *= weight
+        M[bb.M_P01] *= weight
+        M[bb.M_P11] *= weight
+        P[bb.P_NOISE] = noise / np.sqrt(weight)
+        try:
+            st = int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
+        finally:
+            P[bb.P_NOISE] = noise
+            M[bb.M_P00] /= weight
+            M[bb.M_P01] /= weight
+            M[bb.M_P11] /= weight
+        return self.recovered(st, x)
+
+    def recovered(self, status: int, x: np.ndarray) -> int:
+        """The filtered estimate's push whose real-time iteration ran out of samples
+        (its Newton steps above a tenth of the period for
+        :data:`~softlanding.control.bangbang.MAX_UNCONVERGED` samples in a row: the plan's
+        ground, the estimate less ``margin`` honest standard deviations, moves every sample
+        as they shrink): the plan solved to convergence from ``x`` instead, and kept if it
+        covers the state (:data:`~softlanding.control.bangbang.OK`), before a fallback."""
+        M = self.M
+        if not (self.recover and status == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH
+                and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED):
+            return status
+        trial = M.copy()
+        if int(bb.solve_plan(self.P, trial, np.array(x, float), *self.ws)) != bb.OK:
+            return status
+        trial[bb.M_UNCONVERGED] = 0
+        M[:] = trial
+        return bb.OK
+
+    def theta(self) -> tuple[float, float]:
+        """The compiled estimator's fit ``(K, c_d)``."""
+        return float(self.M[bb.M_TH0]), float(self.M[bb.M_TH1])
+
+    def force(self, a_f: float, u: float) -> float:
+        """The ground force a foot acceleration implies under the force ``u``."""
+        P = self.P
+        return float((a_f - P[bb.P_AF0] - P[bb.P_BF] * u) / P[bb.P_GF])
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The plan's force from now: push until the switch, pull until the foot's stop,
