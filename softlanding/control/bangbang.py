@@ -532,7 +532,7 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
 
 
 @njit(**JIT)
-def solve_plan(P, M, x, K, W):
+def solve_plan(P, M, x, K, W, work=np.inf):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
     (no estimate, no shift); the status.
 
@@ -544,12 +544,20 @@ def solve_plan(P, M, x, K, W):
         The state.
     K, W : arrays
         :func:`workspace`.
+    work : float
+        Most integrator steps (default: no bound, as before the impact); with a bound, the
+        steps taken are added to ``M[M_WORK]`` and a solve that runs out returns
+        :data:`DEFERRED`.
     """
     Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
-    left[0] = np.inf  # (before impact: no sample to keep)
+    left[0] = work
     if M[M_PHASE] == PUSH:
-        return _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, MAX_NEWTON)
-    return _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
+        st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, MAX_NEWTON)
+    else:
+        st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
+    if work < np.inf:
+        M[M_WORK] += work - left[0]
+    return st
 
 
 @njit(**JIT)

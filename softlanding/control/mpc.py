@@ -714,13 +714,20 @@ class _FastState:
         :data:`~softlanding.control.bangbang.MAX_UNCONVERGED` samples in a row: the plan's
         ground, the estimate less ``margin`` honest standard deviations, moves every sample
         as they shrink): the plan solved to convergence from ``x`` instead, and kept if it
-        covers the state (:data:`~softlanding.control.bangbang.OK`), before a fallback."""
+        covers the state (:data:`~softlanding.control.bangbang.OK`), before a fallback. The
+        solve is bounded by :data:`~softlanding.control.bangbang.WORK` integrator steps of
+        its own (counted in the sample's work, which may then reach twice the bound)."""
         M = self.M
         if not (self.recover and status == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH
                 and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED):
             return status
         trial = M.copy()
-        if int(bb.solve_plan(self.P, trial, np.array(x, float), *self.ws)) != bb.OK:
+        # bounded as a sample's own work (P_WORK more integrator steps, counted in M_WORK:
+        # such a sample may take twice the bound); one that runs out falls back
+        st = int(bb.solve_plan(self.P, trial, np.array(x, float), *self.ws,
+                               float(self.P[bb.P_WORK])))
+        M[bb.M_WORK] = trial[bb.M_WORK]
+        if st != bb.OK:
             return status
         trial[bb.M_UNCONVERGED] = 0
         M[:] = trial
