@@ -679,8 +679,10 @@ class _FastState:
         probe = M.copy()
         bb.control_step(P.copy(), probe, np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0,
                         1e-3 * period, False, *out.ws)
-        if filtered:  # (and the full solve :meth:`recovered` may need)
-            bb.solve_plan(P.copy(), M.copy(), np.array([10.0, -1.0, -0.1, -1.0]), *out.ws)
+        if filtered:  # (and the bounded full solve :meth:`recovered` may need: its own
+            # specialisation, the work given; loading it mid-landing took 17 ms)
+            bb.solve_plan(P.copy(), M.copy(), np.array([10.0, -1.0, -0.1, -1.0]), *out.ws,
+                          float(P[bb.P_WORK]))
         return out
 
     def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool,
