@@ -37,19 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
-TIMER_C = """
-#define _POSIX_C_SOURCE 199309L
-#include <string.h>
-#include <time.h>
-#include "softlanding_controller.h"
+from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats
 
-static double now_ns(clockid_t c)
-{
-    struct timespec t;
-    clock_gettime(c, &t);
-    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
-}
-
+TIMER_C = CLOCKS_C + """
 int sl_timed_filter(double *F, double *x, double g, double U1, double U2, double h,
                     double beta, double noise, double *ns)
 {
@@ -59,14 +49,6 @@ int sl_timed_filter(double *F, double *x, double g, double U1, double U2, double
     ns[0] = w1 - w0;
     ns[1] = c1 - c0;
     return w;
-}
-
-void sl_timer_overhead(double *ns)
-{
-    double c0 = now_ns(CLOCK_PROCESS_CPUTIME_ID), w0 = now_ns(CLOCK_MONOTONIC);
-    double w1 = now_ns(CLOCK_MONOTONIC), c1 = now_ns(CLOCK_PROCESS_CPUTIME_ID);
-    ns[0] = w1 - w0;
-    ns[1] = c1 - c0;
 }
 
 /* the n calls (inputs in rows) run reps times; the total wall and CPU ns; a checksum */
@@ -90,12 +72,6 @@ double sl_filter_batch(const double *F0, const double *x0, const double *in, int
     return sum;
 }
 """
-
-CONTENDERS = ("numba", "C from Python", "C in C")
-
-
-def _stats(v: np.ndarray) -> list[float]:
-    return [float(np.median(v)), float(np.percentile(v, 99)), float(v.max())]
 
 
 def main() -> None:
@@ -198,7 +174,7 @@ def main() -> None:
     rows = {}
     for c in CONTENDERS:
         w, p = np.array(wall[c]) / 1e3, np.array(cpu[c]) / 1e3
-        rows[c] = _stats(w) + _stats(p)
+        rows[c] = stats(w) + stats(p)
         print(f"{c:24} " + " ".join(f"{v:9.3f}" for v in rows[c]))
     for c in CONTENDERS[1:]:
         print(f"{'ratio ' + c + '/numba':24} " + " ".join(

@@ -33,18 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-TIMER_C = """
-#define _POSIX_C_SOURCE 199309L
-#include <time.h>
-#include "softlanding_controller.h"
+from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats
 
-static double now_ns(clockid_t c)
-{
-    struct timespec t;
-    clock_gettime(c, &t);
-    return (double)t.tv_sec * 1e9 + (double)t.tv_nsec;
-}
-
+TIMER_C = CLOCKS_C + """
 int sl_timed_step(double *P, double *M, const double *x, double a_f, double u, double h,
                   int estimate, double *ns)
 {
@@ -56,21 +47,7 @@ int sl_timed_step(double *P, double *M, const double *x, double a_f, double u, d
     ns[1] = c1 - c0;
     return st;
 }
-
-void sl_timer_overhead(double *ns)
-{
-    double c0 = now_ns(CLOCK_PROCESS_CPUTIME_ID), w0 = now_ns(CLOCK_MONOTONIC);
-    double w1 = now_ns(CLOCK_MONOTONIC), c1 = now_ns(CLOCK_PROCESS_CPUTIME_ID);
-    ns[0] = w1 - w0;
-    ns[1] = c1 - c0;
-}
 """
-
-CONTENDERS = ("numba", "C from Python", "C in C")
-
-
-def _stats(v: np.ndarray) -> list[float]:
-    return [float(np.median(v)), float(np.percentile(v, 99)), float(v.max())]
 
 
 def main() -> None:
@@ -159,12 +136,12 @@ def main() -> None:
     rows = {}
     for c in CONTENDERS:
         w, p = np.array(wall[c]) / 1e3, np.array(cpu[c]) / 1e3
-        rows[c] = _stats(w) + _stats(p)
+        rows[c] = stats(w) + stats(p)
         print(f"{c:24} " + " ".join(f"{v:9.3f}" for v in rows[c]))
         for kind in ("plan kept", "re-solved"):
             sel = kinds == kind
             print(f"  {kind + f' ({sel.sum() // a.repeats})':22} "
-                  + " ".join(f"{v:9.3f}" for v in _stats(w[sel]) + _stats(p[sel])))
+                  + " ".join(f"{v:9.3f}" for v in stats(w[sel]) + stats(p[sel])))
     for c in CONTENDERS[1:]:
         print(f"{'ratio ' + c + '/numba':24} " + " ".join(
             f"{x / y:9.3f}" for x, y in zip(rows[c], rows["numba"], strict=True)))
