@@ -656,6 +656,7 @@ class _FastState:
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
         self.recover = False  # (:meth:`recovered`: the filtered estimate's)
+        self.recovering = 0  # samples the full solve has gone on over so far
 
     @classmethod
     def start(cls, plan: Any, robot: Robot, model: Ground, period: float,
@@ -718,7 +719,9 @@ class _FastState:
         as they shrink): the plan solved to convergence from ``x`` instead, and kept if it
         covers the state (:data:`~softlanding.control.bangbang.OK`), before a fallback. The
         solve is bounded by :data:`~softlanding.control.bangbang.WORK` integrator steps of
-        its own (counted in the sample's work, which may then reach twice the bound)."""
+        its own in a sample (counted in the sample's work, which may then reach twice the
+        bound); one that runs out keeps the plan (the push goes on: ``DEFERRED``) and goes
+        on from its iterate at the next sample, for at most :data:`RECOVERY_SAMPLES`."""
         M = self.M
         if not (self.recover and status == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH
                 and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED):
@@ -729,6 +732,14 @@ class _FastState:
         st = int(bb.solve_plan(self.P, trial, np.array(x, float), *self.ws,
                                float(self.P[bb.P_WORK])))
         M[bb.M_WORK] = trial[bb.M_WORK]
+        if st == bb.DEFERRED and self.recovering < RECOVERY_SAMPLES:
+            # the bound ran out: the sample keeps its plan (the push goes on), and the next
+            # one goes on from this iterate, from its own state
+            self.recovering += 1
+            M[bb.M_TAU1], M[bb.M_TAU2] = trial[bb.M_TAU1], trial[bb.M_TAU2]
+            M[bb.M_DEFERRED] += 1
+            return bb.DEFERRED
+        self.recovering = 0
         if st != bb.OK:
             return status
         trial[bb.M_UNCONVERGED] = 0
@@ -1041,6 +1052,11 @@ def _prepare(problem: OptimalControlProblem, plan: Any, robot: Robot, model: Gro
         for ipopt in (True, False):  # an Ipopt solve for the active set, then its Newton
             with contextlib.suppress(SolveError, ValueError):
                 refine_structure(problem, modes, durs, x_j, params, ipopt=ipopt)
+
+
+RECOVERY_SAMPLES = 6
+"""Most samples in a row the filtered estimate's bounded full solve may go on over (each
+within the work bound) before the landing falls back."""
 
 
 @lru_cache(maxsize=1)
