@@ -23,6 +23,7 @@ import shlex
 import shutil
 import subprocess
 import tempfile
+from importlib.metadata import version
 from pathlib import Path
 
 import casadi as ca
@@ -113,7 +114,7 @@ def compiled_library(solver: ca.Function) -> Path:
         gen.generate(tmp + os.sep)
         source = Path(tmp) / "ocp_nlp.c"
         key = hashlib.sha256(source.read_bytes())
-        key.update(repr((cc, OPT_FLAGS, ca.__version__)).encode())
+        key.update(repr((cc, OPT_FLAGS, version("casadi"))).encode())
         lib = folder / f"nlp-{key.hexdigest()[:32]}.so"
         if not lib.exists():
             built = Path(tmp) / "ocp_nlp.so"
