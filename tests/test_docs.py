@@ -10,6 +10,7 @@ docstring and cross-reference without executing the gallery or the notebooks tak
 """
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -54,6 +55,10 @@ def test_the_site_builds_with_its_gallery_executed(tmp_path):
     # the guide's code names link to their API pages
     guide = (html / "guides" / "unknown_ground.html").read_text()
     assert "generated/softlanding.control.GroundEstimator.html" in guide
-    # quiet: nothing printed but warnings (none: -W) and errors
-    assert not res.stdout.strip() and not res.stderr.strip(), (res.stdout + res.stderr)[-4000:]
+    # quiet: nothing printed but warnings (none: -W) and errors; a notebook kernel's
+    # teardown noise (tornado logging a ZMQ socket closed under it) is not the docs'
+    err = re.sub(r"ERROR:tornado\.general:Uncaught exception in ZMQStream callback\n"
+                 r"(?:.*\n)*?zmq\.error\.ZMQError: Socket operation on non-socket\n?", "",
+                 res.stderr)
+    assert not res.stdout.strip() and not err.strip(), (res.stdout + err)[-4000:]
 
