@@ -64,6 +64,21 @@ INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
 BOUNDARY_KINDS = ("initial", "terminal", "boundary", "time")
 
 
+def expand_mode(expand: Any) -> bool | str:
+    """``expand`` checked: True, False or ``"auto"`` (anything else is refused).
+
+    Parameters
+    ----------
+    expand : bool or str
+        A transcription's ``expand`` argument.
+    """
+    if expand == "auto" and isinstance(expand, str):
+        return "auto"
+    if isinstance(expand, (bool, np.bool_)):
+        return bool(expand)
+    raise ProblemDefinitionError(f"expand must be True, False or 'auto', got {expand!r}")
+
+
 @dataclass
 class GridFree:
     """What a transcription's build does not take from its grid, shared by the
@@ -146,8 +161,10 @@ class Transcription:
         The problem (a single phase or several).
     ipopt_options : dict, optional
         Overrides of :data:`DEFAULT_IPOPT`.
-    expand : bool
-        Expand the NLP to SX scalar graphs (slower build, faster solves).
+    expand : bool or "auto"
+        Expand the NLP to SX scalar graphs (slower build, faster solves); ``"auto"``
+        solves the first time unexpanded (cheap to build) and expands from the second
+        solve of the same kind (cold or warm-started) on, where the build pays back.
     verify : {"warn", "raise", "off"}
         After each converged solve, check path constraints and state bounds on
         a fine grid; on a violation beyond ``verify_tol`` warn
@@ -187,7 +204,7 @@ class Transcription:
     method = "base"
 
     def __init__(self, problem: OptimalControlProblem | MultiPhaseProblem,
-                 ipopt_options: dict | None = None, expand: bool = False,
+                 ipopt_options: dict | None = None, expand: bool | str = False,
                  verify: str = "warn", verify_tol: float = 1e-6,
                  verify_points: int = 10, scaling: Any = "auto",
                  grid_free: GridFree | None = None, *, codegen: bool = False) -> None:
@@ -206,7 +223,8 @@ class Transcription:
             raise ProblemDefinitionError(f"verify must be one of {VERIFY_MODES}, got {verify!r}")
         self.problem = problem
         self.ipopt_options = {**DEFAULT_IPOPT, **(ipopt_options or {})}
-        self.expand = bool(expand)
+        self.expand = expand_mode(expand)
+        self._uses = {False: 0, True: 0}  # solves by kind (cold, warm): expand="auto"
         self.verify, self.verify_tol = verify, float(verify_tol)
         self.verify_points = positive_int(verify_points, "verify_points")
         self.n_builds = 0
@@ -417,12 +435,19 @@ class Transcription:
         constraints at the parameter values ``p`` (unchecked, as posed)."""
         return self._bounds
 
-    def _solver(self, warm: bool, expand: bool | None = None) -> Any:
+    def _solver(self, warm: bool, expand: bool | None = None) -> tuple[Any, bool]:
         """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers
         given; ``expand`` overrides the transcription's for this solver only (mesh
         refinement's warm rounds, where building the expanded graph costs more than the
         few iterations it would speed up)."""
-        key = (warm, self.expand if expand is None else bool(expand))
+        if expand is not None:
+            expanded = bool(expand)
+        elif self.expand == "auto":
+            expanded = self._uses[warm] > 0  # a re-solve: the expanded graph pays back
+        else:
+            expanded = bool(self.expand)
+        self._uses[warm] += 1
+        key = (warm, expanded)
         if key not in self._solvers:
             ipopt = dict(self.ipopt_options)
             if warm:
@@ -440,7 +465,7 @@ class Transcription:
                 del opts["expand"]
                 solver = ca.nlpsol(name, "ipopt", str(self._library), opts)
             self._solvers[key] = solver
-        return self._solvers[key]
+        return self._solvers[key], expanded
 
     # ------------------------------------------------------------------ solve
     def param_vector(self, params: dict[str, float]) -> np.ndarray:
@@ -714,12 +739,12 @@ class Transcription:
             f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
             fref = objective_scale if objective_scale is not None else \
                 self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
-        solver = self._solver(warm_start is not None and "lam_g0" in args, expand)
+        solver, expanded = self._solver(warm_start is not None and "lam_g0" in args, expand)
         t0 = time.perf_counter()
         res = self._unscale(solver(**self._scale_args(args, fref)), fref)
         elapsed = time.perf_counter() - t0
         sol = Solution.from_nlp(self, pv, res, solver.stats(), elapsed)
-        sol.objective_scale = fref
+        sol.objective_scale, sol.expanded = fref, expanded
         if not sol.success:
             cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
             raise cls(sol.status, sol, f"Ipopt failed: {sol.status} after {sol.iterations} "

@@ -59,6 +59,9 @@ class Solution:
     objective_scale : float
         What the objective was divided by for Ipopt (:mod:`ocp.definition.scaling`); the
         objective and multipliers here are unscaled.
+    expanded : bool
+        Whether Ipopt evaluated the NLP's SX-expanded graph (the transcription's
+        ``expand``; with ``"auto"``, from its second solve of a kind on).
     path_violation : float
         Largest violation of a path constraint or state bound found on a fine
         grid between the nodes (relative to ``max(1, |bound|)``); ``verified``
@@ -96,6 +99,7 @@ class Solution:
     objective_error: float  # Collocation.refine's estimate of the objective's error
     mesh_converged: bool
     objective_scale: float
+    expanded: bool
 
     def __init__(self, **kw: Any) -> None:
         self.__dict__.update(kw)

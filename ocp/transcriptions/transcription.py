@@ -39,7 +39,7 @@ from .mesh import (
     objective_threshold,
     refine_mesh,
 )
-from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, GridFree, Transcription
+from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, GridFree, Transcription, expand_mode
 from .shooting import ShootingPhase
 from .solution import Solution
 from .verify import interval_excess, verify
@@ -84,11 +84,13 @@ class MultipleShooting(Transcription):
         RK4 steps per interval.
     ipopt_options : dict, optional
         Overrides of :data:`DEFAULT_IPOPT`.
-    expand : bool
+    expand : bool or "auto"
         Expand the NLP to SX scalar graphs (RK4 only): building takes longer
-        (0.4 s instead of 0.02 s for the soft landing at N = 100) but every
-        evaluation is ~5x faster, so re-solves are ~2x faster. Worth it for
-        sweeps and continuation.
+        (0.3-0.5 s instead of 0.05-0.1 s for the soft landing at N = 100) but every
+        iteration is 2-3x faster. ``"auto"`` (default) solves the first time
+        unexpanded and expands from the second solve of the same kind (from a guess,
+        or warm-started) on: a one-off solve does not pay the build, re-solves
+        (sweeps, continuation, multistart) get the faster graph.
     inner_constraints : bool
         Also impose path constraints and state bounds at the integrator's
         ``substeps - 1`` inner steps of every interval (default: nodes only).
@@ -110,7 +112,7 @@ class MultipleShooting(Transcription):
 
     def __init__(self, problem: Problem, nodes: int | Sequence[int] = 50,
                  integrator: str = "rk4", substeps: int = 4,
-                 ipopt_options: dict | None = None, expand: bool = False, *,
+                 ipopt_options: dict | None = None, expand: bool | str = "auto", *,
                  inner_constraints: bool = False, verify: str = "warn",
                  verify_tol: float = 1e-6, verify_points: int = 10,
                  scaling: Any = "auto", codegen: bool = False) -> None:
@@ -125,7 +127,8 @@ class MultipleShooting(Transcription):
         self.integrator = integrator
         self.substeps = positive_int(substeps, "substeps")
         self.inner_constraints = bool(inner_constraints)
-        super().__init__(problem, ipopt_options, bool(expand) and integrator == "rk4",
+        expand = expand_mode(expand)  # refused before the integrator can ignore it
+        super().__init__(problem, ipopt_options, expand if integrator == "rk4" else False,
                          verify, verify_tol, verify_points, scaling, codegen=codegen)
         self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
         self.F = self.phases[0].F  # type: ignore[attr-defined]
@@ -178,8 +181,9 @@ class Collocation(Transcription):
         Normalised mesh points in [0, 1] per phase (overrides ``intervals``).
     ipopt_options : dict, optional
         Overrides of :data:`DEFAULT_IPOPT`.
-    expand : bool
-        Expand the NLP to SX (default True: collocation graphs are small).
+    expand : bool or "auto"
+        Expand the NLP to SX (default True: collocation graphs are small; ``"auto"`` as
+        in :class:`MultipleShooting`).
     verify, verify_tol, verify_points
         The post-solve check between nodes (see :class:`ocp.transcriptions.nlp.Transcription`).
     scaling : {"auto", "none"} or dict
@@ -205,7 +209,8 @@ class Collocation(Transcription):
     method = "collocation"
 
     def __init__(self, problem: Problem, intervals: int | Sequence[int] = 20, degree: int = 3,
-                 mesh: Any = None, ipopt_options: dict | None = None, expand: bool = True, *,
+                 mesh: Any = None, ipopt_options: dict | None = None,
+                 expand: bool | str = True, *,
                  verify: str = "warn", verify_tol: float = 1e-6,
                  verify_points: int = 10, scaling: Any = "auto",
                  grid_free: GridFree | None = None, codegen: bool = False) -> None:

@@ -38,6 +38,8 @@ def test_min_time_double_integrator_refined_to_machine_precision(di, d):
 def test_resolving_with_new_parameters_does_not_rebuild(di):
     builds = di.n_builds
     solver_ids = None
+    di.solve({"d": 0.5})  # with expand="auto" the second solve builds the expanded solver
+    di.solve({"d": 0.7})
     for d in (1.0, 2.0, 4.0):
         di.solve({"d": d})
         ids = {k: id(v) for k, v in di._solvers.items()}
