@@ -25,8 +25,9 @@ def test_auto_expands_from_the_second_solve_of_a_kind():
 
 
 def test_explicit_expand_is_kept_and_cvodes_never_expands():
-    assert [MultipleShooting(bryson_denham(), nodes=4, substeps=1, expand=e, verify="off").solve().expanded
-            for e in (True, False)] == [True, False]
+    kept = [MultipleShooting(bryson_denham(), nodes=4, substeps=1, expand=e,
+                             verify="off").solve().expanded for e in (True, False)]
+    assert kept == [True, False]
     assert Collocation(bryson_denham(), intervals=4, verify="off").solve().expanded is True
     assert MultipleShooting(bryson_denham(), nodes=4, integrator="cvodes").expand is False
 
