@@ -2,7 +2,7 @@
 every step within the rig's 0.26 ms sample period, median <= 20 us), interleaved.
 
 Run:  python -m benchmarks.bench_controller_step [--cases 12] [--repeats 2] [--noise S]
-      [--delay N] [--margin M]
+      [--delay N] [--margin M] [--realtime]
 
 The contenders land the same cases (``bench_mpc_step.CASES``: every impact velocity on a
 soft drag-free, a nominal dragging and a stiff draggy ground), alternating landing by landing
@@ -16,7 +16,10 @@ maximum step (wall and CPU) of each (and of the bang-bang controller's own sampl
 its fallbacks to the re-planning MPC: the goals'), their ratios, the goals, the bang-bang
 controller's samples deferred by its bound on one sample's work (``bangbang.WORK``
 integrator steps) and the most steps one sample took, and the relative depth difference
-between the two per case (the same to 1e-8 where both are bang-bang).
+between the two per case (the same to 1e-8 where both are bang-bang). ``--realtime`` runs
+the process as a robot runs its control loop (``benchmarks.realtime``: ``SCHED_FIFO``, one
+CPU, memory locked), so that the wall-time maximum is the controller's, not the shared
+machine's preemption.
 """
 
 from __future__ import annotations
@@ -37,7 +40,17 @@ def main() -> None:
     ap.add_argument("--noise", type=float, default=0.0, help="sensor noise std")
     ap.add_argument("--delay", type=int, default=0, help="samples of delay")
     ap.add_argument("--margin", type=float, default=0.0, help="bangbang's margin")
+    ap.add_argument("--realtime", action="store_true",
+                    help="run as a robot's control loop: SCHED_FIFO on one CPU, memory "
+                         "locked (benchmarks.realtime; needs root or CAP_SYS_NICE)")
     a = ap.parse_args()
+    if a.realtime:
+        from benchmarks.realtime import RealtimeUnavailable, enter_realtime
+
+        try:
+            print(enter_realtime())
+        except RealtimeUnavailable as err:
+            ap.error(f"--realtime: {err}")
     from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
     from softlanding.model.robot import PAPER_ROBOT
     from softlanding.model.terrain import paper_rig_units

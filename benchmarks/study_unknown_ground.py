@@ -3,7 +3,7 @@ clairvoyant optimum; MPC step times in the paper's units and on the paper's rig.
 
 Run:  python -m benchmarks.study_unknown_ground [--quick] [--period P] [--json FILE]
       python -m benchmarks.study_unknown_ground --controllers [--quick] [--noise S]
-      [--delay N] [--cases all|bang-bang|creep] [--json FILE]
+      [--delay N] [--cases all|bang-bang|creep] [--json FILE] [--realtime]
 
 ``--controllers`` runs the controller study of issue 33 instead: per case the clairvoyant
 optimum and the compiled bang-bang controller with exact measurements and with noisy,
@@ -63,12 +63,25 @@ def main() -> None:
     ap.add_argument("--cases", choices=("all", "bang-bang", "creep"), default="all",
                     help="--controllers: only the cases whose clairvoyant optimum is "
                          "bang-bang, or only the creeps (default: all)")
+    ap.add_argument("--realtime", action="store_true",
+                    help="--controllers: run as a robot's control loop (SCHED_FIFO on one "
+                         "CPU, memory locked: benchmarks.realtime; needs root or "
+                         "CAP_SYS_NICE)")
     a = ap.parse_args()
     grid = ((-3.0, -10.0), (0.5, 2.0), (0.0, 1.0)) if a.quick else (STUDY_V0, STUDY_STIFFNESS,
                                                                     STUDY_DRAG)
     if a.controllers:
+        if a.realtime:
+            from benchmarks.realtime import RealtimeUnavailable, enter_realtime
+
+            try:
+                print(enter_realtime())
+            except RealtimeUnavailable as err:
+                ap.error(f"--realtime: {err}")
         controllers(grid, a)
         return
+    if a.realtime:
+        ap.error("--realtime applies to --controllers only")
     if a.cases != "all":
         ap.error("--cases applies to --controllers only")
     t0 = time.perf_counter()

@@ -1,0 +1,54 @@
+"""``benchmarks.realtime``: a benchmark run as a robot's control loop (issue 33's wall-time
+maximum), or refused in one line (exit 2) without the privilege, never measured otherwise."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+CHILD = """
+import os, sys
+from benchmarks.realtime import enter_realtime
+if sys.argv[1] == "drop":
+    os.setuid(65534)  # nobody: no CAP_SYS_NICE
+print(enter_realtime())
+print(os.sched_getscheduler(0) == os.SCHED_FIFO, len(os.sched_getaffinity(0)))
+"""
+
+
+def _child(mode: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", CHILD, mode], cwd=ROOT, text=True,
+                          capture_output=True, timeout=60)
+
+
+needs_linux = pytest.mark.skipif(not hasattr(os, "sched_setscheduler"), reason="Linux only")
+
+
+@needs_linux
+def test_without_privilege_it_refuses_in_one_line():
+    if os.geteuid() != 0:
+        pytest.skip("needs root to drop the privilege in a child")
+    out = _child("drop")
+    assert out.returncode != 0
+    assert "RealtimeUnavailable: real-time scheduling not permitted" in out.stderr
+
+
+@needs_linux
+def test_with_privilege_the_process_runs_fifo_on_one_cpu():
+    if os.geteuid() != 0:
+        pytest.skip("needs root (or CAP_SYS_NICE)")
+    out = _child("keep")
+    assert out.returncode == 0, out.stderr
+    head, check = out.stdout.splitlines()
+    assert head.startswith("real-time: SCHED_FIFO priority 50 on CPU")
+    assert check == "True 1"
+
+
+def test_the_benchmarks_refuse_it_with_exit_2_where_it_does_not_apply():
+    out = subprocess.run([sys.executable, "-m", "benchmarks.study_unknown_ground", "--realtime"],
+                         cwd=ROOT, text=True, capture_output=True, timeout=120)
+    assert out.returncode == 2
+    assert "--realtime applies to --controllers only" in out.stderr
