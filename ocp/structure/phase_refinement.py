@@ -153,6 +153,8 @@ class PhaseSwitchingNLP(SwitchingNLP):
         final times, links), in the order of the boundary function ``B``.
     """
 
+    solver_name = "refine_phases"
+
     def __init__(self, mp: MultiPhaseProblem, modes: PhaseModes,
                  substeps: tuple[tuple[int, ...], ...], samples: int = 16,
                  ipopt_options: dict | None = None) -> None:
@@ -176,9 +178,9 @@ class PhaseSwitchingNLP(SwitchingNLP):
         self.exact = tuple(d.exact for ds in self.phase_dyns for d in ds)
         self.K = sum(self.phase_K)
         self._build_multi()
-        opts: dict[str, Any] = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})},
-                                "print_time": False, "error_on_fail": False}
-        self.solver = ca.nlpsol("refine_phases", "ipopt", self._nlp, opts)
+        self._opts = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})},
+                      "print_time": False, "error_on_fail": False}
+        self._solver = None  # (built on first use: SwitchingNLP.solver)
         self.build_time = time.perf_counter() - t0
         self.n_solves = 0
 

@@ -250,6 +250,8 @@ class SwitchingNLP:
         How many times it was solved.
     """
 
+    solver_name = "refine"  # (CasADi's name of the Ipopt instance)
+
     def __init__(self, problem: OptimalControlProblem, modes: Modes, substeps: tuple[int, ...],
                  samples: int = 16, ipopt_options: dict | None = None) -> None:
         t0 = time.perf_counter()
@@ -262,12 +264,23 @@ class SwitchingNLP:
         self._build()
         # a trial step outside the arcs' domain evaluates to NaN and Ipopt backtracks: normal,
         # so CasADi's per-evaluation warnings are off (a failed solve reports its status)
-        opts: dict[str, Any] = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})},
-                                "print_time": False, "error_on_fail": False,
-                                "show_eval_warnings": False}
-        self.solver = ca.nlpsol("refine", "ipopt", self._nlp, opts)
+        self._opts: dict[str, Any] = {"ipopt": {**REFINE_IPOPT, **(ipopt_options or {})},
+                                      "print_time": False, "error_on_fail": False,
+                                      "show_eval_warnings": False}
+        self._solver: Any = None  # Ipopt, built on first use (the Newton path needs none)
         self.build_time = time.perf_counter() - t0
         self.n_solves = 0
+
+    @property
+    def solver(self) -> Any:
+        """Ipopt on the refinement NLP, built on first use (its time added to
+        :attr:`build_time`): a structure that the active-set Newton re-solves never pays
+        for the Hessian's derivation."""
+        if self._solver is None:
+            t0 = time.perf_counter()
+            self._solver = ca.nlpsol(self.solver_name, "ipopt", self._nlp, self._opts)
+            self.build_time += time.perf_counter() - t0
+        return self._solver
 
     # ------------------------------------------------------------------ build
     def _build(self) -> None:
@@ -366,6 +379,12 @@ class SwitchingNLP:
             Ipopt said Search_Direction_Becomes_Too_Small)"``.
         """
         args: dict[str, Any] = {"p": pv, "x0": w0, **self.bounds(pv)}
+        n_eq = int(np.sum(args["lbg"] == args["ubg"]))
+        if n_eq > int(np.sum(args["lbx"] < args["ubx"])):
+            # more equalities than free variables (a structure that no longer fits): what
+            # Ipopt would answer at once, without building it (nor CasADi's warning)
+            return self._not_solved(np.asarray(w0, dtype=float), pv,
+                                    "Not_Enough_Degrees_Of_Freedom")
         if lam_g0 is not None and np.size(lam_g0) == self.solver.nnz_in("lam_g0"):
             # (multipliers of an NLP rebuilt with more RK8 steps have another size: cold)
             args.update(lam_g0=lam_g0, lam_x0=lam_x0)
@@ -389,6 +408,16 @@ class SwitchingNLP:
         if out["success"]:
             self.last = {"w": out["w"], "lam_g": out["lam_g"], "lam_x": out["lam_x"],
                          "pv": np.array(pv, dtype=float)}
+        return out
+
+    def _not_solved(self, w: np.ndarray, pv: np.ndarray, status: str) -> dict[str, Any]:
+        """The result of a solve Ipopt would refuse (``status``), at the start ``w``."""
+        out: dict[str, Any] = {
+            "w": w.copy(), "f": math.nan, "lam_g": np.zeros(self.n_g),
+            "lam_x": np.zeros(self.n_w), "status": status, "success": False, "iterations": 0,
+            "time": 0.0, "path": "ipopt", "ipopt_status": status}
+        out["primal"], out["dual"] = self.kkt(out["w"], out["lam_g"], out["lam_x"], pv)
+        out["complementarity"] = self.complementarity(out["w"], out["lam_g"], out["lam_x"], pv)
         return out
 
     def kkt(self, w: np.ndarray, lam_g: np.ndarray, lam_x: np.ndarray,

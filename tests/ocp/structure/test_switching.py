@@ -464,3 +464,21 @@ def test_compiled_newton_agrees_with_the_python_loop_and_is_built_once():
     np.testing.assert_allclose(fresh.durations, r["w"][:nlp.K], rtol=0, atol=1e-12)
     assert fresh.end_path_violation == pytest.approx(
         nlp.summary(r["w"], pv)["end_violation"], abs=1e-12)
+
+
+def test_an_overconstrained_structure_is_refused_without_building_ipopt(capfd):
+    # the min-time double integrator as one bang arc: 3 unknowns (a duration, x0) and 4
+    # equalities (x0 and the rest at d). Ipopt would refuse it at once; the refinement
+    # says so without building Ipopt (before: built, and CasADi warned on stderr)
+    from tests.oracles.problems import min_time_double_integrator
+
+    p = min_time_double_integrator()
+    sol = MultipleShooting(p, nodes=20).solve({"d": 1.0})
+    r = refine_switching(sol)
+    clear_cache(p)
+    with pytest.raises(SolveError) as err:
+        refine_structure(p, r.modes[:1], r.durations[:1] * 2, r.x0, {"d": 1.0}, fast=False)
+    assert err.value.status == "Not_Enough_Degrees_Of_Freedom"
+    (nlp,) = cached_nlps(p, r.modes[:1])
+    assert nlp.n_solves == 0
+    assert "overconstrained" not in capfd.readouterr().err
