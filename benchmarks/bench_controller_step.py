@@ -45,7 +45,7 @@ def main() -> None:
                          "locked (benchmarks.realtime; needs root or CAP_SYS_NICE)")
     a = ap.parse_args()
     if a.realtime:
-        from benchmarks.realtime import RealtimeUnavailable, enter_realtime
+        from benchmarks.realtime import RealtimeUnavailable, enter_realtime, rest
 
         try:
             print(enter_realtime())
@@ -65,6 +65,8 @@ def main() -> None:
     depths: dict[str, dict[tuple, float]] = {n: {} for n in names}
 
     def land(name: str, case: tuple) -> object:
+        if a.realtime:
+            rest()
         return mpc_landing(case[0], PAPER_ROBOT, true_ground(case[1], case[2]),
                            controller=name, noise=a.noise, delay=a.delay, seed=1,
                            margin=a.margin if name == "bangbang" else 0.0)

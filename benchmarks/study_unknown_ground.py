@@ -28,6 +28,7 @@ import argparse
 import json
 import time
 
+from benchmarks.realtime import RealtimeUnavailable, enter_realtime, rest
 from softlanding.model.terrain import paper_rig_units
 from softlanding.studies.unknown_ground import (
     REALISTIC_DELAY,
@@ -72,8 +73,6 @@ def main() -> None:
                                                                     STUDY_DRAG)
     if a.controllers:
         if a.realtime:
-            from benchmarks.realtime import RealtimeUnavailable, enter_realtime
-
             try:
                 print(enter_realtime())
             except RealtimeUnavailable as err:
@@ -154,7 +153,8 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
     only = {"all": None, "bang-bang": True, "creep": False}[a.cases]
     margins = tuple(float(m) for m in a.margins.split(","))
     rows = controller_study(*grid, period=a.period, noise=a.noise, delay=a.delay,
-                            bang_bang=only, estimator=a.estimator, margins=margins)
+                            bang_bang=only, estimator=a.estimator, margins=margins,
+                            before_landing=rest if a.realtime else None)
     rig = 1e3 * a.period * paper_rig_units().time
     keys = [k for k in rows[0] if k == "exact" or k.startswith("noisy")]
     print(f"sample period {a.period:g} (= {rig:.3g} ms on the paper's rig); noise "

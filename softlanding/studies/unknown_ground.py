@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -164,7 +164,9 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                     period: float = DEFAULT_PERIOD, noise: float = REALISTIC_NOISE,
                     delay: int = REALISTIC_DELAY, margins: Sequence[float] = (0.0, 2.0),
                     seed: int = 0, bang_bang: bool | None = None,
-                    estimator: str = "measured") -> dict[str, Any] | None:
+                    estimator: str = "measured",
+                    before_landing: Callable[[], None] | None = None
+                    ) -> dict[str, Any] | None:
     """One case of the controller study: the clairvoyant optimum, the compiled bang-bang
     controller with exact measurements, and with noisy, delayed ones for each margin.
 
@@ -187,6 +189,9 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
         None, without the landings.
     estimator : str
         The noisy landings' ground estimator (:func:`~softlanding.control.mpc_landing`).
+    before_landing : callable, optional
+        Called before each landing (``benchmarks.realtime.rest``: a real-time benchmark
+        sleeps there, so that the kernel's real-time throttling never falls in a sample).
     """
     clair = solve_landing(v0, robot, ground)
     if bang_bang is not None and (clair.refined is not None) != bang_bang:
@@ -199,6 +204,8 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
     runs.update({f"noisy_m{m:g}": {"noise": noise, "delay": delay, "seed": seed, "margin": m,
                                    "estimator": estimator} for m in margins})
     for key, kw in runs.items():
+        if before_landing is not None:
+            before_landing()
         m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)
         own = [i for i, p in enumerate(m.step_paths) if p.startswith("bangbang")]
         row[key] = {**m.to_dict(), "ratio": m.depth / clair.depth,
