@@ -72,6 +72,7 @@ def export_command(a: argparse.Namespace) -> int:
              "filtered_steps": None if result.filtered is None else {
                  "steps": result.filtered.steps, "weighted": result.filtered.weighted,
                  "recovery": result.filtered.outcomes, "statuses": result.filtered.statuses,
+                 "weight_grid": result.filtered.weights,
                  "max_relative_difference": result.filtered.max_relative}}}
     if a.json:
         print_json(d)

@@ -322,6 +322,8 @@ def test_c_and_python_filtered_steps_agree_with_weights_and_recovery(exported):
     assert r["recovered"] >= 1 and r["recovery deferred"] >= recovery.RECOVERY_SAMPLES, r
     assert r["recovery failed"] >= 1, r
     assert f["statuses"]["deferred"] >= r["recovery deferred"], f
+    # and the weight's edges on a grid: no weight, weighted, the least weight
+    assert all(v >= 50 for v in f["weight_grid"].values()), f["weight_grid"]
 
 
 @pytest.fixture(scope="module")
@@ -333,11 +335,13 @@ def probe_steps():
 
 @needs_cc
 @pytest.mark.parametrize("name,value,changed", [
-    ("FILTERED_REGRESSOR", "0.1000001", "weight"), ("RECOVERY_SAMPLES", "5", "status")])
+    ("FILTERED_REGRESSOR", "0.1000001", "weight"), ("MIN_WEIGHT", "1.000001e-06", "weight"),
+    ("RECOVERY_SAMPLES", "5", "status")])
 def test_the_filtered_step_comparison_sees_a_changed_constant(
         exported_filtered, probe_steps, tmp_path, name, value, changed):
-    # an honest comparison: the weights' allowance off by 1e-6 shows in the weights, one
-    # deferral fewer allowed in the statuses (the probes defer 6 samples in a row)
+    # an honest comparison: the weights' allowance or least weight off by 1e-6 shows in the
+    # weights, one deferral fewer allowed in the statuses (the probes defer 6 samples in a
+    # row)
     folder = exported_filtered[0]
     header = (folder / HEADER).read_text()
     line = re.search(rf"^#define SL_{name} +(\S+)$", header, re.M)
