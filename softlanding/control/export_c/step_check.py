@@ -101,7 +101,8 @@ def recovery_outcome(status: int, M: np.ndarray, before: int, after: int) -> str
     return None
 
 
-def weight_probes(P: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, float, float, float]]:
+def weight_probes(P: np.ndarray
+                  ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, float, float]]:
     """A grid of the weight's inputs: ``(M, F, x, a_f, u)`` for the numbers ``P``, over the
     foot's height (above the surface too) and velocity (at rest too), the ground force
     (negative too), the estimate (negative too) and the filter's covariance (none, small,
