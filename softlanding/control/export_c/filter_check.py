@@ -40,7 +40,7 @@ from softlanding.control.recovery import filtered_step, sample_weight
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 
-#: Samples of one random landing at most.
+#: Samples of one landing at most (the :data:`RECOVERY_PROBES` run whole).
 MAX_SAMPLES = 40
 
 #: Landings every comparison runs first: ``(v0, K, c_d, noise, period)`` (the prior's
