@@ -89,7 +89,8 @@ def main() -> None:
     if find_compiler() is None:
         raise SystemExit("no C compiler (cc, gcc or $CC): nothing to measure")
     r = PAPER_ROBOT
-    calls, _, landings = filtered_calls(r, a.steps)
+    recorded = filtered_calls(r, a.steps)
+    calls, landings = recorded.filter, recorded.landings
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         write_controller(folder, controller_sources(

@@ -68,7 +68,12 @@ def export_command(a: argparse.Namespace) -> int:
              "max_relative_difference": result.max_relative, "statuses": result.statuses,
              "filter": None if fc is None else {
                  "landings": fc.landings, "steps": fc.steps, "plans": fc.plans,
-                 "paths": fc.paths, "max_relative_difference": fc.max_relative}}}
+                 "paths": fc.paths, "max_relative_difference": fc.max_relative},
+             "filtered_steps": None if result.filtered is None else {
+                 "steps": result.filtered.steps, "weighted": result.filtered.weighted,
+                 "recovery": result.filtered.outcomes, "statuses": result.filtered.statuses,
+                 "weight_grid": result.filtered.weights,
+                 "max_relative_difference": result.filtered.max_relative}}}
     if a.json:
         print_json(d)
         return EXIT_OK

@@ -420,17 +420,17 @@ def _export_controller(sub: Any) -> argparse.ArgumentParser:
                                    "durations with a least-squares ground estimator) as C99 "
                                    "source for a robot: DIR/softlanding_controller.c and .h "
                                    "(the step function, the layout of its parameter and memory "
-                                   "arrays, and the foot filter of `mpc --estimator filtered` "
-                                   "for noisy sensors) and README.txt (how to compile and call "
-                                   "it). It "
+                                   "arrays, and the foot filter, per-sample weights and "
+                                   "recovery of `mpc --estimator filtered` for noisy sensors) "
+                                   "and README.txt (how to compile and call it). It "
                                    "needs nothing beyond libm. The robot's and the ground's "
                                    "numbers are runtime parameters (the array P); the options "
                                    "below give the values written as SL_ROBOT_NUMBERS. --check "
                                    "compiles it with the system's C compiler and compares it "
                                    "with the Python controller on 1,000 samples of random "
-                                   "landings, and the filter with the Python filter on 600 "
-                                   "samples of noisy landings (exit 1 unless every output "
-                                   "agrees to 1e-12).")
+                                   "landings, and the filter and the filtered step with the "
+                                   "Python ones on 600 samples of noisy landings (exit 1 "
+                                   "unless every output agrees to 1e-12).")
     e.add_argument("--out", required=True, metavar="DIR",
                    help="folder to write: new or empty, or with --force an existing one whose "
                         "files of the same names are replaced (written in a temporary folder, "
@@ -457,10 +457,12 @@ def _export_controller(sub: Any) -> argparse.ArgumentParser:
                    help="with --noise-std: the estimate the numbers are for. measured: the "
                         "measured force and foot state (default); filtered: the force as "
                         "applied and the foot state from the exported foot filter "
-                        "(sl_filter_step; the estimator's noise then the filtered one's)")
+                        "(sl_filter_step, then sl_filtered_weight and sl_filtered_step; the "
+                        "estimator's noise then the filtered one's)")
     e.add_argument("--check", action="store_true",
                    help="compile the files with the system's C compiler (cc, gcc or $CC) and "
-                        "compare them (controller and foot filter) with the Python ones "
+                        "compare them (controller, foot filter, filtered step) with the Python "
+                        "ones "
                         "before writing them")
     return e
 

@@ -41,6 +41,11 @@ from softlanding.control import bangbang as bb
 from softlanding.control.estimation import GroundEstimate, GroundEstimator, filtered_weight
 from softlanding.control.foot_filter import PROVISIONAL, covariance, filter_step, new_filter
 from softlanding.control.plant import SteppingPlant
+from softlanding.control.recovery import (  # noqa: F401 (mpc.RECOVERY_SAMPLES, as before)
+    RECOVERY_SAMPLES,
+    filtered_step,
+    sample_weight,
+)
 from softlanding.control.state_landing import (
     ground_numbers,
     solve_from_state,
@@ -423,8 +428,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             fit = estimate and (filt is None or samples > PROVISIONAL)
             weight = 1.0
             if fit and filt is not None:
-                weight = filtered_weight(measured, fast.force(a_f, u_meas), fast.theta(),
-                                         covariance(filt), force_var, allowance)
+                weight = sample_weight(fast.P, fast.M, filt, measured, a_f, u_meas)
             status = fast.step(measured, a_f, u_meas, h, fit, weight)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
@@ -655,7 +659,7 @@ class _FastState:
         self.P, self.M, self.active = P, M, active
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
-        self.recover = False  # (:meth:`recovered`: the filtered estimate's)
+        self.recover = False  # (the filtered estimate's weights and recovery: :meth:`step`)
         self.recovering = 0  # samples the full solve has gone on over so far
 
     @classmethod
@@ -680,7 +684,7 @@ class _FastState:
         probe = M.copy()
         bb.control_step(P.copy(), probe, np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0,
                         1e-3 * period, False, *out.ws)
-        if filtered:  # (and the bounded full solve :meth:`recovered` may need: its own
+        if filtered:  # (and the bounded full solve :meth:`step` may need: its own
             # specialisation, the work given; loading it mid-landing took 17 ms)
             bb.solve_plan(P.copy(), M.copy(), np.array([10.0, -1.0, -0.1, -1.0]), *out.ws,
                           float(P[bb.P_WORK]))
@@ -688,63 +692,17 @@ class _FastState:
 
     def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool,
              weight: float = 1.0) -> int:
-        """One compiled sample; the status. ``weight``: the estimate's update weighs the
-        sample so (:func:`~softlanding.control.estimation.filtered_weight`)."""
-        if weight == 1.0 or not estimate:
-            return self.recovered(
-                int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws)), x)
-        # a weighted update is the plain one on the covariance times the weight (the gain is
-        # the same, the covariance comes out times it): scaled in and out around the step,
-        # the noise over its square root meanwhile (the margin's standard deviations)
-        P, M = self.P, self.M
-        noise = P[bb.P_NOISE]
-        M[bb.M_P00] *= weight
-        M[bb.M_P01] *= weight
-        M[bb.M_P11] *= weight
-        P[bb.P_NOISE] = noise / np.sqrt(weight)
-        try:
-            st = int(bb.control_step(P, M, x, a_f, u, h, estimate, *self.ws))
-        finally:
-            P[bb.P_NOISE] = noise
-            M[bb.M_P00] /= weight
-            M[bb.M_P01] /= weight
-            M[bb.M_P11] /= weight
-        return self.recovered(st, x)
-
-    def recovered(self, status: int, x: np.ndarray) -> int:
-        """The filtered estimate's push whose real-time iteration ran out of samples
-        (its Newton steps above a tenth of the period for
-        :data:`~softlanding.control.bangbang.MAX_UNCONVERGED` samples in a row: the plan's
-        ground, the estimate less ``margin`` honest standard deviations, moves every sample
-        as they shrink): the plan solved to convergence from ``x`` instead, and kept if it
-        covers the state (:data:`~softlanding.control.bangbang.OK`), before a fallback. The
-        solve is bounded by :data:`~softlanding.control.bangbang.WORK` integrator steps of
-        its own in a sample (counted in the sample's work, which may then reach twice the
-        bound); one that runs out keeps the plan (the push goes on: ``DEFERRED``) and goes
-        on from its iterate at the next sample, for at most :data:`RECOVERY_SAMPLES`."""
-        M = self.M
-        if not (self.recover and status == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH
-                and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED):
-            return status
-        trial = M.copy()
-        # bounded as a sample's own work (P_WORK more integrator steps, counted in M_WORK:
-        # such a sample may take twice the bound); one that runs out falls back
-        st = int(bb.solve_plan(self.P, trial, np.array(x, float), *self.ws,
-                               float(self.P[bb.P_WORK])))
-        M[bb.M_WORK] = trial[bb.M_WORK]
-        if st == bb.DEFERRED and self.recovering < RECOVERY_SAMPLES:
-            # the bound ran out: the sample keeps its plan (the push goes on), and the next
-            # one goes on from this iterate, from its own state
-            self.recovering += 1
-            M[bb.M_TAU1], M[bb.M_TAU2] = trial[bb.M_TAU1], trial[bb.M_TAU2]
-            M[bb.M_DEFERRED] += 1
-            return bb.DEFERRED
-        self.recovering = 0
-        if st != bb.OK:
-            return status
-        trial[bb.M_UNCONVERGED] = 0
-        M[:] = trial
-        return bb.OK
+        """One compiled sample; the status. With the filtered estimate, ``weight``: the
+        estimate's update weighs the sample so
+        (:func:`~softlanding.control.estimation.filtered_weight`), and a push whose
+        real-time iteration ran out of samples is solved in full, over samples at most
+        :data:`~softlanding.control.recovery.RECOVERY_SAMPLES`
+        (:func:`~softlanding.control.recovery.filtered_step`)."""
+        if not self.recover:  # (the measured estimate: every weight 1, no recovery)
+            return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+        st, self.recovering = filtered_step(self.P, self.M, x, a_f, u, h, estimate, weight,
+                                            self.recovering, *self.ws)
+        return st
 
     def theta(self) -> tuple[float, float]:
         """The compiled estimator's fit ``(K, c_d)``."""
@@ -1052,11 +1010,6 @@ def _prepare(problem: OptimalControlProblem, plan: Any, robot: Robot, model: Gro
         for ipopt in (True, False):  # an Ipopt solve for the active set, then its Newton
             with contextlib.suppress(SolveError, ValueError):
                 refine_structure(problem, modes, durs, x_j, params, ipopt=ipopt)
-
-
-RECOVERY_SAMPLES = 6
-"""Most samples in a row the filtered estimate's bounded full solve may go on over (each
-within the work bound) before the landing falls back."""
 
 
 @lru_cache(maxsize=1)

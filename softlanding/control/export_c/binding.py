@@ -73,7 +73,7 @@ def _ptr(a: np.ndarray) -> int:
 
 
 class CController:
-    """The exported controller's four functions, called through :mod:`ctypes`.
+    """The exported controller's functions, called through :mod:`ctypes`.
 
     Parameters
     ----------
@@ -100,6 +100,10 @@ class CController:
         lib.sl_filter_init.restype = None
         lib.sl_filter_step.argtypes = [p, p, d, d, d, d, d, d]
         lib.sl_filter_step.restype = i
+        lib.sl_filtered_weight.argtypes = [p, p, p, p, d, d]
+        lib.sl_filtered_weight.restype = d
+        lib.sl_filtered_step.argtypes = [p, p, p, d, d, d, i, d, ctypes.POINTER(i)]
+        lib.sl_filtered_step.restype = i
         self.sensor_noise = float(d.in_dll(lib, "SL_SENSOR_NOISE").value)
         self.robot_numbers = np.ctypeslib.as_array(
             (ctypes.c_double * bb.NP).in_dll(lib, "SL_ROBOT_NUMBERS")).copy()
@@ -217,6 +221,49 @@ class CController:
             As :func:`~softlanding.control.foot_filter.filter_step`.
         """
         return bool(self.lib.sl_filter_step(_ptr(F), _ptr(x), g, U1, U2, h, beta, noise))
+
+    def filtered_weight(self, P: np.ndarray, M: np.ndarray, F: np.ndarray, x: np.ndarray,
+                        a_f: float, u: float) -> float:
+        """``sl_filtered_weight`` (as :func:`~softlanding.control.recovery.sample_weight`).
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory before the step.
+        F : array
+            The filter's memory after the sample's filter step.
+        x : array of 4
+            The filtered state.
+        a_f, u : float
+            The measured foot acceleration, the force the sample ended under.
+        """
+        return float(self.lib.sl_filtered_weight(_ptr(P), _ptr(M), _ptr(F), _ptr(x), a_f, u))
+
+    def filtered_step(self, P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float,
+                      u: float, h: float, estimate: bool, weight: float, recovering: int
+                      ) -> tuple[int, int]:
+        """``sl_filtered_step`` (as :func:`~softlanding.control.recovery.filtered_step`): the
+        status and the new count of samples the recovery has gone on over.
+
+        Parameters
+        ----------
+        P, M : array
+            The numbers and the memory, updated in place.
+        x : array of 4
+            The filtered state.
+        a_f, u, h : float
+            The measured foot acceleration, the force the sample ended under, its length.
+        estimate : bool
+            Update the estimate.
+        weight : float
+            The sample's weight.
+        recovering : int
+            Samples the recovery has gone on over so far.
+        """
+        n = ctypes.c_int(recovering)
+        st = self.lib.sl_filtered_step(_ptr(P), _ptr(M), _ptr(x), a_f, u, h, int(estimate),
+                                       weight, ctypes.byref(n))
+        return int(st), int(n.value)
 
 
 __all__ = ["CFLAGS", "CController", "compile_shared", "find_compiler"]

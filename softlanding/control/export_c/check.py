@@ -4,8 +4,8 @@ Both run every recorded call of random landings (:mod:`.samples`) from the same 
 compared are the statuses, ``P`` and ``M`` after every call and the plan's force at three
 times after each, the force of the Python side from
 :func:`~softlanding.optimal.landing.arrest_schedule` (not from the C's formula). The foot
-filter and the plan's force integrals are compared on noisy filtered landings
-(:mod:`.filter_check`).
+filter and the plan's force integrals (:mod:`.filter_check`), and the filtered step's
+weights and recovery (:mod:`.step_check`), are compared on noisy filtered landings.
 """
 
 from __future__ import annotations
@@ -18,9 +18,14 @@ import numpy as np
 
 from softlanding.control import bangbang as bb
 from softlanding.control.export_c.binding import CController, compile_shared
-from softlanding.control.export_c.filter_check import FilterComparison, compare_filter
+from softlanding.control.export_c.filter_check import (
+    FilterComparison,
+    compare_filter,
+    filtered_calls,
+)
 from softlanding.control.export_c.reference import plan_forces, relative_difference
 from softlanding.control.export_c.samples import recorded_calls
+from softlanding.control.export_c.step_check import StepComparison, compare_steps
 from softlanding.errors import ExportError
 from softlanding.model.robot import Robot
 
@@ -45,6 +50,8 @@ class Comparison:
         Status name -> how many calls of the Python controller returned it.
     filter : FilterComparison or None
         The foot filter's and the force integrals' comparison (:mod:`.filter_check`).
+    filtered : StepComparison or None
+        The filtered step's, on the same landings (:mod:`.step_check`).
     """
 
     landings: int = 0
@@ -54,11 +61,13 @@ class Comparison:
         default_factory=lambda: {"status": 0.0, "P": 0.0, "M": 0.0, "force": 0.0})
     statuses: dict[str, int] = field(default_factory=dict)
     filter: FilterComparison | None = None
+    filtered: StepComparison | None = None
 
     def worst(self) -> float:
-        """The largest relative difference of any output (the filter's too)."""
+        """The largest relative difference of any output (the filter's and the filtered
+        step's too)."""
         return max(*self.max_relative.values(),
-                   self.filter.worst() if self.filter is not None else 0.0)
+                   *(r.worst() for r in (self.filter, self.filtered) if r is not None))
 
     def describe(self) -> str:
         """One line: what was compared and how far apart."""
@@ -67,7 +76,8 @@ class Comparison:
                 f"landings, largest relative "
                 f"difference {self.worst():.3g} (force {d['force']:.3g}, P {d['P']:.3g}, M "
                 f"{d['M']:.3g}; statuses {'the same' if d['status'] == 0 else 'differ'})"
-                + (f"; the foot filter: {self.filter.describe()}" if self.filter else ""))
+                + (f"; the foot filter: {self.filter.describe()}" if self.filter else "")
+                + (f"; {self.filtered.describe()}" if self.filtered else ""))
 
 
 def robot_of_numbers(P: np.ndarray) -> Robot:
@@ -129,8 +139,9 @@ def compare(c: CController, n_steps: int = 1000, seed: int = 0) -> Comparison:
 def check_export(folder: Path, n_steps: int = 1000, seed: int = 0,
                  filter_steps: int = 600) -> Comparison:
     """Compile the export in ``folder`` with the system's C compiler (into a temporary
-    folder), :func:`compare` it with the Python controller and its foot filter with the
-    Python filter (:func:`~.filter_check.compare_filter`).
+    folder), :func:`compare` it with the Python controller, its foot filter with the
+    Python filter (:func:`~.filter_check.compare_filter`) and its filtered step with the
+    Python one (:func:`~.step_check.compare_steps`) on the same noisy landings.
 
     Parameters
     ----------
@@ -139,7 +150,7 @@ def check_export(folder: Path, n_steps: int = 1000, seed: int = 0,
     n_steps, seed : int
         As :func:`compare`.
     filter_steps : int
-        Filter steps compared.
+        Filter steps (and filtered steps) compared.
 
     Raises
     ------
@@ -151,7 +162,9 @@ def check_export(folder: Path, n_steps: int = 1000, seed: int = 0,
         lib = compile_shared(Path(folder), Path(tmp) / "libsl.so")
         c = CController(lib)
         result = compare(c, n_steps, seed)
-        result.filter = compare_filter(c, filter_steps, seed)
+        calls = filtered_calls(robot_of_numbers(c.robot_numbers), filter_steps, seed)
+        result.filter = compare_filter(c, filter_steps, seed, calls)
+        result.filtered = compare_steps(c, calls.steps)
     if result.worst() > TOLERANCE:
         raise ExportError(f"the compiled C differs from the Python controller: "
                           f"{result.describe()}")

@@ -1,18 +1,22 @@
-"""The exported C foot filter against the Python (numba) one, on the measurements of random
-noisy landings of the filtered controller (and the plans' force integrals and ground
-estimates on them).
+"""The exported C foot filter and filtered step against the Python (numba) ones, on the
+measurements of random noisy landings of the filtered controller (and the plans' force
+integrals and ground estimates on them).
 
 A landing is the exported robot on a random ground, off the controller's prior, at a random
-impact velocity, sample period and sensor noise, landed as ``mpc_landing(...,
-estimator="filtered")`` lands it with the compiled controller: every sample the plan's
-force over it integrated (:func:`~.reference.plan_force_integrals`), a plant (Runge-Kutta
-steps on the true ground, the force's pieces exact) moved under it, the foot's state and
-acceleration measured with noise, filtered (:func:`~softlanding.control.foot_filter.
-filter_step`), and the control step run on the filtered state and the force as applied
-(its estimate from the third sample on). Every filter call's inputs and every plan's
-integration are recorded, so that the C runs exactly the same ones. Besides the random
-landings, the probes of :data:`PROBES` (a fast impact on a draggy ground, where the
-innovation check widens the prediction) run first.
+impact velocity, sample period, sensor noise and margin, landed as ``mpc_landing(...,
+controller="bangbang", estimator="filtered")`` lands it: every sample the plan's force over
+it integrated (:func:`~.reference.plan_force_integrals`), a plant (Runge-Kutta steps on the
+true ground, the force's pieces exact) moved under it, the foot's state and acceleration
+measured with noise, filtered (:func:`~softlanding.control.foot_filter.filter_step`), and
+the filtered sample run on the filtered state and the force as applied
+(:func:`~softlanding.control.recovery.filtered_step`: the estimate from the third sample on,
+each sample weighed by :func:`~softlanding.control.recovery.sample_weight`; the bounded full
+solve where the push's real-time iteration runs out). Every filter call's and every
+step's inputs and every plan's integration are recorded, so that the C runs exactly the
+same ones. Before the random landings run the probes of :data:`PROBES` (a fast impact on a
+draggy ground, where the innovation check widens the prediction) and of
+:data:`RECOVERY_PROBES` (fast draggy landings whose push needs the bounded full solve, over
+several samples).
 """
 
 from __future__ import annotations
@@ -32,16 +36,25 @@ from softlanding.control.export_c.reference import (
     plan_schedule,
     relative_difference,
 )
+from softlanding.control.recovery import filtered_step, sample_weight
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 
-#: Samples of one landing at most.
+#: Samples of one landing at most (the :data:`RECOVERY_PROBES` run whole).
 MAX_SAMPLES = 40
 
 #: Landings every comparison runs first: ``(v0, K, c_d, noise, period)`` (the prior's
 #: ground the true one): a fast impact on a draggy ground, whose drag transient the
 #: filter's interpolation does not follow (the innovation check's path).
 PROBES = ((-10.0, 0.5, 1.0, 1e-3, 0.01), (-6.0, 0.5, 1.0, 1e-2, 0.01))
+
+#: Landings run after :data:`PROBES`, whole (to the foot's stop): ``(v0, K, c_d)`` of the
+#: true ground, from the prior ``K = 1``, ``c_d = 0`` (``mpc_landing``'s), at sensor noise
+#: :data:`RECOVERY_NOISE`, margin :data:`RECOVERY_MARGIN`, period 0.01: the fast draggy
+#: landings of the controller study whose push needs the bounded full solve.
+RECOVERY_PROBES = ((-6.0, 0.5, 1.0), (-10.0, 0.5, 1.0), (-6.0, 0.75, 1.0),
+                   (-10.0, 0.75, 1.0))
+RECOVERY_NOISE, RECOVERY_MARGIN = 1e-3, 2.0
 
 
 @dataclass(frozen=True)
@@ -98,6 +111,61 @@ class PlanCall:
     U: np.ndarray
 
 
+@dataclass(frozen=True)
+class StepCall:
+    """One sample of the filtered controller: its inputs, as
+    :func:`~softlanding.control.recovery.sample_weight` and
+    :func:`~softlanding.control.recovery.filtered_step` take them.
+
+    Attributes
+    ----------
+    P, M : ndarray
+        The controller's numbers and memory before the step.
+    F : ndarray
+        The filter's memory after the sample's filter step (the weight's covariance).
+    x : ndarray
+        The filtered state.
+    a_f, u, h : float
+        The measured foot acceleration, the force the sample ended under, its length.
+    estimate : bool
+        The estimate's update (no fit from the filter's provisional samples).
+    recovering : int
+        Samples the recovery had gone on over before it.
+    """
+
+    P: np.ndarray
+    M: np.ndarray
+    F: np.ndarray
+    x: np.ndarray
+    a_f: float
+    u: float
+    h: float
+    estimate: bool
+    recovering: int
+
+
+@dataclass
+class LandingCalls:
+    """The recorded calls of noisy filtered landings, in order (:func:`filtered_calls`).
+
+    Attributes
+    ----------
+    filter : list of FilterCall
+        The foot filter's calls.
+    plans : list of PlanCall
+        Every sample's plan integrated over it.
+    steps : list of StepCall
+        The filtered controller's samples.
+    landings : int
+        How many landings they make.
+    """
+
+    filter: list[FilterCall] = field(default_factory=list)
+    plans: list[PlanCall] = field(default_factory=list)
+    steps: list[StepCall] = field(default_factory=list)
+    landings: int = 0
+
+
 def _foot_acc(P: np.ndarray, u: float, xf: float, vf: float, truth: tuple[float, float]
               ) -> float:
     return float(P[bb.P_AF0] + P[bb.P_BF] * u
@@ -137,12 +205,12 @@ def _plant(P: np.ndarray, M: np.ndarray, x: np.ndarray, h: float,
 
 
 def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[float, float],
-             noise: float, period: float, first: float, seed: int,
-             filter_calls: list[FilterCall], plan_calls: list[PlanCall]) -> int:
+             noise: float, period: float, first: float, seed: int, margin: float,
+             max_samples: int, calls: LandingCalls) -> int:
     """One filtered landing (its calls appended); the filter calls it made."""
     u_max = force_limit(robot)
     P = bb.robot_numbers(robot.r_m, robot.s, u_max, *prior,
-                         bb.ground_force_noise(robot.r_m, noise, True), 0.0, period)
+                         bb.ground_force_noise(robot.r_m, noise, True), margin, period)
     M = bb.new_memory(0.1, 0.1, prior, (1.0, 1.0), float(P[bb.P_NOISE]))
     ws = bb.workspace()
     x = np.ascontiguousarray(Impact(v0).initial_state(robot), float)
@@ -151,8 +219,8 @@ def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[f
     rng = np.random.default_rng(seed)
     F = ff.new_filter(x)
     beta = float(P[bb.P_BF])
-    done = 0
-    for sample in range(MAX_SAMPLES):
+    done = recovering = 0
+    for sample in range(max_samples):
         length = (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2]
         # a sample that would pass the plan's foot stop ends there (as mpc_landing's); the
         # first, in some landings, shorter (the impact within a period)
@@ -160,7 +228,7 @@ def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[f
         if h <= 1e-9 * period:
             break
         U1, U2 = U = plan_force_integrals(P, M, h)
-        plan_calls.append(PlanCall(P.copy(), M.copy(), h, U))
+        calls.plans.append(PlanCall(P.copy(), M.copy(), h, U))
         x, u_end = _plant(P, M, x, h, truth)
         if x[3] >= 0.0:  # the foot stopped within the sample
             break
@@ -170,50 +238,51 @@ def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[f
         measured[2] += e[0]
         measured[3] += e[1]
         g = a_f - beta * u_end
-        filter_calls.append(FilterCall(F.copy(), measured.copy(), g, U1, U2, h, beta, noise))
+        calls.filter.append(FilterCall(F.copy(), measured.copy(), g, U1, U2, h, beta, noise))
         ff.filter_step(F, measured, g, U1, U2, h, beta, noise)
         done += 1
         measured[3] = min(measured[3], -1e-9 * max(1.0, abs(v0)))
-        st = int(bb.control_step(P, M, measured, a_f, u_end, h,
-                                 bool(F[ff.F_N] > ff.PROVISIONAL), *ws))
+        fit = bool(F[ff.F_N] > ff.PROVISIONAL)
+        calls.steps.append(StepCall(P.copy(), M.copy(), F.copy(), measured.copy(), a_f, u_end,
+                                    h, fit, recovering))
+        weight = sample_weight(P, M, F, measured, a_f, u_end) if fit else 1.0
+        st, recovering = filtered_step(P, M, measured, a_f, u_end, h, fit, weight,
+                                       recovering, *ws)
         if st not in (bb.OK, bb.CONVERGING, bb.HOLDS, bb.DEFERRED) and not (
                 st == bb.ARREST_FAILS and M[bb.M_PHASE] == bb.PULL):
             break  # a state the controller does not cover: the MPC would take over
     return done
 
 
-def filtered_calls(robot: Robot, n_steps: int, seed: int = 0
-                   ) -> tuple[list[FilterCall], list[PlanCall], int]:
-    """The filter calls of the :data:`PROBES` and random filtered landings of ``robot``,
-    ``n_steps`` in all (the last landing cut there), and their plans' integrations.
+def filtered_calls(robot: Robot, n_steps: int, seed: int = 0) -> LandingCalls:
+    """The calls of the :data:`PROBES`, the :data:`RECOVERY_PROBES` and random filtered
+    landings of ``robot``, ``n_steps`` filter calls in all (the last landing cut there).
 
     Parameters
     ----------
     robot : Robot
         With a force limit.
     n_steps : int
-        Filter calls.
+        Filter calls (and as many filtered steps).
     seed : int
         Of the landings.
-
-    Returns
-    -------
-    filter_calls, plan_calls : lists
-        In order.
-    landings : int
-        How many landings they make.
     """
     rng = np.random.default_rng(seed)
-    fcalls: list[FilterCall] = []
-    pcalls: list[PlanCall] = []
-    landings = 0
+    out = LandingCalls()
+    n_probes = len(PROBES) + len(RECOVERY_PROBES)
     for i in itertools.count():
-        if len(fcalls) >= n_steps:
+        if len(out.filter) >= n_steps:
             break
+        margin, cap = 0.0, MAX_SAMPLES
         if i < len(PROBES):
             v0, k, c_d, noise, period = PROBES[i]
             prior = truth = (k, c_d)
             first = period
+        elif i < n_probes:
+            v0, k, c_d = RECOVERY_PROBES[i - len(PROBES)]
+            prior, truth = (1.0, 0.0), (k, c_d)
+            noise, margin, period, first = RECOVERY_NOISE, RECOVERY_MARGIN, 0.01, 0.01
+            cap = 10 * MAX_SAMPLES  # (whole: the recovery comes late in the push)
         else:
             k = float(np.exp(rng.uniform(np.log(0.3), np.log(3.0))))
             c_d = 0.0 if rng.random() < 0.2 else float(rng.uniform(0.0, 1.0))
@@ -223,9 +292,11 @@ def filtered_calls(robot: Robot, n_steps: int, seed: int = 0
             v0 = float(rng.uniform(-10.0, -0.5))
             period = float(rng.uniform(0.005, 0.03))
             first = period * float(rng.uniform(0.3, 1.0)) if rng.random() < 0.2 else period
-        landings += bool(_landing(robot, v0, prior, truth, noise, period, first,
-                                  seed * 100_003 + i, fcalls, pcalls))
-    return fcalls[:n_steps], pcalls, landings
+            margin = float(rng.choice([0.0, 2.0]))
+        out.landings += bool(_landing(robot, v0, prior, truth, noise, period, first,
+                                      seed * 100_003 + i, margin, cap, out))
+    del out.filter[n_steps:], out.steps[n_steps:]
+    return out
 
 
 @dataclass
@@ -289,7 +360,8 @@ def filter_path(F: np.ndarray, h: float) -> str:
     return "quadratic" if same else "chord"
 
 
-def compare_filter(c: CController, n_steps: int = 600, seed: int = 0) -> FilterComparison:
+def compare_filter(c: CController, n_steps: int = 600, seed: int = 0,
+                   calls: LandingCalls | None = None) -> FilterComparison:
     """Run the filter calls of :func:`filtered_calls` through both filters and the plans'
     force integrals through ``sl_force_integrals`` and the Python schedule, and compare.
 
@@ -301,11 +373,16 @@ def compare_filter(c: CController, n_steps: int = 600, seed: int = 0) -> FilterC
         Filter steps.
     seed : int
         Of the landings.
+    calls : LandingCalls, optional
+        :func:`filtered_calls` of the export's robot, ``n_steps`` and ``seed`` (made if not
+        given).
     """
     r = c.robot_numbers
     robot = Robot(r_m=float(r[bb.P_RM]), s=float(r[bb.P_S]), u_max=float(r[bb.P_UMAX]))
-    fcalls, pcalls, landings = filtered_calls(robot, n_steps, seed)
-    out = FilterComparison(landings=landings, steps=len(fcalls), plans=len(pcalls))
+    if calls is None:
+        calls = filtered_calls(robot, n_steps, seed)
+    fcalls, pcalls = calls.filter, calls.plans
+    out = FilterComparison(landings=calls.landings, steps=len(fcalls), plans=len(pcalls))
     est = GroundEstimator(robot)
     got: dict[str, list[np.ndarray]] = {"F": [], "x": [], "widened": [], "force integrals": [],
                                         "estimate": []}
@@ -336,5 +413,6 @@ def compare_filter(c: CController, n_steps: int = 600, seed: int = 0) -> FilterC
     return out
 
 
-__all__ = ["MAX_SAMPLES", "PROBES", "FilterCall", "FilterComparison", "PlanCall",
+__all__ = ["MAX_SAMPLES", "PROBES", "RECOVERY_MARGIN", "RECOVERY_NOISE", "RECOVERY_PROBES",
+           "FilterCall", "FilterComparison", "LandingCalls", "PlanCall", "StepCall",
            "compare_filter", "filter_path", "filtered_calls"]

@@ -1,7 +1,9 @@
 """The numbers the exported C takes from the Python controller: the layout of ``P`` and
 ``M``, the phases, statuses and tolerances of :mod:`softlanding.control.bangbang`, the
 layout of the foot filter's memory ``F`` and its constants
-(:mod:`softlanding.control.foot_filter`), and the Dormand-Prince coefficients of
+(:mod:`softlanding.control.foot_filter`), the filtered estimate's weight and recovery
+constants (:mod:`softlanding.control.estimation`, :mod:`softlanding.control.recovery`), and
+the Dormand-Prince coefficients of
 :mod:`softlanding.simulation.kernel.dop853`, as C text.
 
 Every index is read from :mod:`~softlanding.control.bangbang` (its ``P_*`` and ``M_*``
@@ -17,6 +19,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from softlanding.control import bangbang as bb
+from softlanding.control import estimation, recovery
 from softlanding.control import foot_filter as ff
 from softlanding.simulation.kernel import dop853
 
@@ -93,6 +96,12 @@ STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "
             "CREEP", "DEFERRED")
 CONSTANTS = ("PUSH", "PULL", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL", "PLAN_HOLDS_TOL",
              "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED", "MARCHED", "SPENT")
+
+#: The filtered estimate's constants: ``(module, name)``, written ``SL_<name>``
+#: (``sl_filtered_weight``'s allowance and least weight, ``sl_filtered_step``'s bound on the
+#: samples in a row its recovery goes on over).
+FILTERED_CONSTANTS = ((bb, "FILTERED_REGRESSOR"), (estimation, "MIN_WEIGHT"),
+                      (recovery, "RECOVERY_SAMPLES"))
 
 
 def c_double(v: float) -> str:
@@ -178,6 +187,16 @@ def filter_constant_lines() -> list[str]:
     return lines
 
 
+def filtered_constant_lines() -> list[str]:
+    """``#define`` lines of :data:`FILTERED_CONSTANTS`."""
+    lines = []
+    for module, name in FILTERED_CONSTANTS:
+        v = getattr(module, name)
+        value = str(v) if type(v) is int else c_double(v)
+        lines.append(f"#define SL_{name:<18} {value}")
+    return lines
+
+
 def _array(values: Iterable[float]) -> str:
     return "{" + ", ".join(c_double(v) for v in values) + "}"
 
@@ -205,6 +224,6 @@ def robot_lines(P: np.ndarray) -> list[str]:
     return [f"    {c_double(v)},  /* {names[i]} */" for i, v in enumerate(P)]
 
 
-__all__ = ["CONSTANTS", "FILTER_CONSTANTS", "F_DOC", "M_DOC", "P_DOC", "STATUSES", "c_double",
-           "constant_lines", "dop853_text", "filter_constant_lines", "indices", "layout_lines",
-           "robot_lines"]
+__all__ = ["CONSTANTS", "FILTERED_CONSTANTS", "FILTER_CONSTANTS", "F_DOC", "M_DOC", "P_DOC",
+           "STATUSES", "c_double", "constant_lines", "dop853_text", "filter_constant_lines",
+           "filtered_constant_lines", "indices", "layout_lines", "robot_lines"]

@@ -21,6 +21,7 @@ from softlanding.control.export_c.layout import (
     constant_lines,
     dop853_text,
     filter_constant_lines,
+    filtered_constant_lines,
     layout_lines,
     robot_lines,
 )
@@ -76,7 +77,8 @@ def controller_sources(P: np.ndarray, robot_text: str,
         **common, "GUARD": "SOFTLANDING_CONTROLLER_H",
         "P_LAYOUT": "\n".join(layout_lines("P_")), "M_LAYOUT": "\n".join(layout_lines("M_")),
         "CONSTANTS": "\n".join(constant_lines()), "F_LAYOUT": "\n".join(layout_lines("F_")),
-        "FILTER_CONSTANTS": "\n".join(filter_constant_lines())})
+        "FILTER_CONSTANTS": "\n".join(filter_constant_lines()),
+        "FILTERED_CONSTANTS": "\n".join(filtered_constant_lines())})
     source = _fill(_template("controller.c.in"), {
         **common, "DOP853": dop853_text(), "ROBOT": "\n".join(robot_lines(P)),
         "SENSOR_NOISE": c_double(sensor_noise)})

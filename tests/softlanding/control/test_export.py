@@ -1,8 +1,8 @@
 """The controller exported as C (``softlanding export-controller``): its numbers against the
 Python modules', compiled with the system's C compiler and compared with the numba
-controller on 1,000 samples of random landings and with the numba foot filter on 600
-samples of noisy landings, C programs that follow the README, and the command's bad input
-and output folder."""
+controller on 1,000 samples of random landings and with the numba foot filter and the
+filtered step (weights, recovery) on 600 samples of noisy landings, C programs that follow
+the README, and the command's bad input and output folder."""
 
 import contextlib
 import io
@@ -15,13 +15,15 @@ import pytest
 
 from softlanding.cli import main
 from softlanding.control import bangbang as bb
+from softlanding.control import estimation, recovery
 from softlanding.control import foot_filter as ff
 from softlanding.control.estimation import GroundEstimator
 from softlanding.control.export_c import layout
 from softlanding.control.export_c.binding import CFLAGS, CController, compile_shared, find_compiler
 from softlanding.control.export_c.check import TOLERANCE, compare, plan_forces
-from softlanding.control.export_c.filter_check import PROBES, compare_filter
+from softlanding.control.export_c.filter_check import PROBES, compare_filter, filtered_calls
 from softlanding.control.export_c.reference import ground_estimate, plan_force_integrals
+from softlanding.control.export_c.step_check import compare_steps
 from softlanding.control.export_c.writer import HEADER, README, SOURCE
 from softlanding.model.robot import PAPER_ROBOT
 from softlanding.simulation.kernel import dop853
@@ -261,6 +263,13 @@ def test_the_header_holds_the_filters_numbers(exported_filtered):
         bb.ground_force_noise(r.r_m, NOISE)
     src = (folder / SOURCE).read_text()
     assert re.search(r"const double SL_SENSOR_NOISE = (\S+);", src).group(1) == "0.001"
+    # the filtered estimate's weights and recovery: from the Python modules
+    for module, name in layout.FILTERED_CONSTANTS:
+        assert float(got[name]) == getattr(module, name)
+    assert {name for _, name in layout.FILTERED_CONSTANTS} == {
+        "FILTERED_REGRESSOR", "MIN_WEIGHT", "RECOVERY_SAMPLES"}
+    assert (int(got["RECOVERY_SAMPLES"]), float(got["MIN_WEIGHT"])) == (
+        recovery.RECOVERY_SAMPLES, estimation.MIN_WEIGHT)
 
 
 def test_a_filter_entry_the_export_does_not_describe_fails_the_export(monkeypatch):
@@ -301,14 +310,65 @@ def test_the_filter_comparison_sees_a_changed_constant(exported_filtered, tmp_pa
     assert result.max_relative["F"] > 1e-9 and result.max_relative["force integrals"] == 0
 
 
+@needs_cc
+def test_c_and_python_filtered_steps_agree_with_weights_and_recovery(exported):
+    f = exported[1]["check"]["filtered_steps"]
+    assert f["steps"] == 600 and all(v <= TOLERANCE for v in
+                                     f["max_relative_difference"].values()), f
+    # weighted samples, and the bounded full solve: converged, deferred over samples, and
+    # given up after RECOVERY_SAMPLES deferred in a row (the fast draggy probes)
+    assert f["weighted"] >= 300, f
+    r = f["recovery"]
+    assert r["recovered"] >= 1 and r["recovery deferred"] >= recovery.RECOVERY_SAMPLES, r
+    assert r["recovery failed"] >= 1, r
+    assert f["statuses"]["deferred"] >= r["recovery deferred"], f
+    # and the weight's edges on a grid: no weight, weighted, the least weight
+    assert all(v >= 50 for v in f["weight_grid"].values()), f["weight_grid"]
+
+
+@pytest.fixture(scope="module")
+def probe_steps():
+    """The filtered samples of the probes' landings (the fast draggy ones whose push needs
+    the bounded full solve among them)."""
+    return filtered_calls(PAPER_ROBOT, 260).steps
+
+
+@needs_cc
+@pytest.mark.parametrize("name,value,changed", [
+    ("FILTERED_REGRESSOR", "0.1000001", "weight"),
+    pytest.param("MIN_WEIGHT", "1.000001e-06", "weight", marks=pytest.mark.slow),
+    ("RECOVERY_SAMPLES", "5", "status")])
+def test_the_filtered_step_comparison_sees_a_changed_constant(
+        exported_filtered, probe_steps, tmp_path, name, value, changed):
+    # an honest comparison: the weights' allowance or least weight off by 1e-6 shows in the
+    # weights, one deferral fewer allowed in the statuses (the probes defer 6 samples in a
+    # row)
+    folder = exported_filtered[0]
+    header = (folder / HEADER).read_text()
+    line = re.search(rf"^#define SL_{name} +(\S+)$", header, re.M)
+    python = {n: getattr(m, n) for m, n in layout.FILTERED_CONSTANTS}
+    assert line and float(line.group(1)) == python[name] != float(value)
+    mutant = tmp_path / "mutant"
+    mutant.mkdir()
+    (mutant / HEADER).write_text(header.replace(line.group(0),
+                                                line.group(0).replace(line.group(1), value)))
+    (mutant / SOURCE).write_text((folder / SOURCE).read_text())
+    c = CController(compile_shared(mutant, tmp_path / "mutant.so"))
+    result = compare_steps(c, probe_steps)
+    assert result.outcomes["recovery deferred"] >= 6 and result.outcomes["recovery failed"]
+    assert result.max_relative[changed] > 1e-9, result.max_relative
+    if changed == "status":  # (the weights do not depend on it)
+        assert result.max_relative["weight"] == 0
+
+
 FILTER_C = """
 #include <stdio.h>
 #include <string.h>
 #include "softlanding_controller.h"
 int main(void) {
     double P[SL_NP], M[SL_NM], F[SL_NF], U[2], x[4] = {10.0, -3.0, 0.0, -3.0}, e[3], E[4];
-    double h, u, a_f;
-    int st, k, j, widened;
+    double h, u, a_f, w;
+    int st, k, j, widened, fit, recovering = 0;
     memcpy(P, SL_ROBOT_NUMBERS, sizeof P);
     h = P[SL_P_PERIOD];
     sl_new_memory(M, 0.1, 0.1, P[SL_P_K], P[SL_P_CD], 1.0, 1.0, P[SL_P_NOISE]);
@@ -331,10 +391,12 @@ int main(void) {
         a_f += e[2];
         widened = sl_filter_step(F, x, a_f - P[SL_P_BF] * u, U[0], U[1], h, P[SL_P_BF],
                                  SL_SENSOR_NOISE);
-        st = sl_control_step(P, M, x, a_f, u, h, F[SL_F_N] > SL_FILTER_PROVISIONAL);
+        fit = F[SL_F_N] > SL_FILTER_PROVISIONAL;
+        w = fit ? sl_filtered_weight(P, M, F, x, a_f, u) : 1.0;
+        st = sl_filtered_step(P, M, x, a_f, u, h, fit, w, &recovering);
         sl_ground_estimate(P, M, E);
-        printf("%d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g\\n", st, widened, x[2],
-               x[3], M[SL_M_TAU1], M[SL_M_TAU2], E[0], E[1], E[2], E[3]);
+        printf("%d %d %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %d\\n", st, widened,
+               x[2], x[3], M[SL_M_TAU1], M[SL_M_TAU2], E[0], E[1], E[2], E[3], w, recovering);
     }
     return 0;
 }
@@ -346,6 +408,7 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
     folder = exported_filtered[0]
     readme = (folder / README).read_text()
     assert "sl_filter_step(F, x, a_f - P[SL_P_BF] * u, U[0], U[1], h, P[SL_P_BF]," in readme
+    assert "st = sl_filtered_step(P, M, x, a_f, u, h, fit, w, &recovering);" in readme
     (tmp_path / "robot.c").write_text(FILTER_C)
     exe = tmp_path / "robot"
     subprocess.run([*find_compiler(), *CFLAGS, "-pedantic", "-Wall", "-Werror", "-I",
@@ -353,7 +416,8 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
                     str(folder / SOURCE), "-lm"], check=True)
     got = [[float(v) for v in ln.split()] for ln in subprocess.run(
         [str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()]
-    # the same in Python: the numba controller and filter, the Python schedule's integrals
+    # the same in Python: the numba controller and filter, the Python schedule's integrals,
+    # the filtered sample of control.recovery
     r = PAPER_ROBOT
     P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, bb.ground_force_noise(r.r_m, NOISE, True))
     M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
@@ -362,6 +426,7 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
     F = ff.new_filter(x)
     est = GroundEstimator(r)
     want = []
+    recovering = 0
     for k in range(12):
         U = plan_force_integrals(P, M, h)
         u = float(plan_forces(P, M, h))
@@ -377,19 +442,26 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
         G = F.copy()  # (without the innovation check: differs where it widened)
         ff.filter_step(G, x.copy(), a_f - P[bb.P_BF] * u, U[0], U[1], h, P[bb.P_BF], 0.0)
         ff.filter_step(F, x, a_f - P[bb.P_BF] * u, U[0], U[1], h, P[bb.P_BF], NOISE)
-        st = bb.control_step(P, M, x, a_f, u, h, bool(F[ff.F_N] > ff.PROVISIONAL), *ws)
+        fit = bool(F[ff.F_N] > ff.PROVISIONAL)
+        w = recovery.sample_weight(P, M, F, x, a_f, u) if fit else 1.0
+        st, recovering = recovery.filtered_step(P, M, x, a_f, u, h, fit, w, recovering, *ws)
         want.append([st, float(not np.array_equal(F, G)), x[2], x[3], M[bb.M_TAU1],
-                     M[bb.M_TAU2], *ground_estimate(P, M, est)])
+                     M[bb.M_TAU2], *ground_estimate(P, M, est), w, recovering])
     assert len(want) == 12 and got == want
     assert {w[0] for w in want} <= {bb.OK, bb.CONVERGING, bb.HOLDS}
     assert want[1][6] == 1.0 and want[2][6] != 1.0  # no fit from the provisional samples
     assert want[-1][8] < 0.1 * want[1][8]  # the estimate's uncertainty fell
+    assert all(w[10] < 1 for w in want[2:])  # the fit's samples weighed by the filter's error
 
 
 @pytest.mark.slow
 @needs_cc
-def test_c_and_numba_filters_agree_on_5000_more_samples(exported, tmp_path):
+def test_c_and_numba_filters_and_filtered_steps_agree_on_5000_more_samples(exported, tmp_path):
     c = CController(compile_shared(exported[0], tmp_path / "lib.so"))
-    result = compare_filter(c, 5000, seed=1)
+    calls = filtered_calls(PAPER_ROBOT, 5000, seed=1)
+    result = compare_filter(c, 5000, 1, calls)
     assert result.steps == 5000 and result.worst() == 0.0, result.describe()
     assert result.paths["widened"] >= 100 and result.paths["redo"] >= 100, result.paths
+    steps = compare_steps(c, calls.steps)  # and the filtered step on them
+    assert steps.steps == 5000 and steps.worst() == 0.0, steps.describe()
+    assert steps.weighted >= 2500 and steps.outcomes["recovered"] >= 1, steps.describe()

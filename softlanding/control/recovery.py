@@ -1,0 +1,129 @@
+"""One sample of the compiled controller with the filtered estimate, as
+``mpc_landing(..., controller="bangbang", estimator="filtered")`` runs it: the sample's
+weight in the regression, the weighted step, and the bounded full solve that recovers a push
+whose real-time iteration ran out of samples.
+
+Pure functions of the controller's arrays (no state of their own: the count of samples the
+recovery has gone on over is an argument and a result), so that the exported C
+(``sl_filtered_weight``, ``sl_filtered_step`` of ``softlanding export-controller``) mirrors
+them operation by operation and its check runs both from the same inputs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from softlanding.control import bangbang as bb
+from softlanding.control.estimation import filtered_weight
+from softlanding.control.foot_filter import covariance
+
+#: Most samples in a row the filtered estimate's bounded full solve may go on over (each
+#: within the work bound) before the landing falls back.
+RECOVERY_SAMPLES = 6
+
+
+def sample_weight(P: np.ndarray, M: np.ndarray, F: np.ndarray, x: np.ndarray, a_f: float,
+                  u: float) -> float:
+    """The filtered regression's weight of a sample
+    (:func:`~softlanding.control.estimation.filtered_weight`): the sample's ground force from
+    the foot's acceleration under the applied force, the estimate in ``M`` before it, the
+    foot filter's covariance, one force's variance from the acceleration's noise
+    (``1 / P[P_GF]^2``) and the allowance
+    :data:`~softlanding.control.bangbang.FILTERED_REGRESSOR`.
+
+    Parameters
+    ----------
+    P, M : array
+        The controller's numbers and memory (before the step).
+    F : array
+        The foot filter's memory after this sample's filter step.
+    x : array of 4
+        The filtered state (``v_f < 0``).
+    a_f : float
+        The foot's measured acceleration.
+    u : float
+        The force the sample ended under (as applied).
+    """
+    force = float((a_f - P[bb.P_AF0] - P[bb.P_BF] * u) / P[bb.P_GF])
+    return filtered_weight(x, force, (float(M[bb.M_TH0]), float(M[bb.M_TH1])), covariance(F),
+                           1.0 / float(P[bb.P_GF]) ** 2, bb.FILTERED_REGRESSOR)
+
+
+def filtered_step(P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: float,
+                  h: float, estimate: bool, weight: float, recovering: int, K: np.ndarray,
+                  W: np.ndarray) -> tuple[int, int]:
+    """One sample of the compiled controller with the filtered estimate; the status and the
+    new count of samples the recovery has gone on over.
+
+    The estimate's update weighs the sample by ``weight`` (at most 1: :func:`sample_weight`):
+    a weighted update is the plain one on the covariance times the weight (the gain is the
+    same, the covariance comes out times it), so the covariance ``M[M_P00..M_P11]`` is
+    scaled by it around :func:`~softlanding.control.bangbang.control_step`, and the noise
+    ``P[P_NOISE]`` by ``1 / sqrt(weight)`` meanwhile (the margin's standard deviations).
+
+    Then the recovery: a push whose real-time iteration ran out of samples (its Newton steps
+    above a tenth of the period for :data:`~softlanding.control.bangbang.MAX_UNCONVERGED`
+    samples in a row: the plan's ground, the estimate less ``margin`` standard deviations,
+    moves every sample as they shrink) is solved to convergence from ``x``
+    (:func:`~softlanding.control.bangbang.solve_plan` on a copy of ``M``) and kept if it
+    covers the state (:data:`~softlanding.control.bangbang.OK`, ``M_UNCONVERGED`` reset),
+    before a fallback. The solve is bounded by ``P[P_WORK]`` integrator steps of its own
+    (counted in ``M[M_WORK]``, which may then reach twice the bound); one that runs out
+    keeps the plan (the push goes on: :data:`~softlanding.control.bangbang.DEFERRED`,
+    counted in ``M_DEFERRED``) and goes on from its iterate at the next sample, for at most
+    :data:`RECOVERY_SAMPLES` samples in a row.
+
+    Parameters
+    ----------
+    P, M : array
+        The controller's numbers and memory, updated in place.
+    x : array of 4
+        The filtered state.
+    a_f, u, h : float
+        The foot's measured acceleration, the force the sample ended under, its length.
+    estimate : bool
+        Update the estimate (no fit from the filter's provisional samples).
+    weight : float
+        The sample's weight in the estimate (1: the plain step).
+    recovering : int
+        Samples the recovery has gone on over so far (0 at impact).
+    K, W : array
+        :func:`~softlanding.control.bangbang.workspace`.
+    """
+    if weight == 1.0 or not estimate:
+        st = int(bb.control_step(P, M, x, a_f, u, h, estimate, K, W))
+    else:
+        noise = P[bb.P_NOISE]
+        M[bb.M_P00] *= weight
+        M[bb.M_P01] *= weight
+        M[bb.M_P11] *= weight
+        P[bb.P_NOISE] = noise / np.sqrt(weight)
+        try:
+            st = int(bb.control_step(P, M, x, a_f, u, h, estimate, K, W))
+        finally:
+            P[bb.P_NOISE] = noise
+            M[bb.M_P00] /= weight
+            M[bb.M_P01] /= weight
+            M[bb.M_P11] /= weight
+    if not (st == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH
+            and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED):
+        return st, recovering
+    trial = M.copy()
+    # bounded as a sample's own work (P_WORK more integrator steps, counted in M_WORK: such
+    # a sample may take twice the bound)
+    solved = int(bb.solve_plan(P, trial, np.array(x, float), K, W, float(P[bb.P_WORK])))
+    M[bb.M_WORK] = trial[bb.M_WORK]
+    if solved == bb.DEFERRED and recovering < RECOVERY_SAMPLES:
+        # the bound ran out: the sample keeps its plan (the push goes on), and the next one
+        # goes on from this iterate, from its own state
+        M[bb.M_TAU1], M[bb.M_TAU2] = trial[bb.M_TAU1], trial[bb.M_TAU2]
+        M[bb.M_DEFERRED] += 1
+        return bb.DEFERRED, recovering + 1
+    if solved != bb.OK:
+        return st, 0
+    trial[bb.M_UNCONVERGED] = 0
+    M[:] = trial
+    return bb.OK, 0
+
+
+__all__ = ["RECOVERY_SAMPLES", "filtered_step", "sample_weight"]
