@@ -704,15 +704,6 @@ class _FastState:
                                             self.recovering, *self.ws)
         return st
 
-    def theta(self) -> tuple[float, float]:
-        """The compiled estimator's fit ``(K, c_d)``."""
-        return float(self.M[bb.M_TH0]), float(self.M[bb.M_TH1])
-
-    def force(self, a_f: float, u: float) -> float:
-        """The ground force a foot acceleration implies under the force ``u``."""
-        P = self.P
-        return float((a_f - P[bb.P_AF0] - P[bb.P_BF] * u) / P[bb.P_GF])
-
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The plan's force from now: push until the switch, pull until the foot's stop,
         then the arrest of the body and its weight (from the plan's state at the stop)."""
