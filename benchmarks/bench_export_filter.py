@@ -31,13 +31,11 @@ from __future__ import annotations
 import argparse
 import ctypes
 import os
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats
+from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats, timed_library
 
 TIMER_C = CLOCKS_C + """
 int sl_timed_filter(double *F, double *x, double g, double U1, double U2, double h,
@@ -79,25 +77,14 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=600, help="filter steps (default 600)")
     ap.add_argument("--repeats", type=int, default=5, help="passes over them (default 5)")
     a = ap.parse_args()
-    from softlanding.control import bangbang as bb
     from softlanding.control import foot_filter as ff
-    from softlanding.control.export_c.binding import compile_shared, find_compiler
     from softlanding.control.export_c.filter_check import filtered_calls
-    from softlanding.control.export_c.writer import controller_sources, write_controller
     from softlanding.model.robot import PAPER_ROBOT
 
-    if find_compiler() is None:
-        raise SystemExit("no C compiler (cc, gcc or $CC): nothing to measure")
+    lib = timed_library(TIMER_C, 1e-3)
     r = PAPER_ROBOT
     recorded = filtered_calls(r, a.steps)
     calls, landings = recorded.filter, recorded.landings
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        write_controller(folder, controller_sources(
-            bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0), "the paper's robot", 1e-3))
-        (folder / "timer.c").write_text(TIMER_C)
-        lib = ctypes.CDLL(str(compile_shared(folder, folder / "lib.so",
-                                             (str(folder / "timer.c"),))))
     vp, d = ctypes.c_void_p, ctypes.c_double
     lib.sl_timed_filter.argtypes = [vp, vp, d, d, d, d, d, d, vp]
     lib.sl_timed_filter.restype = ctypes.c_int

@@ -30,13 +30,11 @@ from __future__ import annotations
 import argparse
 import ctypes
 import os
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-from benchmarks.c_timing import CLOCKS_C, stats
+from benchmarks.c_timing import CLOCKS_C, stats, timed_library
 
 TIMER_C = CLOCKS_C + """
 int sl_timed_plain(double *P, double *M, const double *x, double a_f, double u, double h,
@@ -73,25 +71,15 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5, help="passes over them (default 5)")
     a = ap.parse_args()
     from softlanding.control import bangbang as bb
-    from softlanding.control.export_c.binding import compile_shared, find_compiler
     from softlanding.control.export_c.filter_check import filtered_calls
     from softlanding.control.export_c.step_check import recovery_outcome
-    from softlanding.control.export_c.writer import controller_sources, write_controller
     from softlanding.control.recovery import filtered_step, sample_weight
     from softlanding.model.robot import PAPER_ROBOT
 
-    if find_compiler() is None:
-        raise SystemExit("no C compiler (cc, gcc or $CC): nothing to measure")
+    lib = timed_library(TIMER_C, 1e-3)
     r = PAPER_ROBOT
     recorded = filtered_calls(r, a.steps)
     calls = recorded.steps
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        write_controller(folder, controller_sources(
-            bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0), "the paper's robot", 1e-3))
-        (folder / "timer.c").write_text(TIMER_C)
-        lib = ctypes.CDLL(str(compile_shared(folder, folder / "lib.so",
-                                             (str(folder / "timer.c"),))))
     vp, d, i = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
     lib.sl_timed_plain.argtypes = [vp, vp, vp, d, d, d, i, vp]
     lib.sl_timed_plain.restype = i

@@ -27,13 +27,11 @@ from __future__ import annotations
 import argparse
 import ctypes
 import os
-import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats
+from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats, timed_library
 
 TIMER_C = CLOCKS_C + """
 int sl_timed_step(double *P, double *M, const double *x, double a_f, double u, double h,
@@ -56,25 +54,15 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5, help="passes over them (default 5)")
     a = ap.parse_args()
     from softlanding.control import bangbang as bb
-    from softlanding.control.export_c.binding import compile_shared, find_compiler
     from softlanding.control.export_c.samples import recorded_calls
-    from softlanding.control.export_c.writer import controller_sources, write_controller
     from softlanding.control.mpc import DEFAULT_PERIOD
     from softlanding.model.robot import PAPER_ROBOT
     from softlanding.model.terrain import paper_rig_units
 
-    if find_compiler() is None:
-        raise SystemExit("no C compiler (cc, gcc or $CC): nothing to measure")
+    lib = timed_library(TIMER_C)
     r = PAPER_ROBOT
     calls, landings = recorded_calls(r, a.samples)
     steps = [k for k in calls if not k.first]
-    with tempfile.TemporaryDirectory() as tmp:
-        folder = Path(tmp)
-        write_controller(folder, controller_sources(
-            bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0), "the paper's robot"))
-        (folder / "timer.c").write_text(TIMER_C)
-        lib = ctypes.CDLL(str(compile_shared(folder, folder / "lib.so",
-                                             (str(folder / "timer.c"),))))
     vp, d = ctypes.c_void_p, ctypes.c_double
     lib.sl_timed_step.argtypes = [vp, vp, vp, d, d, d, ctypes.c_int, vp]
     lib.sl_timed_step.restype = ctypes.c_int
