@@ -440,7 +440,9 @@ class Transcription:
         given; ``expand`` overrides the transcription's for this solver only (mesh
         refinement's warm rounds, where building the expanded graph costs more than the
         few iterations it would speed up)."""
-        if expand is not None:
+        if self.codegen:
+            expanded = False  # Ipopt calls the compiled functions, whatever graph made them
+        elif expand is not None:
             expanded = bool(expand)
         elif self.expand == "auto":
             expanded = self._uses[warm] > 0  # a re-solve: the expanded graph pays back

@@ -61,7 +61,8 @@ class Solution:
         objective and multipliers here are unscaled.
     expanded : bool
         Whether Ipopt evaluated the NLP's SX-expanded graph (the transcription's
-        ``expand``; with ``"auto"``, from its second solve of a kind on).
+        ``expand``; with ``"auto"``, from its second solve of a kind on; False with
+        ``codegen=True``: compiled functions).
     path_violation : float
         Largest violation of a path constraint or state bound found on a fine
         grid between the nodes (relative to ``max(1, |bound|)``); ``verified``

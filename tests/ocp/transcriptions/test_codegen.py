@@ -25,6 +25,8 @@ def test_compiled_nlp_solves_as_the_uncompiled_one_and_is_cached(cache):
     assert sol.success and sol.iterations == plain.iterations
     assert sol.objective == pytest.approx(plain.objective, rel=1e-12)
     assert abs(sol.w - plain.w).max() < 1e-10
+    # a re-solve runs the same compiled functions: no expanded solver is built for it
+    assert tr.solve().expanded is False and len(tr._solvers) == 1
     libs = sorted(cache.glob("nlp-*.so"))
     assert len(libs) == 1 and not list(cache.glob(".gen-*"))  # no temporary left
     stamp = libs[0].stat().st_mtime_ns
