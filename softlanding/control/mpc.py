@@ -447,10 +447,12 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             believed = planned_for = est.estimate.ground() if est.samples >= 2 else model
             t0, c0 = time.perf_counter(), time.process_time()
             try:
-                plan = solve_from_state(robot, believed, measured)
+                x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
+                                            sensor.delay, period, plant.t, stop)
+                plan = solve_from_state(robot, believed, x_act)
                 paths.append(f"fallback ({bb.STATUS_NAMES[status]})")
-                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
-                elapsed = 0.0
+                issued.append((plant.t + lead, _schedule(plan, robot), _plan_time(plan)))
+                elapsed = -lead
                 replans += 1
             except SolveError:
                 raise_if_interrupted()
@@ -470,11 +472,13 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 if e.samples >= 2:
                     believed = e.ground()
             try:
-                plan = solve_from_state(robot, believed, measured)
-                elapsed, planned_for = 0.0, believed
+                x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
+                                            sensor.delay, period, plant.t, stop)
+                plan = solve_from_state(robot, believed, x_act)
+                elapsed, planned_for = -lead, believed
                 replans += 1
                 paths.append("fallback (retried)")
-                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
+                issued.append((plant.t + lead, _schedule(plan, robot), _plan_time(plan)))
             except SolveError:
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 fallbacks += 1
@@ -502,14 +506,23 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             issued.append(issued[-1])
             continue
         try:
-            plan, path = _replan(problem, plan, elapsed + h, robot, believed, measured,
+            x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
+                                        sensor.delay, period, plant.t, stop)
+        except SolveError:  # the foot stops before a new plan could act: the last goes on
+            x_act, lead = None, 0.0
+        try:
+            if x_act is None:
+                raise SolveError("stops", message="the foot stops within the delay")
+            plan, path = _replan(problem, plan, elapsed + h + lead, robot, believed, x_act,
                                  planned_for)
-            elapsed, planned_for = 0.0, believed
+            elapsed, planned_for = -lead, believed
         except SolveError:  # no structure near the last one fits: transcribe and refine anew
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             try:
-                plan = _transcribed_plan(plan, elapsed + h, robot, believed, measured)
-                elapsed, path, planned_for = 0.0, "transcription", believed
+                if x_act is None:
+                    raise SolveError("stops", message="the foot stops within the delay")
+                plan = _transcribed_plan(plan, elapsed + h + lead, robot, believed, x_act)
+                elapsed, path, planned_for = -lead, "transcription", believed
                 replans += 1
             except SolveError:  # keep the last plan for this sample
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
@@ -854,6 +867,34 @@ def _plan_holds(robot: Robot, impact: Impact, schedule: Any, h: float, x_before:
         return False
     scale = max(1.0, float(np.max(np.abs(x))))
     return bool(np.max(np.abs(predicted - x)) <= PLAN_HOLDS_TOL * scale)
+
+
+def _at_actuation(robot: Robot, impact: Impact, issued: list, x: np.ndarray,
+                  believed: Ground, delay: int, period: float, t: float,
+                  stop: float) -> tuple[np.ndarray, float]:
+    """Where a control computed now starts to act, and how long from now: the measured
+    state ``x`` carried over the ``delay`` samples of the commands already issued (each
+    ``(origin, schedule, stop)``, the last ``delay`` of ``issued`` in flight) on the
+    believed ground; ``(x, 0)`` without delay.
+
+    Raises
+    ------
+    ocp.SolveError
+        The foot stops within the delay (no plan from there).
+    """
+    x = np.array(x, float)
+    n = len(issued)
+    for j in range(delay):
+        origin, command, _ = issued[max(0, n - delay + j)]
+        try:
+            x = simulate(robot, impact, _shifted(command, t + j * period - origin), believed,
+                         x0=x, t_max=period, energy=False).trajectory(t_end=period,
+                                                                      n=2).x[-1]
+        except RestNotProvenError as err:  # (the foot stopped and rests within the sample)
+            raise SolveError("stops", message="the foot stops within the delay") from err
+        if not x[3] < -stop:
+            raise SolveError("stops", message="the foot stops within the delay")
+    return x, delay * period
 
 
 def _plan_time(plan: Any) -> float:
