@@ -628,17 +628,24 @@ class Sensor:
         ForceSchedule or FeedbackSchedule
             The arrest's force from the sample on.
         """
-        if self.noise == 0.0 and x[1] < 0:
-            return arrest_schedule(x, r_m)
         stroke = float(x[0] - x[2])
+        # a body so slow that braking over the whole stroke outlasts ARREST_TIME brakes over
+        # what it covers in that time (its force above the weight m_b |v_b| / ARREST_TIME:
+        # 3e-4 of it at v_b = -0.02)
+        brake = 0.5 * abs(float(x[1])) * ARREST_TIME
+        if self.noise == 0.0 and x[1] < 0:
+            x_e = np.array(x, float)
+            x_e[0] = min(x_e[0], x_e[2] + brake)
+            return arrest_schedule(x_e, r_m)
         reserve = min(ARREST_RESERVE * self.noise, 0.5 * stroke)
         x_r = np.array(x, float)
         x_r[0] -= reserve  # the arrest sees the stroke less the reserve
+        x_r[0] = min(x_r[0], x_r[2] + brake) if x[1] < 0 else x_r[0]
         tail = arrest_schedule(x_r, r_m)
         assert isinstance(tail, ForceSchedule)
         w = r_m / (1 + r_m)
         # where the arrest stops the body (the reserve left), or where it is
-        end = reserve if x[1] < 0 and stroke - reserve > 0 else stroke
+        end = stroke - (x_r[0] - x_r[2]) if x[1] < 0 and stroke - reserve > 0 else stroke
         times, forces = tail.times, tail.values[:-1]
         if x[1] > 0 and self.noise > 0:
             # a body still rising (a re-planned creep's pull may leave it so): no force until
@@ -656,6 +663,10 @@ class Sensor:
 #: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
 #: arrest.
 ARREST_RESERVE = 3.0
+#: The longest braking of the arrest (paper time units, 26 s on the paper's rig): a tenth of
+#: the simulation's horizon, within which its rest is proven. A body slower than
+#: ``2 stroke / ARREST_TIME`` (0.04 over the paper's whole stroke) brakes over a part of it.
+ARREST_TIME = 1000.0
 #: ``k_p, k_d`` of the damped hold of the stroke after a noisy arrest (per unit of the
 #: paper's force; critically damped for the body's mass ``r_m/(1+r_m)`` about 5/6).
 HOLD_GAINS = (1.0, 2.0)
@@ -1123,6 +1134,6 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     return found if isinstance(found, Solution) else _checked(found)
 
 
-__all__ = ["ARREST_RESERVE", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS", "HOLD_GAINS",
-           "MAX_PERIOD", "MIN_PERIOD", "MPCLanding", "Sensor",
+__all__ = ["ARREST_RESERVE", "ARREST_TIME", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS",
+           "HOLD_GAINS", "MAX_PERIOD", "MIN_PERIOD", "MPCLanding", "Sensor",
            "check_model", "check_period", "mpc_landing"]
