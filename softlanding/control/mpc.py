@@ -647,7 +647,7 @@ class Sensor:
         # where the arrest stops the body (the reserve left), or where it is
         end = stroke - (x_r[0] - x_r[2]) if x[1] < 0 and stroke - reserve > 0 else stroke
         times, forces = tail.times, tail.values[:-1]
-        if x[1] > 0 and self.noise > 0:
+        if x[1] > 0:
             # a body still rising (a re-planned creep's pull may leave it so): no force until
             # its weight alone stops it, then the hold at that stroke (held where it is, the
             # damped hold would brake it by pushing the foot into ground at its capacity)
