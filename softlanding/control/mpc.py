@@ -43,6 +43,7 @@ from softlanding.control.foot_filter import PROVISIONAL, covariance, filter_step
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.state_landing import (
     ground_numbers,
+    plan_schedule,
     solve_from_state,
     state_landing_problem,
     state_parameters,
@@ -58,9 +59,7 @@ from softlanding.optimal.landing import (
     T_MAX,
     affine_laws,
     arrest_schedule,
-    landing_schedule,
     solve_landing,
-    transcribed_schedule,
 )
 from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
@@ -958,10 +957,9 @@ def _force(schedule: Any, t: float, x: np.ndarray) -> float:
 
 def _schedule(plan: Any, robot: Robot) -> ForceSchedule | FeedbackSchedule:
     """A plan's open-loop control: refined arcs, or a transcription's steps (a structure that
-    is not bang-bang, e.g. a singular creep to the depth that holds the robot's weight)."""
-    if isinstance(plan, Solution):
-        return transcribed_schedule(plan, robot.r_m, force_limit(robot))
-    return landing_schedule(plan, robot.r_m)
+    is not bang-bang, e.g. a singular creep to the depth that holds the robot's weight), and
+    the body's arrest, or its coast if it still rises (:func:`plan_schedule`)."""
+    return plan_schedule(plan, robot)
 
 
 def _replan(problem: OptimalControlProblem, plan: Any, applied: float, robot: Robot,

@@ -332,12 +332,40 @@ def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
     ocp.SolveError
         No plan from this state.
     """
-    plan = solve_from_state(robot, ground, x, guess=guess)
+    return plan_schedule(solve_from_state(robot, ground, x, guess=guess), robot)
+
+
+def plan_schedule(plan: RefinedSwitching | Solution,
+                  robot: Robot) -> ForceSchedule | FeedbackSchedule:
+    """A state-started plan's open-loop control: its refined arcs (or the transcription's
+    steps), then, for a body descending at the foot's stop, the arrest force until it
+    stops and its weight (:func:`~softlanding.optimal.landing.landing_schedule`); for a
+    body still rising there (:data:`COAST`), no force until its weight stops it (``v_b``
+    later: its acceleration is -1), then its weight.
+
+    Parameters
+    ----------
+    plan : RefinedSwitching or ocp.Solution
+        What :func:`solve_from_state` returned.
+    robot : Robot
+        The robot (with a force limit).
+    """
     if isinstance(plan, Solution):
-        return transcribed_schedule(plan, robot.r_m, force_limit(robot))
-    return landing_schedule(plan, robot.r_m)
+        out = transcribed_schedule(plan, robot.r_m, force_limit(robot))
+        x_t, t_stop = np.asarray(plan.x[-1], float), float(plan.T)
+    else:
+        out = landing_schedule(plan, robot.r_m)
+        x_t, t_stop = np.asarray(plan.xT, float), float(np.sum(plan.durations))
+    if not x_t[1] > 0:
+        return out
+    # (no arrest arc: the weight's piece starts at the foot's stop)
+    times = (*out.times, t_stop + float(x_t[1]))
+    if isinstance(out, ForceSchedule):
+        return ForceSchedule(times, (*out.values[:-1], 0.0, out.values[-1]))
+    return FeedbackSchedule(times, (*out.gains[:-1], (0.0,) * 5, out.gains[-1]))
 
 
 __all__ = ["COAST", "STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "StatePlan",
-           "StateStarted", "ground_numbers", "plan_from_state", "solve_from_state",
+           "StateStarted", "ground_numbers", "plan_from_state", "plan_schedule",
+           "solve_from_state",
            "state_landing_problem", "state_parameters", "state_transcription"]

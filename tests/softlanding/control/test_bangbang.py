@@ -170,13 +170,17 @@ def test_a_re_plan_lets_a_rising_body_coast_instead_of_digging_for_its_arrest():
     # hold the force that would stop the body were it descending, and crept the foot to
     # 2.05 for it; a rising body needs only its weight (it coasts up, held at its top). The
     # plan stops the foot at d = 1/K = 2 with the body rising; an independent check: the
-    # exact simulator runs the coast and the hold from there to rest, the foot stays put
-    from softlanding.control.state_landing import solve_from_state
+    # exact simulator runs the plan's schedule (its coast, then the weight) from the state
+    # to rest, and the exact arrest's coast and hold from the plan's end
+    from softlanding.control.state_landing import plan_schedule, solve_from_state
 
     r, ground = PAPER_ROBOT, linear_or_drag(0.5, 0.2)
     x = np.array([10.17095, 2.0056, -1.711046, -6.15694])
-    x_t = solve_from_state(r, ground, x).trajectory(2).x[-1]
+    plan = solve_from_state(r, ground, x)
+    x_t = plan.trajectory(2).x[-1]
     assert -x_t[2] == pytest.approx(2.0, rel=1e-6) and x_t[1] > 0.5
+    res = simulate(r, -1.0, plan_schedule(plan, r), ground, x0=x)
+    assert res.rest_proven and res.stroke_held and res.depth == pytest.approx(2.0, rel=1e-6)
     tail = Sensor().arrest(x_t, r.r_m, r.s)
     res = simulate(r, -1.0, tail, ground, x0=x_t, t_max=100.0)
     assert res.rest_proven and res.stroke_held
