@@ -341,7 +341,7 @@ def plan_schedule(plan: RefinedSwitching | Solution,
     steps), then, for a body descending at the foot's stop, the arrest force until it
     stops and its weight (:func:`~softlanding.optimal.landing.landing_schedule`); for a
     body still rising there (:data:`COAST`), no force until its weight stops it (``v_b``
-    later: its acceleration is -1), then its weight.
+    later: its acceleration is -1), then its weight (damped after a transcription).
 
     Parameters
     ----------
@@ -351,8 +351,10 @@ def plan_schedule(plan: RefinedSwitching | Solution,
         The robot (with a force limit).
     """
     if isinstance(plan, Solution):
-        out = transcribed_schedule(plan, robot.r_m, force_limit(robot))
         x_t, t_stop = np.asarray(plan.x[-1], float), float(plan.T)
+        # (a rising body's coast ends with the transcription's error in its velocity, which
+        # the weight alone would carry through the stroke: its hold is damped)
+        out = transcribed_schedule(plan, robot.r_m, force_limit(robot), damped=x_t[1] > 0)
     else:
         out = landing_schedule(plan, robot.r_m)
         x_t, t_stop = np.asarray(plan.xT, float), float(np.sum(plan.durations))
