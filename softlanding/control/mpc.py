@@ -301,7 +301,10 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         this level, so its standard deviations are the estimate's uncertainty.
     delay : int
         Samples between a measurement and the actuation of the control computed from it
-        (0: at once); until then the last control computed goes on.
+        (0: at once); until then the last control computed goes on. A re-plan (the
+        re-planning MPC's, or the compiled controller's fallback) starts from the state
+        where it will act: the measured one carried over the delay under the commands in
+        flight, on the believed ground.
     seed : int
         The noise's random seed.
     margin : float
@@ -608,9 +611,10 @@ class Sensor:
         less a reserve of ``ARREST_RESERVE`` standard deviations of the foot's position (a
         measured stroke may be long), then the weight with a damped hold of the stroke
         where the body stopped (the open-loop weight alone would let a velocity the noise
-        left drift the body forever). A body that no longer descends (the end of a creep,
-        where the foot stops with the body rising by rounding) gets that damped hold where
-        it is, with exact measurements too.
+        left drift the body forever). A body that no longer descends (the end of a creep)
+        coasts up at no force to its top, if that is within ``stroke_max``, and gets that
+        damped hold there, with exact measurements too. A body so slow that braking over
+        the whole stroke would outlast :data:`ARREST_TIME` brakes within it.
 
         Parameters
         ----------
