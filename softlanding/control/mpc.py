@@ -48,6 +48,7 @@ from softlanding.control.recovery import (  # noqa: F401 (mpc.RECOVERY_SAMPLES, 
 )
 from softlanding.control.state_landing import (
     ground_numbers,
+    plan_schedule,
     solve_from_state,
     state_landing_problem,
     state_parameters,
@@ -63,9 +64,7 @@ from softlanding.optimal.landing import (
     T_MAX,
     affine_laws,
     arrest_schedule,
-    landing_schedule,
     solve_landing,
-    transcribed_schedule,
 )
 from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
@@ -307,7 +306,10 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         this level, so its standard deviations are the estimate's uncertainty.
     delay : int
         Samples between a measurement and the actuation of the control computed from it
-        (0: at once); until then the last control computed goes on.
+        (0: at once); until then the last control computed goes on. A re-plan (the
+        re-planning MPC's, or the compiled controller's fallback) starts from the state
+        where it will act: the measured one carried over the delay under the commands in
+        flight, on the believed ground.
     seed : int
         The noise's random seed.
     margin : float
@@ -451,10 +453,12 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             believed = planned_for = est.estimate.ground() if est.samples >= 2 else model
             t0, c0 = time.perf_counter(), time.process_time()
             try:
-                plan = solve_from_state(robot, believed, measured)
+                x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
+                                            sensor.delay, period, plant.t, stop)
+                plan = solve_from_state(robot, believed, x_act)
                 paths.append(f"fallback ({bb.STATUS_NAMES[status]})")
-                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
-                elapsed = 0.0
+                issued.append((plant.t + lead, _schedule(plan, robot), _plan_time(plan)))
+                elapsed = -lead
                 replans += 1
             except SolveError:
                 raise_if_interrupted()
@@ -474,11 +478,13 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 if e.samples >= 2:
                     believed = e.ground()
             try:
-                plan = solve_from_state(robot, believed, measured)
-                elapsed, planned_for = 0.0, believed
+                x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
+                                            sensor.delay, period, plant.t, stop)
+                plan = solve_from_state(robot, believed, x_act)
+                elapsed, planned_for = -lead, believed
                 replans += 1
                 paths.append("fallback (retried)")
-                issued.append((plant.t, _schedule(plan, robot), _plan_time(plan)))
+                issued.append((plant.t + lead, _schedule(plan, robot), _plan_time(plan)))
             except SolveError:
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 fallbacks += 1
@@ -506,14 +512,23 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             issued.append(issued[-1])
             continue
         try:
-            plan, path = _replan(problem, plan, elapsed + h, robot, believed, measured,
+            x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
+                                        sensor.delay, period, plant.t, stop)
+        except SolveError:  # the foot stops before a new plan could act: the last goes on
+            x_act, lead = None, 0.0
+        try:
+            if x_act is None:
+                raise SolveError("stops", message="the foot stops within the delay")
+            plan, path = _replan(problem, plan, elapsed + h + lead, robot, believed, x_act,
                                  planned_for)
-            elapsed, planned_for = 0.0, believed
+            elapsed, planned_for = -lead, believed
         except SolveError:  # no structure near the last one fits: transcribe and refine anew
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             try:
-                plan = _transcribed_plan(plan, elapsed + h, robot, believed, measured)
-                elapsed, path, planned_for = 0.0, "transcription", believed
+                if x_act is None:
+                    raise SolveError("stops", message="the foot stops within the delay")
+                plan = _transcribed_plan(plan, elapsed + h + lead, robot, believed, x_act)
+                elapsed, path, planned_for = -lead, "transcription", believed
                 replans += 1
             except SolveError:  # keep the last plan for this sample
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
@@ -600,9 +615,10 @@ class Sensor:
         less a reserve of ``ARREST_RESERVE`` standard deviations of the foot's position (a
         measured stroke may be long), then the weight with a damped hold of the stroke
         where the body stopped (the open-loop weight alone would let a velocity the noise
-        left drift the body forever). A body that no longer descends (the end of a creep,
-        where the foot stops with the body rising by rounding) gets that damped hold where
-        it is, with exact measurements too.
+        left drift the body forever). A body that no longer descends (the end of a creep)
+        coasts up at no force to its top, if that is within ``stroke_max``, and gets that
+        damped hold there, with exact measurements too. A body so slow that braking over
+        the whole stroke would outlast :data:`ARREST_TIME` brakes within it.
 
         Parameters
         ----------
@@ -619,19 +635,26 @@ class Sensor:
         ForceSchedule or FeedbackSchedule
             The arrest's force from the sample on.
         """
-        if self.noise == 0.0 and x[1] < 0:
-            return arrest_schedule(x, r_m)
         stroke = float(x[0] - x[2])
+        # a body so slow that braking over the whole stroke outlasts ARREST_TIME brakes over
+        # what it covers in that time (its force above the weight m_b |v_b| / ARREST_TIME:
+        # 3e-4 of it at v_b = -0.02)
+        brake = 0.5 * abs(float(x[1])) * ARREST_TIME
+        if self.noise == 0.0 and x[1] < 0:
+            x_e = np.array(x, float)
+            x_e[0] = min(x_e[0], x_e[2] + brake)
+            return arrest_schedule(x_e, r_m)
         reserve = min(ARREST_RESERVE * self.noise, 0.5 * stroke)
         x_r = np.array(x, float)
         x_r[0] -= reserve  # the arrest sees the stroke less the reserve
+        x_r[0] = min(x_r[0], x_r[2] + brake) if x[1] < 0 else x_r[0]
         tail = arrest_schedule(x_r, r_m)
         assert isinstance(tail, ForceSchedule)
         w = r_m / (1 + r_m)
         # where the arrest stops the body (the reserve left), or where it is
-        end = reserve if x[1] < 0 and stroke - reserve > 0 else stroke
+        end = stroke - (x_r[0] - x_r[2]) if x[1] < 0 and stroke - reserve > 0 else stroke
         times, forces = tail.times, tail.values[:-1]
-        if x[1] > 0 and self.noise > 0:
+        if x[1] > 0:
             # a body still rising (a re-planned creep's pull may leave it so): no force until
             # its weight alone stops it, then the hold at that stroke (held where it is, the
             # damped hold would brake it by pushing the foot into ground at its capacity)
@@ -647,6 +670,10 @@ class Sensor:
 #: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
 #: arrest.
 ARREST_RESERVE = 3.0
+#: The longest braking of the arrest (paper time units, 26 s on the paper's rig): a tenth of
+#: the simulation's horizon, within which its rest is proven. A body slower than
+#: ``2 stroke / ARREST_TIME`` (0.04 over the paper's whole stroke) brakes over a part of it.
+ARREST_TIME = 1000.0
 #: ``k_p, k_d`` of the damped hold of the stroke after a noisy arrest (per unit of the
 #: paper's force; critically damped for the body's mass ``r_m/(1+r_m)`` about 5/6).
 HOLD_GAINS = (1.0, 2.0)
@@ -805,6 +832,34 @@ def _plan_holds(robot: Robot, impact: Impact, schedule: Any, h: float, x_before:
     return bool(np.max(np.abs(predicted - x)) <= PLAN_HOLDS_TOL * scale)
 
 
+def _at_actuation(robot: Robot, impact: Impact, issued: list, x: np.ndarray,
+                  believed: Ground, delay: int, period: float, t: float,
+                  stop: float) -> tuple[np.ndarray, float]:
+    """Where a control computed now starts to act, and how long from now: the measured
+    state ``x`` carried over the ``delay`` samples of the commands already issued (each
+    ``(origin, schedule, stop)``, the last ``delay`` of ``issued`` in flight) on the
+    believed ground; ``(x, 0)`` without delay.
+
+    Raises
+    ------
+    ocp.SolveError
+        The foot stops within the delay (no plan from there).
+    """
+    x = np.array(x, float)
+    n = len(issued)
+    for j in range(delay):
+        origin, command, _ = issued[max(0, n - delay + j)]
+        try:
+            x = simulate(robot, impact, _shifted(command, t + j * period - origin), believed,
+                         x0=x, t_max=period, energy=False).trajectory(t_end=period,
+                                                                      n=2).x[-1]
+        except RestNotProvenError as err:  # (the foot stopped and rests within the sample)
+            raise SolveError("stops", message="the foot stops within the delay") from err
+        if not x[3] < -stop:
+            raise SolveError("stops", message="the foot stops within the delay")
+    return x, delay * period
+
+
 def _plan_time(plan: Any) -> float:
     """When the plan has the foot stop (from its start)."""
     return float(plan.T if isinstance(plan, Solution) else np.sum(plan.durations))
@@ -855,10 +910,9 @@ def _force(schedule: Any, t: float, x: np.ndarray) -> float:
 
 def _schedule(plan: Any, robot: Robot) -> ForceSchedule | FeedbackSchedule:
     """A plan's open-loop control: refined arcs, or a transcription's steps (a structure that
-    is not bang-bang, e.g. a singular creep to the depth that holds the robot's weight)."""
-    if isinstance(plan, Solution):
-        return transcribed_schedule(plan, robot.r_m, force_limit(robot))
-    return landing_schedule(plan, robot.r_m)
+    is not bang-bang, e.g. a singular creep to the depth that holds the robot's weight), and
+    the body's arrest, or its coast if it still rises (:func:`plan_schedule`)."""
+    return plan_schedule(plan, robot)
 
 
 def _replan(problem: OptimalControlProblem, plan: Any, applied: float, robot: Robot,
@@ -1026,6 +1080,6 @@ def _transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     return found if isinstance(found, Solution) else _checked(found)
 
 
-__all__ = ["ARREST_RESERVE", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS", "HOLD_GAINS",
-           "MAX_PERIOD", "MIN_PERIOD", "MPCLanding", "Sensor",
+__all__ = ["ARREST_RESERVE", "ARREST_TIME", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS",
+           "HOLD_GAINS", "MAX_PERIOD", "MIN_PERIOD", "MPCLanding", "Sensor",
            "check_model", "check_period", "mpc_landing"]

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, ClassVar
 
+import casadi as ca
 import numpy as np
 
 from ocp import MultipleShooting, OptimalControlProblem, Solution, Trajectory
@@ -25,6 +26,8 @@ from softlanding.model.dynamics import STATE_NAMES
 from softlanding.model.ground import DragGround, Ground, LinearGround
 from softlanding.model.robot import Robot
 from softlanding.optimal.landing import (
+    ARREST,
+    ARREST_FORCE,
     affine_laws,
     landing_schedule,
     landing_stance,
@@ -33,11 +36,15 @@ from softlanding.optimal.landing import (
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_switching
 from softlanding.optimal.pipeline import PhasedVariant, solve_phased
+from softlanding.optimal.stance_phases import crater_capacity
 
 STATE_NODES = 60
 """Shooting intervals of :func:`state_transcription` (the MPC's re-plan of last resort and
 :func:`plan_from_state`): 30 are hardly faster (Ipopt's iterations dominate) and land one
 creep 15 % deeper."""
+
+COAST = "a rising body coasts to its top within the stroke"
+"""The state-started landing's condition on a body still rising at the foot's stop."""
 
 STATE_PARAMETERS = ("r_m", "s", "u_max", "stiffness", "c_d", "x_b0", "v_b0", "x_f0", "v_f0")
 """The parameters of :func:`state_landing_problem`, in order."""
@@ -86,7 +93,21 @@ def state_landing_problem() -> OptimalControlProblem:
     for n in STATE_NAMES:
         p.state(n)
     r_m, s, u_max, k, c_d, *x0 = (p.parameter(n) for n in STATE_PARAMETERS)
-    landing_stance(p, r_m, s, u_max, ParametricGround(k, c_d))
+    ground = ParametricGround(k, c_d)
+    landing_stance(p, r_m, s, u_max, ground, omit=(ARREST, ARREST_FORCE))
+    # the body's arrest at the foot's stop as the landing's, for a descending body; a body
+    # still rising (a state a re-plan may start from, after a push too long for the true
+    # ground) needs no force beyond its weight: it coasts up at no force (-1 its
+    # acceleration, the foot resting under its own weight) and is held at its top, which
+    # must be within the stroke. (The landing's own condition, on v_b^2, asked the crater
+    # to hold the force that would stop it were it descending: the foot crept deeper.)
+    x = p.x
+    stroke, down, up = x[0] - x[2], ca.fmin(x[1], 0.0), ca.fmax(x[1], 0.0)
+    ub_stroke = r_m / (1 + r_m) * (stroke + down ** 2 / 2)
+    p.terminal_constraint(stroke * (crater_capacity(x, ground) - 1 / (1 + r_m)) - ub_stroke,
+                          0, ca.inf, name=ARREST)
+    p.terminal_constraint(stroke * u_max - ub_stroke, 0, ca.inf, name=ARREST_FORCE)
+    p.terminal_constraint(s - stroke - up ** 2 / 2, 0, ca.inf, name=COAST)
     for i, n in enumerate(STATE_NAMES):
         p.initial_constraint(p.x[i] - x0[i], 0.0, name=f"{n}(0) measured")
     return p
@@ -311,12 +332,42 @@ def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
     ocp.SolveError
         No plan from this state.
     """
-    plan = solve_from_state(robot, ground, x, guess=guess)
+    return plan_schedule(solve_from_state(robot, ground, x, guess=guess), robot)
+
+
+def plan_schedule(plan: RefinedSwitching | Solution,
+                  robot: Robot) -> ForceSchedule | FeedbackSchedule:
+    """A state-started plan's open-loop control: its refined arcs (or the transcription's
+    steps), then, for a body descending at the foot's stop, the arrest force until it
+    stops and its weight (:func:`~softlanding.optimal.landing.landing_schedule`); for a
+    body still rising there (:data:`COAST`), no force until its weight stops it (``v_b``
+    later: its acceleration is -1), then its weight (damped after a transcription).
+
+    Parameters
+    ----------
+    plan : RefinedSwitching or ocp.Solution
+        What :func:`solve_from_state` returned.
+    robot : Robot
+        The robot (with a force limit).
+    """
     if isinstance(plan, Solution):
-        return transcribed_schedule(plan, robot.r_m, force_limit(robot))
-    return landing_schedule(plan, robot.r_m)
+        x_t, t_stop = np.asarray(plan.x[-1], float), float(plan.T)
+        # (a rising body's coast ends with the transcription's error in its velocity, which
+        # the weight alone would carry through the stroke: its hold is damped)
+        out = transcribed_schedule(plan, robot.r_m, force_limit(robot), damped=x_t[1] > 0)
+    else:
+        out = landing_schedule(plan, robot.r_m)
+        x_t, t_stop = np.asarray(plan.xT, float), float(np.sum(plan.durations))
+    if not x_t[1] > 0:
+        return out
+    # (no arrest arc: the weight's piece starts at the foot's stop)
+    times = (*out.times, t_stop + float(x_t[1]))
+    if isinstance(out, ForceSchedule):
+        return ForceSchedule(times, (*out.values[:-1], 0.0, out.values[-1]))
+    return FeedbackSchedule(times, (*out.gains[:-1], (0.0,) * 5, out.gains[-1]))
 
 
-__all__ = ["STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "StatePlan", "StateStarted",
-           "ground_numbers", "plan_from_state", "solve_from_state", "state_landing_problem",
-           "state_parameters", "state_transcription"]
+__all__ = ["COAST", "STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "StatePlan",
+           "StateStarted", "ground_numbers", "plan_from_state", "plan_schedule",
+           "solve_from_state",
+           "state_landing_problem", "state_parameters", "state_transcription"]

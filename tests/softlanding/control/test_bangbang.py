@@ -152,6 +152,60 @@ def test_a_creep_holds_every_limit_the_re_planning_mpc_holds(v0, k, c):
     assert fast.depth == pytest.approx(slow.depth, rel=1e-4)
 
 
+def test_a_delayed_creep_re_plans_from_where_its_control_acts():
+    # the creep above with exact measurements and one sample of delay: a re-plan made from
+    # the measured state acted a sample later, so its last pull ran past the foot's stop
+    # and lifted the foot off the crater (it fell back 0.07 deeper: 1.141); planned from
+    # the state where it acts (the commands in flight carried over the delay), the foot
+    # stops at d = 1/K, where the crater holds the robot's weight (no landing stops above)
+    fast = mpc_landing(-1, PAPER_ROBOT, linear_or_drag(2.0, 1.0), controller="bangbang",
+                       delay=1)
+    assert fast.feasible and fast.uncovered == 1
+    assert 0.5 * (1 - 1e-9) <= fast.depth <= 0.5 * (1 + 1e-3)
+
+
+def test_a_re_plan_lets_a_rising_body_coast_instead_of_digging_for_its_arrest():
+    # the state the noisy creep v0 = -1, K = 0.5, c_d = 0.2 fell back at (the push went on
+    # too long: the body rising at 2.0, the foot at -6.2): the re-plan asked the crater to
+    # hold the force that would stop the body were it descending, and crept the foot to
+    # 2.05 for it; a rising body needs only its weight (it coasts up, held at its top). The
+    # plan stops the foot at d = 1/K = 2 with the body rising; an independent check: the
+    # exact simulator runs the plan's schedule (its coast, then the weight) from the state
+    # to rest, and the exact arrest's coast and hold from the plan's end
+    from softlanding.control.state_landing import plan_schedule, solve_from_state
+
+    r, ground = PAPER_ROBOT, linear_or_drag(0.5, 0.2)
+    x = np.array([10.17095, 2.0056, -1.711046, -6.15694])
+    plan = solve_from_state(r, ground, x)
+    x_t = plan.trajectory(2).x[-1]
+    assert -x_t[2] == pytest.approx(2.0, rel=1e-6) and x_t[1] > 0.5
+    res = simulate(r, -1.0, plan_schedule(plan, r), ground, x0=x)
+    assert res.rest_proven and res.stroke_held and res.depth == pytest.approx(2.0, rel=1e-6)
+    tail = Sensor().arrest(x_t, r.r_m, r.s)
+    res = simulate(r, -1.0, tail, ground, x0=x_t, t_max=100.0)
+    assert res.rest_proven and res.stroke_held
+    assert res.depth == pytest.approx(2.0, rel=1e-6)
+    assert res.stroke_max == pytest.approx(x_t[0] - x_t[2] + 0.5 * x_t[1] ** 2, rel=1e-6)
+
+
+@pytest.mark.parametrize("noise,v_b", [(0.0, -2e-6), (1e-3, -3e-4)])
+def test_the_arrest_of_a_slow_body_ends_within_the_simulations_horizon(noise, v_b):
+    # a creep's foot stopped with the body all but at rest: braking it over the whole
+    # stroke at the least force took 1e7 (exact) or 6e4 (noisy) time units, beyond the
+    # simulation's horizon (rest not proven); within ARREST_TIME, the exact arrest's force
+    # is the weight times 1 + |v_b| / ARREST_TIME, and the foot stays where the weight
+    # holds it (K d = 1.0004)
+    r, ground = PAPER_ROBOT, LinearGround(2.0)
+    x = np.array([9.97, v_b, -0.5002, 0.0])
+    res = simulate(r, -1.0, Sensor(noise).arrest(x, r.r_m, r.s), ground, x0=x)
+    assert res.rest_proven and res.stroke_held and res.depth == pytest.approx(0.5002)
+    if noise == 0:
+        from softlanding.control.mpc import ARREST_TIME
+
+        w = r.r_m / (1 + r.r_m)
+        assert res.u_peak == pytest.approx(w * (1 + abs(v_b) / ARREST_TIME), rel=1e-12)
+
+
 def test_the_compiled_plan_of_a_creep_is_not_covered():
     # the push-pull plan from the creep's state after a few samples, on the true ground:
     # Newton converges (the arrest condition holds at the foot's stop) with the body rising
