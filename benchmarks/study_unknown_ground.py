@@ -56,9 +56,10 @@ def main() -> None:
                     help="the controller study (bang-bang, exact and noisy) instead")
     ap.add_argument("--noise", type=float, default=REALISTIC_NOISE)
     ap.add_argument("--delay", type=int, default=REALISTIC_DELAY)
-    ap.add_argument("--estimator", choices=("measured", "filtered"), default="measured",
-                    help="--controllers: the noisy landings' ground estimator (filtered: the "
-                         "force as applied and the foot's state filtered)")
+    ap.add_argument("--estimator", choices=("measured", "filtered"), default="filtered",
+                    help="--controllers: the noisy landings' ground estimator (filtered, the "
+                         "default: the force as applied and the foot's state filtered; "
+                         "measured: as measured)")
     ap.add_argument("--margins", default="0,2",
                     help="--controllers: the noisy landings' margins, comma-separated")
     ap.add_argument("--cases", choices=("all", "bang-bang", "creep"), default="all",

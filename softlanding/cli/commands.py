@@ -642,7 +642,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
     margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
     if a.margin and a.controller != "bangbang":
         raise ParameterError("--margin", "applies to --controller bangbang")
-    if a.estimator != "measured" and not noise:
+    if a.estimator is not None and not noise:
         raise ParameterError("--estimator", "applies with --noise-std > 0 (exact "
                                             "measurements need no filter)")
     robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
@@ -658,7 +658,8 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
 
     m = mpc_landing(impact, robot, ground, model=model, period=period,
                     estimate=not a.no_estimate, controller=a.controller, noise=noise,
-                    delay=delay, seed=seed, margin=margin, estimator=a.estimator)
+                    delay=delay, seed=seed, margin=margin,
+                    estimator=a.estimator or "filtered")
     clair = solve_landing(impact, robot, ground)
     nominal = solve_landing(impact, robot, model)
     ol = simulate(robot, impact, nominal.schedule(), ground)

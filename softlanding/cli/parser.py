@@ -402,11 +402,11 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
     m.add_argument("--margin", type=float, default=0.0, metavar="M",
                    help="bangbang: plan for the estimate less M standard deviations of K and "
                         "c_d while it is uncertain (default 0)")
-    m.add_argument("--estimator", choices=["measured", "filtered"], default="measured",
-                   help="with --noise-std: what the ground estimate regresses. measured: the "
-                        "measured force and foot state (default); filtered: the force as "
-                        "commanded and the foot state filtered with its measured "
-                        "acceleration (assumes the actuator applies its command exactly)")
+    m.add_argument("--estimator", choices=["measured", "filtered"], default=None,
+                   help="with --noise-std: what the ground estimate regresses. filtered "
+                        "(default): the force as commanded and the foot state filtered with "
+                        "its measured acceleration (assumes the actuator applies its command "
+                        "exactly); measured: the measured force and foot state")
     _plot_arg(m, "the landing's depth and force against time")
     ground_args(m)
     return m

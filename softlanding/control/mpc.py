@@ -268,7 +268,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 max_samples: int = 100_000, reuse: bool = False,
                 controller: str = "replan", noise: float = 0.0, delay: int = 0,
                 seed: int = 0, margin: float = 0.0,
-                estimator: str = "measured") -> MPCLanding:
+                estimator: str = "filtered") -> MPCLanding:
     """Land on ``ground`` under MPC whose first plan assumes ``model``.
 
     Parameters
@@ -317,15 +317,18 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         sigma_c`` (the estimate less ``margin`` of its standard deviations) while the
         estimate is uncertain.
     estimator : str
-        What the ground estimate regresses (:data:`ESTIMATORS`). ``"measured"``: the
-        measured foot position, velocity, acceleration and force, as they come.
-        ``"filtered"``: the force the controller applied (it commanded it, the plant applies
-        it exactly, saturated at ``u_max``) instead of its noisy measurement, and the foot's
+        What the ground estimate regresses (:data:`ESTIMATORS`) from noisy measurements.
+        ``"measured"``: the measured foot position, velocity, acceleration and force, as
+        they come. ``"filtered"`` (default): the force the controller applied (it
+        commanded it, the plant applies it exactly, saturated at ``u_max``) instead of its
+        noisy measurement, and the foot's
         position and velocity filtered with its measured acceleration
         (:mod:`softlanding.control.foot_filter`); the plans start from the filtered state
         too. Each sample weighs by the filtered state's error in its force
         (:func:`~softlanding.control.estimation.filtered_weight`). With exact measurements
-        both are the same.
+        both are the same (and the landing records ``"measured"``). In the controller study
+        (noise 1e-3, delay 1, margin 2) the filtered estimate lands all 60 cases within 3 %
+        of the clairvoyant depth (largest 1.021), the measured one 59 (largest 1.10).
 
     Raises
     ------
@@ -362,6 +365,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     sensor = Sensor(noise, delay, seed)
     # (exact measurements need no filter: its estimate would be the measurement)
     filtered = estimator == "filtered" and sensor.noise > 0
+    estimator = "filtered" if filtered else "measured"  # (what runs: the same when exact)
     filt = new_filter(plant.x) if filtered else None
     beta = bb.force_coefficients(robot.r_m)[0]
     est = GroundEstimator(robot, drag=True, prior=ground_numbers(model),

@@ -164,7 +164,7 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                     period: float = DEFAULT_PERIOD, noise: float = REALISTIC_NOISE,
                     delay: int = REALISTIC_DELAY, margins: Sequence[float] = (0.0, 2.0),
                     seed: int = 0, bang_bang: bool | None = None,
-                    estimator: str = "measured",
+                    estimator: str = "filtered",
                     before_landing: Callable[[], None] | None = None
                     ) -> dict[str, Any] | None:
     """One case of the controller study: the clairvoyant optimum, the compiled bang-bang

@@ -119,15 +119,20 @@ def test_cli_bangbang_with_noise_and_delay(cli):
     d = json.loads(out)
     assert d["controller"] == "bangbang" and d["delay"] == 1 and d["noise"] == 1e-3
     assert d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
-    assert d["estimator"] == "measured"
+    assert d["estimator"] == "filtered"  # the default with noise
     assert d["deferred"] >= 0 and 0 < d["step_work_max"] <= bb.WORK
-    # the filtered estimate from the command line (mpc_landing's estimator="filtered")
+    # the measured estimate from the command line (mpc_landing's estimator="measured")
     code, out, err = cli("mpc", "--v0", "-3", "--ground", "linear", "--stiffness", "2",
                          "--controller", "bangbang", "--noise-std", "1e-3", "--delay", "1",
-                         "--margin", "2", "--estimator", "filtered", "--json")
+                         "--margin", "2", "--estimator", "measured", "--json")
     assert code == 0, err
     d = json.loads(out)
-    assert d["estimator"] == "filtered" and d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
+    assert d["estimator"] == "measured" and d["feasible"] and d["ratio_to_clairvoyant"] <= 1.03
+    # exact measurements: no filter, and an explicit estimator does not apply
+    code, out, err = cli("mpc", "--v0", "-3", "--controller", "bangbang", "--json")
+    assert code == 0 and json.loads(out)["estimator"] == "measured", err
+    code, out, err = cli("mpc", "--v0", "-3", "--estimator", "filtered")
+    assert code == 2 and "--estimator" in err and err.count("\n") == 1
 
 
 def test_a_creep_falls_back_and_holds_the_stroke():
