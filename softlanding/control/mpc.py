@@ -407,6 +407,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
     measured = sensor.measure(plant.x)[0]
+    x_act: np.ndarray | None  # where a re-plan acts (None: the foot stops before)
     while plant.x[3] < -stop and samples < max_samples:
         origin, command, planned_stop = issued[max(0, len(issued) - 1 - sensor.delay)]
         schedule = _shifted(command, plant.t - origin)

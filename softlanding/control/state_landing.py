@@ -93,7 +93,7 @@ def state_landing_problem() -> OptimalControlProblem:
     for n in STATE_NAMES:
         p.state(n)
     r_m, s, u_max, k, c_d, *x0 = (p.parameter(n) for n in STATE_PARAMETERS)
-    ground = ParametricGround(k, c_d)
+    ground: Any = ParametricGround(k, c_d)  # (a Ground to the OCP's expressions only)
     landing_stance(p, r_m, s, u_max, ground, omit=(ARREST, ARREST_FORCE))
     # the body's arrest at the foot's stop as the landing's, for a descending body; a body
     # still rising (a state a re-plan may start from, after a push too long for the true
