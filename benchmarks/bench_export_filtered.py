@@ -37,17 +37,6 @@ import numpy as np
 from benchmarks.c_timing import CLOCKS_C, stats, timed_library
 
 TIMER_C = CLOCKS_C + """
-int sl_timed_plain(double *P, double *M, const double *x, double a_f, double u, double h,
-                   int estimate, double *ns)
-{
-    double c0 = now_ns(CLOCK_PROCESS_CPUTIME_ID), w0 = now_ns(CLOCK_MONOTONIC);
-    int st = sl_control_step(P, M, x, a_f, u, h, estimate);
-    double w1 = now_ns(CLOCK_MONOTONIC), c1 = now_ns(CLOCK_PROCESS_CPUTIME_ID);
-    ns[0] = w1 - w0;
-    ns[1] = c1 - c0;
-    return st;
-}
-
 int sl_timed_filtered(double *P, double *M, const double *F, const double *x, double a_f,
                       double u, double h, int estimate, int *recovering, double *ns)
 {
@@ -81,8 +70,8 @@ def main() -> None:
     recorded = filtered_calls(r, a.steps)
     calls = recorded.steps
     vp, d, i = ctypes.c_void_p, ctypes.c_double, ctypes.c_int
-    lib.sl_timed_plain.argtypes = [vp, vp, vp, d, d, d, i, vp]
-    lib.sl_timed_plain.restype = i
+    lib.sl_timed_step.argtypes = [vp, vp, vp, d, d, d, i, vp]
+    lib.sl_timed_step.restype = i
     lib.sl_timed_filtered.argtypes = [vp, vp, vp, vp, d, d, d, i, ctypes.POINTER(i), vp]
     lib.sl_timed_filtered.restype = i
     lib.sl_timer_overhead.argtypes = [vp]
@@ -94,7 +83,7 @@ def main() -> None:
 
     def plain(k):
         P, M = k.P.copy(), k.M.copy()
-        lib.sl_timed_plain(P.ctypes.data, M.ctypes.data, k.x.ctypes.data, k.a_f, k.u, k.h,
+        lib.sl_timed_step(P.ctypes.data, M.ctypes.data, k.x.ctypes.data, k.a_f, k.u, k.h,
                            int(k.estimate), ns.ctypes.data)
         wall["C plain"].append(ns[0])
         cpu["C plain"].append(ns[1])

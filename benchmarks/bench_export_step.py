@@ -33,20 +33,6 @@ import numpy as np
 
 from benchmarks.c_timing import CLOCKS_C, CONTENDERS, stats, timed_library
 
-TIMER_C = CLOCKS_C + """
-int sl_timed_step(double *P, double *M, const double *x, double a_f, double u, double h,
-                  int estimate, double *ns)
-{
-    /* the CPU clock (a system call) outside the wall clock's window (vDSO, cheap) */
-    double c0 = now_ns(CLOCK_PROCESS_CPUTIME_ID), w0 = now_ns(CLOCK_MONOTONIC);
-    int st = sl_control_step(P, M, x, a_f, u, h, estimate);
-    double w1 = now_ns(CLOCK_MONOTONIC), c1 = now_ns(CLOCK_PROCESS_CPUTIME_ID);
-    ns[0] = w1 - w0;
-    ns[1] = c1 - c0;
-    return st;
-}
-"""
-
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -59,7 +45,7 @@ def main() -> None:
     from softlanding.model.robot import PAPER_ROBOT
     from softlanding.model.terrain import paper_rig_units
 
-    lib = timed_library(TIMER_C)
+    lib = timed_library(CLOCKS_C)  # (its sl_timed_step)
     r = PAPER_ROBOT
     calls, landings = recorded_calls(r, a.samples)
     steps = [k for k in calls if not k.first]

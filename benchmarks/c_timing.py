@@ -31,10 +31,23 @@ void sl_timer_overhead(double *ns)
     ns[0] = w1 - w0;
     ns[1] = c1 - c0;
 }
+
+int sl_timed_step(double *P, double *M, const double *x, double a_f, double u, double h,
+                  int estimate, double *ns)
+{
+    /* the CPU clock (a system call) outside the wall clock's window (vDSO, cheap) */
+    double c0 = now_ns(CLOCK_PROCESS_CPUTIME_ID), w0 = now_ns(CLOCK_MONOTONIC);
+    int st = sl_control_step(P, M, x, a_f, u, h, estimate);
+    double w1 = now_ns(CLOCK_MONOTONIC), c1 = now_ns(CLOCK_PROCESS_CPUTIME_ID);
+    ns[0] = w1 - w0;
+    ns[1] = c1 - c0;
+    return st;
+}
 """
-"""The C clocks (``now_ns``: monotonic wall and process CPU, nanoseconds) and
-``sl_timer_overhead`` (two readings of each, back to back: the clocks' own cost), before a
-benchmark's timed functions."""
+"""The C clocks (``now_ns``: monotonic wall and process CPU, nanoseconds),
+``sl_timer_overhead`` (two readings of each, back to back: the clocks' own cost) and
+``sl_timed_step`` (the plain ``sl_control_step`` timed), before a benchmark's own timed
+functions."""
 
 CONTENDERS = ("numba", "C from Python", "C in C")
 """The contenders: the numba function called from Python, the C through ctypes, the C timed
