@@ -142,8 +142,24 @@ def _compiled(rows: list[dict], key: str) -> dict:
             "compiled_cpu_median_ms": float(np.median(c)) if c.size else None,
             "compiled_cpu_p99_ms": float(np.percentile(c, 99)) if c.size else None,
             "compiled_cpu_max_ms": float(c.max()) if c.size else None,
+            **_loop(rows, key),
             "deferred": sum(r[key]["deferred"] for r in rows),
             "step_work_max": max((r[key]["step_work_max"] or 0 for r in rows), default=0)}
+
+
+def _loop(rows: list[dict], key: str) -> dict:
+    """Step times of the same compiled samples replayed as a control loop (one per period
+    of the rig, nothing else between them; ``softlanding.control.loop_replay``)."""
+    import numpy as np
+
+    w = np.concatenate([r[key]["loop_times_ms"] for r in rows] + [np.zeros(0)])
+    c = np.concatenate([r[key]["loop_cpu_ms"] for r in rows] + [np.zeros(0)])
+    out: dict = {"loop_steps": int(w.size)}
+    for name, v in (("wall", w), ("cpu", c)):
+        for stat, f in (("median", np.median), ("p99", lambda a: np.percentile(a, 99)),
+                        ("max", np.max)):
+            out[f"loop_{name}_{stat}_ms"] = float(f(v)) if v.size else None
+    return out
 
 
 def controllers(grid: tuple, a: argparse.Namespace) -> None:
@@ -210,6 +226,14 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
               f"{n['compiled_cpu_max_ms']:.4f} ms, wall max {n['compiled_wall_max_ms']:.4f} "
               f"ms; max CPU <= {rig:.3g} ms: {n['compiled_cpu_max_ms'] <= rig}; deferred "
               f"{n['deferred']}, most integrator steps of a sample {n['step_work_max']}")
+        if n["loop_steps"]:
+            print(f"  the same {n['loop_steps']} samples as a control loop (replayed one per "
+                  f"period, identical to the bit): wall median / p99 / max "
+                  f"{n['loop_wall_median_ms']:.4f} / {n['loop_wall_p99_ms']:.4f} / "
+                  f"{n['loop_wall_max_ms']:.4f} ms, CPU {n['loop_cpu_median_ms']:.4f} / "
+                  f"{n['loop_cpu_p99_ms']:.4f} / {n['loop_cpu_max_ms']:.4f} ms; median <= "
+                  f"0.02 ms: {n['loop_cpu_median_ms'] <= 0.02}; max <= {rig:.3g} ms: "
+                  f"{n['loop_wall_max_ms'] <= rig}")
     for k in keys[1:]:
         n = out[k]
         print(f"goals ({k}): every limit held in all {len(rows)} cases: "

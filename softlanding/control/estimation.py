@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from softlanding.errors import ParameterError, check
 from softlanding.model.dynamics import VF, robot_rhs
@@ -134,6 +135,7 @@ class GroundEstimator:
                               self.samples)
 
 
+@njit(cache=True, fastmath=False)  # (in the compiled filtered sample, and from Python)
 def filtered_weight(x: np.ndarray, force: float, theta: tuple[float, float],
                     cov: tuple[float, float, float], force_var: float, allowance: float
                     ) -> float:

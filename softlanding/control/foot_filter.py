@@ -184,6 +184,7 @@ def filter_step(F, x, g, U1, U2, h, beta, noise=0.0):
     x[2], x[3] = F[F_X], F[F_V]
 
 
+@njit(**JIT)
 def covariance(F: np.ndarray) -> tuple[float, float, float]:
     """The filtered state's covariance ``P_xx, P_xv, P_vv``, in units of the noise variance.
 

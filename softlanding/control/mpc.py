@@ -40,11 +40,11 @@ from ocp.structure.switching import Mode, RefinedSwitching, clear_cache
 from softlanding.control import bangbang as bb
 from softlanding.control.estimation import GroundEstimate, GroundEstimator, filtered_weight
 from softlanding.control.foot_filter import PROVISIONAL, covariance, filter_step, new_filter
+from softlanding.control.loop_replay import CompiledRecord, CompiledSample
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.recovery import (  # noqa: F401 (mpc.RECOVERY_SAMPLES, as before)
     RECOVERY_SAMPLES,
-    filtered_step,
-    sample_weight,
+    filtered_sample,
 )
 from softlanding.control.state_landing import (
     ground_numbers,
@@ -159,6 +159,10 @@ class MPCLanding:
         Samples taken while the foot yielded.
     pieces : list of (float, LandingResult)
         The plant's simulations and their start times (the last one runs to rest).
+    compiled : CompiledRecord or None
+        ``controller="bangbang"``: the compiled controller's samples (inputs, status and
+        memory), to time them again as a robot's control loop runs them
+        (:func:`softlanding.control.loop_replay.replay`).
     """
 
     robot: Robot
@@ -192,6 +196,7 @@ class MPCLanding:
     margin: float = 0.0
     estimator: str = "measured"
     pieces: list[tuple[float, LandingResult]] = field(default_factory=list)
+    compiled: CompiledRecord | None = field(default=None, repr=False, compare=False)
 
     def trajectory(self, n: int = 1500) -> Trajectory:
         """The whole landing from the plant's exact simulations (``mode``: ground mode).
@@ -373,6 +378,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                           if filtered else max(sensor.noise, 1e-6))
     fast = _FastState.start(plan, robot, model, period, sensor, margin, filtered) \
         if controller == "bangbang" else None
+    # the compiled samples' inputs, for a replay as a control loop (:mod:`.loop_replay`)
+    record = CompiledRecord(fast.P.copy(), fast.M.copy(), None if filt is None else filt.copy()) \
+        if fast is not None and fast.active else None
     # the filtered regression's per-sample weights: one force's variance from the
     # acceleration's noise, and the filtered state's error the estimator's noise allows for
     # (both in units of the sensor's noise variance)
@@ -422,24 +430,42 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             break
         u_end = _force_at_end(schedule, plant.x, h)  # the force the sample ended under
         measured, a_f, u_meas = sensor.measure(plant.x, plant.foot_acceleration(u_end), u_end)
-        if filt is not None:  # the foot's filtered state; the force as applied
-            filter_step(filt, measured, a_f - beta * u_end, *_force_integrals(schedule, h),
-                        h, beta, sensor.noise)
-            u_meas = u_end
-        # the foot still yields (the loop's condition, a contact sensor's): a noisy v_f that
-        # reads otherwise is clipped (the plans start from a yielding foot)
-        measured[3] = min(measured[3], -stop)
-        t0, c0 = time.perf_counter(), time.process_time()
-        if fast is not None and fast.active:
+        if filt is not None:  # the force as applied and its integrals over the sample
+            # (the actuator's: inputs of the estimate, as the measurements are)
+            u_meas, g = u_end, a_f - beta * u_end  # (g: the foot's continuous acceleration)
+            U1, U2 = _force_integrals(schedule, h)
+        else:
+            # the foot still yields (the loop's condition, a contact sensor's): a noisy v_f
+            # that reads otherwise is clipped (the plans start from a yielding foot)
+            measured[3] = min(measured[3], -stop)
+        compiled = fast is not None and fast.active
+        x_in = measured.copy() if compiled and record is not None else None
+        # the controller's sample from here: its estimate (the foot filter's step included)
+        # and its control update (the CPU clock, a system call of ~1 us, read outside the
+        # wall clock's interval)
+        c0, t0 = time.process_time(), time.perf_counter()
+        if not compiled:
+            if filt is not None:  # the foot's filtered state, clipped as above
+                filter_step(filt, measured, g, U1, U2, h, beta, sensor.noise)
+                measured[3] = min(measured[3], -stop)
+        else:
+            assert fast is not None
             # (the filter's first states are provisional: no fit from them)
             fit = estimate and (filt is None or samples > PROVISIONAL)
-            weight = 1.0
-            if fit and filt is not None:
-                weight = sample_weight(fast.P, fast.M, filt, measured, a_f, u_meas)
-            status = fast.step(measured, a_f, u_meas, h, fit, weight)
+            if filt is None:
+                status = fast.step(measured, a_f, u_meas, h, fit)
+            else:  # the filter's step, the sample's weight and the step in one call
+                status = fast.filtered_step(measured, filt, g, U1, U2, h, beta,
+                                            sensor.noise, a_f, u_meas, fit, stop)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             step_work.append(int(fast.M[bb.M_WORK]))
+            if record is not None and x_in is not None:
+                record.samples.append(CompiledSample(
+                    x_in, float(a_f), float(u_meas), float(h), bool(fit),
+                    None if filt is None else (float(g), float(U1), float(U2), float(beta),
+                                               float(sensor.noise), float(stop)),
+                    status, fast.M.copy()))
             if estimate:
                 estimates.append(fast.estimate())
             # (an arrest short of the crater's hold while pulling: the pull is still the
@@ -456,7 +482,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             uncovered += 1
             fast.hand_over(est)
             believed = planned_for = est.estimate.ground() if est.samples >= 2 else model
-            t0, c0 = time.perf_counter(), time.process_time()
+            c0, t0 = time.process_time(), time.perf_counter()
             try:
                 x_act, lead = _at_actuation(robot, impact, issued, measured, believed,
                                             sensor.delay, period, plant.t, stop)
@@ -565,7 +591,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       controller=controller, uncovered=uncovered,
                       deferred=paths.count("bangbang (deferred)"), step_work=step_work,
                       noise=sensor.noise,
-                      delay=sensor.delay, seed=seed, margin=margin, estimator=estimator)
+                      delay=sensor.delay, seed=seed, margin=margin, estimator=estimator,
+                      compiled=record)
 
 
 class Sensor:
@@ -691,7 +718,6 @@ class _FastState:
         self.P, self.M, self.active = P, M, active
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
-        self.recover = False  # (the filtered estimate's weights and recovery: :meth:`step`)
         self.recovering = 0  # samples the full solve has gone on over so far
 
     @classmethod
@@ -709,32 +735,37 @@ class _FastState:
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
         M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
         out = cls(P, M, robot, covered)
-        out.recover = filtered
         if covered:  # the first plan's state at the foot's stop (its schedule's tail)
             M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = np.asarray(plan.xT, float)[:3]
         # compile (or load numba's cache) before impact: a sample must not pay for it
         probe = M.copy()
         bb.control_step(P.copy(), probe, np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0,
                         1e-3 * period, False, *out.ws)
-        if filtered:  # (and the bounded full solve :meth:`step` may need: its own
-            # specialisation, the work given; loading it mid-landing took 17 ms)
+        if filtered:  # (and the filtered sample, with the bounded full solve it may need:
+            # loading that mid-landing took 17 ms)
             bb.solve_plan(P.copy(), M.copy(), np.array([10.0, -1.0, -0.1, -1.0]), *out.ws,
                           float(P[bb.P_WORK]))
+            filtered_sample(P.copy(), M.copy(), new_filter(np.array([10.0, -1.0, 0.0, -1.0])),
+                            np.array([10.0, -1.0, -0.1, -1.0]), 0.0, 0.0, 0.0,
+                            1e-3 * period, 0.0, 0.0, 0.0, 0.0, False, 0.0, 0, *out.ws)
         return out
 
-    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool,
-             weight: float = 1.0) -> int:
-        """One compiled sample; the status. With the filtered estimate, ``weight``: the
-        estimate's update weighs the sample so
-        (:func:`~softlanding.control.estimation.filtered_weight`), and a push whose
-        real-time iteration ran out of samples is solved in full, over samples at most
-        :data:`~softlanding.control.recovery.RECOVERY_SAMPLES`
-        (:func:`~softlanding.control.recovery.filtered_step`)."""
-        if not self.recover:  # (the measured estimate: every weight 1, no recovery)
-            return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
-        st, self.recovering = filtered_step(self.P, self.M, x, a_f, u, h, estimate, weight,
-                                            self.recovering, *self.ws)
-        return st
+    def step(self, x: np.ndarray, a_f: float, u: float, h: float, estimate: bool) -> int:
+        """One compiled sample with the measured estimate; the status."""
+        return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
+
+    def filtered_step(self, x: np.ndarray, F: np.ndarray, g: float, U1: float, U2: float,
+                      h: float, beta: float, noise: float, a_f: float, u: float,
+                      estimate: bool, stop: float) -> int:
+        """One compiled sample with the filtered estimate, the foot filter's step included
+        (:func:`~softlanding.control.recovery.filtered_sample`: ``x`` filtered in place, the
+        sample weighed in the estimate, a push whose real-time iteration ran out of samples
+        solved in full over at most :data:`~softlanding.control.recovery.RECOVERY_SAMPLES`
+        samples); the status."""
+        st, self.recovering = filtered_sample(self.P, self.M, F, x, g, U1, U2, h, beta,
+                                              noise, a_f, u, estimate, stop, self.recovering,
+                                              *self.ws)
+        return int(st)
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The plan's force from now: push until the switch, pull until the foot's stop,

@@ -20,11 +20,13 @@ from typing import Any
 
 import numpy as np
 
+from softlanding.control.loop_replay import replay
 from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
 from softlanding.control.robust import GroundLanding, robust_landing, two_stage_landing
 from softlanding.model.controllers import Impedance
 from softlanding.model.ground import Ground, linear_or_drag
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.model.terrain import paper_rig_units
 from softlanding.optimal.landing import solve_landing
 from softlanding.simulation.simulator import simulate
 from softlanding.studies.impedance import optimize_impedance
@@ -168,7 +170,11 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
                     before_landing: Callable[[], None] | None = None
                     ) -> dict[str, Any] | None:
     """One case of the controller study: the clairvoyant optimum, the compiled bang-bang
-    controller with exact measurements, and with noisy, delayed ones for each margin.
+    controller with exact measurements, and with noisy, delayed ones for each margin. Each
+    landing's compiled samples are timed twice: in the landing (``compiled_times_ms``,
+    ``compiled_cpu_ms``: the plant's simulation between them), and replayed as a control
+    loop, one per period of the paper's rig (``loop_times_ms``, ``loop_cpu_ms``:
+    :func:`~softlanding.control.loop_replay.replay`, checked identical to the last bit).
 
     Parameters
     ----------
@@ -190,8 +196,9 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
     estimator : str
         The noisy landings' ground estimator (:func:`~softlanding.control.mpc_landing`).
     before_landing : callable, optional
-        Called before each landing (``benchmarks.realtime.rest``: a real-time benchmark
-        sleeps there, so that the kernel's real-time throttling never falls in a sample).
+        Called before each landing and each replay (``benchmarks.realtime.rest``: a
+        real-time benchmark sleeps there, so that the kernel's real-time throttling never
+        falls in a sample).
     """
     clair = solve_landing(v0, robot, ground)
     if bang_bang is not None and (clair.refined is not None) != bang_bang:
@@ -208,12 +215,19 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
             before_landing()
         m = mpc_landing(v0, robot, ground, period=period, controller="bangbang", **kw)
         own = [i for i, p in enumerate(m.step_paths) if p.startswith("bangbang")]
+        loop: tuple[list[float], list[float]] = ([], [])
+        if m.compiled is not None and m.compiled.samples:
+            # the same samples as a control loop, one per period of the paper's rig
+            if before_landing is not None:
+                before_landing()
+            loop = replay(m.compiled, pace_s=period * paper_rig_units().time)
         row[key] = {**m.to_dict(), "ratio": m.depth / clair.depth,
                     "step_times_ms": list(m.step_times_ms), "step_cpu_ms": list(m.step_cpu_ms),
                     "paths": sorted(set(m.step_paths)),
                     # (the compiled controller's own samples, without its fallbacks)
                     "compiled_times_ms": [m.step_times_ms[i] for i in own],
-                    "compiled_cpu_ms": [m.step_cpu_ms[i] for i in own]}
+                    "compiled_cpu_ms": [m.step_cpu_ms[i] for i in own],
+                    "loop_times_ms": loop[0], "loop_cpu_ms": loop[1]}
     return row
 
 
