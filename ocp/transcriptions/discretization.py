@@ -334,7 +334,7 @@ class PhaseDiscretization:
         mesh = data.mesh
         frac = np.arange(per_interval) / per_interval
         inner = (mesh[:-1, None] + np.diff(mesh)[:, None] * frac[None, :]).ravel()
-        return np.r_[inner, mesh[-1]]
+        return np.concatenate([inner, mesh[-1:]])
 
 
 def static_vector(P: ca.MX, V: ca.MX, t0: ca.MX, T: ca.MX) -> ca.MX:
