@@ -44,7 +44,11 @@ class BufferedCall:
         dense = all(f.sparsity_in(i).is_dense() for i in range(f.n_in())) and \
             all(f.sparsity_out(i).is_dense() for i in range(f.n_out()))
         self.defaults = [np.full(f.nnz_in(i), f.default_in(i)) for i in range(f.n_in())]
-        self.buffer, self.evaluate = f.buffer() if dense else (None, None)
+        # the buffer holds the evaluation's memory; its arguments point into our arrays
+        self.buffer: Any = None
+        self.evaluate: Any = None
+        if dense:
+            self.buffer, self.evaluate = f.buffer()
         self.lock = threading.Lock()
         self.buffered = False  # whether the last evaluation ran in the buffer's memory
 
@@ -79,9 +83,9 @@ class BufferedCall:
             ins = [self._flat(i, a) for i, a in enumerate(args)]
             outs = [np.empty(n) for n in self.sizes_out]
             for i, v in enumerate(ins):
-                self.buffer.set_arg(i, memoryview(v))
+                self.buffer.set_arg(i, v.data)
             for i, o in enumerate(outs):
-                self.buffer.set_res(i, memoryview(o))
+                self.buffer.set_res(i, o.data)
             try:
                 self.evaluate()
             except SystemError as exc:  # an interruption (Ctrl-C) inside the evaluation
