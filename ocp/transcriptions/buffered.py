@@ -8,7 +8,10 @@ results written into fresh numpy arrays -- the same evaluation, the same numbers
 
 It falls back to the ordinary call where the buffer cannot serve: a Function with a
 sparse input or output, a call from a second thread while the first is inside, an
-evaluation that returns an error code (the ordinary call then raises CasADi's error).
+evaluation that returns an error code or in which Python raised an exception (the
+ordinary call then handles it as CasADi does). One difference: an interruption (Ctrl-C,
+SIGTERM as the CLI turns it into one) inside the evaluation is raised as it is, where
+CasADi's call turns it into a failed evaluation (Ipopt's ``NonIpopt_Exception_Thrown``).
 """
 
 from __future__ import annotations
@@ -88,11 +91,11 @@ class BufferedCall:
                 self.buffer.set_res(i, o.data)
             try:
                 self.evaluate()
-            except SystemError as exc:  # an interruption (Ctrl-C) inside the evaluation
+            except SystemError as exc:  # Python raised inside the evaluation
                 if isinstance(exc.__cause__, BaseException) and \
                         not isinstance(exc.__cause__, Exception):
-                    raise exc.__cause__ from None
-                raise
+                    raise exc.__cause__ from None  # an interruption (Ctrl-C): raised
+                return self._ordinary(args)  # CasADi's own handling of the error
             if self.buffer.ret() != 0:  # the ordinary call raises CasADi's own error
                 return self._ordinary(args)
             self.buffered = True

@@ -119,3 +119,27 @@ def test_the_check_between_nodes_sees_each_solves_parameter_values():
         warnings.simplefilter("error", PathViolationWarning)
         back = tr.solve({"a": 2.0}, warm_start=high)
     assert back.verified and back.violations == {}
+
+
+@pytest.mark.slow  # about 1.5 s: a solve long enough to be interrupted inside Ipopt
+def test_an_interruption_inside_ipopt_is_raised_not_turned_into_a_failed_solve():
+    """CasADi's ordinary call turns Ctrl-C inside Ipopt into a failed solve
+    (``NonIpopt_Exception_Thrown``, a ``SolveError`` that ``continuation`` retried); the
+    buffered call raises the interruption."""
+    import signal
+
+    tr = Collocation(moon_lander(), intervals=400, expand=False, verify="off")
+    tr.solve()  # built: the next solve's time is Ipopt's (about 0.6 s)
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.15)
+        with pytest.raises(KeyboardInterrupt):
+            tr.solve()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+    assert tr.solve().success  # the transcription solves again afterwards
