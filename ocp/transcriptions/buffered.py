@@ -64,10 +64,10 @@ class BufferedCall:
         v = np.asarray(a, dtype=float)
         if v.ndim == 2 and v.shape == (r, c):
             return np.ascontiguousarray(v.ravel(order="F"))
-        if v.ndim <= 1 and v.size == r * c and (r == 1 or c == 1):
+        if v.size == r * c and (r == 1 or c == 1):  # a vector, as a row or a column
             return np.ascontiguousarray(v.ravel())
-        if v.ndim <= 1 and v.size == r and c > 1:
-            return np.tile(v, c)
+        if v.size == r and c > 1 and (v.ndim <= 1 or v.shape == (r, 1)):
+            return np.tile(v.ravel(), c)
         raise ValueError(f"input {self.names_in[i]!r} of {self.f.name()}: shape {v.shape}, "
                          f"expected {(r, c)}")
 
