@@ -275,8 +275,9 @@ class CollocationPhase(PhaseDiscretization):
             Points per mesh interval.
         """
         if per_interval not in self._check_bases:
-            # the check points' fractions, and so the polynomial bases there, depend on the
-            # mesh only: computed once per per_interval
+            # the check points' fractions, the polynomial bases there and the indices of
+            # the intervals' values they combine depend on the mesh only: computed once
+            # per per_interval
             N, d = self.N, self.d
             frac = np.arange(per_interval) / per_interval
             k = np.concatenate([np.repeat(np.arange(N), per_interval), [N - 1]])
@@ -284,9 +285,14 @@ class CollocationPhase(PhaseDiscretization):
             inside = theta >= self.c[0]
             bu = lagrange_basis(self.c, theta[inside]) if d > 1 \
                 else np.ones((int(inside.sum()), 1))
+            kb = k[~inside]
             self._check_bases[per_interval] = (
-                k, theta, lagrange_basis(np.concatenate([[0.0], self.c]), theta), inside, bu)
-        k, theta, bx, inside, bu = self._check_bases[per_interval]
+                k, lagrange_basis(np.concatenate([[0.0], self.c]), theta),
+                np.flatnonzero(inside), np.flatnonzero(~inside), k[inside], bu, kb,
+                (kb > 0)[:, None], np.maximum(kb - 1, 0),
+                (theta[~inside] / self.c[0])[:, None])
+        k, bx, at_in, at_out, k_in, bu, kb, has_left, k_left, slope = \
+            self._check_bases[per_interval]
         t = self.check_points(data, per_interval)
         N, d = self.N, self.d
         Zf = np.concatenate([data.raw["X"][:N, None, :], data.raw["Z"].reshape(N, d, -1)],
@@ -294,11 +300,10 @@ class CollocationPhase(PhaseDiscretization):
         x = np.einsum("nr,nri->ni", bx, Zf)
         Uk = data.raw["U"].reshape(N, d, -1)
         u = np.empty((t.size, Uk.shape[2]))
-        u[inside] = np.einsum("nr,nri->ni", bu, Uk[k[inside]])
-        kb = k[~inside]
+        u[at_in] = np.einsum("nr,nri->ni", bu, Uk[k_in])
         first = Uk[kb, 0, :]
-        left = np.where((kb > 0)[:, None], Uk[np.maximum(kb - 1, 0), d - 1, :], first)
-        u[~inside] = left + (theta[~inside] / self.c[0])[:, None] * (first - left)
+        left = np.where(has_left, Uk[k_left, d - 1, :], first)
+        u[at_out] = left + slope * (first - left)
         return t, x, u
 
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],

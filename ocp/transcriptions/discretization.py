@@ -19,6 +19,7 @@ import numpy as np
 
 from ..definition.compiled import CompiledPhase
 from ..definition.multiphase import PhaseTimes
+from .buffered import BufferedCall
 
 
 @dataclass
@@ -150,6 +151,7 @@ class PhaseDiscretization:
         self.nT = 1 if times.T_free else 0
         self.nt0 = 1 if times.t0_free else 0
         self._check_maps: dict[int, ca.Function] = {}
+        self._check_calls: dict[int, BufferedCall] = {}
 
     def check_map(self, n: int) -> ca.Function:
         """The phase's check function mapped over ``n`` points (cached).
@@ -162,6 +164,26 @@ class PhaseDiscretization:
         if n not in self._check_maps:
             self._check_maps[n] = self.cp.check.map(n)
         return self._check_maps[n]
+
+    def check_values(self, t: np.ndarray, x: np.ndarray, u: np.ndarray,
+                     s: np.ndarray) -> np.ndarray:
+        """The phase's check function at ``n`` points, shape (rows, n): ``check_map(n)``
+        evaluated on the arrays as they are (no conversions to CasADi matrices).
+
+        Parameters
+        ----------
+        t : ndarray
+            Times, shape (n,).
+        x, u : ndarray
+            States and controls at those times, shapes (n, nx) and (n, nu).
+        s : ndarray
+            The phase's static vector (parameters, variables, t0, T).
+        """
+        n = t.size
+        if n not in self._check_calls:
+            self._check_calls[n] = BufferedCall(self.check_map(n))
+        out = self._check_calls[n](t[None, :], x.T, u.T, s)[0]
+        return out.reshape(self.cp.ncheck, n, order="F")
 
     def size(self) -> int:
         """Number of entries of the phase's block of ``w``."""
@@ -312,7 +334,7 @@ class PhaseDiscretization:
         mesh = data.mesh
         frac = np.arange(per_interval) / per_interval
         inner = (mesh[:-1, None] + np.diff(mesh)[:, None] * frac[None, :]).ravel()
-        return np.r_[inner, mesh[-1]]
+        return np.concatenate([inner, mesh[-1:]])
 
 
 def static_vector(P: ca.MX, V: ca.MX, t0: ca.MX, T: ca.MX) -> ca.MX:

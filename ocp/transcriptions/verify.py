@@ -26,6 +26,7 @@ between the points.
 from __future__ import annotations
 
 import warnings
+import weakref
 from typing import Any
 
 import numpy as np
@@ -35,24 +36,54 @@ from ..definition.errors import PathViolationError, PathViolationWarning
 VERIFY_MODES = ("warn", "raise", "off")
 
 
+_ROWS: weakref.WeakKeyDictionary[Any, tuple[set[int], list[int]]] = \
+    weakref.WeakKeyDictionary()
+"""Per discretisation: its control-only rows and the rows checked between the points
+(they depend on the compiled phase only: derived once, not at every solve)."""
+
+_BOUNDS: weakref.WeakKeyDictionary[Any, tuple[bytes, tuple[np.ndarray, ...]]] = \
+    weakref.WeakKeyDictionary()
+"""Per compiled phase: the last parameter values' control bounds and check-row bounds."""
+
+
+def _rows(disc: Any) -> tuple[set[int], list[int]]:
+    """The control-only rows of a discretisation and the rows it checks between points."""
+    if disc not in _ROWS:
+        only_u = _control_only(disc)
+        _ROWS[disc] = (only_u, [i for i in range(disc.cp.ncheck) if i not in only_u])
+    return _ROWS[disc]
+
+
+def _check_bounds(cp: Any, params: dict[str, float]) -> tuple[np.ndarray, ...]:
+    """``(ulo, uhi, clo, chi)`` of a compiled phase at these parameter values (the last
+    values' kept: a re-solve at the same values does not evaluate them again)."""
+    pv = np.array([params[k] for k in cp.phase.param_names], dtype=float)
+    key = pv.tobytes()
+    last = _BOUNDS.get(cp)
+    if last is None or last[0] != key:
+        b = cp.bounds(pv)
+        arrays = tuple(np.array(b[i], dtype=float).ravel() for i in (4, 5, 6, 7))
+        for a in arrays:
+            a.setflags(write=False)
+        last = _BOUNDS[cp] = (key, arrays)
+    return last[1]
+
+
 def _phase_excess(ph: Any, params: dict[str, float],
                   per_interval: int) -> tuple[np.ndarray, np.ndarray, list[int]]:
     """Relative excess (rows, points) of one phase's checked rows, the times, the rows."""
     disc = ph.discretization
-    cp = disc.cp
-    only_u = control_only_rows(disc)
-    rows = [i for i in range(cp.ncheck) if i not in only_u]
+    rows = _rows(disc)[1]
     if not rows:
         t = disc.check_points(ph.data, per_interval)
         return np.zeros((0, t.size)), t, rows
     t, x, u = disc.check_samples(ph.data, per_interval)
-    b = cp.bounds(np.array([params[k] for k in cp.phase.param_names]))
+    ulo, uhi, clo, chi = _check_bounds(disc.cp, params)
     if disc.method != "multiple_shooting" and u.size:  # the interpolant, within the bounds
-        u = np.clip(u, np.array(b[4], dtype=float).ravel(), np.array(b[5], dtype=float).ravel())
-    vals = np.array(disc.check_map(t.size)(t[None, :], x.T, u.T, ph.data.s),
-                    dtype=float)[rows]
-    lo = np.array(b[6], dtype=float).ravel()[rows, None]
-    hi = np.array(b[7], dtype=float).ravel()[rows, None]
+        u = np.clip(u, ulo, uhi)
+    vals = disc.check_values(t, x, u, ph.data.s)[rows]
+    lo = clo[rows, None]
+    hi = chi[rows, None]
     with np.errstate(invalid="ignore"):
         excess = np.maximum(np.maximum(lo - vals, vals - hi), 0.0)
         scale = np.maximum(1.0, np.where(vals < lo, np.abs(lo), np.abs(hi)))
@@ -70,6 +101,10 @@ def control_only_rows(disc: Any) -> set[int]:
     disc : PhaseDiscretization
         The phase's discretisation.
     """
+    return set(_rows(disc)[0])
+
+
+def _control_only(disc: Any) -> set[int]:
     cp = disc.cp
     if disc.method == "multiple_shooting" or cp.nu == 0:
         return set()
