@@ -27,8 +27,10 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from pathlib import Path
 
 from benchmarks.realtime import RealtimeUnavailable, enter_realtime, rest
+from softlanding.errors import ParameterError
 from softlanding.model.terrain import paper_rig_units
 from softlanding.studies.unknown_ground import (
     REALISTIC_DELAY,
@@ -40,6 +42,14 @@ from softlanding.studies.unknown_ground import (
     study_summary,
     unknown_ground_study,
 )
+from softlanding.util.files import atomic, output_path
+
+
+def _write_rows(path: Path, rows: list) -> None:
+    """The rows as JSON, atomically (a temporary file beside ``path``, renamed into place:
+    never a partial file, nothing left by a failure)."""
+    with atomic(path, force=True) as tmp, open(tmp, "w") as f:  # (checked up front)
+        json.dump(rows, f, default=float)
 
 
 def _cell(c: dict) -> str:
@@ -51,7 +61,9 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="v0 in {-3, -10}, K in {0.5, 2}, "
                                                          "c_d in {0, 1}")
     ap.add_argument("--period", type=float, default=0.01)
-    ap.add_argument("--json", help="write every row to this file")
+    ap.add_argument("--json", help="write every row to this new file (checked before the "
+                                   "study; written whole or not at all)")
+    ap.add_argument("--force", action="store_true", help="replace an existing --json file")
     ap.add_argument("--controllers", action="store_true",
                     help="the controller study (bang-bang, exact and noisy) instead")
     ap.add_argument("--noise", type=float, default=REALISTIC_NOISE)
@@ -70,6 +82,11 @@ def main() -> None:
                          "CPU, memory locked: benchmarks.realtime; needs root or "
                          "CAP_SYS_NICE)")
     a = ap.parse_args()
+    if a.json:
+        try:  # before hours of work: an existing file, a missing folder
+            a.json = output_path(a.json, "json", force=a.force)
+        except ParameterError as err:
+            ap.error(str(err))
     grid = ((-3.0, -10.0), (0.5, 2.0), (0.0, 1.0)) if a.quick else (STUDY_V0, STUDY_STIFFNESS,
                                                                     STUDY_DRAG)
     if a.controllers:
@@ -119,8 +136,7 @@ def main() -> None:
           f"(goals 1 and 5 ms), against a "
           f"sample period of {1e3 * a.period * tau:.3g} ms on the paper's rig")
     if a.json:
-        with open(a.json, "w") as f:
-            json.dump(rows, f, default=float)
+        _write_rows(a.json, rows)
 
 
 def _c(r: dict) -> str:
@@ -227,8 +243,9 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
               f"ms; max CPU <= {rig:.3g} ms: {n['compiled_cpu_max_ms'] <= rig}; deferred "
               f"{n['deferred']}, most integrator steps of a sample {n['step_work_max']}")
         if n["loop_steps"]:
-            print(f"  the same {n['loop_steps']} samples as a control loop (replayed one per "
-                  f"period, identical to the bit): wall median / p99 / max "
+            print(f"  its {n['loop_steps']} compiled calls (an uncovered sample's included) "
+                  f"as a control loop (replayed one per period, identical to the bit): wall "
+                  f"median / p99 / max "
                   f"{n['loop_wall_median_ms']:.4f} / {n['loop_wall_p99_ms']:.4f} / "
                   f"{n['loop_wall_max_ms']:.4f} ms, CPU {n['loop_cpu_median_ms']:.4f} / "
                   f"{n['loop_cpu_p99_ms']:.4f} / {n['loop_cpu_max_ms']:.4f} ms; median <= "
@@ -240,8 +257,7 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
               f"{n['feasible'] == len(rows)} ({n['feasible']}); within 3 %: "
               f"{n['within_3_percent'] == len(rows)} ({n['within_3_percent']})")
     if a.json:
-        with open(a.json, "w") as f:
-            json.dump(rows, f, default=float)
+        _write_rows(a.json, rows)
 
 
 if __name__ == "__main__":
