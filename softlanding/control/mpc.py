@@ -455,8 +455,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             if filt is None:
                 status = fast.step(measured, a_f, u_meas, h, fit)
             else:  # the filter's step, the sample's weight and the step in one call
-                status = fast.filtered_step(measured, filt, g, U1, U2, h, beta,
-                                            sensor.noise, a_f, u_meas, fit, stop)
+                status = fast.filtered_sample(measured, filt, g, U1, U2, h, beta,
+                                              sensor.noise, a_f, u_meas, fit, stop)
             out_times.append(1e3 * (time.perf_counter() - t0))
             cpu_times.append(1e3 * (time.process_time() - c0))
             step_work.append(int(fast.M[bb.M_WORK]))
@@ -754,9 +754,9 @@ class _FastState:
         """One compiled sample with the measured estimate; the status."""
         return int(bb.control_step(self.P, self.M, x, a_f, u, h, estimate, *self.ws))
 
-    def filtered_step(self, x: np.ndarray, F: np.ndarray, g: float, U1: float, U2: float,
-                      h: float, beta: float, noise: float, a_f: float, u: float,
-                      estimate: bool, stop: float) -> int:
+    def filtered_sample(self, x: np.ndarray, F: np.ndarray, g: float, U1: float, U2: float,
+                        h: float, beta: float, noise: float, a_f: float, u: float,
+                        estimate: bool, stop: float) -> int:
         """One compiled sample with the filtered estimate, the foot filter's step included
         (:func:`~softlanding.control.recovery.filtered_sample`: ``x`` filtered in place, the
         sample weighed in the estimate, a push whose real-time iteration ran out of samples
