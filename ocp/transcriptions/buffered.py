@@ -9,7 +9,10 @@ results written into fresh numpy arrays -- the same evaluation, the same numbers
 It falls back to the ordinary call where the buffer cannot serve: a Function with a
 sparse input or output, a call from a second thread while the first is inside, an
 evaluation that returns an error code or in which Python raised an exception (the
-ordinary call then handles it as CasADi does). One difference: an interruption (Ctrl-C,
+ordinary call then handles it as CasADi does). :meth:`BufferedCall.stats` is the calling
+thread's last evaluation's, read as it ends (in the buffer's memory, under its lock; on the
+ordinary call, CasADi's ``Function.stats``, which another thread's ordinary call of the same
+Function may replace meanwhile: CasADi's own limit). One difference: an interruption (Ctrl-C,
 SIGTERM as the CLI turns it into one) inside the evaluation is raised as it is, where
 CasADi's call turns it into a failed evaluation (Ipopt's ``NonIpopt_Exception_Thrown``).
 """
@@ -53,7 +56,9 @@ class BufferedCall:
         if dense:
             self.buffer, self.evaluate = f.buffer()
         self.lock = threading.Lock()
-        self.buffered = False  # whether the last evaluation ran in the buffer's memory
+        # each thread's last statistics, read as its evaluation ends (another thread may
+        # take the buffer as soon as the lock is released)
+        self.local = threading.local()
 
     def _flat(self, i: int, a: Any) -> np.ndarray:
         """Input ``i``'s nonzeros (column-major); a column vector given for an input of
@@ -62,6 +67,8 @@ class BufferedCall:
         if a is None:
             return self.defaults[i]
         v = np.asarray(a, dtype=float)
+        if v.size == 1:  # a scalar fills the input, as CasADi's call spreads it
+            return np.full(r * c, float(v.ravel()[0]))
         if v.ndim == 2 and v.shape == (r, c):
             return np.ascontiguousarray(v.ravel(order="F"))
         if v.size == r * c and (r == 1 or c == 1):  # a vector, as a row or a column
@@ -98,7 +105,7 @@ class BufferedCall:
                 return self._ordinary(args)  # CasADi's own handling of the error
             if self.buffer.ret() != 0:  # the ordinary call raises CasADi's own error
                 return self._ordinary(args)
-            self.buffered = True
+            self.local.stats, self.local.buffered = dict(self.buffer.stats()), True
             return outs
         finally:
             self.lock.release()
@@ -117,13 +124,18 @@ class BufferedCall:
         outs = self(*(args.get(n) for n in self.names_in))
         return dict(zip(self.names_out, outs, strict=True))
 
+    @property
+    def buffered(self) -> bool:
+        """Whether this thread's last evaluation ran in the buffer's memory."""
+        return bool(getattr(self.local, "buffered", False))
+
     def stats(self) -> dict[str, Any]:
-        """The statistics of the last evaluation (``Function.stats`` of the memory it ran
-        in: an ``nlpsol``'s ``success``, ``return_status``, ``iter_count``, ...)."""
-        return dict(self.buffer.stats() if self.buffered else self.f.stats())
+        """The statistics of this thread's last evaluation (``Function.stats`` of the memory
+        it ran in: an ``nlpsol``'s ``success``, ``return_status``, ``iter_count``, ...)."""
+        return dict(getattr(self.local, "stats", None) or self.f.stats())
 
     def _ordinary(self, args: Sequence[Any]) -> list[np.ndarray]:
         kw = {n: a for n, a in zip(self.names_in, args, strict=True) if a is not None}
         res = self.f.call(kw)
-        self.buffered = False
+        self.local.stats, self.local.buffered = dict(self.f.stats()), False
         return [np.array(res[n], dtype=float).ravel(order="F") for n in self.names_out]

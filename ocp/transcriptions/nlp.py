@@ -664,13 +664,15 @@ class Transcription:
         non-finite, naming the expression (the last start's objective is kept: a re-solve
         from the same start does not evaluate it again)."""
         key = pv.tobytes() + x0.tobytes()
-        if self._last_start is not None and self._last_start[0] == key:
-            return self._last_start[1]
+        last = self._last_start  # (read once: another thread may replace it)
+        if last is not None and last[0] == key:
+            return last[1]
         with np.errstate(all="ignore"):
             f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
         if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
-            self._last_start = (key, float(f.ravel()[0]))
-            return self._last_start[1]
+            f0 = float(f.ravel()[0])
+            self._last_start = (key, f0)
+            return f0
         if not np.all(np.isfinite(x0)):
             raise ProblemDefinitionError("the initial guess has non-finite entries")
         sol = self._unpack_only(x0, pv)
@@ -688,15 +690,17 @@ class Transcription:
             return math.nan
         x0 = np.asarray(x0, dtype=float)
         key = pv.tobytes() + x0.tobytes()  # a re-solve from the same start: known
-        if self._last_variation is not None and self._last_variation[0] == key:
-            return self._last_variation[1]
+        last = self._last_variation  # (read once: another thread may replace it)
+        if last is not None and last[0] == key:
+            return last[1]
         if self._grad_fn is None:  # built on first use: one reverse sweep per start
             self._grad_fn = ca.Function("grad_f", [self._nlp["x"], self._nlp["p"]],
                                         [ca.gradient(self._nlp["f"], self._nlp["x"])])
         with np.errstate(all="ignore"):
             g = np.array(self._grad_fn(x0, pv), dtype=float).ravel()
-        self._last_variation = (key, float(np.sum(np.abs(g * sc.D))))
-        return self._last_variation[1]
+        variation = float(np.sum(np.abs(g * sc.D)))
+        self._last_variation = (key, variation)
+        return variation
 
     def _unpack_only(self, w: np.ndarray, pv: np.ndarray) -> Solution:
         res = {"x": w, "f": np.nan, "lam_g": np.zeros(self.n_g), "lam_x": np.zeros(self.n_w)}
@@ -769,13 +773,15 @@ class Transcription:
         """``(lbw, ubw, lbg, ubg)`` at the parameter values ``pv``, checked (the last
         parameter values' are kept: a re-solve at the same values reuses them)."""
         key = pv.tobytes()
-        if self._last_bounds is None or self._last_bounds[0] != key:
-            b = tuple(np.array(v, dtype=float).ravel() for v in self._bounds(pv))
-            self._check_bound_order(*b)
-            for a in b:
-                a.setflags(write=False)
-            self._last_bounds = (key, b)
-        return self._last_bounds[1]
+        last = self._last_bounds  # (read once: another thread may replace it)
+        if last is not None and last[0] == key:
+            return last[1]
+        b = tuple(np.array(v, dtype=float).ravel() for v in self._bounds(pv))
+        self._check_bound_order(*b)
+        for a in b:
+            a.setflags(write=False)
+        self._last_bounds = (key, b)
+        return b
 
     def _scale_args(self, args: dict[str, Any], fref: float) -> dict[str, Any]:
         """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""

@@ -143,3 +143,39 @@ def test_an_interruption_inside_ipopt_is_raised_not_turned_into_a_failed_solve()
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, previous)
     assert tr.solve().success  # the transcription solves again afterwards
+
+
+def test_two_threads_on_one_transcription_each_report_their_own_solve():
+    # (the buffer is the first thread's while it solves; the other takes CasADi's call:
+    # each solve's statistics must be its own, read before the buffer is released)
+    import sys
+    import threading
+
+    tr = Collocation(moon_lander(), intervals=8, expand=False, verify="off")
+    cold = tr.solve()
+    hot = tr.solve(guess=cold)
+    assert cold.iterations != hot.iterations
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # (the threads interleave within each solve)
+    stop, seen = threading.Event(), []
+
+    def other():
+        while not stop.is_set():
+            seen.append(tr.solve(guess=cold).iterations)
+
+    t = threading.Thread(target=other)
+    t.start()
+    try:
+        mine = [tr.solve().iterations for _ in range(40)]
+    finally:
+        stop.set()
+        t.join()
+        sys.setswitchinterval(switch)
+    assert set(mine) == {cold.iterations} and set(seen) == {hot.iterations}
+    assert len(seen) > 5
+
+
+def test_a_scalar_fills_its_input_as_casadis_call_does():
+    x = ca.SX.sym("x", 2)
+    f = ca.Function("s", [x], [2 * x], ["x0"], ["y"])
+    assert BufferedCall(f).named({"x0": 0.5})["y"].tolist() == [1.0, 1.0]
