@@ -45,10 +45,11 @@ from softlanding.studies.unknown_ground import (
 from softlanding.util.files import atomic, output_path
 
 
-def _write_rows(path: Path, rows: list) -> None:
+def _write_rows(path: Path, rows: list, force: bool) -> None:
     """The rows as JSON, atomically (a temporary file beside ``path``, renamed into place:
-    never a partial file, nothing left by a failure)."""
-    with atomic(path, force=True) as tmp, open(tmp, "w") as f:  # (checked up front)
+    never a partial file, nothing left by a failure; a file that appeared at ``path``
+    meanwhile is refused unless ``force``)."""
+    with atomic(path, force=force) as tmp, open(tmp, "w") as f:
         json.dump(rows, f, default=float)
 
 
@@ -136,7 +137,7 @@ def main() -> None:
           f"(goals 1 and 5 ms), against a "
           f"sample period of {1e3 * a.period * tau:.3g} ms on the paper's rig")
     if a.json:
-        _write_rows(a.json, rows)
+        _write_rows(a.json, rows, a.force)
 
 
 def _c(r: dict) -> str:
@@ -257,7 +258,7 @@ def controllers(grid: tuple, a: argparse.Namespace) -> None:
               f"{n['feasible'] == len(rows)} ({n['feasible']}); within 3 %: "
               f"{n['within_3_percent'] == len(rows)} ({n['within_3_percent']})")
     if a.json:
-        _write_rows(a.json, rows)
+        _write_rows(a.json, rows, a.force)
 
 
 if __name__ == "__main__":

@@ -52,3 +52,14 @@ def test_the_benchmarks_refuse_it_with_exit_2_where_it_does_not_apply():
                          cwd=ROOT, text=True, capture_output=True, timeout=120)
     assert out.returncode == 2
     assert "--realtime applies to --controllers only" in out.stderr
+
+
+def test_the_study_refuses_an_existing_json_file_before_any_work(tmp_path):
+    # (its --json was opened after the study: an existing file replaced silently)
+    out_file = tmp_path / "rows.json"
+    out_file.write_text("keep")
+    out = subprocess.run([sys.executable, "-m", "benchmarks.study_unknown_ground",
+                          "--controllers", "--json", str(out_file)],
+                         cwd=ROOT, text=True, capture_output=True, timeout=120)
+    assert out.returncode == 2 and "exists" in out.stderr and "--force" in out.stderr
+    assert out_file.read_text() == "keep" and list(tmp_path.iterdir()) == [out_file]

@@ -10,8 +10,9 @@ step times keep that cost (they are what the simulation measured); :func:`replay
 the controller as a control loop: the landing's recorded inputs, in order, from the
 landing's initial memory, one sample per period of the rig (idle in between, as the loop
 waiting for its sensors), nothing else in the loop; each sample's status and memory are
-checked identical to the landing's to the last bit (:class:`ReplayMismatch` otherwise), so
-the timed work is the landing's own.
+checked identical to the landing's to the last bit (the controller's and the foot filter's
+memory byte for byte, the status and the recovery's count; :class:`ReplayMismatch`
+otherwise), so the timed work is the landing's own.
 """
 
 from __future__ import annotations
@@ -50,6 +51,10 @@ class CompiledSample:
         The sample's status.
     memory : array
         The controller's memory ``M`` after it.
+    filter_memory : array or None
+        The foot filter's memory ``F`` after it (the filtered estimate).
+    recovering : int
+        The recovery's count after it (the filtered estimate; 0 otherwise).
     """
 
     x: np.ndarray
@@ -60,6 +65,8 @@ class CompiledSample:
     filtered: tuple[float, float, float, float, float, float] | None
     status: int
     memory: np.ndarray
+    filter_memory: np.ndarray | None = None
+    recovering: int = 0
 
 
 @dataclass
@@ -125,7 +132,11 @@ def replay(record: CompiledRecord, pace_s: float = 0.0) -> tuple[list[float], li
             t1, c1 = time.perf_counter(), time.process_time()
         wall.append(1e3 * (t1 - t0))
         cpu.append(1e3 * (c1 - c0))
-        if int(st) != s.status or not np.array_equal(M, s.memory, equal_nan=True):
+        # (bytes: -0.0 is not 0.0, a NaN's payload counts)
+        same = int(st) == s.status and M.tobytes() == s.memory.tobytes() and (
+            F is None or (s.filter_memory is not None and F.tobytes() == s.filter_memory.tobytes()
+                          and recovering == s.recovering))
+        if not same:
             raise ReplayMismatch(f"sample {i} of the replay gave status {int(st)} and a memory "
                                  f"other than the landing's (status {s.status})")
     return wall, cpu

@@ -465,7 +465,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                     x_in, float(a_f), float(u_meas), float(h), bool(fit),
                     None if filt is None else (float(g), float(U1), float(U2), float(beta),
                                                float(sensor.noise), float(stop)),
-                    status, fast.M.copy()))
+                    status, fast.M.copy(), None if filt is None else filt.copy(),
+                    fast.recovering))
             if estimate:
                 estimates.append(fast.estimate())
             # (an arrest short of the crater's hold while pulling: the pull is still the

@@ -174,7 +174,9 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
     landing's compiled samples are timed twice: in the landing (``compiled_times_ms``,
     ``compiled_cpu_ms``: the plant's simulation between them), and replayed as a control
     loop, one per period of the paper's rig (``loop_times_ms``, ``loop_cpu_ms``:
-    :func:`~softlanding.control.loop_replay.replay`, checked identical to the last bit).
+    :func:`~softlanding.control.loop_replay.replay`, checked identical to the last bit; a
+    replay that is not raises :class:`~softlanding.control.loop_replay.ReplayMismatch` and
+    ends the study: its times would be another computation's).
 
     Parameters
     ----------

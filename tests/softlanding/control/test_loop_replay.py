@@ -40,6 +40,13 @@ def test_a_landing_replays_to_the_bit_as_a_control_loop(landings, estimator):
         s, memory=off), *rec.samples[6:]])
     with pytest.raises(ReplayMismatch, match="sample 5"):
         replay(bad)
+    if rec.F is not None:  # the foot filter's memory is compared too
+        f = s.filter_memory.copy()
+        f[0] = np.nextafter(f[0], np.inf)
+        bad = dataclasses.replace(rec, samples=[*rec.samples[:5], dataclasses.replace(
+            s, filter_memory=f), *rec.samples[6:]])
+        with pytest.raises(ReplayMismatch, match="sample 5"):
+            replay(bad)
 
 
 def test_the_fused_filtered_sample_is_its_parts(landings):
