@@ -621,6 +621,8 @@ class SwitchingNLP:
         g, Jr, gJ, f, more = solver.check(w, pv)
         if more:  # what the result reports, evaluated in the same call
             self._summary_memo = (self._summary_key(w, pv), self._decode_summary(more))
+        if not np.all(np.isfinite(g)):  # (a NaN would pass the test below)
+            return None
         sc = np.maximum(1.0, np.abs(g))
         viol = np.r_[(b["lbg"] - g) / sc, (g - b["ubg"]) / sc, 0.0]
         if np.max(viol) > KKT_PRIMAL:
