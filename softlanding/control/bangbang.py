@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from softlanding.control.creep import creep_force, creep_reachable
 from softlanding.model.dynamics import VB, VF, robot_rhs
 from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
@@ -72,22 +73,27 @@ MARCH_FAILED, MARCHED, SPENT = 0, 1, 2
 
 # the layout of the robot and ground numbers P
 (P_AB0, P_BB, P_AF0, P_BF, P_GF, P_K, P_CD, P_RM, P_S, P_UMAX, P_HOLD0, P_NOISE,
- P_MARGIN, P_BUDGET, P_PERIOD, P_WORK) = range(16)
-NP = 16
+ P_MARGIN, P_BUDGET, P_PERIOD, P_WORK, P_CREEP) = range(17)
+NP = 17
 # the layout of the controller's memory M
 (M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
  M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED, M_PRED, M_PRED_OK, M_KPLAN,
- M_CPLAN, M_LAST_STEP, M_WORK, M_DEFERRED) = (*range(15), 15, 19, 20, 21, 22, 23, 24)
-NM = 25
+ M_CPLAN, M_LAST_STEP, M_WORK, M_DEFERRED, M_UCREEP) = (*range(15), 15, 19, 20, 21, 22, 23,
+                                                       24, 25)
+NM = 26
 
-#: Phases: pushing (both arcs left), pulling (the foot's stop left).
-PUSH, PULL = 0, 1
+#: Phases: pushing (both arcs left), pulling (the foot's stop left), creeping (the creep
+#: law's force, :mod:`softlanding.control.creep`, every sample to the foot's stop).
+PUSH, PULL, CREEPING = 0, 1, 2
 #: Statuses of a step: covered (the plan re-solved), and why not.
 #: (:data:`DEFERRED`: the sample's integrator steps ran out, see :data:`WORK`.)
-OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP, DEFERRED = range(8)
+#: (:data:`CREEP_LAW`: the creep law's force, in ``M[M_UCREEP]``, covers the state; only with
+#: ``P[P_CREEP] = 1``, else such a state is :data:`CREEP`, not covered.)
+(OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP, DEFERRED,
+ CREEP_LAW) = range(9)
 STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
                 PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds",
-                CREEP: "creep", DEFERRED: "deferred"}
+                CREEP: "creep", DEFERRED: "deferred", CREEP_LAW: "creep law"}
 
 #: Relative agreement of the measured state with the plan's prediction, and of the estimate
 #: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
@@ -143,7 +149,7 @@ FILTERED_REGRESSOR = 0.1
 
 def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: float,
                   noise_std: float = 1e-6, margin: float = 0.0,
-                  period: float = 0.01) -> np.ndarray:
+                  period: float = 0.01, creep: bool = False) -> np.ndarray:
     """The numbers the compiled step reads (``P``), from the one definition of the dynamics.
 
     Parameters
@@ -158,6 +164,11 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
         Plan for the estimate less ``margin`` standard deviations.
     period : float
         The sample period (the plan-holds check predicts the next sample).
+    creep : bool
+        A state whose plan ends with the body rising (:data:`CREEP`) on ground with drag
+        switches to the creep law (:mod:`softlanding.control.creep`; status
+        :data:`CREEP_LAW`) instead of being reported not covered (the exported C's
+        behaviour: it has no creep law).
     """
     x = np.zeros(4)
     b0 = robot_rhs(x, 0.0, 0.0, r_m)
@@ -173,6 +184,7 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
     P[P_BUDGET] = BUDGET
     P[P_PERIOD] = period
     P[P_WORK] = WORK
+    P[P_CREEP] = 1.0 if creep else 0.0
     return P
 
 
@@ -503,6 +515,23 @@ def _estimate(P, M, x, a_f, u):
 
 
 @njit(**JIT)
+def _creep(P, M, x):
+    """The creep law's force from ``x`` on the planned ground into ``M[M_UCREEP]``, the phase
+    :data:`CREEPING`; :data:`CREEP_LAW`, or :data:`CREEP` where the law does not apply (no
+    drag estimated: not covered)."""
+    u = creep_force(P[P_AF0], P[P_BF], P[P_GF], P[P_AB0], P[P_BB], P[P_UMAX], P[P_HOLD0],
+                    P[P_K], P[P_CD], x, P[P_PERIOD])
+    M[M_ITER] = 0
+    if not math.isfinite(u):
+        M[M_STATUS] = CREEP
+        return CREEP
+    M[M_PHASE] = CREEPING
+    M[M_UCREEP] = u
+    M[M_STATUS] = CREEP_LAW
+    return CREEP_LAW
+
+
+@njit(**JIT)
 def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
     """The state the plan in ``M`` predicts after the next sample from ``x``, for the
     plan-holds check (none if that sample ends at the foot's stop, or the integrator steps
@@ -620,6 +649,13 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
             if abs(x[i] - M[M_PRED + i]) > PLAN_HOLDS_TOL * scale:
                 holds = False
     M[M_PRED_OK] = 0.0
+    if M[M_PHASE] == CREEPING:  # (feedback every sample to the foot's stop)
+        return _creep(P, M, x)
+    # the creep law reaches the static depth, the least any landing can: it takes over
+    if P[P_CREEP] == 1.0 and M[M_SAMPLES] >= 2 and creep_reachable(
+            P[P_AF0], P[P_BF], P[P_GF], P[P_AB0], P[P_BB], P[P_UMAX], P[P_HOLD0], P[P_K],
+            P[P_CD], x):
+        return _creep(P, M, x)
     if M[M_PHASE] == PUSH:
         if M[M_TAU1] > h:
             M[M_TAU1] -= h
@@ -642,6 +678,8 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
             if st == OK:
                 _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
             M[M_STATUS] = st
+            if st == CREEP and P[P_CREEP] == 1.0:
+                return _creep(P, M, x)
             return st
         # the switch fell within the sample
         M[M_TAU2] = max(M[M_TAU2] - (h - M[M_TAU1]), 1e-3 * M[M_TAU2])
@@ -657,10 +695,13 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
     if st == OK:
         _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
     M[M_STATUS] = st
+    if st == CREEP and P[P_CREEP] == 1.0:
+        return _creep(P, M, x)
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "DEFERRED", "HOLDS", "LOOSE_RTOL",
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "CREEPING", "CREEP_LAW",
+           "DEFERRED", "HOLDS", "LOOSE_RTOL",
            "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "NEWTON_FAILED",
            "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "SPENT",
            "TIGHTEN", "WORK", "STATUS_NAMES", "control_step",

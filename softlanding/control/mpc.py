@@ -473,7 +473,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             # fastest stop of the foot, the arrest then digs a little; no plan of this
             # structure does better, and measurement noise makes it short by rounding)
             pulling = fast.M[bb.M_PHASE] == bb.PULL
-            if status in (bb.OK, bb.CONVERGING, bb.HOLDS, bb.DEFERRED) or (
+            if status in (bb.OK, bb.CONVERGING, bb.HOLDS, bb.DEFERRED, bb.CREEP_LAW) or (
                     status == bb.ARREST_FAILS and pulling):
                 paths.append("bangbang" if status == bb.OK else
                              f"bangbang ({bb.STATUS_NAMES[status]})")
@@ -730,7 +730,8 @@ class _FastState:
         u_max = force_limit(robot)
         k, c_d = ground_numbers(model)
         noise = bb.ground_force_noise(robot.r_m, sensor.noise, filtered)
-        P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin, period)
+        P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d, noise, margin, period,
+                             creep=True)
         covered = kinds in (("max", "min"), ("min",))
         d = np.asarray(plan.durations, float) if covered else np.array([0.0, 1.0])
         t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
@@ -770,8 +771,12 @@ class _FastState:
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The plan's force from now: push until the switch, pull until the foot's stop,
-        then the arrest of the body and its weight (from the plan's state at the stop)."""
+        then the arrest of the body and its weight (from the plan's state at the stop); or,
+        creeping, the creep law's force of this sample (held: the next sample computes the
+        next)."""
         M = self.M
+        if M[bb.M_PHASE] == bb.CREEPING:
+            return ForceSchedule((), (float(M[bb.M_UCREEP]),))
         t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
         t2 = float(M[bb.M_TAU2])
         x_t = np.array([M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT], 0.0])
@@ -782,7 +787,9 @@ class _FastState:
         return ForceSchedule(times, values)
 
     def stop_time(self) -> float:
-        """When the plan has the foot stop (from now)."""
+        """When the plan has the foot stop (from now; creeping: not planned, ``inf``)."""
+        if self.M[bb.M_PHASE] == bb.CREEPING:
+            return math.inf
         t1 = float(self.M[bb.M_TAU1]) if self.M[bb.M_PHASE] == bb.PUSH else 0.0
         return t1 + float(self.M[bb.M_TAU2])
 

@@ -41,6 +41,7 @@ P_DOC = {
     "P_BUDGET": "Newton iterations per sample while the switch is > 3 samples away",
     "P_PERIOD": "the sample period (the plan-holds check predicts the next sample)",
     "P_WORK": "integrator steps one call may take (its bound; then SL_DEFERRED)",
+    "P_CREEP": "the Python controller's creep law on (1); this C has none: SL_CREEP",
 }
 
 #: What each entry of ``M`` holds.
@@ -67,6 +68,7 @@ M_DOC = {
     "M_LAST_STEP": "size |dtau1| + |dtau2| of the last Newton step",
     "M_WORK": "integrator steps of the last sl_control_step (at most P[SL_P_WORK])",
     "M_DEFERRED": "calls whose integrator steps ran out (SL_DEFERRED)",
+    "M_UCREEP": "the Python controller's creep law's force (not set by this C)",
 }
 
 #: What each entry of the foot filter's memory ``F`` holds.

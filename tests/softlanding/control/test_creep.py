@@ -1,0 +1,76 @@
+"""The creep law (softlanding.control.creep) against independent computations."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad, solve_ivp
+
+from softlanding.control import bangbang as bb
+from softlanding.control.creep import BRAKE, brake_speed2, brake_time, creep_force, creep_reachable
+from softlanding.control.mpc import Sensor, mpc_landing
+from softlanding.control.plant import SteppingPlant
+from softlanding.model.controllers import ForceSchedule
+from softlanding.model.ground import DragGround, LinearGround
+from softlanding.model.robot import PAPER_ROBOT
+
+P = bb.robot_numbers(PAPER_ROBOT.r_m, PAPER_ROBOT.s, 8.2, 1.0, 1.0)
+AF0, BF, GF, AB0, BB, H0 = (P[i] for i in (bb.P_AF0, bb.P_BF, bb.P_GF, bb.P_AB0, bb.P_BB,
+                                          bb.P_HOLD0))
+
+
+@pytest.mark.parametrize("k,c_d,sigma", [(1.0, 1.0, 0.3), (0.5, 0.2, 1.2), (2.0, 1.0, 0.05)])
+def test_the_brake_stops_the_foot_exactly_at_the_static_depth(k, c_d, sigma):
+    # an independent integration of the foot's ODE (scipy, tight tolerances) under the
+    # brake's constant force from the speed brake_speed2 gives, sigma above the static depth
+    u = -BRAKE * H0
+    c1 = AF0 + BF * u + GF * 1.0
+    v0 = -math.sqrt(brake_speed2(sigma, c1, 2 * GF * c_d, 2 * GF * k))
+    d_s = 1.0 / k
+
+    def rhs(t, y):
+        return [y[1], AF0 + BF * u + GF * (k * -y[0] + c_d * y[1] ** 2)]
+
+    stop = lambda t, y: y[1]  # noqa: E731
+    stop.terminal, stop.direction = True, 1
+    sol = solve_ivp(rhs, (0, 50), [-(d_s - sigma), v0], events=stop, rtol=1e-12, atol=1e-14)
+    assert sol.status == 1
+    assert -sol.y_events[0][0][0] == pytest.approx(d_s, rel=1e-9)
+    # and its duration, by quadrature of 1 / |v| over the distance
+    t_quad = quad(lambda s: 1 / math.sqrt(brake_speed2(s, c1, 2 * GF * c_d, 2 * GF * k)),
+                  0, sigma, limit=200)[0]
+    assert brake_time(sigma, c1, 2 * GF * c_d, 2 * GF * k) == pytest.approx(t_quad, rel=1e-6)
+    assert sol.t_events[0][0] == pytest.approx(t_quad, rel=1e-6)
+
+
+def test_the_law_refuses_ground_without_drag_and_a_foot_not_descending():
+    x = np.array([10.0, -1.0, -0.2, -1.0])
+    assert math.isnan(creep_force(AF0, BF, GF, AB0, BB, 8.2, H0, 1.0, 0.0, x, 0.01))
+    assert not creep_reachable(AF0, BF, GF, AB0, BB, 8.2, H0, 1.0, 0.0, x)
+    x[3] = 0.0
+    assert math.isnan(creep_force(AF0, BF, GF, AB0, BB, 8.2, H0, 1.0, 1.0, x, 0.01))
+
+
+@pytest.mark.parametrize("v0,k,c_d", [(-1.0, 1.0, 1.0), (-3.0, 0.5, 1.0), (-1.0, 0.5, 0.2)])
+def test_the_law_alone_lands_at_the_static_depth_with_the_body_at_rest(v0, k, c_d):
+    # the law from impact (exact ground, a sample of 0.01) on the exact stepping plant; then
+    # the MPC's exact arrest: the least depth any landing can reach, W / K, within 1e-3
+    ground = DragGround(c_d, k)
+    plant = SteppingPlant(PAPER_ROBOT, v0, ground)
+    for _ in range(2000):
+        if plant.x[3] >= -1e-9:
+            break
+        u = creep_force(AF0, BF, GF, AB0, BB, 8.2, H0, k, c_d, np.array(plant.x), 0.01)
+        assert math.isfinite(u) and abs(u) <= 8.2
+        plant.step(ForceSchedule((), (u,)), 0.01)
+    res = plant.finish(Sensor().arrest(np.array(plant.x), PAPER_ROBOT.r_m, PAPER_ROBOT.s))
+    lo = min([a for a, _ in plant.stroke_ranges] + [res.stroke_min])
+    hi = max([b for _, b in plant.stroke_ranges] + [res.stroke_max])
+    assert res.rest_proven and 0.0 <= lo and hi <= PAPER_ROBOT.s
+    assert 1 / k * (1 - 1e-9) <= res.depth <= 1 / k * (1 + 1e-3)
+
+
+def test_a_bang_bang_landing_never_takes_the_creep_law():
+    # linear ground: no drag, the creep cannot reach 1/K (the optimum is deeper)
+    m = mpc_landing(-3, PAPER_ROBOT, LinearGround(0.5), controller="bangbang")
+    assert not any("creep" in p for p in m.step_paths) and m.uncovered == 0
