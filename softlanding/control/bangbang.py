@@ -99,6 +99,10 @@ STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest 
 #: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
 PLAN_HOLDS_TOL = 1e-8
 
+#: Standard deviations of the estimate by which the ground the creep law's takeover is judged
+#: on is stiffer and less draggy than the estimate (:func:`_step`).
+CREEP_SIGMAS = 3.0
+
 #: Newton iterations per sample while the switch is more than three samples away (one:
 #: acados' real-time iteration).
 BUDGET = 1
@@ -652,10 +656,14 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
     if M[M_PHASE] == CREEPING:  # (feedback every sample to the foot's stop)
         return _creep(P, M, x)
     # the creep law reaches the static depth, the least any landing can: it takes over
-    if P[P_CREEP] == 1.0 and M[M_SAMPLES] >= 2 and creep_reachable(
-            P[P_AF0], P[P_BF], P[P_GF], P[P_AB0], P[P_BB], P[P_UMAX], P[P_HOLD0], P[P_K],
-            P[P_CD], x):
-        return _creep(P, M, x)
+    # (judged on the ground CREEP_SIGMAS standard deviations stiffer and less draggy: a
+    # shallower static depth, less drag to spend the momentum)
+    if P[P_CREEP] == 1.0 and M[M_SAMPLES] >= 2:
+        k_hi = M[M_TH0] + CREEP_SIGMAS * P[P_NOISE] * math.sqrt(max(M[M_P00], 0.0))
+        c_lo = M[M_TH1] - CREEP_SIGMAS * P[P_NOISE] * math.sqrt(max(M[M_P11], 0.0))
+        if creep_reachable(P[P_AF0], P[P_BF], P[P_GF], P[P_AB0], P[P_BB], P[P_UMAX],
+                           P[P_HOLD0], k_hi, c_lo, x):
+            return _creep(P, M, x)
     if M[M_PHASE] == PUSH:
         if M[M_TAU1] > h:
             M[M_TAU1] -= h
@@ -700,7 +708,7 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "CREEPING", "CREEP_LAW",
+__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "CREEPING", "CREEP_LAW", "CREEP_SIGMAS",
            "DEFERRED", "HOLDS", "LOOSE_RTOL",
            "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "NEWTON_FAILED",
            "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "SPENT",

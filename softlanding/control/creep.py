@@ -59,7 +59,9 @@ GAIN = 0.5
 #: rest accelerates the foot to it).
 REACH = 0.8
 #: Bisection steps on the brake's length (the cruise speed to ``2^-BISECT`` of the depth left).
-BISECT = 48
+BISECT = 40
+#: Newton steps at most on the push's length.
+NEWTON = 30
 
 # 8-point Gauss-Legendre on [0, 1] (the brake's time)
 _GX, _GW = np.polynomial.legendre.leggauss(8)
@@ -88,6 +90,112 @@ def brake_time(sigma: float, c1: float, beta: float, gam: float) -> float:
             return np.inf
         t += GL_W[i] * 2.0 * sigma * tau / math.sqrt(z)
     return t
+
+
+@njit(**JIT)
+def push_speed2(s: float, z0: float, c_p: float, beta: float, gam: float) -> float:
+    """``v_f^2`` after the foot moved ``s`` further down under a constant force from
+    ``v_f^2 = z0`` (``c_p``: its acceleration's constant part at the start,
+    ``a_f0 + b_f u + g_f K d``; forward, ``dz/ds = -2 c_p - gam s - beta z``)."""
+    a = (gam / beta - 2.0 * c_p) / beta
+    return a - (gam / beta) * s + (z0 - a) * math.exp(-beta * s)
+
+
+@njit(**JIT)
+def push_time(s: float, z0: float, c_p: float, beta: float, gam: float) -> float:
+    """The push's duration over ``s`` (``s = s_p tau^2``: a foot starting at rest too)."""
+    t = 0.0
+    for i in range(GL_X.size):
+        tau = GL_X[i]
+        z = push_speed2(s * tau * tau, z0, c_p, beta, gam)
+        if z <= 0.0:
+            return np.inf
+        t += GL_W[i] * 2.0 * s * tau / math.sqrt(z)
+    return t
+
+
+@njit(**JIT)
+def _impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e, beta,
+             gam):
+    """The ground's impulse in excess of the weight over the plan with a brake of length
+    ``sb``: push (at ``u_push``; 0: none, the foot at ``w`` at once) to the brake's speed
+    ``w`` if the foot is slower, cruise at ``w``, brake; ``-inf`` where the plan does not fit
+    (the push and the brake longer than the depth left, a speed the push does not reach, or
+    a cruise the force limit does not hold)."""
+    w2 = brake_speed2(sb, c1e, beta, gam)
+    if not w2 > 0.0:
+        return np.inf  # (no cruise: the least speed; never the bisection's answer)
+    # a cruise the force limit (the push's, else u_max) holds down to the static depth
+    if w2 > (-(af0 + bf * (u_push if u_push > 0.0 else u_max)) / gf - weight) / c_d:
+        return -np.inf
+    w = math.sqrt(w2)
+    j = 0.0
+    sp = 0.0
+    if w2 > v * v and u_push > 0.0:  # the push to it (none: at w at once)
+        c_p = af0 + bf * u_push + gf * k * d
+        if push_speed2(depth_left - sb, v * v, c_p, beta, gam) < w2:
+            return -np.inf
+        # its length: Newton on z(s) = w^2 from the far end (z is concave where it rises:
+        # the first step lands below the root, the next ones rise to it), at most NEWTON
+        sp = depth_left - sb
+        for _ in range(NEWTON):
+            z = push_speed2(sp, v * v, c_p, beta, gam)
+            slope = -2.0 * c_p - gam * sp - beta * z
+            if not slope > 0.0:
+                return -np.inf
+            step = (z - w2) / slope
+            sp -= step
+            if abs(step) <= 1e-12 * (depth_left + sp):
+                break
+        if not 0.0 <= sp <= depth_left - sb:
+            return -np.inf
+        j = (v + w - (af0 + bf * u_push + gf * weight) * push_time(sp, v * v, c_p, beta, gam)) / gf
+    cruise = depth_left - sp
+    j += c_d * w * (cruise - sb) - k * (cruise * cruise - sb * sb) / (2.0 * w)
+    return j + (w - c1e * brake_time(sb, c1e, beta, gam)) / gf
+
+
+@njit(**JIT)
+def _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, u_push):
+    """The cruise speed whose plan (push at ``u_push`` to it, cruise, brake) spends the
+    momentum, the brake's speed at the depth left if none is needed
+    (braking), and whether the plan reaches the static depth with the momentum spent
+    (``nan, False`` where the law does not apply)."""
+    v = x[3]
+    if not (k > 0.0 and c_d > 0.0 and v < 0.0):
+        return np.nan, False
+    m_f = 1.0 / gf
+    m_b = -bf / (gf * bb)
+    weight = -(m_b * ab0 + m_f * af0)
+    d = -x[2]
+    depth_left = weight / k - d
+    if depth_left <= 0.0:
+        return 0.0, False
+    beta, gam = 2.0 * gf * c_d, 2.0 * gf * k
+    c1e = af0 - bf * BRAKE * hold0 + gf * weight
+    q = -(m_b * x[1] + m_f * v)
+    top = brake_speed2(depth_left, c1e, beta, gam)
+    if not top > v * v:  # braking from here: does the brake spend the momentum
+        e = math.expm1(beta * depth_left)
+        c1 = (v * v + (gam / beta) * (e / beta - depth_left)) * beta / (2.0 * e)
+        j = (-v - c1 * brake_time(depth_left, c1, beta, gam)) / gf
+        return math.sqrt(top), abs((c1 - af0 - gf * weight) / bf) <= u_max and j >= q
+    lo, hi = 0.0, depth_left
+    for _ in range(BISECT):
+        sb = 0.5 * (lo + hi)
+        j = _impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e,
+                     beta, gam)
+        if j < q:  # (-inf: too fast, the plan does not fit; +inf: too slow)
+            if j == -np.inf:
+                hi = sb
+            else:
+                lo = sb
+        else:
+            hi = sb
+    j = _impulse(hi, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e, beta,
+                 gam)
+    w = math.sqrt(max(brake_speed2(0.5 * (lo + hi), c1e, beta, gam), 0.0))
+    return w, j >= q and math.isfinite(j)
 
 
 @njit(**JIT)
@@ -122,33 +230,19 @@ def creep_force(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: 
     d = -x[2]
     depth_left = weight / k - d
     u_e = -BRAKE * hold0
-    beta, gam = 2.0 * gf * c_d, 2.0 * gf * k
-    c1e = af0 + bf * u_e + gf * weight
     if depth_left <= 0.0:  # past the static depth: stop the foot at the brake's force
         return max(min(u_e, u_max), -u_max)
+    beta, gam = 2.0 * gf * c_d, 2.0 * gf * k
     # the constant force that stops the foot exactly at the static depth
     e = math.expm1(beta * depth_left)
     c1 = (v * v + (gam / beta) * (e / beta - depth_left)) * beta / (2.0 * e)
     u_b = (c1 - af0 - gf * weight) / bf
     if u_b <= u_e:
         return max(min(u_b, u_max), -u_max)
-    # cruise: the brake's length sigma_b whose cruise speed spends the momentum
-    q = -(m_b * x[1] + m_f * v)
-    lo, hi = 0.0, depth_left
-    for _ in range(BISECT):
-        s = 0.5 * (lo + hi)
-        w2 = brake_speed2(s, c1e, beta, gam)
-        if not w2 > 0.0:
-            lo = s
-            continue
-        w = math.sqrt(w2)
-        j = c_d * w * (depth_left - s) - k * (depth_left * depth_left - s * s) / (2.0 * w) \
-            + (w - c1e * brake_time(s, c1e, beta, gam)) / gf
-        if j < q:
-            lo = s
-        else:
-            hi = s
-    w = math.sqrt(max(brake_speed2(0.5 * (lo + hi), c1e, beta, gam), 0.0))
+    # (the force's cruise speed counts no push: measured, a push in its plan left the body
+    # 0.3-0.5 descending at the foot's stop from impact, 2 % deeper; the push arc serves
+    # the decision to take over, creep_reachable)
+    w, _ = _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, 0.0)
     a = -GAIN / h * (v + w)
     u = (a - af0 - gf * (k * d + c_d * v * v)) / bf
     return max(min(u, u_max), -u_max)
@@ -157,46 +251,12 @@ def creep_force(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: 
 @njit(**JIT)
 def creep_reachable(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: float,
                     hold0: float, k: float, c_d: float, x: np.ndarray) -> bool:
-    """The creep law can spend the robot's momentum before the static depth, cruising at
-    most at the speed the foot holds under :data:`REACH` of the force limit (or its own, or
-    the brake's from here), then braking: the landing then ends at the least depth any
-    landing can (``W / K``), and the law should take over. Arguments as
-    :func:`creep_force`'s."""
-    v = x[3]
-    if not (k > 0.0 and c_d > 0.0 and v < 0.0):
-        return False
-    m_f = 1.0 / gf
-    m_b = -bf / (gf * bb)
-    weight = -(m_b * ab0 + m_f * af0)
-    d = -x[2]
-    depth_left = weight / k - d
-    if depth_left <= 0.0:
-        return False
-    beta, gam = 2.0 * gf * c_d, 2.0 * gf * k
-    c1e = af0 - bf * BRAKE * hold0 + gf * weight
-    top = brake_speed2(depth_left, c1e, beta, gam)
-    if not top > v * v:  # braking from here: the force that stops the foot at the depth
-        e = math.expm1(beta * depth_left)
-        c1 = (v * v + (gam / beta) * (e / beta - depth_left)) * beta / (2.0 * e)
-        if abs((c1 - af0 - gf * weight) / bf) > u_max:
-            return False
-        return (-v - c1 * brake_time(depth_left, c1, beta, gam)) / gf >= -(m_b * x[1] + m_f * v)
-    # the fastest cruise: the speed the foot holds at REACH of the force limit (the rest of
-    # it to get there), at least its own, at most the brake's from here
-    w2 = (-(af0 + bf * REACH * u_max) / gf - k * d) / c_d
-    w2 = min(max(w2, v * v), top)
-    lo, hi = 0.0, depth_left  # the brake's length from that speed
-    for _ in range(BISECT):
-        s = 0.5 * (lo + hi)
-        if brake_speed2(s, c1e, beta, gam) < w2:
-            lo = s
-        else:
-            hi = s
-    s, w = 0.5 * (lo + hi), math.sqrt(w2)
-    j = c_d * w * (depth_left - s) - k * (depth_left * depth_left - s * s) / (2.0 * w) \
-        + (w - c1e * brake_time(s, c1e, beta, gam)) / gf
-    return j >= -(m_b * x[1] + m_f * v)
+    """The creep law's plan (push at :data:`REACH` of the force limit to a cruise speed,
+    cruise, brake) spends the robot's momentum before the static depth: the landing then
+    ends at the least depth any landing can (``W / K``), and the law should take over.
+    Arguments as :func:`creep_force`'s."""
+    return _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, REACH * u_max)[1]
 
 
-__all__ = ["BISECT", "BRAKE", "GAIN", "REACH", "GL_W", "GL_X", "brake_speed2", "brake_time",
-           "creep_force", "creep_reachable"]
+__all__ = ["BISECT", "BRAKE", "GAIN", "GL_W", "GL_X", "NEWTON", "REACH", "brake_speed2",
+           "brake_time", "creep_force", "creep_reachable", "push_speed2", "push_time"]

@@ -140,12 +140,13 @@ def test_a_creep_is_the_creep_laws_within_the_period_and_holds_the_stroke():
     # robot's weight; the clairvoyant optimum is not bang-bang, it creeps down to d = 1/K):
     # the compiled Newton's push-pull plan has the body rising at the foot's stop; the creep
     # law (softlanding.control.creep) takes over in the compiled step, no fallback (it was a
-    # transcription of 0.1 s in that sample); it switches late here (the push went on
-    # 15 samples): 3.5 % deeper than 1/K, every limit held
+    # transcription of 0.1 s in that sample), once its plan (push, cruise, brake) can spend
+    # the momentum before 1/K: measured 0.6 % deeper (the push went on a little too long),
+    # every limit held
     fast = mpc_landing(-1, PAPER_ROBOT, linear_or_drag(2.0, 1.0), controller="bangbang")
     assert fast.stroke_held and fast.uncovered == 0 and "bangbang (creep law)" in fast.step_paths
-    assert 0.5 * (1 - 1e-9) <= fast.depth <= 0.5 * 1.04
-    # where it switches early, the static depth itself (the least any landing reaches)
+    assert 0.5 * (1 - 1e-9) <= fast.depth <= 0.5 * 1.01
+    # the static depth itself (the least any landing reaches)
     fast = mpc_landing(-1, PAPER_ROBOT, linear_or_drag(1.5, 1.0), controller="bangbang")
     assert fast.stroke_held and fast.uncovered == 0 and fast.feasible
     assert fast.depth == pytest.approx(1 / 1.5, rel=1e-6)
@@ -164,10 +165,10 @@ def test_a_creep_holds_every_limit_the_re_planning_mpc_holds(v0, k, c):
 
 
 def test_a_delayed_creep_is_the_creep_laws_near_the_static_depth():
-    # a creep (v0 = -3, K = 0.5, c_d = 1) with exact measurements and one sample of delay:
-    # the creep law acts on a state a sample old (it does not carry the state over the
-    # delay), every limit held, 0.3 % below 1/K (measured 2.0056; without delay the plan
-    # fails at sample 4 and the fallback's re-plan lands at 1/K)
+    # a creep (v0 = -3, K = 0.5, c_d = 1; its push-pull plan fails at sample 4) with exact
+    # measurements and one sample of delay: the creep law acts on a state a sample old (it
+    # does not carry the state over the delay; its feedback takes most of the error up),
+    # every limit held, measured 0.28 % below 1/K (1 + 2e-6 without the delay)
     fast = mpc_landing(-3, PAPER_ROBOT, linear_or_drag(0.5, 1.0), controller="bangbang",
                        delay=1)
     assert fast.feasible and fast.uncovered == 0 and "bangbang (creep law)" in fast.step_paths

@@ -7,7 +7,15 @@ import pytest
 from scipy.integrate import quad, solve_ivp
 
 from softlanding.control import bangbang as bb
-from softlanding.control.creep import BRAKE, brake_speed2, brake_time, creep_force, creep_reachable
+from softlanding.control.creep import (
+    BRAKE,
+    brake_speed2,
+    brake_time,
+    creep_force,
+    creep_reachable,
+    push_speed2,
+    push_time,
+)
 from softlanding.control.mpc import Sensor, mpc_landing
 from softlanding.control.plant import SteppingPlant
 from softlanding.model.controllers import ForceSchedule
@@ -41,6 +49,26 @@ def test_the_brake_stops_the_foot_exactly_at_the_static_depth(k, c_d, sigma):
                   0, sigma, limit=200)[0]
     assert brake_time(sigma, c1, 2 * GF * c_d, 2 * GF * k) == pytest.approx(t_quad, rel=1e-6)
     assert sol.t_events[0][0] == pytest.approx(t_quad, rel=1e-6)
+
+
+@pytest.mark.parametrize("k,c_d,v0,d0", [(1.0, 1.0, -1.0, 0.1), (0.5, 0.2, -0.5, 0.0),
+                                         (2.0, 1.0, 0.0, 0.2)])
+def test_the_push_arc_is_the_foots_motion_under_the_force_limit(k, c_d, v0, d0):
+    # scipy integrates the foot under u_max from (d0, v0) over 0.1; the closed form's v_f^2
+    # at the distance it moved, and the quadrature's duration of that distance, agree
+    u = 8.2
+    c_p = AF0 + BF * u + GF * k * d0
+
+    def rhs(t, y):
+        return [y[1], AF0 + BF * u + GF * (k * -y[0] + c_d * y[1] ** 2)]
+
+    sol = solve_ivp(rhs, (0, 0.1), [-d0, v0], rtol=1e-12, atol=1e-14)
+    s = -sol.y[0, -1] - d0
+    z = push_speed2(s, v0 * v0, c_p, 2 * GF * c_d, 2 * GF * k)
+    assert z == pytest.approx(sol.y[1, -1] ** 2, rel=1e-9)
+    # (8-point Gauss-Legendre: 1.2e-5 where the speed grows tenfold; the law's impulse
+    # estimate needs no more, its feedback takes the rest up)
+    assert push_time(s, v0 * v0, c_p, 2 * GF * c_d, 2 * GF * k) == pytest.approx(0.1, rel=3e-5)
 
 
 def test_the_law_refuses_ground_without_drag_and_a_foot_not_descending():
