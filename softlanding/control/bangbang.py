@@ -28,9 +28,14 @@ solved. The acceleration coefficients come from
 The ground estimate is the recursive least squares of
 :class:`~softlanding.control.estimation.GroundEstimator`, compiled into the same step.
 
-A state the structure does not cover (Newton fails, a duration turns negative beyond the
-switch, the arrest cannot hold, a limit on the plan's path) is reported, and the caller
-falls back to the re-planning MPC (:func:`~softlanding.control.mpc.mpc_landing` counts it).
+Where the optimum creeps to the static depth (the plan's body rises at the foot's stop, or
+the creep law's own plan reaches that depth with the momentum spent, judged on the ground
+:data:`CREEP_SIGMAS` standard deviations stiffer and less draggy) the step hands over to the
+creep law (:mod:`softlanding.control.creep`, phase :data:`CREEPING`, status
+:data:`CREEP_LAW`) with ``P[P_CREEP] = 1``. A state neither covers (Newton fails, a duration
+turns negative beyond the switch, the arrest cannot hold, a limit on the plan's path) is
+reported, and the caller falls back to the re-planning MPC
+(:func:`~softlanding.control.mpc.mpc_landing` counts it).
 """
 
 from __future__ import annotations

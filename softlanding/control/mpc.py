@@ -301,10 +301,11 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     controller : str
         ``"replan"``: the re-planning MPC above. ``"bangbang"``: the compiled real-time
         Newton on the push-then-pull plan's switching times
-        (:mod:`softlanding.control.bangbang`; no NLP, no allocation in Python per sample);
-        where that structure does not cover the state (a creep, an arrest that no longer
-        holds), the sample and the rest of the landing fall back to the re-planning MPC
-        (counted in ``uncovered``).
+        (:mod:`softlanding.control.bangbang`; no NLP, no allocation in Python per sample),
+        and the creep law (:mod:`softlanding.control.creep`) where the optimum creeps to
+        the static depth; where neither covers the state (Newton fails, an arrest that no
+        longer holds), the sample and the rest of the landing fall back to the re-planning
+        MPC (counted in ``uncovered``).
     noise : float
         Standard deviation of the Gaussian noise on every measured foot position, velocity,
         acceleration and force (paper units; 0: exact measurements). The estimator is told
