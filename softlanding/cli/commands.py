@@ -672,7 +672,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
            "feasible": m.feasible, **{k_: d[k_] for k_ in (
                "failure", "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak",
                "period", "period_rig_ms", "controller", "uncovered", "deferred",
-               "step_work_max", "noise", "delay",
+               "creep_samples", "step_work_max", "noise", "delay",
                "seed", "margin", "estimator", "samples", "steps", "replans",
                "fallbacks", "step_time_median_ms", "step_time_p99_ms", "step_time_max_ms",
                "step_cpu_median_ms", "step_cpu_p99_ms", "step_cpu_max_ms", "prepare_time_s",
@@ -701,6 +701,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
             ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
             ("samples not covered (bangbang)", m.uncovered),
             ("samples deferred (bangbang)", m.deferred),
+            ("samples under the creep law", m.creep_samples),
             ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"
                                            + (", filtered estimate" if m.estimator == "filtered"
                                               else "")),

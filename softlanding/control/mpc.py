@@ -149,6 +149,9 @@ class MPCLanding:
         sample's work, :data:`softlanding.control.bangbang.WORK`): each applied the last
         whole Newton iterate, or the last plan, and the next sample's Newton went on from
         there (``step_paths``: ``"bangbang (deferred)"``).
+    creep_samples : int
+        ``controller="bangbang"``: samples under the creep law
+        (:mod:`softlanding.control.creep`; ``step_paths``: ``"bangbang (creep law)"``).
     step_work : list of int
         ``controller="bangbang"``: the integrator steps of each sample the compiled
         controller ran (at most :data:`softlanding.control.bangbang.WORK`).
@@ -189,6 +192,7 @@ class MPCLanding:
     sample_limit_hit: bool = False
     uncovered: int = 0
     deferred: int = 0
+    creep_samples: int = 0
     step_work: list[int] = field(default_factory=list)
     noise: float = 0.0
     delay: int = 0
@@ -255,6 +259,7 @@ class MPCLanding:
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
             "structure_changes": self.structure_changes, "controller": self.controller,
             "uncovered": self.uncovered, "deferred": self.deferred,
+            "creep_samples": self.creep_samples,
             "step_work_max": max(self.step_work, default=None), "noise": self.noise,
             "delay": self.delay,
             "seed": self.seed, "margin": self.margin, "estimator": self.estimator,
@@ -591,7 +596,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                       pieces=list(plant.history), prepare_time_s=prepare_s,
                       sample_limit_hit=samples >= max_samples and plant.x[3] < -stop,
                       controller=controller, uncovered=uncovered,
-                      deferred=paths.count("bangbang (deferred)"), step_work=step_work,
+                      deferred=paths.count("bangbang (deferred)"),
+                      creep_samples=paths.count("bangbang (creep law)"), step_work=step_work,
                       noise=sensor.noise,
                       delay=sensor.delay, seed=seed, margin=margin, estimator=estimator,
                       compiled=record)

@@ -150,6 +150,8 @@ def test_a_creep_is_the_creep_laws_within_the_period_and_holds_the_stroke():
     fast = mpc_landing(-1, PAPER_ROBOT, linear_or_drag(1.5, 1.0), controller="bangbang")
     assert fast.stroke_held and fast.uncovered == 0 and fast.feasible
     assert fast.depth == pytest.approx(1 / 1.5, rel=1e-6)
+    assert fast.creep_samples == fast.step_paths.count("bangbang (creep law)") > 0
+    assert fast.to_dict()["creep_samples"] == fast.creep_samples
 
 
 @pytest.mark.slow
