@@ -46,7 +46,8 @@ def export_command(a: argparse.Namespace) -> int:
     from softlanding.control.export_c.writer import FILES, controller_sources, write_controller
 
     P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d,
-                         bb.ground_force_noise(robot.r_m, noise, filtered), margin, period)
+                         bb.ground_force_noise(robot.r_m, noise, filtered), margin, period,
+                         creep=True)  # (the creep law on, as mpc_landing runs it)
     text = (f"r_m = {robot.r_m:g}, s = {robot.s:g}, u_max = {u_max:g}; prior ground K = {k:g}, "
             f"c_d = {c_d:g}; sample period {period:g}; sensor noise {noise:g}; margin "
             f"{margin:g}; {a.estimator} estimate")
