@@ -252,7 +252,7 @@ def robot_lines(P: np.ndarray) -> list[str]:
     return [f"    {c_double(v)},  /* {names[i]} */" for i, v in enumerate(P)]
 
 
-__all__ = ["CONSTANTS", "CREEP_CONSTANTS", "FILTERED_CONSTANTS", "FILTER_CONSTANTS", "F_DOC", "M_DOC", "P_DOC",
-           "STATUSES", "c_double", "constant_lines", "creep_constant_lines",
+__all__ = ["CONSTANTS", "CREEP_CONSTANTS", "FILTERED_CONSTANTS", "FILTER_CONSTANTS", "F_DOC",
+           "M_DOC", "P_DOC", "STATUSES", "c_double", "constant_lines", "creep_constant_lines",
            "creep_gl_text", "dop853_text", "filter_constant_lines",
            "filtered_constant_lines", "indices", "layout_lines", "robot_lines"]

@@ -83,7 +83,8 @@ def controller_sources(P: np.ndarray, robot_text: str,
         "FILTERED_CONSTANTS": "\n".join(filtered_constant_lines()),
         "CREEP_CONSTANTS": "\n".join(creep_constant_lines())})
     source = _fill(_template("controller.c.in"), {
-        **common, "DOP853": dop853_text(), "CREEP_GL": creep_gl_text(), "ROBOT": "\n".join(robot_lines(P)),
+        **common, "DOP853": dop853_text(), "CREEP_GL": creep_gl_text(),
+        "ROBOT": "\n".join(robot_lines(P)),
         "SENSOR_NOISE": c_double(sensor_noise)})
     readme = _fill(_template("README.txt.in"), {
         **common, "EXPORTED_FOR": textwrap.fill(f"Exported for: {robot_text}.", 90)})
