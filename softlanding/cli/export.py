@@ -46,7 +46,8 @@ def export_command(a: argparse.Namespace) -> int:
     from softlanding.control.export_c.writer import FILES, controller_sources, write_controller
 
     P = bb.robot_numbers(robot.r_m, robot.s, u_max, k, c_d,
-                         bb.ground_force_noise(robot.r_m, noise, filtered), margin, period)
+                         bb.ground_force_noise(robot.r_m, noise, filtered), margin, period,
+                         creep=True)  # (the creep law on, as mpc_landing runs it)
     text = (f"r_m = {robot.r_m:g}, s = {robot.s:g}, u_max = {u_max:g}; prior ground K = {k:g}, "
             f"c_d = {c_d:g}; sample period {period:g}; sensor noise {noise:g}; margin "
             f"{margin:g}; {a.estimator} estimate")
@@ -73,7 +74,18 @@ def export_command(a: argparse.Namespace) -> int:
                  "steps": result.filtered.steps, "weighted": result.filtered.weighted,
                  "recovery": result.filtered.outcomes, "statuses": result.filtered.statuses,
                  "weight_grid": result.filtered.weights,
-                 "max_relative_difference": result.filtered.max_relative}}}
+                 "max_relative_difference": result.filtered.max_relative},
+             "creep_law_samples": result.creep_law_samples(),
+             "creep_landings": None if result.creep is None else {
+                 "landings": result.creep.landings, "samples": result.creep.steps,
+                 "filtered_samples": 0 if result.creep_filtered is None
+                 else result.creep_filtered.steps,
+                 "statuses": result.creep.statuses,
+                 "filtered_statuses": {} if result.creep_filtered is None
+                 else result.creep_filtered.statuses,
+                 "max_relative_difference": result.creep.max_relative,
+                 "filtered_max_relative_difference": {} if result.creep_filtered is None
+                 else result.creep_filtered.max_relative}}}
     if a.json:
         print_json(d)
         return EXIT_OK

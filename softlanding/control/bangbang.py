@@ -176,8 +176,9 @@ def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: flo
     creep : bool
         A state whose plan ends with the body rising (:data:`CREEP`) on ground with drag
         switches to the creep law (:mod:`softlanding.control.creep`; status
-        :data:`CREEP_LAW`) instead of being reported not covered (the exported C's
-        behaviour: it has no creep law).
+        :data:`CREEP_LAW`) instead of being reported not covered (``mpc_landing`` and
+        ``softlanding export-controller``'s numbers have it on; the exported C has the law
+        too).
     """
     x = np.zeros(4)
     b0 = robot_rhs(x, 0.0, 0.0, r_m)

@@ -1,5 +1,6 @@
 """The numbers the exported C takes from the Python controller: the layout of ``P`` and
 ``M``, the phases, statuses and tolerances of :mod:`softlanding.control.bangbang`, the
+creep law's constants and Gauss-Legendre nodes (:mod:`softlanding.control.creep`), the
 layout of the foot filter's memory ``F`` and its constants
 (:mod:`softlanding.control.foot_filter`), the filtered estimate's weight and recovery
 constants (:mod:`softlanding.control.estimation`, :mod:`softlanding.control.recovery`), and
@@ -19,7 +20,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from softlanding.control import bangbang as bb
-from softlanding.control import estimation, recovery
+from softlanding.control import creep, estimation, recovery
 from softlanding.control import foot_filter as ff
 from softlanding.simulation.kernel import dop853
 
@@ -41,12 +42,12 @@ P_DOC = {
     "P_BUDGET": "Newton iterations per sample while the switch is > 3 samples away",
     "P_PERIOD": "the sample period (the plan-holds check predicts the next sample)",
     "P_WORK": "integrator steps one call may take (its bound; then SL_DEFERRED)",
-    "P_CREEP": "the Python controller's creep law on (1); this C has none: SL_CREEP",
+    "P_CREEP": "the creep law takes over creeping landings (1; 0: SL_CREEP, not covered)",
 }
 
 #: What each entry of ``M`` holds.
 M_DOC = {
-    "M_PHASE": "SL_PUSH (both arcs left) or SL_PULL (the foot's stop left)",
+    "M_PHASE": "SL_PUSH (both arcs left), SL_PULL (the foot's stop left) or SL_CREEPING",
     "M_TAU1": "push left from the last step (while SL_PUSH)",
     "M_TAU2": "pull from the switch (SL_PUSH) or from the last step (SL_PULL) to the stop",
     "M_TH0": "estimate of K",
@@ -68,7 +69,7 @@ M_DOC = {
     "M_LAST_STEP": "size |dtau1| + |dtau2| of the last Newton step",
     "M_WORK": "integrator steps of the last sl_control_step (at most P[SL_P_WORK])",
     "M_DEFERRED": "calls whose integrator steps ran out (SL_DEFERRED)",
-    "M_UCREEP": "the Python controller's creep law's force (not set by this C)",
+    "M_UCREEP": "the creep law's force of the last step (while SL_CREEPING): sl_force",
 }
 
 #: What each entry of the foot filter's memory ``F`` holds.
@@ -95,9 +96,14 @@ FILTER_CONSTANTS = ("PROVISIONAL", "PROCESS", "INNOVATION", "START_STD")
 #: The phases and statuses, and the tolerances the C uses (names of
 #: :mod:`~softlanding.control.bangbang`).
 STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS",
-            "CREEP", "DEFERRED")
-CONSTANTS = ("PUSH", "PULL", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL", "PLAN_HOLDS_TOL",
-             "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED", "MARCHED", "SPENT")
+            "CREEP", "DEFERRED", "CREEP_LAW")
+CONSTANTS = ("PUSH", "PULL", "CREEPING", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL",
+             "PLAN_HOLDS_TOL", "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED",
+             "MARCHED", "SPENT", "CREEP_SIGMAS")
+
+#: The creep law's constants (names of :mod:`~softlanding.control.creep`), written
+#: ``SL_CREEP_<name>``; its Gauss-Legendre nodes and weights are :func:`creep_gl_text`'s.
+CREEP_CONSTANTS = ("BRAKE", "GAIN", "REACH", "BISECT", "NEWTON")
 
 #: The filtered estimate's constants: ``(module, name)``, written ``SL_<name>``
 #: (``sl_filtered_weight``'s allowance and least weight, ``sl_filtered_step``'s bound on the
@@ -199,6 +205,26 @@ def filtered_constant_lines() -> list[str]:
     return lines
 
 
+def creep_constant_lines() -> list[str]:
+    """``#define SL_CREEP_*`` lines of :data:`CREEP_CONSTANTS`, and ``SL_CREEP_GL_N``, the
+    number of Gauss-Legendre nodes."""
+    lines = []
+    for name in CREEP_CONSTANTS:
+        v = getattr(creep, name)
+        value = str(v) if type(v) is int else c_double(v)
+        lines.append(f"#define SL_CREEP_{name:<10} {value}")
+    lines.append(f"#define SL_CREEP_{'GL_N':<10} {creep.GL_X.size}")
+    return lines
+
+
+def creep_gl_text() -> str:
+    """The C arrays ``SL_GL_X``, ``SL_GL_W``: the creep law's Gauss-Legendre nodes and
+    weights on ``[0, 1]`` (:data:`~softlanding.control.creep.GL_X`, ``GL_W``), exact."""
+    return "\n".join([
+        f"static const double SL_GL_X[SL_CREEP_GL_N] = {_array(creep.GL_X)};",
+        f"static const double SL_GL_W[SL_CREEP_GL_N] = {_array(creep.GL_W)};"])
+
+
 def _array(values: Iterable[float]) -> str:
     return "{" + ", ".join(c_double(v) for v in values) + "}"
 
@@ -226,6 +252,7 @@ def robot_lines(P: np.ndarray) -> list[str]:
     return [f"    {c_double(v)},  /* {names[i]} */" for i, v in enumerate(P)]
 
 
-__all__ = ["CONSTANTS", "FILTERED_CONSTANTS", "FILTER_CONSTANTS", "F_DOC", "M_DOC", "P_DOC",
-           "STATUSES", "c_double", "constant_lines", "dop853_text", "filter_constant_lines",
+__all__ = ["CONSTANTS", "CREEP_CONSTANTS", "FILTERED_CONSTANTS", "FILTER_CONSTANTS", "F_DOC",
+           "M_DOC", "P_DOC", "STATUSES", "c_double", "constant_lines", "creep_constant_lines",
+           "creep_gl_text", "dop853_text", "filter_constant_lines",
            "filtered_constant_lines", "indices", "layout_lines", "robot_lines"]

@@ -15,7 +15,8 @@ from softlanding.optimal.landing import arrest_schedule
 
 def plan_schedule(P: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The plan in ``M`` as a piecewise-constant force from the step, from the Python
-    schedule (push, pull, then :func:`~softlanding.optimal.landing.arrest_schedule`):
+    schedule (push, pull, then :func:`~softlanding.optimal.landing.arrest_schedule`; while
+    creeping, the creep law's force ``M[M_UCREEP]`` held, as ``mpc_landing``'s):
     ``values[i]`` until ``times[i]``, the last value after.
 
     Parameters
@@ -23,6 +24,8 @@ def plan_schedule(P: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     P, M : arrays
         The controller's numbers and memory.
     """
+    if M[bb.M_PHASE] == bb.CREEPING:
+        return np.array([]), np.array([float(M[bb.M_UCREEP])])
     t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
     t2 = t1 + float(M[bb.M_TAU2])
     u_max = float(P[bb.P_UMAX])

@@ -7,9 +7,10 @@ state (:func:`~softlanding.control.bangbang.solve_plan`), then the samples follo
 gave (a plant by Euler steps on the true ground, whose ``K`` and ``c_d`` are off the
 controller's prior by up to 50 %, and noisy sensors; or, in a fifth of the landings, the
 state the plan predicted, after a first sample at the impact: the plan-holds path),
-until the plan's foot stop or a state the controller does not cover. Every call's inputs
-(``P`` and ``M`` before it included) are recorded, so that another implementation can be
-run on exactly the same ones.
+until the plan's foot stop or a state the controller does not cover; every other landing
+with the creep law on (``P_CREEP = 1``: creeping, the plant's foot stop ends it). Every
+call's inputs (``P`` and ``M`` before it included) are recorded, so that another
+implementation can be run on exactly the same ones.
 """
 
 from __future__ import annotations
@@ -105,7 +106,7 @@ def random_landings(robot: Robot, seed: int = 0) -> Iterator[Landing]:
         exact = rng.random() < 0.2  # the plant follows the plan's prediction exactly
         margin = 0.0 if exact else float(rng.choice([0.0, 2.0]))
         P = bb.robot_numbers(r.r_m, r.s, u_max, k, c_d, max(noise, 1e-6), margin,
-                             float(rng.uniform(0.005, 0.03)))
+                             float(rng.uniform(0.005, 0.03)), creep=i % 2 == 1)
         if i % 5 == 4:  # a tight bound on a sample's work: the deferred samples too
             P[bb.P_WORK] = 30.0
         truth = (k, c_d) if exact else (k * float(rng.uniform(0.5, 1.5)),
@@ -130,7 +131,9 @@ class Call:
         (unused by a first plan).
     first : bool
         The first plan (:func:`~softlanding.control.bangbang.solve_plan`), else a sample
-        (:func:`~softlanding.control.bangbang.control_step`, estimating).
+        (:func:`~softlanding.control.bangbang.control_step`).
+    estimate : bool
+        The sample updates the estimate (the random landings' always do).
     """
 
     P: np.ndarray
@@ -140,6 +143,7 @@ class Call:
     u: float
     h: float
     first: bool
+    estimate: bool = True
 
 
 def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call], int]:
@@ -181,7 +185,9 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
                 st = int(bb.solve_plan(P, M, x, *ws))
             else:
                 hk = h
-                if case.exact:  # the plan's own prediction (first: a sample at impact)
+                creeping = M[bb.M_PHASE] == bb.CREEPING
+                if case.exact and not creeping:  # the plan's own prediction (first: a
+                    # sample at impact)
                     hk = h if M[bb.M_PRED_OK] == 1.0 else 0.0
                     x = M[bb.M_PRED:bb.M_PRED + 4].copy() if hk else x.copy()
                     u = float(P[bb.P_UMAX]) if M[bb.M_PHASE] == bb.PUSH and M[bb.M_TAU1] > hk \
@@ -190,15 +196,18 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
                         case.truth[0] * -x[2] + case.truth[1] * x[3] * x[3]))
                 else:  # the plant, and the sensors' noise
                     x, u, a_f = _plant(P, M, x, h, case.truth)
+                    if creeping and x[3] >= 0.0:
+                        break  # the creep law's foot stopped
                     x = x * (1.0 + case.noise * rng.standard_normal(4))
                     a_f = a_f * (1.0 + case.noise * rng.standard_normal())
                 x[3] = min(x[3], -1e-6)  # (the foot still sinks: the loop's condition)
                 calls.append(Call(P.copy(), M.copy(), x, a_f, u, hk, False))
                 st = int(bb.control_step(P, M, x, a_f, u, hk, True, *ws))
                 steps += 1
-            length = (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2]
+            length = np.inf if M[bb.M_PHASE] == bb.CREEPING else (
+                (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2])
             if steps >= n_steps or length <= h or st not in (bb.OK, bb.CONVERGING, bb.HOLDS,
-                                                                  bb.DEFERRED):
+                                                                  bb.DEFERRED, bb.CREEP_LAW):
                 break  # the foot's stop within the next sample, or a state not covered
     pr = CREEP_PROBE
     P = bb.robot_numbers(robot.r_m, robot.s, force_limit(robot), pr.K, pr.c_d)
@@ -218,6 +227,8 @@ def _plant(P: np.ndarray, M: np.ndarray, x: np.ndarray, h: float,
     u = a_f = 0.0
     for i in range(20):
         u = float(P[bb.P_UMAX]) if (i + 1) * dt <= t1 else -float(P[bb.P_UMAX])
+        if M[bb.M_PHASE] == bb.CREEPING:  # (the creep law's force, held)
+            u = float(M[bb.M_UCREEP])
         a_f = float(P[bb.P_AF0] + P[bb.P_BF] * u
                     + P[bb.P_GF] * (truth[0] * -xf + truth[1] * vf * vf))
         vb += dt * float(P[bb.P_AB0] + P[bb.P_BB] * u)

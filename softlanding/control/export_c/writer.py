@@ -19,6 +19,8 @@ from softlanding.control import bangbang as bb
 from softlanding.control.export_c.layout import (
     c_double,
     constant_lines,
+    creep_constant_lines,
+    creep_gl_text,
     dop853_text,
     filter_constant_lines,
     filtered_constant_lines,
@@ -78,9 +80,11 @@ def controller_sources(P: np.ndarray, robot_text: str,
         "P_LAYOUT": "\n".join(layout_lines("P_")), "M_LAYOUT": "\n".join(layout_lines("M_")),
         "CONSTANTS": "\n".join(constant_lines()), "F_LAYOUT": "\n".join(layout_lines("F_")),
         "FILTER_CONSTANTS": "\n".join(filter_constant_lines()),
-        "FILTERED_CONSTANTS": "\n".join(filtered_constant_lines())})
+        "FILTERED_CONSTANTS": "\n".join(filtered_constant_lines()),
+        "CREEP_CONSTANTS": "\n".join(creep_constant_lines())})
     source = _fill(_template("controller.c.in"), {
-        **common, "DOP853": dop853_text(), "ROBOT": "\n".join(robot_lines(P)),
+        **common, "DOP853": dop853_text(), "CREEP_GL": creep_gl_text(),
+        "ROBOT": "\n".join(robot_lines(P)),
         "SENSOR_NOISE": c_double(sensor_noise)})
     readme = _fill(_template("README.txt.in"), {
         **common, "EXPORTED_FOR": textwrap.fill(f"Exported for: {robot_text}.", 90)})

@@ -1,8 +1,9 @@
 """The controller exported as C (``softlanding export-controller``): its numbers against the
 Python modules', compiled with the system's C compiler and compared with the numba
 controller on 1,000 samples of random landings and with the numba foot filter and the
-filtered step (weights, recovery) on 600 samples of noisy landings, C programs that follow
-the README, and the command's bad input and output folder."""
+filtered step (weights, recovery) on 600 samples of noisy landings, and on the samples of
+mpc_landing's creep landings (the creep law), C programs that follow the README, and the
+command's bad input and output folder."""
 
 import contextlib
 import io
@@ -15,12 +16,13 @@ import pytest
 
 from softlanding.cli import main
 from softlanding.control import bangbang as bb
-from softlanding.control import estimation, recovery
+from softlanding.control import creep, estimation, recovery
 from softlanding.control import foot_filter as ff
 from softlanding.control.estimation import GroundEstimator
 from softlanding.control.export_c import layout
 from softlanding.control.export_c.binding import CFLAGS, CController, compile_shared, find_compiler
-from softlanding.control.export_c.check import TOLERANCE, compare, plan_forces
+from softlanding.control.export_c.check import TOLERANCE, compare, compare_calls, plan_forces
+from softlanding.control.export_c.creep_samples import CREEP_LANDINGS, creep_calls
 from softlanding.control.export_c.filter_check import PROBES, compare_filter, filtered_calls
 from softlanding.control.export_c.reference import ground_estimate, plan_force_integrals
 from softlanding.control.export_c.step_check import compare_steps
@@ -69,7 +71,8 @@ def test_the_files_and_json(exported):
     assert sorted(p.name for p in folder.iterdir()) == sorted([HEADER, SOURCE, README])
     assert d["files"] == [str(folder / n) for n in (HEADER, SOURCE, README)]
     r = PAPER_ROBOT
-    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0)
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, creep=True)  # (as mpc_landing's)
+    assert P[bb.P_CREEP] == 1.0
     assert d["numbers"] == {k[2:]: P[i] for k, i in layout.indices("P_").items()}
 
 
@@ -83,13 +86,18 @@ def test_the_header_holds_the_python_modules_numbers(exported):
     assert max(layout.indices("P_").values()) < bb.NP and bb.M_PRED + 4 <= bb.NM
     for name in layout.CONSTANTS:
         assert float(got[name]) == getattr(bb, name)
+    for name in layout.CREEP_CONSTANTS:  # the creep law's, from its module
+        assert float(got[f"CREEP_{name}"]) == getattr(creep, name)
+    assert {"CREEPING", "CREEP_LAW", "CREEP_SIGMAS"} <= set(layout.CONSTANTS)
     src = (folder / SOURCE).read_text()
+    assert np.array_equal(_array(src, "SL_GL_X"), creep.GL_X)
+    assert np.array_equal(_array(src, "SL_GL_W"), creep.GL_W)
     assert np.array_equal(_array(src, "SL_DA"), dop853.A.ravel())
     for name, want in (("SL_DB", dop853.B), ("SL_DE5", dop853.E5), ("SL_DE3", dop853.E3)):
         assert np.array_equal(_array(src, name), want)
     r = PAPER_ROBOT
     assert np.array_equal(_array(src, "SL_ROBOT_NUMBERS"),
-                          bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0))
+                          bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, creep=True))
 
 
 def test_an_entry_the_export_does_not_describe_fails_the_export(monkeypatch):
@@ -107,6 +115,7 @@ def test_c_and_numba_agree_on_1000_samples_of_random_landings(exported):
     st = check["statuses"]
     assert all(st.get(s, 0) >= 50 for s in ("ok", "converging", "plan holds")), st
     assert st.get("creep", 0) >= 1  # a plan not covered: SL_CREEP in C too (samples.py)
+    assert st.get("creep law", 0) >= 10  # the creep law on, every other landing
     assert st.get("deferred", 0) >= 10  # the work bound ran out (samples.py's tight ones)
     assert check["pull_samples"] >= 50  # and after the switch
     assert sum(st.values()) == 1000 + check["landings"] + 1  # the creep's probe
@@ -124,6 +133,78 @@ def test_the_comparison_sees_a_changed_constant(exported, tmp_path):
     (mutant / SOURCE).write_text(src.replace("-1.0 / 8.0", "-1.0 / 8.000001"))
     c = CController(compile_shared(mutant, tmp_path / "mutant.so"))
     assert compare(c, 30).worst() > 1e-9
+
+
+# ---- the creep law --------------------------------------------------------------------------
+
+@pytest.fixture(scope="module")
+def creep_samples():
+    """The samples of mpc_landing's creep landings of the paper's robot (exact, and noisy
+    filtered)."""
+    return creep_calls(PAPER_ROBOT)
+
+
+@pytest.fixture(scope="module")
+def compiled(exported, tmp_path_factory):
+    """The exported C, compiled."""
+    return CController(compile_shared(exported[0], tmp_path_factory.mktemp("lib") / "l.so"))
+
+
+@needs_cc
+def test_c_and_python_creep_law_agree_on_creep_landings(compiled, creep_samples):
+    # every sample of the exact creep landing through both steps: the same status (the
+    # creep law's takeover decided alike), and the creep law's force to the last bit
+    c, ws = compiled, bb.workspace()
+    assert CREEP_LANDINGS[0][:3] == (-1.0, 1.0, 1.5) and creep_samples.landings == 2
+    creeping = 0
+    for k in creep_samples.exact:
+        Pp, Pc, Mp, Mc = k.P.copy(), k.P.copy(), k.M.copy(), k.M.copy()
+        sp = int(bb.control_step(Pp, Mp, k.x.copy(), k.a_f, k.u, k.h, k.estimate, *ws))
+        sc = c.control_step(Pc, Mc, k.x.copy(), k.a_f, k.u, k.h, k.estimate)
+        assert sc == sp and np.array_equal(Mc, Mp) and np.array_equal(Pc, Pp)
+        if sp == bb.CREEP_LAW:
+            creeping += 1
+            u = float(Mp[bb.M_UCREEP])
+            assert Mc[bb.M_PHASE] == bb.CREEPING and abs(u) <= Pp[bb.P_UMAX]
+            # sl_force holds the creep law's force, as the Python schedule
+            for t in (0.0, 0.5 * Pp[bb.P_PERIOD], 10.0):
+                assert c.force(Pc, Mc, t) == u == float(plan_forces(Pp, Mp, t))
+            h = float(Pp[bb.P_PERIOD])
+            assert np.array_equal(c.force_integrals(Pc, Mc, h), plan_force_integrals(Pp, Mp, h))
+    assert creeping >= 40 and creeping >= len(creep_samples.exact) - 5, creeping
+    # and the comparison of both (the filtered landing's steps too)
+    result = compare_calls(c, creep_samples.exact, creep_samples.landings)
+    assert result.worst() == 0.0 and result.statuses["creep law"] == creeping
+    filtered = compare_steps(c, creep_samples.filtered)
+    assert filtered.worst() == 0.0 and filtered.statuses["creep law"] >= 60, filtered.statuses
+
+
+@needs_cc
+def test_the_check_compares_creep_law_samples(exported):
+    check = exported[1]["check"]
+    cl = check["creep_landings"]
+    assert cl["landings"] == len(CREEP_LANDINGS)
+    assert cl["statuses"]["creep law"] >= 40 and cl["filtered_statuses"]["creep law"] >= 60
+    assert all(v <= TOLERANCE for v in (*cl["max_relative_difference"].values(),
+                                        *cl["filtered_max_relative_difference"].values())), cl
+    assert check["creep_law_samples"] >= cl["statuses"]["creep law"] + \
+        cl["filtered_statuses"]["creep law"] + check["statuses"]["creep law"]
+
+
+@pytest.mark.slow
+@needs_cc
+def test_the_creep_comparison_sees_a_changed_constant(exported, creep_samples, tmp_path):
+    # an honest comparison: the cruise's gain off by 1e-7 shows in the creep law's force
+    header = (exported[0] / HEADER).read_text()
+    line = "#define SL_CREEP_GAIN       0.5\n"
+    assert header.count(line) == 1
+    mutant = tmp_path / "mutant"
+    mutant.mkdir()
+    (mutant / HEADER).write_text(header.replace(line, line.replace("0.5", "0.5000001")))
+    (mutant / SOURCE).write_text((exported[0] / SOURCE).read_text())
+    c = CController(compile_shared(mutant, tmp_path / "mutant.so"))
+    result = compare_calls(c, creep_samples.exact, creep_samples.landings)
+    assert result.max_relative["M"] > 1e-9 and result.max_relative["force"] > 1e-9
 
 
 ROBOT_C = """
@@ -168,7 +249,7 @@ def test_a_c_program_following_the_readme_runs_as_the_python_controller(exported
         [str(exe)], capture_output=True, text=True, check=True).stdout.splitlines()]
     # the same calls in Python
     r = PAPER_ROBOT
-    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0)
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, creep=True)
     M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
     x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
     st = bb.solve_plan(P, M, x, *ws)
@@ -419,7 +500,8 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
     # the same in Python: the numba controller and filter, the Python schedule's integrals,
     # the filtered sample of control.recovery
     r = PAPER_ROBOT
-    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, bb.ground_force_noise(r.r_m, NOISE, True))
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, bb.ground_force_noise(r.r_m, NOISE, True),
+                         creep=True)
     M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
     x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
     bb.solve_plan(P, M, x, *ws)
