@@ -55,9 +55,10 @@ JIT: dict[str, Any] = {"cache": True, "fastmath": False}
 BRAKE = 0.5
 #: The fraction of the gap to the cruise speed the foot's acceleration closes per sample.
 GAIN = 0.5
-#: The fraction of the force limit whose foot speed :func:`creep_reachable` counts on (the
-#: rest accelerates the foot to it).
-REACH = 0.8
+#: The fraction of the force limit :func:`creep_reachable`'s plan pushes at (the law's push
+#: saturates at the limit; 0.8 with the push arc's impulse of the wrong sign took a bang-bang
+#: landing over; measured with the sign right: 1.0 lands the creeps as well or better).
+REACH = 1.0
 #: Bisection steps on the brake's length (the cruise speed to ``2^-BISECT`` of the depth left).
 BISECT = 40
 #: Newton steps at most on the push's length.
@@ -115,13 +116,34 @@ def push_time(s: float, z0: float, c_p: float, beta: float, gam: float) -> float
 
 
 @njit(**JIT)
-def _impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e, beta,
-             gam):
+def plan_impulse(sb: float, v: float, d: float, depth_left: float, k: float, c_d: float,
+                 af0: float, bf: float, gf: float, u_push: float, u_max: float,
+                 weight: float, c1e: float, beta: float, gam: float) -> float:
     """The ground's impulse in excess of the weight over the plan with a brake of length
     ``sb``: push (at ``u_push``; 0: none, the foot at ``w`` at once) to the brake's speed
     ``w`` if the foot is slower, cruise at ``w``, brake; ``-inf`` where the plan does not fit
     (the push and the brake longer than the depth left, a speed the push does not reach, or
-    a cruise the force limit does not hold)."""
+    a cruise the force limit does not hold).
+
+    Parameters
+    ----------
+    sb : float
+        The brake's length.
+    v, d : float
+        The foot's velocity (< 0) and depth.
+    depth_left : float
+        The static depth less ``d``.
+    k, c_d : float
+        The ground.
+    af0, bf, gf : float
+        The foot's acceleration ``af0 + bf u + gf f_g``.
+    u_push, u_max : float
+        The push's force (0: no push arc), the force limit.
+    weight : float
+        The robot's weight.
+    c1e, beta, gam : float
+        The brake's deceleration at the stop, ``2 g_f c_d``, ``2 g_f K``.
+    """
     w2 = brake_speed2(sb, c1e, beta, gam)
     if not w2 > 0.0:
         return np.inf  # (no cruise: the least speed; never the bisection's answer)
@@ -133,23 +155,23 @@ def _impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c
     sp = 0.0
     if w2 > v * v and u_push > 0.0:  # the push to it (none: at w at once)
         c_p = af0 + bf * u_push + gf * k * d
-        if push_speed2(depth_left - sb, v * v, c_p, beta, gam) < w2:
-            return -np.inf
-        # its length: Newton on z(s) = w^2 from the far end (z is concave where it rises:
-        # the first step lands below the root, the next ones rise to it), at most NEWTON
-        sp = depth_left - sb
+        # its length: Newton on z(s) = w^2 from the foot's state (z is concave where it
+        # rises: the iterates rise to the root from below), at most NEWTON steps
+        sp = 0.0
+        z = v * v
         for _ in range(NEWTON):
-            z = push_speed2(sp, v * v, c_p, beta, gam)
             slope = -2.0 * c_p - gam * sp - beta * z
-            if not slope > 0.0:
+            if not slope > 0.0:  # the push no longer speeds the foot up: w out of reach
                 return -np.inf
-            step = (z - w2) / slope
-            sp -= step
+            step = (w2 - z) / slope
+            sp += step
+            if sp > depth_left - sb:
+                return -np.inf
+            z = push_speed2(sp, v * v, c_p, beta, gam)
             if abs(step) <= 1e-12 * (depth_left + sp):
                 break
-        if not 0.0 <= sp <= depth_left - sb:
-            return -np.inf
-        j = (v + w - (af0 + bf * u_push + gf * weight) * push_time(sp, v * v, c_p, beta, gam)) / gf
+        # (the foot's momentum change -w - v_f less the push's force and weight over it)
+        j = (-w - v - (af0 + bf * u_push + gf * weight) * push_time(sp, v * v, c_p, beta, gam)) / gf
     cruise = depth_left - sp
     j += c_d * w * (cruise - sb) - k * (cruise * cruise - sb * sb) / (2.0 * w)
     return j + (w - c1e * brake_time(sb, c1e, beta, gam)) / gf
@@ -183,7 +205,7 @@ def _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, u_push):
     lo, hi = 0.0, depth_left
     for _ in range(BISECT):
         sb = 0.5 * (lo + hi)
-        j = _impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e,
+        j = plan_impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e,
                      beta, gam)
         if j < q:  # (-inf: too fast, the plan does not fit; +inf: too slow)
             if j == -np.inf:
@@ -192,7 +214,7 @@ def _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, u_push):
                 lo = sb
         else:
             hi = sb
-    j = _impulse(hi, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e, beta,
+    j = plan_impulse(hi, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e, beta,
                  gam)
     w = math.sqrt(max(brake_speed2(0.5 * (lo + hi), c1e, beta, gam), 0.0))
     return w, j >= q and math.isfinite(j)
@@ -259,4 +281,5 @@ def creep_reachable(af0: float, bf: float, gf: float, ab0: float, bb: float, u_m
 
 
 __all__ = ["BISECT", "BRAKE", "GAIN", "GL_W", "GL_X", "NEWTON", "REACH", "brake_speed2",
-           "brake_time", "creep_force", "creep_reachable", "push_speed2", "push_time"]
+           "brake_time", "creep_force", "creep_reachable", "plan_impulse", "push_speed2",
+           "push_time"]

@@ -13,6 +13,7 @@ from softlanding.control.creep import (
     brake_time,
     creep_force,
     creep_reachable,
+    plan_impulse,
     push_speed2,
     push_time,
 )
@@ -102,3 +103,43 @@ def test_a_bang_bang_landing_never_takes_the_creep_law():
     # linear ground: no drag, the creep cannot reach 1/K (the optimum is deeper)
     m = mpc_landing(-3, PAPER_ROBOT, LinearGround(0.5), controller="bangbang")
     assert not any("creep" in p for p in m.step_paths) and m.uncovered == 0
+
+
+@pytest.mark.parametrize("sb", [0.2, 0.3])
+def test_the_plans_impulse_is_what_the_plan_spends_on_the_exact_plant(sb):
+    # the plan (push at u_max to the brake's speed, cruise at it, brake) followed on the
+    # exact stepping plant with a fine hold (2e-4); the momentum it spends equals
+    # plan_impulse (a push arc with the sign of its foot's momentum change wrong left a
+    # bang-bang landing to the creep law, 1.4 % deep)
+    from softlanding.model.robot import Robot
+
+    robot, k, c_d = Robot(r_m=10.0, s=10.0, u_max=4.0), 1.424, 0.182
+    p = bb.robot_numbers(robot.r_m, robot.s, 4.0, k, c_d)
+    af0, bf, gf, ab0, b_b, h0 = (p[i] for i in (bb.P_AF0, bb.P_BF, bb.P_GF, bb.P_AB0,
+                                                 bb.P_BB, bb.P_HOLD0))
+    m_f, m_b = 1 / gf, -bf / (gf * b_b)
+    weight = -(m_b * ab0 + m_f * af0)
+    x = np.array([4.9907, -0.432, -0.0187, -1.36])
+    beta, gam = 2 * gf * c_d, 2 * gf * k
+    c1e = af0 - bf * BRAKE * h0 + gf * weight
+    w = math.sqrt(brake_speed2(sb, c1e, beta, gam))
+    j = plan_impulse(sb, x[3], -x[2], weight / k + x[2], k, c_d, af0, bf, gf, 4.0, 4.0,
+                     weight, c1e, beta, gam)
+    assert math.isfinite(j)
+    plant = SteppingPlant(robot, -0.5, DragGround(c_d, k))
+    plant.x[:] = x
+    p0, phase = m_b * x[1] + m_f * x[3], "push"
+    for _ in range(100_000):
+        v, d = plant.x[3], -plant.x[2]
+        if v >= -1e-12:
+            break
+        if phase == "push" and -v >= w:
+            phase = "cruise"
+        if phase != "brake" and v * v >= brake_speed2(weight / k - d, c1e, beta, gam):
+            phase = "brake"
+        u = {"push": 4.0, "cruise": (-af0 - gf * (k * d + c_d * v * v)) / bf,
+             "brake": -BRAKE * h0}[phase]
+        plant.step(ForceSchedule((), (u,)), 2e-4)
+    spent = m_b * plant.x[1] + m_f * plant.x[3] - p0
+    assert -plant.x[2] == pytest.approx(weight / k, rel=1e-3)
+    assert spent == pytest.approx(j, abs=5e-3 * abs(p0))
