@@ -276,7 +276,24 @@ def creep_reachable(af0: float, bf: float, gf: float, ab0: float, bb: float, u_m
     """The creep law's plan (push at :data:`REACH` of the force limit to a cruise speed,
     cruise, brake) spends the robot's momentum before the static depth: the landing then
     ends at the least depth any landing can (``W / K``), and the law should take over.
-    Arguments as :func:`creep_force`'s."""
+    Arguments as :func:`creep_force`'s.
+
+    A bound first (most bang-bang samples end there, no bisection): the ground's impulse
+    beyond the weight is ``int (K d - W + c_d v_f^2) dt <= c_d int |v_f| dsigma <= c_d V D``
+    over the depth ``D`` left, ``V`` the plan's largest foot speed (the foot's own, or the
+    fastest cruise the force holds, or the brake's from here)."""
+    v = x[3]
+    if not (k > 0.0 and c_d > 0.0 and v < 0.0):
+        return False
+    m_f = 1.0 / gf
+    m_b = -bf / (gf * bb)
+    weight = -(m_b * ab0 + m_f * af0)
+    depth_left = weight / k + x[2]
+    top = min(brake_speed2(depth_left, af0 - bf * BRAKE * hold0 + gf * weight, 2.0 * gf * c_d,
+                           2.0 * gf * k),
+              (-(af0 + bf * REACH * u_max) / gf - weight) / c_d)
+    if c_d * math.sqrt(max(top, v * v)) * depth_left < -(m_b * x[1] + m_f * v):
+        return False
     return _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, REACH * u_max)[1]
 
 
