@@ -669,7 +669,10 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
         c_lo = M[M_TH1] - CREEP_SIGMAS * P[P_NOISE] * math.sqrt(max(M[M_P11], 0.0))
         if creep_reachable(P[P_AF0], P[P_BF], P[P_GF], P[P_AB0], P[P_BB], P[P_UMAX],
                            P[P_HOLD0], k_hi, c_lo, x):
-            return _creep(P, M, x)
+            # (not where the planned ground, the margin's, has no drag left for the law:
+            # the bang-bang plan goes on)
+            if _creep(P, M, x) == CREEP_LAW:
+                return CREEP_LAW
     if M[M_PHASE] == PUSH:
         if M[M_TAU1] > h:
             M[M_TAU1] -= h

@@ -16,9 +16,11 @@ robot's momentum spent, in closed form (no NLP):
   ``z(sigma) = -A expm1(beta sigma) + (gamma / beta) sigma``, ``A = (gamma/beta - 2 c_1) /
   beta``: the constant force that stops the foot exactly at ``d_s`` from ``(d, v_f)`` is
   linear in ``z``. The brake is ``u_e = -BRAKE h_0`` (``h_0`` the foot's weight share): the
-  foot's support at the stop stays ``(1 - BRAKE) h_0 >= 0`` (it rests; a pull would lift
-  it), and the drag does the braking. Once the force that stops the foot at ``d_s`` is at
-  most ``u_e`` the law applies that force (recomputed every sample).
+  foot's support at the stop ``(1 - BRAKE) h_0 >= 0`` (it rests; a harder pull lifts it),
+  and the drag does the braking. Once the force that stops the foot at ``d_s`` is at most
+  ``u_e`` the law applies that force (recomputed every sample); entered a sample late, it
+  pulls somewhat harder (measured up to ``2.3 h_0`` from impact): the foot may then leave
+  the crater at its stop and land back on it (the plant's flight and landing modes).
 * **The cruise.** Before that, the foot is driven to a speed ``w`` (a proportional step of
   :data:`GAIN` of the gap per sample, through the foot's acceleration), cruising at ``w``
   then braking at ``u_e`` from ``w``: ``w`` is chosen so that the ground's impulse in excess
@@ -32,9 +34,9 @@ robot's momentum spent, in closed form (no NLP):
 
 What it does not reach: a momentum larger than the drag can take at the force limit (the
 foot's speed saturates; the body then arrives moving and its arrest digs a little deeper),
-and ground with no drag (no creep: the law refuses, ``nan``). Measured on the 9 creep cases
-of the unknown-ground study with exact sensing: see :func:`creep_force`'s callers
-(:mod:`softlanding.control.bangbang`, phase ``CREEPING``).
+and ground with no drag (no creep: the law refuses, ``nan``). Its callers:
+:mod:`softlanding.control.bangbang` (phase ``CREEPING``); measured in the guide's "The creep
+law" (``docs/guides/unknown_ground.md``).
 
 The foot's and body's coefficients are the controller's numbers (from
 :func:`softlanding.model.dynamics.robot_rhs`: one definition of the dynamics).
@@ -207,7 +209,7 @@ def _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, u_push):
         sb = 0.5 * (lo + hi)
         j = plan_impulse(sb, v, d, depth_left, k, c_d, af0, bf, gf, u_push, u_max, weight, c1e,
                      beta, gam)
-        if j < q:  # (-inf: too fast, the plan does not fit; +inf: too slow)
+        if j < q:  # (-inf: too fast, the plan does not fit)
             if j == -np.inf:
                 hi = sb
             else:
@@ -244,7 +246,8 @@ def creep_force(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: 
         The sample period (the cruise's gain is per sample).
     """
     v = x[3]
-    if not (k > 0.0 and c_d > 0.0 and v < 0.0 and h > 0.0):
+    if not (k > 0.0 and c_d > 0.0 and v < 0.0 and h > 0.0 and math.isfinite(x[0])
+            and math.isfinite(x[1]) and math.isfinite(x[2]) and math.isfinite(v)):
         return np.nan
     m_f = 1.0 / gf
     m_b = -bf / (gf * bb)
@@ -259,6 +262,9 @@ def creep_force(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: 
     e = math.expm1(beta * depth_left)
     c1 = (v * v + (gam / beta) * (e / beta - depth_left)) * beta / (2.0 * e)
     u_b = (c1 - af0 - gf * weight) / bf
+    # braking once the brake's force is reached (entered a sample late, the force that stops
+    # the foot pulls somewhat harder than u_e; measured, braking a sample early instead, or
+    # never pulling beyond the foot's weight share, lands deeper: up to 32 %)
     if u_b <= u_e:
         return max(min(u_b, u_max), -u_max)
     # (the force's cruise speed counts no push: measured, a push in its plan left the body
