@@ -102,6 +102,7 @@ def test_the_law_alone_lands_at_the_static_depth_with_the_body_at_rest(v0, k, c_
     assert 1 / k * (1 - 1e-9) <= res.depth <= 1 / k * (1 + 1e-3)
 
 
+@pytest.mark.slow  # ~2.5 s (two landings and a clairvoyant solve): in the second command
 def test_a_bang_bang_landing_never_takes_the_creep_law():
     # a drag ground where the optimum is bang-bang (the clairvoyant depth 0.70500, deeper
     # than the static depth 1/K = 0.70225), near a ground that a wrong push-arc impulse (see
@@ -118,7 +119,7 @@ def test_a_bang_bang_landing_never_takes_the_creep_law():
     assert m.creep_samples == 0 and m.uncovered == 0
 
 
-@pytest.mark.parametrize("sb", [0.2, 0.3])
+@pytest.mark.parametrize("sb", [0.2, pytest.param(0.3, marks=pytest.mark.slow)])
 def test_the_plans_impulse_is_what_the_plan_spends_on_the_exact_plant(sb):
     # the plan (push at u_max to the brake's speed, cruise at it, brake) followed on the
     # exact stepping plant with a fine hold (2e-4); the momentum it spends equals
