@@ -41,19 +41,17 @@ reported, and the caller falls back to the re-planning MPC
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from numba import njit
 
 from softlanding.control.creep import creep_force, creep_reachable
 from softlanding.model.dynamics import VB, VF, robot_rhs
+from softlanding.simulation.kernel.const import ENTRY, JIT
 from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
 from softlanding.simulation.kernel.dop853 import B as DB
-
-JIT: dict[str, Any] = {"cache": True, "fastmath": False}
 
 #: Relative and absolute tolerance of the foot's integration (Newton's last steps).
 RTOL = 1e-13
@@ -268,7 +266,7 @@ def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax, tol, left):
         return MARCHED
     t = 0.0
     h = min(tau, 0.02)
-    _rhs(P, u, y, n, K, 0)
+    _rhs(P, u, y, n, K, np.int64(0))
     for _ in range(100000):
         if left[0] <= 0.0:
             return SPENT
@@ -289,7 +287,7 @@ def _flow(P, u, y, n, tau, K, Yt, ynew, body, vmax, tol, left):
             for j in range(12):
                 acc += DB[j] * K[j, i]
             ynew[i] = y[i] + h * acc
-        _rhs(P, u, ynew, n, K, 12)
+        _rhs(P, u, ynew, n, K, np.int64(12))
         e5 = 0.0
         e3 = 0.0
         for i in range(n):
@@ -413,7 +411,7 @@ def _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, budget):
         M[M_ITER] = it + 1
         # (the arcs to LOOSE_RTOL while Newton's steps are far larger than its error)
         tight = M[M_LAST_STEP] <= TIGHTEN * (1.0 + abs(t1) + t2)
-        st = _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim, body, vmax, True,
+        st = _plan(P, x, t1, t2, K, Yt, ynew, y, J, r, lim, body, vmax, np.bool_(True),
                    RTOL if tight else LOOSE_RTOL, left)
         if st == SPENT:
             M[M_DEFERRED] += 1
@@ -474,7 +472,8 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left):
     prev = -1.0  # the last whole step (none yet)
     for it in range(MAX_NEWTON):
         M[M_ITER] = it + 1
-        st = _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, False, RTOL, left)
+        st = _plan(P, x, 0.0, t2, K, Yt, ynew, y, J, r, lim, body, vmax, np.bool_(False), RTOL,
+                   left)
         if st == SPENT:
             M[M_DEFERRED] += 1
             M[M_TAU1], M[M_TAU2] = 0.0, t2
@@ -570,7 +569,7 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
     M[M_PRED_OK] = 1.0
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def solve_plan(P, M, x, K, W, work=np.inf):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
     (no estimate, no shift); the status.
@@ -599,7 +598,7 @@ def solve_plan(P, M, x, K, W, work=np.inf):
     return st
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def control_step(P, M, x, a_f, u, h, estimate, K, W):
     """One sample of the controller, compiled: the estimate updated from the measurement
     (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from

@@ -45,12 +45,11 @@ The foot's and body's coefficients are the controller's numbers (from
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from numba import njit
 
-JIT: dict[str, Any] = {"cache": True, "fastmath": False}
+from softlanding.simulation.kernel.const import ENTRY, JIT
 
 #: The brake's force as a fraction of the foot's weight share, pulling: the foot's support at
 #: its stop is ``1 - BRAKE`` of its weight (it rests on the crater).
@@ -72,7 +71,7 @@ GL_X = 0.5 * (_GX + 1.0)
 GL_W = 0.5 * _GW
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def brake_speed2(sigma: float, c1: float, beta: float, gam: float) -> float:
     """``v_f^2`` from which a constant force with foot deceleration ``c1`` at the stop stops
     the foot exactly ``sigma`` further down (``beta``, ``gam``: the drag's and the spring's
@@ -81,7 +80,7 @@ def brake_speed2(sigma: float, c1: float, beta: float, gam: float) -> float:
     return -((bc - 2.0 * c1) / beta) * math.expm1(beta * sigma) + bc * sigma
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def brake_time(sigma: float, c1: float, beta: float, gam: float) -> float:
     """The brake's duration over ``sigma`` (``int dsigma / |v_f|``; ``sigma = sigma_b tau^2``
     takes the stop's inverse square root away)."""
@@ -95,7 +94,7 @@ def brake_time(sigma: float, c1: float, beta: float, gam: float) -> float:
     return t
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def push_speed2(s: float, z0: float, c_p: float, beta: float, gam: float) -> float:
     """``v_f^2`` after the foot moved ``s`` further down under a constant force from
     ``v_f^2 = z0`` (``c_p``: its acceleration's constant part at the start,
@@ -104,7 +103,7 @@ def push_speed2(s: float, z0: float, c_p: float, beta: float, gam: float) -> flo
     return a - (gam / beta) * s + (z0 - a) * math.exp(-beta * s)
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def push_time(s: float, z0: float, c_p: float, beta: float, gam: float) -> float:
     """The push's duration over ``s`` (``s = s_p tau^2``: a foot starting at rest too)."""
     t = 0.0
@@ -117,7 +116,7 @@ def push_time(s: float, z0: float, c_p: float, beta: float, gam: float) -> float
     return t
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def plan_impulse(sb: float, v: float, d: float, depth_left: float, k: float, c_d: float,
                  af0: float, bf: float, gf: float, u_push: float, u_max: float,
                  weight: float, c1e: float, beta: float, gam: float) -> float:
@@ -222,7 +221,7 @@ def _cruise(af0, bf, gf, ab0, bb, u_max, hold0, k, c_d, x, u_push):
     return w, j >= q and math.isfinite(j)
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def creep_force(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: float,
                 hold0: float, k: float, c_d: float, x: np.ndarray, h: float) -> float:
     """The creep law's force from the state ``x`` (``nan``: the law does not apply: no drag
@@ -276,7 +275,7 @@ def creep_force(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: 
     return max(min(u, u_max), -u_max)
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def creep_reachable(af0: float, bf: float, gf: float, ab0: float, bb: float, u_max: float,
                     hold0: float, k: float, c_d: float, x: np.ndarray) -> bool:
     """The creep law's plan (push at :data:`REACH` of the force limit to a cruise speed,

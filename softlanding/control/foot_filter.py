@@ -14,12 +14,10 @@ the measured position and velocity.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numba import njit
 
-JIT: dict[str, Any] = {"cache": True, "fastmath": False}
+from softlanding.simulation.kernel.const import ENTRY, JIT
 
 # the filter's memory F: estimate, covariance (in units of the noise variance), the last
 # two samples' continuous accelerations, samples done, the last sample's length, and the
@@ -91,7 +89,7 @@ def _redo(F, g3, h, beta):
     F[F_X], F[F_V] = x, v
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def filter_step(F, x, g, U1, U2, h, beta, noise=0.0):
     """One sample of the filter, in place: predict with the sample's accelerations, correct
     with the measured ``x[2], x[3]``, and write the filtered position and velocity into
@@ -184,7 +182,7 @@ def filter_step(F, x, g, U1, U2, h, beta, noise=0.0):
     x[2], x[3] = F[F_X], F[F_V]
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def covariance(F: np.ndarray) -> tuple[float, float, float]:
     """The filtered state's covariance ``P_xx, P_xv, P_vv``, in units of the noise variance.
 

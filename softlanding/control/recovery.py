@@ -15,23 +15,20 @@ step 21 us median in a landing, the step alone ~10 us).
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from numba import njit
 
 from softlanding.control import bangbang as bb
 from softlanding.control.estimation import filtered_weight
 from softlanding.control.foot_filter import covariance, filter_step
-
-JIT: dict[str, Any] = {"cache": True, "fastmath": False}
+from softlanding.simulation.kernel.const import ENTRY
 
 #: Most samples in a row the filtered estimate's bounded full solve may go on over (each
 #: within the work bound) before the landing falls back.
 RECOVERY_SAMPLES = 6
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def sample_weight(P: np.ndarray, M: np.ndarray, F: np.ndarray, x: np.ndarray, a_f: float,
                   u: float) -> float:
     """The filtered regression's weight of a sample
@@ -59,7 +56,7 @@ def sample_weight(P: np.ndarray, M: np.ndarray, F: np.ndarray, x: np.ndarray, a_
                            1.0 / P[bb.P_GF] ** 2, bb.FILTERED_REGRESSOR)
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def filtered_step(P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: float,
                   h: float, estimate: bool, weight: float, recovering: int, K: np.ndarray,
                   W: np.ndarray) -> tuple[int, int]:
@@ -135,7 +132,7 @@ def filtered_step(P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: fl
     return bb.OK, 0
 
 
-@njit(**JIT)
+@njit(**ENTRY)
 def filtered_sample(P: np.ndarray, M: np.ndarray, F: np.ndarray, x: np.ndarray, g: float,
                     U1: float, U2: float, h: float, beta: float, noise: float, a_f: float,
                     u: float, estimate: bool, stop: float, recovering: int, K: np.ndarray,

@@ -36,5 +36,7 @@ SMALL = 1e-12  # what counts as zero drift in the rest proof
 # Python entry: these are called from compiled code only (each one's Python wrapper, which
 # unboxes its arguments, was compiled for nothing: ~10 % of the first compile). A call from
 # Python to a JIT function would crash: the functions Python calls take ENTRY instead.
+# (A constant argument in a call between compiled functions is passed as np.int64(..) or
+# np.bool_(..): numba compiles the callee again for every literal value it is given.)
 JIT: dict[str, Any] = {"cache": True, "no_cfunc_wrapper": True, "no_cpython_wrapper": True}
 ENTRY: dict[str, Any] = {"cache": True, "no_cfunc_wrapper": True}

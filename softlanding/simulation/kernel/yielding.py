@@ -188,14 +188,15 @@ def crossing_nl(sysd, y, K, ynew, h, c, rtol, K2, Yt, yt):
     g0, g1 = cdot(c, y), cdot(c, ynew)
     d0, d1 = cdot(c, K[0]), cdot(c, K[12])
     if g0 <= 0.0 < g1:
-        return refine_nl(sysd, y, K, c, False, 0.0, h, g0, g1, rtol,
+        return refine_nl(sysd, y, K, c, np.bool_(False), 0.0, h, g0, g1, rtol,
                          hermite_guess(g0, d0, g1, d1, h), K2, Yt, yt)
     if g1 <= 0.0 and d0 > 0.0 and d1 < 0.0:  # a maximum inside the step
         cneg = (-c[0], -c[1], -c[2], -c[3], -c[4])
-        se = refine_nl(sysd, y, K, cneg, True, 0.0, h, -d0, -d1, 1e-12, -1.0, K2, Yt, yt)
+        se = refine_nl(sysd, y, K, cneg, np.bool_(True), 0.0, h, -d0, -d1, 1e-12, -1.0, K2, Yt, yt)
         ge = cdot(c, yt)
         if ge > 0.0:
-            return refine_nl(sysd, y, K, c, False, 0.0, se, g0, ge, rtol, -1.0, K2, Yt, yt)
+            return refine_nl(sysd, y, K, c, np.bool_(False), 0.0, se, g0, ge, rtol, -1.0, K2, Yt,
+                             yt)
     return -1.0
 
 
@@ -210,7 +211,7 @@ def fold_extrema(sysd, y, K, yend, fend, h, ext, K2, Yt, yt):
     if (r0 > 0.0 > r1) or (r0 < 0.0 < r1):
         sg = 1.0 if r0 < 0.0 else -1.0
         c = (0.0, sg, 0.0, -sg, 0.0)
-        refine_nl(sysd, y, K, c, False, 0.0, h, sg * r0, sg * r1, 1e-10, -1.0, K2, Yt, yt)
+        refine_nl(sysd, y, K, c, np.bool_(False), 0.0, h, sg * r0, sg * r1, 1e-10, -1.0, K2, Yt, yt)
         sv = cdot(cs, yt)
         ext[X_SMIN], ext[X_SMAX] = min(ext[X_SMIN], sv), max(ext[X_SMAX], sv)
     d0, d1 = cdot(cu, K[0]), cdot(cu, fend)
@@ -218,7 +219,7 @@ def fold_extrema(sysd, y, K, yend, fend, h, ext, K2, Yt, yt):
     if not lock and ((d0 > 0.0 > d1) or (d0 < 0.0 < d1)):
         sg = 1.0 if d0 < 0.0 else -1.0
         c = (sg * cu[0], sg * cu[1], sg * cu[2], sg * cu[3], sg * cu[4])
-        refine_nl(sysd, y, K, c, True, 0.0, h, sg * d0, sg * d1, 1e-10, -1.0, K2, Yt, yt)
+        refine_nl(sysd, y, K, c, np.bool_(True), 0.0, h, sg * d0, sg * d1, 1e-10, -1.0, K2, Yt, yt)
         uv = cdot(cu, yt)
         ext[X_UMIN], ext[X_UMAX] = min(ext[X_UMIN], uv), max(ext[X_UMAX], uv)
     sv = cdot(cs, yend)
