@@ -101,6 +101,7 @@ def test_lagrange_cost_and_fixed_time():
     assert d["status"] == "Solve_Succeeded" and len(d["controls"]["u"]) == 10
 
 
+@pytest.mark.slow  # 3.2 s CPU
 def test_cvodes_integrator_agrees_with_rk4():
     p = OptimalControlProblem()
     x = p.state("x")

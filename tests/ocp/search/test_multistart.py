@@ -90,6 +90,7 @@ def test_starts_cover_the_box_and_are_deterministic():
     assert all(abs(s.point["u"]) <= 0.4 for s in lhs.starts[1:])
 
 
+@pytest.mark.slow  # 3.8 s CPU: worker processes start and import the toolkit
 def test_processes_give_the_same_results():
     serial, parallel = coarse(0), coarse(0, workers=2)
     assert [s.status for s in parallel.starts] == [s.status for s in serial.starts]
