@@ -106,6 +106,10 @@ PLAN_HOLDS_TOL = 1e-8
 #: on is stiffer and less draggy than the estimate (:func:`_step`).
 CREEP_SIGMAS = 3.0
 
+#: The creep law's force is limited to keep the stroke this fraction of ``s`` inside its
+#: limits (:func:`stroke_guard`; the force is held over a sample, the ground's changes).
+STROKE_MARGIN = 1e-3
+
 #: Newton iterations per sample while the switch is more than three samples away (one:
 #: acados' real-time iteration).
 BUDGET = 1
@@ -535,9 +539,47 @@ def _creep(P, M, x):
         M[M_STATUS] = CREEP
         return CREEP
     M[M_PHASE] = CREEPING
-    M[M_UCREEP] = u
+    M[M_UCREEP] = stroke_guard(P, x, u)
     M[M_STATUS] = CREEP_LAW
     return CREEP_LAW
+
+
+@njit(**JIT)
+def _approach_limit(dist, vel, h, decel):
+    """The largest constant acceleration towards a limit ``dist`` away (approached at
+    ``vel``) over a sample ``h`` after which the approach still stops short of it at
+    ``decel``: the end speed ``w`` meets ``dist >= h (vel + w) / 2 + max(w, 0)^2 / (2 decel)``
+    (receding by the end, ``w < 0``, when even stopping at the end is too late)."""
+    c = dist - 0.5 * h * vel
+    if c >= 0.0:
+        w = decel * (math.sqrt(0.25 * h * h + 2.0 * c / decel) - 0.5 * h)
+    else:
+        w = 2.0 * c / h
+    return (w - vel) / h
+
+
+@njit(**ENTRY)
+def stroke_guard(P, x, u):
+    """The creep law's force ``u`` (held over a sample) limited so that the leg's extension
+    (or compression) can still stop at half the body's own relative deceleration under the
+    force limit (pulled extending, pushed compressing: the foot may rest) before the stroke
+    leaves ``[m, s - m]`` (``m = STROKE_MARGIN s``; :func:`_approach_limit`): the law plans
+    the foot only. The relative acceleration is affine in ``u`` (the yielding foot's
+    included). A safety net, not a plan: a law that turns in time is untouched."""
+    S, V = x[0] - x[2], x[1] - x[3]
+    m = STROKE_MARGIN * P[P_S]
+    h, ab0, bb, umax = P[P_PERIOD], P[P_AB0], P[P_BB], P[P_UMAX]
+    a0, slope = ab0, bb
+    if x[3] < 0.0:
+        a0 -= _foot_acc(P, 0.0, x[2], x[3])
+        slope -= P[P_BF]
+    top = _approach_limit(P[P_S] - m - S, V, h, 0.5 * (bb * umax - ab0))
+    if a0 + slope * u > top:
+        u = (top - a0) / slope
+    floor = _approach_limit(S - m, -V, h, 0.5 * (ab0 + bb * umax))
+    if -(a0 + slope * u) > floor:
+        u = (-floor - a0) / slope
+    return min(umax, max(-umax, u))
 
 
 @njit(**JIT)
@@ -722,4 +764,4 @@ __all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "CREEPING", "CREEP_L
            "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "SPENT",
            "TIGHTEN", "WORK", "STATUS_NAMES", "control_step",
            "force_coefficients", "ground_force_noise", "new_memory", "robot_numbers",
-           "solve_plan", "workspace"]
+           "solve_plan", "STROKE_MARGIN", "stroke_guard", "workspace"]

@@ -55,13 +55,17 @@ class CreepCalls:
     landings: int = 0
 
 
-def creep_calls(robot: Robot) -> CreepCalls:
-    """The samples of the :data:`CREEP_LANDINGS` of ``robot``.
+def creep_calls(robot: Robot,
+                landings: tuple[tuple[float, float, float, float, int], ...] = CREEP_LANDINGS
+                ) -> CreepCalls:
+    """The samples of the creep ``landings`` of ``robot``.
 
     Parameters
     ----------
     robot : Robot
         With a force limit.
+    landings : tuple of (v0, c_d, K, noise, delay)
+        As :data:`CREEP_LANDINGS` (the default).
 
     Raises
     ------
@@ -71,7 +75,7 @@ def creep_calls(robot: Robot) -> CreepCalls:
     """
     out = CreepCalls()
     ws = bb.workspace()
-    for v0, c_d, k, noise, delay in CREEP_LANDINGS:
+    for v0, c_d, k, noise, delay in landings:
         record = mpc_landing(v0, robot, DragGround(c_d, k), controller="bangbang",
                              noise=noise, delay=delay).compiled
         if record is None or not record.samples:

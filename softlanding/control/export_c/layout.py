@@ -99,7 +99,7 @@ STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "
             "CREEP", "DEFERRED", "CREEP_LAW")
 CONSTANTS = ("PUSH", "PULL", "CREEPING", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL",
              "PLAN_HOLDS_TOL", "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED",
-             "MARCHED", "SPENT", "CREEP_SIGMAS")
+             "MARCHED", "SPENT", "CREEP_SIGMAS", "STROKE_MARGIN")
 
 #: The creep law's constants (names of :mod:`~softlanding.control.creep`), written
 #: ``SL_CREEP_<name>``; its Gauss-Legendre nodes and weights are :func:`creep_gl_text`'s.

@@ -157,3 +157,25 @@ def test_the_plans_impulse_is_what_the_plan_spends_on_the_exact_plant(sb):
     spent = m_b * plant.x[1] + m_f * plant.x[3] - p0
     assert -plant.x[2] == pytest.approx(weight / k, rel=1e-3)
     assert spent == pytest.approx(j, abs=5e-3 * abs(p0))
+
+
+def test_on_a_short_stroke_the_law_keeps_the_stroke():
+    # s = 3: the law cruises the foot while the body rises, and its brake lets the leg
+    # extend past the stroke (3.065 without the guard); the guard brakes the extension in
+    # time, at the cost of 0.4 % of depth (the static depth W / K = 2 is not reached exactly)
+    import dataclasses
+
+    short = dataclasses.replace(PAPER_ROBOT, s=3.0)
+    m = mpc_landing(-1.0, short, DragGround(0.5, 0.5), controller="bangbang")
+    assert m.creep_samples > 100 and m.uncovered == 0
+    assert m.feasible and m.stroke_held
+    assert 0.0 <= m.stroke_min and m.stroke_max <= short.s * (1 - 0.5 * bb.STROKE_MARGIN)
+    assert m.depth == pytest.approx(2.0, rel=5e-3)
+    # the guard alone: a force that would carry the leg past its stroke within the sample is
+    # limited to one whose extension still stops short of it; one that does not, untouched
+    P = bb.robot_numbers(short.r_m, short.s, short.u_max, 0.5, 0.5)
+    x = np.array([0.99, 0.3, -2.0, -0.05])  # the stroke 2.99, extending at 0.35
+    limited = bb.stroke_guard(P, x, short.u_max)
+    assert limited < short.u_max
+    assert bb.stroke_guard(P, x, limited) == limited
+    assert bb.stroke_guard(P, np.array([0.0, -0.2, -1.5, -0.3]), 1.0) == 1.0

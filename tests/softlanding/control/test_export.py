@@ -6,6 +6,7 @@ mpc_landing's creep landings (the creep law), C programs that follow the README,
 command's bad input and output folder."""
 
 import contextlib
+import dataclasses
 import io
 import json
 import re
@@ -177,6 +178,17 @@ def test_c_and_python_creep_law_agree_on_creep_landings(compiled, creep_samples)
     assert result.worst() == 0.0 and result.statuses["creep law"] == creeping
     filtered = compare_steps(c, creep_samples.filtered)
     assert filtered.worst() == 0.0 and filtered.statuses["creep law"] >= 60, filtered.statuses
+
+
+@needs_cc
+def test_c_and_python_stroke_guard_agree_on_a_short_stroke(compiled):
+    # the short stroke's creep landing, where the creep law's stroke guard limits the force
+    # (tests/softlanding/control/test_creep.py): every sample alike to the last bit
+    short = dataclasses.replace(PAPER_ROBOT, s=3.0)
+    calls = creep_calls(short, ((-1.0, 0.5, 0.5, 0.0, 0),))
+    assert calls.landings == 1 and len(calls.exact) > 100
+    result = compare_calls(compiled, calls.exact, calls.landings)
+    assert result.worst() == 0.0 and result.statuses["creep law"] > 100
 
 
 @needs_cc
