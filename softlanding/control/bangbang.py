@@ -549,7 +549,11 @@ def _approach_limit(dist, vel, h, decel):
     """The largest constant acceleration towards a limit ``dist`` away (approached at
     ``vel``) over a sample ``h`` after which the approach still stops short of it at
     ``decel``: the end speed ``w`` meets ``dist >= h (vel + w) / 2 + max(w, 0)^2 / (2 decel)``
-    (receding by the end, ``w < 0``, when even stopping at the end is too late)."""
+    (receding by the end, ``w < 0``, when even stopping at the end is too late). No limit
+    (``inf``) without a deceleration to stop by (``decel <= 0``: a force limit not above the
+    body's weight)."""
+    if not decel > 0.0:
+        return np.inf
     c = dist - 0.5 * h * vel
     if c >= 0.0:
         w = decel * (math.sqrt(0.25 * h * h + 2.0 * c / decel) - 0.5 * h)
@@ -565,7 +569,9 @@ def stroke_guard(P, x, u):
     force limit (pulled extending, pushed compressing: the foot may rest) before the stroke
     leaves ``[m, s - m]`` (``m = STROKE_MARGIN s``; :func:`_approach_limit`): the law plans
     the foot only. The relative acceleration is affine in ``u`` (the yielding foot's
-    included). A safety net, not a plan: a law that turns in time is untouched."""
+    included; a resting foot is taken to stay at rest, which a push beyond the crater's hold
+    makes optimistic). A safety net, not a plan: a law that turns in time is untouched; where
+    both limits cannot hold, the compression's wins, and the force limit over both."""
     S, V = x[0] - x[2], x[1] - x[3]
     m = STROKE_MARGIN * P[P_S]
     h, ab0, bb, umax = P[P_PERIOD], P[P_AB0], P[P_BB], P[P_UMAX]

@@ -103,8 +103,8 @@ def test_mesh_refinement_builds_once_per_mesh_and_resolves_without_rebuild():
 # the certificate against the literature's verdict, on every single-phase problem with a
 # control: bang-bang ones are certified from their collocation solution and its refined
 # switching times; the others (singular, chattering, smooth) are never certified
-CERT_SLOW = {"robot_arm", "hanging_chain", "rayleigh_min_time"}  # their refined solves are
-# REACH_SLOW
+CERT_SLOW = {"robot_arm", "hanging_chain", "rayleigh_min_time"}  # robot_arm: 2 s CPU; the
+# other two: their refined solves are REACH_SLOW
 
 
 # the verdict is what is tested: a refined mesh a hair over a state limit between its points

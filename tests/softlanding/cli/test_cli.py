@@ -107,7 +107,7 @@ def test_the_force_limit_applies_to_the_rigid_leg(cli):
 @pytest.mark.parametrize("args,match", [
     (["compare", "--n", "3", "--umax", "0.5"], "body weight"),
     pytest.param(["solve", "--v0", "-10", "--umax", "2"], "arrest force u_b <= u_max",
-                 marks=pytest.mark.slow),  # 5.5 s CPU: a re-solve without each condition
+                 marks=pytest.mark.slow),  # 5.5 s CPU (its API twin in test_landing is fast)
 ])
 def test_infeasible_request_one_line_exit_1(args, match, cli):
     """Well-posed but infeasible: exit 1, not the bad-input code 2."""

@@ -162,7 +162,7 @@ def test_the_plans_impulse_is_what_the_plan_spends_on_the_exact_plant(sb):
 def test_on_a_short_stroke_the_law_keeps_the_stroke():
     # s = 3: the law cruises the foot while the body rises, and its brake lets the leg
     # extend past the stroke (3.065 without the guard); the guard brakes the extension in
-    # time, at the cost of 0.4 % of depth (the static depth W / K = 2 is not reached exactly)
+    # time, at the cost of 0.4 % of depth (2.008, deeper than the static depth W / K = 2)
     import dataclasses
 
     short = dataclasses.replace(PAPER_ROBOT, s=3.0)
@@ -179,3 +179,7 @@ def test_on_a_short_stroke_the_law_keeps_the_stroke():
     assert limited < short.u_max
     assert bb.stroke_guard(P, x, limited) == limited
     assert bb.stroke_guard(P, np.array([0.0, -0.2, -1.5, -0.3]), 1.0) == 1.0
+    # a force limit at the body's weight: no deceleration to stop a compression by (no
+    # limit there, not a division by zero)
+    P = bb.robot_numbers(short.r_m, short.s, short.r_m / (1 + short.r_m), 0.5, 0.5)
+    assert bb.stroke_guard(P, np.array([0.0, -0.2, -1.5, 0.0]), 0.5) == 0.5
