@@ -2,18 +2,24 @@
 
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 from softlanding import PAPER_ROBOT, ParameterError, Robot
+from softlanding.model.controllers import Rigid
+from softlanding.model.ground import DragGround
+from softlanding.model.robot import Impact
 from softlanding.optimal.landing import (
     InfeasibleLandingError,
     landing_transcription,
+    rigid_guess,
     solve_landing,
     sweep_landing,
 )
-from softlanding.simulation.simulator import stroke
+from softlanding.simulation.simulator import simulate, stroke
 
 
 def rigid(v0):
@@ -58,6 +64,48 @@ def test_depth_decreases_toward_one_and_ratio_toward_half(sweep):
     assert 1.0 < depth[0] < 1.002
     ratio = depth[0] / rigid(v[0])
     assert abs(ratio - 0.5) < 2e-3
+
+
+@pytest.mark.parametrize("v0", [0.0, -0.5, -3.0, -10.0])
+def test_rigid_guess_is_the_rigid_landing_in_closed_form(v0):
+    """The guess's locked leg on the paper's spring (unit mass, stiffness and weight): depth
+    ``1 - cos t + |v0| sin t``, the foot stopped at ``T = pi - atan|v0|``."""
+    tr = landing_transcription(100)
+    w = rigid_guess(tr, PAPER_ROBOT, Impact(v0))
+    T, X = w[tr.layout.iT], w[tr.layout.iX].reshape(-1, 4)
+    assert T == pytest.approx(math.pi - math.atan(abs(v0)), rel=1e-10)
+    t = np.linspace(0.0, T, X.shape[0])
+    assert np.max(np.abs(-X[:, 2] - (1 - np.cos(t) + abs(v0) * np.sin(t)))) < 1e-9
+    assert -X[-1, 2] == pytest.approx(rigid(v0), rel=1e-10) and abs(X[-1, 3]) < 1e-9
+    assert np.ptp(X[:, 0] - X[:, 2]) < 1e-9  # the leg locked
+
+
+def test_rigid_guess_on_a_drag_ground_is_the_exact_simulators_rigid_landing():
+    ground, robot, impact = DragGround(0.5), PAPER_ROBOT, Impact(-3.0)
+    tr = landing_transcription(100, ground=ground)
+    w = rigid_guess(tr, robot, impact, ground)
+    T, X = w[tr.layout.iT], w[tr.layout.iX].reshape(-1, 4)
+    res = simulate(robot.without_force_limit(), impact, Rigid(), ground)
+    assert T == pytest.approx(res.t_first_stop, rel=1e-9)
+    traj = res.trajectory(t_end=T, n=X.shape[0])
+    t = np.linspace(0.0, T, X.shape[0])
+    exact = np.column_stack([np.interp(t, traj.t, traj.x[:, i]) for i in range(4)])
+    assert np.max(np.abs(X - exact)) < 1e-7
+
+
+def test_a_first_sweep_loads_no_simulator_kernel():
+    """Without a replay, a process's first landings use no numba kernel (loading one costs
+    about 0.4 s CPU, as much as the rest of a 41-velocity sweep)."""
+    code = ("import sys\n"
+            "from numba.core.dispatcher import Dispatcher\n"
+            "from softlanding.optimal.landing import sweep_landing\n"
+            "sweep_landing([0.0, -1.0])\n"
+            "print([f'{m}.{n}' for m, mod in list(sys.modules.items()) if m.startswith("
+            "'softlanding') for n, f in vars(mod).items() if isinstance(f, Dispatcher) "
+            "and f.signatures])\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120)
+    assert out.stdout.strip() == "[]"
 
 
 def test_resolving_does_not_rebuild_the_nlp():
