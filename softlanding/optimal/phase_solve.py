@@ -53,8 +53,9 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
         The (cached) transcription.
     params : dict
         Parameter values.
-    guess : Trajectory, Solution or array
-        Cold-start guess.
+    guess : Trajectory, Solution or array, or a callable returning one
+        Cold-start guess (a callable is called only when there is no warm start or it
+        fails: a warm sweep does not compute it).
     warm_start : Solution, optional
         A neighbouring solution of the same transcription.
     notes : list of str
@@ -77,6 +78,8 @@ def transcribed_solve(tr: MultipleShooting, params: dict[str, float], guess: Any
             except (SolveError, ValueError):  # failed, or a solution of another problem
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
                 sol = None
+        if sol is None and callable(guess):
+            guess = guess()
         if sol is None and default_start and guess is not None:
             try:
                 sol = tr.solve(params, guess=guess)

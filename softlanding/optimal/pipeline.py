@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Iterable
+from functools import cache
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
 from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
@@ -273,16 +274,16 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
             out = variant.assemble(None, r, [], "structure")
     if out is None:
         notes: list[str] = []
-        guess = variant.guess()
+        guess = cache(variant.guess)  # a warm start that converges does not need it
         try:
             sol = transcribed_solve(variant.transcription(), params, guess, warm, notes,
                                     default_start=variant.default_start)
         except InfeasibleError as err:
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-            raise variant.explain(err, guess) from None
+            raise variant.explain(err, guess()) from None
         ref = variant.refinement(sol, notes) if refine else None
         if refine:
-            sol, ref = variant.retry(sol, ref, guess, notes)
+            sol, ref = variant.retry(sol, ref, guess(), notes)
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
     out.refine_requested = refine
     if replay:

@@ -108,6 +108,17 @@ def test_a_first_sweep_loads_no_simulator_kernel():
     assert out.stdout.strip() == "[]"
 
 
+def test_a_converged_warm_start_computes_no_cold_guess(monkeypatch):
+    from softlanding.optimal.landing import PaperLanding
+
+    calls = []
+    original = PaperLanding.guess
+    monkeypatch.setattr(PaperLanding, "guess", lambda self: calls.append(1) or original(self))
+    res = sweep_landing([-1.0, -1.5, -2.0], refine=False)
+    assert [r.iterations < 20 for r in res[1:]] == [True, True]  # warm-started
+    assert len(calls) == 1  # the first landing's only
+
+
 def test_resolving_does_not_rebuild_the_nlp():
     tr = landing_transcription(100)
     before = tr.n_builds
