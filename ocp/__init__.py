@@ -66,6 +66,8 @@ _WHERE = {
     "ScenarioProblem": "scenarios.scenario",
     "ScenarioTranscription": "scenarios.scenario",
     "ScenarioResult": "scenarios.result",
+    "blas_threads": "transcriptions.blas",
+    "set_blas_threads": "transcriptions.blas",
 }
 
 __all__ = [
@@ -86,6 +88,7 @@ __all__ = [
     "Solution",
     "SolveError",
     "Trajectory",
+    "blas_threads",
     "certify",
     "certify_phases",
     "continuation",
@@ -96,6 +99,7 @@ __all__ = [
     "refine_phases",
     "refine_structure",
     "refine_switching",
+    "set_blas_threads",
     "transcribe",
 ]
 
@@ -133,6 +137,7 @@ if TYPE_CHECKING:
     from .structure.arcs import detect_arcs, detect_structure
     from .structure.phase_refinement import refine_phases
     from .structure.switching import refine_structure, refine_switching
+    from .transcriptions.blas import blas_threads, set_blas_threads
     from .transcriptions.solution import Solution
     from .transcriptions.transcription import (
         Collocation,

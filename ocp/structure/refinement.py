@@ -45,6 +45,7 @@ import numpy as np
 
 from ..definition.problem import OptimalControlProblem
 from ..definition.symbols import INF, constant
+from ..transcriptions.blas import default_blas_threads
 from .active_set_newton import ActiveSetNewton
 from .constraint_kinds import control_constraints
 from .control_set import violated_control_constraint
@@ -278,6 +279,7 @@ class SwitchingNLP:
         for the Hessian's derivation."""
         if self._solver is None:
             t0 = time.perf_counter()
+            default_blas_threads()
             self._solver = ca.nlpsol(self.solver_name, "ipopt", self._nlp, self._opts)
             self.build_time += time.perf_counter() - t0
         return self._solver

@@ -7,7 +7,8 @@ per-phase discretisations (:mod:`~ocp.transcriptions.discretization`,
 :mod:`~ocp.transcriptions.integrators`, :mod:`~ocp.transcriptions.mesh` (error estimate and
 h-refinement), :mod:`~ocp.transcriptions.nlp` (the parametric NLP, built once; Ipopt),
 :mod:`~ocp.transcriptions.verify` (path constraints between the nodes),
-:mod:`~ocp.transcriptions.gridview` (how a solution's grid is read) and
+:mod:`~ocp.transcriptions.gridview` (how a solution's grid is read),
+:mod:`~ocp.transcriptions.blas` (CasADi's OpenBLAS under Ipopt on one thread) and
 :mod:`~ocp.transcriptions.solution` (:class:`~ocp.Solution`). Imports only
 :mod:`ocp.definition`.
 """

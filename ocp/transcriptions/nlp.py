@@ -21,6 +21,7 @@ user's units whatever the scaling.
 from __future__ import annotations
 
 import math
+import re
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -53,6 +54,7 @@ from ..definition.scaling import (
 from ..definition.sizes import phase_state_sizes
 from ..definition.symbols import positive_int
 from ..definition.trajectory import Trajectory
+from .blas import default_blas_threads
 from .buffered import BufferedCall
 from .codegen import compiled_library
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
@@ -464,8 +466,11 @@ class Transcription:
             opts: dict[str, Any] = {"ipopt": ipopt, "print_time": False,
                                     "error_on_fail": False, "expand": key[1],
                                     "calc_lam_p": False}
-            name = f"{self.multiphase.name}_{self.method}"
+            # CasADi names are identifiers; a problem's name is a label ("double integrator")
+            label = re.sub(r"[^A-Za-z0-9]+", "_", self.multiphase.name).strip("_") or "ocp"
+            name = f"{label if label[0].isalpha() else 'ocp_' + label}_{self.method}"
             nlp: Any = self._scaled
+            default_blas_threads()
             solver = ca.nlpsol(name, "ipopt", nlp, opts)
             if self.codegen:  # the same functions for every key: compiled once
                 if self._library is None:

@@ -1,0 +1,117 @@
+"""CasADi's bundled OpenBLAS, which MUMPS (Ipopt's linear solver) calls, on one thread.
+
+Its worker threads wait for work by spinning: on a transcription's small banded KKT
+systems they add CPU time and no speed. Measured (2 cores, CPU / wall): the alp rider's
+refinement 5.26 / 4.27 s with OpenBLAS's default threads, 4.14 / 4.14 s on one; a
+brachistochrone solve 0.093 / 0.058 s, on one 0.058 / 0.058 s. Before its first Ipopt
+solver is built, :mod:`ocp` sets one thread, unless ``OPENBLAS_NUM_THREADS`` or
+``OMP_NUM_THREADS`` is set in the environment (the user's choice is kept);
+:func:`set_blas_threads` changes it at any time. numpy's own BLAS is not touched.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import re
+from functools import cache
+from pathlib import Path
+
+ENVIRONMENT = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
+"""Variables that, when set, leave the thread count to OpenBLAS (and to the user)."""
+
+
+@cache
+def casadi_openblas() -> ctypes.CDLL | None:
+    """CasADi's bundled OpenBLAS (loaded if it was not), or None if this CasADi build has
+    none (another platform's wheel, a build against the system's BLAS).
+
+    The wheel holds copies of one library under several names (``.so``, ``.so.0``, ...):
+    the one loaded already, else the one named as the solver plugins ask for it
+    (``.so.<major>``), is taken -- setting another copy would change nothing.
+    """
+    import casadi
+
+    files = sorted(Path(casadi.__file__).parent.glob("libcasadi-tp-openblas*"))
+    loaded = _mapped_files()
+    files.sort(key=lambda f: (str(f.resolve()) not in loaded,
+                              re.fullmatch(r".*\.so\.\d+", f.name) is None))
+    for lib in files:
+        try:
+            blas = ctypes.CDLL(str(lib))
+            blas.openblas_set_num_threads, blas.openblas_get_num_threads  # noqa: B018
+        except (OSError, AttributeError):
+            continue
+        blas.openblas_get_num_threads.restype = ctypes.c_int
+        return blas
+    return None
+
+
+def _mapped_files() -> set[str]:
+    """Files mapped into this process (Linux; empty elsewhere)."""
+    try:
+        text = Path("/proc/self/maps").read_text()
+    except OSError:
+        return set()
+    return {line.split(None, 5)[5] for line in text.splitlines() if line.count(" ") >= 5
+            and "/" in line}
+
+
+def set_blas_threads(n: int) -> bool:
+    """Let CasADi's OpenBLAS (under Ipopt's MUMPS) use ``n`` threads.
+
+    Parameters
+    ----------
+    n : int
+        Threads (>= 1).
+
+    Returns
+    -------
+    bool
+        False if this CasADi has no bundled OpenBLAS (nothing was changed).
+
+    Raises
+    ------
+    ValueError
+        ``n`` is not a positive integer.
+    """
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise ValueError(f"set_blas_threads: n must be a positive integer, got {n!r}")
+    blas = casadi_openblas()
+    if blas is None:
+        return False
+    blas.openblas_set_num_threads(ctypes.c_int(n))
+    return True
+
+
+def blas_threads() -> int | None:
+    """The threads CasADi's OpenBLAS may use (None if this CasADi has none).
+
+    Returns
+    -------
+    int or None
+    """
+    blas = casadi_openblas()
+    return None if blas is None else int(blas.openblas_get_num_threads())
+
+
+@cache
+def default_blas_threads() -> None:
+    """One thread for CasADi's OpenBLAS, once per process, unless the environment sets a
+    count (see the module's notes). Called before an Ipopt solver is built.
+
+    If the library is not loaded yet, it is loaded with ``OPENBLAS_NUM_THREADS=1`` in the
+    environment (restored at once): OpenBLAS then starts no worker threads at all, where
+    starting them costs about 0.1 s CPU of spinning on another core."""
+    if any(os.environ.get(v) for v in ENVIRONMENT):
+        return
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    try:
+        casadi_openblas()
+    finally:
+        del os.environ["OPENBLAS_NUM_THREADS"]
+    set_blas_threads(1)
+
+
+__all__ = ["ENVIRONMENT", "blas_threads", "casadi_openblas", "default_blas_threads",
+           "set_blas_threads"]

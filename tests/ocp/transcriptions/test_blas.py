@@ -1,0 +1,56 @@
+"""CasADi's bundled OpenBLAS (under Ipopt's MUMPS) on one thread unless the user says."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+import ocp
+
+SOLVE_AND_REPORT = """
+import ocp
+p = ocp.OptimalControlProblem("double integrator")
+x, v = p.state("x"), p.state("v")
+u = p.control("u", lower=-1, upper=1)
+p.set_dynamics([v, u])
+p.initial_constraint(x, 0.0)
+p.initial_constraint(v, 0.0)
+p.terminal_constraint(x, 1.0)
+p.terminal_constraint(v, 0.0)
+p.free_final_time(lower=0.1, upper=10.0, guess=2.0)
+p.minimize(p.T)
+sol = ocp.MultipleShooting(p, nodes=20).solve()
+print(ocp.blas_threads(), round(sol.T, 6))
+"""
+
+
+def run(env_extra: dict[str, str]) -> list[str]:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", SOLVE_AND_REPORT], capture_output=True,
+                         text=True, check=True, timeout=120, env={**env, **env_extra})
+    return out.stdout.split()
+
+
+@pytest.mark.skipif(ocp.blas_threads() is None, reason="this CasADi has no bundled OpenBLAS")
+def test_solves_use_one_blas_thread_unless_the_environment_says():
+    # the minimum time of a unit move at |u| <= 1 is 2 (bang-bang)
+    assert run({}) == ["1", "2.0"]
+    assert run({"OPENBLAS_NUM_THREADS": "2"}) == ["2", "2.0"]
+
+
+@pytest.mark.skipif(ocp.blas_threads() is None, reason="this CasADi has no bundled OpenBLAS")
+def test_set_blas_threads_changes_the_count():
+    before = ocp.blas_threads()
+    try:
+        assert ocp.set_blas_threads(2) is True and ocp.blas_threads() == 2
+    finally:
+        ocp.set_blas_threads(before)
+    assert ocp.blas_threads() == before
+
+
+@pytest.mark.parametrize("n", [0, -1, 1.5, True, "2"])
+def test_set_blas_threads_refuses_a_bad_count(n):
+    with pytest.raises(ValueError, match="positive integer"):
+        ocp.set_blas_threads(n)
