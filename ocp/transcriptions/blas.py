@@ -105,11 +105,15 @@ def default_blas_threads() -> None:
     starting them costs about 0.1 s CPU of spinning on another core."""
     if any(os.environ.get(v) for v in ENVIRONMENT):
         return
+    before = os.environ.get("OPENBLAS_NUM_THREADS")  # None, or set but empty
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
     try:
         casadi_openblas()
     finally:
-        del os.environ["OPENBLAS_NUM_THREADS"]
+        if before is None:
+            del os.environ["OPENBLAS_NUM_THREADS"]
+        else:
+            os.environ["OPENBLAS_NUM_THREADS"] = before
     set_blas_threads(1)
 
 
