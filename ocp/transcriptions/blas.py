@@ -3,10 +3,13 @@
 Its worker threads wait for work by spinning: on a transcription's small banded KKT
 systems they add CPU time and no speed. Measured (2 cores, CPU / wall): the alp rider's
 refinement 5.26 / 4.27 s with OpenBLAS's default threads, 4.14 / 4.14 s on one; a
-brachistochrone solve 0.093 / 0.058 s, on one 0.058 / 0.058 s. Before its first Ipopt
-solver is built, :mod:`ocp` sets one thread, unless ``OPENBLAS_NUM_THREADS`` or
-``OMP_NUM_THREADS`` is set in the environment (the user's choice is kept);
-:func:`set_blas_threads` changes it at any time. numpy's own BLAS is not touched.
+brachistochrone solve 0.093 / 0.058 s, on one 0.058 / 0.058 s.
+
+The library is loaded on one thread (no worker thread starts) before :mod:`ocp` builds its
+first Ipopt solver, unless ``OPENBLAS_NUM_THREADS`` or ``OMP_NUM_THREADS`` is set in the
+environment: that choice is kept. :func:`set_blas_threads` changes the count at any time,
+and a count set by it is kept too. The setting is process-wide (CasADi's solvers outside
+:mod:`ocp` share the library); numpy's own BLAS is not touched.
 """
 
 from __future__ import annotations
@@ -14,11 +17,22 @@ from __future__ import annotations
 import ctypes
 import os
 import re
+import threading
 from functools import cache
 from pathlib import Path
 
 ENVIRONMENT = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")
 """Variables that, when set, leave the thread count to OpenBLAS (and to the user)."""
+
+_LOCK = threading.Lock()
+_CHOSEN = threading.Event()  # set_blas_threads was called: the default no longer applies
+
+
+def library_files() -> list[Path]:
+    """CasADi's bundled OpenBLAS files (empty if this CasADi build has none)."""
+    import casadi
+
+    return sorted(Path(casadi.__file__).parent.glob("libcasadi-tp-openblas*"))
 
 
 @cache
@@ -28,23 +42,35 @@ def casadi_openblas() -> ctypes.CDLL | None:
 
     The wheel holds copies of one library under several names (``.so``, ``.so.0``, ...):
     the one loaded already, else the one named as the solver plugins ask for it
-    (``.so.<major>``), is taken -- setting another copy would change nothing.
+    (``.so.<major>``), is taken -- setting another copy would change nothing. A first load
+    with no count in the environment is made with ``OPENBLAS_NUM_THREADS=1`` set for its
+    duration (then restored), so that OpenBLAS starts no worker thread: starting them
+    costs about 0.1 s CPU of spinning on another core.
     """
-    import casadi
-
-    files = sorted(Path(casadi.__file__).parent.glob("libcasadi-tp-openblas*"))
+    files = library_files()
     loaded = _mapped_files()
     files.sort(key=lambda f: (str(f.resolve()) not in loaded,
                               re.fullmatch(r".*\.so\.\d+", f.name) is None))
-    for lib in files:
+    with _LOCK:
+        quiet = not any(os.environ.get(v) for v in ENVIRONMENT)
+        before = os.environ.get("OPENBLAS_NUM_THREADS")  # None, or set but empty
+        if quiet:
+            os.environ["OPENBLAS_NUM_THREADS"] = "1"
         try:
-            blas = ctypes.CDLL(str(lib))
-            blas.openblas_set_num_threads, blas.openblas_get_num_threads  # noqa: B018
-        except (OSError, AttributeError):
-            continue
-        blas.openblas_get_num_threads.restype = ctypes.c_int
-        return blas
-    return None
+            for lib in files:
+                try:
+                    blas = ctypes.CDLL(str(lib))
+                    blas.openblas_set_num_threads, blas.openblas_get_num_threads  # noqa: B018
+                except (OSError, AttributeError):
+                    continue
+                blas.openblas_get_num_threads.restype = ctypes.c_int
+                return blas
+            return None
+        finally:
+            if quiet and before is None:
+                os.environ.pop("OPENBLAS_NUM_THREADS", None)
+            elif quiet:
+                os.environ["OPENBLAS_NUM_THREADS"] = before  # type: ignore[assignment]
 
 
 def _mapped_files() -> set[str]:
@@ -57,8 +83,17 @@ def _mapped_files() -> set[str]:
             and "/" in line}
 
 
+def _apply(n: int) -> bool:
+    blas = casadi_openblas()
+    if blas is None:
+        return False
+    blas.openblas_set_num_threads(ctypes.c_int(n))
+    return True
+
+
 def set_blas_threads(n: int) -> bool:
-    """Let CasADi's OpenBLAS (under Ipopt's MUMPS) use ``n`` threads.
+    """Let CasADi's OpenBLAS (under Ipopt's MUMPS) use ``n`` threads, from now on (later
+    solves keep this count).
 
     Parameters
     ----------
@@ -77,11 +112,8 @@ def set_blas_threads(n: int) -> bool:
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ValueError(f"set_blas_threads: n must be a positive integer, got {n!r}")
-    blas = casadi_openblas()
-    if blas is None:
-        return False
-    blas.openblas_set_num_threads(ctypes.c_int(n))
-    return True
+    _CHOSEN.set()
+    return _apply(n)
 
 
 def blas_threads() -> int | None:
@@ -97,25 +129,11 @@ def blas_threads() -> int | None:
 
 @cache
 def default_blas_threads() -> None:
-    """One thread for CasADi's OpenBLAS, once per process, unless the environment sets a
-    count (see the module's notes). Called before an Ipopt solver is built.
-
-    If the library is not loaded yet, it is loaded with ``OPENBLAS_NUM_THREADS=1`` in the
-    environment (restored at once): OpenBLAS then starts no worker threads at all, where
-    starting them costs about 0.1 s CPU of spinning on another core."""
-    if any(os.environ.get(v) for v in ENVIRONMENT):
-        return
-    before = os.environ.get("OPENBLAS_NUM_THREADS")  # None, or set but empty
-    os.environ["OPENBLAS_NUM_THREADS"] = "1"
-    try:
-        casadi_openblas()
-    finally:
-        if before is None:
-            del os.environ["OPENBLAS_NUM_THREADS"]
-        else:
-            os.environ["OPENBLAS_NUM_THREADS"] = before
-    set_blas_threads(1)
+    """One thread for CasADi's OpenBLAS, once per process, unless the environment or
+    :func:`set_blas_threads` chose a count. Called before an Ipopt solver is built."""
+    if not _CHOSEN.is_set() and not any(os.environ.get(v) for v in ENVIRONMENT):
+        _apply(1)
 
 
 __all__ = ["ENVIRONMENT", "blas_threads", "casadi_openblas", "default_blas_threads",
-           "set_blas_threads"]
+           "library_files", "set_blas_threads"]

@@ -274,7 +274,9 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
             out = variant.assemble(None, r, [], "structure")
     if out is None:
         notes: list[str] = []
-        guess = cache(variant.guess)  # a warm start that converges does not need it
+        # computed when used: not for a warm start that converges unless the refinement
+        # is on (its second attempt, retry, takes the guess)
+        guess = cache(variant.guess)
         try:
             sol = transcribed_solve(variant.transcription(), params, guess, warm, notes,
                                     default_start=variant.default_start)
