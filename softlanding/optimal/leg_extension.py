@@ -284,6 +284,11 @@ class LegExtension(pipeline.PhasedVariant):
         The two-phase optimum with the paper's initial condition (guess and reference).
     """
 
+    default_start = True
+    """The two-phase guess can mislead Ipopt: seen after another variant's solve in the same
+    process, ``v0 = -1`` at an extension of 10 stopped at Restoration_Failed from it (the
+    guess 1e-16 apart from one that converges); the default start then converges."""
+
     def __init__(self, robot: Robot, impact: Impact, mode: str, bounds: dict[str, float],
                  two: TwoPhaseLanding) -> None:
         super().__init__(robot, impact)

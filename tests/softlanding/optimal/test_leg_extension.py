@@ -119,3 +119,22 @@ def test_second_start_refines_where_the_first_transcription_dives_through_the_st
     direct = solve_leg_extension(impact, two_phase=two, replay=False)
     assert direct.refined is not None
     assert ref.objective == pytest.approx(direct.depth, abs=1e-9)
+
+
+def test_a_guess_that_misleads_ipopt_falls_back_to_the_default_start(monkeypatch):
+    """Ipopt failing from the two-phase guess (as seen after another variant's solve in the
+    same process) is not the answer: the default start is tried."""
+    from ocp import InfeasibleError
+    from softlanding.optimal import leg_extension_problem as problem
+
+    tr = problem.leg_extension_transcription("impact")
+    solve = tr.solve
+
+    def misled(params=None, guess=None, warm_start=None, **kwargs):
+        if guess is not None:
+            raise InfeasibleError("Restoration_Failed")
+        return solve(params, guess=guess, warm_start=warm_start, **kwargs)
+
+    monkeypatch.setattr(tr, "solve", misled)
+    r = solve_leg_extension(-1.0, extension=10.0, replay=False)
+    assert r.depth == pytest.approx(r.paper_depth, abs=1e-9)
