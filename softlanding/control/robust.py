@@ -455,6 +455,11 @@ def _search(pieces: _Pieces, grounds: tuple[Ground, ...], theta0: np.ndarray,
             if not abs(u_last) <= u_max:  # the actuator cannot stop the body in time
                 cache[key] = np.r_[nowhere, u_max - abs(u_last)]
                 return cache[key]
+            if not np.all(np.diff(np.r_[0.0, np.cumsum(d)]) > 0.0):
+                # a search step far out: durations of 1e11 (seen) swallow one of 1e-6, so
+                # the pieces' times are no schedule; a point nowhere, not a crash
+                cache[key] = np.r_[nowhere, u_max - abs(u_last)]
+                return cache[key]
             rows = []
             sched = pieces.schedule(theta)
             results = [simulate(robot, impact, sched, g, energy=False) for g in grounds]

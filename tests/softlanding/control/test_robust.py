@@ -253,3 +253,26 @@ def test_the_guides_robust_and_tree_columns_are_runs(v0):
         assert marks == ([] if r.feasible else ["!"]) + ["~"] and len(value.split(".")[1]) == 2
         assert abs(float(value) - r.worst) <= 0.01, (value, r.worst, r.message)
     assert cells[3] == f"{t.worst:.3f}" + ("" if t.feasible else " !")
+
+
+def test_a_search_step_far_out_is_a_point_nowhere_not_a_crash(monkeypatch):
+    """SLSQP once stepped the durations to 1.95e11, 1e-6 and 5.2e11 (the set of test_a_set_no_
+    schedule_can_hold_..., after other tests in the process): their sums lose the 1e-6, the
+    pieces' times are not increasing, and the schedule's ParameterError escaped as bad input
+    (the CLI's exit 2)."""
+    import softlanding.control.robust as rb
+
+    real = rb.minimize
+    seen = []
+
+    def far_out_first(fun, x, **kwargs):
+        far = np.array(x, float)
+        n = (len(far)) // 2  # durations, then forces, then the bound
+        far[:n] = [1.95e11, 1e-6, 5.2e11][:n] + [1.0] * max(0, n - 3)
+        seen.append(kwargs["constraints"][0]["fun"](far))
+        return real(fun, x, **kwargs)
+
+    monkeypatch.setattr(rb, "minimize", far_out_first)
+    r = robust_landing(-3, [LinearGround()])
+    assert seen and np.all(np.isfinite(seen[0])) and np.min(seen[0]) < 0  # infeasible there
+    assert r.feasible
