@@ -33,6 +33,7 @@ import numpy as np
 
 from ocp import MultipleShooting, OptimalControlProblem, Solution, SolveError
 from ocp.structure.switching import RefinedSwitching, detect_arcs
+from ocp.transcriptions.integrators import rk4_function
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
@@ -536,16 +537,13 @@ def _lock_flow(ground: Ground, steps: int) -> ca.Function:
 
 @lru_cache(maxsize=16)
 def _lock_interval(ground: Ground) -> ca.Function:
-    """One interval of :func:`_lock_flow`."""
-    x, r, h = ca.SX.sym("x", 4), ca.SX.sym("r_m"), ca.SX.sym("h")
+    """One interval of :func:`_lock_flow`: the transcriptions' RK4 step
+    (:func:`ocp.transcriptions.integrators.rk4_function`) on the locked dynamics."""
+    x, r, h, none = ca.SX.sym("x", 4), ca.SX.sym("r_m"), ca.SX.sym("h"), ca.SX.sym("u", 0)
     force = _lock_force(ground)
-    rhs = ca.Function("locked", [x, r], [stance_dynamics(x, force(x, r), r, ground)])
-    z, dt = x, h / LOCK_SUBSTEPS
-    for _ in range(LOCK_SUBSTEPS):
-        k1 = rhs(z, r)
-        k2 = rhs(z + dt / 2 * k1, r)
-        k3 = rhs(z + dt / 2 * k2, r)
-        z = z + dt / 6 * (k1 + 2 * k2 + 2 * k3 + rhs(z + dt * k3, r))
+    locked = ca.Function("locked", [x, none, r], [stance_dynamics(x, force(x, r), r, ground)])
+    step = rk4_function(locked, ca.Function("L", [x, none, r], [0]), 4, 0, 1, LOCK_SUBSTEPS)
+    z = step(x, none, h, r)[0]
     return ca.Function("lock_interval", [x, r, h], [z, force(z, r)])
 
 
