@@ -3,6 +3,7 @@
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -12,22 +13,16 @@ from ocp.transcriptions.blas import library_files
 BUNDLED = pytest.mark.skipif(not library_files(), reason="this CasADi has no bundled OpenBLAS")
 CPUS = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
 
-SOLVE_AND_REPORT = """
+ROOT = Path(__file__).resolve().parents[3]
+SOLVE_AND_REPORT = f"""
 import sys
+sys.path.insert(0, {str(ROOT)!r})
 import ocp
+from tests.oracles.problems import min_time_double_integrator
 if len(sys.argv) > 1:
     ocp.set_blas_threads(int(sys.argv[1]))
-p = ocp.OptimalControlProblem("double integrator")
-x, v = p.state("x"), p.state("v")
-u = p.control("u", lower=-1, upper=1)
-p.set_dynamics([v, u])
-p.initial_constraint(x, 0.0)
-p.initial_constraint(v, 0.0)
-p.terminal_constraint(x, 1.0)
-p.terminal_constraint(v, 0.0)
-p.free_final_time(lower=0.1, upper=10.0, guess=2.0)
-p.minimize(p.T)
-sol = ocp.MultipleShooting(p, nodes=20).solve()
+p = min_time_double_integrator(name="double integrator")
+sol = ocp.MultipleShooting(p, nodes=20).solve({{"d": 1.0}})
 print(ocp.blas_threads(), round(sol.T, 6))
 """
 

@@ -17,6 +17,7 @@ from ocp import (
     ProblemDefinitionError,
     transcribe,
 )
+from tests.oracles.problems import min_time_double_integrator
 
 
 def _band_problem():
@@ -222,15 +223,6 @@ def test_legacy_functions_refuse_what_they_cannot_represent():
 @pytest.mark.parametrize("name", ["double integrator", "2 phases: a -> b", "!!!", "été"])
 def test_a_problem_named_with_any_label_solves(name):
     """The name is a label: CasADi's function names (identifiers) are derived from it."""
-    p = OptimalControlProblem(name)
-    x, v = p.state("x"), p.state("v")
-    u = p.control("u", lower=-1, upper=1)
-    p.set_dynamics([v, u])
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 0.0)
-    p.terminal_constraint(x, 1.0)
-    p.terminal_constraint(v, 0.0)
-    p.free_final_time(lower=0.1, upper=10.0, guess=2.0)
-    p.minimize(p.T)
+    p = min_time_double_integrator(name=name)
     for tr in (MultipleShooting(p, nodes=10), Collocation(p, intervals=5)):
-        assert tr.solve().T == pytest.approx(2.0, abs=0.01)  # bang-bang: 2 exactly
+        assert tr.solve({"d": 1.0}).T == pytest.approx(2.0, abs=0.01)  # bang-bang: 2
