@@ -105,7 +105,9 @@ class Arc:
 
     Attributes
     ----------
-    kind : {"max", "min", "boundary", "interior"}
+    kind : {"max", "min", "boundary", "vertex", "interior", "singular"}
+        ``"singular"`` only where a caller has classified an interior arc as singular
+        (:func:`ocp.structure.singular_refinement.singular_structure`).
     start, end : float
     active : tuple of str
         State and mixed path constraints active at every node of the arc.
