@@ -43,29 +43,36 @@ def transcription_samples_for_arcs(sol: TranscribedSolution, tol: float,
     tol : float
         Allowed relative residual.
     error : float
-        The solution's measured relative error.
+        A floor for the solution's relative error, raised to H's measured deviation
+        from a constant and to the mesh's error estimate (``sol.mesh_error``).
     """
     pr = sol.problem
     values = known_values(sol)
     pv = np.array([values[k] for k in pr.param_names], dtype=float)
-    Hx = pmp_functions(pr).Hx
+    fns = pmp_functions(pr)
     t, lam = costates_from_multipliers(sol)
     mesh = np.asarray(mesh_level(sol).t, dtype=float)
     margin = 1.5 * float(np.max(np.diff(mesh)))
     if is_collocation(sol):
         x, u = np.asarray(sol.x[1:]), np.asarray(sol.u)
-        hx = along(Hx, x, u, lam, pv)[0]
+        hx = along(fns.Hx, x, u, lam, pv)[0]
         pairs = (t[:-1], t[1:], lam[:-1], lam[1:], 0.5 * (hx[:-1] + hx[1:]))
-        return ArcSamples(pr, values, t, x, u, lam, pairs, margin, tol, error)
-    # shooting: lam at t_1..t_N; interval k (t_k, t_k+1), k = 1..N-1, has control u_k
-    tn, xn = np.asarray(sol.t), np.asarray(sol.x)
-    tm = 0.5 * (tn[1:-1] + tn[2:])
-    xm = 0.5 * (xn[1:-1] + xn[2:])
-    um = np.asarray(sol.u)[1:]
-    lm = 0.5 * (lam[:-1] + lam[1:])
-    hx = along(Hx, xm, um, lm, pv)[0]
-    pairs = (t[:-1], t[1:], lam[:-1], lam[1:], hx)
-    return ArcSamples(pr, values, tm, xm, um, lm, pairs, margin, tol, error)
+    else:
+        # shooting: lam at t_1..t_N; interval k (t_k, t_k+1), k = 1..N-1, has control u_k
+        tn, xn = np.asarray(sol.t), np.asarray(sol.x)
+        t, x = 0.5 * (tn[1:-1] + tn[2:]), 0.5 * (xn[1:-1] + xn[2:])
+        u, lm = np.asarray(sol.u)[1:], 0.5 * (lam[:-1] + lam[1:])
+        hx = along(fns.Hx, x, u, lm, pv)[0]
+        pairs = (tn[1:-1], tn[2:], lam[:-1], lam[1:], hx)
+        lam = lm
+    # the solution's own accuracy: H's deviation from a constant, relative to its scale
+    H = along(fns.H, x, u, lam, pv)[0].ravel()
+    xdot = along(pr.dynamics_function(), x, u, pv)[0]
+    scale = float(np.max(np.sum(np.abs(lam * xdot), axis=1), initial=0.0)) or 1.0
+    mesh_error = float(getattr(sol, "mesh_error", math.nan) or math.nan)
+    error = max(error, float(np.ptp(H)) / scale if len(H) else 0.0,
+                mesh_error if math.isfinite(mesh_error) else 0.0)
+    return ArcSamples(pr, values, t, x, u, lam, pairs, margin, tol, error)
 
 
 def transcription_table(sol: TranscribedSolution, structure: ArcStructure, tol: float,

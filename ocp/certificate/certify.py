@@ -95,7 +95,9 @@ from .from_refined import path_activity_along as path_activity_along
 from .from_transcription import certify_transcription, transcription_samples
 from .from_transcription import finer_transcription as finer_transcription
 from .result import PMPCertificate as PMPCertificate
-from .result import hold_to_structure
+from .arc_table import transcription_table
+from .arc_verdict import NOT_EXTREMAL as NOT_EXTREMAL
+from .arc_verdict import settle
 from .result import not_applicable as not_applicable
 from .result import refusal as refusal
 
@@ -220,13 +222,16 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     tol = Tolerances(H=tol_H if tol_H is not None else (1e-6 if refined else 1e-2),
                      sigma=tol_sigma if tol_sigma is not None else (1e-6 if refined else 1e-2),
                      switch=math.nan, singular=2 * h if min_singular is None else min_singular)
+    st = detect_structure(tsol) if structure is None else structure
     if refined is not None:
         tol.switch = 1e-6 * refined.T if tol_switch is None else tol_switch
         cert = certify_refined(tsol, refined, tol, n)
     else:
         tol.switch = 1.5 * h if tol_switch is None else tol_switch
-        cert = certify_transcription(tsol, tol, verify, tol_switch is None)
-    hold_to_structure(cert, detect_structure(tsol) if structure is None else structure)
+        arcs = transcription_table(tsol, st, tol.sigma, 0.0)
+        cert = certify_transcription(tsol, tol, verify, tol_switch is None, arcs)
+        cert.arcs = arcs
+    settle(cert, st, refuting=refined is not None)
     in_dynamics = pr.nv and ca.depends_on(ca.vertcat(pr.rhs, pr.lagrange), pr.v)
     if chattering and in_dynamics:
         # the transcription's switching functions need the variables' values in f: read

@@ -24,6 +24,8 @@ from ..structure.arcs import TranscribedSolution, no_control_crosses
 from ..structure.switching import RefinedSwitching
 from ..transcriptions.gridview import grid_spacing
 from ..transcriptions.solution import along
+from .arc_table import refined_table
+from .arc_verdict import covered
 from .checks import (
     ERROR_MARGIN,
     Tolerances,
@@ -248,13 +250,18 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
         fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                       sw.H_expected, np.zeros(int(keep.sum()), bool), *args,
                       ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
+    arcs = refined_table(ref, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep], tol.sigma,
+                         max(err["H"], err["costate"], err["sigma"]))
+    fig.singular = [r for r in fig.singular if not covered(arcs, r)]
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
     verdict, reasons = verdict_of(definite, uncertain, active, last, T)
     gap_lam = _costate_gap(sol, ref, sw.t[keep], sw.lam[keep], last)
     src = "refined (adjoint integrated with the state along the refined arcs: " + (
         "exact arcs)" if ref.exact else f"RK8, error measured {sw.error_lam:.1e})")
-    return build_certificate(verdict, reasons, sw.H_expected, fig, active, gap_lam, src,
+    cert = build_certificate(verdict, reasons, sw.H_expected, fig, active, gap_lam, src,
                              sw.t[keep], sw.lam[keep], sw.u[keep], err, last)
+    cert.arcs = arcs
+    return cert
 
 
 def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray, lam: np.ndarray,

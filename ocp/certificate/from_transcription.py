@@ -29,6 +29,8 @@ from ..structure.arcs import (
 from ..structure.constraint_kinds import MIXED, STATE
 from ..transcriptions.gridview import grid_spacing, is_collocation, mesh_level
 from ..transcriptions.solution import Solution
+from .arc_record import ArcCheck
+from .arc_verdict import covered
 from .checks import (
     INCONCLUSIVE,
     NOT_BANG_BANG,
@@ -223,8 +225,22 @@ def _persistent(coarse: Figures, fine: Figures, tol: Tolerances,
     return out
 
 
+def _leave_to_table(fig: Figures, active: list, arcs: list[ArcCheck]) -> list:
+    """Leave the spans that rows of the per-arc table check to the table: runs of vanishing
+    sigma on interior or singular arcs, and state-constrained spans on state boundary arcs.
+    Returns the active spans left."""
+    fig.singular = [r for r in fig.singular if not covered(arcs, r)]
+    for name in fig.agreement:
+        mine = [r for r in arcs if r.control == name or r.kind == "state boundary"]
+        if mine and all(r.kind in ("interior", "singular", "state boundary") for r in mine):
+            # no bang arc: H_u = 0 is the table's check, not a bound sign(sigma) selects
+            fig.agreement[name] = 1.0
+    return [a for a in active if not covered(arcs, a, kinds=("state boundary",))]
+
+
 def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: bool,
-                          default_switch: bool) -> PMPCertificate:
+                          default_switch: bool, arcs: list[ArcCheck] | None = None
+                          ) -> PMPCertificate:
     """The certificate of a transcription alone; a would-be refutation is re-checked on a
     grid twice as fine and reported only if it persists there.
 
@@ -236,18 +252,21 @@ def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: boo
         Allow the re-check on a finer grid (without it a refutation is "inconclusive").
     default_switch : bool
         ``tol.switch`` is the default (1.5 h): halved with the grid on the re-check.
+    arcs : list of ArcCheck, optional
+        The per-arc table: the spans its rows check are left to it.
 
     Returns
     -------
     PMPCertificate
     """
     fig, H_exp, active, t = _transcription_figures(sol, tol)
+    left = _leave_to_table(fig, active, arcs or [])
     definite, uncertain = judge(fig, tol, {}, H_exp is not None)
     src = ("transcription (costates from collocation multipliers / Radau weights)"
            if is_collocation(sol) else "transcription (costates from continuity multipliers)")
     _, _, u, lam = transcription_samples(sol)
     if not definite:
-        verdict, reasons = verdict_of([], uncertain, active, 0.0, sol.T)
+        verdict, reasons = verdict_of([], uncertain, left, 0.0, sol.T)
         return build_certificate(verdict, reasons, H_exp, fig, active, math.nan, src, t, lam, u,
                                  {}, 0.0)
     found = finer_transcription(sol) if verify else None
@@ -260,6 +279,7 @@ def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: boo
     tol_f = Tolerances(tol.H, tol.sigma, tol.switch / 2 if default_switch else tol.switch,
                        tol.singular / 2)
     fig2, H2, active2, t2 = _transcription_figures(fine, tol_f)
+    left2 = _leave_to_table(fig2, active2, arcs or [])
     persistent = _persistent(fig, fig2, tol, tol_f)
     src2 = f"{src}; re-checked on {fine.N} nodes"
     _, _, u2, lam2 = transcription_samples(fine)
@@ -272,6 +292,6 @@ def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: boo
     if d2:
         return build_certificate(INCONCLUSIVE, note + d2, H2, fig2, active2, math.nan, src2, t2,
                                  lam2, u2, {}, 0.0)
-    verdict, reasons = verdict_of([], u2_reasons, active2, 0.0, fine.T)
+    verdict, reasons = verdict_of([], u2_reasons, left2, 0.0, fine.T)
     return build_certificate(verdict, note + reasons, H2, fig2, active2, math.nan, src2, t2, lam2,
                              u2, {}, 0.0)

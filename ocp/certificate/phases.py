@@ -25,10 +25,12 @@ import numpy as np
 from ..structure.arcs import detect_structure
 from ..structure.phase_refinement import RefinedPhases, local_phase
 from ..transcriptions.solution import Solution
+from .arc_record import certified_verdict
 from .checks import CERTIFIED, ERROR_MARGIN, INCONCLUSIVE, NOT_BANG_BANG, Tolerances
 from .costates import adjoint_sweep
 from .from_refined import certify_refined, constrained_refined
-from .result import PMPCertificate, hold_to_structure, not_applicable, refusal
+from .arc_verdict import NOT_EXTREMAL, settle
+from .result import PMPCertificate, not_applicable, refusal
 
 JUNCTION_TOL = 1e-6
 """Allowed relative gap between the swept and the multipliers' costate at a phase start."""
@@ -147,7 +149,7 @@ def certify_phases(sol: Solution | None, refined: RefinedPhases, *,
         else:
             certs.append(certify_refined(loc, r, tol, n))
             if sol is not None:  # never certify what the phase's own structure doubts
-                hold_to_structure(certs[-1], detect_structure(loc))
+                settle(certs[-1], detect_structure(loc), refuting=True)
         gap, err = _junction_gap(r, refined.junction_costates[i], n)
         gaps.append(gap)
         if math.isfinite(gap) and gap > JUNCTION_TOL and gap > ERROR_MARGIN * err:
@@ -166,13 +168,19 @@ def _no_control(r: Any) -> PMPCertificate:
 
 def _combine(certs: list[PMPCertificate], names: list[str], gaps: list[float],
              extra: list[str], refined: RefinedPhases, elapsed: float) -> PhasesCertificate:
-    order = {CERTIFIED: 0, INCONCLUSIVE: 1, NOT_BANG_BANG: 2}
-    verdict = max((c.verdict for c in certs), key=order.__getitem__)
+    def rank(v: str) -> int:
+        return 0 if v == CERTIFIED or v.startswith("certified (") else \
+            {INCONCLUSIVE: 1, NOT_BANG_BANG: 2, NOT_EXTREMAL: 3}[v]
+
+    verdict = max((c.verdict for c in certs), key=rank)
+    if verdict.startswith("certified (") or verdict == CERTIFIED:
+        verdict = certified_verdict([a for c in certs for a in c.arcs]) \
+            if any(c.arcs for c in certs) else CERTIFIED
     reasons = [f"phase {n!r}: {r_}" for n, c in zip(names, certs, strict=True)
                for r_ in c.reasons]
     if extra:
         reasons += extra
-        verdict = NOT_BANG_BANG if verdict == NOT_BANG_BANG else INCONCLUSIVE
+        verdict = verdict if verdict in (NOT_BANG_BANG, NOT_EXTREMAL) else INCONCLUSIVE
     t0 = refined.t0
     shift = [[(a + t0[i], b + t0[i]) for a, b in c.state_constraint_active_intervals]
              for i, c in enumerate(certs)]

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..structure.arcs import ArcStructure, SolutionLike
+from .arc_record import ArcCheck
 from .chattering import ChatteringResult
 from .checks import CERTIFIED, INCONCLUSIVE, NOT_APPLICABLE, NOT_BANG_BANG, UNVERIFIED, Figures
 
@@ -61,6 +62,10 @@ class PMPCertificate:
         Seconds the certificate took.
     chattering : ChatteringResult or None
         Switches accumulating at a point (:func:`detect_chattering`), if found.
+    arcs : list of ArcCheck
+        The per-arc table: each arc's kind, span, the residuals of its conditions,
+        their tolerances and errors, its order (singular, state boundary) and status
+        (:mod:`ocp.certificate.arc_record`).
     t, lam, H, sigma, u : arrays for plotting (``sigma``/``u`` 1-D for one control).
     """
 
@@ -86,11 +91,12 @@ class PMPCertificate:
     per_control: dict[str, dict[str, float]] = field(default_factory=dict)
     elapsed: float = 0.0
     chattering: ChatteringResult | None = None
+    arcs: list[ArcCheck] = field(default_factory=list)
 
     @property
     def certified(self) -> bool:
-        """True when the verdict is "bang-bang certified"."""
-        return self.verdict == CERTIFIED
+        """True when the verdict is "bang-bang certified" or "certified (...)"."""
+        return self.verdict == CERTIFIED or self.verdict.startswith("certified (")
 
     @property
     def applicable(self) -> bool:
@@ -116,7 +122,8 @@ class PMPCertificate:
                 "per_control": {c: {k: f(v) for k, v in d.items()}
                                 for c, d in self.per_control.items()},
                 "elapsed_s": float(self.elapsed),
-                "chattering": self.chattering.to_dict() if self.chattering else None}
+                "chattering": self.chattering.to_dict() if self.chattering else None,
+                "arcs": [a.to_dict() for a in self.arcs]}
 
 
 def build_certificate(verdict: str, reasons: list[str], H_exp: float | None, fig: Figures,

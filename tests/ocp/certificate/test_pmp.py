@@ -53,8 +53,10 @@ def test_free_time_with_running_cost_has_zero_hamiltonian():
     assert c2.H_max_abs < 1e-6
 
 
-def test_singular_arc_is_not_certified():
-    # min int x^2, x' = u, |u| <= 1, x(0) = 1, T = 3: u = -1 until t = 1, then u = 0 (singular)
+def test_singular_arc_is_certified_with_its_order():
+    # min int x^2, x' = u, |u| <= 1, x(0) = 1, T = 3: u = -1 until t = 1, then u = 0 (singular).
+    # This test asserted the old limitation ("not bang-bang", a singular arc refuting the
+    # bang-bang certificate); the certificate now checks the singular arc's own conditions.
     p = OptimalControlProblem()
     x = p.state("x")
     u = p.control("u", lower=-1, upper=1)
@@ -64,10 +66,10 @@ def test_singular_arc_is_not_certified():
     p.minimize_integral(x**2)
     sol = MultipleShooting(p, nodes=60).solve({})
     c = certify(sol)
-    assert c.verdict == NOT_BANG_BANG
-    assert c.singular_intervals
-    a, b = c.singular_intervals[0]
-    assert a == pytest.approx(1.0, abs=0.1) and b == pytest.approx(3.0)
+    assert c.verdict == "certified (bang, singular order 1)", c.reasons
+    (arc,) = [a for a in c.arcs if a.kind == "singular"]
+    assert arc.start == pytest.approx(1.0, abs=0.1) and arc.end == pytest.approx(3.0)
+    assert arc.order == 1 and arc.residuals["Kelley (-1)^k b min"] == pytest.approx(2.0)
 
 
 @pytest.mark.parametrize("v0", [-0.5, -3.0, -7.0, -10.0])
@@ -97,12 +99,19 @@ def test_non_optimal_landing_is_refuted(how):
     assert c.reasons
 
 
-def test_transcription_alone_flags_the_constrained_tail():
-    # at v0 = -10 the transcription ends with an arc on which v_f <= 0 is active
+def test_transcription_alone_certifies_the_constrained_tail():
+    # at v0 = -10 the transcription ends with an arc on which v_f <= 0 is active. This test
+    # asserted the old limitation ("inconclusive": a state constraint active, left out of
+    # the checks); the tail is now checked as a state boundary arc of order 1 (on the
+    # constraint, the boundary control law, the multiplier's sign, the costate equation).
     r = solve_landing(-10.0, replay=False)
     c = certify(r.transcribed)
-    assert c.verdict == INCONCLUSIVE
+    assert c.verdict == "certified (bang, state boundary order 1)", c.reasons
     assert c.state_constraint_active_intervals
+    (arc,) = [a for a in c.arcs if a.kind == "state boundary"]
+    assert arc.control == "foot descending v_f <= 0" and arc.order == 1
+    assert arc.end == pytest.approx(r.transcribed.T)
+    assert arc.residuals["boundary control |u - u_b|"] < 1e-6
 
 
 def test_cli_pmp_json(tmp_path, cli):

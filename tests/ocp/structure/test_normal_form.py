@@ -177,7 +177,9 @@ def test_every_way_of_writing_gives_one_answer(problem):
         assert T == pytest.approx(exact[problem], abs=1e-12) and verdict == INCONCLUSIVE
     else:
         assert J == pytest.approx(4.0, rel=2e-3) and T is None
-        assert verdict == INCONCLUSIVE  # interior arcs off the constraint
+        # (was INCONCLUSIVE, the old limitation: interior arcs off the constraint; the
+        # certificate now checks interior and state boundary arcs by their own conditions)
+        assert verdict == "certified (interior, state boundary order 2)"
 
 
 # ------------------------------------------------------------ decision variables

@@ -1,0 +1,87 @@
+"""The verdict of a certificate with its per-arc table.
+
+The global checks (:mod:`ocp.certificate.checks`: H constant, bang arcs at the bound
+``sign(sigma)`` selects, switches at sign changes) see a vanishing switching function
+as a failure, and structure detection's interior arcs as a doubt. An arc of the table
+whose own conditions hold (an interior arc's stationarity and Legendre--Clebsch, a
+singular arc's derivatives, singular control and Kelley's condition, a state boundary
+arc's multiplier and jumps) answers both: :func:`covered` lets the global checks leave
+its span to the table, and :func:`settle` gives the verdict:
+
+* a table row that fails refutes a refined candidate (``"not an extremal"``); on a
+  transcription alone it makes the verdict "inconclusive" (structure detection may
+  have misread the arc: a chattering control, a transition);
+* a row that is uncertain makes it "inconclusive", naming the arc and the condition;
+* an interior arc of the detected structure that no holding row covers makes it
+  "inconclusive" (never certify what structure detection doubts);
+* else a certified verdict names the arc types (:func:`~ocp.certificate.arc_record.certified_verdict`).
+"""
+
+from __future__ import annotations
+
+from ..structure.arcs import ArcStructure
+from .arc_record import FAILS, HOLDS, UNCERTAIN, ArcCheck, certified_verdict
+from .checks import CERTIFIED, INCONCLUSIVE, NOT_BANG_BANG
+from .result import PMPCertificate, interior_arcs
+
+NOT_EXTREMAL = "not an extremal"
+"""The refutation of a candidate with non-bang arcs (``"not bang-bang"`` for bang-bang ones)."""
+
+_FREE = ("interior", "singular", "state boundary")
+
+
+def covered(arcs: list[ArcCheck], span: tuple[float, float], kinds: tuple[str, ...] = _FREE,
+            statuses: tuple[str, ...] = (HOLDS, UNCERTAIN)) -> bool:
+    """True when rows of ``kinds`` with a status in ``statuses`` cover half of ``span``.
+
+    Parameters
+    ----------
+    arcs : list of ArcCheck
+    span : (float, float)
+    kinds, statuses : tuple of str
+    """
+    a, b = span
+    got = sum(max(0.0, min(b, r.end) - max(a, r.start)) for r in arcs
+              if r.kind in kinds and r.status in statuses)
+    return got >= 0.5 * (b - a) - 1e-12
+
+
+def settle(cert: PMPCertificate, structure: ArcStructure | None, refuting: bool) -> None:
+    """The verdict of ``cert`` with its table ``cert.arcs`` (in place).
+
+    Parameters
+    ----------
+    cert : PMPCertificate
+        With its global verdict and its per-arc table.
+    structure : ArcStructure or None
+        The structure detected on the candidate's transcription (None: no doubt to hold).
+    refuting : bool
+        A failing row refutes (a refined candidate, whose errors are measured).
+    """
+    rows = cert.arcs
+    free = [r for r in rows if r.kind != "bang" and r.kind != "control boundary"]
+    if cert.verdict == NOT_BANG_BANG and free:
+        cert.verdict = NOT_EXTREMAL
+    bad = [r for r in rows if r.status != HOLDS]
+    for r in bad:
+        cert.reasons.append(f"{r.where()}: {r.status}: " + "; ".join(r.notes))
+    if any(r.status == FAILS for r in bad) and refuting and cert.verdict != NOT_BANG_BANG:
+        cert.verdict = NOT_EXTREMAL
+    elif bad and cert.verdict == CERTIFIED:
+        cert.verdict = INCONCLUSIVE
+    doubt = [(c, a, b) for c, a, b in (interior_arcs(structure) if structure else [])
+             if not covered([r for r in rows if r.control == c or r.kind == "state boundary"],
+                            (a, b), statuses=(HOLDS,))]
+    if doubt:
+        spans = ", ".join(f"[{a:.6g}, {b:.6g}] ({c})" for c, a, b in doubt)
+        if cert.verdict == CERTIFIED:
+            cert.verdict = INCONCLUSIVE
+        if cert.verdict not in (NOT_BANG_BANG, NOT_EXTREMAL):
+            cert.reasons.append(f"structure detection finds an interior arc on {spans}: a "
+                                "singular, free or unresolved arc whose conditions were not "
+                                "shown to hold, never certified")
+    if cert.verdict == CERTIFIED and rows:
+        cert.verdict = certified_verdict(rows)
+
+
+__all__ = ["NOT_EXTREMAL", "covered", "settle"]
