@@ -54,7 +54,7 @@ class ArcSamples:
         between them by the transcription's own rule (for the costate equation); None
         when the costate was integrated from that equation (a refinement).
     margin : float
-        Samples this close to a junction are not judged.
+        Samples this close to a junction are not judged (without ``mesh``).
     tol : float
         Allowed relative residual.
     error : float
@@ -71,6 +71,19 @@ class ArcSamples:
     margin: float
     tol: float
     error: float
+    mesh: np.ndarray | None = None
+
+    def margin_at(self, t_j: float, factor: float = 1.0) -> float:
+        """How far from a junction at ``t_j`` samples are not judged: ``factor * margin``
+        (1.5 the longest mesh interval: a junction is known to a grid interval).
+
+        Parameters
+        ----------
+        t_j : float
+        factor : float
+        """
+        # (the longest mesh interval anywhere: a detected junction can be that far off)
+        return factor * self.margin
 
     @property
     def pv(self) -> np.ndarray:
@@ -158,12 +171,24 @@ def refined_arcs(ref: object) -> list[ArcCheck]:
     return _spans(pr, found)
 
 
-def inside_arc(s: ArcSamples, arc: ArcCheck, t: np.ndarray) -> np.ndarray:
-    """Samples strictly inside the arc, ``margin`` away from its junctions (not from the
-    horizon's ends, which are no junctions)."""
-    lo = arc.start + (s.margin if arc.start > s.t[0] - 1e-12 + s.margin * 1e-3 and
-                      arc.start > 1e-12 else 0.0)
-    hi = arc.end - (s.margin if arc.end < float(np.max(s.t)) - 1e-12 else 0.0)
+def inside_arc(s: ArcSamples, arc: ArcCheck, t: np.ndarray, factor: float = 1.0) -> np.ndarray:
+    """Samples inside the arc, ``factor`` margins away from its junctions (not from the
+    horizon's ends, which are no junctions).
+
+    Parameters
+    ----------
+    s : ArcSamples
+    arc : ArcCheck
+    t : ndarray
+        The times to select from.
+    factor : float
+        Margins (:meth:`ArcSamples.margin_at`) kept from each junction.
+    """
+    t0, T = float(np.min(s.t)), float(np.max(s.t))
+    first = arc.start <= 1e-12 or arc.start <= t0 - 1e-12
+    last = arc.end >= T - 1e-12 and arc.end >= float(np.max(t)) - 1e-12
+    lo = arc.start + (0.0 if first else s.margin_at(arc.start, factor))
+    hi = arc.end - (0.0 if last else s.margin_at(arc.end, factor))
     return (t >= lo - 1e-12) & (t <= hi + 1e-12)
 
 

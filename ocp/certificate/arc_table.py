@@ -72,7 +72,7 @@ def transcription_samples_for_arcs(sol: TranscribedSolution, tol: float,
     mesh_error = float(getattr(sol, "mesh_error", math.nan) or math.nan)
     error = max(error, float(np.ptp(H)) / scale if len(H) else 0.0,
                 mesh_error if math.isfinite(mesh_error) else 0.0)
-    return ArcSamples(pr, values, t, x, u, lam, pairs, margin, tol, error)
+    return ArcSamples(pr, values, t, x, u, lam, pairs, margin, tol, error, mesh)
 
 
 def transcription_table(sol: TranscribedSolution, structure: ArcStructure, tol: float,

@@ -24,8 +24,6 @@ enter the adjoint equations at the nodes), so the certificate reads:
 
 from __future__ import annotations
 
-import dataclasses
-
 import casadi as ca
 import numpy as np
 
@@ -75,8 +73,7 @@ def check_state_arcs(arcs: list[ArcCheck], s: ArcSamples) -> None:
                                              c.upper if arc.side == "upper" else c.lower])
         # a transcription zig-zags next to a boundary arc of order p over about p grid
         # intervals: its inside is judged (p + 1) margins from the junctions
-        sel = inside_arc(dataclasses.replace(s, margin=(1 + (arc.order or 0)) * s.margin),
-                         arc, s.t)
+        sel = inside_arc(s, arc, s.t, _factor(s, arc))
         if sel.sum() >= 2:
             val, _, lim = along(fn, s.x[sel], pv)
             scale = max(1.0, float(np.max(np.abs(lim))))
@@ -88,8 +85,16 @@ def check_state_arcs(arcs: list[ArcCheck], s: ArcSamples) -> None:
         if s.pairs is not None:
             _density(arc, s, fn, sign)
             for t_j, what in ((arc.start, "entry"), (arc.end, "exit")):
-                if s.t[0] + s.margin < t_j < float(np.max(s.t)) - s.margin:
+                if s.t[0] + s.margin_at(t_j) < t_j < float(np.max(s.t)) - s.margin_at(t_j):
                     _jump(arc, s, fn, sign, t_j, what)
+
+
+def _factor(s: ArcSamples, arc: ArcCheck) -> float:
+    """Margins kept from the junctions inside a boundary arc: a transcription zig-zags
+    next to a boundary arc of order p over about p grid intervals, so p + 1 margins, but
+    never more than leaves half the arc."""
+    room = 0.25 * (arc.end - arc.start) / max(s.margin, 1e-300)
+    return max(1.0, min(1.0 + (arc.order or 0), room))
 
 
 def _on_arc(arc: ArcCheck, s: ArcSamples, sel: np.ndarray) -> None:
@@ -121,7 +126,8 @@ def _density(arc: ArcCheck, s: ArcSamples, fn: ca.Function, sign: float) -> None
     """``mu >= 0`` on the arc, and the costate equation across ``grad c``."""
     assert s.pairs is not None
     ta, tb, la, lb, hx = s.pairs
-    sel = inside_arc(s, arc, ta) & inside_arc(s, arc, tb)
+    k = _factor(s, arc)
+    sel = inside_arc(s, arc, ta, k) & inside_arc(s, arc, tb, k)
     if sel.sum() < 2:
         return
     xm = np.array([np.interp(0.5 * (ta[sel] + tb[sel]), s.t, s.x[:, i])
@@ -143,8 +149,8 @@ def _density(arc: ArcCheck, s: ArcSamples, fn: ca.Function, sign: float) -> None
 def _side_line(s: ArcSamples, t_j: float, before: bool) -> tuple[np.ndarray, np.ndarray] | None:
     """The costate beside a junction as a line ``a + b t`` through the two nearest samples
     on one side, ``margin`` away from the detected junction ``t_j``."""
-    t = s.t
-    idx = np.flatnonzero(t <= t_j - s.margin) if before else np.flatnonzero(t >= t_j + s.margin)
+    t, m = s.t, s.margin_at(t_j)
+    idx = np.flatnonzero(t <= t_j - m) if before else np.flatnonzero(t >= t_j + m)
     if len(idx) < 2:
         return None
     i, k = (idx[-2], idx[-1]) if before else (idx[0], idx[1])
@@ -172,8 +178,8 @@ def _jump(arc: ArcCheck, s: ArcSamples, fn: ca.Function, sign: float, t_j: float
     a, b = right[0] - left[0], right[1] - left[1]
     pa, pb = a - (a @ grad) / g2 * grad, b - (b @ grad) / g2 * grad
     if float(pb @ pb) > 0:
-        t_j = float(np.clip(-(pa @ pb) / float(pb @ pb), t_j - 2 * s.margin,
-                            t_j + 2 * s.margin))
+        m = s.margin_at(t_j)
+        t_j = float(np.clip(-(pa @ pb) / float(pb @ pb), t_j - 2 * m, t_j + 2 * m))
     d = a + b * t_j
     eta = -sign * float(d @ grad) / g2
     size = max(float(np.max(np.abs(s.lam))), 1e-300)

@@ -1,0 +1,173 @@
+"""A certificate per arc type (issue 44 items 1 and 3): interior, singular, state boundary.
+
+Independent references: the scalar LQ problem's closed form (``J = tanh(1)/2``, the
+Riccati solution ``S(t) = tanh(T - t)``); the singular problem's (``u = -1`` until
+``t = 1``, then the singular arc ``u = 0``, ``J = 1/3``, ``sigma = lambda``, ``sigma'' =
+-2u``: order 1, Kelley's coefficient 2); Bryson--Denham's (``l = 1/9``: junctions at
+``3l`` and ``1 - 3l``, ``J = 4/(9l) = 4``, the costate ``lambda_x = 2/(9 l^2) = 18``
+jumping to 0 at the entry and to -18 at the exit: ``eta = 18`` at both).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from ocp import Collocation, MultipleShooting, OptimalControlProblem, SolveError, certify
+from ocp.certificate.arc_verdict import NOT_EXTREMAL
+from ocp.structure.singular import singular_algebra
+from ocp.structure.singular_refinement import refine_singular
+
+
+def lq() -> OptimalControlProblem:
+    p = OptimalControlProblem("lq")
+    x, u = p.state("x"), p.control("u")
+    p.set_dynamics([u])
+    p.initial_constraint(x, 1.0)
+    p.fixed_final_time(1.0)
+    p.minimize_integral((x**2 + u**2) / 2)
+    return p
+
+
+def singular(T: float = 2.0) -> OptimalControlProblem:
+    p = OptimalControlProblem("bang_singular")
+    x, u = p.state("x"), p.control("u", lower=-1, upper=1)
+    p.set_dynamics([u])
+    p.initial_constraint(x, 1.0)
+    p.fixed_final_time(T)
+    p.minimize_integral(x**2)
+    return p
+
+
+def bryson_denham(form: str, order: int = 2, l_: float = 1 / 9) -> OptimalControlProblem:
+    """x <= l as a declared state bound, bound_state or a path constraint; order 2
+    (x'' = u) or 3 (x''' = u)."""
+    p = OptimalControlProblem(f"bryson_denham_{form}_{order}")
+    x = p.state("x", upper=l_) if form == "state" else p.state("x")
+    names = ["v", "a"][:order - 1]
+    chain = [p.state(n) for n in names]
+    u = p.control("u")
+    if form == "bound_state":
+        p.bound_state("x", upper=l_)
+    elif form == "path":
+        p.path_constraint(x, upper=l_)
+    rhs = {"x": chain[0]}
+    for n, nxt in zip(names, [*chain[1:], u], strict=True):
+        rhs[n] = nxt
+    p.set_dynamics(rhs)
+    ends = {"x": (0.0, 0.0), "v": (1.0, -1.0), "a": (0.0, 0.0)}
+    for n, s in zip(["x", *names], [x, *chain], strict=True):
+        p.initial_constraint(s, ends[n][0])
+        p.terminal_constraint(s, ends[n][1])
+    p.fixed_final_time(1.0)
+    p.minimize_integral(u**2 / 2)
+    return p
+
+
+@pytest.fixture(scope="module")
+def lq_solutions():
+    return {"collocation": Collocation(lq(), 10).refine({}, tol=1e-8),
+            "shooting": MultipleShooting(lq(), nodes=40).solve({})}
+
+
+@pytest.mark.parametrize("how", ["collocation", "shooting"])
+def test_lq_certified_interior_arc(lq_solutions, how):
+    sol = lq_solutions[how]
+    c = certify(sol)
+    assert c.verdict == "certified (interior)" and c.certified, c.reasons
+    (arc,) = c.arcs
+    assert arc.kind == "interior" and arc.status == "holds"
+    assert arc.residuals["stationarity |H_u|"] < (1e-8 if how == "collocation" else 1e-3)
+    assert arc.residuals["min H_uu"] == pytest.approx(1.0)  # Legendre-Clebsch
+    assert arc.residuals["costate equation"] < 1e-3
+    # the Jacobi test ran and found no conjugate point; its Riccati matrix at the first
+    # sample is tanh(T - t) (free final state: S(T) = 0, S' = S^2 - 1)
+    assert arc.residuals["Jacobi min sigma(dX)"] > 0.5
+    note = [n for n in arc.notes if n.startswith("no conjugate point")]
+    S0 = float(note[0].split("[[")[1].split("]]")[0])
+    t1 = float(sol.t[1]) if how == "collocation" else 0.5 * (sol.t[1] + sol.t[2])
+    # (to the samples' accuracy: O(h) on the shooting grid)
+    assert S0 == pytest.approx(math.tanh(1.0 - t1), abs=2e-3 if how == "collocation" else 1e-2)
+    assert c.to_dict()["arcs"][0]["kind"] == "interior"
+
+
+@pytest.fixture(scope="module")
+def bang_singular():
+    sol = MultipleShooting(singular(), nodes=40).solve({})
+    return sol, refine_singular(sol)
+
+
+def test_singular_algebra_order_and_kelley():
+    alg = singular_algebra(singular(), "u")
+    assert alg.order == 1
+    assert float(alg.kelley) == 2.0 and float(alg.law) == 0.0
+
+
+def test_bang_singular_refined_to_machine_precision_and_certified(bang_singular):
+    sol, r = bang_singular
+    assert abs(sol.objective - 1 / 3) > 1e-10  # the transcription alone is not there
+    assert r.kinds == ["min", "singular"]
+    assert abs(r.objective - 1 / 3) <= 1e-10
+    assert abs(r.switch_times[0] - 1.0) <= 1e-10
+    c = certify(sol, r)
+    assert c.verdict == "certified (bang, singular order 1)" and c.certified, c.reasons
+    (arc,) = [a for a in c.arcs if a.kind == "singular"]
+    assert arc.order == 1 and arc.residuals["Kelley (-1)^k b min"] == pytest.approx(2.0)
+    assert arc.residuals["singular control |u - u_s|"] <= 1e-12
+    assert certify(sol).verdict == "certified (bang, singular order 1)"
+
+
+def test_bang_singular_off_junction_is_refuted(bang_singular):
+    sol, r = bang_singular
+    bad = dataclasses.replace(r, durations=r.durations * np.array([1.05, 0.95]))
+    c = certify(sol, bad)
+    assert c.verdict == NOT_EXTREMAL and not c.certified
+    assert any(s.startswith("singular arc of u on [") for s in c.reasons)
+
+
+@pytest.mark.parametrize("form", ["state", "bound_state", "path"])
+def test_bryson_denham_certified_with_its_boundary_arc(form):
+    sol = Collocation(bryson_denham(form), 20).refine({}, tol=1e-8)
+    assert sol.objective == pytest.approx(4.0, abs=1e-6)
+    c = certify(sol)
+    assert c.verdict == "certified (interior, state boundary order 2)", c.reasons
+    (arc,) = [a for a in c.arcs if a.kind == "state boundary"]
+    assert arc.order == 2 and arc.side == "upper" and arc.status == "holds"
+    # junctions placed where the costate's two sides agree across grad c (detected: to a
+    # mesh interval)
+    assert arc.residuals["entry time"] == pytest.approx(1 / 3, abs=1e-2)
+    assert arc.residuals["exit time"] == pytest.approx(2 / 3, abs=1e-2)
+    assert arc.residuals["entry jump eta"] == pytest.approx(18.0, rel=1e-3)
+    assert arc.residuals["exit jump eta"] == pytest.approx(18.0, rel=1e-3)
+
+
+@pytest.mark.parametrize("build", [singular, lambda: bryson_denham("path")])
+def test_stopped_early_never_certified(build):
+    with pytest.raises(SolveError) as info:
+        MultipleShooting(build(), nodes=30, ipopt_options={"max_iter": 3}).solve({})
+    c = certify(info.value.iterate)
+    assert not c.certified and c.verdict.startswith("not applicable")
+
+
+def test_lq_is_a_qp_solved_in_one_iteration():
+    """The LQ problem is a QP: Ipopt converges in one iteration, so max_iter 3 does not stop
+    it early, and its certificate is that of a converged optimum."""
+    sol = MultipleShooting(lq(), nodes=30, ipopt_options={"max_iter": 3}).solve({})
+    assert sol.success and sol.iterations == 1
+    assert certify(sol).verdict == "certified (interior)"
+
+
+@pytest.mark.slow
+def test_third_order_constraint_touch_is_not_certified_as_a_boundary_arc():
+    """x''' = u, x <= l: a constraint of order 3, whose optimal contacts are touch points
+    (boundary arcs of odd order >= 3 are generically not optimal). The transcription shows
+    short "boundary arcs" a mesh interval long: the certificate reads the order (3) and
+    does not certify them."""
+    sol = Collocation(bryson_denham("state", order=3, l_=0.05), 20).refine({}, tol=1e-6)
+    c = certify(sol)
+    assert not c.certified and c.verdict == "inconclusive"
+    rows = [a for a in c.arcs if a.kind == "state boundary"]
+    assert rows and all(a.order == 3 and a.status != "holds" for a in rows)
