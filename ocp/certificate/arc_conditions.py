@@ -296,4 +296,5 @@ def _costate_equation(arc: ArcCheck, s: ArcSamples) -> None:
               "lambda' = -H_x, integrated over the arc")
 
 
-__all__ = ["ArcSamples", "check_arcs", "classify", "inside_arc", "refined_arcs", "transcription_arcs"]
+__all__ = ["ArcSamples", "check_arcs", "classify", "inside_arc", "refined_arcs",
+           "transcription_arcs"]

@@ -14,7 +14,8 @@ its span to the table, and :func:`settle` gives the verdict:
 * a row that is uncertain makes it "inconclusive", naming the arc and the condition;
 * an interior arc of the detected structure that no holding row covers makes it
   "inconclusive" (never certify what structure detection doubts);
-* else a certified verdict names the arc types (:func:`~ocp.certificate.arc_record.certified_verdict`).
+* else a certified verdict names the arc types
+  (:func:`~ocp.certificate.arc_record.certified_verdict`).
 """
 
 from __future__ import annotations

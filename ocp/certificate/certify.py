@@ -72,6 +72,9 @@ import casadi as ca
 # the split)
 from ..structure.arcs import ArcStructure, SolutionLike, detect_structure, transcribed
 from ..transcriptions.gridview import grid_spacing
+from .arc_table import transcription_table
+from .arc_verdict import NOT_EXTREMAL as NOT_EXTREMAL
+from .arc_verdict import settle
 from .chattering import ChatteringResult as ChatteringResult
 from .chattering import detect_chattering as chattering_of
 from .checks import CERTIFIED as CERTIFIED
@@ -95,9 +98,6 @@ from .from_refined import path_activity_along as path_activity_along
 from .from_transcription import certify_transcription, transcription_samples
 from .from_transcription import finer_transcription as finer_transcription
 from .result import PMPCertificate as PMPCertificate
-from .arc_table import transcription_table
-from .arc_verdict import NOT_EXTREMAL as NOT_EXTREMAL
-from .arc_verdict import settle
 from .result import not_applicable as not_applicable
 from .result import refusal as refusal
 

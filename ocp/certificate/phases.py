@@ -26,10 +26,10 @@ from ..structure.arcs import detect_structure
 from ..structure.phase_refinement import RefinedPhases, local_phase
 from ..transcriptions.solution import Solution
 from .arc_record import certified_verdict
+from .arc_verdict import NOT_EXTREMAL, settle
 from .checks import CERTIFIED, ERROR_MARGIN, INCONCLUSIVE, NOT_BANG_BANG, Tolerances
 from .costates import adjoint_sweep
 from .from_refined import certify_refined, constrained_refined
-from .arc_verdict import NOT_EXTREMAL, settle
 from .result import PMPCertificate, not_applicable, refusal
 
 JUNCTION_TOL = 1e-6

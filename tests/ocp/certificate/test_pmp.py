@@ -10,7 +10,6 @@ import pytest
 from ocp import MultipleShooting, OptimalControlProblem, certify
 from ocp.certificate.certify import (
     CERTIFIED,
-    INCONCLUSIVE,
     NOT_BANG_BANG,
     costates_from_multipliers,
 )
