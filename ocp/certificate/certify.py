@@ -304,6 +304,10 @@ def plot_certificate(cert: PMPCertificate, title: str | None = None):
         a.grid(alpha=0.3)
         for lo, hi in cert.state_constraint_active_intervals:
             a.axvspan(lo, hi, color="0.85", lw=0)
+        for row in cert.arcs:  # the per-arc table: non-bang arcs shaded, failing ones red
+            if row.kind != "bang":
+                a.axvspan(row.start, row.end, alpha=0.12, lw=0,
+                          color="tab:red" if row.status != "holds" else "tab:blue")
     a1.set_title(title or f"PMP certificate: {cert.verdict} "
                  f"(max|H| {cert.H_max_abs:.1e}, switch gap {cert.switch_sigma_gap:.1e})",
                  fontsize=9)
