@@ -105,7 +105,7 @@ __all__ = ["STOP", "STRUCTURED", "TIME_SPAN", "LocalOptimum", "MultistartResult"
 METHODS = ("sobol", "lhs")
 MAX_STARTS = 100_000
 """The most starts one call takes (each is an NLP solve; the sampler holds them all)."""
-STRUCTURED = 0.5
+STRUCTURED = 0.75
 """Default fraction of the starts after start 0 that are structured (bang sequences)."""
 STOP = (4, 6)
 """Default stopping rule ``(k, m)``: the best optimum reached by k starts, none new in m."""

@@ -269,8 +269,22 @@ def default_solution(tr: Transcription, params: dict[str, float]) -> Solution:
     params : dict
         Parameter values.
     """
-    w0 = tr.default_guess(params)
-    res = {"x": w0, "f": math.nan, "lam_g": np.zeros(tr.n_g), "lam_x": np.zeros(tr.n_w)}
+    return unpacked(tr, params, tr.default_guess(params))
+
+
+def unpacked(tr: Transcription, params: dict[str, float], w: np.ndarray) -> Solution:
+    """A decision vector (a start) unpacked as a (not solved) solution, to read it.
+
+    Parameters
+    ----------
+    tr : Transcription
+        The transcription.
+    params : dict
+        Parameter values.
+    w : ndarray
+        The decision vector.
+    """
+    res = {"x": w, "f": math.nan, "lam_g": np.zeros(tr.n_g), "lam_x": np.zeros(tr.n_w)}
     stats = {"success": False, "return_status": "Not_Solved", "iter_count": 0}
     return Solution.from_nlp(tr, tr.param_vector(params), res, stats, 0.0)
 
