@@ -187,3 +187,35 @@ def shortest_path_around_discs(start, goal, discs) -> tuple[float, list[np.ndarr
     while path[-1] != 0:
         path.append(prev[path[-1]])
     return dist[1], [nodes[i] for i in reversed(path)]
+
+
+TWO_LINK_PUBLISHED = 2.9822
+"""Luus (2000), Iterative Dynamic Programming, section 12.4.2 (PSOPT's ``twolinkarm``)."""
+
+
+def two_link_arm() -> OptimalControlProblem:
+    """The two-link robot arm in minimum time (Luus 2000; PSOPT ``examples/twolinkarm``):
+    torques ``|u| <= 1``, states in [-2, 2], from rest at (0.5, 0) to rest at (0.5, 0.522).
+    The default guess reaches the published optimum; another local optimum lies at 3.2085
+    (seen by multistart's starts): the case where early stopping saves starts."""
+    p = OptimalControlProblem("two_link_arm")
+    x1, x2, x3, x4 = (p.state(n, -2.0, 2.0) for n in ("x1", "x2", "x3", "x4"))
+    u1, u2 = p.control("u1", -1.0, 1.0), p.control("u2", -1.0, 1.0)
+    s, c = ca.sin(x3), ca.cos(x3)
+    den = 31 / 36 + 9 / 4 * s**2
+    n1 = s * (9 / 4 * c * x1**2 + 2 * x2**2) + 4 / 3 * (u1 - u2) - 3 / 2 * c * u2
+    n2 = -(s * (7 / 2 * x1**2 + 9 / 4 * c * x2**2) - 7 / 3 * u2 + 3 / 2 * c * (u1 - u2))
+    p.set_dynamics({"x1": n1 / den, "x2": n2 / den, "x3": x2 - x1, "x4": x1})
+    for x, a, b in ((x1, 0.0, 0.0), (x2, 0.0, 0.0), (x3, 0.5, 0.5), (x4, 0.0, 0.522)):
+        p.initial_constraint(x, a)
+        p.terminal_constraint(x, b)
+    p.free_final_time(1.0, 10.0)
+    p.minimize_terminal(p.T)
+    return p
+
+
+def dubins_transcription():
+    """A 16-interval collocation of :func:`dubins_point` (a module-level builder: picklable)."""
+    from ocp import Collocation
+
+    return Collocation(dubins_point(), intervals=16)

@@ -22,14 +22,19 @@ from ocp.definition.errors import ProblemDefinitionError
 from ocp.search.starts import default_solution, start_coordinates, unpacked
 from ocp.search.structured import PATTERNS, StructuredStarts, affine_controls
 from tests.oracles.ocp_suite.pendulum_swingup import build as pendulum
-from tests.oracles.several_optima import DUBINS_TARGET, dubins_point, dubins_point_lengths
+from tests.oracles.several_optima import (
+    DUBINS_TARGET,
+    dubins_point,
+    dubins_point_lengths,
+    dubins_transcription,
+)
 
 LEFT, RIGHT = dubins_point_lengths()
 
 
 @cache
 def car() -> Collocation:
-    return Collocation(dubins_point(), intervals=16)
+    return dubins_transcription()
 
 
 @cache
@@ -117,6 +122,19 @@ def test_it_stops_when_the_optima_repeat_and_says_why():
     # the rule held: the best reached, and the last 2 starts brought no new optimum
     new = {o.starts[0] for o in short.optima}
     assert short.optima[0].count >= 1 and not new & {n - 1, n - 2}
+
+
+@pytest.mark.slow  # worker processes start and import the toolkit
+def test_processes_stop_at_the_same_start():
+    """Results are taken in the order of the starts, so a pool stops where a serial run
+    does (starts queued past the stop are cancelled)."""
+    short = run((1, 2))
+    par = multistart(dubins_transcription, n=8, seed=0, stop=(1, 2), workers=2)
+    assert par.stopped == short.stopped
+    assert [(s.point, s.status) for s in par.starts] == [
+        (s.point, s.status) for s in short.starts]
+    assert [o.objective for o in par.optima] == pytest.approx(
+        [o.objective for o in short.optima], rel=1e-9)
 
 
 @pytest.mark.parametrize(("kwargs", "named"), [
