@@ -33,8 +33,8 @@ bounds the structured starts' control levels and time search too).
 Stopping early
 --------------
 With ``stop=(k, m)`` (default :data:`STOP`) the run ends once the best
-optimum has been reached by ``k`` starts and the last ``m`` starts found no
-new optimum (:class:`ocp.search.optima.StopRule`); ``res.stopped`` says so
+objective has been reached by ``k`` starts and the last ``m`` starts found no
+new objective (:class:`ocp.search.optima.StopRule`); ``res.stopped`` says so
 and why (empty when every start ran). ``stop=None`` runs all ``n``.
 
 What a result means
@@ -108,7 +108,7 @@ MAX_STARTS = 100_000
 STRUCTURED = 0.75
 """Default fraction of the starts after start 0 that are structured (bang sequences)."""
 STOP = (4, 6)
-"""Default stopping rule ``(k, m)``: the best optimum reached by k starts, none new in m."""
+"""Default stopping rule ``(k, m)``: the best objective reached by k starts, none new in m."""
 Builder = Callable[[], Transcription]
 
 
@@ -281,8 +281,8 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
         sequences simulated), in [0, 1]; the others are sampled. 0 gives the
         sampled starts alone.
     stop : (int, int) or None
-        Stop once the best optimum has been reached by ``k`` starts and the
-        last ``m`` starts found no new optimum; None runs all ``n``.
+        Stop once the best objective has been reached by ``k`` starts and the
+        last ``m`` starts found no new objective; None runs all ``n``.
 
     Returns
     -------

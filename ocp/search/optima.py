@@ -7,11 +7,13 @@ solution is compared with the first solution of every optimum found so far,
 in the order of the starts, so the grouping does not depend on where the
 starts ran.
 
-The stopping rule ``(k, m)`` (:class:`StopRule`): stop once the best optimum
-found so far has been reached by ``k`` starts and the last ``m`` starts found
-no optimum that was not already known (a failed start finds none). The
-landscape then repeats itself: more starts of the same kinds mostly land on
-known optima.
+The stopping rule ``(k, m)`` (:class:`StopRule`): stop once the best
+objective found so far has been reached by ``k`` starts and the last ``m``
+starts found no objective that was not already known (a failed start finds
+none). The landscape then repeats itself: more starts of the same kinds mostly
+land on known optima. The rule reads objectives, not trajectories, so that a
+family of solutions of equal cost (a control that does not matter on some arc)
+counts as one level and does not keep the run going.
 """
 
 from __future__ import annotations
@@ -88,7 +90,8 @@ class Optima:
         self._founders: list[Solution] = []
         self._groups: list[LocalOptimum] = []
         self.recorded = 0
-        self.last_new = -1  # the number of the last start that found a new optimum
+        self.last_new = -1  # the number of the last start that found a new objective
+        self._objectives: list[float] = []  # every verified start's objective
 
     def add(self, index: int, sol: Solution | None) -> int | None:
         """Record start ``index``; returns the arrival number of its optimum (None if none).
@@ -103,24 +106,29 @@ class Optima:
         self.recorded += 1
         if sol is None:
             return None
+        if not any(self._same(sol.objective, o) for o in self._objectives):
+            self.last_new = index
+        self._objectives.append(sol.objective)
         for k, (founder, grp) in enumerate(zip(self._founders, self._groups, strict=True)):
-            close = abs(sol.objective - founder.objective) <= self.objective_rtol * max(
-                1.0, abs(founder.objective))
-            if close and trajectory_distance(sol, founder) <= self.distance_tol:
+            if self._same(sol.objective, founder.objective) and \
+                    trajectory_distance(sol, founder) <= self.distance_tol:
                 grp.starts.append(index)
                 if sol.objective < grp.objective:
                     grp.objective, grp.solution = sol.objective, sol
                 return k
         self._founders.append(sol)
         self._groups.append(LocalOptimum(sol.objective, sol, [index]))
-        self.last_new = index
         return len(self._groups) - 1
 
+    def _same(self, a: float, b: float) -> bool:
+        return abs(a - b) <= self.objective_rtol * max(1.0, abs(b))
+
     def best_count(self) -> int:
-        """How many starts reached the best optimum so far (0 if none)."""
-        if not self._groups:
+        """How many starts reached the best objective so far (0 if none)."""
+        if not self._objectives:
             return 0
-        return min(self._groups, key=lambda g: g.objective).count
+        best = min(self._objectives)
+        return sum(1 for o in self._objectives if self._same(o, best))
 
     def ranked(self) -> list[LocalOptimum]:
         """The optima best first, each with the fraction of the recorded starts that reached it."""
@@ -132,14 +140,14 @@ class Optima:
 
 @dataclass(frozen=True)
 class StopRule:
-    """Stop once the best optimum has ``best_count`` starts and ``quiet`` starts found none new.
+    """Stop once the best objective has ``best_count`` starts and ``quiet`` found none new.
 
     Attributes
     ----------
     best_count : int
-        Starts that must have reached the best optimum (``k``).
+        Starts that must have reached the best objective (``k``).
     quiet : int
-        Consecutive latest starts without a new optimum (``m``).
+        Consecutive latest starts without a new objective (``m``).
     """
 
     best_count: int
@@ -159,6 +167,6 @@ class StopRule:
         quiet = index - optima.last_new
         if optima.last_new < 0 or k < self.best_count or quiet < self.quiet:
             return ""
-        return (f"stopped early after {index + 1} starts: the best optimum was reached by {k} "
-                f"starts and the last {quiet} found no new optimum "
+        return (f"stopped early after {index + 1} starts: the best objective was reached by {k} "
+                f"starts and the last {quiet} found no new one "
                 f"(stop=({self.best_count}, {self.quiet}))")

@@ -23,7 +23,14 @@ A structured start is built as one builds a guess by hand:
   each difference relative to the state's box), searched within the phase's
   time box; without such values it is a random point of that box. The states
   are then corrected linearly in time to those terminal values, so that the
-  start meets the end conditions and Ipopt closes the dynamics' small defect.
+  start meets the end conditions and Ipopt closes the dynamics' small defect;
+* of :data:`CANDIDATES` such starts (the same sequence, other switch times and
+  durations) the one kept is the one whose simulation ends closest to the
+  terminal values and whose corrected states violate the path constraints and
+  state bounds least (each relative to ``max(1, |bound|)``, as the check
+  between nodes measures it); the states are then clipped into their bounds.
+  A simulation is cheap next to a solve; a start that leaves the bounds or
+  runs through an obstacle costs Ipopt hundreds of iterations.
 
 A phase time-linked to a previous one starts at that phase's end time and
 its end states (same names).
@@ -47,8 +54,9 @@ __all__ = ["PATTERNS", "STEPS", "StructuredStarts"]
 
 STEPS = 400
 """RK4 steps of a structured start's simulation over its phase's time box."""
-CANDIDATES = 3
-"""Candidates simulated per structured start; the one that ends closest to the targets is kept."""
+CANDIDATES = 6
+"""Candidates simulated per structured start; the one that ends closest to the targets and
+violates the path constraints least is kept."""
 PATTERNS = tuple((switches, first) for switches in (0, 1, 2) for first in (0, 1))
 """(number of switches, first level: 0 the box's low end, 1 its high end)."""
 
@@ -71,6 +79,9 @@ class _PhaseSetup:
     simulate: ca.Function
     pv: np.ndarray  # the parameters and decision variables, [p; v] of the static vector
     bang: list[bool]  # per control: the problem is affine in it (levels at the box's ends)
+    check: ca.Function  # the path constraints and bounded states on SAMPLES points
+    check_lo: np.ndarray
+    check_hi: np.ndarray
 
 
 class StructuredStarts:
@@ -103,8 +114,8 @@ class StructuredStarts:
         ps, cp = self.base.phases[i], self.tr.compiled[i]
         pre = prefix(self.tr, i)
         names = ps.problem.state_names
-        _, _, xlo, xhi, _, _, _, _ = (np.array(v, dtype=float).ravel()
-                                      for v in cp.bounds(self.pv))
+        _, _, xlo, xhi, _, _, clo, chi = (np.array(v, dtype=float).ravel()
+                                          for v in cp.bounds(self.pv))
         xbox = [by_name[pre + n] for n in names]
         ubox = [by_name[pre + n] for n in ps.problem.control_names]
         duration, dname = None, ""
@@ -120,7 +131,8 @@ class StructuredStarts:
             np.asarray(ps.x, dtype=float)[0], xlo, xhi,
             np.array([max(c.hi - c.lo, 1e-12) for c in xbox]),
             np.array([c.lo for c in ubox]), np.array([c.hi for c in ubox]), targets,
-            _simulator(self.tr, i), np.concatenate([self.pv, self.v]), affine_controls(ps.problem))
+            _simulator(self.tr, i), np.concatenate([self.pv, self.v]), affine_controls(ps.problem),
+            _checker(self.tr, i), clo, chi)
 
     def make(self, number: int, rng: np.random.Generator) -> tuple[dict[str, float], np.ndarray]:
         """The ``number``-th structured start: its description and decision vector.
@@ -196,6 +208,32 @@ def _simulator(tr: Transcription, i: int) -> ca.Function:
     return cache[key]
 
 
+def _checker(tr: Transcription, i: int) -> ca.Function:
+    """Phase ``i``'s path constraints and bounded states on ``SAMPLES`` points (cached)."""
+    key = ("multistart_checker", i, SAMPLES)
+    cache = tr.grid_free.functions
+    if key not in cache:
+        cache[key] = tr.compiled[i].check.map(SAMPLES)
+    return cache[key]
+
+
+def _violation(ph: _PhaseSetup, t: np.ndarray, x: np.ndarray, u: np.ndarray,
+               static: np.ndarray) -> float:
+    """The sum over the path constraints of their largest violation along a start, each
+    relative to ``max(1, |bound|)`` (as the check between nodes measures it)."""
+    if ph.check_lo.size == 0:
+        return 0.0
+    c = np.asarray(ph.check(t[None, :], x.T, u.T, np.tile(static[:, None], (1, t.size))),
+                   dtype=float)
+    lo, hi = ph.check_lo[:, None], ph.check_hi[:, None]
+    with np.errstate(invalid="ignore"):
+        below = (lo - c) / np.maximum(1.0, np.abs(np.where(np.isfinite(lo), lo, 0.0)))
+        above = (c - hi) / np.maximum(1.0, np.abs(np.where(np.isfinite(hi), hi, 0.0)))
+        rel = np.maximum(np.maximum(below, above), 0.0)
+    rel[~np.isfinite(rel)] = 1.0  # a constraint the start makes non-finite
+    return float(np.sum(np.max(rel, axis=1)))
+
+
 def _levels(ph: _PhaseSetup, number: int, rng: np.random.Generator, duration: float,
             names: list[str], pre: str) -> tuple[list[tuple[np.ndarray, np.ndarray]],
                                                  dict[str, float]]:
@@ -228,7 +266,8 @@ def _phase_start(ph: _PhaseSetup, t0: float, x0: np.ndarray, number: int,
                  rng: np.random.Generator, pre: str, names: list[str]
                  ) -> tuple[PhasePart, dict[str, float], float]:
     """One phase of a structured start: simulate, pick the duration, correct the ends; and
-    the terminal miss before the correction (relative to the states' boxes)."""
+    its score: the terminal miss before the correction (relative to the states' boxes)
+    plus the path constraints' violation after it."""
     if ph.duration is None:
         sampled, lo, hi = ph.fixed_duration, ph.fixed_duration, ph.fixed_duration
     else:
@@ -256,10 +295,12 @@ def _phase_start(ph: _PhaseSetup, t0: float, x0: np.ndarray, number: int,
     xg = np.column_stack([np.interp(t, grid, x[:, j]) for j in range(x.shape[1])])
     for k, value in ph.targets.items():
         xg[:, k] += s * (value - xg[-1, k])
-    xg = np.clip(xg, ph.xlo, ph.xhi)
+    ug = _controls_at(controls, t)
+    miss += _violation(ph, t0 + t, xg, ug, np.concatenate([ph.pv, [t0, t0 + duration]]))
+    xg = np.clip(xg, ph.xlo, ph.xhi)  # after scoring: a start that leaves them scores worse
     if ph.duration is not None:
         plan[ph.duration_name] = duration + (t0 if ph.duration_name.endswith("T") else 0.0)
-    return PhasePart(t0 + t, xg, _controls_at(controls, t)), plan, miss
+    return PhasePart(t0 + t, xg, ug), plan, miss
 
 
 def _held_finite(x: np.ndarray) -> np.ndarray:
