@@ -77,6 +77,7 @@ import time
 import warnings
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import closing
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -237,7 +238,6 @@ class MultistartResult:
         return f"MultistartResult({self.message})"
 
 
-
 def multistart(transcription: Transcription | Builder, n: int = 16, method: str = "sobol",
                seed: int | np.random.Generator | None = None, guess: Any = None,
                params: dict[str, float] | None = None, workers: int | None = None,
@@ -318,14 +318,15 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
         scales = _solved_times(tr, sol0) if sol0 is not None and sol0.success else {}
         coords = start_coordinates(tr, params, spread, box, scales)
         origins, points, guesses = _starts(tr, params, coords, n, method, seed, structured)
-        for i, raw in enumerate(run.each(guesses), start=1):
-            sol = _solution(tr, params, raw)
-            rec = _record(i, origins[i - 1], points[i - 1], sol, raw)
-            optima.add(i, sol if rec.verified else None)
-            starts.append(rec)
-            stopped = rule.reason(optima, i) if rule is not None and i < n - 1 else ""
-            if stopped:
-                break
+        with closing(run.each(guesses)) as results:  # closed at a stop: the rest cancelled
+            for i, raw in enumerate(results, start=1):
+                sol = _solution(tr, params, raw)
+                rec = _record(i, origins[i - 1], points[i - 1], sol, raw)
+                optima.add(i, sol if rec.verified else None)
+                starts.append(rec)
+                stopped = rule.reason(optima, i) if rule is not None and i < n - 1 else ""
+                if stopped:
+                    break
     ranked = optima.ranked()
     for k, opt in enumerate(ranked):  # the optima's ranks, best first
         for i in opt.starts:
