@@ -1,13 +1,13 @@
 """Issue 45 item 4, the study: multistart with its defaults on published problems with
 several local optima (tests/oracles/several_optima.py, the pendulum of the suite).
 
-Measured before and after (interleaved, n = 16, seeds 0 and 1; the figures are in the
-issue's closing note): starts that reached the global optimum, of 16.
+Measured before and after (interleaved, n = 16, seeds 0 and 1): starts that reached the
+global optimum, of 16.
 
-* pendulum swing-up (50 intervals; default guess: 17.29, 75 % above): 11 -> 14;
-* Dubins' car behind (40 intervals; the default guess fails): 0 -> 4-5;
+* pendulum swing-up (50 intervals; default guess: 17.29, 75 % above): 10-11 -> 13-14;
+* Dubins' car behind (40 intervals; the default guess fails): 0 -> 6-7;
 * PSOPT's obstacles in minimum time (40 intervals, ``verify_tol=1e-3``; the default
-  reaches 1.0534, 5.6 % above, unverified): 2-5 either way, a landscape of some eight
+  reaches 1.0534, 5.6 % above, unverified): 5-6 -> 3-4, a landscape of some eight
   local optima within 50 % of the best.
 
 Every test runs all 16 starts (``stop=None``) to count them; about 30 s of CPU in all.
