@@ -81,7 +81,7 @@ def test_starts_cover_the_box_and_are_deterministic():
     lo, hi, log = res.boxes["T"]
     assert log and lo == pytest.approx(math.pi / 4) and hi == 50.0
     assert np.all(np.abs(u) <= 0.4) and np.all((T >= lo) & (T <= hi))
-    assert T.min() < 2.0 < 10.0 < T.max()
+    assert T.max() > 4 * T.min()  # spread over the box, not bunched
     # the same seed gives the same starts (and the same outcome); another seed others. A
     # coarser grid's start 0 converges to another T, hence another T box: the other
     # coordinates are the same points
