@@ -55,7 +55,18 @@ SAMPLES = 201
 
 @dataclass
 class Coordinate:
-    """One coordinate of a start and its box ``[lo, hi]`` (log-uniform if ``log``)."""
+    """One coordinate of a start and its box.
+
+    Attributes
+    ----------
+    name : str
+        Its name (``"T"``, a state's, a control's, ``"phase.name"`` in a multi-phase
+        problem).
+    lo, hi : float
+        The box ``[lo, hi]``.
+    log : bool
+        Sampled log-uniformly.
+    """
 
     name: str
     lo: float
@@ -77,7 +88,17 @@ class Coordinate:
 
 @dataclass
 class PhasePart:
-    """One phase of a start: times, states (n, nx) and controls (n, nu) on a grid."""
+    """One phase of a start on a grid of times.
+
+    Attributes
+    ----------
+    t : ndarray
+        The times (n,).
+    x : ndarray
+        The states (n, nx).
+    u : ndarray
+        The controls (n, nu).
+    """
 
     t: np.ndarray
     x: np.ndarray
