@@ -31,7 +31,7 @@ from tests.oracles.ocp_suite.pendulum_swingup import (
 
 @cache
 def run():
-    return multistart(transcription(), n=8, seed=0)
+    return multistart(transcription(), n=8, seed=0, stop=None)
 
 
 @cache
@@ -70,7 +70,10 @@ def test_the_best_refines_to_the_independent_value():
 def test_starts_cover_the_box_and_are_deterministic():
     res = run()
     pts = [s.point for s in res.starts[1:]]
-    assert set(pts[0]) == {"theta", "omega", "u", "T"}
+    sampled = [s.point for s in res.starts if s.origin == "sobol"]
+    assert len(sampled) == 2 and all(set(p) == {"theta", "omega", "u", "T"} for p in sampled)
+    assert [s.origin for s in res.starts] == ["default"] + ["sobol"] + ["bang"] * 3 + [
+        "sobol"] + ["bang"] * 2  # three in four structured, interleaved
     u = np.array([p["u"] for p in pts])
     T = np.array([p["T"] for p in pts])
     # T's box: from the known durations (start 0's 17.29, the dynamics' pi) over and times
@@ -78,12 +81,12 @@ def test_starts_cover_the_box_and_are_deterministic():
     lo, hi, log = res.boxes["T"]
     assert log and lo == pytest.approx(math.pi / 4) and hi == 50.0
     assert np.all(np.abs(u) <= 0.4) and np.all((T >= lo) & (T <= hi))
-    assert T.min() < 2.0 < 10.0 < T.max()
+    assert T.max() > 4 * T.min()  # spread over the box, not bunched
     # the same seed gives the same starts (and the same outcome); another seed others. A
     # coarser grid's start 0 converges to another T, hence another T box: the other
     # coordinates are the same points
-    same = [{k: v for k, v in s.point.items() if k != "T"} for s in coarse(0).starts]
-    assert same == [{k: v for k, v in s.point.items() if k != "T"} for s in res.starts[:3]]
+    same = [{k: v for k, v in s.point.items() if k != "T"} for s in coarse(0).starts[:2]]
+    assert same == [{k: v for k, v in s.point.items() if k != "T"} for s in res.starts[:2]]
     lhs = coarse(1, method="lhs", n=2)
     assert [s.origin for s in lhs.starts] == ["default", "lhs"]
     assert lhs.starts[1].point != res.starts[1].point
