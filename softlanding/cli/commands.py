@@ -100,7 +100,7 @@ def _certificate_rows(cert: Any) -> list[tuple[str, object]]:
 def _cmd_solve(a: argparse.Namespace) -> int:
     """Every ``--variant`` through one flow: check, solve, certify, plot, print (the
     result's protocol, :class:`softlanding.optimal.variants.VariantResult`)."""
-    from softlanding.cli.variants import variant_of
+    from softlanding.cli.variants import labelled_dict, labelled_rows, variant_of
     from softlanding.util.files import output_path
 
     robot, ground = robot_of(a), ground_of_args(a)
@@ -121,7 +121,7 @@ def _cmd_solve(a: argparse.Namespace) -> int:
                if path is not None]
     unverified = res.unverified_reasons(cert)
     if a.json:
-        d = res.to_dict()
+        d = labelled_dict(variant, res.to_dict())
         if cert is not None:
             d["pmp"] = cert.to_dict()
         elif a.pmp:
@@ -129,7 +129,7 @@ def _cmd_solve(a: argparse.Namespace) -> int:
         print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
         status = "yes" if not unverified else "NO: " + "; ".join(unverified)
-        print_table([("verified", status)] + res.rows()
+        print_table([("verified", status)] + labelled_rows(variant, res.rows())
                     + (_certificate_rows(cert) if cert is not None else []))
         for n in res.notes:
             print(f"note: {n}")
@@ -740,8 +740,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from softlanding.cli.parser import build_parser
 
-    args = build_parser(HANDLERS, CliParser, sys.argv[1:] if argv is None else argv
-                        ).parse_args(argv)
+    parser = build_parser(HANDLERS, CliParser, sys.argv[1:] if argv is None else argv)
+    args, extras = parser.parse_known_args(argv)
+    if extras:  # another variant's option: refused as one the chosen variant ignores
+        from softlanding.cli.variants import refusal_of_unknown
+
+        refused = refusal_of_unknown(args, extras)
+        if refused is not None:
+            return report_error(refused)
+        parser.error(f"unrecognized arguments: {' '.join(extras)}")
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)

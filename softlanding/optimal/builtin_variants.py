@@ -41,10 +41,9 @@ def _non_negative(v: float) -> str | None:
 
 PAPER = Variant(
     "paper", "the paper's single-phase OCP (default)", "softlanding.optimal.landing:solve_landing",
-    options=(Option("nodes", int, 100, "shooting intervals (default 100, 2 to 5000)",
-                    _within(2, 5000)),
-             Option("extra_arcs", int, 0, "also try this many more bang arcs (default 0, at "
-                                              "most 20)", _within(0, 20))),
+    options=(Option("nodes", int, 100, "shooting intervals (2 to 5000)", _within(2, 5000)),
+             Option("extra_arcs", int, 0, "also try this many more bang arcs (at most 20)",
+                    _within(0, 20))),
     ground=True, certificate_figure=True)
 
 
@@ -61,8 +60,8 @@ def _two_phase_refusal(values: Mapping[str, Any]) -> str:
 TWO_PHASE = Variant(
     "two-phase", "yielding then static stance until the body stops, the arrest optimised",
     "softlanding.optimal.two_phase:solve_two_phase_variant",
-    options=(Option("steps", int, 1, "yielding steps allowed (default 1; 2: yielding, "
-                                     "static, yielding, static, compared with one step)",
+    options=(Option("steps", int, 1, "yielding steps allowed (2: yielding, static, "
+                                     "yielding, static, compared with one step)",
                     choices=(1, 2)),),
     ground=True, takes=_two_phase_takes, refusal=_two_phase_refusal)
 
@@ -83,15 +82,15 @@ LEG_EXTENSION = Variant(
                      "condition)",
     "softlanding.optimal.leg_extension:solve_leg_extension_variant",
     options=(Option("mode", str, "impact", "decide the leg's state at impact directly "
-                                           "(impact, the default: both masses at v0), or by "
-                                           "a flight phase from the drop height v0^2/2 (drop)",
+                                           "(impact: both masses at v0), or by a flight "
+                                           "phase from the drop height v0^2/2 (drop)",
                     choices=("impact", "drop")),
              Option("extension", extension_value, "free",
-                    "impact mode: 'free' (within the stroke; default) or a leg length at "
-                    "impact (s/2 is the paper's)"),
-             Option("rate_max", float, None, "impact mode: also free the relative velocity "
-                                             "at impact within +-RATE_MAX (default: 0, the "
-                                             "paper's)", _non_negative)),
+                    "impact mode: 'free' (within the stroke) or a leg length at impact (s/2 "
+                    "is the paper's)", kind="'free' or a length", metavar="L"),
+             Option("rate_max", float, 0.0, "impact mode: also free the relative velocity "
+                                            "at impact within +-RATE_MAX (0: the paper's, "
+                                            "both masses at v0)", _non_negative)),
     takes=_leg_takes, refusal=_leg_refusal)
 
 VARIANTS: Mapping[str, Variant] = {"PAPER": PAPER, "TWO_PHASE": TWO_PHASE,

@@ -28,7 +28,7 @@ def test_variants_json_lists_every_variant_with_its_options_and_origin(cli):
     assert [(o["flag"], o["required"]) for o in mpf["options"]] == [("--depth-max", True)]
     assert found["two-phase"]["options"][0]["choices"] == [1, 2]
     code, out, _ = cli("variants")
-    assert code == 0 and "--depth-max (float, required)" in out
+    assert code == 0 and "--depth-max (number, required)" in out
 
 
 BAD_DEPTH = [["--depth-max", "abc"], ["--depth-max", "-1"], ["--depth-max", "nan"],
