@@ -146,7 +146,10 @@ def _v0_grid(a: argparse.Namespace) -> Any:
 
     n = check_count("n", a.n, 1, 10_000)
     for name in ("v0_min", "v0_max"):
-        Impact(getattr(a, name))
+        try:
+            Impact(getattr(a, name))
+        except ParameterError as err:  # named by the option given, not the Impact's "v0"
+            raise ParameterError(name, str(err).partition(": ")[2]) from None
     if a.v0_min > a.v0_max:
         raise ParameterError("v0_min", f"must not exceed --v0-max ({a.v0_max:g})")
     return np.linspace(a.v0_max, a.v0_min, n)
@@ -845,7 +848,7 @@ def _run(args: argparse.Namespace) -> int:
     except Exception as exc:
         if args.debug:
             raise
-        return report_error(exc)
+        return report_error(exc, args)
 
 
 if __name__ == "__main__":

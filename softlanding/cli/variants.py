@@ -167,6 +167,8 @@ def add_variant_options(p: argparse.ArgumentParser, argv: Sequence[str] | None,
     try:
         wanted = _wanted(argv, command)
     except SoftlandingError as err:  # no such variant, or a user's module that fails
+        if "--debug" in (argv or ()):  # parsed later: its traceback is wanted now
+            raise
         p.error(f"--variant {err}" if isinstance(err, VariantError) else str(err))
     p.add_argument("--variant", default=DEFAULT_VARIANT, metavar="NAME",
                    help="the landing variant: " + ", ".join(built_in_names())
