@@ -147,5 +147,5 @@ def default_blas_threads() -> None:
         _apply(1)
 
 
-__all__ = ["ENVIRONMENT", "available_cpus", "blas_threads", "casadi_openblas", "default_blas_threads",
-           "library_files", "set_blas_threads"]
+__all__ = ["ENVIRONMENT", "available_cpus", "blas_threads", "casadi_openblas",
+           "default_blas_threads", "library_files", "set_blas_threads"]

@@ -289,5 +289,6 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     return fig
 
 
-__all__ = ["PHASE_COLOURS", "TITLE_WIDTH", "plot_hop", "plot_hybrid_findings", "plot_phased_landing",
-           "plot_phases", "plot_variant_sweep", "shade_phases", "wrapped_title"]
+__all__ = ["PHASE_COLOURS", "TITLE_WIDTH", "plot_hop", "plot_hybrid_findings",
+           "plot_phased_landing", "plot_phases", "plot_variant_sweep", "shade_phases",
+           "wrapped_title"]
