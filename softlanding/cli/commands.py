@@ -763,7 +763,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def console_main() -> int:
     """The ``softlanding`` console script and ``python -m softlanding``: :func:`main`, made
-    safe against a second signal while the process winds down.
+    safe against a second signal while the process winds down (and an interruption during
+    start-up, before :func:`main` runs the command, reported as one line).
 
     A signal that arrives after the interruption was reported (a repeated Ctrl-C, or one
     that a solver library re-raises on its way out) would end the process with the signal's
@@ -776,14 +777,19 @@ def console_main() -> int:
     """
     import signal
 
-    from softlanding.util.signals import EXIT_INTERRUPTED
+    from softlanding.util.signals import (
+        EXIT_INTERRUPTED,
+        TERMINATING,
+        report_interrupt,
+        reported_interrupt,
+    )
 
     try:
         code = main()
-    except KeyboardInterrupt:  # a second interruption before main returned
-        code = EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:  # before the run (start-up), or a second one after it
+        code = reported_interrupt() or report_interrupt(exc)
     if code >= EXIT_INTERRUPTED and threading.current_thread() is threading.main_thread():
-        for signum in (signal.SIGINT, signal.SIGTERM):
+        for signum in (signal.SIGINT, *TERMINATING):
             signal.signal(signum, signal.SIG_IGN)
     return code
 
