@@ -4,7 +4,8 @@ Every sub-command prints a readable table by default and one JSON object with
 ``--json``. The commands only parse, call the API and print: every number
 comes from :mod:`softlanding`. Exit codes: 0 ok, 1 a well-posed run that
 failed (rest not proven, solver failure), 2 bad input, 3 internal error (a
-bug: ``--debug`` shows the traceback), 130 interrupted, 143 terminated (SIGTERM).
+bug: ``--debug`` shows the traceback), 130 interrupted, 143 terminated (SIGTERM),
+129 hung up (SIGHUP).
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Exit codes: 0 ok, 1 a well-posed run that failed (rest not proven, solver failure),
 2 bad input, 3 internal error (a bug: ``--debug`` shows the traceback), 130 interrupted
-(Ctrl-C), 143 terminated (SIGTERM; :mod:`softlanding.util.signals`).
+(Ctrl-C), 143 terminated (SIGTERM), 129 hung up (SIGHUP; :mod:`softlanding.util.signals`).
 """
 
 from __future__ import annotations
