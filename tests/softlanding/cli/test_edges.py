@@ -1,6 +1,8 @@
 """The newest edges of issue 47: the command line names its own options, start-up signals
 end the run cleanly, hostile values are one line."""
 
+import json
+
 import pytest
 
 FLAGS = [  # (arguments, the option the one-line refusal must name)
@@ -38,3 +40,21 @@ def test_a_derived_value_keeps_its_own_name(cli):
 def test_the_depth_budget_is_named_by_its_option(cli):
     code, _, err = cli("solve", "--v0", "-3", "--variant", "min-peak-force", "--depth-max", "1")
     assert code == 2 and "--depth-max: 1 is below the least depth" in err
+
+
+@pytest.mark.slow  # two min-peak-force solves: about 6 s CPU
+def test_a_budget_that_cannot_bind_is_the_problem_without_it(cli):
+    """Issue 47, defect 9: --depth-max 1e300 exited 1 with Restoration_Failed (1e12
+    worked). Any budget above the depth the least peak lands at (3.0637 at v0 = -3) gives
+    the same answer: the problem without the budget, said in a note."""
+    out = {}
+    for budget in ("100", "1e300"):
+        code, text, err = cli("solve", "--v0", "-3", "--variant", "min-peak-force",
+                              "--depth-max", budget, "--json")
+        assert code == 0, err
+        out[budget] = json.loads(text)
+    a, b = out["100"], out["1e300"]
+    assert b["verified"] is True and b["depth_max"] == 1e300
+    assert b["peak"] == pytest.approx(a["peak"], abs=1e-9) and 1.1 < b["peak"] < 1.2
+    assert b["depth"] == pytest.approx(a["depth"], abs=1e-9) and b["depth"] < 100
+    assert any("does not bind" in n for n in b["notes"])
