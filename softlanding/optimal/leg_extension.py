@@ -220,7 +220,8 @@ def _replay(out: LegExtensionLanding) -> None:
         else:
             assert out.transcribed is not None
             ctrl, kind = transcribed_controller(out.transcribed, out.robot.body_mass,
-                                                len(out.transcribed.phases) - 2)
+                                                len(out.transcribed.phases) - 2,
+                                                u_max=out.force_bound)
     except NotImplementedError as err:
         out.replay_kind = str(err)
         return

@@ -48,7 +48,6 @@ from softlanding.optimal.stance_phases import (
     parameters,
 )
 
-
 BUDGET_CAP = 1e6
 """A budget above ``BUDGET_CAP`` times the least depth (at least 1) is solved at that cap:
 a budget of 1e300 in the constraint ``-x_f <= depth_max`` defeats Ipopt's arithmetic. When
@@ -129,17 +128,24 @@ class MinPeakForceLanding(TwoPhaseLanding):
                 ("least depth at u_max", self.least_depth), *super().own_rows()]
 
     def own_reasons(self) -> list[str]:
-        """The exact replay's largest force must be the peak; a budget solved at its cap
-        (:data:`BUDGET_CAP`) must not bind there."""
+        """The exact replay's largest force must be the peak (a transcription's, at most
+        it); a budget solved at its cap (:data:`BUDGET_CAP`) must not bind there."""
         out = []
         cap = budget_solved(self.depth_max, self.least_depth)
         if cap < self.depth_max and not self.depth < cap * (1 - 1e-6):
             out.append(f"the depth budget was solved at {cap:.3g} and binds there")
-        if self.replay is None or self.refined is None:
+        if self.replay is None:
             return out
-        gap = abs(self.replay.u_peak - self.peak)
+        gap = self.replay.u_peak - self.peak  # the transcription's forces: at most the peak
+        if self.refined is not None:
+            gap = abs(gap)
         return out if gap <= 1e-9 * max(1.0, self.peak) else out + [
             f"the replay's largest force differs from the peak by {gap:.2e}"]
+
+    @property
+    def force_bound(self) -> float:
+        """The peak: the force bound of this landing."""
+        return self.peak
 
     def own_dict(self) -> dict[str, Any]:
         """The two-phase fields and the peak."""
