@@ -165,13 +165,25 @@ def _compile(cc: list[str], source: Path, built: Path) -> None:
         raise ProblemDefinitionError(f"codegen=True: the C compiler failed: {first}")
 
 
-def _place(built: Path, lib: Path, tmp: Path) -> None:
-    """Move the compiled ``built`` to ``lib`` and write its record, each in one step (a
-    reader sees a whole file or none; a library without its record is compiled again)."""
-    rec = tmp / "record.json"
-    rec.write_text(json.dumps(file_record(built)))
-    os.replace(built, lib)
-    os.replace(rec, record_path(lib))
+def place(built: Path, lib: Path) -> None:
+    """Move the compiled ``built`` to ``lib`` and write its record (:func:`record_path`),
+    each in one step: a reader sees a whole file or none, and a library without its record
+    is compiled again (:func:`intact`).
+
+    Parameters
+    ----------
+    built : Path
+        The library just compiled (on the same file system as ``lib``).
+    lib : Path
+        Where it is kept.
+    """
+    rec = lib.with_name(f".{lib.stem}.{os.getpid()}.json.partial")
+    try:
+        rec.write_text(json.dumps(file_record(built)))
+        os.replace(built, lib)
+        os.replace(rec, record_path(lib))
+    finally:
+        rec.unlink(missing_ok=True)
 
 
 def compiled_library(solver: ca.Function) -> Path:
@@ -211,7 +223,7 @@ def compiled_library(solver: ca.Function) -> Path:
             if not intact(lib):  # missing, or damaged: loading it could kill the process
                 built = Path(tmp) / "ocp_nlp.so"
                 _compile(cc, source, built)
-                _place(built, lib, Path(tmp))
+                place(built, lib)
     except OSError as err:  # the folder changed under us (removed, made read-only, full)
         raise ProblemDefinitionError(f"codegen=True: cannot write the compiled library in "
                                      f"{str(folder)!r}: {err.strerror or err}") from None

@@ -193,3 +193,23 @@ def test_variants_show_one_default_and_a_readable_type(cli):
         in out
     for line in out.splitlines():
         assert line.count("default") <= 1, line
+
+
+def test_a_long_figure_title_is_wrapped_inside_the_figure():
+    """An unrefined result's title ran off both sides of its figure."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import numpy as np
+
+    from softlanding.plots.phased import plot_phases
+
+    title = ("least peak force (transcribed, not refined), $v_0$=-3, $r_m$=5, $s$=20, "
+             "$u_{max}$=8.2, drag, $c_d$ = 0.2, stiffness = 2: depth 2.016296 (depth "
+             "budget: 2.016300)")
+    t = np.linspace(0, 1, 5)
+    fig = plot_phases(t, np.zeros((5, 4)), t, [(0.0, 1.0, "yielding")], title)
+    fig.canvas.draw()
+    box = fig._suptitle.get_window_extent()
+    assert box.x0 >= 0 and box.x1 <= fig.bbox.width
+    assert fig._suptitle.get_text().replace("\n", " ") == title
