@@ -40,7 +40,8 @@ def _flag(dest: str) -> str:
 
 
 def named_variant(argv: Sequence[str] | None) -> str | None:
-    """The ``--variant`` value in ``argv`` (a look before parsing; None when not there).
+    """The ``--variant`` value in ``argv`` (a look before parsing; the last one given, as
+    argparse takes it; None when not there).
 
     Parameters
     ----------
@@ -48,12 +49,13 @@ def named_variant(argv: Sequence[str] | None) -> str | None:
         The command line.
     """
     args = list(argv or [])
-    for i, arg in enumerate(args):
+    found = None
+    for i, arg in enumerate(args):  # the last, as argparse takes it
         if arg == "--variant" and i + 1 < len(args):
-            return args[i + 1]
-        if arg.startswith("--variant="):
-            return arg.split("=", 1)[1]
-    return None
+            found = args[i + 1]
+        elif arg.startswith("--variant="):
+            found = arg.split("=", 1)[1]
+    return found
 
 
 def _wanted(argv: Sequence[str] | None, command: str) -> list[Variant]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from softlanding.errors import LIMITS
 from softlanding.optimal.variants import Option, Variant
 
 
@@ -35,8 +36,11 @@ def extension_value(text: str) -> str | float:
         raise ValueError(f"'free' or a leg length, not {text!r}") from None
 
 
-def _non_negative(v: float) -> str | None:
-    return None if v >= 0 else f"must be >= 0, got {v:g}"
+def _rate(v: float) -> str | None:
+    """A relative velocity bound: >= 0, and within the model's velocities (as ``v0``'s
+    range: 1e308 reached Ipopt as an infinite bound and failed)."""
+    top = -LIMITS["v0"][0]
+    return None if 0 <= v <= top else f"must be 0 to {top:g}, got {v:g}"
 
 
 PAPER = Variant(
@@ -90,7 +94,7 @@ LEG_EXTENSION = Variant(
                     "is the paper's)", kind="'free' or a length", metavar="L"),
              Option("rate_max", float, 0.0, "impact mode: also free the relative velocity "
                                             "at impact within +-RATE_MAX (0: the paper's, "
-                                            "both masses at v0)", _non_negative)),
+                                            "both masses at v0)", _rate)),
     takes=_leg_takes, refusal=_leg_refusal)
 
 VARIANTS: Mapping[str, Variant] = {"PAPER": PAPER, "TWO_PHASE": TWO_PHASE,

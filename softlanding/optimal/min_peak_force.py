@@ -285,7 +285,7 @@ def _positive(d: float) -> str | None:
 
 VARIANT = Variant(
     "min-peak-force", "the least peak force max |u| landing within a depth budget",
-    solve_min_peak_force, ground=True,
+    solve_min_peak_force, ground=True, objective=("peak", "peak force max |u|"),
     options=(Option("depth_max", float, help="the depth budget D (at least the two-phase "
                     "least depth)", check=_positive, required=True, metavar="D"),))
 """``softlanding solve --variant min-peak-force --depth-max D``."""

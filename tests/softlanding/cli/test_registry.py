@@ -3,7 +3,6 @@ registry; a variant outside the package runs through `--variant module:attribute
 packaged `min-peak-force` answers the inverse of the two-phase landing's depth."""
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -67,11 +66,16 @@ def _solve_json(args, env=None):
 
 @pytest.mark.slow
 def test_a_copy_outside_the_package_runs_like_the_packaged_variant(tmp_path, monkeypatch):
-    """The packaged module copied under another name into a folder outside the project:
-    the same depth, peak, verdict and figure through --variant othername:VARIANT."""
+    """The packaged module copied under another name into a folder outside the project, its
+    Variant renamed: the same depth, peak, verdict and figure through --variant
+    othername:VARIANT, under the new name."""
     import os
 
-    shutil.copy(PACKAGED, tmp_path / "othername.py")
+    text = PACKAGED.read_text()
+    declared = 'VARIANT = Variant(\n    "min-peak-force",'
+    assert declared in text
+    (tmp_path / "othername.py").write_text(text.replace(  # renamed in its Variant only
+        declared, 'VARIANT = Variant(\n    "my-peak-force",'))
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(tmp_path), str(PACKAGED.parents[2]), os.environ.get("PYTHONPATH", "")])}
     out = {}
@@ -84,7 +88,9 @@ def test_a_copy_outside_the_package_runs_like_the_packaged_variant(tmp_path, mon
     (c1, a, s1), (c2, b, s2) = out.values()
     assert c1 == c2 and a["verified"] == b["verified"]
     assert a["unverified_reasons"] == b["unverified_reasons"]
-    assert b["variant"] == "min-peak-force"
+    # issue 47: the output is named by the Variant that ran, not by the result class
+    assert (a["variant"], b["variant"]) == ("min-peak-force", "my-peak-force")
+    assert b["variant_from"] == "othername:VARIANT"
     assert abs(a["depth"] - b["depth"]) < 1e-12 and abs(a["peak"] - b["peak"]) < 1e-12
     assert s1 > 10_000 and abs(s1 - s2) < 0.02 * s1  # the same figure (same title, data)
     found = find_variant("min-peak-force")
