@@ -1,8 +1,9 @@
 """The ``softlanding`` console script: :func:`console_main` around :func:`main`.
 
 Modules: :mod:`.commands` (the sub-commands' handlers and :func:`main`), :mod:`.parser`
-(the argument parser), :mod:`.ground` (the ``--ground`` options), :mod:`.variants` (the
-variant table of ``solve``), :mod:`.output` (exit codes, tables, JSON, errors).
+(the argument parser), :mod:`.ground` (the ``--ground`` options), :mod:`.scale`
+(``scale``), :mod:`.variants` (the variant table of ``solve``), :mod:`.output` (exit codes,
+tables, JSON, errors).
 
 This module is light: :func:`console_main` installs the signal handlers before importing
 the rest, so that SIGTERM or SIGHUP during start-up ends the run as it would later (one

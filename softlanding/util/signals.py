@@ -29,7 +29,7 @@ EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
 """Exit code after SIGTERM: 128 + 15, as a shell reports it."""
 
-TERMINATING = {signal.SIGTERM: "terminated (SIGTERM)"}
+TERMINATING: dict[int, str] = {signal.SIGTERM: "terminated (SIGTERM)"}
 """Signals that end the run as :class:`Terminated` (exit 128 + the signal's number), and how
 the one line names them: SIGTERM, and SIGHUP where the platform has it."""
 if hasattr(signal, "SIGHUP"):
@@ -99,7 +99,7 @@ class _WithoutCasadiNotes:
 
 def _quiet_casadi() -> None:
     if not isinstance(sys.stderr, _WithoutCasadiNotes) and sys.stderr is not None:
-        sys.stderr = _WithoutCasadiNotes(sys.stderr)  # type: ignore[assignment]
+        sys.stderr = _WithoutCasadiNotes(sys.stderr)
 
 
 def _restore_stderr() -> None:
@@ -184,8 +184,8 @@ def _install() -> dict[int, Any]:
     """Our handler for SIGINT, SIGTERM and SIGHUP where each has its default (a handler
     someone else installed, e.g. SIGINT or SIGHUP ignored by ``nohup``, is left alone);
     the previous handlers of those changed."""
-    previous = {}
-    defaults = [(signal.SIGINT, signal.default_int_handler)] + [
+    previous: dict[int, Any] = {}
+    defaults: list[tuple[int, Any]] = [(signal.SIGINT, signal.default_int_handler)] + [
         (signum, signal.SIG_DFL) for signum in TERMINATING]
     for signum, default in defaults:
         if signal.getsignal(signum) is default:
