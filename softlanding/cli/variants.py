@@ -103,7 +103,8 @@ def variant_label(v: Variant) -> str:
 
 def labelled_rows(v: Variant, rows: Sequence[tuple[str, object]]) -> list[tuple[str, object]]:
     """A result's table with the variant named by its declaration (a copy of a packaged
-    module keeps its result class, whose name would be the original's).
+    module keeps its result class, whose name would be the original's): its ``variant``
+    row, or a first one for a user's variant whose result has none.
 
     Parameters
     ----------
@@ -112,6 +113,8 @@ def labelled_rows(v: Variant, rows: Sequence[tuple[str, object]]) -> list[tuple[
     rows : sequence of (str, object)
         The result's rows.
     """
+    if not any(r[0] == "variant" for r in rows) and v.source in ("built-in", "packaged"):
+        return list(rows)
     return [("variant", variant_label(v))] + [r for r in rows if r[0] != "variant"]
 
 

@@ -239,6 +239,9 @@ class VariantResult(Protocol):
 
 Solve = Callable[..., Any]
 
+_RESULT_MEMBERS = ("depth", "notes", "rows", "to_dict", "figures", "certify",
+                   "uncertified_reason", "unverified_reasons")
+
 
 @dataclass(frozen=True)
 class Variant:
@@ -361,7 +364,7 @@ class Variant:
         """
         solve = self.solver()
         try:
-            return solve(impact, robot, ground, refine=refine, warm_start=warm_start, **options)
+            res = solve(impact, robot, ground, refine=refine, warm_start=warm_start, **options)
         except Exception as err:
             solver_errors = sys.modules.get("ocp.definition.errors")
             if isinstance(err, SoftlandingError) or solver_errors is not None and \
@@ -372,6 +375,13 @@ class Variant:
                 raise
             raise VariantError(self.spec, f"raised {type(err).__name__} ({blamed}): {err}; "
                                           "--debug shows the traceback") from err
+        if self.source not in ("", "built-in", "packaged") and \
+                not isinstance(res, VariantResult):  # the user's, else it fails in ours
+            missing = [m for m in _RESULT_MEMBERS if not hasattr(res, m)]
+            raise VariantError(self.spec, f"its solve returned a {type(res).__name__} without "
+                                          f"{', '.join(missing)} (see "
+                                          "softlanding.optimal.VariantResult)")
+        return res
 
     @property
     def spec(self) -> str:

@@ -46,6 +46,8 @@ class Result:
 def solve(impact, robot, ground, *, refine, warm_start, scale):
     if scale == 13:
         return 1 / 0  # a bug in the user's code
+    if scale == 7:
+        return {"depth": 1.0}  # not a result the command line can print
     return Result(impact.v0, scale)
 
 
@@ -151,6 +153,9 @@ def test_a_users_variant_names_its_output_and_its_bug(cli, modules, tmp_path):
     assert code == 2 and out == "" and err.count("\n") == 1, err
     assert f"{mod}:VARIANT: raised ZeroDivisionError ({mod}.py, line" in err
     assert "internal error" not in err
+    code, out, err = cli("solve", "--v0", "-3", "--variant", f"{mod}:VARIANT", "--scale", "7")
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert "returned a dict without depth, notes, rows, to_dict" in err
 
 
 def test_a_sweep_shows_the_variants_objective(cli, modules, tmp_path):
