@@ -112,6 +112,8 @@ FRONT_DOORS = {
     "softlanding.model": "Robot, ground, terrain, controllers, the dynamics, scaling.",
     "softlanding.simulation": "The exact event-driven simulator.",
     "softlanding.optimal": "Optimal landings: the paper's, two-phase, leg extension, hopping.",
+    "softlanding.optimal.stance_phases": "A variant's building blocks: the ground modes as "
+                                         "phases (yielding, static, flight).",
     "softlanding.control": "Feedback on an unknown ground: stepping plant, estimation, MPC.",
     "softlanding.studies": "Impedance optimisation, sweeps, comparison, robustness, terrain, "
                            "unknown ground.",
@@ -127,6 +129,7 @@ FRONT_DOORS = {
     "ocp.search": "Many starts: distinct local optima.",
 }
 HOME_ORDER = ["softlanding.model", "softlanding.simulation", "softlanding.optimal",
+              "softlanding.optimal.stance_phases",
               "softlanding.control", "softlanding.studies", "softlanding.plots",
               "softlanding.report", "softlanding.errors", "ocp", "softlanding"]
 """An object exported by several front doors is documented once, under the first here."""

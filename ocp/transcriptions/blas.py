@@ -91,9 +91,21 @@ def _apply(n: int) -> bool:
     return True
 
 
+def available_cpus() -> int:
+    """The CPUs this process may use (its affinity mask where the platform has one)."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(1, len(os.sched_getaffinity(0)))
+    return max(1, os.cpu_count() or 1)
+
+
 def set_blas_threads(n: int) -> bool:
     """Let CasADi's OpenBLAS (under Ipopt's MUMPS) use ``n`` threads, from now on (later
     solves keep this count).
+
+    A count above the CPUs this process may use (:func:`available_cpus`) is capped at that
+    number, the rule OpenBLAS applies to ``OPENBLAS_NUM_THREADS`` (more threads than CPUs
+    only spin); OpenBLAS may cap it further at the limit it was built with.
+    :func:`blas_threads` reads the count set.
 
     Parameters
     ----------
@@ -113,7 +125,7 @@ def set_blas_threads(n: int) -> bool:
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise ValueError(f"set_blas_threads: n must be a positive integer, got {n!r}")
     _CHOSEN.set()
-    return _apply(n)
+    return _apply(min(n, available_cpus()))  # also keeps n within OpenBLAS's C int
 
 
 def blas_threads() -> int | None:
@@ -135,5 +147,5 @@ def default_blas_threads() -> None:
         _apply(1)
 
 
-__all__ = ["ENVIRONMENT", "blas_threads", "casadi_openblas", "default_blas_threads",
-           "library_files", "set_blas_threads"]
+__all__ = ["ENVIRONMENT", "available_cpus", "blas_threads", "casadi_openblas",
+           "default_blas_threads", "library_files", "set_blas_threads"]

@@ -741,7 +741,12 @@ class Transcription:
             With ``verify="raise"``, if a path constraint is violated between nodes.
         GuessError
             If the starting point makes an expression non-finite.
+        TypeError
+            If ``warm_start`` is not a :class:`~ocp.Solution`.
         """
+        if warm_start is not None and not isinstance(warm_start, Solution):
+            raise TypeError(f"solve: warm_start must be an ocp.Solution or None, got "
+                            f"{type(warm_start).__name__} {warm_start!r:.40}")
         return self._solve(params, guess, warm_start, self.verify)
 
     def _solve(self, params: dict[str, float] | None, guess: Any,

@@ -4,7 +4,8 @@ Every sub-command prints a readable table by default and one JSON object with
 ``--json``. The commands only parse, call the API and print: every number
 comes from :mod:`softlanding`. Exit codes: 0 ok, 1 a well-posed run that
 failed (rest not proven, solver failure), 2 bad input, 3 internal error (a
-bug: ``--debug`` shows the traceback), 130 interrupted, 143 terminated (SIGTERM).
+bug: ``--debug`` shows the traceback), 130 interrupted, 143 terminated (SIGTERM),
+129 hung up (SIGHUP).
 """
 
 from __future__ import annotations
@@ -36,8 +37,9 @@ from softlanding.cli.output import (
 )
 from softlanding.cli.parser import DEMO_FIGURE, DEMO_FOLDER, dask_timeout
 from softlanding.cli.robust import robust_command
+from softlanding.cli.scale import scale_command
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count
-from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot
+from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 
 # ------------------------------------------------------------------- simulate
 _DEPTH_LABEL = {"final": "depth -x_f(T)", "limit": "depth limit (t -> inf)",
@@ -100,7 +102,7 @@ def _certificate_rows(cert: Any) -> list[tuple[str, object]]:
 def _cmd_solve(a: argparse.Namespace) -> int:
     """Every ``--variant`` through one flow: check, solve, certify, plot, print (the
     result's protocol, :class:`softlanding.optimal.variants.VariantResult`)."""
-    from softlanding.cli.variants import variant_of
+    from softlanding.cli.variants import labelled_dict, labelled_rows, variant_of
     from softlanding.util.files import output_path
 
     robot, ground = robot_of(a), ground_of_args(a)
@@ -121,7 +123,7 @@ def _cmd_solve(a: argparse.Namespace) -> int:
                if path is not None]
     unverified = res.unverified_reasons(cert)
     if a.json:
-        d = res.to_dict()
+        d = labelled_dict(variant, res.to_dict())
         if cert is not None:
             d["pmp"] = cert.to_dict()
         elif a.pmp:
@@ -129,7 +131,7 @@ def _cmd_solve(a: argparse.Namespace) -> int:
         print_json({"verified": not unverified, "unverified_reasons": unverified, **d})
     else:
         status = "yes" if not unverified else "NO: " + "; ".join(unverified)
-        print_table([("verified", status)] + res.rows()
+        print_table([("verified", status)] + labelled_rows(variant, res.rows())
                     + (_certificate_rows(cert) if cert is not None else []))
         for n in res.notes:
             print(f"note: {n}")
@@ -146,7 +148,10 @@ def _v0_grid(a: argparse.Namespace) -> Any:
 
     n = check_count("n", a.n, 1, 10_000)
     for name in ("v0_min", "v0_max"):
-        Impact(getattr(a, name))
+        try:
+            Impact(getattr(a, name))
+        except ParameterError as err:  # named by the option given, not the Impact's "v0"
+            raise ParameterError(name, str(err).partition(": ")[2]) from None
     if a.v0_min > a.v0_max:
         raise ParameterError("v0_min", f"must not exceed --v0-max ({a.v0_max:g})")
     return np.linspace(a.v0_max, a.v0_min, n)
@@ -360,81 +365,6 @@ def _cmd_compare(a: argparse.Namespace) -> int:
               f"{r['bang_bang'] / r['rigid']:>9.4f}")
     if written:
         print(f"figure written to {written}")
-    return EXIT_OK
-
-
-# ---------------------------------------------------------------------- scale
-SI_FLAGS = ("mb", "mf", "stroke", "umax_si", "v0_si", "Kp", "Kd")
-TO_SI_FLAGS = ("rm", "s", "v0", "umax", "kp", "kd")
-
-
-def _scale_from_si(a: argparse.Namespace) -> Any:
-    from softlanding.model.scaling import PhysicalParams, paper_rig
-
-    given = {name: getattr(a, flag) for flag, name in
-             (("mb", "m_b"), ("mf", "m_f"), ("kg", "k_g"), ("stroke", "stroke"),
-              ("umax_si", "u_max"), ("Kp", "K_p"), ("Kd", "K_d"), ("g", "g"),
-              ("v0_si", "v0")) if getattr(a, flag) is not None}
-    if getattr(a, "medium", None) is not None or getattr(a, "foot_diameter", None) is not None:
-        from softlanding.cli.ground import rft_stiffness_of
-
-        given["k_g"] = rft_stiffness_of(a)
-    if a.preset == "paper":
-        return paper_rig(**given)  # every flag given overrides the preset
-    missing = [f for f, n in (("mb", "m_b"), ("mf", "m_f"), ("kg", "k_g"),
-                              ("stroke", "stroke")) if n not in given]
-    if missing:
-        raise ParameterError(missing[0], "is required (or use --preset paper)")
-    return PhysicalParams(**given)
-
-
-def _cmd_scale(a: argparse.Namespace) -> int:
-    from softlanding.model.controllers import Impedance
-    from softlanding.model.robot import Units
-    from softlanding.model.scaling import PhysicalParams
-
-    if a.to_si:
-        wrong = [f for f in SI_FLAGS if getattr(a, f) is not None] + (
-            ["preset"] if a.preset else [])
-        if wrong:
-            raise ParameterError(wrong[0], "is an SI input; with --to-si give the "
-                                           "dimensionless numbers and --mt, --kg, --g")
-        if a.kg is None:
-            raise ParameterError("kg", "is required with --to-si (ground stiffness in N/m)")
-        units = Units(a.mt, a.kg, G_EARTH if a.g is None else a.g)
-        gains = None if a.kp is None and a.kd is None else Impedance(
-            0.0 if a.kp is None else a.kp, 0.0 if a.kd is None else a.kd)
-        ph = PhysicalParams.from_dimensionless(
-            Robot(r_m=PAPER_ROBOT.r_m if a.rm is None else a.rm,
-                  s=PAPER_ROBOT.s if a.s is None else a.s, u_max=a.umax),
-            Impact(-1.0 if a.v0 is None else a.v0), units, gains)
-    else:
-        wrong = [f for f in TO_SI_FLAGS if getattr(a, f) is not None]
-        if wrong:
-            raise ParameterError(wrong[0], "is a dimensionless input; use it with --to-si")
-        ph = _scale_from_si(a)
-    robot, impact, controller, _ = ph.to_dimensionless()
-    gain_dict = {} if controller is None else {k: v for k, v in controller.to_dict().items()
-                                               if k in ("k_p", "k_d")}
-    dimensionless = {**robot.to_dict(), **impact.to_dict(), **gain_dict}
-    out = {"physical": ph.to_dict(), "dimensionless": dimensionless,
-           "scales": ph.units.to_dict()}
-    if getattr(a, "medium", None) is not None:
-        from softlanding.model.terrain import PAPER_K_G
-
-        out["rft"] = {"medium": a.medium, "k_g_rft": ph.units.k_g, "k_g_paper": PAPER_K_G,
-                      "ratio": ph.units.k_g / PAPER_K_G}
-    if a.json:
-        print_json(out)
-    else:
-        rows = [(f"SI {k}", v) for k, v in ph.to_dict().items() if v is not None]
-        if "rft" in out:
-            rows += [("RFT k_g [N/m]", out["rft"]["k_g_rft"]),
-                     ("paper's measured k_g [N/m]", out["rft"]["k_g_paper"]),
-                     ("RFT / measured", out["rft"]["ratio"])]
-        rows += [(f"scale {k}", v) for k, v in ph.units.to_dict().items()]
-        rows += [(f"dimensionless {k}", v) for k, v in dimensionless.items() if v is not None]
-        print_table(rows)
     return EXIT_OK
 
 
@@ -719,7 +649,7 @@ def _cmd_mpc(a: argparse.Namespace) -> int:
 
 HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
-            "compare": _cmd_compare, "scale": _cmd_scale, "demo": _cmd_demo,
+            "compare": _cmd_compare, "scale": scale_command, "demo": _cmd_demo,
             "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc,
             "robust": robust_command, "export-controller": export_command,
             "cache": cache_command}
@@ -740,8 +670,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from softlanding.cli.parser import build_parser
 
-    args = build_parser(HANDLERS, CliParser, sys.argv[1:] if argv is None else argv
-                        ).parse_args(argv)
+    parser = build_parser(HANDLERS, CliParser, sys.argv[1:] if argv is None else argv)
+    args, extras = parser.parse_known_args(argv)
+    if extras:  # another variant's option: refused as one the chosen variant ignores
+        from softlanding.cli.variants import refusal_of_unknown
+
+        refused = refusal_of_unknown(args, extras)
+        if refused is not None:
+            return report_error(refused)
+        parser.error(f"unrecognized arguments: {' '.join(extras)}")
     from softlanding.util import progress as _progress
 
     _progress.FORCE = bool(args.progress)
@@ -753,7 +690,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 def console_main() -> int:
     """The ``softlanding`` console script and ``python -m softlanding``: :func:`main`, made
-    safe against a second signal while the process winds down.
+    safe against a second signal while the process winds down (and an interruption during
+    start-up, before :func:`main` runs the command, reported as one line).
 
     A signal that arrives after the interruption was reported (a repeated Ctrl-C, or one
     that a solver library re-raises on its way out) would end the process with the signal's
@@ -766,14 +704,19 @@ def console_main() -> int:
     """
     import signal
 
-    from softlanding.util.signals import EXIT_INTERRUPTED
+    from softlanding.util.signals import (
+        EXIT_INTERRUPTED,
+        TERMINATING,
+        report_interrupt,
+        reported_interrupt,
+    )
 
     try:
         code = main()
-    except KeyboardInterrupt:  # a second interruption before main returned
-        code = EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:  # before the run (start-up), or a second one after it
+        code = reported_interrupt() or report_interrupt(exc)
     if code >= EXIT_INTERRUPTED and threading.current_thread() is threading.main_thread():
-        for signum in (signal.SIGINT, signal.SIGTERM):
+        for signum in (signal.SIGINT, *TERMINATING):
             signal.signal(signum, signal.SIG_IGN)
     return code
 
@@ -838,7 +781,7 @@ def _run(args: argparse.Namespace) -> int:
     except Exception as exc:
         if args.debug:
             raise
-        return report_error(exc)
+        return report_error(exc, args)
 
 
 if __name__ == "__main__":

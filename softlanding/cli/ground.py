@@ -114,7 +114,7 @@ def ground_of(a: argparse.Namespace) -> Any:
     if kind == "drag":
         _unused(a, ("pi_a", "radius", "kappa", "exponent"), kind)
         if a.cd is None:
-            raise ParameterError("cd", "--ground drag needs the drag number --cd VALUE")
+            raise ParameterError("--cd", "--ground drag needs the drag number --cd VALUE")
         return DragGround(a.cd, k)
     if kind == "added-mass":
         _unused(a, ("exponent", "stiffness"), kind)
@@ -128,7 +128,7 @@ def ground_of(a: argparse.Namespace) -> Any:
             c_d=0.0 if a.cd is None else a.cd)
     _unused(a, ("cd", "pi_a", "radius", "kappa", "stiffness"), kind)
     if a.exponent is None:
-        raise ParameterError("exponent", "--ground power needs --exponent N")
+        raise ParameterError("--exponent", "--ground power needs --exponent N")
     from softlanding.model.terrain import power_law_ground
 
     return power_law_ground(check("exponent", a.exponent))
@@ -182,7 +182,12 @@ def model_ground(a: argparse.Namespace) -> Any:
         raise ParameterError("--model-cd", "is required with --model-ground drag (the drag "
                                            "number the controller assumes)")
     k = 1.0 if a.model_stiffness is None else a.model_stiffness
-    return LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
+    try:
+        return LinearGround(k) if a.model_ground == "linear" else DragGround(a.model_cd, k)
+    except ParameterError as err:  # the model's numbers are --model-*, not --cd, --stiffness
+        flag = {"c_d": "--model-cd", "stiffness": "--model-stiffness"}.get(err.parameter,
+                                                                          err.parameter)
+        raise ParameterError(flag, str(err).partition(": ")[2]) from None
 
 
 def rft_stiffness_of(a: argparse.Namespace) -> float:

@@ -2,7 +2,7 @@
 
 Exit codes: 0 ok, 1 a well-posed run that failed (rest not proven, solver failure),
 2 bad input, 3 internal error (a bug: ``--debug`` shows the traceback), 130 interrupted
-(Ctrl-C), 143 terminated (SIGTERM; :mod:`softlanding.util.signals`).
+(Ctrl-C), 143 terminated (SIGTERM), 129 hung up (SIGHUP; :mod:`softlanding.util.signals`).
 """
 
 from __future__ import annotations
@@ -155,16 +155,49 @@ def savefig(fig: Any, path: Any) -> str:
 
 
 
-def report_error(exc: BaseException) -> int:
+API_DESTS = {"r_m": "rm", "u_max": "umax", "k_p": "kp", "k_d": "kd", "c_d": "cd", "m_b": "mb",
+             "m_f": "mf", "k_g": "kg", "U_max": "umax_si", "V0": "v0_si", "K_p": "Kp",
+             "K_d": "Kd", "m_t": "mt"}
+"""The API's parameter names whose command-line option is spelled otherwise (``c_d`` is
+``--cd``); the others are spelled alike (``depth_max`` is ``--depth-max``)."""
+
+
+def name_the_flag(exc: ParameterError, a: argparse.Namespace | None) -> ParameterError:
+    """``exc`` naming the command line's option (``--cd``) instead of the API's parameter
+    (``c_d``) when the user gave that option (a value derived from others keeps its name).
+
+    Parameters
+    ----------
+    exc : ParameterError
+        The error, as the API raised it (changed in place).
+    a : argparse.Namespace or None
+        The parsed command line.
+    """
+    name = exc.parameter
+    dest = API_DESTS.get(name, name)
+    given = None if a is None else getattr(a, dest, None)
+    if name.startswith("-") or given is None or given is False:  # (0 is a value given)
+        return exc
+    flag = "--" + dest.replace("_", "-")
+    exc.args = (flag + str(exc)[len(name):],)
+    exc.parameter = flag
+    return exc
+
+
+def report_error(exc: BaseException, a: argparse.Namespace | None = None) -> int:
     """One line on stderr for an error; the exit code it means.
 
     Parameters
     ----------
     exc : BaseException
         The error a command raised.
+    a : argparse.Namespace, optional
+        The parsed command line (a bad value is then named by its option).
     """
     from ocp import SolveError
 
+    if isinstance(exc, ParameterError):
+        exc = name_the_flag(exc, a)
     if isinstance(exc, SoftlandingError):
         print(f"softlanding: {exc.label}: {exc}", file=sys.stderr)
         return exc.exit_code

@@ -20,7 +20,8 @@ DESCRIPTION = (
     "after Lynch, Lynch & Umbanhowar. All quantities are dimensionless unless named "
     "otherwise: lengths in x_s = m_t g / k_g, time in sqrt(m_t / k_g), force in m_t g. "
     "Exit codes: 0 ok, 1 a run that failed (rest not proven, solver failure), 2 bad input, "
-    "3 internal error (a bug; --debug shows the traceback), 130 interrupted.")
+    "3 internal error (a bug; --debug shows the traceback), 130 interrupted "
+    "(143 SIGTERM, 129 SIGHUP).")
 
 
 def _version() -> str:

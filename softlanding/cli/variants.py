@@ -14,18 +14,20 @@ option's name. :func:`variant_of` refuses an option the chosen variant would ign
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Sequence
 from typing import Any
 
-from softlanding.errors import ParameterError
+from softlanding.errors import ParameterError, SoftlandingError
 from softlanding.optimal.variants import (
     PIPELINE_OPTIONS,
     Option,
     Variant,
-    all_variants,
+    VariantError,
     built_in_names,
     built_in_variants,
     find_variant,
+    survey_variants,
 )
 
 DEFAULT_VARIANT = "paper"
@@ -38,7 +40,8 @@ def _flag(dest: str) -> str:
 
 
 def named_variant(argv: Sequence[str] | None) -> str | None:
-    """The ``--variant`` value in ``argv`` (a look before parsing; None when not there).
+    """The ``--variant`` value in ``argv`` (a look before parsing; the last one given, as
+    argparse takes it; None when not there).
 
     Parameters
     ----------
@@ -46,27 +49,111 @@ def named_variant(argv: Sequence[str] | None) -> str | None:
         The command line.
     """
     args = list(argv or [])
-    for i, arg in enumerate(args):
+    found = None
+    for i, arg in enumerate(args):  # the last, as argparse takes it
         if arg == "--variant" and i + 1 < len(args):
-            return args[i + 1]
-        if arg.startswith("--variant="):
-            return arg.split("=", 1)[1]
-    return None
+            found = args[i + 1]
+        elif arg.startswith("--variant="):
+            found = arg.split("=", 1)[1]
+    return found
 
 
 def _wanted(argv: Sequence[str] | None, command: str) -> list[Variant]:
-    """The variants whose options the ``command`` parser needs for ``argv``."""
+    """The variants whose options the ``command`` parser needs for ``argv`` (for
+    ``--help``: every one that loads, and the one named; a broken plug-in is one line on
+    stderr, the rest still listed)."""
     args = list(argv or [])
     if command not in args:
         return built_in_variants()
     rest = args[args.index(command) + 1:]
-    if "-h" in rest or "--help" in rest:
-        return all_variants()
-    out = built_in_variants()
     name = named_variant(rest)
+    if "-h" in rest or "--help" in rest:
+        found, failures = survey_variants([] if name is None else [name])
+        warn_failures(failures)
+        return found
+    out = built_in_variants()
     if name is not None and name not in {v.name for v in out}:
         out.append(find_variant(name))
     return out
+
+
+def warn_failures(failures: Sequence[VariantError]) -> None:
+    """One line on stderr for each variant that does not load.
+
+    Parameters
+    ----------
+    failures : sequence of VariantError
+        From :func:`~softlanding.optimal.variants.survey_variants`.
+    """
+    for err in failures:
+        print(f"softlanding: {err.label}: {err} (left out)", file=sys.stderr)
+
+
+def variant_label(v: Variant) -> str:
+    """The variant as the output names it: its own name, and where a user's module comes
+    from (``min-peak-force (mymod:VARIANT)``).
+
+    Parameters
+    ----------
+    v : Variant
+        The variant that ran.
+    """
+    return v.name if v.spec == v.name else f"{v.name} ({v.spec})"
+
+
+def labelled_rows(v: Variant, rows: Sequence[tuple[str, object]]) -> list[tuple[str, object]]:
+    """A result's table with the variant named by its declaration (a copy of a packaged
+    module keeps its result class, whose name would be the original's): its ``variant``
+    row, or a first one for a user's variant whose result has none.
+
+    Parameters
+    ----------
+    v : Variant
+        The variant that ran.
+    rows : sequence of (str, object)
+        The result's rows.
+    """
+    if not any(r[0] == "variant" for r in rows) and v.source in ("built-in", "packaged"):
+        return list(rows)
+    return [("variant", variant_label(v))] + [r for r in rows if r[0] != "variant"]
+
+
+def labelled_dict(v: Variant, d: dict[str, Any]) -> dict[str, Any]:
+    """A result's JSON with the variant named by its declaration, and where it is declared.
+
+    Parameters
+    ----------
+    v : Variant
+        The variant that ran.
+    d : dict
+        The result's ``to_dict()``.
+    """
+    return {**d, "variant": v.name, "variant_from": f"{v.module}:{v.attribute}"}
+
+
+def refusal_of_unknown(a: argparse.Namespace, extras: Sequence[str]) -> ParameterError | None:
+    """For ``solve``/``solve-sweep``, an unknown option that another variant declares: the
+    same refusal as an option the chosen variant does not take (None: not such a one).
+
+    Parameters
+    ----------
+    a : argparse.Namespace
+        What parsed.
+    extras : sequence of str
+        What did not.
+    """
+    if getattr(a, "command", None) not in SUBCOMMANDS:
+        return None
+    flags = [x.split("=", 1)[0] for x in extras if x.startswith("--")]
+    if not flags:
+        return None
+    found, _ = survey_variants()  # only on this error: may import the packaged modules
+    for flag in flags:
+        owners = [v.name for v in found if flag in {o.flag for o in v.options}]
+        if owners:
+            return ParameterError(flag, f"does not apply to --variant {a.variant} (an option "
+                                        f"of {', '.join(owners)})")
+    return None
 
 
 def add_variant_options(p: argparse.ArgumentParser, argv: Sequence[str] | None,
@@ -84,8 +171,10 @@ def add_variant_options(p: argparse.ArgumentParser, argv: Sequence[str] | None,
     """
     try:
         wanted = _wanted(argv, command)
-    except ParameterError as err:
-        p.error(str(err))
+    except SoftlandingError as err:  # no such variant, or a user's module that fails
+        if "--debug" in (argv or ()):  # parsed later: its traceback is wanted now
+            raise
+        p.error(f"--variant {err}" if isinstance(err, VariantError) else str(err))
     p.add_argument("--variant", default=DEFAULT_VARIANT, metavar="NAME",
                    help="the landing variant: " + ", ".join(built_in_names())
                         + " (default paper), module:attribute (a Variant in any importable "
@@ -102,9 +191,8 @@ def add_variant_options(p: argparse.ArgumentParser, argv: Sequence[str] | None,
         kw: dict[str, Any] = (
             {"action": "store_true", "default": None} if o.is_flag else
             {"default": None, "metavar": o.metavar})
-        extra = f" (one of {', '.join(map(str, o.choices))})" if o.choices else ""
         try:
-            p.add_argument(o.flag, dest=name, help=f"{who}: {o.help}{extra}", **kw)
+            p.add_argument(o.flag, dest=name, help=f"{who}: {o.help} ({o.describe()})", **kw)
         except argparse.ArgumentError:
             p.error(f"--variant {owners[name][0]}: its option {o.flag} clashes with "
                     f"{command}'s own")
@@ -162,13 +250,16 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
     robot, ground
         The landing.
     plot : Path or None
-        The figure to write (depth against ``v0``).
+        The figure to write (depth, and the variant's objective, against ``v0``).
     """
     from softlanding.cli.output import EXIT_FAILURE, EXIT_OK, print_json, savefig
     from softlanding.optimal.variants import sweep_variant
 
     res = sweep_variant(variant, v0, robot, ground, options, progress=not a.json)
-    rows = [{"v0": float(x), **r.to_dict(), "unverified_reasons": r.unverified_reasons()}
+    attr, what = variant.objective
+    rows = [{"v0": float(x), **labelled_dict(variant, r.to_dict()),
+             "objective": float(getattr(r, attr)),
+             "unverified_reasons": r.unverified_reasons()}
             for x, r in zip(v0, res, strict=True)]
     unverified = [r for r in rows if r["unverified_reasons"]]
     code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
@@ -176,20 +267,27 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
     if plot:
         import numpy as np
 
-        from softlanding.plots.paper import plot_depth_vs_velocity
+        from softlanding.plots.phased import plot_variant_sweep
 
-        written = savefig(plot_depth_vs_velocity(
-            np.asarray(v0), {variant.name: np.array([r.depth for r in res])}), plot)
+        written = savefig(plot_variant_sweep(
+            np.asarray(v0), np.array([r["depth"] for r in rows]), variant_label(variant),
+            None if attr == "depth" else (what, np.array([r["objective"] for r in rows]))),
+            plot)
     if a.json:
-        print_json({"verified": not unverified, "variant": variant.name, "sweep": rows})
+        print_json({"verified": not unverified, "variant": variant.name, "objective": attr,
+                    "sweep": rows})
         return code
     if unverified:
         print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
             f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
-    print(f"{'v0':>7} {'depth':>14}  verified  solved by")
+    own = attr != "depth"
+    print(f"variant {variant_label(variant)}" + (f", minimising {what}" if own else ""))
+    print(f"{'v0':>7} {'depth':>14}" + (f" {what[:14]:>14}" if own else "")
+          + "  verified  solved by")
     for r in rows:
-        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}  "
-              f"{'no' if r['unverified_reasons'] else 'yes':>8}  {r.get('path', '-')}")
+        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}"
+              + (f" {r['objective']:>14.10f}" if own else "")
+              + f"  {'no' if r['unverified_reasons'] else 'yes':>8}  {r.get('path', '-')}")
     if written:
         print(f"figure written to {written}")
     return code
@@ -198,16 +296,22 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
 def _cmd_variants(a: argparse.Namespace) -> int:
     from softlanding.cli.output import EXIT_OK, print_json
 
-    found = all_variants()
+    named = list(a.variant or [])
+    found, failures = survey_variants(named)
+    for name in named:  # one the user named that does not load: their error, exit 2
+        if not any(name in (v.name, v.spec) for v in found):
+            bad = [f for f in failures if f.spec.split(" ")[0] == name]
+            raise bad[0] if bad else VariantError(name, "does not load")
+    warn_failures(failures)
     if a.json:
-        print_json({"variants": [v.to_dict() for v in found]})
+        print_json({"variants": [v.to_dict() for v in found],
+                    "not_loaded": [str(f) for f in failures]})
         return EXIT_OK
     for v in found:
-        print(f"{v.name}: {v.summary}")
+        print(f"{variant_label(v)}: {v.summary}")
         print(f"    from {v.module}:{v.attribute} ({v.source})")
         for o in v.options:
-            req = "required" if o.required else f"default {o.default}"
-            print(f"    {o.flag} ({getattr(o.type, '__name__', 'value')}, {req}): {o.help}")
+            print(f"    {o.flag} ({o.describe()}): {o.help}")
         pipe = [_flag(n) for n in PIPELINE_OPTIONS if n != "no_refine" or v.refine]
         print(f"    and {', '.join(pipe)}" + (", --ground" if v.ground else ""))
     return EXIT_OK
@@ -227,10 +331,14 @@ def variants_parser(sub: Any) -> argparse.ArgumentParser:
                                    "group softlanding.variants), with its options and "
                                    "where it is declared. A variant in any importable "
                                    "module is also taken as --variant module:attribute.")
+    p.add_argument("--variant", action="append", metavar="MODULE:ATTRIBUTE",
+                   help="also list this variant (a Variant in any importable module; may be "
+                        "given several times)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=_cmd_variants)
     return p
 
 
-__all__ = ["DEFAULT_VARIANT", "SUBCOMMANDS", "add_variant_options", "named_variant",
-           "sweep_command", "variant_of", "variants_parser"]
+__all__ = ["DEFAULT_VARIANT", "SUBCOMMANDS", "add_variant_options", "labelled_dict",
+           "labelled_rows", "named_variant", "refusal_of_unknown", "sweep_command",
+           "variant_label", "variant_of", "variants_parser", "warn_failures"]

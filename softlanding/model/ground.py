@@ -75,6 +75,17 @@ def _depth_power(depth: Any, n: float) -> Any:
     return depth**n if n != 1.0 else depth
 
 
+def _number(name: str, value: Any) -> float:
+    """One checked number (:func:`~softlanding.errors.check`): a ground's parameter is a
+    scalar, never an array (which :func:`check` would pass through for batch inputs)."""
+    shape = getattr(value, "shape", None)
+    if shape is not None and shape != ():
+        raise ParameterError(name, f"must be one number, got an array of shape {shape}")
+    if isinstance(value, list | tuple | dict | set):
+        raise ParameterError(name, f"must be one number, got a {type(value).__name__}")
+    return float(check(name, value))
+
+
 def _stiffness_entry(k: float) -> dict[str, float]:
     """The JSON entry of a stiffness factor: none for the paper's 1 (outputs unchanged)."""
     return {} if k == 1.0 else {"stiffness": k}
@@ -114,7 +125,7 @@ class LinearGround(_NoAddedMass):
     name: ClassVar[str] = "linear"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "stiffness", check("stiffness", self.stiffness))
+        object.__setattr__(self, "stiffness", _number("stiffness", self.stiffness))
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
         """``f_g = K d`` (independent of the foot's velocity).
@@ -166,8 +177,8 @@ class DragGround(_NoAddedMass):
     name: ClassVar[str] = "drag"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "c_d", check("c_d", self.c_d))
-        object.__setattr__(self, "stiffness", check("stiffness", self.stiffness))
+        object.__setattr__(self, "c_d", _number("c_d", self.c_d))
+        object.__setattr__(self, "stiffness", _number("stiffness", self.stiffness))
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
         """``f_g = K d + c_d v_f^2``.
@@ -248,7 +259,7 @@ class AddedMassGround:
 
     def __post_init__(self) -> None:
         for n in ("pi_a", "radius", "kappa", "c_d"):
-            object.__setattr__(self, n, check(n, getattr(self, n)))
+            object.__setattr__(self, n, _number(n, getattr(self, n)))
 
     @property
     def critical_depth(self) -> float:
@@ -336,8 +347,12 @@ class CustomGround:
         if not self.label:
             raise ParameterError("label", "a custom ground needs a name")
         for d, v in ((1.0, -1.0), (0.0, 0.0), (3.0, -2.0)):
-            f = float(self.force(d, v))
-            m = 0.0 if self.mass is None else float(self.mass(d))
+            try:
+                f = float(self.force(d, v))
+                m = 0.0 if self.mass is None else float(self.mass(d))
+            except (TypeError, ValueError, ArithmeticError) as err:  # not one number
+                raise ParameterError("force", f"the law fails at depth {d:g}, velocity "
+                                              f"{v:g}: {type(err).__name__}: {err}") from None
             if not (math.isfinite(f) and math.isfinite(m)) or m < 0:
                 raise ParameterError("force", f"the law gives f({d:g}, {v:g}) = {f!r}, "
                                               f"m_a = {m!r}: need finite values, m_a >= 0")

@@ -12,4 +12,4 @@ from .pipeline import PhasedVariant as PhasedVariant, continuation as continuati
 from .result import PhasedLanding as PhasedLanding
 from .two_phase import TwoPhase as TwoPhase, TwoPhaseLanding as TwoPhaseLanding, TwoStepCheck as TwoStepCheck, solve_two_phase as solve_two_phase, sweep_two_phase as sweep_two_phase, two_step_check as two_step_check
 from .two_phase_problem import build_two_phase_problem as build_two_phase_problem, two_phase_transcription as two_phase_transcription
-from .variants import Option as Option, Variant as Variant, VariantResult as VariantResult, all_variants as all_variants, find_variant as find_variant, sweep_variant as sweep_variant
+from .variants import Option as Option, Variant as Variant, VariantError as VariantError, VariantResult as VariantResult, all_variants as all_variants, find_variant as find_variant, survey_variants as survey_variants, sweep_variant as sweep_variant

@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from softlanding.errors import LIMITS
 from softlanding.optimal.variants import Option, Variant
 
 
@@ -35,16 +36,18 @@ def extension_value(text: str) -> str | float:
         raise ValueError(f"'free' or a leg length, not {text!r}") from None
 
 
-def _non_negative(v: float) -> str | None:
-    return None if v >= 0 else f"must be >= 0, got {v:g}"
+def _rate(v: float) -> str | None:
+    """A relative velocity bound: >= 0, and within the model's velocities (as ``v0``'s
+    range: 1e308 reached Ipopt as an infinite bound and failed)."""
+    top = -LIMITS["v0"][0]
+    return None if 0 <= v <= top else f"must be 0 to {top:g}, got {v:g}"
 
 
 PAPER = Variant(
     "paper", "the paper's single-phase OCP (default)", "softlanding.optimal.landing:solve_landing",
-    options=(Option("nodes", int, 100, "shooting intervals (default 100, 2 to 5000)",
-                    _within(2, 5000)),
-             Option("extra_arcs", int, 0, "also try this many more bang arcs (default 0, at "
-                                              "most 20)", _within(0, 20))),
+    options=(Option("nodes", int, 100, "shooting intervals (2 to 5000)", _within(2, 5000)),
+             Option("extra_arcs", int, 0, "also try this many more bang arcs (at most 20)",
+                    _within(0, 20))),
     ground=True, certificate_figure=True)
 
 
@@ -61,8 +64,8 @@ def _two_phase_refusal(values: Mapping[str, Any]) -> str:
 TWO_PHASE = Variant(
     "two-phase", "yielding then static stance until the body stops, the arrest optimised",
     "softlanding.optimal.two_phase:solve_two_phase_variant",
-    options=(Option("steps", int, 1, "yielding steps allowed (default 1; 2: yielding, "
-                                     "static, yielding, static, compared with one step)",
+    options=(Option("steps", int, 1, "yielding steps allowed (2: yielding, static, "
+                                     "yielding, static, compared with one step)",
                     choices=(1, 2)),),
     ground=True, takes=_two_phase_takes, refusal=_two_phase_refusal)
 
@@ -83,15 +86,15 @@ LEG_EXTENSION = Variant(
                      "condition)",
     "softlanding.optimal.leg_extension:solve_leg_extension_variant",
     options=(Option("mode", str, "impact", "decide the leg's state at impact directly "
-                                           "(impact, the default: both masses at v0), or by "
-                                           "a flight phase from the drop height v0^2/2 (drop)",
+                                           "(impact: both masses at v0), or by a flight "
+                                           "phase from the drop height v0^2/2 (drop)",
                     choices=("impact", "drop")),
              Option("extension", extension_value, "free",
-                    "impact mode: 'free' (within the stroke; default) or a leg length at "
-                    "impact (s/2 is the paper's)"),
-             Option("rate_max", float, None, "impact mode: also free the relative velocity "
-                                             "at impact within +-RATE_MAX (default: 0, the "
-                                             "paper's)", _non_negative)),
+                    "impact mode: 'free' (within the stroke) or a leg length at impact (s/2 "
+                    "is the paper's)", kind="'free' or a length", metavar="L"),
+             Option("rate_max", float, 0.0, "impact mode: also free the relative velocity "
+                                            "at impact within +-RATE_MAX (0: the paper's, "
+                                            "both masses at v0)", _rate)),
     takes=_leg_takes, refusal=_leg_refusal)
 
 VARIANTS: Mapping[str, Variant] = {"PAPER": PAPER, "TWO_PHASE": TWO_PHASE,

@@ -265,7 +265,9 @@ class HopCycle:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-able dict."""
+        """JSON-able dict (``unverified_reasons``: the replay's checks and, for a cycle
+        whose energy is not the continuous optimum, why; empty exactly when verified)."""
+        reasons = self.unverified_reasons() + [r for r in [self.unconverged_reason()] if r]
         return json_safe({
             "leg": self.leg, "v0": self.impact.v0, "apex_height": self.apex_height,
             "eta": self.eta, "energy": self.energy, "energy_per_apex_height":
@@ -274,9 +276,8 @@ class HopCycle:
             "ground_loss": self.depth ** 2 / 2, "energy_transcribed": self.energy_transcribed,
             "depth": self.depth, "cot": self.cot, "apex_error": self.apex_error,
             "balance_error": self.balance_error, "gains": self.gains, "times": self.times,
-            "verified": not self.unverified_reasons() and self.converged,
-            "replay_verified": not self.unverified_reasons(),
-            "unverified_reasons": self.unverified_reasons(), "converged": self.converged,
+            "verified": not reasons, "replay_verified": not self.unverified_reasons(),
+            "unverified_reasons": reasons, "converged": self.converged,
             "optimum": "converged" if self.converged else "discretised",
             "method": "exact arcs" if self.exact_arcs else "grid",
             "exact_arcs": self.exact_arcs,

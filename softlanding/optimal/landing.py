@@ -403,14 +403,18 @@ def transcribed_schedule(sol: Solution, r_m: float, u_max: float = math.inf,
         Mass ratio.
     u_max : float
         The force limit: Ipopt meets its bounds to its tolerance (~1e-8), the actuator
-        exactly, so the forces are clipped to it.
+        exactly, so forces beyond it by at most
+        :data:`~softlanding.optimal.phase_schedule.FORCE_TOLERANCE` are clipped to it (a
+        larger excess is kept, and the replay's check flags it).
     damped : bool
         Hold the body's weight with a damper on its velocity
         (:data:`~softlanding.optimal.phase_schedule.TAIL_DAMPING`): the transcription
         leaves the body a residual velocity of its accuracy (~1e-8) that would otherwise
         carry it through the stroke limit forever.
     """
-    u = np.clip(sol.u[:, 0], -u_max, u_max)
+    from softlanding.optimal.phase_schedule import clipped_forces
+
+    u, _ = clipped_forces(sol.u[:, 0], u_max)
     h = sol.T / sol.N
     return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m,
                         damped=damped)

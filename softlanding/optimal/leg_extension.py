@@ -220,7 +220,8 @@ def _replay(out: LegExtensionLanding) -> None:
         else:
             assert out.transcribed is not None
             ctrl, kind = transcribed_controller(out.transcribed, out.robot.body_mass,
-                                                len(out.transcribed.phases) - 2)
+                                                len(out.transcribed.phases) - 2,
+                                                u_max=out.force_bound)
     except NotImplementedError as err:
         out.replay_kind = str(err)
         return
@@ -410,7 +411,7 @@ def solve_leg_extension_variant(impact: Impact | float, robot: Robot = PAPER_ROB
                                 ground: Any = LINEAR_GROUND, *, refine: bool = True,
                                 warm_start: Any = None, mode: str = "impact",
                                 extension: Any = "free",
-                                rate_max: float | None = None) -> LegExtensionLanding:
+                                rate_max: float | None = 0.0) -> LegExtensionLanding:
     """``--variant leg-extension`` (see :mod:`softlanding.optimal.builtin_variants`):
     :func:`solve_leg_extension` with the command line's options.
 
@@ -425,14 +426,15 @@ def solve_leg_extension_variant(impact: Impact | float, robot: Robot = PAPER_ROB
     extension : "free" or float
         The leg length at impact, or free within the stroke.
     rate_max : float, optional
-        Free the relative velocity at impact within ``+-rate_max`` (None: 0).
+        Free the relative velocity at impact within ``+-rate_max`` (0 or None: it is 0,
+        the paper's).
     """
     if ground != LINEAR_GROUND:
         raise ParameterError("ground", "leg extension takes only the paper's linear ground")
     warm = warm_start if isinstance(warm_start, LegExtensionLanding) else None
     return solve_leg_extension(
         impact, robot, mode=mode, extension=None if extension == "free" else extension,
-        rate=None if rate_max is None else (-rate_max, rate_max), warm_start=warm,
+        rate=(-rate_max, rate_max) if rate_max else None, warm_start=warm,
         refine=refine)
 
 

@@ -48,6 +48,26 @@ from softlanding.optimal.stance_phases import (
     parameters,
 )
 
+BUDGET_CAP = 1e6
+"""A budget above ``BUDGET_CAP`` times the least depth (at least 1) is solved at that cap:
+a budget of 1e300 in the constraint ``-x_f <= depth_max`` defeats Ipopt's arithmetic. When
+the depth reached is below the cap the constraint is inactive, and the answer is the same
+for every larger budget (the problem without the budget); a result that reaches the cap
+is flagged (:meth:`MinPeakForceLanding.own_reasons`)."""
+
+
+def budget_solved(depth_max: float, least_depth: float) -> float:
+    """The budget the NLP is given: ``depth_max`` up to its cap (:data:`BUDGET_CAP`).
+
+    Parameters
+    ----------
+    depth_max : float
+        The budget asked for.
+    least_depth : float
+        The two-phase landing's least depth.
+    """
+    return min(depth_max, BUDGET_CAP * max(1.0, least_depth))
+
 
 @lru_cache(maxsize=4)
 def min_peak_force_transcription(ground: Ground = LINEAR_GROUND) -> MultipleShooting:
@@ -108,12 +128,24 @@ class MinPeakForceLanding(TwoPhaseLanding):
                 ("least depth at u_max", self.least_depth), *super().own_rows()]
 
     def own_reasons(self) -> list[str]:
-        """The exact replay's largest force must be the peak."""
-        if self.replay is None or self.refined is None:
-            return []
-        gap = abs(self.replay.u_peak - self.peak)
-        return [] if gap <= 1e-9 * max(1.0, self.peak) else [
+        """The exact replay's largest force must be the peak (a transcription's, at most
+        it); a budget solved at its cap (:data:`BUDGET_CAP`) must not bind there."""
+        out = []
+        cap = budget_solved(self.depth_max, self.least_depth)
+        if cap < self.depth_max and not self.depth < cap * (1 - 1e-6):
+            out.append(f"the depth budget was solved at {cap:.3g} and binds there")
+        if self.replay is None:
+            return out
+        gap = self.replay.u_peak - self.peak  # the transcription's forces: at most the peak
+        if self.refined is not None:
+            gap = abs(gap)
+        return out if gap <= 1e-9 * max(1.0, self.peak) else out + [
             f"the replay's largest force differs from the peak by {gap:.2e}"]
+
+    @property
+    def force_bound(self) -> float:
+        """The peak: the force bound of this landing."""
+        return self.peak
 
     def own_dict(self) -> dict[str, Any]:
         """The two-phase fields and the peak."""
@@ -141,8 +173,9 @@ class MinPeakForce(TwoPhase):
         self.paper_depth = depth_max
 
     def parameters(self) -> dict[str, float]:
-        """The landing's parameters and the budget."""
-        return {**super().parameters(), "depth_max": self.depth_max}
+        """The landing's parameters and the budget (at most its cap, :func:`budget_solved`)."""
+        return {**super().parameters(),
+                "depth_max": budget_solved(self.depth_max, self.start.depth)}
 
     def transcription(self) -> MultipleShooting:
         """This variant's problem."""
@@ -195,6 +228,9 @@ class MinPeakForce(TwoPhase):
             ``"transcription"`` or ``"structure"``.
         """
         two = super().assemble(sol, ref, notes, path)
+        if two.depth < budget_solved(self.depth_max, self.start.depth) * (1 - 1e-6):
+            notes.append(f"the depth budget does not bind: the least peak lands at depth "
+                         f"{two.depth:.9g}, below {self.depth_max:.9g}")
         src = ref if ref is not None else sol
         return MinPeakForceLanding(**two.__dict__, depth_max=self.depth_max,
                                    peak=float(src.variables["peak"]),
@@ -249,10 +285,10 @@ def _positive(d: float) -> str | None:
 
 VARIANT = Variant(
     "min-peak-force", "the least peak force max |u| landing within a depth budget",
-    solve_min_peak_force, ground=True,
+    solve_min_peak_force, ground=True, objective=("peak", "peak force max |u|"),
     options=(Option("depth_max", float, help="the depth budget D (at least the two-phase "
                     "least depth)", check=_positive, required=True, metavar="D"),))
 """``softlanding solve --variant min-peak-force --depth-max D``."""
 
-__all__ = ["VARIANT", "MinPeakForce", "MinPeakForceLanding", "min_peak_force_transcription",
-           "solve_min_peak_force"]
+__all__ = ["BUDGET_CAP", "VARIANT", "MinPeakForce", "MinPeakForceLanding", "budget_solved",
+           "min_peak_force_transcription", "solve_min_peak_force"]

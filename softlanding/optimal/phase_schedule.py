@@ -13,6 +13,7 @@ force and a :class:`~softlanding.model.controllers.ForceSchedule` replays it exa
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -27,6 +28,43 @@ TAIL_DAMPING = 1.0
 
 TINY = 1e-10
 """Intervals shorter than this (relative to the horizon) are left out (touch points)."""
+
+FORCE_TOLERANCE = 1e-7
+"""How far (relative to ``max(1, u_max)``) a transcription's force may exceed the force
+limit and be clipped to it for the replay: Ipopt meets bounds within its bound relaxation
+(``bound_relax_factor``, 1e-8 of ``max(1, |bound|)``), an actuator exactly; ten times that
+is allowed. A larger excess is replayed as it is, and the replay's check flags it."""
+
+
+def clipped_forces(u: np.ndarray, u_max: float) -> tuple[np.ndarray, float]:
+    """``u`` with the forces beyond ``+-u_max`` by at most :data:`FORCE_TOLERANCE` clipped to
+    it; and the largest excess clipped (0: none).
+
+    Parameters
+    ----------
+    u : ndarray
+        Forces.
+    u_max : float
+        The force limit (inf: none).
+    """
+    u = np.asarray(u, dtype=float)
+    excess = np.abs(u) - u_max
+    clip = (excess > 0) & (excess <= FORCE_TOLERANCE * max(1.0, u_max))
+    if not clip.any():
+        return u, 0.0
+    return np.where(clip, np.sign(u) * u_max, u), float(excess[clip].max())
+
+
+def clip_note(excess: float) -> str:
+    """How a replay says that it clipped forces to the limit (empty: none clipped).
+
+    Parameters
+    ----------
+    excess : float
+        The largest excess clipped (:func:`clipped_forces`).
+    """
+    return (f"; forces up to {excess:.1e} beyond the force limit (Ipopt's bound tolerance) "
+            "clipped to it") if excess > 0 else ""
 
 
 @dataclass
@@ -177,7 +215,8 @@ def propagate(laws: list[ArcLaw], A: np.ndarray, B: np.ndarray,
     return z[:4]
 
 
-def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[Any, str]:
+def transcribed_controller(sol: Any, tail: float, first: int = 0,
+                           u_max: float = math.inf) -> tuple[Any, str]:
     """A transcription's piecewise-constant force, from phase ``first`` on, then ``tail``:
     the replay of a result that was not refined (exact up to the transcription's grid).
 
@@ -189,6 +228,10 @@ def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[Any, 
         Force held after the last phase (the body's weight share).
     first : int
         First phase replayed (earlier ones, e.g. a flight, are propagated elsewhere).
+    u_max : float
+        The force limit the transcription was bounded by: forces beyond it within
+        :data:`FORCE_TOLERANCE` are clipped to it (:func:`clipped_forces`), as the
+        description then says.
     """
     durs: list[float] = []
     vals: list[float] = []
@@ -197,17 +240,20 @@ def transcribed_controller(sol: Any, tail: float, first: int = 0) -> tuple[Any, 
         if h > 0:
             durs += [h] * ph.N
             vals += [float(u) for u in ph.u[:, 0]]
+    forces, excess = clipped_forces(np.asarray(vals), u_max)
+    vals = [float(v) for v in forces]
     if not feedback_available():
         return (ForceSchedule.from_arcs(durs, vals + [tail]),
-                "ForceSchedule (the transcription's piecewise-constant force)")
+                "ForceSchedule (the transcription's piecewise-constant force"
+                f"{clip_note(excess)})")
     # the tail damps the body's velocity, as replay_controller's does: the transcription
     # leaves a residual body velocity of its own accuracy (~1e-8) that would carry the
     # body through the stroke limit forever
     gains = [(0.0, 0.0, 0.0, 0.0, v) for v in vals] + [(0.0, -TAIL_DAMPING, 0.0, 0.0, tail)]
     return (_controllers.FeedbackSchedule(tuple(np.cumsum(durs)), tuple(gains)),
             "FeedbackSchedule (the transcription's piecewise-constant force; then the tail "
-            "force with a damper)")
+            f"force with a damper{clip_note(excess)})")
 
 
-__all__ = ["ArcLaw", "arc_laws", "feedback_available", "propagate", "replay_controller",
-           "transcribed_controller"]
+__all__ = ["FORCE_TOLERANCE", "ArcLaw", "arc_laws", "clip_note", "clipped_forces",
+           "feedback_available", "propagate", "replay_controller", "transcribed_controller"]

@@ -90,8 +90,8 @@ def continuation(impacts: Iterable[Impact], solve_one: Callable[[Impact, R | Non
     for imp in show_progress(list(impacts), progress, desc, "solve"):
         res: Any = solve_one(imp, prev)
         out.append(res)
-        if getattr(res, "transcribed", None) is None and prev is not None and \
-                prev.transcribed is not None:
+        if getattr(res, "transcribed", None) is None and \
+                getattr(prev, "transcribed", None) is not None:  # (a user's result may have none)
             res = dataclasses.replace(res, transcribed=prev.transcribed)
         prev = res
     return out

@@ -120,6 +120,12 @@ class PhasedLanding:
         return ""
 
     @property
+    def force_bound(self) -> float:
+        """The largest ``|u|`` the landing may apply: the robot's force limit (a variant
+        that bounds the force otherwise, e.g. by a decision variable, says so here)."""
+        return math.inf if self.robot.u_max is None else float(self.robot.u_max)
+
+    @property
     def gain(self) -> float:
         """``paper_depth - depth``: what the variant gains (>= 0 up to rounding)."""
         return self.paper_depth - self.depth

@@ -224,7 +224,8 @@ class TwoPhase(PhasedVariant):
                 ctrl, kind = replay_controller(result.refined, tail)
             else:
                 assert result.transcribed is not None
-                ctrl, kind = transcribed_controller(result.transcribed, tail)
+                ctrl, kind = transcribed_controller(result.transcribed, tail,
+                                                    u_max=result.force_bound)
         except NotImplementedError as err:
             result.replay_kind = str(err)
             return

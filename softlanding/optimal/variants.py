@@ -21,12 +21,19 @@ This module loads no numerical library.
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import json
 import math
+import os
+import sys
+import traceback
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, replace
+from functools import cache
+from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
-from softlanding.errors import ParameterError
+from softlanding.errors import ParameterError, SoftlandingError
 
 ENTRY_POINT_GROUP = "softlanding.variants"
 """The ``importlib.metadata`` entry-point group an installed package registers variants in."""
@@ -58,6 +65,14 @@ class Option:
         The values allowed (after ``type``).
     metavar : str, optional
         Name of the value in ``--help``.
+    kind : str, optional
+        What a value is, in words, for ``--help`` and ``softlanding variants`` (default
+        from ``type``: number, integer, text or flag; ``"value"`` for another function).
+
+    Raises
+    ------
+    TypeError
+        A field of the wrong type (e.g. a name that is not an identifier).
     """
 
     name: str
@@ -68,6 +83,40 @@ class Option:
     required: bool = False
     choices: tuple[Any, ...] | None = None
     metavar: str | None = None
+    kind: str | None = None
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name.isidentifier()):
+            raise TypeError(f"Option: name must be a Python identifier, got {self.name!r}")
+        for what, value in (("type", self.type), ("check", self.check)):
+            if value is not None and not callable(value):
+                raise TypeError(f"Option {self.name!r}: {what} must be callable, got "
+                                f"{type(value).__name__}")
+        if not isinstance(self.help, str):
+            raise TypeError(f"Option {self.name!r}: help must be text")
+        if self.choices is not None:
+            object.__setattr__(self, "choices", tuple(self.choices))
+
+    @property
+    def type_name(self) -> str:
+        """What a value is, in words (``kind``, else from ``type``)."""
+        if self.kind:
+            return self.kind
+        return _TYPE_NAMES.get(self.type, "value")
+
+    def describe(self) -> str:
+        """Its type, choices and default in words: ``integer, default 100``."""
+        what = self.type_name
+        if self.choices is not None:
+            what += ": one of " + ", ".join(map(str, self.choices))
+        if self.is_flag:
+            return what
+        sep = "; " if self.choices is not None else ", "
+        if self.required:
+            return f"{what}{sep}required"
+        shown = ("none" if self.default is None else f"{self.default:g}"
+                 if isinstance(self.default, float) else str(self.default))
+        return f"{what}{sep}default {shown}"
 
     @property
     def flag(self) -> str:
@@ -119,11 +168,23 @@ class Option:
         return v
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-able description."""
-        return {"name": self.name, "flag": self.flag,
-                "type": getattr(self.type, "__name__", str(self.type)),
-                "default": self.default, "required": self.required, "help": self.help,
-                "choices": list(self.choices) if self.choices is not None else None}
+        """JSON-able description (a default or choice JSON cannot hold is given as text)."""
+        return {"name": self.name, "flag": self.flag, "type": self.type_name,
+                "default": _jsonable(self.default), "required": self.required,
+                "help": self.help, "choices": None if self.choices is None else
+                [_jsonable(c) for c in self.choices]}
+
+
+_TYPE_NAMES: dict[Any, str] = {float: "number", int: "integer", str: "text", bool: "flag"}
+
+
+def _jsonable(value: Any) -> Any:
+    """``value`` if JSON holds it as it is, else its text (an object, NaN)."""
+    try:
+        json.dumps(value, allow_nan=False)
+    except (TypeError, ValueError):
+        return str(value)
+    return value
 
 
 @runtime_checkable
@@ -178,6 +239,9 @@ class VariantResult(Protocol):
 
 Solve = Callable[..., Any]
 
+_RESULT_MEMBERS = ("depth", "notes", "rows", "to_dict", "figures", "certify",
+                   "uncertified_reason", "unverified_reasons")
+
 
 @dataclass(frozen=True)
 class Variant:
@@ -207,11 +271,20 @@ class Variant:
     refusal : callable, optional
         ``values -> str``: what to add to "does not apply to --variant NAME" (e.g.
         ``" --steps 2"``).
+    objective : tuple of (str, str)
+        What it minimises: the attribute of its result and how to call it (default
+        ``("depth", "depth")``); a sweep over ``v0`` shows it beside the depth.
     source : str
         Where it was found: ``"built-in"``, ``"packaged"``, ``"module"`` or
         ``"entry point (distribution)"`` (filled in by the registry).
     module, attribute : str
         Where it is declared (filled in by the registry).
+
+    Raises
+    ------
+    TypeError
+        A field of the wrong type (options that are not :class:`Option`, two options of
+        one name, a solve that is neither callable nor ``"module:function"``).
     """
 
     name: str
@@ -223,9 +296,33 @@ class Variant:
     certificate_figure: bool = False
     takes: Callable[[Mapping[str, Any]], Iterable[str]] | None = None
     refusal: Callable[[Mapping[str, Any]], str] | None = None
+    objective: tuple[str, str] = ("depth", "depth")
     source: str = ""
     module: str = ""
     attribute: str = ""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name.strip() and not
+                any(c.isspace() or c == ":" for c in self.name)):
+            raise TypeError(f"Variant: name must be a word (no spaces, no ':'), got "
+                            f"{self.name!r}")
+        if not (callable(self.solve) or isinstance(self.solve, str) and ":" in self.solve):
+            raise TypeError(f"Variant {self.name!r}: solve must be a function or "
+                            f"'module:function', got {self.solve!r:.60}")
+        if isinstance(self.options, Option) or not isinstance(self.options, tuple | list) \
+                or not all(isinstance(o, Option) for o in self.options):
+            raise TypeError(f"Variant {self.name!r}: options must be a tuple of Option, got "
+                            f"{self.options!r:.60}")
+        names = [o.name for o in self.options]
+        twice = sorted({n for n in names if names.count(n) > 1} | set(names) & set(
+            PIPELINE_OPTIONS))
+        if twice:
+            raise TypeError(f"Variant {self.name!r}: option {twice[0]!r} declared twice (or "
+                            "one the pipeline gives)")
+        object.__setattr__(self, "options", tuple(self.options))
+        if not (isinstance(self.objective, tuple) and len(self.objective) == 2
+                and all(isinstance(t, str) for t in self.objective)):
+            raise TypeError(f"Variant {self.name!r}: objective must be (attribute, label)")
 
     def option_names(self) -> tuple[str, ...]:
         """Its own options' names, then the pipeline's that apply."""
@@ -265,8 +362,62 @@ class Variant:
         warm_start : result, optional
             A neighbour's result (continuation).
         """
-        return self.solver()(impact, robot, ground, refine=refine, warm_start=warm_start,
-                             **options)
+        solve = self.solver()
+        try:
+            res = solve(impact, robot, ground, refine=refine, warm_start=warm_start, **options)
+        except Exception as err:
+            solver_errors = sys.modules.get("ocp.definition.errors")
+            if isinstance(err, SoftlandingError) or solver_errors is not None and \
+                    isinstance(err, solver_errors.SolveError):
+                raise  # bad input, an infeasible landing, Ipopt's verdict: said as they are
+            blamed = self.blame(err)
+            if blamed is None:
+                raise
+            raise VariantError(self.spec, f"raised {type(err).__name__} ({blamed}): {err}; "
+                                          "--debug shows the traceback") from err
+        if self.source not in ("", "built-in", "packaged") and \
+                not isinstance(res, VariantResult):  # the user's, else it fails in ours
+            missing = [m for m in _RESULT_MEMBERS if not hasattr(res, m)]
+            raise VariantError(self.spec, f"its solve returned a {type(res).__name__} without "
+                                          f"{', '.join(missing)} (see "
+                                          "softlanding.optimal.VariantResult)")
+        return res
+
+    @property
+    def spec(self) -> str:
+        """How the user names it: ``module:attribute`` for a module's, else its name."""
+        return f"{self.module}:{self.attribute}" if self.source == "module" else self.name
+
+    def blame(self, err: BaseException) -> str | None:
+        """Where in a user's module (a ``module:attribute`` or an installed one) ``err``
+        was raised, ``"mymod.py, line 12"``; None when the error is not the user's (a
+        built-in or packaged variant, or raised within softlanding or ocp).
+
+        The user's when the innermost frame in either the user's files or this project's
+        is theirs, or when theirs called ours with a wrong value or type (a ``TypeError`` or
+        ``ValueError``, such as ocp's ``ProblemDefinitionError``).
+
+        Parameters
+        ----------
+        err : BaseException
+            An error the solve raised.
+        """
+        if self.source in ("", "built-in", "packaged") or not self.module:
+            return None
+        theirs = _module_root(self.module)
+        if theirs is None:
+            return None
+        ours = tuple(p + os.sep for p in project_roots())
+        first_ours = None
+        for frame, line in reversed(list(traceback.walk_tb(err.__traceback__))):
+            path = str(Path(frame.f_code.co_filename).resolve())
+            if path.startswith(ours):
+                first_ours = True if first_ours is None else first_ours
+            elif path == theirs or path.startswith(theirs + os.sep):
+                if first_ours and not isinstance(err, TypeError | ValueError):
+                    return None  # failed inside this project: a bug to report here
+                return f"{Path(path).name}, line {line}"
+        return None
 
     def values(self, given: Mapping[str, Any]) -> dict[str, Any]:
         """The checked values of its own options (defaults filled in).
@@ -293,6 +444,71 @@ class Variant:
                 "ground": self.ground}
 
 
+class VariantError(SoftlandingError):
+    """A user's variant (``module:attribute`` or an installed one) failed: it does not
+    import, is not a :class:`Variant`, or raised inside its own code. Bad input to the
+    command line (exit 2): the fix is in the user's module, not in this project.
+
+    Parameters
+    ----------
+    spec : str
+        The variant as the user named it.
+    message : str
+        What went wrong (one line).
+    """
+
+    exit_code = 2
+    label = "variant"
+
+    def __init__(self, spec: str, message: str) -> None:
+        self.spec = spec
+        super().__init__(f"{spec}: {message}")
+
+
+@cache
+def project_roots() -> tuple[str, ...]:
+    """The folders of the ``softlanding`` and ``ocp`` packages (resolved; found without
+    importing ``ocp``)."""
+    roots = [str(Path(__file__).resolve().parents[1])]
+    spec = importlib.util.find_spec("ocp")
+    if spec is not None and spec.submodule_search_locations:
+        roots += [str(Path(p).resolve()) for p in spec.submodule_search_locations]
+    return tuple(roots)
+
+
+def _module_root(module: str) -> str | None:
+    """The file or folder of the top-level package of ``module`` (None if not found)."""
+    try:
+        spec = importlib.util.find_spec(module.split(".")[0])
+    except (ImportError, ValueError):
+        return None
+    if spec is None:
+        return None
+    if spec.submodule_search_locations:
+        return str(Path(next(iter(spec.submodule_search_locations))).resolve())
+    return str(Path(spec.origin).resolve()) if spec.origin else None
+
+
+def _import_failure(mod: str, err: BaseException) -> str:
+    """One line on why importing ``mod`` failed: the error and, when known, where."""
+    if isinstance(err, SystemExit):
+        return f"importing {mod!r} called sys.exit({err.code!r})"
+    if isinstance(err, ModuleNotFoundError) and err.name == mod.split(".")[0]:
+        return f"no module {mod!r} on the path"
+    where = ""
+    if isinstance(err, SyntaxError) and err.filename:
+        where = f" ({Path(err.filename).name}, line {err.lineno})"
+    else:
+        frames = [(f, n) for f, n in traceback.walk_tb(err.__traceback__)
+                  if not f.f_code.co_filename.startswith("<frozen")]
+        if frames:
+            f, n = frames[-1]
+            where = f" ({Path(f.f_code.co_filename).name}, line {n})"
+    text = err.msg if isinstance(err, SyntaxError) else str(err)
+    return (f"cannot import {mod!r}{where}: {type(err).__name__}: {text}; --debug shows the "
+            "traceback")
+
+
 def resolve(spec: str, what: str) -> Any:
     """The object ``"module:attribute"`` names (``attribute`` may be dotted).
 
@@ -313,8 +529,8 @@ def resolve(spec: str, what: str) -> Any:
         raise ParameterError(what, f"expected module:attribute, got {spec!r}")
     try:
         obj: Any = importlib.import_module(mod)
-    except ImportError as err:
-        raise ParameterError(what, f"cannot import {mod!r} ({err})") from None
+    except (Exception, SystemExit) as err:  # whatever a module does on import: one line
+        raise VariantError(spec, _import_failure(mod, err)) from err
     for part in attr.split("."):
         try:
             obj = getattr(obj, part)
@@ -325,8 +541,8 @@ def resolve(spec: str, what: str) -> Any:
 
 def _as_variant(obj: Any, spec: str, source: str, what: str) -> Variant:
     if not isinstance(obj, Variant):
-        raise ParameterError(what, f"{spec} is a {type(obj).__name__}, not a "
-                                   "softlanding.optimal.Variant")
+        raise VariantError(spec, f"is a {type(obj).__name__}, not a "
+                                 "softlanding.optimal.Variant")
     mod, _, attr = spec.partition(":")
     return replace(obj, source=source, module=mod, attribute=attr)
 
@@ -373,6 +589,8 @@ def find_variant(name: str) -> Variant:
     ------
     ParameterError
         No such variant (one line, with the names there are).
+    VariantError
+        A user's or installed module that does not import or holds no :class:`Variant`.
     """
     for v in built_in_variants():
         if v.name == name:
@@ -388,20 +606,54 @@ def find_variant(name: str) -> Variant:
         dist = getattr(getattr(ep, "dist", None), "name", "?")
         try:
             obj = ep.load()
-        except Exception as err:  # a broken third-party package: say which, one line
-            raise ParameterError("--variant", f"entry point {name!r} ({ep.value}) of "
-                                 f"{dist} does not load: {err}") from None
+        except (Exception, SystemExit) as err:  # a broken third-party package: one line
+            raise VariantError(f"{name} (entry point {ep.value} of {dist})", _import_failure(
+                ep.value.partition(":")[0], err)) from err
         return _as_variant(obj, ep.value, f"entry point ({dist})", "--variant")
     known = built_in_names() + sorted(eps)
     raise ParameterError("--variant", f"no variant {name!r} (known: {', '.join(known)}; or "
                                       "module:attribute)")
 
 
+def survey_variants(extra: Iterable[str] = ()) -> tuple[list[Variant], list[VariantError]]:
+    """Every variant that loads, and why each other does not (a broken plug-in does not
+    hide the rest).
+
+    Parameters
+    ----------
+    extra : iterable of str
+        Variants named besides the registered ones (``module:attribute``).
+
+    Returns
+    -------
+    variants : list of Variant
+        Built in, packaged, installed (entry points), then ``extra``, in that order.
+    failures : list of VariantError
+        One for each that does not load.
+    """
+    out = built_in_variants()
+    failures: list[VariantError] = []
+    for name in [*PACKAGED, *sorted(entry_points()), *extra]:
+        if name in {v.name for v in out} or name in {v.spec for v in out}:
+            continue
+        try:
+            out.append(find_variant(name))
+        except VariantError as err:
+            failures.append(err)
+    return out, failures
+
+
 def all_variants() -> list[Variant]:
-    """Every variant: built in, packaged, and installed (entry points), in that order."""
-    out = built_in_variants() + [find_variant(n) for n in PACKAGED]
-    seen = {v.name for v in out}
-    out += [find_variant(n) for n in sorted(entry_points()) if n not in seen]
+    """Every variant: built in, packaged, and installed (entry points), in that order.
+
+    Raises
+    ------
+    VariantError
+        An installed variant that does not load (:func:`survey_variants` lists the rest).
+    """
+    out, failures = survey_variants()
+    if failures:
+        raise failures[0]
     return out
 
 
@@ -436,5 +688,6 @@ def sweep_variant(variant: Variant, v0_values: Iterable[float], robot: Any, grou
 
 
 __all__ = ["BUILT_IN", "ENTRY_POINT_GROUP", "PACKAGED", "PIPELINE_OPTIONS", "Option", "Variant",
-           "VariantResult", "all_variants", "built_in_names", "built_in_variants",
-           "entry_points", "find_variant", "resolve", "sweep_variant"]
+           "VariantError", "VariantResult", "all_variants", "built_in_names",
+           "built_in_variants", "entry_points", "find_variant", "project_roots", "resolve",
+           "survey_variants", "sweep_variant"]

@@ -40,6 +40,12 @@ def replay_reasons(replay: Any, depth: float, refined: bool) -> list[str]:
         out.append(f"the exact-simulator replay leaves the stroke [0, {replay.robot.s:g}] "
                    f"by {excess:.1e} (leg length from {replay.stroke_min:.6g} to "
                    f"{replay.stroke_max:.6g})")
+    # a force beyond the limit by more than rounding (a boundary arc's law: 1e-14); a
+    # transcription's excess within Ipopt's tolerance was clipped before the replay
+    u_max = replay.robot.u_max
+    if u_max is not None and replay.u_peak > u_max + 1e-12 * max(1.0, u_max):
+        out.append(f"the replay applies a force {replay.u_peak - u_max:.1e} beyond the force "
+                   f"limit u_max = {u_max:g}")
     tol = (1e-9 if refined else 1e-6) * max(1.0, depth)
     diff = abs(replay.depth - depth)
     if not diff <= tol:

@@ -6,6 +6,7 @@ saved here).
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -83,7 +84,73 @@ def plot_phases(t: np.ndarray, x: np.ndarray, u: np.ndarray,
     a3.set_xlabel(r"time $\tau$ [$\sqrt{m_t/k_g}$]")
     a1.legend(fontsize=8, loc="best")
     a2.legend(fontsize=8, loc="best")
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(wrapped_title(title), fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+TITLE_WIDTH = 90
+"""Characters per line of a figure's title (about the width of an 8-inch figure at 10 pt)."""
+
+
+def wrapped_title(title: str, width: int = TITLE_WIDTH) -> str:
+    """``title`` broken into lines of at most ``width`` characters (a long title would run
+    off both sides of the figure), never inside a ``$...$`` formula.
+
+    Parameters
+    ----------
+    title : str
+        The title on one line.
+    width : int
+        Characters per line (mathtext counts as its source).
+    """
+    words = title.split(" ")
+    merged: list[str] = []  # words, with a formula's spaces kept inside one word
+    for w in words:
+        if merged and merged[-1].count("$") % 2:
+            merged[-1] += " " + w
+        else:
+            merged.append(w)
+    lines = textwrap.wrap(" ".join(w.replace(" ", "\0") for w in merged), width,
+                          break_long_words=False, break_on_hyphens=False)
+    return "\n".join(line.replace("\0", " ") for line in lines)
+
+
+def plot_variant_sweep(v0: np.ndarray, depth: np.ndarray, label: str,
+                       objective: tuple[str, np.ndarray] | None = None) -> plt.Figure:
+    """A variant's sweep over ``v0``: the depth and, for a variant that minimises
+    something else (the peak force within a depth budget...), its objective in a second
+    panel.
+
+    Parameters
+    ----------
+    v0 : ndarray
+        Impact velocities.
+    depth : ndarray
+        The depth at each.
+    label : str
+        The variant's name.
+    objective : (str, ndarray), optional
+        The objective's name and values (None: the depth is the objective).
+    """
+    fig, axes = plt.subplots(1, 1 if objective is None else 2, squeeze=False,
+                             figsize=(6.4 if objective is None else 11.0, 4.4))
+    a = axes[0, 0]
+    a.plot(v0, depth, "C0o-", ms=3, label=label)
+    a.set_xlabel(r"impact velocity $v_0$ [$x_s / \tau_s$]")
+    a.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")
+    a.set_title("depth", fontsize=9)
+    a.legend(fontsize=8)
+    if objective is not None:
+        what, values = objective
+        b = axes[0, 1]
+        b.plot(v0, values, "C3o-", ms=3, label=label)
+        b.set_xlabel(r"impact velocity $v_0$ [$x_s / \tau_s$]")
+        b.set_ylabel(what)
+        b.set_title(f"objective: {what}", fontsize=9)
+        b.legend(fontsize=8)
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
     fig.tight_layout()
     return fig
 
@@ -222,5 +289,6 @@ def plot_hybrid_findings(two: Sequence[Any], legs: Sequence[Any],
     return fig
 
 
-__all__ = ["PHASE_COLOURS", "plot_phased_landing", "plot_hop", "plot_hybrid_findings",
-           "plot_phases", "shade_phases"]
+__all__ = ["PHASE_COLOURS", "TITLE_WIDTH", "plot_hop", "plot_hybrid_findings",
+           "plot_phased_landing", "plot_phases", "plot_variant_sweep", "shade_phases",
+           "wrapped_title"]

@@ -11,14 +11,17 @@ pointer: the kernel is not recompiled per law.
 
 The cache is bounded (:data:`LAW_CACHE_MAX_FILES` laws, :data:`LAW_CACHE_MAX_BYTES`): a new
 law evicts the least recently used ones (``softlanding cache`` shows it, ``--clear`` empties
-it). Without a C compiler the law is evaluated in Python instead (a ctypes callback of the
-same CasADi function): the same numbers, 60 to 100 times slower (``benchmarks/
-bench_law_fallback.py``: 400 drag landings at K = 2, 0.17 s CPU compiled with the compiler's
-time, 10.2 s in Python).
+it). Each law's size and SHA-256 are recorded beside it and checked before it is loaded
+(:func:`ocp.transcriptions.codegen.intact`): a damaged one is compiled again, where loading
+it would kill the process. Without a C compiler the law is evaluated in Python instead (a
+ctypes callback of the same CasADi function): the same numbers, 60 to 100 times slower
+(``benchmarks/bench_law_fallback.py``: 400 drag landings at K = 2, 0.17 s CPU compiled with
+the compiler's time, 10.2 s in Python).
 """
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import hashlib
 import os
@@ -32,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ocp.transcriptions.codegen import intact, place, record_path
 from softlanding.errors import ParameterError
 from softlanding.model.ground import AddedMassGround, DragGround, Ground, LinearGround
 
@@ -136,7 +140,12 @@ def law_cache_dir(create: bool = True) -> Path:
         os.path.expanduser("~"), ".cache", "softlanding")
     path = Path(root) / "laws"
     if create:
-        path.mkdir(parents=True, exist_ok=True)
+        try:
+            path.mkdir(parents=True, exist_ok=True)
+        except OSError as err:  # a file, a read-only or unreadable place
+            where = "$SOFTLANDING_CACHE" if os.environ.get("SOFTLANDING_CACHE") else "cache"
+            raise ParameterError(where, f"{path} cannot hold the compiled ground laws: "
+                                        f"{err.strerror or err}") from None
     return path
 
 
@@ -249,6 +258,29 @@ def raise_law_errors() -> None:
         raise exc
 
 
+def law_source(ground: Ground) -> str:
+    """The C source of a ground model's law (CasADi's code and the kernel's wrapper); its
+    hash names the compiled library.
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    """
+    fun = law_expressions(ground)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg_name = "sl_law_gen.c"
+        cwd = os.getcwd()
+        try:
+            os.chdir(tmp)
+            fun.generate(cg_name, {"with_header": False, "casadi_real": "double"})
+        finally:
+            os.chdir(cwd)
+        return (Path(tmp) / cg_name).read_text() + _WRAPPER.format(
+            n_arg=max(2, fun.sz_arg()), n_res=max(5, fun.sz_res()), n_w=max(1, fun.sz_w()),
+            n_iw=max(1, fun.sz_iw()))
+
+
 def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
     """Generate, compile (once: cached on disk) and load the C law of a ground model.
 
@@ -266,25 +298,16 @@ def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
     address : int
         Address of ``void sl_law(double d, double v, double *out)``.
     """
-    fun = law_expressions(ground)
-    with tempfile.TemporaryDirectory() as tmp:
-        cg_name = "sl_law_gen.c"
-        cwd = os.getcwd()
-        try:
-            os.chdir(tmp)
-            fun.generate(cg_name, {"with_header": False, "casadi_real": "double"})
-        finally:
-            os.chdir(cwd)
-        src = (Path(tmp) / cg_name).read_text() + _WRAPPER.format(
-            n_arg=max(2, fun.sz_arg()), n_res=max(5, fun.sz_res()), n_w=max(1, fun.sz_w()),
-            n_iw=max(1, fun.sz_iw()))
+    src = law_source(ground)
     key = hashlib.sha256(src.encode()).hexdigest()[:20]
     so = law_cache_dir() / f"law_{key}.so"
     if str(so) in _LIBS:
         return _LIBS[str(so)], ctypes.cast(_LIBS[str(so)].sl_law, ctypes.c_void_p).value or 0
-    try:
-        os.utime(so)  # used now: the last to be evicted
-    except FileNotFoundError:
+    if intact(so):  # size and hash as recorded: a damaged library would kill the process
+        with contextlib.suppress(FileNotFoundError):  # (evicted meanwhile: loaded below)
+            os.utime(so)  # used now: the last to be evicted
+            os.utime(record_path(so))
+    else:
         cc = _compiler()
         if cc is None:
             return _python_law(ground)
@@ -299,7 +322,7 @@ def compile_law(ground: Ground) -> tuple[ctypes.CDLL, int]:
                     raise ParameterError("ground", f"the C code of the ground law "
                                                    f"{ground.name!r} did not compile: "
                                                    f"{p.stderr.strip()[:300]}")
-                os.replace(tmp_so, so)
+                place(tmp_so, so)
             finally:
                 tmp_so.unlink(missing_ok=True)
         prune_law_cache(keep=so)
@@ -374,4 +397,4 @@ def kernel_law(ground: Ground, r_m: float, *, lock: bool = False,
 
 __all__ = ["LAW_CACHE_MAX_BYTES", "LAW_CACHE_MAX_FILES", "clear_law_cache", "compile_law",
            "hold_stiffness", "kernel_law", "law_cache_dir", "law_cache_info", "law_expressions",
-           "needs_integration", "prune_law_cache", "raise_law_errors"]
+           "law_source", "needs_integration", "prune_law_cache", "raise_law_errors"]

@@ -16,7 +16,7 @@ from softlanding import (
 from softlanding.control.robust import robust_landing
 from softlanding.errors import ParameterError
 from softlanding.model import Impedance, LinearGround, Rigid
-from softlanding.model.ground import MAX_GROUNDS
+from softlanding.model.ground import MAX_GROUNDS, AddedMassGround, CustomGround, DragGround
 from softlanding.simulation.simulator import simulate_batch
 
 CASES = [
@@ -44,6 +44,12 @@ CASES = [
     ("controller", lambda: simulate(PAPER_ROBOT, -1, Impedance)),
     ("v0", lambda: simulate(PAPER_ROBOT, np.array([-1.0, -2.0]), Rigid())),
     ("steps", lambda: solve_two_phase(-3, steps=3)),
+    # issue 47, defect 10: an array was taken as a ground's number, failing later in numpy
+    ("c_d", lambda: DragGround(np.array([1, 2]))),
+    ("stiffness", lambda: DragGround(0.1, [1.0, 2.0])),
+    ("stiffness", lambda: LinearGround(np.array([1.0]))),
+    ("kappa", lambda: AddedMassGround(1.0, 0.1, np.ones(2))),
+    ("force", lambda: CustomGround("arrays", lambda d, v: np.array([d, d]))),
 ]
 
 

@@ -42,3 +42,10 @@ def test_start_from_another_problem_is_a_guess_error(how):
     other = ocp.MultipleShooting(_problem(True), 10).solve()
     with pytest.raises(GuessError, match="not this problem's"):
         ocp.MultipleShooting(_problem(False), 10).solve(**{how: other})
+
+
+@pytest.mark.parametrize("bad", ["x", 3.0, {"w": [1.0]}])
+def test_a_warm_start_that_is_not_a_solution_is_a_type_error_naming_it(bad):
+    """Issue 47, defect 10: solve(warm_start='x') raised AttributeError from inside."""
+    with pytest.raises(TypeError, match="warm_start must be an ocp.Solution"):
+        ocp.MultipleShooting(_problem(False), 4).solve(warm_start=bad)

@@ -58,3 +58,16 @@ def test_set_blas_threads_changes_the_count():
 def test_set_blas_threads_refuses_a_bad_count(n):
     with pytest.raises(ValueError, match="positive integer"):
         ocp.set_blas_threads(n)
+
+
+@BUNDLED
+def test_a_count_above_the_cpus_is_capped_at_them():
+    """Issue 47, defect 10: 2**32 + 1 gave one thread (a C int overflow) and 10**9 gave
+    OpenBLAS's build limit, 16, on 2 CPUs. The rule: at most the CPUs this process may use
+    (as OpenBLAS does for OPENBLAS_NUM_THREADS)."""
+    before = ocp.blas_threads()
+    try:
+        for n in (2**32 + 1, 10**9, CPUS + 1):
+            assert ocp.set_blas_threads(n) is True and ocp.blas_threads() == CPUS, n
+    finally:
+        ocp.set_blas_threads(before)

@@ -39,7 +39,7 @@ def test_map_whose_out_file_appeared_meanwhile_exits_2_and_leaves_nothing(tmp_pa
     _appears_meanwhile(monkeypatch, out)
     code, stdout, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", png)
     assert code == 2 and err.count("\n") == 1
-    assert err.strip() == f"softlanding: error: out: {out} exists; pass --force to overwrite it"
+    assert err.strip() == f"softlanding: error: --out: {out} exists; pass --force to overwrite it"
     assert out.read_bytes() == b"the other run's" and not png.exists()
     assert os.listdir(tmp_path) == ["same.nc"]  # no temporary file either
     assert "written" not in stdout
@@ -112,7 +112,7 @@ def test_unusable_outputs_exit_2_before_any_work(tmp_path, cli, monkeypatch, out
     monkeypatch.chdir(tmp_path)
     code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", plot)
     assert code == 2 and err.count("\n") == 1, err
-    assert err.startswith(f"softlanding: error: {option}: ") and message in err
+    assert err.startswith(f"softlanding: error: --{option}: ") and message in err
     assert os.listdir(tmp_path) == []
 
 
@@ -122,12 +122,12 @@ def test_an_unwritable_folder_exits_2_before_any_work(tmp_path, cli, monkeypatch
     locked = tmp_path / "locked"
     locked.mkdir(mode=0o500)
     code, _, err = cli("map", "--v0", "-3", "--out", locked / "m.nc")
-    assert code == 2 and "out: folder" in err and "not writable" in err
+    assert code == 2 and "--out: folder" in err and "not writable" in err
 
 
 def test_reproduce_into_an_unusable_folder_exits_2_before_any_work(cli):
     code, _, err = cli("reproduce", "--quick", "--out", "/proc/D")
-    assert code == 2 and err.strip() == ("softlanding: error: out: cannot create files in "
+    assert code == 2 and err.strip() == ("softlanding: error: --out: cannot create files in "
                                          "/proc: No such file or directory")
 
 

@@ -76,6 +76,10 @@ def _check_hop_json(code, out, png):
     assert d["verified"] is False and d["optimum"] == "discretised" and d["leg"] == "free"
     assert d["cycles"]["free"]["replay_verified"] is True  # its replay closes all the same
     assert "discretised" in d["unverified_reasons"]["free"][0]
+    # issue 47, defect 11: a cycle said verified: false with unverified_reasons: []
+    for c in d["cycles"].values():
+        assert c["verified"] is (not c["unverified_reasons"]), c["unverified_reasons"]
+    assert "discretised" in d["cycles"]["free"]["unverified_reasons"][0]
     assert d["energy"] > 0 and d["energy"] == d["cycles"]["free"]["energy"]
     assert d["cycles"]["free"]["net_work"] == pytest.approx(
         d["cycles"]["free"]["ground_loss"], rel=1e-6)

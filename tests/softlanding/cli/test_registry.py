@@ -3,7 +3,6 @@ registry; a variant outside the package runs through `--variant module:attribute
 packaged `min-peak-force` answers the inverse of the two-phase landing's depth."""
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -28,7 +27,7 @@ def test_variants_json_lists_every_variant_with_its_options_and_origin(cli):
     assert [(o["flag"], o["required"]) for o in mpf["options"]] == [("--depth-max", True)]
     assert found["two-phase"]["options"][0]["choices"] == [1, 2]
     code, out, _ = cli("variants")
-    assert code == 0 and "--depth-max (float, required)" in out
+    assert code == 0 and "--depth-max (number, required)" in out
 
 
 BAD_DEPTH = [["--depth-max", "abc"], ["--depth-max", "-1"], ["--depth-max", "nan"],
@@ -67,11 +66,16 @@ def _solve_json(args, env=None):
 
 @pytest.mark.slow
 def test_a_copy_outside_the_package_runs_like_the_packaged_variant(tmp_path, monkeypatch):
-    """The packaged module copied under another name into a folder outside the project:
-    the same depth, peak, verdict and figure through --variant othername:VARIANT."""
+    """The packaged module copied under another name into a folder outside the project, its
+    Variant renamed: the same depth, peak, verdict and figure through --variant
+    othername:VARIANT, under the new name."""
     import os
 
-    shutil.copy(PACKAGED, tmp_path / "othername.py")
+    text = PACKAGED.read_text()
+    declared = 'VARIANT = Variant(\n    "min-peak-force",'
+    assert declared in text
+    (tmp_path / "othername.py").write_text(text.replace(  # renamed in its Variant only
+        declared, 'VARIANT = Variant(\n    "my-peak-force",'))
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(
         [str(tmp_path), str(PACKAGED.parents[2]), os.environ.get("PYTHONPATH", "")])}
     out = {}
@@ -84,7 +88,9 @@ def test_a_copy_outside_the_package_runs_like_the_packaged_variant(tmp_path, mon
     (c1, a, s1), (c2, b, s2) = out.values()
     assert c1 == c2 and a["verified"] == b["verified"]
     assert a["unverified_reasons"] == b["unverified_reasons"]
-    assert b["variant"] == "min-peak-force"
+    # issue 47: the output is named by the Variant that ran, not by the result class
+    assert (a["variant"], b["variant"]) == ("min-peak-force", "my-peak-force")
+    assert b["variant_from"] == "othername:VARIANT"
     assert abs(a["depth"] - b["depth"]) < 1e-12 and abs(a["peak"] - b["peak"]) < 1e-12
     assert s1 > 10_000 and abs(s1 - s2) < 0.02 * s1  # the same figure (same title, data)
     found = find_variant("min-peak-force")
@@ -190,3 +196,31 @@ def test_the_worked_example_uses_public_names_and_the_guide_shows_it_whole():
                 assert {a.name for a in node.names} <= set(mod.__all__), node.module
     guide = (PACKAGED.parents[2] / "docs" / "guides" / "hybrid.md").read_text()
     assert "```{literalinclude} ../../softlanding/optimal/min_peak_force.py" in guide
+
+
+def test_every_name_the_worked_example_imports_has_an_api_page():
+    """Issue 47: the example's building blocks (add_yielding, add_static, ...) had no API
+    page. docs/conf.py writes one page per front door (FRONT_DOORS) from its __all__, and
+    docs/api/index.rst lists the pages: each name the example imports is on one."""
+    import ast
+    import importlib
+
+    docs = PACKAGED.parents[2] / "docs"
+    conf = ast.parse((docs / "conf.py").read_text())
+    doors = next(ast.literal_eval(n.value) for n in conf.body if isinstance(n, ast.Assign)
+                 and getattr(n.targets[0], "id", "") == "FRONT_DOORS")
+    homes = next(ast.literal_eval(n.value) for n in conf.body if isinstance(n, ast.Assign)
+                 and getattr(n.targets[0], "id", "") == "HOME_ORDER")
+    index = (docs / "api" / "index.rst").read_text().split()
+    assert set(doors) <= set(index) and set(homes) <= set(doors)
+
+    def exports(name):
+        mod = importlib.import_module(name)
+        return getattr(mod, "__all__", [n for n in dir(mod) if not n.startswith("_")])
+
+    documented = {n for d in homes for n in exports(d)}  # each object's page is under these
+    for node in ast.walk(ast.parse(PACKAGED.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module.split(".")[0] in ("softlanding",
+                                                                             "ocp"):
+            missing = {a.name for a in node.names} - documented
+            assert not missing, (node.module, missing)

@@ -55,6 +55,7 @@ BAD = [  # each a distinct class of bad input the CLI once called a bug or ignor
     ["solve", "--v0", "-3", "--variant", "leg-extension", "--extension", "abc"],
     ["solve", "--v0", "-3", "--variant", "leg-extension", "--extension", "nan"],
     ["solve", "--v0", "-3", "--variant", "leg-extension", "--rate-max", "-1"],
+    ["solve", "--v0", "-3", "--variant", "leg-extension", "--rate-max", "1e308"],  # issue 47
     ["solve", "--v0", "-3", "--nodes", "1"],
     ["solve", "--v0", "-3", "--extra-arcs", "21"],
     ["hop", "--v0=-1e-300"],

@@ -282,7 +282,7 @@ def test_a_c_program_following_the_readme_runs_as_the_python_controller(exported
     (("--period", "0"), "--period"), (("--noise-std", "nan"), "--noise-std"),
     (("--margin", "-1"), "--margin"), (("--l0", "3"), "does not apply"),
     (("--model-cd", "0.2"), "applies to --model-ground drag"),
-    (("--model-ground", "drag"), "is required"), (("--rm", "-1"), "r_m"),
+    (("--model-ground", "drag"), "is required"), (("--rm", "-1"), "--rm"),
     (("--estimator", "filtered"), "--noise-std > 0")])
 def test_bad_input_one_line_exit_2_nothing_written(args, match, tmp_path, cli):
     code, out, err = cli("export-controller", "--out", tmp_path / "c", *args)

@@ -72,3 +72,33 @@ def test_without_a_c_compiler_a_law_runs_in_python_with_the_same_numbers(cache, 
                             DragGround(0.41, 1.7100000000000002))
     assert on_python.status == "rest proven"
     assert on_python.depth == pytest.approx(compiled_run.depth, rel=1e-12)
+
+
+def test_a_damaged_cached_law_is_compiled_again(cache):
+    """Issue 47 (the review of defect 1's kind): a law library emptied or overwritten in the
+    cache failed to load (a truncated one would kill the process); its size and hash are
+    recorded beside it, checked before loading, and a bad one is compiled again."""
+    import hashlib
+
+    from ocp.transcriptions.codegen import intact
+
+    ground = DragGround(0.37, 1.3)
+    key = hashlib.sha256(groundcode.law_source(ground).encode()).hexdigest()[:20]
+    so = cache / f"law_{key}.so"
+    so.write_bytes(b"\x7fELF" + b"\0" * 60)  # a library cut short (and no record)
+    lib, address = groundcode.compile_law(ground)
+    assert intact(so) and so.stat().st_size > 1000
+    law = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double,
+                           ctypes.POINTER(ctypes.c_double))(address)
+    out = (ctypes.c_double * 5)()
+    law(0.5, -2.0, out)
+    assert out[0] == pytest.approx(1.3 * 0.5 + 0.37 * 4.0, rel=1e-14)  # f = K d + c_d v^2
+
+
+def test_a_cache_folder_that_cannot_be_made_is_one_line(tmp_path, monkeypatch, cli):
+    (tmp_path / "a-file").write_text("")
+    monkeypatch.setenv("SOFTLANDING_CACHE", str(tmp_path / "a-file"))
+    code, out, err = cli("simulate", "--v0", "-3", "--rigid", "--ground", "drag", "--cd",
+                         "0.1", "--stiffness", "2.5")
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert "$SOFTLANDING_CACHE" in err and "cannot hold the compiled ground laws" in err
