@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 
@@ -29,12 +30,36 @@ class SolveError(RuntimeError):
         The last iterate, as a :class:`ocp.Solution` (not an optimum).
     message : str, optional
         The text (default: ``"Ipopt failed: STATUS"``).
+    diagnose : callable, optional
+        ``() -> diagnosis``: what is wrong at the last iterate
+        (:class:`ocp.transcriptions.diagnosis.Diagnosis`), run when first asked for;
+        its one line ends the message.
+
+    Attributes
+    ----------
+    diagnosis : Diagnosis or None
+        The analysis of the last iterate (None without ``diagnose``).
     """
 
-    def __init__(self, status: str, iterate: Any = None, message: str | None = None) -> None:
+    def __init__(self, status: str, iterate: Any = None, message: str | None = None,
+                 diagnose: Callable[[], Any] | None = None) -> None:
         self.status = status
         self.iterate = iterate
-        super().__init__(message or f"Ipopt failed: {status}")
+        self._text = message or f"Ipopt failed: {status}"
+        self._diagnose = diagnose
+        self._diagnosis: Any = None
+        super().__init__(self._text)
+
+    @property
+    def diagnosis(self) -> Any:
+        """The analysis of the last iterate (computed on first access)."""
+        if self._diagnosis is None and self._diagnose is not None:
+            self._diagnosis = self._diagnose()
+        return self._diagnosis
+
+    def __str__(self) -> str:
+        d = self.diagnosis
+        return self._text if d is None else f"{self._text}: {d}"
 
 
 class InfeasibleError(SolveError):
@@ -67,3 +92,15 @@ class PathViolationError(SolveError):
 
 class PathViolationWarning(UserWarning):
     """A converged solution violates a path constraint between its nodes."""
+
+
+class ScalingFallbackWarning(UserWarning):
+    """The scaled NLP failed and the NLP as posed (``scaling="none"``) solved."""
+
+
+class DroppedConditionWarning(UserWarning):
+    """A dependent end condition was left out of the solve (``drop_dependent=True``)."""
+
+
+class ConvergenceWarning(UserWarning):
+    """Mesh refinement did not converge, with what the problem suggests as the cause."""

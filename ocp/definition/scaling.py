@@ -101,6 +101,9 @@ class Scaling:
         The objective's scale (None: automatic at each solve).
     enabled : bool
         Whether the NLP is scaled.
+    state_refs : list of list of tuple, optional
+        Per phase, each state's ``(ref0, ref)`` (what a solve on another mesh of the
+        same problem carries over).
     """
 
     D: np.ndarray  # w = D * w_s + c
@@ -108,6 +111,12 @@ class Scaling:
     r: np.ndarray  # g_s = r * g
     objective_ref: float | None  # None: automatic, at each solve
     enabled: bool
+    state_refs: list[list[tuple[float, float]]] | None = None  # per phase, per state
+
+    def variables_unscaled(self) -> bool:
+        """True if no variable is scaled (``D = 1``, ``c = 0``): the NLP's variables as
+        posed, whose objective is then left as posed where its variation is moderate."""
+        return bool(np.all(self.D == 1.0) and np.all(self.c == 0.0))
 
     def is_identity(self) -> bool:
         """True if no variable or row is scaled."""
@@ -138,7 +147,7 @@ class Scaling:
             # do (a small value at the start may be small by accident, a variation that
             # is non-zero is a rate). A variation in [1, 100] is left as posed: Ipopt
             # leaves gradients up to 100 alone, and well-posed problems keep their NLP
-            if VARIATION_KEPT[0] <= v <= VARIATION_KEPT[1]:
+            if VARIATION_KEPT[0] <= v <= VARIATION_KEPT[1] and self.variables_unscaled():
                 return 1.0
             v = min(max(v, VARIATION_RANGE[0]), VARIATION_RANGE[1])
             return float(10.0 ** math.floor(math.log10(v) + 1e-9))
@@ -358,16 +367,33 @@ def _auto_ref(lo: Any, hi: Any, guess: Any, size: float | None = None) -> tuple[
     when they span more than :data:`LOOSE` times the guess magnitude, or when both
     are non-zero and more than :data:`LOOSE` apart in magnitude.
     """
-    lv, hv = _number(lo), _number(hi)
     vals = guess if isinstance(guess, tuple | list) else (guess,)
     nums = [abs(x) for x in (_number(g) for g in vals) if x is not None and math.isfinite(x)]
     g = max(nums) if nums else 0.0
-    if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
-            and hv > lv and not loose_bounds(lv, hv, g):
-        return lv, hv - lv
+    from_bounds = informative_bounds(lo, hi, g)
+    if from_bounds is not None:
+        return from_bounds
     if g > 0:
         return 0.0, g
     return (0.0, size) if size is not None and size > 0 else (0.0, 1.0)
+
+
+def informative_bounds(lo: Any, hi: Any, g: float) -> tuple[float, float] | None:
+    """``(lo, hi - lo)`` where the bounds give a magnitude (both finite numbers, not
+    loose for a guess of magnitude ``g``), else None.
+
+    Parameters
+    ----------
+    lo, hi : SX or float
+        Bounds.
+    g : float
+        The guess' magnitude.
+    """
+    lv, hv = _number(lo), _number(hi)
+    if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
+            and hv > lv and not loose_bounds(lv, hv, g):
+        return lv, hv - lv
+    return None
 
 
 def loose_bounds(lv: float, hv: float, g: float) -> bool:
