@@ -298,26 +298,36 @@ def _phase_refs(tr: Any, i: int, data: Any, pv: np.ndarray, linked: dict[str, fl
     X, U = np.asarray(data.x, dtype=float), np.asarray(data.u_points, dtype=float)
     mags = np.max(np.abs(X), axis=0) if X.size else np.zeros(ph.nx)
     given = [opts["refs"].get(n, ph.state_ref.get(n)) for n in ph.state_names]
-    open_ = [g is None and informative_bounds(xlo[k], xhi[k], mags[k]) is None
-             for k, g in enumerate(given)]
+    open_ = np.array([g is None and informative_bounds(xlo[k], xhi[k], mags[k]) is None
+                      for k, g in enumerate(given)], dtype=bool)
     sizes: dict[str, float] = {}
-    if not any(open_):
+    if not open_.any():
         return list(base), sizes
     build = (tr.grid_free.sizes or [[None] * ph.nx] * (i + 1))[i]
     s = np.array([base[k][1] for k in range(ph.nx)], dtype=float)
-    for k in np.flatnonzero(open_):
-        cands = [mags[k], build[k] or 0.0, linked.get(ph.state_names[k], 0.0)]
-        s[k] = max(cands) if max(cands) > 0 else 1.0
     su = np.array([_control_size(ulo[k], uhi[k], U[:, k]) for k in range(ph.nu)])
+    rates = _rates(tr, i, data)
     duration = float(data.T - data.t0)
-    for _ in range(PASSES):
-        dyn = _dynamics_change(tr, i, data, s, su, duration)
-        grow = np.array(open_) & np.isfinite(dyn) & (dyn > np.maximum(s, 1.0))
-        s[grow] = dyn[grow]
+    if rates is None or not (math.isfinite(duration) and duration > 0):
+        rates = None
+    f_change = duration * rates[0] if rates is not None else np.zeros(ph.nx)
+    # a state the start says nothing of (0, not moving there) is sized by the others
+    silent = open_ & (mags == 0.0) & (f_change == 0.0)
+    for k in np.flatnonzero(open_):
+        cands = [mags[k], f_change[k], build[k] or 0.0, linked.get(ph.state_names[k], 0.0)]
+        s[k] = max(c for c in cands if math.isfinite(c)) or 1.0
+    s[silent] = 1.0
+    if rates is not None and silent.any():
+        for _ in range(PASSES):
+            change = duration * _coupled(rates, s, su)
+            grow = silent & np.isfinite(change) & (change > s)
+            s[grow] = change[grow]
+    for k in np.flatnonzero(silent):  # a boundary row's or linked phase's size may be larger
+        s[k] = max(s[k], build[k] or 0.0, linked.get(ph.state_names[k], 0.0))
     refs = list(base)
     for k in np.flatnonzero(open_):
         sizes[ph.state_names[k]] = float(s[k])
-        ref = 10.0 ** math.ceil(math.log10(s[k]) - 1e-9)  # a power of ten: see the module
+        ref = 10.0 ** math.ceil(math.log10(s[k]) - 1e-9)  # a power of ten above the size
         refs[k] = (0.0, ref) if not AUTO_RANGE[0] <= ref <= AUTO_RANGE[1] else (0.0, 1.0)
     return refs, sizes
 
@@ -331,27 +341,32 @@ def _control_size(lo: float, hi: float, values: np.ndarray) -> float:
     return m if m > 0 else 1.0
 
 
-def _dynamics_change(tr: Any, i: int, data: Any, s: np.ndarray, su: np.ndarray,
-                     duration: float) -> np.ndarray:
-    """``duration * max over the start's points of (|f| + |J_x| s + |J_u| su)``, the
-    state's own column of ``J_x`` left out (its rate says nothing of its size)."""
-    nx = s.size
-    if not (math.isfinite(duration) and duration > 0) or len(data.t) == 0:
-        return np.full(nx, np.nan)
-    fn = _rate_function(tr, i)
-    n = len(data.t)
+def _rates(tr: Any, i: int, data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """At the start's points: the largest ``|f|`` per state, and ``|df/dx|`` (its diagonal
+    zeroed: a state's own rate says nothing of its size) and ``|df/du|``, each
+    ``(row, point, column)``; None where not finite."""
+    n, nx, nu = len(data.t), tr.compiled[i].nx, tr.compiled[i].nu
+    if n == 0:
+        return None
     with np.errstate(all="ignore"):
-        f, jx, ju = (np.array(a, dtype=float) for a in fn.map(n)(
+        f, jx, ju = (np.array(a, dtype=float) for a in _rate_function(tr, i).map(n)(
             data.t[None, :], data.x.T, data.u_points.T, np.asarray(data.s)[:, None]))
-    jx = np.abs(jx).reshape(nx, n, nx)  # (row, point, column): map stacks horizontally
+    jx = np.abs(jx).reshape(nx, n, nx)  # map stacks the points' Jacobians side by side
     jx[np.arange(nx), :, np.arange(nx)] = 0.0
-    rate = np.maximum(np.abs(f), np.max(jx * s, axis=2))
+    ju = np.abs(ju).reshape(nx, n, nu)
+    if not (np.all(np.isfinite(f)) and np.all(np.isfinite(jx)) and np.all(np.isfinite(ju))):
+        return None
+    return np.max(np.abs(f), axis=1), jx, ju
+
+
+def _coupled(rates: tuple[np.ndarray, np.ndarray, np.ndarray], s: np.ndarray,
+             su: np.ndarray) -> np.ndarray:
+    """The largest rate the other states and the controls can give each state at their
+    sizes: ``max over points and columns of |df/dx_j| s_j, |df/du_k| su_k``."""
+    _, jx, ju = rates
+    out = np.max(jx * s, axis=(1, 2)) if jx.size else np.zeros(s.size)
     if su.size:
-        rate = np.maximum(rate, np.max(np.abs(ju).reshape(nx, n, su.size) * su, axis=2))
-    rate[~np.isfinite(rate)] = np.nan
-    with np.errstate(all="ignore"):
-        out = duration * np.nanmax(np.where(np.isnan(rate), -np.inf, rate), axis=1)
-    out[~np.isfinite(out)] = np.nan
+        out = np.maximum(out, np.max(ju * su, axis=(1, 2)))
     return out
 
 
