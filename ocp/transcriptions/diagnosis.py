@@ -76,6 +76,11 @@ class Diagnosis:
         Unbounded states entering only through ``2 pi``-periodic functions.
     weights : dict
         The null combination of the end rows: row of ``g`` -> weight.
+    unreachable : list of str
+        End conditions on one variable that its bounds cannot meet.
+    degenerate : bool
+        The dependent rows' gradients vanish at the iterate by themselves (an expression
+        at its extremum, ``cos(psi) = -1``).
     """
 
     summary: str = "no cause found in the last iterate"
@@ -88,6 +93,8 @@ class Diagnosis:
     badly_scaled: list[tuple[str, float]] = field(default_factory=list)
     periodic: list[str] = field(default_factory=list)
     weights: dict[int, float] = field(default_factory=dict)
+    degenerate: bool = False
+    unreachable: list[str] = field(default_factory=list)
 
     def __str__(self) -> str:
         return self.summary
@@ -115,8 +122,11 @@ def diagnose(tr: Any, w: np.ndarray, pv: np.ndarray, scaling: Any) -> Diagnosis:
     if dep is not None:
         d.rank, d.n_equalities, d.dependent_rows, d.weights = dep
         d.dependent = [labels[k] for k in d.dependent_rows]
+        d.degenerate = bool(d.rank + len(d.dependent_rows) == d.n_equalities and
+                            all(w_ == 1.0 for w_ in d.weights.values()))
         with np.errstate(all="ignore"):
-            d.conserved = conserved_quantity(tr, w, pv, d.weights)
+            d.conserved = None if d.degenerate else conserved_quantity(tr, w, pv, d.weights)
+    d.unreachable = unreachable_rows(tr, w, pv, bounds, labels)
     d.violated = violated_rows(tr, w, pv, bounds, labels)
     d.badly_scaled = badly_scaled(tr, w, scaling)
     d.periodic = [f"{ph.name}: {n}" if len(tr.multiphase.phases) > 1 else n
@@ -127,19 +137,24 @@ def diagnose(tr: Any, w: np.ndarray, pv: np.ndarray, scaling: Any) -> Diagnosis:
 
 def _summary(d: Diagnosis) -> str:
     """The one line of a diagnosis: the first cause found."""
+    if d.dependent and d.degenerate:
+        return (f"the gradient of {', '.join(d.dependent)} vanishes at the last iterate (an "
+                "expression at its extremum): pose the condition on the variable itself")
     if d.dependent:
         why = f" ({d.conserved} is conserved by the dynamics and fixed at both ends)" \
             if d.conserved else ""
         return (f"end conditions {', '.join(d.dependent)} are dependent (rank "
                 f"{d.rank} of {d.n_equalities} after the dynamics){why}; drop one "
                 "(solve(drop_dependent=True))")
+    if d.unreachable:
+        return f"cannot be met together: {'; '.join(d.unreachable)}"
     if d.periodic:
         return (f"state {', '.join(repr(p) for p in d.periodic)} enters only through "
                 "2*pi-periodic functions and is unbounded: bound it (e.g. within "
                 "[-2*pi, 2*pi]) or wrap it")
     if d.violated:
         rows = ", ".join(f"{k} (by {v:.2g})" for k, v in d.violated[:3])
-        return f"cannot meet together: {rows}"
+        return f"the last iterate violates most: {rows}"
     if d.badly_scaled:
         q = ", ".join(f"{k} ({v:.1e})" for k, v in d.badly_scaled[:3])
         return f"badly scaled: {q} in scaled units; give ref= to these quantities"
@@ -183,6 +198,9 @@ def dependent_ends(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
     free = np.flatnonzero(lbw < ubw)
     J = (_jacobian(tr, w, pv) @ sp.diags(scaling.D)).tocsc()[:, free].tocsr()
     norms = np.sqrt(np.asarray(J.multiply(J).sum(axis=1)).ravel())
+    flat = [int(k) for k in B if norms[k] <= 1e-10 * max(1.0, float(norms.max()))]
+    if flat:  # a row whose gradient vanishes: degenerate by itself (cos(psi) = -1)
+        return len(B) - len(flat), int(B.size), flat, dict.fromkeys(flat, 1.0)
     norms[norms == 0] = 1.0
     J = sp.diags(1.0 / norms) @ J
     JA, JB = J[A], J[B].toarray()
@@ -284,6 +302,31 @@ def _conserved(tr: Any, i: int, grad: ca.SX) -> bool:
 
 
 # ------------------------------------------------------------------ other causes
+def unreachable_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
+                     labels: list[str]) -> list[str]:
+    """End conditions on a single entry of ``w`` (a state at an end, a time, a variable)
+    that no value within that entry's bounds meets (sampled on 65 points of a finite
+    box), with the bounds that exclude them."""
+    lbw, ubw, lbg, ubg = bounds
+    eq_rows = np.setdiff1d(np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg)), _base_rows(tr))
+    J = _jacobian(tr, w, pv)[eq_rows].tocsr()
+    fn, out = tr.nlp_function(), []
+    for j, k in enumerate(eq_rows):
+        cols = J[j].indices
+        if cols.size != 1 or not (np.isfinite(lbw[cols[0]]) and np.isfinite(ubw[cols[0]])):
+            continue
+        c = int(cols[0])
+        pts = np.linspace(lbw[c], ubw[c], 65)
+        W = np.repeat(w[:, None], pts.size, axis=1)
+        W[c] = pts
+        with np.errstate(all="ignore"):
+            g = np.array(fn.map(pts.size)(W, pv)[1], dtype=float)[k]
+        if np.all((g < lbg[k] - 1e-9 * max(1.0, abs(lbg[k]))) |
+                  (g > ubg[k] + 1e-9 * max(1.0, abs(ubg[k])))):
+            out.append(f"{labels[k]} with its variable within [{lbw[c]:g}, {ubw[c]:g}]")
+    return out
+
+
 def violated_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
                   labels: list[str]) -> list[tuple[str, float]]:
     """The rows violated most at ``w`` (relative to ``max(1, |bound|)``), largest first,

@@ -12,11 +12,14 @@ and (on request) leave out a dependent end condition.
   one line ends the message.
 * **Dependent end conditions.** ``solve(drop_dependent=True)`` looks for dependent end
   conditions at the start and, failing that, after a failed solve at its last iterate;
-  it leaves out the terminal row of largest weight in the dependence and solves again,
-  then measures how well the solution meets the row it left out
-  (``sol.dropped_residual``, relative to ``max(1, |bound|)``) and warns
-  (:class:`~ocp.DroppedConditionWarning`): a conserved quantity fixes the dropped
-  value up to a branch (``y = +-sqrt(r^2 - x^2)``), which the residual exposes.
+  it loosens the terminal row of largest weight in the dependence (:func:`loosened`:
+  ``e = b`` becomes ``|e - b| <= |b| / 2``, inactive at the solution) and solves again,
+  then measures how well the solution meets the row as posed (``sol.dropped_residual``,
+  relative to ``max(1, |b|)``: the discretisation's drift of the conserved quantity) and
+  warns (:class:`~ocp.DroppedConditionWarning`). Left out entirely, the row would leave
+  its value free up to a branch (``x = +-sqrt(r^2 - y^2)``); the loose band keeps the
+  branch (``-b`` lies outside it), and the row of largest weight is the one whose value
+  is largest, so the band is widest.
 """
 
 from __future__ import annotations
@@ -104,7 +107,9 @@ def solve_dropping_dependent(tr: Any, params: Any, guess: Any, warm_start: Any) 
     row = _row_to_drop_at_start(tr, params, guess, warm_start)
     if row is None:
         try:
-            return solve_once(params, guess, warm_start, {})
+            sol = solve_once(params, guess, warm_start, {})
+            sol.dropped_residual = math.nan
+            return sol
         except SolveError as e:
             d = e.diagnosis
             if not isinstance(d, Diagnosis) or not d.dependent_rows:
@@ -122,6 +127,29 @@ def solve_dropping_dependent(tr: Any, params: Any, guess: Any, warm_start: Any) 
                   f"meets it to {sol.dropped_residual:.1e}", DroppedConditionWarning,
                   stacklevel=3)
     return sol
+
+
+def loosened(lbg: np.ndarray, ubg: np.ndarray, rows: list[int],
+             r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds with the equality rows ``rows`` (``e = b``) loosened to ``|e - b| <= |b| / 2``
+    (``|b|`` replaced by the row's typical size ``1 / r`` where larger; a band wide enough
+    to be inactive, narrow enough to exclude the other branch ``-b``).
+
+    Parameters
+    ----------
+    lbg, ubg : ndarray
+        The rows' bounds.
+    rows : list of int
+        The rows to loosen.
+    r : ndarray
+        The rows' scaling (``g_s = r g``).
+    """
+    lo, hi = lbg.copy(), ubg.copy()
+    for k in rows:
+        b = lbg[k]
+        half = 0.5 * abs(b) if b != 0.0 else 0.5 / r[k]
+        lo[k], hi[k] = b - half, b + half
+    return lo, hi
 
 
 def _row_to_drop_at_start(tr: Any, params: Any, guess: Any, warm_start: Any) -> int | None:

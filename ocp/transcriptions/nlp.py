@@ -51,7 +51,7 @@ from .blas import default_blas_threads
 from .buffered import BufferedCall
 from .codegen import compiled_library
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
-from .failure import INFEASIBLE_STATUSES, after_failure, solve_dropping_dependent
+from .failure import INFEASIBLE_STATUSES, after_failure, loosened, solve_dropping_dependent
 from .scaled import (
     build_scaling,
     carried_scaling,
@@ -693,7 +693,7 @@ class Transcription:
 
     def solve_once(self, params: dict[str, float] | None, guess: Any,
                    warm_start: Solution | None, dropped: dict[int, str]) -> Solution:
-        """One solve with the rows ``dropped`` left out (their bounds opened).
+        """One solve with the rows ``dropped`` loosened (:func:`~.failure.loosened`).
 
         Parameters
         ----------
@@ -715,9 +715,7 @@ class Transcription:
         pv = self.param_vector(params)
         lbw, ubw, lbg, ubg = self.bounds_at(pv)
         if self.dropped:
-            lbg, ubg = lbg.copy(), ubg.copy()
-            rows = list(self.dropped)
-            lbg[rows], ubg[rows] = -np.inf, np.inf
+            lbg, ubg = loosened(lbg, ubg, list(self.dropped), self.scaling.r)
         args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg,
                 **self._start(pv, params, guess, warm_start)}
         sc, fref = self._solve_scaling(args, pv, guess, warm_start, objective_scale)
@@ -762,9 +760,7 @@ class Transcription:
         elapsed = time.perf_counter() - t0
         sol = Solution.from_nlp(self, args["p"], res, call.stats(), elapsed)
         sol.objective_scale, sol.expanded, sol.scaling = fref, expanded, sc
-        sol.scaling_fallback = None
-        if self.dropped:
-            sol.dropped = list(self.dropped.values())
+        sol.scaling_fallback, sol.dropped = None, list(self.dropped.values())
         return sol
 
     def bounds_at(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:

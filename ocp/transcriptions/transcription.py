@@ -39,6 +39,7 @@ from .mesh import (
     objective_threshold,
     refine_mesh,
 )
+from .failure import warn_unconverged
 from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, GridFree, Transcription, expand_mode
 from .shooting import ShootingPhase
 from .solution import Solution
@@ -348,6 +349,8 @@ class Collocation(Transcription):
             sol = tr._next_solve(params, sol, guess, emax <= WARM_REFINE_ERROR, fref)
         sol.mesh_history, sol.mesh_error, sol.objective_error = history, emax, change
         sol.mesh_converged = emax <= tol and change <= target
+        if not sol.mesh_converged:  # name what the problem suggests as the cause
+            warn_unconverged(sol)
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
 
