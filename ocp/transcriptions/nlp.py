@@ -55,6 +55,7 @@ from .failure import INFEASIBLE_STATUSES, after_failure, loosened, solve_droppin
 from .scaled import (
     build_scaling,
     carried_scaling,
+    graph_of,
     identity,
     scale_args,
     scaled_nlp,
@@ -222,7 +223,7 @@ class Transcription:
         if not isinstance(codegen, bool):
             raise ProblemDefinitionError(f"codegen must be True or False, got {codegen!r}")
         self.codegen = codegen
-        self._library: dict[bool, Path] = {}  # the compiled NLP functions (codegen)
+        self._library: dict[str, Path] = {}  # the compiled NLP functions (codegen)
         if grid_free is None:
             mp = as_multiphase(problem)
             mp.validate()
@@ -359,12 +360,12 @@ class Transcription:
         return self._bounds
 
     def _solver(self, warm: bool, expand: bool | None = None,
-                posed: bool = False) -> tuple[Any, bool]:
+                graph: str = "build") -> tuple[Any, bool]:
         """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers
         given; ``expand`` overrides the transcription's for this solver only (mesh
         refinement's warm rounds, where building the expanded graph costs more than the
-        few iterations it would speed up); ``posed``: the NLP as posed (no scaling
-        parameters: the very graph of the problem, for an identity scaling)."""
+        few iterations it would speed up); ``graph``: which scaled graph
+        (:func:`~ocp.transcriptions.scaled.scaled_nlp`)."""
         if self.codegen:
             expanded = False  # Ipopt calls the compiled functions, whatever graph made them
         elif expand is not None:
@@ -374,7 +375,7 @@ class Transcription:
         else:
             expanded = bool(self.expand)
         self._uses[warm] += 1
-        key = (warm, expanded, posed)
+        key = (warm, expanded, graph)
         if key not in self._solvers:
             ipopt = dict(self.ipopt_options)
             if warm:
@@ -386,14 +387,14 @@ class Transcription:
             # CasADi names are identifiers; a problem's name is a label ("double integrator")
             label = re.sub(r"[^A-Za-z0-9]+", "_", self.multiphase.name).strip("_") or "ocp"
             name = f"{label if label[0].isalpha() else 'ocp_' + label}_{self.method}"
-            nlp: Any = scaled_nlp(self._nlp, self.n_w, self.n_g, posed)
+            nlp: Any = scaled_nlp(self._nlp, self.n_w, self.n_g, graph, self.scaling)
             default_blas_threads()
             solver = ca.nlpsol(name, "ipopt", nlp, opts)
             if self.codegen:  # the same functions for every key of a graph: compiled once
-                if posed not in self._library:
-                    self._library[posed] = compiled_library(solver)
+                if graph not in self._library:
+                    self._library[graph] = compiled_library(solver)
                 del opts["expand"]
-                solver = ca.nlpsol(name, "ipopt", str(self._library[posed]), opts)
+                solver = ca.nlpsol(name, "ipopt", str(self._library[graph]), opts)
             self._solvers[key] = solver
             self._calls[key] = BufferedCall(solver)
         return self._solvers[key], expanded
@@ -752,11 +753,11 @@ class Transcription:
     def _ipopt(self, args: dict[str, Any], sc: Scaling, fref: float, warm: bool,
                expand: bool | None) -> Solution:
         """Ipopt on the NLP scaled by ``sc`` and ``fref``, from ``args`` (user's units)."""
-        posed = sc.is_identity()
-        expanded = self._solver(warm, expand, posed)[1]
-        call = self._calls[(warm, expanded, posed)]  # Ipopt on numpy arrays, no DM conversions
+        graph = graph_of(sc, self.scaling)
+        expanded = self._solver(warm, expand, graph)[1]
+        call = self._calls[(warm, expanded, graph)]  # Ipopt on numpy arrays, no DM conversions
         t0 = time.perf_counter()
-        res = unscale(sc, call.named(scale_args(sc, args, fref, posed)), fref)
+        res = unscale(sc, call.named(scale_args(sc, args, fref, graph)), fref)
         elapsed = time.perf_counter() - t0
         sol = Solution.from_nlp(self, args["p"], res, call.stats(), elapsed)
         sol.objective_scale, sol.expanded, sol.scaling = fref, expanded, sc

@@ -154,10 +154,13 @@ def state_sizes(tr: Any, ends: list[tuple[ca.SX, ca.SX]]) -> list[list[float | N
     return out
 
 
-def scaled_nlp(nlp: dict[str, Any], n_w: int, n_g: int,
-               posed: bool = False) -> dict[str, ca.MX]:
-    """The NLP Ipopt solves: ``w = D w_s + c``, rows times ``r``, objective times ``kf``,
-    with ``kf``, ``D``, ``c`` and ``r`` NLP parameters after the problem's.
+MODES = ("posed", "build", "start")
+
+
+def scaled_nlp(nlp: dict[str, Any], n_w: int, n_g: int, mode: str = "start",
+               sc: Scaling | None = None) -> dict[str, ca.MX]:
+    """The NLP Ipopt solves: ``w = D w_s + c``, rows times ``r``, objective times ``kf``
+    (an NLP parameter after the problem's).
 
     Parameters
     ----------
@@ -165,20 +168,47 @@ def scaled_nlp(nlp: dict[str, Any], n_w: int, n_g: int,
         The NLP in the user's units (``x``, ``p``, ``f``, ``g``).
     n_w, n_g : int
         Its sizes.
-    posed : bool
-        Only ``kf``: the graph of the NLP as posed, for solves whose scaling is the
-        identity (the same graph gives the same floating-point operations, so a
-        well-scaled problem's iterations are exactly those of ``scaling="none"``).
+    mode : {"posed", "build", "start"}
+        ``"posed"``: the graph of the NLP as posed (an identity scaling); ``"build"``:
+        ``D``, ``c``, ``r`` of ``sc`` folded in as constants (the transcription's build
+        scaling: the graph of the versions before parametric scaling, so a solve whose
+        scaling is the build's takes exactly their iterations); ``"start"``: ``D``,
+        ``c`` and ``r`` NLP parameters too, for a scaling derived at a solve's start.
+    sc : Scaling, optional
+        The build scaling (``mode="build"``).
     """
-    if posed:
-        kf = ca.MX.sym("kf")
+    kf = ca.MX.sym("kf")
+    if mode == "posed":
         return {"x": nlp["x"], "p": ca.vertcat(nlp["p"], kf), "f": kf * nlp["f"],
                 "g": nlp["g"]}
-    kf, D, c, r = (ca.MX.sym(n, k) for n, k in (("kf", 1), ("D", n_w), ("c", n_w),
-                                                 ("r", n_g)))
     ws = ca.MX.sym("ws", n_w)
+    if mode == "build":
+        assert sc is not None
+        D, c, r, P = ca.DM(sc.D), ca.DM(sc.c), ca.DM(sc.r), ca.vertcat(nlp["p"], kf)
+    else:
+        D, c, r = (ca.MX.sym(n, k) for n, k in (("D", n_w), ("c", n_w), ("r", n_g)))
+        P = ca.vertcat(nlp["p"], kf, D, c, r)
     f, g = ca.substitute([nlp["f"], nlp["g"]], [nlp["x"]], [D * ws + c])
-    return {"x": ws, "p": ca.vertcat(nlp["p"], kf, D, c, r), "f": kf * f, "g": r * g}
+    return {"x": ws, "p": P, "f": kf * f, "g": r * g}
+
+
+def graph_of(sc: Scaling, build: Scaling) -> str:
+    """Which graph (:func:`scaled_nlp`) solves with ``sc``: ``"posed"`` for an identity,
+    ``"build"`` for the build scaling's numbers, else ``"start"``.
+
+    Parameters
+    ----------
+    sc : Scaling
+        The solve's scaling.
+    build : Scaling
+        The transcription's build scaling.
+    """
+    if sc.is_identity():
+        return "posed"
+    if sc is build or (np.array_equal(sc.D, build.D) and np.array_equal(sc.c, build.c)
+                       and np.array_equal(sc.r, build.r)):
+        return "build"
+    return "start"
 
 
 def identity(n_w: int, n_g: int) -> Scaling:
@@ -193,7 +223,7 @@ def identity(n_w: int, n_g: int) -> Scaling:
 
 
 def scale_args(sc: Scaling, args: dict[str, Any], fref: float,
-               posed: bool = False) -> dict[str, Any]:
+               mode: str = "start") -> dict[str, Any]:
     """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units.
 
     Parameters
@@ -204,11 +234,11 @@ def scale_args(sc: Scaling, args: dict[str, Any], fref: float,
         ``p``, ``x0``, bounds and optional multipliers in the user's units.
     fref : float
         The objective scale.
-    posed : bool
-        For the graph as posed (:func:`scaled_nlp`): no scaling parameters.
+    mode : str
+        The graph (:func:`scaled_nlp`): only ``"start"`` takes the scaling as parameters.
     """
     out = dict(args)
-    tail = [] if posed else [sc.D, sc.c, sc.r]
+    tail = [sc.D, sc.c, sc.r] if mode == "start" else []
     out["p"] = np.concatenate([args["p"], [1.0 / fref], *tail])
     for k in ("x0", "lbx", "ubx"):
         out[k] = sc.x_to_scaled(args[k])
