@@ -224,24 +224,27 @@ def check_scaling(scaling: Any) -> dict[str, Any]:
         ``"objective"``: the objective's ``ref``; ``"time"``: ``ref`` of every
         free time; a state, control or variable name: its ``ref`` or
         ``(ref0, ref)`` (overrides the problem's, in every phase);
-        ``"auto"``: False to scale only what is named (default True).
+        ``"auto"``: False to scale only what is named (default True);
+        ``"fallback"``: False not to retry a failed scaled solve as posed (default True,
+        :mod:`ocp.transcriptions.failure`).
     """
     if isinstance(scaling, str):
         if scaling not in SCALING_MODES:
             raise ProblemDefinitionError(f"scaling must be one of {SCALING_MODES} or a dict, "
                                          f"got {scaling!r}")
-        return {"enabled": scaling == "auto", "auto": scaling == "auto", "refs": {}}
+        return {"enabled": scaling == "auto", "auto": scaling == "auto", "refs": {},
+                "fallback": True}
     if not isinstance(scaling, Mapping):
         raise ProblemDefinitionError(f"scaling must be 'auto', 'none' or a dict, got "
                                      f"{type(scaling).__name__}")
     refs: dict[str, tuple[float, float]] = {}
-    auto = True
+    flags = {"auto": True, "fallback": True}
     for key, val in scaling.items():
-        if key == "auto":
+        if key in flags:
             if not isinstance(val, bool):
-                raise ProblemDefinitionError(f"scaling['auto'] must be True or False, got "
+                raise ProblemDefinitionError(f"scaling[{key!r}] must be True or False, got "
                                              f"{val!r}")
-            auto = val
+            flags[key] = val
             continue
         pair = val if isinstance(val, tuple | list) else (None, val)
         if len(pair) != 2:
@@ -249,7 +252,8 @@ def check_scaling(scaling: Any) -> dict[str, Any]:
         checked = scale_ref(pair[1], pair[0], f"scaling[{key!r}]")
         assert checked is not None
         refs[str(key)] = checked
-    return {"enabled": True, "auto": auto, "refs": refs}
+    return {"enabled": True, "auto": flags["auto"], "refs": refs,
+            "fallback": flags["fallback"]}
 
 
 class ScalingBuilder:
