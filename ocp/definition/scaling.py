@@ -25,7 +25,10 @@ Where the numbers come from (``scaling="auto"``, the default):
   (:mod:`ocp.definition.sizes`): the value at which a boundary constraint on it alone reaches
   its bound (a muzzle energy ``1/2 m v(0)^2 <= 4e5`` gives v), the size of the
   state it is linked from, or the change its rate can make over the guessed
-  duration; else 1. Free times likewise from their bounds or guess;
+  duration; else 1. Free times likewise from their bounds or guess. These are the
+  build's numbers; at each solve, the states whose bounds say nothing are sized again
+  from the start actually given, and by the dynamics' change over the phase there
+  (:mod:`ocp.transcriptions.scaled`);
 * defect rows (``continuity``, ``collocation``) are divided by their state's
   ``ref``, so a scaled defect is the defect of the scaled state;
 * other constraint rows by their ``ref=`` if given (``path_constraint(...,
@@ -37,8 +40,9 @@ Where the numbers come from (``scaling="auto"``, the default):
   that brings its *variation* at the starting point of each solve,
   ``sum |df/dw| D`` (how much it changes when every variable moves by its
   scale), into [1, 10) -- up or down, unless that variation is already in
-  [1, 100] (:data:`VARIATION_KEPT`: Ipopt's gradient-based scaling leaves
-  gradients up to 100 alone). The variation is proportional to the objective,
+  [1, 100] and no variable is scaled (:data:`VARIATION_KEPT`: Ipopt's gradient-based
+  scaling leaves gradients up to 100 alone, and a problem posed in normalised units
+  keeps its NLP). The variation is proportional to the objective,
   so the same objective in metres, kilometres or millimetres gives exactly the
   same NLP (the cannonball's ``-r(T)``, ``-r(T) / 1000``, ``-1000 r(T)``: the
   same iterations). Where the objective does not vary at the start (``u^2`` at

@@ -20,7 +20,7 @@ def row_labels(tr: Any) -> list[str]:
     """
     out = [""] * tr.n_g
     multi = len(tr.layouts) > 1
-    for i, (ph, lay) in enumerate(zip(tr.multiphase.phases, tr.layouts, strict=True)):
+    for ph, lay in zip(tr.multiphase.phases, tr.layouts, strict=True):
         pre = f"{ph.name}: " if multi else ""
         path_names = [c.name for c in ph.path for _ in range(c.expr.numel())]
         for kind, sl in lay.blocks.items():

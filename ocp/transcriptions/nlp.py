@@ -13,7 +13,9 @@ Constraint vector: each phase's blocks (``continuity``, ``path`` /
 ``boundary`` and ``time`` constraints), then the ``link`` constraints.
 
 Ipopt solves a scaled copy of this NLP (:mod:`ocp.definition.scaling`): ``w = D w_s + c``,
-rows and objective multiplied by constants; every result is mapped back, so
+rows and objective multiplied by numbers that each solve may take anew from its start
+(:mod:`ocp.transcriptions.scaled`); a failed solve is retried as posed and its failure
+diagnosed (:mod:`ocp.transcriptions.failure`); every result is mapped back, so
 ``sol.w``, ``sol.objective``, ``lam_g``, ``lam_x`` and ``multipliers`` are in the
 user's units whatever the scaling.
 """

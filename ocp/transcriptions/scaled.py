@@ -306,7 +306,7 @@ def start_scaling(tr: Any, x0: np.ndarray, pv: np.ndarray) -> Scaling:
     refs: list[list[tuple[float, float]]] = []
     sizes_by_phase: list[dict[str, float]] = []
     mp = tr.multiphase
-    for i, (disc, ph) in enumerate(zip(tr.phases, mp.phases, strict=True)):
+    for i, disc in enumerate(tr.phases):
         data = disc.unpack(x0[tr.offsets[i]:tr.offsets[i] + disc.size()], pv, vv)
         prev = next((j for j, k in mp.time_links if k == i and j < i), None)
         linked = sizes_by_phase[prev] if prev is not None else {}

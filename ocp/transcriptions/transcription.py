@@ -30,6 +30,7 @@ from ..definition.problem import OptimalControlProblem
 from ..definition.symbols import positive_int, relative_tolerance
 from .collocation import CollocationPhase
 from .discretization import PhaseDiscretization
+from .failure import warn_unconverged
 from .integrators import cvodes_function, rk4_function
 from .mesh import (
     MeshRound,
@@ -39,7 +40,6 @@ from .mesh import (
     objective_threshold,
     refine_mesh,
 )
-from .failure import warn_unconverged
 from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, GridFree, Transcription, expand_mode
 from .shooting import ShootingPhase
 from .solution import Solution

@@ -20,7 +20,6 @@ from __future__ import annotations
 import math
 from functools import cache
 
-import casadi as ca
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
