@@ -54,8 +54,17 @@ class SolveError(RuntimeError):
     def diagnosis(self) -> Any:
         """The analysis of the last iterate (computed on first access)."""
         if self._diagnosis is None and self._diagnose is not None:
-            self._diagnosis = self._diagnose()
+            try:
+                self._diagnosis = self._diagnose()
+            except Exception as exc:  # noqa: BLE001 (an analysis must not hide the failure)
+                self._diagnosis = f"no diagnosis ({type(exc).__name__}: {exc})"[:200]
+            self._diagnose = None
         return self._diagnosis
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        # the analysis is a closure over the transcription: pickled as its result, if any
+        state = {k: v for k, v in self.__dict__.items() if k != "_diagnose"}
+        return self.__class__, self.args, state
 
     def __str__(self) -> str:
         d = self.diagnosis
