@@ -378,9 +378,12 @@ def _rates(tr: Any, i: int, data: Any) -> tuple[np.ndarray, np.ndarray, np.ndarr
     n, nx, nu = len(data.t), tr.compiled[i].nx, tr.compiled[i].nu
     if n == 0:
         return None
-    with np.errstate(all="ignore"):
-        f, jx, ju = (np.array(a, dtype=float) for a in _rate_function(tr, i).map(n)(
-            data.t[None, :], data.x.T, data.u_points.T, np.asarray(data.s)[:, None]))
+    try:
+        with np.errstate(all="ignore"):
+            f, jx, ju = (np.array(a, dtype=float) for a in _rate_function(tr, i).map(n)(
+                data.t[None, :], data.x.T, data.u_points.T, np.asarray(data.s)[:, None]))
+    except RuntimeError:  # a function CasADi cannot evaluate there: the start says nothing
+        return None
     jx = np.abs(jx).reshape(nx, n, nx)  # map stacks the points' Jacobians side by side
     jx[np.arange(nx), :, np.arange(nx)] = 0.0
     ju = np.abs(ju).reshape(nx, n, nu)
