@@ -183,6 +183,19 @@ def dependent_ends(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
     equality rows ``B``; ``R = (I - A^T (A A^T)^-1 A) B^T`` is what of the end rows is
     not already in the dynamics' span, and its small singular values are dependences.
 
+    Parameters
+    ----------
+    tr : Transcription
+        The transcription.
+    w : ndarray
+        The iterate, in the user's units.
+    pv : ndarray
+        The parameter values.
+    bounds : tuple
+        ``(lbw, ubw, lbg, ubg)`` at ``pv``.
+    scaling : Scaling
+        The solve's scaling (the Jacobian is taken in its variables).
+
     Returns
     -------
     tuple or None
@@ -306,7 +319,21 @@ def unreachable_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
                      labels: list[str]) -> list[str]:
     """End conditions on a single entry of ``w`` (a state at an end, a time, a variable)
     that no value within that entry's bounds meets (sampled on 65 points of a finite
-    box), with the bounds that exclude them."""
+    box), with the bounds that exclude them.
+
+    Parameters
+    ----------
+    tr : Transcription
+        The transcription.
+    w : ndarray
+        The iterate, in the user's units.
+    pv : ndarray
+        The parameter values.
+    bounds : tuple
+        ``(lbw, ubw, lbg, ubg)`` at ``pv``.
+    labels : list of str
+        The rows' labels.
+    """
     lbw, ubw, lbg, ubg = bounds
     eq_rows = np.setdiff1d(np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg)), _base_rows(tr))
     J = _jacobian(tr, w, pv)[eq_rows].tocsr()
@@ -330,7 +357,21 @@ def unreachable_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
 def violated_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
                   labels: list[str]) -> list[tuple[str, float]]:
     """The rows violated most at ``w`` (relative to ``max(1, |bound|)``), largest first,
-    one per label."""
+    one per label.
+
+    Parameters
+    ----------
+    tr : Transcription
+        The transcription.
+    w : ndarray
+        The iterate, in the user's units.
+    pv : ndarray
+        The parameter values.
+    bounds : tuple
+        ``(lbw, ubw, lbg, ubg)`` at ``pv``.
+    labels : list of str
+        The rows' labels.
+    """
     _, _, lbg, ubg = bounds
     with np.errstate(all="ignore"):
         g = np.array(tr.nlp_function()(w, pv)[1], dtype=float).ravel()
@@ -348,7 +389,17 @@ def violated_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
 
 def badly_scaled(tr: Any, w: np.ndarray, scaling: Any) -> list[tuple[str, float]]:
     """Quantities whose largest scaled magnitude lies more than :data:`SPREAD` from the
-    median of the others'."""
+    median of the others'.
+
+    Parameters
+    ----------
+    tr : Transcription
+        The transcription.
+    w : ndarray
+        The iterate, in the user's units.
+    scaling : Scaling
+        The solve's scaling (what Ipopt saw).
+    """
     ws = np.abs(scaling.x_to_scaled(w))
     mags: dict[str, float] = {}
     multi = len(tr.layouts) > 1
