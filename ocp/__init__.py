@@ -38,11 +38,14 @@ from . import deprecated_paths
 # names are imported on first use: `import ocp.definition.trajectory` (a light module) loads neither
 # CasADi nor the transcriptions
 _WHERE = {
+    "ConvergenceWarning": "definition.errors",
+    "DroppedConditionWarning": "definition.errors",
     "GuessError": "definition.errors",
     "InfeasibleError": "definition.errors",
     "PathViolationError": "definition.errors",
     "PathViolationWarning": "definition.errors",
     "ProblemDefinitionError": "definition.errors",
+    "ScalingFallbackWarning": "definition.errors",
     "SolveError": "definition.errors",
     "MultiPhaseProblem": "definition.multiphase",
     "PMPCertificate": "certificate.certify",
@@ -72,6 +75,8 @@ _WHERE = {
 
 __all__ = [
     "Collocation",
+    "ConvergenceWarning",
+    "DroppedConditionWarning",
     "GuessError",
     "InfeasibleError",
     "MultiPhaseProblem",
@@ -82,6 +87,7 @@ __all__ = [
     "PathViolationError",
     "PathViolationWarning",
     "ProblemDefinitionError",
+    "ScalingFallbackWarning",
     "ScenarioProblem",
     "ScenarioResult",
     "ScenarioTranscription",
@@ -121,11 +127,14 @@ if TYPE_CHECKING:
     from .certificate.certify import PMPCertificate, certify, plot_certificate
     from .certificate.phases import certify_phases
     from .definition.errors import (
+        ConvergenceWarning,
+        DroppedConditionWarning,
         GuessError,
         InfeasibleError,
         PathViolationError,
         PathViolationWarning,
         ProblemDefinitionError,
+        ScalingFallbackWarning,
         SolveError,
     )
     from .definition.multiphase import MultiPhaseProblem

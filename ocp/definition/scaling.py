@@ -25,7 +25,10 @@ Where the numbers come from (``scaling="auto"``, the default):
   (:mod:`ocp.definition.sizes`): the value at which a boundary constraint on it alone reaches
   its bound (a muzzle energy ``1/2 m v(0)^2 <= 4e5`` gives v), the size of the
   state it is linked from, or the change its rate can make over the guessed
-  duration; else 1. Free times likewise from their bounds or guess;
+  duration; else 1. Free times likewise from their bounds or guess. These are the
+  build's numbers; at each solve, the states whose bounds say nothing are sized again
+  from the start actually given, and by the dynamics' change over the phase there
+  (:mod:`ocp.transcriptions.scaled`);
 * defect rows (``continuity``, ``collocation``) are divided by their state's
   ``ref``, so a scaled defect is the defect of the scaled state;
 * other constraint rows by their ``ref=`` if given (``path_constraint(...,
@@ -37,8 +40,9 @@ Where the numbers come from (``scaling="auto"``, the default):
   that brings its *variation* at the starting point of each solve,
   ``sum |df/dw| D`` (how much it changes when every variable moves by its
   scale), into [1, 10) -- up or down, unless that variation is already in
-  [1, 100] (:data:`VARIATION_KEPT`: Ipopt's gradient-based scaling leaves
-  gradients up to 100 alone). The variation is proportional to the objective,
+  [1, 100] and no variable is scaled (:data:`VARIATION_KEPT`: Ipopt's gradient-based
+  scaling leaves gradients up to 100 alone, and a problem posed in normalised units
+  keeps its NLP). The variation is proportional to the objective,
   so the same objective in metres, kilometres or millimetres gives exactly the
   same NLP (the cannonball's ``-r(T)``, ``-r(T) / 1000``, ``-1000 r(T)``: the
   same iterations). Where the objective does not vary at the start (``u^2`` at
@@ -101,6 +105,9 @@ class Scaling:
         The objective's scale (None: automatic at each solve).
     enabled : bool
         Whether the NLP is scaled.
+    state_refs : list of list of tuple, optional
+        Per phase, each state's ``(ref0, ref)`` (what a solve on another mesh of the
+        same problem carries over).
     """
 
     D: np.ndarray  # w = D * w_s + c
@@ -108,6 +115,12 @@ class Scaling:
     r: np.ndarray  # g_s = r * g
     objective_ref: float | None  # None: automatic, at each solve
     enabled: bool
+    state_refs: list[list[tuple[float, float]]] | None = None  # per phase, per state
+
+    def variables_unscaled(self) -> bool:
+        """True if no variable is scaled (``D = 1``, ``c = 0``): the NLP's variables as
+        posed, whose objective is then left as posed where its variation is moderate."""
+        return bool(np.all(self.D == 1.0) and np.all(self.c == 0.0))
 
     def is_identity(self) -> bool:
         """True if no variable or row is scaled."""
@@ -138,7 +151,7 @@ class Scaling:
             # do (a small value at the start may be small by accident, a variation that
             # is non-zero is a rate). A variation in [1, 100] is left as posed: Ipopt
             # leaves gradients up to 100 alone, and well-posed problems keep their NLP
-            if VARIATION_KEPT[0] <= v <= VARIATION_KEPT[1]:
+            if VARIATION_KEPT[0] <= v <= VARIATION_KEPT[1] and self.variables_unscaled():
                 return 1.0
             v = min(max(v, VARIATION_RANGE[0]), VARIATION_RANGE[1])
             return float(10.0 ** math.floor(math.log10(v) + 1e-9))
@@ -215,24 +228,27 @@ def check_scaling(scaling: Any) -> dict[str, Any]:
         ``"objective"``: the objective's ``ref``; ``"time"``: ``ref`` of every
         free time; a state, control or variable name: its ``ref`` or
         ``(ref0, ref)`` (overrides the problem's, in every phase);
-        ``"auto"``: False to scale only what is named (default True).
+        ``"auto"``: False to scale only what is named (default True);
+        ``"fallback"``: False not to retry a failed scaled solve as posed (default True,
+        :mod:`ocp.transcriptions.failure`).
     """
     if isinstance(scaling, str):
         if scaling not in SCALING_MODES:
             raise ProblemDefinitionError(f"scaling must be one of {SCALING_MODES} or a dict, "
                                          f"got {scaling!r}")
-        return {"enabled": scaling == "auto", "auto": scaling == "auto", "refs": {}}
+        return {"enabled": scaling == "auto", "auto": scaling == "auto", "refs": {},
+                "fallback": True}
     if not isinstance(scaling, Mapping):
         raise ProblemDefinitionError(f"scaling must be 'auto', 'none' or a dict, got "
                                      f"{type(scaling).__name__}")
     refs: dict[str, tuple[float, float]] = {}
-    auto = True
+    flags = {"auto": True, "fallback": True}
     for key, val in scaling.items():
-        if key == "auto":
+        if key in flags:
             if not isinstance(val, bool):
-                raise ProblemDefinitionError(f"scaling['auto'] must be True or False, got "
+                raise ProblemDefinitionError(f"scaling[{key!r}] must be True or False, got "
                                              f"{val!r}")
-            auto = val
+            flags[key] = val
             continue
         pair = val if isinstance(val, tuple | list) else (None, val)
         if len(pair) != 2:
@@ -240,7 +256,8 @@ def check_scaling(scaling: Any) -> dict[str, Any]:
         checked = scale_ref(pair[1], pair[0], f"scaling[{key!r}]")
         assert checked is not None
         refs[str(key)] = checked
-    return {"enabled": True, "auto": auto, "refs": refs}
+    return {"enabled": True, "auto": flags["auto"], "refs": refs,
+            "fallback": flags["fallback"]}
 
 
 class ScalingBuilder:
@@ -358,16 +375,33 @@ def _auto_ref(lo: Any, hi: Any, guess: Any, size: float | None = None) -> tuple[
     when they span more than :data:`LOOSE` times the guess magnitude, or when both
     are non-zero and more than :data:`LOOSE` apart in magnitude.
     """
-    lv, hv = _number(lo), _number(hi)
     vals = guess if isinstance(guess, tuple | list) else (guess,)
     nums = [abs(x) for x in (_number(g) for g in vals) if x is not None and math.isfinite(x)]
     g = max(nums) if nums else 0.0
-    if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
-            and hv > lv and not loose_bounds(lv, hv, g):
-        return lv, hv - lv
+    from_bounds = informative_bounds(lo, hi, g)
+    if from_bounds is not None:
+        return from_bounds
     if g > 0:
         return 0.0, g
     return (0.0, size) if size is not None and size > 0 else (0.0, 1.0)
+
+
+def informative_bounds(lo: Any, hi: Any, g: float) -> tuple[float, float] | None:
+    """``(lo, hi - lo)`` where the bounds give a magnitude (both finite numbers, not
+    loose for a guess of magnitude ``g``), else None.
+
+    Parameters
+    ----------
+    lo, hi : SX or float
+        Bounds.
+    g : float
+        The guess' magnitude.
+    """
+    lv, hv = _number(lo), _number(hi)
+    if lv is not None and hv is not None and math.isfinite(lv) and math.isfinite(hv) \
+            and hv > lv and not loose_bounds(lv, hv, g):
+        return lv, hv - lv
+    return None
 
 
 def loose_bounds(lv: float, hv: float, g: float) -> bool:

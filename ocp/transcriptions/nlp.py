@@ -13,7 +13,9 @@ Constraint vector: each phase's blocks (``continuity``, ``path`` /
 ``boundary`` and ``time`` constraints), then the ``link`` constraints.
 
 Ipopt solves a scaled copy of this NLP (:mod:`ocp.definition.scaling`): ``w = D w_s + c``,
-rows and objective multiplied by constants; every result is mapped back, so
+rows and objective multiplied by numbers that each solve may take anew from its start
+(:mod:`ocp.transcriptions.scaled`); a failed solve is retried as posed and its failure
+diagnosed (:mod:`ocp.transcriptions.failure`); every result is mapped back, so
 ``sol.w``, ``sol.objective``, ``lam_g``, ``lam_x`` and ``multipliers`` are in the
 user's units whatever the scaling.
 """
@@ -31,7 +33,7 @@ import casadi as ca
 import numpy as np
 
 from ..definition.compiled import CompiledPhase
-from ..definition.errors import GuessError, InfeasibleError, ProblemDefinitionError, SolveError
+from ..definition.errors import GuessError, ProblemDefinitionError
 from ..definition.guess import (
     DefaultChoices,
     control_guess,
@@ -44,29 +46,34 @@ from ..definition.guess import (
 )
 from ..definition.multiphase import MultiPhaseProblem, as_multiphase
 from ..definition.problem import OptimalControlProblem
-from ..definition.scaling import (
-    Scaling,
-    ScalingBuilder,
-    check_scaling,
-    loose_bounds,
-    phase_quantities,
-)
-from ..definition.sizes import phase_state_sizes
+from ..definition.scaling import Scaling, check_scaling
 from ..definition.symbols import positive_int
 from ..definition.trajectory import Trajectory
 from .blas import default_blas_threads
 from .buffered import BufferedCall
 from .codegen import compiled_library
 from .discretization import PhaseDiscretization, PhaseLayout, PhaseNLP
+from .failure import INFEASIBLE_STATUSES, after_failure, loosened, solve_dropping_dependent
+from .scaled import (
+    build_scaling,
+    carried_scaling,
+    graph_of,
+    identity,
+    scale_args,
+    scaled_nlp,
+    start_scaling,
+    unscale,
+)
 from .solution import Solution
 from .verify import VERIFY_MODES, verify
 
 # mumps_mem_percent: Ipopt's default (1000) has MUMPS allocate eleven times its workspace
 # estimate at every factorisation (13 % of the alp rider's refinement, in CPU time);
 # twice the estimate gives the same iterates (Ipopt enlarges it if MUMPS ever asks)
+__all__ = ["DEFAULT_IPOPT", "INFEASIBLE_STATUSES", "GridFree", "Transcription", "expand_mode"]
+
 DEFAULT_IPOPT = {"tol": 1e-10, "max_iter": 3000, "print_level": 0, "sb": "yes",
                  "mu_strategy": "adaptive", "mumps_mem_percent": 100}
-INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
 BOUNDARY_KINDS = ("initial", "terminal", "boundary", "time")
 
 
@@ -218,7 +225,7 @@ class Transcription:
         if not isinstance(codegen, bool):
             raise ProblemDefinitionError(f"codegen must be True or False, got {codegen!r}")
         self.codegen = codegen
-        self._library: Path | None = None  # the compiled NLP functions (codegen)
+        self._library: dict[str, Path] = {}  # the compiled NLP functions (codegen)
         if grid_free is None:
             mp = as_multiphase(problem)
             mp.validate()
@@ -234,6 +241,7 @@ class Transcription:
         self.verify, self.verify_tol = verify, float(verify_tol)
         self.verify_points = positive_int(verify_points, "verify_points")
         self.n_builds = 0
+        self.dropped: dict[int, str] = {}  # rows of g left out of this solve (drop_dependent)
         self._solvers: dict[tuple[bool, bool], Any] = {}
         self._calls: dict[tuple[bool, bool], BufferedCall] = {}  # Ipopt on numpy arrays
         self._nlp_fn: ca.Function | None = None
@@ -275,98 +283,8 @@ class Transcription:
         self._choices = choices
         self._nlp = {"x": w, "p": P, "f": J, "g": g}
         self.n_w, self.n_g = nw, int(g.numel())
-        self.scaling = self._scaling(gf.plain)
-        self._scaled = self._scaled_nlp()
+        self.scaling = build_scaling(self, gf.plain)
         self.n_builds += 1
-
-    def _scaling(self, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
-        """The constants of the scaled NLP (see :mod:`ocp.definition.scaling`)."""
-        mp = self.multiphase
-        known = {"objective", "time", *mp.var_names}
-        for ph in mp.phases:
-            known |= {*ph.state_names, *ph.control_names}
-        unknown = sorted(set(self.scaling_options["refs"]) - known)
-        if unknown:
-            raise ProblemDefinitionError(f"scaling: {unknown} are not states, controls or "
-                                         "variables of the problem (nor 'objective', 'time')")
-        sb = ScalingBuilder(self.scaling_options, self.n_w, self.n_g)
-        if self.grid_free.sizes is None or not self.scaling_options["auto"]:
-            sizes = self._state_sizes(ends)
-            if self.scaling_options["auto"]:
-                self.grid_free.sizes = sizes
-        else:
-            sizes = self.grid_free.sizes
-        for ph, lay, tm, (a, b), sz in zip(mp.phases, self.layouts, self.times, ends, sizes,
-                                           strict=True):
-            states, controls = phase_quantities(ph, a, b)
-            for k, (name, user, lo, hi, guess) in enumerate(states):
-                ref = sb.ref(name, user, lo, hi, guess, sz[k])
-                for sl in (lay.iX, lay.iZ):
-                    if sl is not None:
-                        sb.set_entries(np.arange(sl.start, sl.stop)[k::ph.nx], ref)
-                for kind in ("continuity", "collocation"):  # defects: state fastest
-                    if kind in lay.blocks:
-                        rows = np.arange(lay.blocks[kind].start, lay.blocks[kind].stop)
-                        sb.r[rows[k::ph.nx]] = 1.0 / ref[1]
-            for k, (name, user, lo, hi, guess) in enumerate(controls):
-                sb.set_entries(np.arange(lay.iU.start, lay.iU.stop)[k::ph.nu],
-                               sb.ref(name, user, lo, hi, guess))
-            if lay.iT is not None:
-                lo, hi = tm.T_bounds
-                sb.set_entries(lay.iT, sb.ref("time", None, lo, hi, tm.T_guess))
-            if lay.it0 is not None:
-                lo, hi = tm.t0_bounds
-                sb.set_entries(lay.it0, sb.ref("time", None, lo, hi, tm.t0_guess))
-            if "path" in lay.blocks:
-                rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
-                sl = lay.blocks["path"]
-                sb.r[sl] = np.tile(rs, (sl.stop - sl.start) // max(len(rs), 1))
-        sh = mp.shared
-        for k, name in enumerate(sh.var_names):
-            sb.set_entries(self.iV.start + k, sb.ref(name, sh.var_ref.get(name),
-                                                      *sh.var_bounds[name],
-                                                      sh.var_guess.get(name)))
-        for i, kind, cs in self._groups:
-            sl = (self.link_blocks if i == -1 else self.layouts[i].blocks)[kind]
-            rs = [sb.row_scale(c, j) for c in cs for j in range(c.expr.numel())]
-            sb.r[sl] = rs
-        if "objective" not in self.scaling_options["refs"] and sh.objective_ref is not None:
-            self.scaling_options["refs"]["objective"] = (0.0, sh.objective_ref)
-        return sb.build()
-
-    def _state_sizes(self, ends: list[tuple[ca.SX, ca.SX]]) -> list[list[float | None]]:
-        """Sizes of the states that bounds and guess leave unknown (:mod:`ocp.definition.sizes`)."""
-        mp = self.multiphase
-        if not self.scaling_options["auto"]:
-            return [[None] * ph.nx for ph in mp.phases]
-        vg = variable_guess(mp.shared)
-        out: list[list[float | None]] = []
-        for i, (ph, tm, (a, b)) in enumerate(zip(mp.phases, self.times, ends, strict=True)):
-            prev = next((j for j, k in mp.time_links if k == i and j < i), None)
-            linked = None
-            if prev is not None:
-                pp = mp.phases[prev]
-                linked = {n: s for n, s in zip(pp.state_names, out[prev], strict=True)
-                          if s is not None}
-            out.append(phase_state_sizes(ph, a, b, (tm.t0_guess, tm.T_guess), vg, linked,
-                                         loose_bounds))
-        return out
-
-    def _scaled_nlp(self) -> dict[str, ca.MX]:
-        """The NLP Ipopt solves: ``w = D w_s + c``, rows times ``r``, objective times ``kf``.
-
-        ``kf = 1 / f_ref`` is an NLP parameter (after the problem's), so the
-        objective scale can follow each solve's start without a rebuild.
-        """
-        nlp, sc = self._nlp, self.scaling
-        kf = ca.MX.sym("kf")
-        P = ca.vertcat(nlp["p"], kf)
-        if sc.is_identity():  # keep the graph (and Ipopt's iterations) as posed
-            return {"x": nlp["x"], "p": P, "f": kf * nlp["f"], "g": nlp["g"]}
-        ws = ca.MX.sym("ws", self.n_w)
-        f, g = ca.substitute([nlp["f"], nlp["g"]], [nlp["x"]],
-                             [ca.DM(sc.D) * ws + ca.DM(sc.c)])
-        return {"x": ws, "p": P, "f": kf * f, "g": ca.DM(sc.r) * g}
 
     def _var_bounds(self, side: int) -> list[ca.SX]:
         sh = self.multiphase.shared
@@ -381,7 +299,7 @@ class Transcription:
         mp = self.multiphase
         bsym = ca.vertcat(*[ca.vertcat(ph.x0, ph.u0, ph.xT, ph.uT, ph.t0, ph.T, ph.q)
                             for ph in mp.phases])
-        outs = [ca.vertcat(*[c.expr for c in cs]) for _, _, cs in self._groups]
+        outs = [ca.vertcat(*[c.expr for c in cs]) for _, _, cs in self.groups]
         return ca.Function("boundary", [bsym, mp.p, mp.v], [*outs, mp.objective()])
 
     def _constraints(self, pieces: list[PhaseNLP], P: ca.MX,
@@ -392,12 +310,12 @@ class Transcription:
         """
         mp = self.multiphase
         all_b = mp.boundary_blocks(self.times)
-        self._groups = []
+        self.groups = []
         for i in [*range(len(mp.phases)), -1]:
             for kind in (*BOUNDARY_KINDS, "link"):
                 cs = [c for j, k, c in all_b if j == i and k == kind]
                 if cs:
-                    self._groups.append((i, kind, cs))
+                    self.groups.append((i, kind, cs))
         bvals = self._boundary_fn()(ca.vertcat(*[self._bvalues(pn) for pn in pieces]), P, V)
         self.layouts = [d.layout(o) for d, o in zip(self.phases, self.offsets, strict=True)]
         for lay in self.layouts:
@@ -419,11 +337,11 @@ class Transcription:
         for i, pn in enumerate(pieces):
             for name, expr, lo, hi in pn.constraints:
                 _add(self.layouts[i].blocks, name, expr, lo, hi)
-            for gi, (j, kind, cs) in enumerate(self._groups):
+            for gi, (j, kind, cs) in enumerate(self.groups):
                 if j == i:
                     _add(self.layouts[i].blocks, kind, bvals[gi],
                         ca.vertcat(*[c.lower for c in cs]), ca.vertcat(*[c.upper for c in cs]))
-        for gi, (j, kind, cs) in enumerate(self._groups):
+        for gi, (j, kind, cs) in enumerate(self.groups):
             if j == -1:
                 _add(self.link_blocks, kind, bvals[gi], ca.vertcat(*[c.lower for c in cs]),
                     ca.vertcat(*[c.upper for c in cs]))
@@ -443,11 +361,13 @@ class Transcription:
         constraints at the parameter values ``p`` (unchecked, as posed)."""
         return self._bounds
 
-    def _solver(self, warm: bool, expand: bool | None = None) -> tuple[Any, bool]:
+    def _solver(self, warm: bool, expand: bool | None = None,
+                graph: str = "build") -> tuple[Any, bool]:
         """Ipopt on the scaled NLP (built on first use): ``warm`` takes the multipliers
         given; ``expand`` overrides the transcription's for this solver only (mesh
         refinement's warm rounds, where building the expanded graph costs more than the
-        few iterations it would speed up)."""
+        few iterations it would speed up); ``graph``: which scaled graph
+        (:func:`~ocp.transcriptions.scaled.scaled_nlp`)."""
         if self.codegen:
             expanded = False  # Ipopt calls the compiled functions, whatever graph made them
         elif expand is not None:
@@ -457,7 +377,7 @@ class Transcription:
         else:
             expanded = bool(self.expand)
         self._uses[warm] += 1
-        key = (warm, expanded)
+        key = (warm, expanded, graph)
         if key not in self._solvers:
             ipopt = dict(self.ipopt_options)
             if warm:
@@ -469,14 +389,14 @@ class Transcription:
             # CasADi names are identifiers; a problem's name is a label ("double integrator")
             label = re.sub(r"[^A-Za-z0-9]+", "_", self.multiphase.name).strip("_") or "ocp"
             name = f"{label if label[0].isalpha() else 'ocp_' + label}_{self.method}"
-            nlp: Any = self._scaled
+            nlp: Any = scaled_nlp(self._nlp, self.n_w, self.n_g, graph, self.scaling)
             default_blas_threads()
             solver = ca.nlpsol(name, "ipopt", nlp, opts)
-            if self.codegen:  # the same functions for every key: compiled once
-                if self._library is None:
-                    self._library = compiled_library(solver)
+            if self.codegen:  # the same functions for every key of a graph: compiled once
+                if graph not in self._library:
+                    self._library[graph] = compiled_library(solver)
                 del opts["expand"]
-                solver = ca.nlpsol(name, "ipopt", str(self._library), opts)
+                solver = ca.nlpsol(name, "ipopt", str(self._library[graph]), opts)
             self._solvers[key] = solver
             self._calls[key] = BufferedCall(solver)
         return self._solvers[key], expanded
@@ -538,7 +458,7 @@ class Transcription:
             if not np.all(np.isfinite(w)):
                 return w.size + self.n_g + 1
             with np.errstate(all="ignore"):
-                f, g = (np.array(v, dtype=float) for v in self._nlp_function()(w, pv))
+                f, g = (np.array(v, dtype=float) for v in self.nlp_function()(w, pv))
             bad = int(np.sum(~np.isfinite(f)) + np.sum(~np.isfinite(g)))
             if bad == 0:  # what _check_start finds at this start: kept, not evaluated again
                 self._last_start = (pv.tobytes() + w.tobytes(), float(f.ravel()[0]))
@@ -555,7 +475,12 @@ class Transcription:
         use, val = repair_default(count, lo, hi, self._choices.refs)
         return at(use, val)
 
-    def _nlp_function(self) -> ca.Function:
+    @property
+    def nlp(self) -> dict[str, Any]:
+        """The NLP in the user's units: ``x`` (= w), ``p``, ``f``, ``g`` (CasADi MX)."""
+        return self._nlp
+
+    def nlp_function(self) -> ca.Function:
         """``(w, p) -> (f, g)`` in the user's units (built on first use)."""
         if self._nlp_fn is None:
             self._nlp_fn = ca.Function("nlp", [self._nlp["x"], self._nlp["p"]],
@@ -645,6 +570,21 @@ class Transcription:
         parts.append(w0[self.iV])
         return np.concatenate(parts)
 
+    def start_vector(self, pv: np.ndarray, params: dict[str, float], guess: Any,
+                     warm_start: Solution | None) -> np.ndarray:
+        """The primal start of a solve, in the user's units.
+
+        Parameters
+        ----------
+        pv : ndarray
+            The parameter values.
+        params : dict
+            The same, by name.
+        guess, warm_start
+            As for :meth:`solve`.
+        """
+        return self._start(pv, params, guess, warm_start)["x0"]
+
     def _start(self, pv: np.ndarray, params: dict[str, float], guess: Any,
                warm_start: Solution | None) -> dict[str, Any]:
         if warm_start is not None:
@@ -676,7 +616,7 @@ class Transcription:
         if last is not None and last[0] == key:
             return last[1]
         with np.errstate(all="ignore"):
-            f, g = (np.array(v, dtype=float) for v in self._nlp_function()(x0, pv))
+            f, g = (np.array(v, dtype=float) for v in self.nlp_function()(x0, pv))
         if np.all(np.isfinite(f)) and np.all(np.isfinite(g)):
             f0 = float(f.ravel()[0])
             self._last_start = (key, f0)
@@ -690,14 +630,13 @@ class Transcription:
         raise ProblemDefinitionError("the initial guess makes a boundary constraint or the "
                                      "objective non-finite")
 
-    def _objective_variation(self, x0: np.ndarray, pv: np.ndarray) -> float:
+    def _objective_variation(self, x0: np.ndarray, pv: np.ndarray, sc: Scaling) -> float:
         """``sum |df/dw| D`` at the start: the objective's change when every variable
         moves by its scale (:mod:`ocp.definition.scaling`; NaN when not needed)."""
-        sc = self.scaling
         if not sc.enabled or sc.objective_ref is not None:
             return math.nan
         x0 = np.asarray(x0, dtype=float)
-        key = pv.tobytes() + x0.tobytes()  # a re-solve from the same start: known
+        key = pv.tobytes() + x0.tobytes() + sc.D.tobytes()  # a re-solve: known
         last = self._last_variation  # (read once: another thread may replace it)
         if last is not None and last[0] == key:
             return last[1]
@@ -716,7 +655,8 @@ class Transcription:
         return Solution.from_nlp(self, pv, res, stats, 0.0)
 
     def solve(self, params: dict[str, float] | None = None, guess: Any = None,
-              warm_start: Solution | None = None) -> Solution:
+              warm_start: Solution | None = None, *,
+              drop_dependent: bool = False) -> Solution:
         """Solve for the given parameter values.
 
         Parameters
@@ -725,18 +665,26 @@ class Transcription:
             A value for every declared parameter (none needed if there are none).
         guess : Solution, Trajectory or decision vector, optional
             Primal starting point (cold start); a solution of another
-            transcription (grid, method) or a trajectory is resampled.
-            By default, the default guess (see :mod:`ocp.definition.guess`).
+            transcription (grid, method) or a trajectory is resampled, and the
+            scaling of the states that bounds do not size is taken from it
+            (:mod:`ocp.transcriptions.scaled`). By default, the default guess (see
+            :mod:`ocp.definition.guess`).
         warm_start : Solution, optional
             Start from this solution's primal and dual values (Ipopt warm start). A
             solution on another collocation mesh of the same problem is resampled, its
             multipliers interpolated (:meth:`dual_from`); one of another method gives
             its primal values only.
+        drop_dependent : bool
+            Where the end conditions are dependent (a quantity the dynamics conserve
+            fixed at both ends, :mod:`ocp.transcriptions.diagnosis`), leave out one of
+            them (the terminal row of largest weight) and solve; ``sol.dropped`` names
+            it and ``sol.dropped_residual`` says how well the solution meets it anyway.
 
         Raises
         ------
         InfeasibleError, SolveError
-            Carrying Ipopt's status and the last iterate.
+            Carrying Ipopt's status, the last iterate and ``diagnosis`` (what is wrong
+            there, in one line in the message).
         PathViolationError
             With ``verify="raise"``, if a path constraint is violated between nodes.
         GuessError
@@ -747,44 +695,91 @@ class Transcription:
         if warm_start is not None and not isinstance(warm_start, Solution):
             raise TypeError(f"solve: warm_start must be an ocp.Solution or None, got "
                             f"{type(warm_start).__name__} {warm_start!r:.40}")
+        if drop_dependent:
+            return solve_dropping_dependent(self, params, guess, warm_start)
         return self._solve(params, guess, warm_start, self.verify)
+
+    def solve_once(self, params: dict[str, float] | None, guess: Any,
+                   warm_start: Solution | None, dropped: dict[int, str]) -> Solution:
+        """One solve with the rows ``dropped`` loosened (:func:`~.failure.loosened`).
+
+        Parameters
+        ----------
+        params, guess, warm_start
+            As for :meth:`solve`.
+        dropped : dict
+            Rows of ``g`` to leave out, with their labels.
+        """
+        self.dropped = dict(dropped)
+        try:
+            return self._solve(params, guess, warm_start, self.verify)
+        finally:
+            self.dropped = {}
 
     def _solve(self, params: dict[str, float] | None, guess: Any,
                warm_start: Solution | None, verify_mode: str,
                expand: bool | None = None, objective_scale: float | None = None) -> Solution:
         params = {} if params is None else params
         pv = self.param_vector(params)
-        lbw, ubw, lbg, ubg = self._bounds_at(pv)
+        lbw, ubw, lbg, ubg = self.bounds_at(pv)
+        if self.dropped:
+            lbg, ubg = loosened(lbg, ubg, list(self.dropped), self.scaling.r)
         args = {"p": pv, "lbx": lbw, "ubx": ubw, "lbg": lbg, "ubg": ubg,
                 **self._start(pv, params, guess, warm_start)}
+        sc, fref = self._solve_scaling(args, pv, guess, warm_start, objective_scale)
+        warm = warm_start is not None and "lam_g0" in args
+        sol = self._ipopt(args, sc, fref, warm, expand)
+        if not sol.success:
+            sol = after_failure(self, sol, args, lambda: self._ipopt(
+                args, identity(self.n_w, self.n_g), 1.0, warm, sol.expanded))
+        verify(sol, verify_mode, self.verify_tol, self.verify_points)
+        return sol
+
+    def _solve_scaling(self, args: dict[str, Any], pv: np.ndarray, guess: Any,
+                       warm_start: Solution | None,
+                       objective_scale: float | None) -> tuple[Scaling, float]:
+        """The scaling and objective scale of a solve from ``args`` (see
+        :mod:`ocp.transcriptions.scaled`): a re-solve at its own solution keeps that
+        solve's; a solve given ``objective_scale`` (a refinement round) keeps the
+        scaling of the solution it starts from; any other is sized from its start."""
         if warm_start is not None and warm_start.transcription is self and \
                 np.array_equal(pv, self.param_vector(warm_start.params)) and \
                 math.isfinite(warm_start.objective) and math.isfinite(warm_start.objective_scale):
             # a re-solve at its own solution: f, g known finite, and the same NLP as the
-            # solve that found it (its objective scale), so its multipliers fit as they are
-            f0, fref = warm_start.objective, warm_start.objective_scale
-        else:
-            f0 = self._check_start(np.asarray(args["x0"], dtype=float), pv)
-            fref = objective_scale if objective_scale is not None else \
-                self.scaling.objective_scale(f0, self._objective_variation(args["x0"], pv))
-        warm = warm_start is not None and "lam_g0" in args
-        expanded = self._solver(warm, expand)[1]
-        call = self._calls[(warm, expanded)]  # Ipopt on numpy arrays, no DM conversions
+            # solve that found it, so its multipliers fit as they are
+            return getattr(warm_start, "scaling", self.scaling), warm_start.objective_scale
+        x0 = np.asarray(args["x0"], dtype=float)
+        f0 = self._check_start(x0, pv)
+        carried = carried_scaling(self, warm_start if warm_start is not None else guess) \
+            if objective_scale is not None else None
+        sc = carried if carried is not None else start_scaling(self, x0, pv)
+        fref = objective_scale if objective_scale is not None else \
+            sc.objective_scale(f0, self._objective_variation(x0, pv, sc))
+        return sc, fref
+
+    def _ipopt(self, args: dict[str, Any], sc: Scaling, fref: float, warm: bool,
+               expand: bool | None) -> Solution:
+        """Ipopt on the NLP scaled by ``sc`` and ``fref``, from ``args`` (user's units)."""
+        graph = graph_of(sc, self.scaling)
+        expanded = self._solver(warm, expand, graph)[1]
+        call = self._calls[(warm, expanded, graph)]  # Ipopt on numpy arrays, no DM conversions
         t0 = time.perf_counter()
-        res = self._unscale(call.named(self._scale_args(args, fref)), fref)
+        res = unscale(sc, call.named(scale_args(sc, args, fref, graph)), fref)
         elapsed = time.perf_counter() - t0
-        sol = Solution.from_nlp(self, pv, res, call.stats(), elapsed)
-        sol.objective_scale, sol.expanded = fref, expanded
-        if not sol.success:
-            cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
-            raise cls(sol.status, sol, f"Ipopt failed: {sol.status} after {sol.iterations} "
-                                       f"iterations")
-        verify(sol, verify_mode, self.verify_tol, self.verify_points)
+        sol = Solution.from_nlp(self, args["p"], res, call.stats(), elapsed)
+        sol.objective_scale, sol.expanded, sol.scaling = fref, expanded, sc
+        sol.scaling_fallback, sol.dropped = None, list(self.dropped.values())
         return sol
 
-    def _bounds_at(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:
+    def bounds_at(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:
         """``(lbw, ubw, lbg, ubg)`` at the parameter values ``pv``, checked (the last
-        parameter values' are kept: a re-solve at the same values reuses them)."""
+        parameter values' are kept: a re-solve at the same values reuses them).
+
+        Parameters
+        ----------
+        pv : ndarray
+            The parameter values.
+        """
         key = pv.tobytes()
         last = self._last_bounds  # (read once: another thread may replace it)
         if last is not None and last[0] == key:
@@ -795,26 +790,6 @@ class Transcription:
             a.setflags(write=False)
         self._last_bounds = (key, b)
         return b
-
-    def _scale_args(self, args: dict[str, Any], fref: float) -> dict[str, Any]:
-        """Ipopt's arguments for the scaled NLP, from ``args`` in the user's units."""
-        sc = self.scaling
-        out = dict(args)
-        out["p"] = np.append(args["p"], 1.0 / fref)
-        for k in ("x0", "lbx", "ubx"):
-            out[k] = sc.x_to_scaled(args[k])
-        out["lbg"], out["ubg"] = sc.r * args["lbg"], sc.r * args["ubg"]
-        if "lam_g0" in args:
-            out["lam_g0"], out["lam_x0"] = sc.multipliers_to_scaled(args["lam_g0"],
-                                                                    args["lam_x0"], fref)
-        return out
-
-    def _unscale(self, res: dict[str, Any], fref: float) -> dict[str, Any]:
-        """Ipopt's result mapped back to the user's units."""
-        sc = self.scaling
-        lam_g, lam_x = sc.multipliers_from_scaled(res["lam_g"], res["lam_x"], fref)
-        return {"x": sc.x_from_scaled(res["x"]), "f": float(res["f"][0]) * fref,
-                "lam_g": lam_g, "lam_x": lam_x, "g": res["g"] / sc.r}
 
     def _check_bound_order(self, lbw: np.ndarray, ubw: np.ndarray, lbg: np.ndarray,
                            ubg: np.ndarray) -> None:

@@ -63,6 +63,12 @@ class Solution:
         Whether Ipopt evaluated the NLP's SX-expanded graph (the transcription's
         ``expand``; with ``"auto"``, from its second solve of a kind on; False with
         ``codegen=True``: compiled functions).
+    scaling, scaling_fallback : Scaling, str or None
+        The scaling the solve used (:mod:`ocp.transcriptions.scaled`), and, where a
+        scaled solve failed and the NLP as posed solved, why it is the identity.
+    dropped, dropped_residual : list of str, float
+        End conditions loosened by ``solve(drop_dependent=True)`` and how well the
+        solution meets them anyway (:mod:`ocp.transcriptions.failure`).
     path_violation : float
         Largest violation of a path constraint or state bound found on a fine
         grid between the nodes (relative to ``max(1, |bound|)``); ``verified``

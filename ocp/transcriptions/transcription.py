@@ -30,6 +30,7 @@ from ..definition.problem import OptimalControlProblem
 from ..definition.symbols import positive_int, relative_tolerance
 from .collocation import CollocationPhase
 from .discretization import PhaseDiscretization
+from .failure import warn_unconverged
 from .integrators import cvodes_function, rk4_function
 from .mesh import (
     MeshRound,
@@ -348,6 +349,8 @@ class Collocation(Transcription):
             sol = tr._next_solve(params, sol, guess, emax <= WARM_REFINE_ERROR, fref)
         sol.mesh_history, sol.mesh_error, sol.objective_error = history, emax, change
         sol.mesh_converged = emax <= tol and change <= target
+        if not sol.mesh_converged:  # name what the problem suggests as the cause
+            warn_unconverged(sol)
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
 

@@ -111,6 +111,50 @@ def cannonball(refs: bool = True, factor: float = 1.0,
     return mp
 
 
+DYMOS_GUESS = {  # the dymos documentation's guesses (``p.set_val(...)``), per phase
+    "ascent": {"r": (0.0, 100.0), "h": (0.0, 100.0), "gam": (math.radians(25.0), 0.0),
+               "v": (200.0, 150.0)},
+    "descent": {"r": (100.0, 200.0), "h": (100.0, 0.0), "gam": (0.0, math.radians(-45.0)),
+                "v": (150.0, 200.0)},
+}
+
+
+def cannonball_dymos(factor: float = 1.0) -> MultiPhaseProblem:
+    """The cannonball posed as the dymos documentation poses it: no ``ref`` on the
+    states, and its guesses (radius 0.05 m, ascent 10 s from t = 0 and descent 10 s,
+    each state linear between the values of :data:`DYMOS_GUESS`).
+
+    Parameters
+    ----------
+    factor : float
+        The objective is ``-factor * r_end`` (1e-3: the range in km).
+    """
+    rho = ca.interpolant("rho", "linear", [ALT_M], RHO_SI)
+    mp = MultiPhaseProblem("cannonball_dymos")
+    radius = mp.variable("radius", lower=0.01, upper=0.10, guess=0.05)
+    m, S = mass(radius), math.pi * radius**2
+    ascent, descent = mp.phase("ascent"), mp.phase("descent")
+    for ph in (ascent, descent):
+        g = DYMOS_GUESS[ph.name]
+        ph.state("r", lower=0.0, guess=g["r"])
+        h = ph.state("h", lower=0.0, guess=g["h"])
+        gam = ph.state("gam", lower=-math.pi / 2, upper=math.pi / 2, guess=g["gam"])
+        v = ph.state("v", lower=0.0, guess=g["v"])
+        D = 0.5 * rho(h) * v**2 * S * CD
+        ph.set_dynamics({"r": v * ca.cos(gam), "h": v * ca.sin(gam),
+                         "gam": -G * ca.cos(gam) / v, "v": -D / m - G * ca.sin(gam)})
+    ascent.initial_constraint(ascent.x[0], 0.0)
+    ascent.initial_constraint(ascent.x[1], 0.0)
+    ascent.initial_constraint(0.5 * m * ascent.x[3] ** 2, 0.0, KE_MAX, name="muzzle energy")
+    ascent.terminal_constraint(ascent.x[2], 0.0)  # apogee
+    ascent.free_final_time(1.0, 100.0, guess=10.0)
+    descent.terminal_constraint(descent.x[1], 0.0)  # impact
+    descent.free_duration(0.5, 100.0, guess=10.0)
+    mp.link(ascent, descent)
+    mp.minimize(-factor * descent.at_tf(descent.x[0]))
+    return mp
+
+
 def flight_range(radius: float, gamma0: float, rtol: float = 1e-11) -> float:
     """Range of a ball of this radius launched at ``gamma0`` with the full muzzle energy.
 
