@@ -52,7 +52,6 @@ from softlanding.optimal.stance_phases import (
     parameters,
 )
 
-
 BUDGET_RTOL = 1e-6
 """The budget binds where the depth is within this of it (relative to ``max(1, D)``): the
 refined depth meets an active budget to 1e-14, the transcribed one to Ipopt's tolerance; a
@@ -277,5 +276,5 @@ VARIANT = Variant(
                     "least depth)", check=_positive, required=True, metavar="D"),))
 """``softlanding solve --variant min-peak-force --depth-max D``."""
 
-__all__ = ["BUDGET_RTOL", "VARIANT", "MinPeakForce", "MinPeakForceLanding", "min_peak_force_transcription",
-           "solve_min_peak_force"]
+__all__ = ["BUDGET_RTOL", "VARIANT", "MinPeakForce", "MinPeakForceLanding",
+           "min_peak_force_transcription", "solve_min_peak_force"]

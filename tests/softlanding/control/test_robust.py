@@ -260,19 +260,20 @@ def test_a_search_step_far_out_is_a_point_nowhere_not_a_crash(monkeypatch):
     schedule_can_hold_..., after other tests in the process): their sums lose the 1e-6, the
     pieces' times are not increasing, and the schedule's ParameterError escaped as bad input
     (the CLI's exit 2)."""
-    import softlanding.control.robust as rb
+    import softlanding.control.robust_search as rs
 
-    real = rb.minimize
+    real = rs.minimize
     seen = []
 
     def far_out_first(fun, x, **kwargs):
         far = np.array(x, float)
-        n = (len(far)) // 2  # durations, then forces, then the bound
+        n = (len(far)) // 2  # durations, then forces, then the bound (an unpinned family)
         far[:n] = [1.95e11, 1e-6, 5.2e11][:n] + [1.0] * max(0, n - 3)
         seen.append(kwargs["constraints"][0]["fun"](far))
         return real(fun, x, **kwargs)
 
-    monkeypatch.setattr(rb, "minimize", far_out_first)
-    r = robust_landing(-3, [LinearGround()])
+    monkeypatch.setattr(rs, "minimize", far_out_first)
+    # the nominal plan is not this ground's optimum: the unpinned search runs first
+    r = robust_landing(-3, [LinearGround(2.0)], max_iterations=5)
     assert seen and np.all(np.isfinite(seen[0])) and np.min(seen[0]) < 0  # infeasible there
     assert r.feasible
