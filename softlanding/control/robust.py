@@ -32,8 +32,9 @@ gradients, the multipliers of the active rows by non-negative least squares; tho
 binding grounds' depths sum to 1): a local optimum within the plan's piece structure, or the
 result says it is not. A schedule that is a clairvoyant optimum (one ground binding, the
 others slack) is reported as that ground's (``clairvoyant_of``): its worst depth is the
-largest clairvoyant depth, which no plan for the set can beat. Every figure reported is an
-exact replay.
+largest clairvoyant depth (``lower_bound``), below which no plan for the set lands on that
+ground as far as its clairvoyant optimum is the least depth there. Every figure reported is
+an exact replay.
 """
 
 from __future__ import annotations

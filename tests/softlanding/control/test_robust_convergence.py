@@ -11,7 +11,6 @@ import pytest
 
 from softlanding import PAPER_ROBOT, Impedance, simulate, solve_landing
 from softlanding.control import robust_landing
-from softlanding.control.robust_family import PieceFamily, Pin, body_extrema, stroke_extrema
 from softlanding.model.ground import DragGround, LinearGround
 from softlanding.model.robot import Impact
 
@@ -72,6 +71,8 @@ def test_cli_robust_on_two_near_grounds_converges_with_the_binding_one_named(cli
 def test_the_stroke_extrema_are_the_exact_solutions_local_ones():
     # an impedance landing whose stroke oscillates: each located extremum is a local one of a
     # dense exact sampling (independent), the lowest is the simulator's own minimum
+    from softlanding.control.robust_family import stroke_extrema
+
     for ground in (LinearGround(), DragGround(1.0, 0.5)):
         r = simulate(PAPER_ROBOT, -3, Impedance(0.5, 0.05), ground, energy=False)
         minima, maxima = stroke_extrema(r)
@@ -93,6 +94,8 @@ def test_the_stroke_extrema_are_the_exact_solutions_local_ones():
 def test_after_a_pinned_stop_the_body_is_the_closed_form_one(paper):
     # the pinned family's rows after the foot's stop: the body's extrema in closed form equal
     # the exact replay's (the foot rests there on the paper's ground)
+    from softlanding.control.robust_family import PieceFamily, Pin, body_extrema
+
     sched = paper.schedule()
     d = np.diff((0.0,) + sched.times)
     fam = PieceFamily(PAPER_ROBOT, Impact(-3), (LinearGround(),), len(d), Pin(1, 0))
