@@ -286,8 +286,9 @@ def pinned_stroke_slots(family: PieceFamily, p: Point) -> tuple[list[float], lis
 
 class Measures:
     """The rows of the epigraph problem at each point of a family, cached: per ground its
-    depth, :data:`SLOTS` stroke minima and maxima; the last force's margin; with a pin, per
-    later force the crater's capacity and the ground's no-pull margins at the pinned stop.
+    depth, :data:`SLOTS` stroke minima and maxima (one each, the global, unpinned); the last
+    force's margin; with a pin, per later force the crater's capacity and the ground's
+    no-pull margins at the pinned stop.
 
     Parameters
     ----------
@@ -300,7 +301,10 @@ class Measures:
         self.cache: dict[bytes, np.ndarray] = {}
         self.holds: dict[bytes, bool] = {}  # every ground's replay holds every limit
         self.replayed: dict[bytes, float] = {}  # the worst depth of the replays
-        self.per_ground = 1 + 2 * SLOTS
+        # the structure search (unpinned) has one row per limit: duplicates would only make
+        # SLSQP's active set degenerate
+        self.slots = SLOTS if family.pin is not None else 1
+        self.per_ground = 1 + 2 * self.slots
         g = len(family.grounds)
         self.n_pin = 0 if family.pin is None else family.n - family.pin.piece
         self.size = self.per_ground * g + 1 + 2 * self.n_pin
@@ -309,7 +313,8 @@ class Measures:
         """Each row's kind and ground (None: not a ground's)."""
         rows: list[tuple[str, int | None]] = []
         for k in range(len(self.family.grounds)):
-            rows += [("depth", k)] + [("stroke >= 0", k)] * SLOTS + [("stroke <= s", k)] * SLOTS
+            rows += ([("depth", k)] + [("stroke >= 0", k)] * self.slots
+                     + [("stroke <= s", k)] * self.slots)
         rows.append(("last force <= u_max", None))
         pinned = None if self.family.pin is None else self.family.pin.ground
         rows += [("crater holds the support", pinned)] * self.n_pin
@@ -326,7 +331,7 @@ class Measures:
     def nowhere(self, u_margin: float) -> np.ndarray:
         """The rows of a point with no landing (infinite depth, every limit broken)."""
         s = self.family.robot.s
-        ground = [math.inf] + [-s] * (2 * SLOTS)
+        ground = [math.inf] + [-s] * (2 * self.slots)
         return np.array(ground * len(self.family.grounds) + [u_margin]
                         + [-s] * (2 * self.n_pin))
 
@@ -355,7 +360,7 @@ class Measures:
             replayed = max(replayed, r.depth)
             if not (r.rest_proven and math.isfinite(r.stroke_min)
                     and math.isfinite(r.stroke_max)):
-                rows += [math.inf] + [-fam.robot.s] * (2 * SLOTS)
+                rows += [math.inf] + [-fam.robot.s] * (2 * self.slots)
                 continue
             pinned = fam.pin is not None and fam.pin.ground == k
             if pinned:
@@ -363,7 +368,7 @@ class Measures:
             elif fam.pin is not None:
                 low, high = stroke_slots(r)
             else:  # the structure search: the global extrema (its depths have kinks anyway)
-                low, high = [r.stroke_min] * SLOTS, [r.stroke_max] * SLOTS
+                low, high = [r.stroke_min], [r.stroke_max]
             rows += [-float(p.stop[2]) if pinned else r.depth, *low,
                      *[fam.robot.s - v for v in high]]
         rows.append(margin)
