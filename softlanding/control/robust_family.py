@@ -25,7 +25,9 @@ them stalls (SLSQP zigzags, a KKT check by finite differences fails); both are l
 An unpinned family is the search for the structure (which ground binds, where its foot
 stops): its depths have kinks anyway, so its stroke rows are the simulator's global extrema
 (no extrema located: cheaper; from the nominal plan at ``v0 = -10`` on the study's grounds it
-also ends nearer the optimum than with the split rows, 13.94 against 14.27).
+also ends nearer the optimum than with the split rows, 13.94 against 14.27). Its path is
+sensitive: the same rows without the repeated slots ended at 13.95, where the pinned search
+did not converge.
 """
 
 from __future__ import annotations
@@ -256,10 +258,12 @@ def body_extrema(family: PieceFamily, p: Point) -> tuple[list[float], list[float
     forces = [*map(float, p.u[j + 1:]), p.u_last]
     minima: list[float] = []
     maxima: list[float] = []
-    for dur, f in zip(p.d[j + 1:], forces, strict=True):
+    last = len(forces) - 1
+    for i, (dur, f) in enumerate(zip(p.d[j + 1:], forces, strict=True)):
         a = -1 + family.gain * f
         t = -v / a if a != 0 else math.nan
-        if 0 < t < dur:  # v_b changes sign inside the piece
+        # v_b changes sign inside the piece (the last piece's zero is its end: the rest)
+        if i < last and 0 < t < dur:
             (minima if a > 0 else maxima).append(x + v * t / 2)
         x, v = x + v * dur + a * dur * dur / 2, v + a * dur
     # the body rests at the last piece's end (v_b = 0 by construction)
@@ -286,8 +290,8 @@ def pinned_stroke_slots(family: PieceFamily, p: Point) -> tuple[list[float], lis
 
 class Measures:
     """The rows of the epigraph problem at each point of a family, cached: per ground its
-    depth, :data:`SLOTS` stroke minima and maxima (one each, the global, unpinned); the last
-    force's margin; with a pin, per later force the crater's capacity and the ground's
+    depth, :data:`SLOTS` stroke minima and maxima (unpinned: the global ones, repeated); the
+    last force's margin; with a pin, per later force the crater's capacity and the ground's
     no-pull margins at the pinned stop.
 
     Parameters
@@ -301,9 +305,7 @@ class Measures:
         self.cache: dict[bytes, np.ndarray] = {}
         self.holds: dict[bytes, bool] = {}  # every ground's replay holds every limit
         self.replayed: dict[bytes, float] = {}  # the worst depth of the replays
-        # the structure search (unpinned) has one row per limit: duplicates would only make
-        # SLSQP's active set degenerate
-        self.slots = SLOTS if family.pin is not None else 1
+        self.slots = SLOTS
         self.per_ground = 1 + 2 * self.slots
         g = len(family.grounds)
         self.n_pin = 0 if family.pin is None else family.n - family.pin.piece
@@ -368,7 +370,7 @@ class Measures:
             elif fam.pin is not None:
                 low, high = stroke_slots(r)
             else:  # the structure search: the global extrema (its depths have kinks anyway)
-                low, high = [r.stroke_min], [r.stroke_max]
+                low, high = [r.stroke_min] * SLOTS, [r.stroke_max] * SLOTS
             rows += [-float(p.stop[2]) if pinned else r.depth, *low,
                      *[fam.robot.s - v for v in high]]
         rows.append(margin)
