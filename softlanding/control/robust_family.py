@@ -59,7 +59,15 @@ ROOT_ITERATIONS = 40
 @dataclass(frozen=True)
 class Pin:
     """Piece ``piece`` (0-based) ends when the foot on ground ``ground`` (an index into the
-    grounds) first stops."""
+    grounds) first stops.
+
+    Parameters
+    ----------
+    piece : int
+        The pinned piece.
+    ground : int
+        The ground whose foot's stop ends it.
+    """
 
     piece: int
     ground: int
@@ -67,8 +75,21 @@ class Pin:
 
 @dataclass(frozen=True)
 class Point:
-    """A resolved point of the family: every duration and force, and the pinned ground's
-    state at its foot's stop (None without a pin)."""
+    """A resolved point of the family.
+
+    Parameters
+    ----------
+    d : ndarray
+        Every duration.
+    u : ndarray
+        The forces but the last.
+    u_last : float
+        The last piece's force (the body stops at its end).
+    stop : ndarray or None
+        The pinned ground's state at its foot's stop (None without a pin).
+    held : LandingResult or None
+        The pinned ground's replay until its stop.
+    """
 
     d: np.ndarray
     u: np.ndarray
@@ -104,7 +125,13 @@ class PieceFamily:
         self.n_free = n - (pin is not None)  # free durations
 
     def theta(self, d: np.ndarray, u: np.ndarray) -> np.ndarray:
-        """The family's coordinates of the pieces ``d``, ``u`` (``u`` without the last)."""
+        """The family's coordinates of the pieces.
+
+        Parameters
+        ----------
+        d, u : ndarray
+            Durations and forces (without the last).
+        """
         d = np.asarray(d, float)
         free = np.delete(d, self.pin.piece) if self.pin is not None else d
         return np.concatenate([free, np.asarray(u, float)[:self.n - 1]])
@@ -116,13 +143,25 @@ class PieceFamily:
                 np.concatenate([np.full(k, np.inf), np.full(self.n - 1, self.u_max)]))
 
     def last_force(self, d: np.ndarray, u: np.ndarray) -> float:
-        """The force of the last piece that brings ``v_b`` to zero at its end."""
+        """The force of the last piece that brings ``v_b`` to zero at its end.
+
+        Parameters
+        ----------
+        d, u : ndarray
+            Durations and forces (without the last).
+        """
         v = self.impact.v0 + float(np.sum((-1 + self.gain * u) * d[:-1]))
         return (1 - v / d[-1]) / self.gain
 
     def resolve(self, theta: np.ndarray) -> Point | None:
         """Every duration and force of ``theta`` (projected onto the bounds), or None where
-        the pinned foot stops before its piece starts (no such schedule)."""
+        the pinned foot stops before its piece starts (no such schedule).
+
+        Parameters
+        ----------
+        theta : ndarray
+            The family's coordinates.
+        """
         theta = np.asarray(theta, float)
         d = np.maximum(theta[:self.n_free], 1e-9)
         u = np.clip(theta[self.n_free:], -self.u_max, self.u_max)
@@ -140,7 +179,13 @@ class PieceFamily:
     def first_stop(self, d: np.ndarray, u: np.ndarray) -> tuple[LandingResult, np.ndarray] | None:
         """The pinned ground's first stop under the pieces before the pin, the pinned piece's
         force held: the replay and the state at the stop (None if it stops before the pinned
-        piece)."""
+        piece).
+
+        Parameters
+        ----------
+        d, u : ndarray
+            Durations (without the pinned one) and forces.
+        """
         j = self.pin.piece
         t0 = float(np.sum(d[:j]))
         held = ForceSchedule(tuple(np.cumsum(d[:j])), tuple(u[:j + 1]))
@@ -158,12 +203,24 @@ class PieceFamily:
         return r, x
 
     def schedule(self, p: Point) -> ForceSchedule:
-        """The force schedule of a resolved point (then the body's weight)."""
+        """The force schedule of a resolved point (then the body's weight).
+
+        Parameters
+        ----------
+        p : Point
+            The point.
+        """
         values = [*map(float, p.u), p.u_last, self.robot.r_m / (1 + self.robot.r_m)]
         return ForceSchedule(tuple(np.cumsum(p.d)), tuple(values))
 
     def later_forces(self, p: Point) -> list[float]:
-        """The forces after the pinned piece: the pinned ground's foot must rest under each."""
+        """The forces after the pinned piece: the pinned ground's foot must rest under each.
+
+        Parameters
+        ----------
+        p : Point
+            A point of the pinned family.
+        """
         j = self.pin.piece
         return [*map(float, p.u[j + 1:]), p.u_last, self.robot.r_m / (1 + self.robot.r_m)]
 
@@ -331,7 +388,13 @@ class Measures:
         return self.cache[key]
 
     def nowhere(self, u_margin: float) -> np.ndarray:
-        """The rows of a point with no landing (infinite depth, every limit broken)."""
+        """The rows of a point with no landing (infinite depth, every limit broken).
+
+        Parameters
+        ----------
+        u_margin : float
+            The last force's margin row.
+        """
         s = self.family.robot.s
         ground = [math.inf] + [-s] * (2 * self.slots)
         return np.array(ground * len(self.family.grounds) + [u_margin]

@@ -124,7 +124,13 @@ def kkt_point(cons: Callable[[np.ndarray], np.ndarray], x: np.ndarray, lo: np.nd
 def kkt_residual(cons: Callable[[np.ndarray], np.ndarray], x: np.ndarray, lo: np.ndarray,
                  hi: np.ndarray, grad_f: np.ndarray, step: float = KKT_STEP,
                  active_tol: float = ACTIVE_TOL) -> float:
-    """The residual of :func:`kkt_point` (same parameters)."""
+    """The residual of :func:`kkt_point`.
+
+    Parameters
+    ----------
+    cons, x, lo, hi, grad_f, step, active_tol
+        As :func:`kkt_point`.
+    """
     return kkt_point(cons, x, lo, hi, grad_f, step, active_tol).residual
 
 
@@ -279,7 +285,15 @@ def _violation(measures: Measures, key: bytes) -> float:
 
 
 def worst_of(family: PieceFamily, p: Point) -> tuple[float, bool]:
-    """The worst depth of a schedule's exact replays and whether every one holds every limit."""
+    """The worst depth of a schedule's exact replays and whether every one holds every limit.
+
+    Parameters
+    ----------
+    family : PieceFamily
+        The family (its landing and grounds).
+    p : Point
+        The schedule's pieces.
+    """
     sched = family.schedule(p)
     results = [simulate(family.robot, family.impact, sched, g, energy=False)
                for g in family.grounds]
@@ -292,6 +306,11 @@ def off_pin_check(run: Run) -> str:
 
     Returns ``""`` without a pin or a KKT point; ``"rises on both sides (slopes a, b)"``;
     ``"descent ..."`` where it falls on a side holding every limit.
+
+    Parameters
+    ----------
+    run : Run
+        A search run.
     """
     fam, p = run.family, run.point
     if fam.pin is None or p is None or run.kkt.residual > KKT_TOL:
@@ -320,7 +339,15 @@ def off_pin_check(run: Run) -> str:
 def pin_at(family: PieceFamily, p: Point) -> Pin | None:
     """The pin a converged search would need: the binding ground's first stop tied to the
     switch nearest it (not the last, which is the body's stop); None if its foot stops in the
-    first piece or the tie is no schedule."""
+    first piece or the tie is no schedule.
+
+    Parameters
+    ----------
+    family : PieceFamily
+        The unpinned family.
+    p : Point
+        The point (the search's best).
+    """
     sched = family.schedule(p)
     results = [simulate(family.robot, family.impact, sched, g, energy=False)
                for g in family.grounds]
@@ -339,7 +366,17 @@ def pin_at(family: PieceFamily, p: Point) -> Pin | None:
 
 @dataclass(frozen=True)
 class Start:
-    """A start of the search: pieces (durations, the forces but the last) and a pin."""
+    """A start of the search.
+
+    Parameters
+    ----------
+    d : ndarray
+        The durations.
+    u : ndarray
+        The forces but the last.
+    pin : Pin, optional
+        The pin of its family.
+    """
 
     d: np.ndarray
     u: np.ndarray
