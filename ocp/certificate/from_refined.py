@@ -252,7 +252,7 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                       ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
     arcs = refined_table(ref, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep], tol.sigma,
                          max(err["H"], err["costate"], err["sigma"]))
-    fig.singular = [r for r in fig.singular if not covered(arcs, r)]
+    fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=tol.singular)]
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
     verdict, reasons = verdict_of(definite, uncertain, active, last, T)
     gap_lam = _costate_gap(sol, ref, sw.t[keep], sw.lam[keep], last)
