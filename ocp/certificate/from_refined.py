@@ -28,6 +28,7 @@ from .arc_table import refined_table
 from .arc_verdict import covered
 from .checks import (
     ERROR_MARGIN,
+    INCONCLUSIVE,
     Tolerances,
     figures,
     intervals_of,
@@ -35,7 +36,7 @@ from .checks import (
     verdict_of,
 )
 from .costates import adjoint_sweep, costates_from_multipliers
-from .result import PMPCertificate, build_certificate
+from .result import PMPCertificate, build_certificate, not_applicable
 
 
 def is_mixed(pr: OptimalControlProblem, name: str | None) -> bool:
@@ -138,7 +139,9 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
 
 
 def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[float]]:
-    """Switch times of every control after ``after``, ignoring zero-length intervals."""
+    """Switch times of every control after ``after``, ignoring zero-length intervals: the
+    switches between two bang arcs (a junction with a singular arc is no sign change of
+    sigma, which vanishes on that arc; its row in the per-arc table checks it)."""
     edges = np.r_[0.0, np.cumsum(ref.durations)]
     tiny = 1e-10 * max(edges[-1], 1.0)
     out: dict[str, list[float]] = {}
@@ -147,7 +150,7 @@ def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[f
         modes = [(im[k][j], edges[k + 1]) for k in range(len(ref.durations))
                  if ref.durations[k] > tiny]
         out[name] = [float(e) for (m, e), (m2, _) in zip(modes[:-1], modes[1:], strict=True)
-                     if m != m2 and e > after + tiny]
+                     if m != m2 and e > after + tiny and "singular" not in (m.kind, m2.kind)]
     return out
 
 
@@ -183,6 +186,11 @@ def constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[float
                               bounds=effective_bounds(pr, x, ref.pv)) & (t > tiny) & \
         (t < T - tiny)
     dense = intervals_of(t, act, 2 * T / max(len(t), 1))
+    # the constraint's measure lives where it is active: the costate may jump anywhere there,
+    # not only at the path rows whose multipliers the refinement made non-zero (they are
+    # degenerate where the constraint is redundant, m >= m_f with m(T) = m_f and m' <= 0)
+    for _, b in dense:
+        last = max(last, T if b >= T - 2 * T / max(len(t), 1) else b)
     if ref.nlp is not None and "path" in ref.blocks and len(ref.lam_g):
         rows = ref.blocks["path"]
         lam = np.abs(ref.lam_g[rows])
@@ -218,9 +226,16 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
     """
     pr = ref.problem
     active, last = constrained_refined(ref, n)
-    sw = adjoint_sweep(ref, last, n)
     T = float(np.sum(ref.durations))
     tiny = 1e-10 * max(T, 1.0)
+    if last >= T - tiny:  # constrained to the end: no unconstrained costate to sweep
+        spans = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in active)
+        cert = not_applicable(INCONCLUSIVE, [
+            f"state constraint active on {spans}, up to the final time: the costate may jump "
+            "anywhere there, so no part of the horizon is checked from the refinement"])
+        cert.state_constraint_active_intervals, cert.checked_from = active, T
+        return cert
+    sw = adjoint_sweep(ref, last, n)
     keep = (sw.t >= last - tiny) & (ref.durations[sw.interval] > tiny)
     switches = _effective_switches(ref, last)
     values = {**ref.params, **ref.variables}  # the control set at the variables' values

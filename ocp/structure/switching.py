@@ -53,6 +53,7 @@ from .arcs import (
     transcribed,
 )
 from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
+from .interior_arcs import singular_arcs
 from .refinement import (
     DEFAULT_TOL,
     REFINE_IPOPT,
@@ -408,11 +409,8 @@ def _as_structure(sol: TranscribedSolution, structure: Any) -> ArcStructure:
             raise ValueError("a SwitchingStructure describes one control; pass an ArcStructure "
                              "(detect_structure) for a problem with several controls")
         structure = ArcStructure.from_controls([structure])
-    if not structure.refinable:
-        kinds = {s.control: s.kinds for s in structure.per_control}
-        raise ValueError(f"not bang-bang: arcs {kinds}; refinement needs bang and boundary "
-                         "arcs only (an interior arc is singular or free)")
-    return structure
+    # interior arcs of a control with a singular order are singular arcs (or a ValueError)
+    return singular_arcs(sol.problem, structure)
 
 
 def insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
@@ -459,7 +457,9 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     sol : Solution
         A transcribed solution (parameters, bounds and starting guess).
     structure : SwitchingStructure or ArcStructure, optional
-        Default: :func:`detect_structure` of ``sol``. Bang and boundary arcs only.
+        Default: :func:`detect_structure` of ``sol``. Its interior arcs are refined as
+        singular arcs where the control enters H linearly with a singular order
+        (:func:`ocp.structure.interior_arcs.singular_arcs`).
     extra_arcs : int
         Single control only: try this many more bang arcs, to test whether more
         switches improve the objective (pairs are inserted inside the longest
@@ -486,7 +486,8 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     Raises
     ------
     ValueError
-        If the structure has interior (singular or free) arcs.
+        If the structure has an interior arc that is not singular (a control that enters
+        H nonlinearly, or has no singular order).
     SolveError, InfeasibleError
         If Ipopt fails, or the integration accuracy cannot be reached.
     """

@@ -19,7 +19,7 @@ import pytest
 from ocp import Collocation, MultipleShooting, OptimalControlProblem, SolveError, certify
 from ocp.certificate.arc_verdict import NOT_EXTREMAL
 from ocp.structure.singular import singular_algebra
-from ocp.structure.singular_refinement import refine_singular
+from ocp import refine_switching
 
 
 def lq() -> OptimalControlProblem:
@@ -97,7 +97,7 @@ def test_lq_certified_interior_arc(lq_solutions, how):
 @pytest.fixture(scope="module")
 def bang_singular():
     sol = MultipleShooting(singular(), nodes=40).solve({})
-    return sol, refine_singular(sol)
+    return sol, refine_switching(sol)
 
 
 def test_singular_algebra_order_and_kelley():
