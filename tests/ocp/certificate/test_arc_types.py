@@ -16,10 +16,18 @@ import math
 import numpy as np
 import pytest
 
-from ocp import Collocation, MultipleShooting, OptimalControlProblem, SolveError, certify
-from ocp.certificate.arc_verdict import NOT_EXTREMAL
+from ocp import (
+    Collocation,
+    MultipleShooting,
+    OptimalControlProblem,
+    SolveError,
+    certify,
+    refine_switching,
+)
+from ocp.certificate.arc_verdict import NOT_EXTREMAL, junction_margin, settle
+from ocp.certificate.checks import CERTIFIED
+from ocp.structure.arcs import Arc, ArcStructure, SwitchingStructure, detect_structure
 from ocp.structure.singular import singular_algebra
-from ocp import refine_switching
 
 
 def lq() -> OptimalControlProblem:
@@ -126,6 +134,29 @@ def test_bang_singular_off_junction_is_refuted(bang_singular):
     c = certify(sol, bad)
     assert c.verdict == NOT_EXTREMAL and not c.certified
     assert any(s.startswith("singular arc of u on [") for s in c.reasons)
+
+
+def test_half_covered_interior_arc_is_never_certified(bang_singular):
+    """Structure detection's doubt is answered only where holding rows cover the interior
+    arc, all of it but a junction margin at each end: a bogus interior arc on [0, 2], whose
+    second half is the certified singular row, keeps the verdict "inconclusive"."""
+    sol, r = bang_singular
+    cert = certify(sol, r)
+    assert cert.certified
+    end = r.T
+    bogus = ArcStructure.from_controls([SwitchingStructure("u", [Arc("interior", 0.0, end)],
+                                                           -1.0, 1.0)])
+    for margin in (0.0, junction_margin(sol)):
+        c = dataclasses.replace(cert, verdict=CERTIFIED, reasons=[])
+        settle(c, bogus, refuting=True, margin=margin)
+        assert c.verdict == "inconclusive" and not c.certified
+        assert "structure detection finds an interior arc on [0, 2]" in c.reasons[-1]
+    # the arc as detected (its junction a grid interval from the refined one) is covered
+    (arc,) = [a for a in detect_structure(sol).per_control[0].arcs if a.kind == "interior"]
+    assert abs(arc.start - 1.0) < junction_margin(sol)
+    c = dataclasses.replace(cert, verdict=CERTIFIED, reasons=[])
+    settle(c, detect_structure(sol), refuting=True, margin=junction_margin(sol))
+    assert c.verdict == "certified (bang, singular order 1)", c.reasons
 
 
 @pytest.mark.parametrize("form", ["state", "bound_state", "path"])
