@@ -50,7 +50,7 @@ from ..definition.multiphase import MultiPhaseProblem
 from ..definition.trajectory import Trajectory
 from ..transcriptions.solution import Solution
 from .arcs import ArcStructure, control_bounds_at, detect_structure
-from .interior_arcs import singular_arcs
+from .interior_arcs import refinable_arcs
 from .phase_nlp import (
     Modes,
     PhaseModes,
@@ -422,7 +422,7 @@ def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *
     structures : list of ArcStructure, optional
         One per phase (default: :func:`detect_phase_structures`). Interior arcs are
         refined as singular arcs where the control enters H linearly with a singular
-        order (:func:`ocp.structure.interior_arcs.singular_arcs`).
+        order (:func:`ocp.structure.interior_arcs.refinable_arcs`).
     extra_arcs : int
         Single-control phases: this many more bang arcs in every phase that has a bang
         arc (see :func:`ocp.structure.switching.refine_switching`).
@@ -448,9 +448,12 @@ def refine_phases(sol: Solution, structures: list[ArcStructure] | None = None, *
     modes, durs = [], []
     for i, st in enumerate(sts):
         try:  # interior arcs of a control with a singular order are singular arcs
-            st = singular_arcs(sol.phases[i].problem, st)
+            st = refinable_arcs(sol.phases[i].problem, st)
         except ValueError as err:
             raise ValueError(f"phase {sol.phases[i].problem.name!r}: {err}") from None
+        if any(m.kind == "interior" for ms in st.modes for m in ms):
+            raise ValueError(f"phase {sol.phases[i].problem.name!r}: a regular interior arc "
+                             "is refined in a single-phase problem only (refine_switching)")
         m, d = list(st.modes), list(st.durations)
         if extra_arcs and len(st.controls) == 1 and any(x[0].kind in ("max", "min")
                                                         for x in m):

@@ -52,8 +52,9 @@ from .arcs import (
     path_activity,
     transcribed,
 )
+from .costate_copies import costate_guess, costates_as_states
 from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
-from .interior_arcs import singular_arcs
+from .interior_arcs import refinable_arcs
 from .refinement import (
     DEFAULT_TOL,
     REFINE_IPOPT,
@@ -409,8 +410,8 @@ def _as_structure(sol: TranscribedSolution, structure: Any) -> ArcStructure:
             raise ValueError("a SwitchingStructure describes one control; pass an ArcStructure "
                              "(detect_structure) for a problem with several controls")
         structure = ArcStructure.from_controls([structure])
-    # interior arcs of a control with a singular order are singular arcs (or a ValueError)
-    return singular_arcs(sol.problem, structure)
+    # interior arcs: singular, or regular with costate copies (or a ValueError)
+    return refinable_arcs(sol.problem, structure)
 
 
 def insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
@@ -459,7 +460,9 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     structure : SwitchingStructure or ArcStructure, optional
         Default: :func:`detect_structure` of ``sol``. Its interior arcs are refined as
         singular arcs where the control enters H linearly with a singular order
-        (:func:`ocp.structure.interior_arcs.singular_arcs`).
+        (:func:`ocp.structure.interior_arcs.refinable_arcs`); regular interior arcs are
+        flown with ``H_u = 0`` and the costate as extra states
+        (:mod:`ocp.structure.costate_copies`).
     extra_arcs : int
         Single control only: try this many more bang arcs, to test whether more
         switches improve the objective (pairs are inserted inside the longest
@@ -509,11 +512,19 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         x0 = np.r_[x0, [float(tsol.variables[n]) for n in tsol.problem.var_names]]
 
     def attempt(s: ArcStructure) -> RefinedSwitching:
+        s = refinable_arcs(tsol.problem, s)
         modes, durs = list(s.modes), list(s.durations)
         if extra_arcs:
             if len(s.controls) != 1:
                 raise ValueError("extra_arcs supports single-control problems")
             insert_extra_arcs(modes, durs, extra_arcs)
+        starts = [iv.start for k, iv in enumerate(s.intervals) if any(
+            m.kind == "interior" for m in iv.modes) and (k == 0 or all(
+                m.kind != "interior" for m in s.intervals[k - 1].modes))]
+        if starts:  # regular interior arcs: a costate copy per run, from the transcription's
+            return refine_structure(costates_as_states(pr, len(starts)), tuple(modes),
+                                    np.asarray(durs, dtype=float),
+                                    np.r_[x0, costate_guess(tsol, starts)], params, **opts)
         out = refine_structure(pr, tuple(modes), np.asarray(durs, dtype=float), x0, params,
                                **opts)
         if pr is not tsol.problem:
