@@ -24,8 +24,9 @@ from ..structure.arcs import TranscribedSolution, no_control_crosses
 from ..structure.switching import RefinedSwitching
 from ..transcriptions.gridview import grid_spacing
 from ..transcriptions.solution import along
+from .arc_record import HOLDS, ArcCheck
 from .arc_table import refined_table
-from .arc_verdict import covered
+from .arc_verdict import covered, junction_margin
 from .checks import (
     ERROR_MARGIN,
     INCONCLUSIVE,
@@ -35,7 +36,8 @@ from .checks import (
     judge,
     verdict_of,
 )
-from .costates import adjoint_sweep, costates_from_multipliers
+from .costates import adjoint_sweep, costates_from_multipliers, pmp_functions
+from .refined_state_arcs import copy_rows, refined_boundary_rows
 from .result import PMPCertificate, build_certificate, not_applicable
 
 
@@ -257,7 +259,11 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                      if mixed else None)
         err["H"] += float(np.max(np.abs(fig.H - cf.H), initial=0.0)) / fig.H_scale
         dsig = np.max(np.abs(fig.sigma - cf.sigma), axis=0, initial=0.0)
-        err["sigma"] = float(np.max(dsig / np.maximum(np.max(np.abs(fig.sigma), axis=0), 1e-300)))
+        # relative to the size of sigma's terms (sigma itself vanishes on interior arcs)
+        terms = along(pmp_functions(pr).sigma_terms, sw.x[keep], sw.u[keep], sw.lam[keep],
+                      ref.pv)[0]
+        err["sigma"] = float(np.max(dsig / np.maximum(np.maximum(
+            np.max(np.abs(fig.sigma), axis=0), np.max(terms, axis=0, initial=0.0)), 1e-300)))
         err["switch"] = max((abs(fig.gap[k] - cf.gap[k]) for k in fig.gap
                              if math.isfinite(fig.gap[k]) and math.isfinite(cf.gap[k])),
                             default=0.0)
@@ -269,14 +275,55 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                          max(err["H"], err["costate"], err["sigma"]))
     fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=tol.singular)]
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
-    verdict, reasons = verdict_of(definite, uncertain, active, last, T)
+    H_after = sw.H_expected if sw.H_expected is not None else float(np.median(fig.H))
+    arcs, left, start = constrained_rows(sol, ref, arcs, (sw.t[keep], sw.lam[keep]), H_after,
+                                         tol, max(err["H"], err["costate"], err["sigma"]),
+                                         active, last, n)
+    verdict, reasons = verdict_of(definite, uncertain, left, start, T)
     gap_lam = _costate_gap(sol, ref, sw.t[keep], sw.lam[keep], last)
     src = "refined (adjoint integrated with the state along the refined arcs: " + (
         "exact arcs)" if ref.exact else f"RK8, error measured {sw.error_lam:.1e})")
     cert = build_certificate(verdict, reasons, sw.H_expected, fig, active, gap_lam, src,
-                             sw.t[keep], sw.lam[keep], sw.u[keep], err, last)
+                             sw.t[keep], sw.lam[keep], sw.u[keep], err, start)
     cert.arcs = arcs
     return cert
+
+
+def constrained_rows(sol: TranscribedSolution, ref: RefinedSwitching, arcs: list[ArcCheck],
+                     sweep: tuple[np.ndarray, np.ndarray], H_after: float, tol: Tolerances,
+                     error: float, active: list[tuple[float, float]], last: float,
+                     n: int) -> tuple[list[ArcCheck], list[tuple[float, float]], float]:
+    """The rows of the part before the last constrained time: state boundary arcs (their
+    multipliers and jumps, :mod:`ocp.certificate.refined_state_arcs`) and interior arcs
+    with their costate copies; the active spans those boundary rows do not answer, and
+    where the checked part starts (0 when holding rows cover all before ``last``).
+
+    Parameters
+    ----------
+    sol : TranscribedSolution
+    ref : RefinedSwitching
+    arcs : list of ArcCheck
+        The swept part's rows.
+    sweep : (ndarray, ndarray)
+        The sweep's times and costates.
+    H_after : float
+        H on the swept part.
+    tol : Tolerances
+    error : float
+    active : list of (float, float)
+        State-constrained spans.
+    last : float
+        The last constrained time.
+    n : int
+        About how many samples along ``ref``.
+    """
+    rows = refined_boundary_rows(ref, sol, sweep, tol.sigma, error, junction_margin(sol))
+    rows += copy_rows(ref, last, H_after, tol.sigma, error, n)
+    out = sorted(arcs + rows, key=lambda r: (r.start, r.control))
+    left = [a for a in active if not covered(rows, a, kinds=("state boundary",),
+                                             statuses=(HOLDS,), margin=tol.singular)]
+    start = 0.0 if last > 0 and covered(out, (0.0, last), statuses=(HOLDS,)) else last
+    return out, left, start
 
 
 def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray, lam: np.ndarray,

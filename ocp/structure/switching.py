@@ -549,7 +549,7 @@ def _without_arc(st: ArcStructure, j: int, i: int) -> ArcStructure:
     per = list(st.per_control)
     arcs = [Arc(a.kind, a.start, a.end, a.active, a.constraint, a.side) for a in per[j].arcs]
     gone = arcs.pop(i)
-    if 0 < i < len(arcs) and arcs[i - 1].mode == arcs[i].mode:
+    if 0 < i < len(arcs) and arcs[i - 1].mode_key() == arcs[i].mode_key():
         arcs[i - 1].end = arcs[i].end
         del arcs[i]
     elif i > 0:

@@ -24,8 +24,10 @@ from ocp import (
     certify,
     refine_switching,
 )
+from ocp.certificate.arc_record import ArcCheck
 from ocp.certificate.arc_verdict import NOT_EXTREMAL, junction_margin, settle
 from ocp.certificate.checks import CERTIFIED
+from ocp.certificate.refined_state_arcs import check_refined_boundary
 from ocp.structure.arcs import Arc, ArcStructure, SwitchingStructure, detect_structure
 from ocp.structure.singular import singular_algebra
 
@@ -159,9 +161,19 @@ def test_half_covered_interior_arc_is_never_certified(bang_singular):
     assert c.verdict == "certified (bang, singular order 1)", c.reasons
 
 
+@pytest.fixture(scope="module")
+def bd_solutions():
+    """Bryson--Denham in its three forms, collocation with mesh refinement, and refined."""
+    out = {}
+    for form in ("state", "bound_state", "path"):
+        sol = Collocation(bryson_denham(form), 20).refine({}, tol=1e-8)
+        out[form] = (sol, refine_switching(sol))
+    return out
+
+
 @pytest.mark.parametrize("form", ["state", "bound_state", "path"])
-def test_bryson_denham_certified_with_its_boundary_arc(form):
-    sol = Collocation(bryson_denham(form), 20).refine({}, tol=1e-8)
+def test_bryson_denham_certified_with_its_boundary_arc(bd_solutions, form):
+    sol, _ = bd_solutions[form]
     assert sol.objective == pytest.approx(4.0, abs=1e-6)
     c = certify(sol)
     assert c.verdict == "certified (interior, state boundary order 2)", c.reasons
@@ -173,6 +185,63 @@ def test_bryson_denham_certified_with_its_boundary_arc(form):
     assert arc.residuals["exit time"] == pytest.approx(2 / 3, abs=1e-2)
     assert arc.residuals["entry jump eta"] == pytest.approx(18.0, rel=1e-3)
     assert arc.residuals["exit jump eta"] == pytest.approx(18.0, rel=1e-3)
+
+
+@pytest.mark.parametrize("form", ["state", "bound_state", "path"])
+def test_bryson_denham_refined_and_its_boundary_arc_certified(bd_solutions, form):
+    """The default route refines the regular interior arcs (costate copies) and the boundary
+    arc's junctions; the refined certificate checks the boundary arc itself: the costate
+    rebuilt across it by indirect adjoining, its jumps eta = 18 at both junctions, the
+    density mu = 0 and the total measure 36 (read also from the transcription's path
+    multipliers where the constraint is a path constraint)."""
+    sol, r = bd_solutions[form]
+    assert r.kinds == ["interior", "boundary", "interior"]
+    assert r.objective == pytest.approx(4.0, abs=1e-12)
+    # J is stationary in the junctions: they are known to about sqrt(eps)
+    assert r.switch_times == pytest.approx([1 / 3, 2 / 3], abs=1e-7)
+    c = certify(sol, r)
+    assert c.verdict == "certified (interior, state boundary order 2)", c.reasons
+    assert c.checked_from == 0.0
+    (arc,) = [a for a in c.arcs if a.kind == "state boundary"]
+    assert arc.status == "holds" and arc.order == 2
+    assert (arc.start, arc.end) == pytest.approx(r.switch_times, abs=1e-15)
+    assert arc.residuals["entry jump eta"] == pytest.approx(18.0, rel=1e-6)
+    assert arc.residuals["exit jump eta"] == pytest.approx(18.0, rel=1e-6)
+    assert arc.residuals["total measure pi_0"] == pytest.approx(36.0, rel=1e-6)
+    assert arc.residuals["density mu >= 0 (a_0 non-increasing)"] <= 1e-10
+    if form == "path":
+        assert arc.residuals["transcription's measure"] == pytest.approx(36.0, rel=1e-4)
+    else:
+        assert "transcription's measure" not in arc.residuals
+    first = [a for a in c.arcs if a.kind == "interior" and a.end <= 0.34]
+    assert first and first[0].status == "holds"  # checked with its costate copy
+
+
+def test_bryson_denham_wrong_candidates_refuted(bd_solutions):
+    sol, r = bd_solutions["path"]
+    bad = dataclasses.replace(r, durations=r.durations * np.array([1.02, 0.98, 1.0]))
+    c = certify(sol, bad)
+    assert c.verdict == NOT_EXTREMAL and not c.certified
+    # a costate that jumps the wrong way at the entry: eta < 0 is refuted by the sign check
+    row = [a for a in certify(sol, r).arcs if a.kind == "state boundary"][0]
+    t, x, u, k = r.samples(2000)
+    sel = k == 1
+    arc = ArcCheck("state boundary", row.control, row.start, row.end, side="upper")
+    pr = r.problem.costate_copies.origin
+    before = np.array([18.0 - 40.0, 0.0])  # true: (18, 0)
+    check_refined_boundary(arc, pr, 0, t[sel], x[sel][:, :2], u[sel], r.pv, before,
+                           x[k == 2][0, 4:6], 1e-6, 0.0)
+    assert arc.status == "fails" and arc.residuals["entry jump eta"] == pytest.approx(-22.0)
+
+
+def test_lq_refined_by_default_route_and_certified(lq_solutions):
+    sol = lq_solutions["shooting"]
+    r = refine_switching(sol)
+    assert r.kinds == ["interior"]
+    assert r.objective == pytest.approx(math.tanh(1.0) / 2, abs=1e-14)
+    assert r.x0[1] == pytest.approx(math.tanh(1.0), abs=1e-12)  # lambda(0) = S(0) x(0)
+    c = certify(sol, r)
+    assert c.verdict == "certified (interior)", c.reasons
 
 
 @pytest.mark.parametrize("build", [singular, lambda: bryson_denham("path")])
