@@ -244,6 +244,40 @@ def test_lq_refined_by_default_route_and_certified(lq_solutions):
     assert c.verdict == "certified (interior)", c.reasons
 
 
+def first_order_tail() -> OptimalControlProblem:
+    """``min int u^2/2 + x``, ``x' = u``, ``x(0) = 1``, ``x >= 0``, ``T = 2``: ``u = t - sqrt 2``
+    until ``x`` reaches 0 at ``t = sqrt 2``, then a boundary arc of order 1 to the end with
+    ``lambda = 0``, density ``mu = 1`` and no jump (a regular H: the control is continuous),
+    ``J = 2 sqrt(2) / 3``."""
+    p = OptimalControlProblem("first_order_tail")
+    x, u = p.state("x", lower=0.0), p.control("u")
+    p.set_dynamics([u])
+    p.initial_constraint(x, 1.0)
+    p.fixed_final_time(2.0)
+    p.minimize_integral(u**2 / 2 + x)
+    return p
+
+
+def test_entry_jump_inside_the_junctions_resolution_is_no_sign_violation():
+    """The softlanding tail's case (issue 44, certificate item 4): a boundary arc with a
+    density and no entry jump. The jump estimated from the costate lines beside a junction
+    known to a grid interval is -mu h-ish (here -0.039 on 40 intervals, -0.027 on 80: it
+    shrinks with the grid); it was a sign failure, and H_u on the arc (u = lambda = 0) was
+    judged relative to terms that vanish there. Now it is certified, with the reason."""
+    sol = MultipleShooting(first_order_tail(), nodes=40).solve({})
+    assert sol.objective == pytest.approx(2 * math.sqrt(2) / 3, abs=3e-4)
+    c = certify(sol)
+    assert c.verdict == "certified (interior, state boundary order 1)", c.reasons
+    (arc,) = [a for a in c.arcs if a.kind == "state boundary"]
+    assert arc.status == "holds" and arc.order == 1
+    assert arc.residuals["entry time"] == pytest.approx(math.sqrt(2), abs=0.05)
+    eta, density = arc.residuals["entry jump eta"], arc.residuals["multiplier mu dt max"]
+    assert density == pytest.approx(1.0 * 2 / 40, rel=1e-2)  # mu = 1 over one interval
+    assert -density <= eta < 0
+    assert any(n.startswith("entry jump eta") and "within the numerical error" in n
+               for n in arc.notes)
+
+
 @pytest.mark.parametrize("build", [singular, lambda: bryson_denham("path")])
 def test_stopped_early_never_certified(build):
     with pytest.raises(SolveError) as info:
