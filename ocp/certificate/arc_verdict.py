@@ -95,7 +95,10 @@ def settle(cert: PMPCertificate, structure: ArcStructure | None, refuting: bool,
     """
     rows = cert.arcs
     free = [r for r in rows if r.kind != "bang" and r.kind != "control boundary"]
-    if cert.verdict == NOT_BANG_BANG and free:
+    if cert.verdict == NOT_BANG_BANG and free and refuting:
+        # (a transcription's global refutation says only what it measured: sigma vanishes
+        # on an interval, or sits off its bound: "not bang-bang"; its per-arc rows carry
+        # the grid's error and refute nothing)
         cert.verdict = NOT_EXTREMAL
     bad = [r for r in rows if r.status != HOLDS]
     for r in bad:

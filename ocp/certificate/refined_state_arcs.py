@@ -144,7 +144,8 @@ def check_refined_boundary(arc: ArcCheck, org: OptimalControlProblem, j: int,
               / max(1.0, float(np.max(np.abs(lv)))), tol, error, "held on the refined arc")
     if after is None or before is None or p < 1:
         arc.mark(UNCERTAIN, "the costate beside the refined arc is not known (no interior run "
-                 "or swept part borders it): its multipliers were not checked")
+                 "or swept part borders it), or the constraint has no order: its multipliers "
+                 "were not checked")
         return
     fn = _indirect(org, arc.control, str(arc.side), j)
     lam, nu, _ = _sweep(fn, t, x, u, after, pv, 1)
@@ -246,6 +247,10 @@ def refined_boundary_rows(ref: object, tsol: TranscribedSolution, sweep: tuple |
         after = copy_at(last + 1, Z[last + 1])
         if after is None and sweep is not None and len(sweep[0]) and sweep[0][0] <= t2 + 1e-9:
             after = sweep[1][int(np.argmin(np.abs(sweep[0] - t2)))][:org.nx]
+        c = path_constraint(org, name).expr
+        if before is None or after is None or ca.depends_on(c, ca.vertcat(org.t, org.t0,
+                                                                         org.T)):
+            continue  # no costate beside it (bang arcs are not swept): its span stays active
         t, x, u, k = ref.samples(points * max(1, int(edges[-1] / max(t2 - t1, 1e-300))))  # type: ignore
         sel = (k >= first) & (k <= last)
         check_refined_boundary(arc, org, j, t[sel], x[sel][:, :org.nx], u[sel], pv, before,

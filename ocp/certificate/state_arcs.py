@@ -67,6 +67,10 @@ def check_state_arcs(arcs: list[ArcCheck], s: ArcSamples) -> None:
         if arc.kind != "state boundary":
             continue
         c = path_constraint(pr, arc.control)
+        if ca.depends_on(ca.vertcat(c.expr, c.lower, c.upper), ca.vertcat(pr.t, pr.t0, pr.T)):
+            arc.mark(UNCERTAIN, "a time-varying state constraint: its boundary arc's "
+                     "conditions are not checked")
+            continue
         arc.order = constraint_order(pr, arc.control)
         sign = 1.0 if arc.side == "upper" else -1.0
         fn = ca.Function("c", [pr.x, pr.p], [c.expr, ca.gradient(c.expr, pr.x),

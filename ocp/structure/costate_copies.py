@@ -111,7 +111,8 @@ def _build(pr: OptimalControlProblem, runs: int) -> OptimalControlProblem:
     X = [q.state(n) for n in pr.state_names]
     L = [[q.state(f"lam_{n}#{i}") for n in pr.state_names] for i in range(runs)]
     U = [q.control(n) for n in pr.control_names]
-    old, new = ca.vertcat(pr.p, pr.x, pr.u, pr.T), ca.vertcat(*P, *X, *U, q.T)
+    old = ca.vertcat(pr.p, pr.x, pr.u, pr.t, pr.t0, pr.T)
+    new = ca.vertcat(*P, *X, *U, q.t, q.t0, q.T)
 
     def sub(e: ca.SX) -> ca.SX:
         return ca.substitute(ca.SX(e), old, new)
