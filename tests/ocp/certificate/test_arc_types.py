@@ -161,19 +161,29 @@ def test_half_covered_interior_arc_is_never_certified(bang_singular):
     assert c.verdict == "certified (bang, singular order 1)", c.reasons
 
 
+class _Solved(dict):
+    """Bryson--Denham per form, collocation with mesh refinement, solved on first use;
+    ``refined(form)`` adds its refinement (also on first use)."""
+
+    def __missing__(self, form: str):
+        self[form] = Collocation(bryson_denham(form), 20).refine({}, tol=1e-8)
+        return self[form]
+
+    def refined(self, form: str):
+        key = ("refined", form)
+        if key not in self:
+            self[key] = refine_switching(self[form])
+        return self[form], self[key]
+
+
 @pytest.fixture(scope="module")
 def bd_solutions():
-    """Bryson--Denham in its three forms, collocation with mesh refinement, and refined."""
-    out = {}
-    for form in ("state", "bound_state", "path"):
-        sol = Collocation(bryson_denham(form), 20).refine({}, tol=1e-8)
-        out[form] = (sol, refine_switching(sol))
-    return out
+    return _Solved()
 
 
 @pytest.mark.parametrize("form", ["state", "bound_state", "path"])
 def test_bryson_denham_certified_with_its_boundary_arc(bd_solutions, form):
-    sol, _ = bd_solutions[form]
+    sol = bd_solutions[form]
     assert sol.objective == pytest.approx(4.0, abs=1e-6)
     c = certify(sol)
     assert c.verdict == "certified (interior, state boundary order 2)", c.reasons
@@ -187,14 +197,15 @@ def test_bryson_denham_certified_with_its_boundary_arc(bd_solutions, form):
     assert arc.residuals["exit jump eta"] == pytest.approx(18.0, rel=1e-3)
 
 
-@pytest.mark.parametrize("form", ["state", "bound_state", "path"])
+@pytest.mark.parametrize("form", [pytest.param("state", marks=pytest.mark.slow),
+                                  pytest.param("bound_state", marks=pytest.mark.slow), "path"])
 def test_bryson_denham_refined_and_its_boundary_arc_certified(bd_solutions, form):
     """The default route refines the regular interior arcs (costate copies) and the boundary
     arc's junctions; the refined certificate checks the boundary arc itself: the costate
     rebuilt across it by indirect adjoining, its jumps eta = 18 at both junctions, the
     density mu = 0 and the total measure 36 (read also from the transcription's path
     multipliers where the constraint is a path constraint)."""
-    sol, r = bd_solutions[form]
+    sol, r = bd_solutions.refined(form)
     assert r.kinds == ["interior", "boundary", "interior"]
     assert r.objective == pytest.approx(4.0, abs=1e-12)
     # J is stationary in the junctions: they are known to about sqrt(eps)
@@ -218,13 +229,13 @@ def test_bryson_denham_refined_and_its_boundary_arc_certified(bd_solutions, form
 
 
 def test_bryson_denham_wrong_candidates_refuted(bd_solutions):
-    sol, r = bd_solutions["path"]
+    sol, r = bd_solutions.refined("path")
     bad = dataclasses.replace(r, durations=r.durations * np.array([1.02, 0.98, 1.0]))
     c = certify(sol, bad)
     assert c.verdict == NOT_EXTREMAL and not c.certified
     # a costate that jumps the wrong way at the entry: eta < 0 is refuted by the sign check
     row = [a for a in certify(sol, r).arcs if a.kind == "state boundary"][0]
-    t, x, u, k = r.samples(2000)
+    t, x, u, k = r.samples(400)
     sel = k == 1
     arc = ArcCheck("state boundary", row.control, row.start, row.end, side="upper")
     pr = r.problem.costate_copies.origin
