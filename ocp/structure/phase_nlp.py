@@ -43,7 +43,16 @@ _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def check_phase_problem(mp: MultiPhaseProblem) -> None:
-    """Refuse what the refinement cannot represent (see the module docstring)."""
+    """Refuse what the refinement cannot represent (see :mod:`ocp.structure.phase_refinement`).
+
+    Parameters
+    ----------
+    mp : MultiPhaseProblem
+
+    Raises
+    ------
+    ProblemDefinitionError
+    """
     for ph in mp.phases:
         if ca.depends_on(ca.vertcat(ph.rhs, ph.lagrange), ca.vertcat(ph.t, ph.t0, ph.T)):
             raise ProblemDefinitionError(
@@ -480,14 +489,26 @@ def clear_cache(mp: MultiPhaseProblem | None = None) -> None:
 
 
 class PhaseRows:
-    """What the certificate reads of a phase's NLP rows (step counts, row times)."""
+    """What the certificate reads of a phase's NLP rows (step counts, row times).
+
+    Parameters
+    ----------
+    nlp : PhaseSwitchingNLP
+    i : int
+        The phase.
+    """
 
     def __init__(self, nlp: PhaseSwitchingNLP, i: int) -> None:
         self._nlp, self._i = nlp, i
         self.substeps = nlp.phase_substeps[i]
 
     def row_times(self, w: np.ndarray) -> np.ndarray:
-        """Local times of the phase's rows at the phase's ``[durations, x0]`` ``w``."""
+        """Local times of the phase's rows at the phase's ``[durations, x0]`` ``w``.
+
+        Parameters
+        ----------
+        w : ndarray
+        """
         full = np.zeros(self._nlp.n_w)
         full[self._nlp.phase_slice(self._i)] = w
         return self._nlp.phase_row_times(self._i, full)
