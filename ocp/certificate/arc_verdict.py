@@ -107,6 +107,11 @@ def settle(cert: PMPCertificate, structure: ArcStructure | None, refuting: bool,
         cert.verdict = NOT_EXTREMAL
     elif bad and cert.verdict == CERTIFIED:
         cert.verdict = INCONCLUSIVE
+    if not refuting and any(r.status == FAILS and r.kind in ("interior", "singular")
+                            for r in bad):
+        cert.reasons.append("a transcription's control on an interior or singular arc "
+                            "carries the grid's error: certify(sol, refine_switching(sol)) "
+                            "checks the arcs flown exactly")
     doubt = [(c, a, b) for c, a, b in (interior_arcs(structure) if structure else [])
              if not covered([r for r in rows if r.control == c or r.kind == "state boundary"],
                             (a, b), statuses=(HOLDS,), margin=margin)]

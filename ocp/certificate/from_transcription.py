@@ -229,8 +229,14 @@ def _leave_to_table(fig: Figures, active: list, arcs: list[ArcCheck], margin: fl
     """Leave the spans that rows of the per-arc table check to the table: runs of vanishing
     sigma on interior or singular arcs, and state-constrained spans on state boundary arcs.
     Returns the active spans left. A span may stick out of its rows by ``margin`` at each
-    end (the shortest singular interval the certificate reports)."""
-    fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=margin)]
+    end (the shortest singular interval the certificate reports). A run that holds an
+    interior or singular row of any status is the table's too: sigma is small beside a
+    singular arc (it leaves zero as a power of the distance to the junction), and on a
+    transcription alone a failing row gives "inconclusive" (the control on a singular arc
+    carries the grid's error), never the global checks' refutation."""
+    free = [r for r in arcs if r.kind in ("interior", "singular")]
+    fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=margin)
+                    and not any(min(r[1], a.end) > max(r[0], a.start) for a in free)]
     for name in fig.agreement:
         mine = [r for r in arcs if r.control == name or r.kind == "state boundary"]
         if mine and all(r.kind in ("interior", "singular", "state boundary") for r in mine):
