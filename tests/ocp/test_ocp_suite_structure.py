@@ -1,5 +1,5 @@
 """The suite's bang-bang problems refined and certified with default settings; its singular
-problems get "not bang-bang" (from multiple-shooting transcriptions)."""
+problems, from a multiple-shooting transcription alone, are "inconclusive" (never refuted)."""
 
 import pytest
 
