@@ -240,6 +240,20 @@ class Solution:
         """
         return self.discretization.sample(self.data, np.atleast_1d(np.asarray(t, float)))
 
+    def resample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """States and controls of a phase at the times ``t`` as the method represents them,
+        what a guess on another grid is resampled from (collocation: the control's
+        polynomial through its collocation points, extrapolated before the first; see
+        :meth:`ocp.transcriptions.collocation.CollocationPhase.local`; multiple
+        shooting: :meth:`at`).
+
+        Parameters
+        ----------
+        t : array_like
+            Times within the phase.
+        """
+        return self.discretization.resample(self.data, np.atleast_1d(np.asarray(t, float)))
+
     def trajectory(self, n: int = 1000) -> Trajectory:
         """The solution as a :class:`ocp.definition.trajectory.Trajectory` on about ``n`` samples.
 
