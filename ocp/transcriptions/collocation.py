@@ -180,7 +180,7 @@ class CollocationPhase(PhaseDiscretization):
         if self.inner.shape != (N,):
             raise ValueError(f"inner: {self.inner.shape[0]} flags for {N} intervals")
         self.Gin: ca.Function | None = None
-        if self.inner.any() and self.checked_rows():
+        if self.inner.any() and self.checked_rows() and self.inner_theta.size:
             key = ("radau inner", cp, degree)
             if key not in functions:
                 functions[key] = self._inner_function()
@@ -208,23 +208,28 @@ class CollocationPhase(PhaseDiscretization):
                            ["xk", "Z", "U", "t", "h", "s"], ["defect", "xend", "q", "path"])
 
     def _inner_function(self) -> ca.Function:
-        """The checked rows at the state polynomial's inner Bernstein control points of one
-        interval (:func:`bernstein_points`), the time and the control at their Greville
-        abscissae (the control :meth:`interpolate`'s, unclipped: an NLP row cannot clip)."""
+        """The checked rows between the points of one interval, at the Greville abscissae
+        ``i / d`` (:func:`bernstein_points`): a row free of the controls at the state
+        polynomial's Bernstein control points (a bound there holds along the whole
+        polynomial for a row affine in the states, or convex below an upper bound), a row
+        with controls on the polynomial, with :meth:`interpolate`'s control (unclipped:
+        an NLP row cannot clip)."""
         cp, d, c1 = self.cp, self.d, float(self.c[0])
         rows = self.checked_rows()
         xk, Z = ca.SX.sym("xk", cp.nx), ca.SX.sym("Z", cp.nx, d)
         U, up = ca.SX.sym("U", cp.nu, d), ca.SX.sym("up", cp.nu)
         t, h, s = ca.SX.sym("t"), ca.SX.sym("h"), ca.SX.sym("s", cp.ns)
-        bx = self.inner_states
-        bu = lagrange_basis(self.c, self.inner_theta) if d > 1 \
-            else np.ones((self.inner_theta.size, 1))
+        theta = self.inner_theta
+        bx = lagrange_basis(np.r_[0.0, self.c], theta)
+        bu = lagrange_basis(self.c, theta) if d > 1 else np.ones((theta.size, 1))
         Zf = ca.horzcat(xk, Z)
         out = []
-        for i, th in enumerate(self.inner_theta):
-            x = ca.mtimes(Zf, ca.DM(bx[i]))
+        for i, th in enumerate(theta):
             u = ca.mtimes(U, ca.DM(bu[i])) if th >= c1 else up + (th / c1) * (U[:, 0] - up)
-            out.append(cp.check(t + th * h, x, u, s)[rows])
+            at_cp = cp.check(t + th * h, ca.mtimes(Zf, ca.DM(self.inner_states[i])), u, s)
+            on_curve = cp.check(t + th * h, ca.mtimes(Zf, ca.DM(bx[i])), u, s)
+            out.append(ca.vertcat(*[at_cp[r] if cp.check_u_free[r] else on_curve[r]
+                                    for r in rows]))
         return ca.Function("Gin", [xk, Z, U, up, t, h, s], [ca.horzcat(*out)],
                            ["xk", "Z", "U", "up", "t", "h", "s"], ["c"])
 

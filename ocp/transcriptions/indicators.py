@@ -64,8 +64,11 @@ def conservatism(ph: Solution) -> np.ndarray:
     xc = np.einsum("ir,nrj->nij", disc.inner_states, nodes).reshape(idx.size * n_in, -1)
     at_cp = _rows_at(disc, data, idx, disc.inner_theta, xc, rows)
     on_curve = _rows_at(disc, data, idx, np.linspace(0.0, 1.0, CURVE_SAMPLES), None, rows)
-    upper = at_cp.max(axis=2) - on_curve.max(axis=2)
-    lower = on_curve.min(axis=2) - at_cp.min(axis=2)
+    u_free = np.array([disc.cp.check_u_free[r] for r in rows])
+    at_cp[~u_free] = -np.inf  # a row with controls is imposed on the curve: held at no cost
+    with np.errstate(invalid="ignore"):
+        upper = at_cp.max(axis=2) - on_curve.max(axis=2)
+        lower = on_curve.min(axis=2) - np.where(np.isinf(at_cp), np.inf, at_cp).min(axis=2)
     gap = np.where(lam.T > 0, upper, np.where(lam.T < 0, lower, 0.0))  # (rows, flagged)
     out[idx] = np.sum(np.abs(lam.T) * np.maximum(gap, 0.0), axis=0)
     return out

@@ -97,8 +97,8 @@ class Solution:
     unchecked: list[str]
     mesh_history: list[Any]
     mesh_error: float
-    objective_error: float  # Collocation.refine's estimate of the objective's error
-    mesh_converged: bool
+    objective_error: float = math.nan  # refine()'s estimate of the objective's error
+    mesh_converged: bool = False  # refine() met its tolerances (a single solve: False)
     objective_scale: float
     expanded: bool
 
@@ -127,6 +127,24 @@ class Solution:
             ``solution -> value``.
         """
         self.__dict__.setdefault("deferred", {})[name] = compute
+
+    @property
+    def convergence(self) -> str:
+        """Whether the discretisation converged, in words: ``"converged (mesh, estimated
+        error 3.2e-09)"`` after a :meth:`~ocp.Collocation.refine` (or
+        :meth:`~ocp.MultipleShooting.refine`) that met its tolerances with that estimate
+        of the objective's absolute error (``objective_error``), else what it is not."""
+        history = self.__dict__.get("mesh_history")
+        e = self.objective_error
+        if not history:
+            return "not converged: one grid, no estimate of its error (refine() converges)"
+        if self.mesh_converged:
+            return f"converged (mesh, estimated error {e:.2g})"
+        if not math.isfinite(e):
+            return ("not converged (mesh): no estimate of the objective's error could be "
+                    f"confirmed within the rounds and intervals allowed ({len(history)} solves)")
+        return (f"not converged (mesh): estimated error {e:.2g} above the tolerance after "
+                f"{len(history)} solves")
 
     # python-control / scipy style aliases
     @property

@@ -33,7 +33,7 @@ from .discretization import PhaseDiscretization, segment_index
 from .integrators import cvodes_function, rk4_function
 from .mesh import mesh_error
 from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, GridFree, Transcription, expand_mode
-from .refinement import MeshRefinement
+from .refinement import MeshRefinement, NodeDoubling
 from .shooting import ShootingPhase
 from .solution import Solution
 
@@ -52,7 +52,7 @@ def _per_phase(value: Any, n: int, what: str) -> list[Any]:
     return [value] * n
 
 
-class MultipleShooting(Transcription):
+class MultipleShooting(NodeDoubling, Transcription):
     """Multiple-shooting transcription of an optimal control problem.
 
     Parameters
@@ -85,6 +85,8 @@ class MultipleShooting(Transcription):
         :mod:`ocp.definition.scaling`).
     codegen : bool
         Compiled NLP functions (RK4 only; see :class:`ocp.transcriptions.nlp.Transcription`).
+    grid_free : GridFree, optional
+        Reuse another transcription's compiled problem (:meth:`refine`'s doublings).
 
     Attributes
     ----------
@@ -99,7 +101,8 @@ class MultipleShooting(Transcription):
                  ipopt_options: dict | None = None, expand: bool | str = "auto", *,
                  inner_constraints: bool = False, verify: str = "warn",
                  verify_tol: float = 1e-6, verify_points: int = 10,
-                 scaling: Any = "auto", codegen: bool = False) -> None:
+                 scaling: Any = "auto", codegen: bool = False,
+                 grid_free: GridFree | None = None) -> None:
         if integrator not in ("rk4", "cvodes"):
             raise ProblemDefinitionError(f"integrator must be 'rk4' or 'cvodes', got "
                                          f"{integrator!r}")
@@ -112,14 +115,34 @@ class MultipleShooting(Transcription):
         self.substeps = positive_int(substeps, "substeps")
         self.inner_constraints = bool(inner_constraints)
         expand = expand_mode(expand)  # refused before the integrator can ignore it
+        self.scaling_arg = scaling
         super().__init__(problem, ipopt_options, expand if integrator == "rk4" else False,
-                         verify, verify_tol, verify_points, scaling, codegen=codegen)
+                         verify, verify_tol, verify_points, scaling, grid_free,
+                         codegen=codegen)
         self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
         self.F = self.phases[0].F  # type: ignore[attr-defined]
 
     def _discretize(self) -> list[PhaseDiscretization]:
         return [ShootingPhase(cp, tm, n, self.integrator, self.substeps, self.inner_constraints)
                 for cp, tm, n in zip(self.compiled, self.times, self.nodes, strict=True)]
+
+    def with_nodes(self, nodes: list[int], ipopt_options: dict | None = None
+                   ) -> MultipleShooting:
+        """A new multiple shooting of the same problem and options on other node counts.
+
+        Parameters
+        ----------
+        nodes : list of int
+            Nodes per phase.
+        ipopt_options : dict, optional
+            Override of the Ipopt options (default: this transcription's).
+        """
+        return MultipleShooting(self.problem, nodes, self.integrator, self.substeps,
+                                ipopt_options or self.ipopt_options, self.expand,
+                                inner_constraints=self.inner_constraints, verify=self.verify,
+                                verify_tol=self.verify_tol, verify_points=self.verify_points,
+                                scaling=self.scaling_arg, codegen=self.codegen,
+                                grid_free=self.grid_free)
 
     def initial_guess(self, T: float | None = None, x: Any = None, u: Any = None,
                       params: dict[str, float] | None = None) -> np.ndarray:
