@@ -1,46 +1,22 @@
 """Where the objective's error lies, for the refinement rounds driven by the objective.
 
-The local error estimates of :mod:`ocp.transcriptions.mesh` see the dynamics only. Two
-other sources are located here:
-
-* :func:`discrepancy` -- where a solution differs from another mesh's solution (the
-  confirmation's, on the mesh halved): the coarser mesh's error lies there, whatever its
-  kind (a control that kinks inside an interval, a junction);
-* :func:`conservatism` -- what imposing the constraints at the Bernstein control points
-  costs (``inner_constraints``): a polynomial whose control point sits on the bound is
-  held below it by the gap between its control points and its own maximum, which costs
-  the objective about the rows' multipliers times that gap (their sensitivity). The
-  refinement shrinks those intervals, where the gap shrinks with their length.
+The local error estimates of :mod:`ocp.transcriptions.mesh` see the dynamics only. Imposing
+the constraints at the Bernstein control points (``inner_constraints``) has a cost they do
+not see (:func:`conservatism`): a polynomial whose control point sits on the bound is held
+below it by the gap between its control points and its own maximum, which costs the
+objective about the rows' multipliers (their sensitivity) times that gap. Refinement
+shrinks those intervals, where the gap shrinks with the square of their length.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .discretization import segment_index
 from .extrema import check_at
 from .solution import Solution
 
 CURVE_SAMPLES = 24
 """Samples of a flagged interval's rows along the polynomial for :func:`conservatism`."""
-
-
-def discrepancy(sol: Solution, other: Solution) -> np.ndarray:
-    """Per mesh interval of one phase of ``sol``, the largest difference between its states
-    and those of the same phase of ``other`` (another mesh's solution) at both solutions'
-    points, relative to ``1 + max |x|``.
-
-    Parameters
-    ----------
-    sol, other : Solution
-        One phase of each.
-    """
-    t = np.union1d(sol.t, other.t)
-    x = sol.at(t)[0]
-    worst = np.max(np.abs(other.at(t)[0] - x) / (1.0 + np.max(np.abs(x), axis=0)), axis=1)
-    out = np.zeros(sol.mesh.size - 1)
-    np.maximum.at(out, segment_index(sol.mesh, t), worst)
-    return out
 
 
 def conservatism(ph: Solution) -> np.ndarray:

@@ -3,26 +3,28 @@
 Collocation (:class:`MeshRefinement`, h-refinement): rounds split the intervals whose
 error estimate (:mod:`ocp.transcriptions.mesh`) or whose violation between the points
 (:mod:`ocp.transcriptions.extrema`) exceeds the tolerance, then, while the objective's
-change between meshes exceeds its tolerance, those with the largest estimates. An
-interval found violating a path constraint or state bound between its points also gets
-the constraints imposed at its Bernstein control points from then on
-(``inner_constraints``; its pieces inherit them): a violation that comes from the NLP's
-freedom between the points rather than from the mesh (measured: the speed limit's
-state polynomial 1-2e-6 above its bound on intervals of every size from 3e-5 to 3e-3,
-round after round) is closed so.
+change between meshes exceeds its tolerance, those with the largest estimates and those
+whose constraints between the points cost the objective most
+(:mod:`ocp.transcriptions.indicators`). An interval found violating a path constraint or
+state bound between its points gets the constraints imposed at its Bernstein control
+points from then on (``inner_constraints``; its pieces inherit them): a violation that
+comes from the NLP's freedom between the points rather than from the mesh (measured: the
+speed limit's state polynomial 1-2e-6 above its bound on intervals of every size from
+3e-5 to 3e-3, round after round, refinement never converging) is closed so.
 
 Neither criterion measures the objective's error: the local estimates do not see an
 interval whose control kinks inside it while its dynamics are met (the speed limit's
 exit junction: 7.4e-7 off with every estimate below 1e-9), and the change between two
-meshes that split only some intervals can be small while the error is not (measured:
-9.2e-10 reported for a true error of 8.9e-7). Once both are met, the result is
-**confirmed**: the problem is solved again on the mesh with every interval halved,
-warm-started, and the objective's error is estimated as :data:`CONFIRM_SAFETY` times the
-change (for an error ``C h^p`` the coarse mesh's error is ``2^p / (2^p - 1)`` times the
-change: twice it for ``p = 1``) and never below the last change between rounds. If that
-misses the tolerance, refinement goes on where the two solutions differ most, and
-confirms again. The solution returned is the confirmed (coarser) one, so the final mesh
-is the one refinement needed.
+meshes that split only some intervals can be small while the error is not (measured
+before: goddard's singular arc, 3.9e-7 reported for an error of 2.7e-6). Once both are
+met, the result is **confirmed**: the problem is solved again on the mesh with every
+interval halved, warm-started, and the objective's error is estimated as
+:data:`CONFIRM_SAFETY` times the change (for an error ``C h^p`` the coarse mesh's error is
+``2^p / (2^p - 1)`` times the change: twice it for ``p = 1``), never below the last
+change between rounds nor below what Ipopt resolves (:meth:`MeshRefinement.resolution`).
+If that misses the tolerance, the halved mesh's solution becomes the next round and
+refinement goes on, to be confirmed again. The solution returned is the confirmed one
+(the coarser of the pair), so the final mesh is the one refinement needed.
 
 Ipopt relaxes every bound by ``bound_relax_factor`` (1e-8 relative by default): an
 active bound moves the objective by its multiplier times that (Bryson-Denham's
@@ -46,7 +48,7 @@ import numpy as np
 from ..definition.errors import ProblemDefinitionError, SolveError
 from ..definition.symbols import relative_tolerance
 from .discretization import segment_index
-from .indicators import conservatism, discrepancy, largest_share
+from .indicators import conservatism, largest_share
 from .mesh import (
     MeshRound,
     interval_errors,
@@ -58,7 +60,6 @@ from .mesh import (
 from .solution import Solution
 from .verify import interval_excess, verify
 
-ADOPT = True
 NOISE = 1e-3
 """Local estimates below this fraction of the tolerance do not localise the objective's
 error (measured: 1e-11 to 1e-14 on a third-order state constraint, where splitting
@@ -318,7 +319,6 @@ class _Run:
         self.max_split, self.fref = max_split, fref
         self.history: list[MeshRound] = []
         self.previous: list[float] = []  # objectives of the earlier rounds
-        self.last: Solution | None = None  # the previous round's solution
 
     def record(self, sol: Solution, emax: float, change: float, driver: str,
                kind: str = "refine") -> None:
@@ -352,25 +352,22 @@ class _Run:
                 if error <= target:
                     confirmed = True
                     break
-                if ADOPT:
-                    self.previous.append(sol.objective)
-                    sol, tr = fine, fine.transcription
-                    rounds += 1
-                    continue
-                start, close = fine, True
-                new = self.objective_meshes(tr, sol, error, target, errs, fine)
-            else:
-                start, close = sol, emax <= WARM_REFINE_ERROR
-                new = self.origin.next_meshes(tr.meshes, errs, "state", self.tol, change,
-                                              target, self.max_split) \
-                    if driver == "state" else \
-                    self.objective_meshes(tr, sol, change, target, errs, None)
+                if rounds + 1 > max_rounds:
+                    break
+                self.previous.append(sol.objective)  # the halved mesh is the next round
+                sol, tr = fine, fine.transcription
+                rounds += 1
+                continue
+            close = emax <= WARM_REFINE_ERROR
+            new = self.origin.next_meshes(tr.meshes, errs, "state", self.tol, change, target,
+                                          self.max_split) if driver == "state" else \
+                self.objective_meshes(tr, sol, change, target, errs)
             if rounds + 1 > max_rounds or _size(new) > max_intervals:
                 self.history[-1].refined_for = ""
                 break
             tr = self.next_transcription(tr, new, inner, close)
             self.previous.append(sol.objective)
-            sol = tr.next_solve(self.params, start, guess, close, self.fref)
+            sol = tr.next_solve(self.params, sol, guess, close, self.fref)
             rounds += 1
         sol.mesh_history, sol.mesh_error, sol.objective_error = self.history, emax, error
         sol.mesh_converged = confirmed and emax <= self.tol and \
@@ -378,18 +375,13 @@ class _Run:
         return sol
 
     def objective_meshes(self, tr: Any, sol: Solution, error: float, target: float,
-                         errs: list[np.ndarray], fine: Solution | None) -> list[np.ndarray]:
+                         errs: list[np.ndarray]) -> list[np.ndarray]:
         """The meshes of a round driven by the objective: split where the local estimates
-        (or, after a confirmation, the difference from the finer solution ``fine``) are
-        largest, and the intervals whose constraints between the points cost the
+        are largest, and the intervals whose constraints between the points cost the
         objective more than a tenth of its target (:mod:`ocp.transcriptions.indicators`)."""
-        if fine is not None:
-            errs = [discrepancy(a, b) for a, b in zip(sol.phases, fine.phases, strict=True)]
-        else:  # estimates far below the tolerance are rounding, not a location
-            errs = [np.where(e >= NOISE * self.tol, e, 0.0) for e in errs]
+        errs = [np.where(e >= NOISE * self.tol, e, 0.0) for e in errs]  # else rounding
         cost = [conservatism(ph) for ph in sol.phases]
-        total = np.concatenate(cost)
-        share = largest_share(total, 0.1 * target)
+        share = largest_share(np.concatenate(cost), 0.1 * target)
         bounds = np.cumsum([0] + [c.size for c in cost])
         must = [share[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
         return self.origin.next_meshes(tr.meshes, errs, "objective", self.tol, error,
