@@ -33,6 +33,7 @@ from .discretization import (
     PhaseNLP,
     lagrange_basis,
     linear_guess,
+    locate,
     segment_index,
     static_vector,
 )
@@ -342,14 +343,28 @@ class CollocationPhase(PhaseDiscretization):
         theta : ndarray
             Local fraction of each sample.
         """
-        N, d = self.N, self.d
-        Zf = np.concatenate([data.raw["X"][:N, None, :],
-                             data.raw["Z"].reshape(N, d, -1)], axis=1)[k]
-        x = np.einsum("nr,nri->ni", lagrange_basis(np.r_[0.0, self.c], theta), Zf)
-        Uk = data.raw["U"].reshape(N, d, -1)[k]
-        u = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta), Uk) if d > 1 \
+        Uk = data.raw["U"].reshape(self.N, self.d, -1)[k]
+        u = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta), Uk) if self.d > 1 \
             else Uk[:, 0, :]
-        return x, u
+        return self.states(data, k, theta), u
+
+    def node_values(self, data: PhaseData) -> np.ndarray:
+        """The state polynomials' values at every interval's nodes ``0, c_1, ..., c_d``,
+        shape (N, d + 1, nx).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        """
+        return np.concatenate([data.raw["X"][:self.N, None, :],
+                               data.raw["Z"].reshape(self.N, self.d, -1)], axis=1)
+
+    def states(self, data: PhaseData, k: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """The state polynomials of intervals ``k`` at the fractions ``theta``, (n, nx)
+        (arguments as :meth:`local`'s)."""
+        return np.einsum("nr,nri->ni", lagrange_basis(np.r_[0.0, self.c], theta),
+                         self.node_values(data)[k])
 
     def resample(self, data: PhaseData, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The collocation polynomials (:meth:`local`) at times ``t``: a guess on another
@@ -364,10 +379,7 @@ class CollocationPhase(PhaseDiscretization):
         t : ndarray
             Times.
         """
-        k = segment_index(data.mesh, t)
-        h = np.diff(data.mesh)[k]
-        theta = np.where(h > 0, (t - data.mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
-        return self.local(data, k, theta)
+        return self.local(data, *locate(data.mesh, t))
 
     def control_only_rows(self) -> list[int]:
         """Rows of the check function on the controls and not on the states: checked and
@@ -391,35 +403,22 @@ class CollocationPhase(PhaseDiscretization):
 
     def interpolate(self, data: PhaseData, k: np.ndarray,
                     theta: np.ndarray, substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """The solution on interval ``k`` at the fractions ``theta`` in [0, 1].
+        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.interpolate`.
 
         The states are the collocation polynomials. The control is the method's between
         its points, never extrapolated: on ``[c_1, 1]`` the Lagrange polynomial through the
         interval's values at its collocation points; before ``c_1``, the straight line from
         the previous interval's last point (the mesh point, where the control is that
         point's) to ``c_1`` -- on the first interval, the value at ``c_1``; held within the
-        control's bounds at the solution's parameter values. ``sol.sample``, ``sol.at``,
-        the check between points (:mod:`ocp.transcriptions.extrema`) and a guess taken from
-        the solution all read this interpolant. (The mesh error estimate reads
-        :meth:`local`, the collocation polynomials as the method defines them.)
-
-        Parameters
-        ----------
-        data : PhaseData
-            The phase's solved arrays.
-        k : ndarray of int
-            Interval of each sample.
-        theta : ndarray
-            Local fraction of each sample.
-        substeps : int
-            Unused (multiple shooting's integration steps).
+        control's bounds at the solution's parameter values. ``sol.sample``, ``sol.at`` and
+        the check between points (:mod:`ocp.transcriptions.extrema`) read this
+        interpolant; a guess for another mesh and the mesh error estimate read
+        :meth:`local`, the polynomials as the NLP holds them.
         """
         N, d = self.N, self.d
         k = np.asarray(k, dtype=int)
         theta = np.asarray(theta, dtype=float)
-        Zf = np.concatenate([data.raw["X"][:N, None, :],
-                             data.raw["Z"].reshape(N, d, -1)], axis=1)[k]
-        x = np.einsum("nr,nri->ni", lagrange_basis(np.r_[0.0, self.c], theta), Zf)
+        x = self.states(data, k, theta)
         Uk = data.raw["U"].reshape(N, d, -1)
         u = np.empty((theta.size, Uk.shape[2]))
         if u.shape[1] == 0:

@@ -297,11 +297,7 @@ class PhaseDiscretization:
         substeps : int
             RK4 steps per sample (multiple shooting).
         """
-        t = np.asarray(t, dtype=float)
-        k = segment_index(data.mesh, t)
-        h = np.diff(data.mesh)[k]
-        theta = np.where(h > 0, (t - data.mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
-        return self.interpolate(data, k, theta, substeps)
+        return self.interpolate(data, *locate(data.mesh, t), substeps)
 
     def resample(self, data: PhaseData, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """States and controls at times ``t`` as the method represents them, for a guess
@@ -426,6 +422,22 @@ def linear_guess(a: ca.SX, b: ca.SX, tau: np.ndarray) -> ca.SX:
     """
     row = ca.DM(np.asarray(tau, dtype=float)).T
     return ca.mtimes(a, 1 - row) + ca.mtimes(b, row)
+
+
+def locate(mesh: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh interval holding each time and the fraction of it there.
+
+    Parameters
+    ----------
+    mesh : ndarray
+        Increasing mesh times.
+    t : array_like
+        Query times.
+    """
+    t = np.asarray(t, dtype=float)
+    k = segment_index(mesh, t)
+    h = np.diff(mesh)[k]
+    return k, np.where(h > 0, (t - mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
 
 
 def segment_index(mesh: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -33,10 +33,9 @@ def conservatism(ph: Solution) -> np.ndarray:
     if getattr(disc, "Gin", None) is None:
         return out
     rows, idx = disc.checked_rows(), np.flatnonzero(disc.inner)
-    n_in, N, d = disc.inner_theta.size, disc.N, disc.d
+    n_in = disc.inner_theta.size
     lam = ph.multipliers["path_inner"].reshape(idx.size, n_in, len(rows)).sum(axis=1)
-    nodes = np.concatenate([data.raw["X"][:N, None, :],
-                            data.raw["Z"].reshape(N, d, -1)], axis=1)[idx]
+    nodes = disc.node_values(data)[idx]
     xc = np.einsum("ir,nrj->nij", disc.inner_states, nodes).reshape(idx.size * n_in, -1)
     at_cp = _rows_at(disc, data, idx, disc.inner_theta, xc, rows)
     on_curve = _rows_at(disc, data, idx, np.linspace(0.0, 1.0, CURVE_SAMPLES), None, rows)

@@ -147,20 +147,9 @@ class ShootingPhase(PhaseDiscretization):
 
     def interpolate(self, data: PhaseData, k: np.ndarray, theta: np.ndarray,
                     substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """The dynamics integrated from node ``k`` (RK4, ``substeps`` steps) over the
-        fraction ``theta`` of its interval with the interval's constant control.
-
-        Parameters
-        ----------
-        data : PhaseData
-            The phase's solved arrays.
-        k : ndarray of int
-            Interval of each sample.
-        theta : ndarray
-            Fraction of the interval of each sample.
-        substeps : int
-            RK4 steps per sample.
-        """
+        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.interpolate`:
+        the dynamics integrated from node ``k`` (RK4, ``substeps`` steps) over the
+        fraction ``theta`` of its interval with the interval's constant control."""
         k = np.asarray(k, dtype=int)
         n = k.size
         h = np.diff(data.mesh)[k] * np.asarray(theta, dtype=float)
