@@ -64,13 +64,19 @@ class Solution:
         ``expand``; with ``"auto"``, from its second solve of a kind on; False with
         ``codegen=True``: compiled functions).
     path_violation : float
-        Largest violation of a path constraint or state bound found on a fine
-        grid between the nodes (relative to ``max(1, |bound|)``); ``verified``
+        Largest violation of a path constraint or state bound along the solution's
+        interpolant, its maximum located between the nodes (relative to
+        ``max(1, |bound|)``; :mod:`ocp.transcriptions.verify`); ``verified``
         is True when it is within the transcription's ``verify_tol``;
         ``violations`` names the offending constraints. ``unchecked`` names the
         constraints ``verified`` does not cover between the nodes (collocation:
-        those on the controls alone, checked at the collocation points only;
-        see :mod:`ocp.transcriptions.verify`).
+        those on the controls alone, checked at the collocation points only).
+    mesh_converged, objective_error, convergence
+        Whether the discretisation converged: after ``refine()``, whether the states'
+        and the objective's estimates met their tolerances (collocation: confirmed on
+        the mesh halved; :mod:`ocp.transcriptions.refinement`), the estimate of the
+        objective's absolute error, and both in words; after a single solve, False,
+        NaN and ``"not converged: one grid, ..."``.
     phases : list of Solution
         One per phase (a single-phase solution is its own only phase). A
         multi-phase solution has no ``t``, ``x``, ``u``: use ``phases[i]`` or
