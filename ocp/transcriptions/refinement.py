@@ -29,9 +29,10 @@ refinement goes on, to be confirmed again. The solution returned is the confirme
 Ipopt relaxes every bound by ``bound_relax_factor`` (1e-8 relative by default): an
 active bound moves the objective by its multiplier times that (Bryson-Denham's
 ``x <= 1/9``: 3.6e-7), whatever the mesh. Rounds started from a previous mesh's
-multipliers, the confirmation and a final polish are therefore solved with the
-relaxation off (unless ``ipopt_options`` sets it), so the confirmed objective is the
-discretisation's and not the relaxed problem's.
+multipliers and the confirmation are therefore solved with the relaxation off (unless
+``ipopt_options`` sets it), and so is a final polish on the confirmed mesh when the
+relaxation moved its objective by more than Ipopt resolves (:func:`relaxation_effect`):
+the confirmed objective is the discretisation's, not the relaxed problem's.
 
 Multiple shooting (:class:`NodeDoubling`): the nodes are doubled until the estimate
 of :func:`doubling_error` (Richardson's, from the last three solves) meets the tolerance;
@@ -94,6 +95,31 @@ def is_tight(sol: Solution) -> bool:
     """Whether a solution was solved with the relaxation :func:`tight_options` sets."""
     opts = sol.transcription.ipopt_options
     return opts == tight_options(opts)
+
+
+def relaxation_effect(sol: Solution) -> float:
+    """What Ipopt's relaxation of the bounds moved the objective by, to first order: the
+    sum over the inequality bounds (of the variables and the constraints) of each
+    multiplier times its relaxation ``bound_relax_factor * max(1, |bound|)``.
+
+    Parameters
+    ----------
+    sol : Solution
+        A solution.
+    """
+    tr = sol.transcription
+    relax = float(tr.ipopt_options.get("bound_relax_factor", 1e-8))
+    if relax == 0.0:
+        return 0.0
+    lbw, ubw, lbg, ubg = (np.array(b, dtype=float).ravel()
+                          for b in tr.bounds_function(tr.param_vector(sol.params)))
+
+    def moved(lam: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> float:
+        bound = np.where(lam > 0, hi, lo)  # CasADi: a positive multiplier holds the upper
+        free = np.isfinite(bound) & (lo < hi)  # equalities and fixed variables: not relaxed
+        return float(np.sum(np.abs(lam[free]) * np.maximum(1.0, np.abs(bound[free]))))
+
+    return relax * (moved(sol.lam_x, lbw, ubw) + moved(sol.lam_g, lbg, ubg))
 
 
 def halved(meshes: list[np.ndarray]) -> list[np.ndarray]:
@@ -401,7 +427,9 @@ class _Run:
         """The solution on its own mesh with Ipopt's bound relaxation off (and the
         constraints between the points where a violation was found), warm-started."""
         same = all(np.array_equal(a, b) for a, b in zip(inner, tr.inner, strict=True))
-        if is_tight(sol) and same:
+        negligible = relaxation_effect(sol) <= self.origin.resolution() * max(
+            1.0, abs(sol.objective))
+        if same and (is_tight(sol) or negligible):
             return sol, tr
         tr = self.next_transcription(tr, tr.meshes, inner, True)
         return tr.next_solve(self.params, sol, None, True, self.fref), tr
