@@ -378,11 +378,8 @@ class _Run:
                 if error <= target:
                     confirmed = True
                     break
-                if rounds + 1 > max_rounds:
-                    break
                 self.previous.append(sol.objective)  # the halved mesh is the next round
-                sol, tr = fine, fine.transcription
-                rounds += 1
+                sol, tr = fine, fine.transcription  # (solved already: not counted)
                 continue
             close = emax <= WARM_REFINE_ERROR
             new = self.origin.next_meshes(tr.meshes, errs, "state", self.tol, change, target,
