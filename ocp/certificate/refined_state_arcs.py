@@ -35,7 +35,7 @@ from ..structure.arcs import TranscribedSolution
 from ..structure.constraint_kinds import STATE, constraint_kind
 from ..structure.costate_copies import copy_of
 from ..structure.flows import path_constraint
-from ..transcriptions.gridview import is_collocation
+from ..transcriptions.gridview import is_collocation, mesh_indices
 from ..transcriptions.solution import along
 from .arc_conditions import ArcSamples, check_arcs, refined_arcs
 from .arc_record import FAILS, UNCERTAIN, ArcCheck
@@ -204,7 +204,37 @@ def transcription_measure(sol: TranscribedSolution, name: str, side: str,
     # (a row's multiplier: the measure at its point; collocation has no row at t0)
     t = np.asarray(sol.t[1:] if is_collocation(sol) else sol.t, dtype=float)
     sel = (t >= span[0] - margin) & (t <= span[1] + margin)
-    return float(np.sum(m[sel])) * (1.0 if side == "upper" else -1.0)
+    total = float(np.sum(m[sel])) + inner_measure(sol, name, span, margin)
+    return total * (1.0 if side == "upper" else -1.0)
+
+
+def inner_measure(sol: TranscribedSolution, name: str, span: tuple[float, float],
+                  margin: float) -> float:
+    """The part of the measure of ``name`` held by its rows between the points
+    (``inner_constraints``: Bernstein control points of the flagged intervals), over the
+    intervals whose start lies in ``span`` (and ``margin`` either side); 0 without them."""
+    disc, inner = getattr(sol, "discretization", None), sol.multipliers.get("path_inner")
+    if inner is None or disc is None or np.size(inner) == 0:
+        return 0.0
+    if not is_collocation(sol):  # shooting: every row of check at the integrator's steps
+        names = list(disc.cp.check_names)
+        if name not in names:
+            return 0.0
+        lam = np.asarray(inner, dtype=float).reshape(disc.N, -1, len(names))
+        starts = np.asarray(sol.t, dtype=float)[:disc.N]
+        sel = (starts >= span[0] - margin) & (starts <= span[1] + margin)
+        return float(np.sum(lam[sel, :, names.index(name)]))
+    if getattr(disc, "Gin", None) is None:
+        return 0.0
+    rows = disc.checked_rows()
+    names = [disc.cp.check_names[r] for r in rows]
+    if name not in names:
+        return 0.0
+    idx = np.flatnonzero(disc.inner)
+    lam = np.asarray(inner, dtype=float).reshape(idx.size, disc.inner_theta.size, len(rows))
+    starts = np.asarray(sol.t, dtype=float)[mesh_indices(sol)][idx]
+    sel = (starts >= span[0] - margin) & (starts <= span[1] + margin)
+    return float(np.sum(lam[sel, :, names.index(name)]))
 
 
 def refined_boundary_rows(ref: object, tsol: TranscribedSolution, sweep: tuple | None,
