@@ -181,5 +181,31 @@ def at_actuation(robot: Robot, impact: Impact, issued: list[Command], x: np.ndar
     return x, delay * period
 
 
+def saturated(control: Any, u_max: float | None) -> Any:
+    """``control`` with its constant forces clipped to ``[-u_max, u_max]`` (itself where
+    none is beyond; an affine row is left to the plant, which saturates it exactly:
+    :meth:`~softlanding.control.plant.SteppingPlant.step`).
+
+    Parameters
+    ----------
+    control : controller
+        A schedule (others are returned as they are).
+    u_max : float or None
+        The force limit (None: none).
+    """
+    if u_max is None:
+        return control
+    if isinstance(control, ForceSchedule):
+        if max(abs(v) for v in control.values) <= u_max:
+            return control
+        return ForceSchedule(control.times, tuple(min(u_max, max(-u_max, v))
+                                                  for v in control.values))
+    if isinstance(control, FeedbackSchedule):
+        rows = tuple(row if any(row[:4]) or abs(row[4]) <= u_max
+                     else (*row[:4], min(u_max, max(-u_max, row[4]))) for row in control.gains)
+        return control if rows == control.gains else FeedbackSchedule(control.times, rows)
+    return control
+
+
 __all__ = ["Command", "Schedule", "at_actuation", "force_at", "force_at_end",
-           "force_integrals", "plan_time", "shifted"]
+           "force_integrals", "plan_time", "saturated", "shifted"]

@@ -177,7 +177,8 @@ class CompiledController:
 
     def schedule(self) -> ForceSchedule | FeedbackSchedule:
         """The plan's force from now: push until the switch, pull until the foot's stop,
-        then the arrest of the body and its weight (from the plan's state at the stop); or,
+        then the arrest of the body (saturated at the force limit) and its weight (from the
+        plan's state at the stop); or,
         creeping, the creep law's force of this sample (held: the next sample computes the
         next)."""
         M = self.M
@@ -189,7 +190,9 @@ class CompiledController:
         tail = arrest_schedule(x_t, self.r_m)
         assert isinstance(tail, ForceSchedule)  # (a constant arrest force, then the weight)
         times = ((t1,) if t1 > 0 else ()) + (t1 + t2,) + tuple(t1 + t2 + t for t in tail.times)
-        values = ((self.u_max,) if t1 > 0 else ()) + (-self.u_max,) + tuple(tail.values)
+        # (the arrest's force saturated at the limit: a noisy state's arrest may ask more)
+        values = ((self.u_max,) if t1 > 0 else ()) + (-self.u_max,) + tuple(
+            min(self.u_max, max(-self.u_max, v)) for v in tail.values)
         return ForceSchedule(times, values)
 
     def stop_time(self) -> float:

@@ -197,7 +197,8 @@ def run_loop(controller: LandingController, plant: SteppingPlant, sensor: Sensor
         issued.append(controller.step(reading))
     if plant.x[3] >= -stop:
         robot = plant.robot
-        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m, robot.s))
+        final = plant.finish(sensor.arrest(sensor.measure(plant.x)[0], robot.r_m, robot.s,
+                                           robot.u_max))
     else:
         origin, command, _ = issued[-1]
         final = plant.finish(shifted(command, plant.t - origin))

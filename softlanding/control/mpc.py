@@ -19,6 +19,17 @@ from softlanding.control.commands import plan_time
 from softlanding.control.compiled import CompiledController
 from softlanding.control.estimators import make_estimator
 from softlanding.control.loop import LoopRecord, LoopRun, run_loop
+from softlanding.control.options import (
+    CONTROLLERS,
+    DEFAULT_PERIOD,
+    ESTIMATORS,
+    MAX_NOISE,
+    MAX_PERIOD,
+    MIN_NOISE,
+    MIN_PERIOD,
+    check_choice,
+    check_period,
+)
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.recovery import (  # noqa: F401 (mpc.RECOVERY_SAMPLES, as before)
     RECOVERY_SAMPLES,
@@ -30,38 +41,17 @@ from softlanding.control.state_landing import state_landing_problem
 from softlanding.errors import ParameterError, check, check_count, expect
 from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.landing import T_MAX, solve_landing
-
-#: The default sample period, in the paper's time unit ``sqrt(m_t / k_g)`` (26 ms on the
-#: paper's rig, so 0.26 ms: a 4 kHz controller): a tenth of the shortest bang arc of the
-#: paper's landings.
-DEFAULT_PERIOD = 0.01
-
-#: The shortest sample period taken: 1e-4 (2.6 us on the paper's rig), about 10,000 samples
-#: over the longest landing of the unknown-ground study (T < 1); a shorter one would run for
-#: hours (1e-9: a million times more samples) and is refused at once.
-MIN_PERIOD = 1e-4
-
-#: The longest sample period taken: the landing problem's horizon bound (``T_MAX``). A period
-#: beyond the landing is one open-loop sample; far beyond it (1e300) the simulation's times
-#: lose every digit of the landing's.
-MAX_PERIOD = T_MAX
-
-#: The controllers :func:`mpc_landing` runs, by name.
-CONTROLLERS = ("replan", "bangbang")
-
-#: What the ground estimate regresses (:func:`mpc_landing`'s ``estimator``).
-ESTIMATORS = ("measured", "filtered")
+from softlanding.optimal.landing import solve_landing
 
 
 def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 ground: Ground = LINEAR_GROUND, *, model: Ground = LINEAR_GROUND,
                 period: float = DEFAULT_PERIOD, estimate: bool = True,
                 max_samples: int = 100_000, reuse: bool = False,
-                controller: str = "replan", noise: float = 0.0, delay: int = 0,
+                controller: str = "bangbang", noise: float = 0.0, delay: int = 0,
                 seed: int = 0, margin: float = 0.0,
                 estimator: str = "filtered") -> MPCLanding:
-    """Land on ``ground`` under MPC whose first plan assumes ``model``.
+    """Land on ``ground`` under closed-loop control whose first plan assumes ``model``.
 
     Parameters
     ----------
@@ -86,13 +76,17 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         what ran before it: in the unknown-ground study, 57 of 60 within 2 % and a 99th
         percentile step of 14 ms with reuse, 59 of 60 and 152 ms without.
     controller : str
-        ``"replan"``: the re-planning MPC above. ``"bangbang"``: the compiled real-time
-        Newton on the push-then-pull plan's switching times
-        (:mod:`softlanding.control.bangbang`; no NLP, no allocation in Python per sample),
-        and the creep law (:mod:`softlanding.control.creep`) where the optimum creeps to
-        the static depth; where neither covers the state (Newton fails, an arrest that no
-        longer holds), the sample and the rest of the landing fall back to the re-planning
-        MPC (counted in ``uncovered``).
+        ``"bangbang"`` (default): the compiled real-time controller
+        (:class:`~softlanding.control.compiled.CompiledController`: Newton on the
+        push-then-pull plan's switching times, :mod:`softlanding.control.bangbang`, and the
+        creep law, :mod:`softlanding.control.creep`, where the optimum creeps to the static
+        depth; microseconds a sample, no NLP, no allocation in Python per sample); where
+        neither covers the state (Newton fails, an arrest that no longer holds), the sample
+        and the rest of the landing fall back to the re-planning MPC (counted in
+        ``uncovered``). ``"replan"``: the re-planning MPC
+        (:class:`~softlanding.control.replan.ReplanController`: every sample it must, the
+        landing OCP re-solved; milliseconds to seconds a sample, a simulation study's
+        baseline).
     noise : float
         Standard deviation of the Gaussian noise on every measured foot position, velocity,
         acceleration and force (paper units; 0: exact measurements). The estimator is told
@@ -134,15 +128,12 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     impact = Impact.of(impact)
     expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
     check_model(model)
-    if controller not in CONTROLLERS:
-        raise ParameterError("controller", f"must be one of {', '.join(CONTROLLERS)}, got "
-                                           f"{controller!r}")
+    check_choice("controller", controller, CONTROLLERS)
     period = check_period("period", period)
     margin = check("margin", margin, (lambda v: v >= 0, "must be >= 0"))
-    if estimator not in ESTIMATORS:
-        raise ParameterError("estimator", f"must be one of {', '.join(ESTIMATORS)}, got "
-                                          f"{estimator!r}")
+    check_choice("estimator", estimator, ESTIMATORS)
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
+    sensor = Sensor(noise, delay, seed)
     first = solve_landing(impact, robot, model, replay=False)
     plan: Any = first.refined if first.refined is not None else first.transcribed
     problem = state_landing_problem()
@@ -155,7 +146,6 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         raise ParameterError("period", f"{period:g} takes about "
                                        f"{plan_time(plan) / period:.3g} samples over the "
                                        f"planned landing, more than max_samples = {max_samples}")
-    sensor = Sensor(noise, delay, seed)
     # the foot has stopped when it is static, or creeps by rounding at the crater's exact
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
@@ -220,26 +210,6 @@ def check_model(model: Any, name: str = "model") -> Ground:
     return model
 
 
-def check_period(name: str, period: Any) -> float:
-    """A sample period within [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`].
-
-    Parameters
-    ----------
-    name : str
-        The argument's name in the message (``--period`` on the command line).
-    period : float
-        What the caller gave.
-
-    Raises
-    ------
-    ParameterError
-        Not finite, or out of the range.
-    """
-    return check(name, period, (lambda v: (v >= MIN_PERIOD) & (v <= MAX_PERIOD),
-                                f"must be within [{MIN_PERIOD:g}, {MAX_PERIOD:g}] (the "
-                                f"shortest bounds the samples per landing to about 1e4)"))
-
-
 __all__ = ["ARREST_RESERVE", "ARREST_TIME", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS",
-           "HOLD_GAINS", "MAX_PERIOD", "MIN_PERIOD", "MPCLanding", "Sensor",
-           "check_model", "check_period", "mpc_landing"]
+           "HOLD_GAINS", "MAX_NOISE", "MAX_PERIOD", "MIN_NOISE", "MIN_PERIOD", "MPCLanding",
+           "Sensor", "check_model", "check_period", "mpc_landing"]

@@ -18,7 +18,7 @@ import time
 from typing import Any
 
 from ocp import OptimalControlProblem, SolveError
-from softlanding.control.commands import Command, at_actuation, plan_time, shifted
+from softlanding.control.commands import Command, at_actuation, plan_time, saturated, shifted
 from softlanding.control.estimators import MeasuredEstimator, Reading
 from softlanding.control.loop import LoopRecord
 from softlanding.control.resolve import (
@@ -87,7 +87,7 @@ class ReplanController:
         t0 = time.perf_counter()
         prepare_resolves(self.problem, self.plan, self.robot, self.model, x0)
         self.record.setup_ms = 1e3 * (time.perf_counter() - t0)
-        return Command(0.0, plan_schedule(self.plan, self.robot), plan_time(self.plan))
+        return self._command(0.0)
 
     def step(self, r: Reading) -> Command:
         """One sample: the estimate, then the plan kept or re-solved; the command.
@@ -116,8 +116,7 @@ class ReplanController:
         path = self._replanned(r)
         self.record.step_paths.append(path)
         self.record.stop()
-        return Command(r.t - self.elapsed, plan_schedule(self.plan, self.robot),
-                       plan_time(self.plan))
+        return self._command(r.t - self.elapsed)
 
     def take_over(self, r: Reading, why: str, believed: Ground) -> Command:
         """The first sample of a fallback (the compiled controller did not cover the state):
@@ -140,8 +139,7 @@ class ReplanController:
             x_act, lead = self._at_actuation(r)
             self.plan = solve_from_state(self.robot, believed, x_act)
             rec.step_paths.append(f"fallback ({why})")
-            command = Command(r.t + lead, plan_schedule(self.plan, self.robot),
-                              plan_time(self.plan))
+            command = self._command(r.t + lead)
             self.elapsed = -lead
             rec.replans += 1
         except SolveError:
@@ -153,6 +151,11 @@ class ReplanController:
             self.plan, self.elapsed = None, 0.0
         rec.stop(more=True)
         return command
+
+    def _command(self, origin: float) -> Command:
+        """The plan's command from ``origin`` (its forces saturated at the limit)."""
+        schedule = saturated(plan_schedule(self.plan, self.robot), self.robot.u_max)
+        return Command(origin, schedule, plan_time(self.plan))
 
     def _estimate(self, r: Reading) -> None:
         """The estimate updated from the sample (two samples before it is believed)."""
@@ -177,8 +180,7 @@ class ReplanController:
             self.elapsed, self.planned_for = -lead, self.believed
             rec.replans += 1
             rec.step_paths.append("fallback (retried)")
-            command = Command(r.t + lead, plan_schedule(self.plan, self.robot),
-                              plan_time(self.plan))
+            command = self._command(r.t + lead)
         except SolveError:
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             rec.fallbacks += 1

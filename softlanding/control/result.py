@@ -18,6 +18,9 @@ from softlanding.model.terrain import paper_rig_units
 from softlanding.simulation.simulator import LandingResult, joined_trajectory
 from softlanding.util.jsonable import json_safe
 
+#: The relative excess over the force limit :attr:`MPCLanding.force_held` allows (rounding).
+FORCE_TOL = 1e-9
+
 
 @dataclass
 class MPCLanding:
@@ -149,9 +152,16 @@ class MPCLanding:
         return bool(self.stroke_min >= -tol and self.stroke_max <= self.robot.s + tol)
 
     @property
+    def force_held(self) -> bool:
+        """``|u| <= u_max`` over the whole landing (to 1e-9: the plant saturates every
+        command, so a force beyond is a bug, not a landing)."""
+        u_max = self.robot.u_max
+        return u_max is None or bool(self.u_peak <= u_max * (1 + FORCE_TOL))
+
+    @property
     def feasible(self) -> bool:
-        """The stroke held and rest proven at the end."""
-        return self.stroke_held and self.result.rest_proven
+        """The stroke and the force held, and rest proven at the end."""
+        return self.stroke_held and self.force_held and self.result.rest_proven
 
     def failure(self) -> str | None:
         """Why the landing is not :attr:`feasible` (one line), or None."""
@@ -160,6 +170,9 @@ class MPCLanding:
             why.append(f"the stroke went below 0 ({self.stroke_min:.6g})")
         if self.stroke_max > self.robot.s * (1 + 1e-9) + 1e-9:
             why.append(f"the stroke went beyond s = {self.robot.s:g} ({self.stroke_max:.6g})")
+        if not self.force_held:
+            why.append(f"the force reached |u| = {self.u_peak:.6g}, beyond u_max = "
+                       f"{self.robot.u_max:g}")
         if not self.result.rest_proven:
             why.append(f"rest is not proven ({self.result.status})")
         if self.sample_limit_hit:
@@ -181,6 +194,7 @@ class MPCLanding:
         """JSON-able dict."""
         return json_safe({
             "depth": self.depth, "feasible": self.feasible, "stroke_held": self.stroke_held,
+            "force_held": self.force_held,
             "rest_proven": self.result.rest_proven, "stroke_min": self.stroke_min,
             "stroke_max": self.stroke_max, "u_peak": self.u_peak, "period": self.period,
             "samples": self.samples, "replans": self.replans, "fallbacks": self.fallbacks,
@@ -199,4 +213,4 @@ class MPCLanding:
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict()})
 
 
-__all__ = ["MPCLanding"]
+__all__ = ["FORCE_TOL", "MPCLanding"]

@@ -13,7 +13,9 @@ import math
 
 import numpy as np
 
-from softlanding.errors import ParameterError, check, check_count
+from softlanding.control.commands import saturated
+from softlanding.control.options import check_noise
+from softlanding.errors import ParameterError, check_count
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.dynamics import VB, robot_rhs
 from softlanding.optimal.landing import arrest_schedule
@@ -27,7 +29,9 @@ class Sensor:
     Parameters
     ----------
     noise : float
-        Standard deviation (>= 0).
+        Standard deviation: 0 (exact), or within
+        [:data:`~softlanding.control.options.MIN_NOISE`,
+        :data:`~softlanding.control.options.MAX_NOISE`].
     delay : int
         Samples (>= 0).
     seed : int
@@ -35,7 +39,7 @@ class Sensor:
     """
 
     def __init__(self, noise: float = 0.0, delay: int = 0, seed: int = 0) -> None:
-        self.noise = check("noise", noise, (lambda v: v >= 0, "must be >= 0"))
+        self.noise = check_noise("noise", noise)
         if isinstance(delay, bool) or not isinstance(delay, int | np.integer):
             raise ParameterError("delay", f"must be a whole number of samples, got {delay!r}")
         self.delay = check_count("delay", int(delay), 0, 1000)
@@ -63,9 +67,8 @@ class Sensor:
         m[3] += e[1]
         return m, float(a_f + e[2]), float(u + e[3])
 
-
-    def arrest(self, x: np.ndarray, r_m: float, stroke_max: float = math.inf
-               ) -> ForceSchedule | FeedbackSchedule:
+    def arrest(self, x: np.ndarray, r_m: float, stroke_max: float = math.inf,
+               u_max: float | None = None) -> ForceSchedule | FeedbackSchedule:
         """The body's arrest from the measured state of a stopped foot: exact measurements,
         the constant force that stops it in the stroke left, then its weight
         (:func:`~softlanding.optimal.landing.arrest_schedule`). Noisy ones: the stroke left
@@ -75,7 +78,9 @@ class Sensor:
         left drift the body forever). A body that no longer descends (the end of a creep)
         coasts up at no force to its top, if that is within ``stroke_max``, and gets that
         damped hold there, with exact measurements too. A body so slow that braking over
-        the whole stroke would outlast :data:`ARREST_TIME` brakes within it.
+        the whole stroke would outlast :data:`ARREST_TIME` brakes within it. The constant
+        forces are saturated at ``u_max`` (the hold, affine in the state, is saturated by
+        the plant that applies it).
 
         Parameters
         ----------
@@ -86,6 +91,8 @@ class Sensor:
         stroke_max : float
             The stroke's limit (a noisy arrest lets a rising body coast up to its top, at
             no force, where that is within it).
+        u_max : float, optional
+            The force limit (None: none).
 
         Returns
         -------
@@ -100,7 +107,7 @@ class Sensor:
         if self.noise == 0.0 and x[1] < 0:
             x_e = np.array(x, float)
             x_e[0] = min(x_e[0], x_e[2] + brake)
-            return arrest_schedule(x_e, r_m)
+            return saturated(arrest_schedule(x_e, r_m), u_max)
         reserve = min(ARREST_RESERVE * self.noise, 0.5 * stroke)
         x_r = np.array(x, float)
         x_r[0] -= reserve  # the arrest sees the stroke less the reserve
@@ -121,7 +128,7 @@ class Sensor:
         hold = (-HOLD_GAINS[0], -HOLD_GAINS[1], HOLD_GAINS[0], HOLD_GAINS[1],
                 w + HOLD_GAINS[0] * end)
         rows = [(0.0, 0.0, 0.0, 0.0, v) for v in forces] + [hold]
-        return FeedbackSchedule(times, tuple(rows))
+        return saturated(FeedbackSchedule(times, tuple(rows)), u_max)
 
 
 #: Standard deviations of the foot's measured position kept as a stroke reserve by a noisy
