@@ -5,8 +5,9 @@ push-then-pull plan's switching times with the creep law (:mod:`softlanding.cont
 
 Its state is the compiled step's arrays: the robot's and ground's numbers ``P``, the memory
 ``M`` (the plan, the estimate), the foot filter's ``F`` (the estimator's) and the work arrays;
-nothing is allocated per sample in the compiled code. A sample whose state the structure does
-not cover hands the estimate over to its fallback, which runs the rest of the landing.
+nothing is allocated per sample in the compiled code. Where the push-then-pull structure does
+not cover a state, the compiled fallback acts in the same call, within the sample
+(:mod:`softlanding.control.fallback`); no sample of the loop solves an NLP.
 """
 
 from __future__ import annotations
@@ -18,23 +19,20 @@ import numpy as np
 
 from ocp.structure.switching import RefinedSwitching
 from softlanding.control import bangbang as bb
-from softlanding.control.commands import Command
-from softlanding.control.estimation import GroundEstimate, GroundEstimator
+from softlanding.control.commands import Command, plan_time
+from softlanding.control.estimation import GroundEstimate
 from softlanding.control.estimators import MeasuredEstimator, Reading
+from softlanding.control.fallback import fallback_step
 from softlanding.control.foot_filter import new_filter
+from softlanding.control.loop import LoopRecord
 from softlanding.control.loop_replay import CompiledRecord, CompiledSample
 from softlanding.control.recovery import filtered_sample
-from softlanding.control.replan import ReplanController
 from softlanding.control.state_landing import ground_numbers
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import Ground
 from softlanding.model.robot import Robot
 from softlanding.optimal.landing import arrest_schedule
 from softlanding.optimal.limits import force_limit
-
-#: The statuses of a sample the compiled controller covers (its plan, or the creep law's
-#: force, is the control).
-COVERED = (bb.OK, bb.CONVERGING, bb.HOLDS, bb.DEFERRED, bb.CREEP_LAW)
 
 
 class CompiledController:
@@ -52,9 +50,6 @@ class CompiledController:
     estimator : MeasuredEstimator
         Its ground estimate (the compiled step runs the same; a filtered one's foot filter is
         stepped inside the compiled call).
-    fallback : ReplanController
-        What runs a landing, or its rest, the compiled controller does not cover (it shares
-        the record).
     period, margin : float
         The sample period; plan for the estimate less ``margin`` standard deviations.
 
@@ -62,8 +57,6 @@ class CompiledController:
     ----------
     P, M : ndarray
         The compiled step's numbers and memory.
-    active : bool
-        The compiled controller runs the samples (else its fallback).
     recovering : int
         Samples the filtered estimate's full solve has gone on over so far.
     """
@@ -71,9 +64,9 @@ class CompiledController:
     name = "bangbang"
 
     def __init__(self, robot: Robot, model: Ground, plan: Any, estimator: MeasuredEstimator,
-                 fallback: ReplanController, *, period: float, margin: float) -> None:
-        self.robot, self.model, self.estimator, self.fallback = robot, model, estimator, fallback
-        self.record = fallback.record
+                 *, period: float, margin: float, record: LoopRecord | None = None) -> None:
+        self.robot, self.model, self.estimator = robot, model, estimator
+        self.record = LoopRecord() if record is None else record
         self.u_max, self.r_m = force_limit(robot), robot.r_m
         self.ws = bb.workspace()
         self.recovering = 0
@@ -83,18 +76,22 @@ class CompiledController:
         noise = bb.ground_force_noise(robot.r_m, estimator.noise, estimator.F is not None)
         self.P = bb.robot_numbers(robot.r_m, robot.s, self.u_max, k, c_d, noise, margin, period,
                                   creep=True)
-        self.active = kinds in (("max", "min"), ("min",))
-        d = np.asarray(plan.durations, float) if self.active else np.array([0.0, 1.0])
-        t1, t2 = (d[0], d[1]) if kinds == ("max", "min") else (0.0, float(d[-1]))
+        # a first plan of the structure (push then pull, or pull) is the memory's; another
+        # (a creep, a boundary arc) gives the compiled plan's first guess, half and half
+        self.covered = kinds in (("max", "min"), ("min",))
+        T = plan_time(plan)
+        d = np.asarray(plan.durations, float) if self.covered else np.array([0.5 * T, 0.5 * T])
+        t1, t2 = (d[0], d[1]) if kinds == ("max", "min") or not self.covered \
+            else (0.0, float(d[-1]))
         self.M = bb.new_memory(t1, t2, (k, c_d), (1.0, 1.0), noise)
-        if self.active:  # the first plan's state at the foot's stop (its schedule's tail)
+        if self.covered:  # the first plan's state at the foot's stop (its schedule's tail)
             self.M[bb.M_XBT], self.M[bb.M_VBT], self.M[bb.M_XFT] = np.asarray(plan.xT,
                                                                              float)[:3]
 
     def prepare(self, x0: np.ndarray) -> Command:
         """Compile (or load numba's cache) before the impact, a sample must not pay for it;
-        the first plan's command. A first plan the structure does not cover: the fallback's
-        preparation and command (it runs the landing).
+        a first plan not of the structure solved compiled from the impact (its fallback's
+        force where that does not cover it); the first command.
 
         Parameters
         ----------
@@ -102,8 +99,10 @@ class CompiledController:
             The impact state.
         """
         self._compile()
-        if not self.active:
-            return self.fallback.prepare(x0)
+        if not self.covered:  # (before the impact: no bound on the work)
+            x = np.array(x0, float)
+            st = int(bb.solve_plan(self.P, self.M, x, *self.ws))
+            fallback_step(self.P, self.M, x, st)
         F = self.estimator.F
         # the compiled samples' inputs, for a replay as a control loop (:mod:`.loop_replay`)
         self.record.compiled = CompiledRecord(self.P.copy(), self.M.copy(),
@@ -125,41 +124,33 @@ class CompiledController:
 
     def step(self, r: Reading) -> Command:
         """One sample, compiled (the estimate, the foot filter's step, the plan's re-solve or
-        the creep law's force); a state not covered hands over to the fallback.
+        the creep law's force, the fallback where the structure does not cover the state).
 
         Parameters
         ----------
         r : Reading
             The sample.
         """
-        if not self.active:
-            return self.fallback.step(r)
-        rec, est = self.record, self.estimator
+        rec, est, M = self.record, self.estimator, self.M
         x_in = r.x.copy()
+        fallbacks = M[bb.M_FALLBACKS]
         rec.start()
         fit = est.fits(r.sample)
         if est.F is None:
-            status = int(bb.control_step(self.P, self.M, r.x, r.a_f, r.u, r.h, fit, *self.ws))
+            status = int(bb.control_step(self.P, M, r.x, r.a_f, r.u, r.h, fit, *self.ws))
         else:  # the filter's step, the sample's weight and the step in one call
             st, self.recovering = filtered_sample(
-                self.P, self.M, est.F, r.x, r.g, r.U1, r.U2, r.h, est.beta, est.noise, r.a_f,
+                self.P, M, est.F, r.x, r.g, r.U1, r.U2, r.h, est.beta, est.noise, r.a_f,
                 r.u, fit, est.stop, self.recovering, *self.ws)
             status = int(st)
         rec.stop()
         self._log(r, x_in, fit, status)
-        # (an arrest short of the crater's hold while pulling: the pull is still the
-        # fastest stop of the foot, the arrest then digs a little; no plan of this
-        # structure does better, and measurement noise makes it short by rounding)
-        pulling = self.M[bb.M_PHASE] == bb.PULL
-        if status in COVERED or (status == bb.ARREST_FAILS and pulling):
-            rec.step_paths.append("bangbang" if status == bb.OK else
-                                  f"bangbang ({bb.STATUS_NAMES[status]})")
-            return Command(r.t, self.schedule(), self.stop_time())
-        # not covered: this sample and the rest of the landing re-plan as the MPC does
-        rec.uncovered += 1
-        self.hand_over(est.rls)
-        believed = est.estimate.ground() if est.rls.samples >= 2 else self.model
-        return self.fallback.take_over(r, bb.STATUS_NAMES[status], believed)
+        name = "bangbang" if status == bb.OK else f"bangbang ({bb.STATUS_NAMES[status]})"
+        if M[bb.M_FALLBACKS] > fallbacks:  # (the structure did not cover the state)
+            rec.uncovered += 1
+            name = f"bangbang ({bb.STATUS_NAMES[status]}: {bb.STATUS_NAMES[int(M[bb.M_WHY])]})"
+        rec.step_paths.append(name)
+        return Command(r.t, self.schedule(), self.stop_time())
 
     def _log(self, r: Reading, x_in: np.ndarray, fit: bool, status: int) -> None:
         """The sample's work, its inputs and outputs (for a replay), and the estimate."""
@@ -179,10 +170,10 @@ class CompiledController:
         """The plan's force from now: push until the switch, pull until the foot's stop,
         then the arrest of the body (saturated at the force limit) and its weight (from the
         plan's state at the stop); or,
-        creeping, the creep law's force of this sample (held: the next sample computes the
-        next)."""
+        creeping or braking, the creep law's or the brake's force of this sample (held: the
+        next sample computes the next)."""
         M = self.M
-        if M[bb.M_PHASE] == bb.CREEPING:
+        if M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING):
             return ForceSchedule((), (float(M[bb.M_UCREEP]),))
         t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
         t2 = float(M[bb.M_TAU2])
@@ -196,8 +187,9 @@ class CompiledController:
         return ForceSchedule(times, values)
 
     def stop_time(self) -> float:
-        """When the plan has the foot stop (from now; creeping: not planned, ``inf``)."""
-        if self.M[bb.M_PHASE] == bb.CREEPING:
+        """When the plan has the foot stop (from now; creeping or braking: not planned,
+        ``inf``)."""
+        if self.M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING):
             return math.inf
         t1 = float(self.M[bb.M_TAU1]) if self.M[bb.M_PHASE] == bb.PUSH else 0.0
         return t1 + float(self.M[bb.M_TAU2])
@@ -210,20 +202,5 @@ class CompiledController:
                               float(np.sqrt(max(M[bb.M_P11], 0.0)) * noise),
                               int(M[bb.M_SAMPLES]))
 
-    def hand_over(self, rls: GroundEstimator) -> None:
-        """Give the estimate to the fallback's estimator, and stop.
 
-        Parameters
-        ----------
-        rls : GroundEstimator
-            The estimator's least squares.
-        """
-        M = self.M
-        rls.theta = np.array([M[bb.M_TH0], M[bb.M_TH1]])
-        rls.P = np.array([[M[bb.M_P00], M[bb.M_P01]], [M[bb.M_P01], M[bb.M_P11]]])
-        rls.noise = float(self.P[bb.P_NOISE])
-        rls.samples = int(M[bb.M_SAMPLES])
-        self.active = False
-
-
-__all__ = ["COVERED", "CompiledController"]
+__all__ = ["CompiledController"]

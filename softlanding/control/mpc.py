@@ -150,10 +150,10 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     # capacity (the optimal arrest uses all of it)
     stop = 1e-9 * max(1.0, abs(impact.v0))
     est = make_estimator(estimator, robot, model, sensor.noise, estimate, stop, plant.x)
-    replan = ReplanController(robot, impact, model, plan, problem, est, period=period,
+    loop: ReplanController | CompiledController = CompiledController(
+        robot, model, plan, est, period=period, margin=margin) if controller == "bangbang" \
+        else ReplanController(robot, impact, model, plan, problem, est, period=period,
                               delay=sensor.delay, stop=stop)
-    loop = replan if controller == "replan" else CompiledController(
-        robot, model, plan, est, replan, period=period, margin=margin)
     run = run_loop(loop, plant, sensor, period=period, max_samples=max_samples, stop=stop)
     return _landing(loop.record, run, plant, model=model, period=period, sensor=sensor,
                     controller=controller, margin=margin, estimator=est.name,

@@ -18,7 +18,7 @@ import time
 from typing import Any
 
 from ocp import OptimalControlProblem, SolveError
-from softlanding.control.commands import Command, at_actuation, plan_time, saturated, shifted
+from softlanding.control.commands import Command, at_actuation, plan_time, saturated
 from softlanding.control.estimators import MeasuredEstimator, Reading
 from softlanding.control.loop import LoopRecord
 from softlanding.control.resolve import (
@@ -27,7 +27,7 @@ from softlanding.control.resolve import (
     replan_structure,
     transcribed_plan,
 )
-from softlanding.control.state_landing import plan_schedule, solve_from_state
+from softlanding.control.state_landing import plan_schedule
 from softlanding.model.ground import Ground
 from softlanding.model.robot import Impact, Robot
 from softlanding.util.signals import raise_if_interrupted
@@ -55,8 +55,8 @@ class ReplanController:
 
     Attributes
     ----------
-    plan : RefinedSwitching or ocp.Solution or None
-        The plan it applies (None: a fallback found none, the last command goes on).
+    plan : RefinedSwitching or ocp.Solution
+        The plan it applies.
     believed, planned_for : Ground
         The ground it believes now, and the one its plan was made for.
     """
@@ -99,8 +99,6 @@ class ReplanController:
         """
         self.record.start()
         self.estimator.filter(r)
-        if self.plan is None:  # a fallback that found no plan: tried again from here
-            return self._retried(r)
         self._estimate(r)
         # (not at the plan's foot stop: a foot still creeping there needs a new plan, the
         # rest of this one assumes it stopped)
@@ -118,40 +116,6 @@ class ReplanController:
         self.record.stop()
         return self._command(r.t - self.elapsed)
 
-    def take_over(self, r: Reading, why: str, believed: Ground) -> Command:
-        """The first sample of a fallback (the compiled controller did not cover the state):
-        a transcription from where the command acts, for ``believed``; the last command
-        goes on if none is found. Timed as more of the sample's time.
-
-        Parameters
-        ----------
-        r : Reading
-            The sample (filtered, its estimate updated).
-        why : str
-            Why the compiled controller handed over (its status).
-        believed : Ground
-            The ground estimated.
-        """
-        rec = self.record
-        self.believed = self.planned_for = believed
-        rec.start()
-        try:
-            x_act, lead = self._at_actuation(r)
-            self.plan = solve_from_state(self.robot, believed, x_act)
-            rec.step_paths.append(f"fallback ({why})")
-            command = self._command(r.t + lead)
-            self.elapsed = -lead
-            rec.replans += 1
-        except SolveError:
-            raise_if_interrupted()
-            rec.fallbacks += 1
-            rec.step_paths.append(f"kept ({why})")
-            origin, schedule, stop = r.acting
-            command = Command(r.t, shifted(schedule, r.t - origin), origin + stop - r.t)
-            self.plan, self.elapsed = None, 0.0
-        rec.stop(more=True)
-        return command
-
     def _command(self, origin: float) -> Command:
         """The plan's command from ``origin`` (its forces saturated at the limit)."""
         schedule = saturated(plan_schedule(self.plan, self.robot), self.robot.u_max)
@@ -168,26 +132,6 @@ class ReplanController:
     def _at_actuation(self, r: Reading) -> tuple[Any, float]:
         return at_actuation(self.robot, self.impact, r.issued, r.x, self.believed, self.delay,
                             self.period, r.t, self.stop)
-
-    def _retried(self, r: Reading) -> Command:
-        """A sample without a plan: the estimate goes on, and a transcription is tried again
-        from this sample's state (else the last command goes on)."""
-        rec = self.record
-        self._estimate(r)
-        try:
-            x_act, lead = self._at_actuation(r)
-            self.plan = solve_from_state(self.robot, self.believed, x_act)
-            self.elapsed, self.planned_for = -lead, self.believed
-            rec.replans += 1
-            rec.step_paths.append("fallback (retried)")
-            command = self._command(r.t + lead)
-        except SolveError:
-            raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
-            rec.fallbacks += 1
-            rec.step_paths.append("kept")
-            command = r.issued[-1]
-        rec.stop()
-        return command
 
     def _replanned(self, r: Reading) -> str:
         """The plan re-solved from where its command acts (its structure, else a
