@@ -225,3 +225,33 @@ def test_a_closed_standard_output_does_not_change_the_exit_code(monkeypatch):
     print_json({"depth": 1.0})  # (raised BrokenPipeError)
     print_table([("depth", 1.0)])
     out.close()
+
+
+def test_a_callers_signal_handler_raising_inside_the_landing_propagates():
+    # a caller's timeout (SIGALRM handler raising) inside mpc_landing was swallowed by the
+    # first plan's solve (CasADi re-evaluated, the exception lost): the call went on for
+    # 127 s; it must reach the caller
+    import signal
+
+    from softlanding.studies.unknown_ground import true_ground
+
+    class Timeout(Exception):
+        pass
+
+    def handler(signum, frame):
+        raise Timeout
+
+    def land():
+        return mpc_landing(-1, PAPER_ROBOT, true_ground(0.5, 0.2), noise=1e-2, delay=1,
+                           controller="bangbang")
+
+    land()  # (warm: the alarm then falls in the first plan's solve)
+    old = signal.signal(signal.SIGALRM, handler)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.05)
+        with pytest.raises(Timeout):
+            for _ in range(20):
+                land()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
