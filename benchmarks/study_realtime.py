@@ -126,7 +126,7 @@ def main() -> None:
     ap.add_argument("--random", type=int, default=20, help="random robots and grounds")
     ap.add_argument("--json", help="write every row to this new file")
     a = ap.parse_args()
-    path = output_path(a.json, "json") if a.json else None
+    path = output_path(a.json, "json", force=False) if a.json else None
     random, skipped = random_cases(4 if a.quick else a.random)
     cases = study_cases(a.quick) + random
     settings = [(float(n), int(d)) for n, d in (s.split(":") for s in a.settings.split(","))]
