@@ -48,7 +48,8 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.control.bangbang_layout import (
+from softlanding.control import bangbang_layout
+from softlanding.control.bangbang_layout import (  # noqa: F401 (re-exported: bangbang.X)
     ARREST_FAILS,
     BRAKE,
     BRAKING,
@@ -524,25 +525,8 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
 @njit(**ENTRY)
 def structure_step(P, M, x, a_f, u, h, estimate, K, W):
     """:func:`control_step` without the fallback (the filtered step's recovery comes before
-    it): the status (:data:`OK`, or why the structure does not cover the state).
-
-    Parameters
-    ----------
-    P : array
-        :func:`robot_numbers` (its ``K``, ``c_d`` are overwritten by the estimate).
-    M : array
-        :func:`new_memory`, updated in place.
-    x : array of 4
-        The measured state.
-    a_f, u : float
-        The measured foot acceleration and the force the sample ended under.
-    h : float
-        The sample just applied.
-    estimate : bool
-        Update the estimate (else keep the ground in ``P``).
-    K, W : arrays
-        :func:`workspace`.
-    """
+    it), its arguments the same: the status (:data:`OK`, or why the structure does not
+    cover the state)."""
     Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
     left[0] = P[P_WORK]
     st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
@@ -638,16 +622,5 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
     return st
 
 
-__all__ = ["ARREST_FAILS", "BRAKE", "BRAKING", "BUDGET", "CONVERGING", "CREEP", "CREEPING",
-           "CREEP_LAW", "CREEP_SIGMAS", "DEFERRED", "FILTERED_REGRESSOR", "HOLDS", "KEPT",
-           "LOOSE_RTOL", "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "M_CPLAN",
-           "M_DEFERRED", "M_FALLBACKS", "M_ITER", "M_KPLAN", "M_LAST_STEP", "M_P00", "M_P01",
-           "M_P11", "M_PHASE", "M_PRED", "M_PRED_OK", "M_SAMPLES", "M_STATUS", "M_TAU1",
-           "M_TAU2", "M_TH0", "M_TH1", "M_UCREEP", "M_UNCONVERGED", "M_VBT", "M_WHY", "M_WORK",
-           "M_XBT", "M_XFT", "NEWTON_FAILED", "NEWTON_TOL", "NM", "NP", "OK", "PATH_LIMIT",
-           "PLAN_HOLDS_TOL", "PULL", "PUSH", "P_AB0", "P_AF0", "P_BB", "P_BF", "P_BUDGET",
-           "P_CD", "P_CREEP", "P_GF", "P_HOLD0", "P_K", "P_MARGIN", "P_NOISE", "P_PERIOD",
-           "P_RM", "P_S", "P_UMAX", "P_WORK", "RTOL", "SPENT", "STATUS_NAMES", "STROKE_MARGIN",
-           "TIGHTEN", "WORK", "control_step", "foot_acc", "force_coefficients",
-           "ground_force_noise", "new_memory", "robot_numbers", "solve_plan", "stroke_guard",
-           "structure_step", "workspace"]
+__all__ = [*bangbang_layout.__all__, "control_step", "solve_plan", "structure_step",
+           "stroke_guard"]

@@ -33,25 +33,10 @@ from softlanding.simulation.simulator import LandingResult
 
 @dataclass
 class LoopRecord:
-    """What a landing's controller did, sample by sample.
-
-    Attributes
-    ----------
-    step_times_ms, step_cpu_ms : list of float
-        Each sample's computation (its estimate and control update), wall and CPU time.
-    step_paths : list of str
-        What computed each sample's control.
-    estimates : list of GroundEstimate
-        The ground estimate after each sample that updated it.
-    step_work : list of int
-        The compiled controller's integrator steps per sample.
-    replans, fallbacks, uncovered : int
-        Samples re-planned by a transcription, whose re-plan failed (the last command kept),
-        and that the compiled controller did not cover.
-    setup_ms : float
-        The builds before the impact (not a step's time).
-    compiled : CompiledRecord or None
-        The compiled controller's samples, for a replay as a control loop.
+    """What a landing's controller did, sample by sample: the fields of
+    :class:`~softlanding.control.result.MPCLanding` of the same names (each sample's wall and
+    CPU time, path, estimate and integrator steps; the counts of re-plans, kept plans and
+    fallback samples; the builds before the impact; the compiled samples for a replay).
     """
 
     step_times_ms: list[float] = field(default_factory=list)

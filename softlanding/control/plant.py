@@ -53,14 +53,13 @@ class AffineLaw:
 
     def kernel_arrays(self, mats: dict[str, Any],
                       robot: Robot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The same feedback in every ground mode, no schedule.
+        """The law as the feedback of every ground mode, no schedule (the simulator's
+        arrays; ``mats`` and ``robot`` unused: the simulator saturates at the robot's limit).
 
         Parameters
         ----------
-        mats : dict
-            Unused.
-        robot : Robot
-            Unused (the simulator saturates at its force limit).
+        mats, robot
+            The simulator's arguments.
         """
         Kf = np.empty((3, 5))
         Kf[:] = np.asarray(self.row, float)
