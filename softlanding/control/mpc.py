@@ -81,22 +81,25 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         push-then-pull plan's switching times, :mod:`softlanding.control.bangbang`, and the
         creep law, :mod:`softlanding.control.creep`, where the optimum creeps to the static
         depth; microseconds a sample, no NLP, no allocation in Python per sample); where
-        neither covers the state (Newton fails, an arrest that no longer holds), the sample
-        and the rest of the landing fall back to the re-planning MPC (counted in
+        neither covers the state (Newton fails, a plan that breaks a path limit), the
+        compiled fallback acts within the sample (:mod:`softlanding.control.fallback`: the
+        plan kept with the margin dropped, the creep law or the safe brake; counted in
         ``uncovered``). ``"replan"``: the re-planning MPC
         (:class:`~softlanding.control.replan.ReplanController`: every sample it must, the
         landing OCP re-solved; milliseconds to seconds a sample, a simulation study's
         baseline).
     noise : float
         Standard deviation of the Gaussian noise on every measured foot position, velocity,
-        acceleration and force (paper units; 0: exact measurements). The estimator is told
-        this level, so its standard deviations are the estimate's uncertainty.
+        acceleration and force (paper units; 0: exact measurements, else within
+        [:data:`~softlanding.control.options.MIN_NOISE`,
+        :data:`~softlanding.control.options.MAX_NOISE`] = [1e-12, 0.1]). The estimator is
+        told this level, so its standard deviations are the estimate's uncertainty.
     delay : int
         Samples between a measurement and the actuation of the control computed from it
-        (0: at once); until then the last control computed goes on. A re-plan (the
-        re-planning MPC's, or the compiled controller's fallback) starts from the state
-        where it will act: the measured one carried over the delay under the commands in
-        flight, on the believed ground.
+        (0: at once); until then the last control computed goes on. The re-planning MPC's
+        re-plan starts from the state where it will act: the measured one carried over the
+        delay under the commands in flight, on the believed ground (the compiled controller
+        plans from the measured state).
     seed : int
         The noise's random seed.
     margin : float

@@ -54,8 +54,10 @@ class MPCLanding:
     structure_changes : int
         Samples re-planned by Newton on a neighbouring structure (an arc dropped or added).
     step_paths : list of str
-        What re-planned each sample: ``"plan holds"`` (no re-solve: the sample went as the
-        plan predicted on its ground, which is still the estimate), ``"newton"`` (the plan's
+        What computed each sample: the compiled controller's ``"bangbang"`` and
+        ``"bangbang (status)"``; the re-planning MPC's ``"plan holds"`` (no re-solve: the
+        sample went as the plan predicted on its ground, which is still the estimate),
+        ``"newton"`` (the plan's
         structure), ``"structure"``
         (a neighbouring structure, Newton), ``"continuation"`` (Newton along grounds from the
         plan's to the estimate), ``"ipopt"`` (the plan's structure, Ipopt),
@@ -67,13 +69,14 @@ class MPCLanding:
         Everything before the impact, in s of wall time: the first plan, the builds
         (``setup_ms``) and any compilation; never counted in a step's time.
     controller : str
-        The controller's name (:data:`CONTROLLERS`).
+        The controller's name (:data:`~softlanding.control.options.CONTROLLERS`).
     sample_limit_hit : bool
         ``max_samples`` ended the sampling before the foot stopped.
     uncovered : int
         ``controller="bangbang"``: samples the compiled controller did not cover (its
-        structure, push then pull, did not fit the state and estimate); each of them and the
-        rest of the landing fell back to the re-planning MPC (``step_paths`` says why).
+        structure, push then pull, did not fit the state and estimate): the compiled
+        fallback met each within the sample (``step_paths``: ``"bangbang (kept: ...)"``,
+        ``"bangbang (creep law: ...)"``, ``"bangbang (brake: ...)"``, after the colon why).
     deferred : int
         ``controller="bangbang"``: samples whose integrator steps ran out (the bound on one
         sample's work, :data:`softlanding.control.bangbang.WORK`): each applied the last
