@@ -8,7 +8,8 @@ per-phase discretisations (:mod:`~ocp.transcriptions.discretization`,
 h-refinement), :mod:`~ocp.transcriptions.nlp` (the parametric NLP, built once; Ipopt),
 :mod:`~ocp.transcriptions.verify` (path constraints between the nodes),
 :mod:`~ocp.transcriptions.gridview` (how a solution's grid is read),
-:mod:`~ocp.transcriptions.blas` (CasADi's OpenBLAS under Ipopt on one thread) and
+:mod:`~ocp.transcriptions.blas` (CasADi's OpenBLAS under Ipopt on one thread),
+:mod:`~ocp.transcriptions.solver_output` (CasADi's messages logged, not printed) and
 :mod:`~ocp.transcriptions.solution` (:class:`~ocp.Solution`). Imports only
 :mod:`ocp.definition`.
 """
