@@ -234,6 +234,7 @@ def test_the_command_prints_what_the_page_shows(shown, tmp_path):
     printed = (res.stdout + res.stderr).rstrip("\n").split("\n")
     output = shown.output or ("...",)
     assert res.returncode == expected_exit(output), f"{shown}\n" + "\n".join(printed)
+    assert not [ln for ln in printed if "WARNING(" in ln], printed  # no CasADi message
     assert _matches(_masked(output), _masked(printed)), \
         "\n".join([str(shown), "page:", *output, "printed:", *printed])
     arcs = re.search(r"arcs `([^`]*)`", shown.caption)
