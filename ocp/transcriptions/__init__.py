@@ -11,7 +11,8 @@ objective's error lies), :mod:`~ocp.transcriptions.nlp` (the parametric NLP, bui
 Ipopt), :mod:`~ocp.transcriptions.verify` and :mod:`~ocp.transcriptions.extrema` (path
 constraints between the nodes, at their maxima along the interpolant),
 :mod:`~ocp.transcriptions.gridview` (how a solution's grid is read),
-:mod:`~ocp.transcriptions.blas` (CasADi's OpenBLAS under Ipopt on one thread) and
+:mod:`~ocp.transcriptions.blas` (CasADi's OpenBLAS under Ipopt on one thread),
+:mod:`~ocp.transcriptions.solver_output` (CasADi's messages logged, not printed) and
 :mod:`~ocp.transcriptions.solution` (:class:`~ocp.Solution`). Imports only
 :mod:`ocp.definition`.
 """

@@ -13,7 +13,8 @@ ordinary call then handles it as CasADi does; an exception the ordinary call doe
 again, a signal handler's, is raised as it is). :meth:`BufferedCall.stats` is the calling
 thread's last evaluation's, read as it ends (in the buffer's memory, under its lock; on the
 ordinary call, CasADi's ``Function.stats``, which another thread's ordinary call of the same
-Function may replace meanwhile: CasADi's own limit). One difference: an interruption (Ctrl-C,
+Function may replace meanwhile: CasADi's own limit). CasADi's messages during an evaluation
+are logged, not printed (:mod:`.solver_output`). One difference: an interruption (Ctrl-C,
 SIGTERM as the CLI turns it into one) inside the evaluation is raised as it is, where
 CasADi's call turns it into a failed evaluation (Ipopt's ``NonIpopt_Exception_Thrown``).
 """
@@ -26,6 +27,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
+from .solver_output import solver_output
 
 
 class BufferedCall:
@@ -88,6 +91,10 @@ class BufferedCall:
         *args : array_like or None
             One per input.
         """
+        with solver_output():  # CasADi's messages (NaN in an evaluation, ...): logged
+            return self._call(args)
+
+    def _call(self, args: Sequence[Any]) -> list[np.ndarray]:
         if self.buffer is None or not self.lock.acquire(blocking=False):
             return self._ordinary(args)
         try:

@@ -494,20 +494,22 @@ def _cmd_hop(a: argparse.Namespace) -> int:
 
     hop_input(robot, a.v0, a.eta)  # checked before the solver loads
     from softlanding.optimal.hopping import best_impedance_hop, rigid_hop, solve_hop
+    from softlanding.util.progress import activity
 
     cycles: dict[str, Any] = {}
-    for leg in legs:
-        if leg == "free":
-            cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta, doublings=doublings)
-        elif leg == "rigid":
-            cycles[leg] = rigid_hop(Impact(a.v0), robot, a.eta)
-        else:
-            cycles[leg] = best_impedance_hop(Impact(a.v0), robot, a.eta, grid=grid)
-            if cycles[leg] is None:
-                raise InfeasibleLandingError(
-                    f"no impedance in the {grid} x {grid} gain grid (k_p in [0.05, 2], "
-                    f"k_d in [0, 2]) hops to the apex: no thrust within u_max = "
-                    f"{robot.u_max:g} restores it inside the stroke")
+    for leg in legs:  # tens of seconds each: a bar on a terminal (the solves report steps)
+        with activity(f"hop, {leg} leg"):
+            if leg == "free":
+                cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta, doublings=doublings)
+            elif leg == "rigid":
+                cycles[leg] = rigid_hop(Impact(a.v0), robot, a.eta)
+            else:
+                cycles[leg] = best_impedance_hop(Impact(a.v0), robot, a.eta, grid=grid)
+        if leg == "impedance" and cycles[leg] is None:
+            raise InfeasibleLandingError(
+                f"no impedance in the {grid} x {grid} gain grid (k_p in [0.05, 2], "
+                f"k_d in [0, 2]) hops to the apex: no thrust within u_max = "
+                f"{robot.u_max:g} restores it inside the stroke")
     # a verified cycle: its replay closes (apex, energy balance) and its energy is the
     # continuous optimum, not a grid's value
     reasons = {k: c.unverified_reasons() + [r for r in [c.unconverged_reason()] if r]
