@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from softlanding.cli.ground import model_ground
 from softlanding.cli.output import EXIT_OK, print_json, print_table, robot_of
@@ -62,33 +63,10 @@ def export_command(a: argparse.Namespace) -> int:
             result = check_export(tmp)
     files = [str(out / name) for name in FILES]
     names = {i: k_ for k_, i in indices("P_").items()}
-    fc = None if result is None else result.filter
     d = {"out": str(out), "files": files, "robot": text, "estimator": a.estimator,
          "sensor_noise": noise,
          "numbers": {names[i][2:]: float(v) for i, v in enumerate(P)},
-         "check": None if result is None else {
-             "landings": result.landings, "samples": result.steps,
-             "pull_samples": result.pull_steps,
-             "max_relative_difference": result.max_relative, "statuses": result.statuses,
-             "filter": None if fc is None else {
-                 "landings": fc.landings, "steps": fc.steps, "plans": fc.plans,
-                 "paths": fc.paths, "max_relative_difference": fc.max_relative},
-             "filtered_steps": None if result.filtered is None else {
-                 "steps": result.filtered.steps, "weighted": result.filtered.weighted,
-                 "recovery": result.filtered.outcomes, "statuses": result.filtered.statuses,
-                 "weight_grid": result.filtered.weights,
-                 "max_relative_difference": result.filtered.max_relative},
-             "creep_law_samples": result.creep_law_samples(),
-             "creep_landings": None if result.creep is None else {
-                 "landings": result.creep.landings, "samples": result.creep.steps,
-                 "filtered_samples": 0 if result.creep_filtered is None
-                 else result.creep_filtered.steps,
-                 "statuses": result.creep.statuses,
-                 "filtered_statuses": {} if result.creep_filtered is None
-                 else result.creep_filtered.statuses,
-                 "max_relative_difference": result.creep.max_relative,
-                 "filtered_max_relative_difference": {} if result.creep_filtered is None
-                 else result.creep_filtered.max_relative}}}
+         "check": None if result is None else check_summary(result)}
     if a.json:
         print_json(d)
         return EXIT_OK
@@ -100,4 +78,38 @@ def export_command(a: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-__all__ = ["export_command", "model_ground"]
+def check_summary(result: Any) -> dict[str, Any]:
+    """The export check's figures as JSON-ready numbers (``--json``'s ``check``).
+
+    Parameters
+    ----------
+    result : object
+        What :func:`~softlanding.control.export_c.check.check_export` returned.
+    """
+    fc = result.filter
+    return {
+        "landings": result.landings, "samples": result.steps,
+        "pull_samples": result.pull_steps,
+        "max_relative_difference": result.max_relative, "statuses": result.statuses,
+        "filter": None if fc is None else {
+            "landings": fc.landings, "steps": fc.steps, "plans": fc.plans,
+            "paths": fc.paths, "max_relative_difference": fc.max_relative},
+        "filtered_steps": None if result.filtered is None else {
+            "steps": result.filtered.steps, "weighted": result.filtered.weighted,
+            "recovery": result.filtered.outcomes, "statuses": result.filtered.statuses,
+            "weight_grid": result.filtered.weights,
+            "max_relative_difference": result.filtered.max_relative},
+        "creep_law_samples": result.creep_law_samples(),
+        "creep_landings": None if result.creep is None else {
+            "landings": result.creep.landings, "samples": result.creep.steps,
+            "filtered_samples": 0 if result.creep_filtered is None
+            else result.creep_filtered.steps,
+            "statuses": result.creep.statuses,
+            "filtered_statuses": {} if result.creep_filtered is None
+            else result.creep_filtered.statuses,
+            "max_relative_difference": result.creep.max_relative,
+            "filtered_max_relative_difference": {} if result.creep_filtered is None
+            else result.creep_filtered.max_relative}}
+
+
+__all__ = ["check_summary", "export_command", "model_ground"]
