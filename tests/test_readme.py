@@ -137,4 +137,11 @@ def test_ci_runs_exactly_the_readmes_test_commands():
     assert len(tests) == 2 and all(c.startswith("python3 -m venv .venv && . .venv/bin/activate")
                                    for c in commands if "pip install" in c)
     ci = [ln.strip() for ln in (ROOT / ".ci" / "run").read_text().splitlines()]
-    assert [ln for ln in ci if "pytest" in ln] == tests
+    assert [ln for ln in ci if "pytest" in ln and ln != OCP_ALONE] == tests
+    assert ci.count(OCP_ALONE) == 1  # and the ocp-only job, once
+
+
+OCP_ALONE = ('python -m pytest -p tests.ocp_alone tests/ocp -m "not slow" '
+             '-k "test_ocp.py or test_pmp.py or test_layout.py" -q -p no:cacheprovider')
+"""The ocp-only job of ``.ci/run``: tests/ocp collected with softlanding unimportable, three
+quick files run (issue 46)."""

@@ -24,18 +24,30 @@ between consecutive switch events of any control.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, Protocol, cast
-
-import casadi as ca
 import numpy as np
 
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.gridview import grid_spacing, is_collocation, mesh_level
-from ..transcriptions.solution import Solution, along
+from .activity import (
+    active_path_constraints,
+    control_bounds_at,
+    drop_uncrossable,
+    known_values,
+    no_control_crosses,
+    path_activity,
+)
+from .arc_structure import (
+    BANG,
+    Arc,
+    ArcStructure,
+    Interval,
+    SolutionLike,
+    SwitchingStructure,
+    TranscribedSolution,
+    transcribed,
+)
 from .constraint_kinds import (
     CONTROL,
-    KINDS,
     control_constraints,
     coupled_groups,
     path_kinds,
@@ -44,466 +56,11 @@ from .constraint_kinds import (
 from .control_set import control_polytope, vertex_faces, violated_control_constraint
 from .flows import Mode
 
-BANG = ("max", "min")
-
-
-class TranscribedSolution(Protocol):
-    """What this package reads of an :class:`ocp.Solution` (which sets these attributes
-    dynamically, so type checkers cannot see them on the class)."""
-
-    problem: OptimalControlProblem
-    transcription: Any
-    t: np.ndarray
-    x: np.ndarray
-    u: np.ndarray
-    T: float
-    N: int
-    params: dict[str, float]
-    variables: dict[str, float]
-    multipliers: dict[str, np.ndarray]
-    objective: float
-
-    def control(self, name: str) -> np.ndarray:
-        """The column of control ``name``.
-
-        Parameters
-        ----------
-        name : str
-            Control name.
-        """
-        ...
-
-    def evaluate(self, expr: ca.SX) -> np.ndarray:
-        """An expression of (x, u, p) at every node.
-
-        Parameters
-        ----------
-        expr : casadi.SX
-            An expression of the problem's states, controls and parameters.
-        """
-        ...
-
-
-SolutionLike = Solution | TranscribedSolution
-"""A transcribed solution, as passed in (``Solution``) or as read (the protocol)."""
-
-
-def transcribed(sol: SolutionLike) -> TranscribedSolution:
-    """``sol`` typed by :class:`TranscribedSolution` (no conversion).
-
-    Parameters
-    ----------
-    sol : Solution or Trajectory-like
-        A solution of a transcription.
-    """
-    return cast(TranscribedSolution, sol)
-
-
-@dataclass
-class Arc:
-    """A maximal interval where one control sits at a bound, on a constraint, or inside.
-
-    Attributes
-    ----------
-    kind : {"max", "min", "boundary", "vertex", "interior", "singular"}
-        ``"singular"`` only where a caller has classified an interior arc as singular
-        (:func:`ocp.structure.interior_arcs.refinable_arcs`).
-    start, end : float
-    active : tuple of str
-        State and mixed path constraints active at every node of the arc.
-    constraint, side : str or None
-        On a boundary arc, the constraint held and its limit (``"lower"``/``"upper"``).
-    faces : tuple of str
-        Control-only path constraints active at every node of the arc (faces of
-        the control set the controls sit on; not state constraints).
-    """
-
-    kind: str
-    start: float
-    end: float
-    active: tuple[str, ...] = ()
-    constraint: str | None = None
-    side: str | None = None
-    faces: tuple[str, ...] = ()
-
-    @property
-    def duration(self) -> float:
-        """``end - start``."""
-        return self.end - self.start
-
-    def mode_key(self) -> tuple[str, str | None, str | None]:
-        """``(kind, constraint, side)``: arcs with equal keys merge."""
-        return (self.kind, self.constraint, self.side)
-
-    @property
-    def mode(self) -> Mode:
-        """The arc as a refinement :class:`~ocp.structure.flows.Mode` (bang or boundary arcs
-        only)."""
-        if self.kind == "interior":
-            raise ValueError("an interior (singular or free) arc has no refinement mode")
-        return Mode(self.kind, self.constraint, self.side)
-
-
-@dataclass
-class SwitchingStructure:
-    """Arcs of one control, and whether they are all bang arcs.
-
-    Attributes
-    ----------
-    control : str
-        The control's name.
-    arcs : list of Arc
-        Its arcs in time order.
-    lower, upper : float
-        Its bounds.
-    """
-
-    control: str
-    arcs: list[Arc]
-    lower: float
-    upper: float
-
-    @property
-    def kinds(self) -> list[str]:
-        """The arcs' kinds in order."""
-        return [a.kind for a in self.arcs]
-
-    @property
-    def bang_bang(self) -> bool:
-        """Every arc at a bound or at a vertex of the control set (no boundary and no
-        interior arc)."""
-        return all(a.kind in BANG or a.kind == "vertex" for a in self.arcs)
-
-    @property
-    def refinable(self) -> bool:
-        """Every arc is a bang or a boundary arc: switching-time refinement applies."""
-        return all(a.kind != "interior" for a in self.arcs)
-
-    @property
-    def switch_times(self) -> list[float]:
-        """Times between consecutive arcs."""
-        return [a.end for a in self.arcs[:-1]]
-
-    def without_trailing_constrained(self) -> SwitchingStructure:
-        """Drop a final non-bang arc on which a path (state) constraint is active.
-
-        On such an arc the control is whatever keeps the state on its
-        constraint, not a bang. Dropping it refines the problem whose final
-        time is the end of the last bang arc, which is the right question when
-        the terminal conditions already account for the constrained tail (as
-        the soft landing's body-arrest condition does).
-        """
-        last = self.arcs[-1]
-        if len(self.arcs) > 1 and last.kind not in BANG and last.active:
-            return SwitchingStructure(self.control, self.arcs[:-1], self.lower, self.upper)
-        return self
-
-
-@dataclass
-class Interval:
-    """An interval between consecutive switch events of any control, with each control's mode.
-
-    Attributes
-    ----------
-    start, end : float
-        The interval's times.
-    modes : tuple of Mode
-        Each control's mode on it.
-    """
-
-    start: float
-    end: float
-    modes: tuple[Mode, ...]
-
-    @property
-    def duration(self) -> float:
-        """``end - start``."""
-        return self.end - self.start
-
-
-@dataclass
-class ArcStructure:
-    """The arc structure of every control, merged into intervals.
-
-    Attributes
-    ----------
-    controls : tuple of str
-    per_control : tuple of SwitchingStructure
-        One per control.
-    intervals : list of Interval
-        Between consecutive switch events of any control; the refinement's unknowns
-        are their durations.
-    """
-
-    controls: tuple[str, ...]
-    per_control: tuple[SwitchingStructure, ...]
-    intervals: list[Interval] = field(default_factory=list)
-
-    @property
-    def modes(self) -> tuple[tuple[Mode, ...], ...]:
-        """Per interval, the mode of every control."""
-        return tuple(iv.modes for iv in self.intervals)
-
-    @property
-    def kinds(self) -> list[tuple[str, ...]]:
-        """Per interval, the kind of every control."""
-        return [tuple(m.kind for m in iv.modes) for iv in self.intervals]
-
-    @property
-    def durations(self) -> list[float]:
-        """Interval lengths."""
-        return [iv.duration for iv in self.intervals]
-
-    @property
-    def switch_times(self) -> list[float]:
-        """Switch events of any control, in order."""
-        return [iv.end for iv in self.intervals[:-1]]
-
-    @property
-    def bang_bang(self) -> bool:
-        """Every control bang-bang."""
-        return all(s.bang_bang for s in self.per_control)
-
-    @property
-    def refinable(self) -> bool:
-        """Every arc of every control is a bang or boundary arc."""
-        return all(s.refinable for s in self.per_control)
-
-    @property
-    def T(self) -> float:
-        """End of the last interval."""
-        return self.intervals[-1].end if self.intervals else 0.0
-
-    @classmethod
-    def from_controls(cls, structures: list[SwitchingStructure] | tuple[SwitchingStructure, ...],
-                      merge_tol: float = 1e-12) -> ArcStructure:
-        """Merge per-control arcs into intervals between the switch events of all controls.
-
-        Events of different controls closer than ``merge_tol * T`` are one event.
-        When some control has an interior (singular or free) arc there are no
-        intervals (``refinable`` is False).
-        """
-        structures = tuple(structures)
-        names = tuple(s.control for s in structures)
-        if not all(s.refinable for s in structures):
-            return cls(names, structures, [])  # interior arcs: no refinement intervals
-        T = max(s.arcs[-1].end for s in structures)
-        ev = sorted({t for s in structures for t in s.switch_times})
-        events: list[float] = []
-        for t in ev:
-            if not events or t - events[-1] > merge_tol * max(T, 1.0):
-                events.append(t)
-        edges = [0.0, *events, T]
-        intervals: list[Interval] = []
-        for a, b in zip(edges[:-1], edges[1:], strict=True):
-            mid = 0.5 * (a + b)
-            modes = tuple(_arc_at(s, mid).mode for s in structures)
-            if intervals and intervals[-1].modes == modes:
-                intervals[-1].end = b
-            else:
-                intervals.append(Interval(a, b, modes))
-        return cls(names, structures, intervals)
-
-    @classmethod
-    def from_modes(cls, controls: tuple[str, ...], modes: list[tuple[Mode, ...]],
-                   durations: list[float]) -> ArcStructure:
-        """A structure given directly by interval modes and durations (a guess)."""
-        edges = np.r_[0.0, np.cumsum(durations)]
-        intervals = [Interval(float(edges[k]), float(edges[k + 1]), tuple(m))
-                     for k, m in enumerate(modes)]
-        per = []
-        for j, name in enumerate(controls):
-            arcs: list[Arc] = []
-            for iv in intervals:
-                m = iv.modes[j]
-                if arcs and arcs[-1].mode == m:
-                    arcs[-1].end = iv.end
-                else:
-                    arcs.append(Arc(m.kind, iv.start, iv.end, (), m.constraint, m.side))
-            per.append(SwitchingStructure(name, arcs, np.nan, np.nan))
-        return cls(tuple(controls), tuple(per), intervals)
-
-
-def _arc_at(s: SwitchingStructure, t: float) -> Arc:
-    for a in s.arcs:
-        if t <= a.end:
-            return a
-    return s.arcs[-1]
-
-
-def control_bounds_at(problem: OptimalControlProblem, name: str,
-                      params: dict[str, float]) -> tuple[float, float]:
-    """Numeric ``(lower, upper)`` bounds of control ``name`` at the values ``params``.
-
-    The control's limits (``problem.control_limits``, :mod:`ocp.definition.normal_form`)
-    may involve decision variables (``u <= peak``), and in a problem derived for the
-    refinement, the states that stand for them: their values are looked up by name in
-    ``params`` too (:func:`known_values` of a solution has them).
-
-    Parameters
-    ----------
-    problem : OptimalControlProblem
-    name : str
-        A control's name.
-    params : dict
-        A value for every parameter of the problem (and for every decision variable
-        or state the limits involve).
-
-    Returns
-    -------
-    (float, float)
-
-    Raises
-    ------
-    ValueError
-        When the limits involve a variable whose value ``params`` does not give.
-    """
-    lo, hi = problem.control_limits[name]
-    both = ca.vertcat(lo, hi)
-    if both.is_constant():
-        return float(ca.DM(lo)), float(ca.DM(hi))
-    syms, vals = [], []
-    for names, vec in ((problem.param_names, problem.p), (problem.var_names, problem.v),
-                       (problem.state_names, problem.x)):
-        for i, n in enumerate(names):
-            if ca.depends_on(both, vec[i]):
-                if n not in params:
-                    raise ValueError(f"the bounds of control {name!r} depend on {n!r}: "
-                                     "its value is needed")
-                syms.append(vec[i])
-                vals.append(float(params[n]))
-    f = ca.Function("b", [ca.vertcat(*syms)], [lo, hi])
-    a, b = (float(v) for v in f(vals))
-    return a, b
-
-
-def known_values(sol: SolutionLike) -> dict[str, float]:
-    """A solution's parameter values and its decision variables' optimised values.
-
-    Parameters
-    ----------
-    sol : Solution
-        A transcribed (or refined) solution.
-    """
-    return {**transcribed(sol).params, **(getattr(sol, "variables", None) or {})}
-
-
-def path_activity(sol: SolutionLike, tol: float,
-                  kinds: tuple[str, ...] = KINDS) -> tuple[np.ndarray, np.ndarray]:
-    """Which path constraints sit at which limit at every node.
-
-    Parameters
-    ----------
-    sol : Solution
-        A transcribed solution.
-    tol : float
-        Relative distance to a limit that counts as at it.
-    kinds : tuple of str
-        Which kinds of constraint to report (:func:`ocp.structure.constraint_kinds.constraint_kind`:
-        ``"state"``, ``"mixed"``, ``"control"``); the columns of the others are False.
-
-    Returns
-    -------
-    at_lower, at_upper : bool arrays (N+1, n_path)
-        Within ``tol * max(1, |value|)`` of the lower (upper) limit.
-    """
-    tsol = transcribed(sol)
-    pr = tsol.problem
-    n = tsol.N + 1
-    if not pr.structure_path:
-        return np.zeros((n, 0), dtype=bool), np.zeros((n, 0), dtype=bool)
-    pv = [tsol.params[k] for k in pr.param_names]
-    lows, ups = [], []
-    for c, kind in zip(pr.structure_path, path_kinds(pr), strict=True):
-        if kind not in kinds:
-            lows.append(np.zeros(n, dtype=bool))
-            ups.append(np.zeros(n, dtype=bool))
-            continue
-        vals = tsol.evaluate(c.expr)
-        lo, hi = (float(v) for v in ca.Function("b", [pr.p], [c.lower, c.upper])(pv))
-        scale = tol * np.maximum(1.0, np.abs(vals))
-        lows.append(np.abs(vals - lo) <= scale)
-        ups.append(np.abs(vals - hi) <= scale)
-    return np.column_stack(lows), np.column_stack(ups)
-
-
-def active_path_constraints(sol: SolutionLike, tol: float,
-                            kinds: tuple[str, ...] = KINDS,
-                            crossable: bool = False) -> np.ndarray:
-    """Which path constraints are active (at either limit) at every node.
-
-    Parameters
-    ----------
-    sol : Solution
-        A transcribed solution.
-    tol : float
-        As in :func:`path_activity`.
-    kinds : tuple of str
-        As in :func:`path_activity`.
-    crossable : bool
-        Count a state constraint at a limit only where some admissible control could
-        cross it (:func:`no_control_crosses`).
-
-    Returns
-    -------
-    ndarray of bool (N+1, n_path)
-    """
-    tsol = transcribed(sol)
-    lo, up = path_activity(tsol, tol, kinds)
-    if crossable:
-        _drop_uncrossable(tsol, lo, up)
-    return lo | up
-
-
-def no_control_crosses(pr: OptimalControlProblem, c: Any, side: str, x: np.ndarray,
-                       los: np.ndarray, his: np.ndarray, pv: np.ndarray,
-                       tol: float = 1e-9) -> np.ndarray:
-    """Where no admissible control could push state constraint ``c`` across its ``side``
-    limit: ``dc/dt = a(x) + b(x) u`` is on the feasible side for every ``u`` in the box.
-
-    A state at such a limit is not held there by the constraint (``m <= 1`` while
-    ``m' = -u/E`` with ``u >= 0``): touching it is no constrained arc, and the costate
-    does not jump there. A constraint whose first derivative does not involve the
-    controls (relative degree 2 or more), or involves them nonlinearly, can always be
-    crossed here (False).
-
-    Parameters
-    ----------
-    pr : OptimalControlProblem
-    c : Constraint
-        A state constraint (no control in it).
-    side : {"lower", "upper"}
-    x : ndarray (m, nx)
-        States at the samples.
-    los, his : ndarray (m, nu)
-        The control set's box at the samples.
-    pv : ndarray
-        Parameter values.
-    tol : float
-        Allowed push across, relative to the size of the terms.
-
-    Returns
-    -------
-    ndarray of bool (m,)
-    """
-    dc = ca.jtimes(c.expr, pr.x, pr.rhs)
-    b = ca.jacobian(dc, pr.u)
-    if pr.nu == 0 or ca.depends_on(b, pr.u) or not ca.depends_on(dc, pr.u) \
-            or ca.depends_on(dc, ca.vertcat(pr.t, pr.t0, pr.T, pr.v)):
-        return np.zeros(len(x), dtype=bool)
-    a = ca.substitute(dc, pr.u, ca.DM.zeros(pr.nu))
-    av, bv = along(ca.Function("ab", [pr.x, pr.p], [a, b.T]), x, pv)
-    av = av.ravel()
-    with np.errstate(invalid="ignore"):
-        ends = np.stack([bv * los, bv * his])  # (2, m, nu); 0 * inf is nan: no push
-    ends = np.where(bv[None] == 0.0, 0.0, ends)
-    push = av + (np.sum(np.max(ends, axis=0), axis=1) if side == "upper"
-                 else np.sum(np.min(ends, axis=0), axis=1))
-    size = np.abs(av) + np.sum(np.abs(np.where(np.isfinite(ends), ends, 0.0)), axis=(0, 2))
-    scale = tol * np.maximum(1.0, size)
-    ok = push <= scale if side == "upper" else push >= -scale
-    return np.isfinite(push) & ok
-
+# the types and the activity checks, importable from here as before the split
+__all__ = ["BANG", "Arc", "ArcStructure", "Interval", "SolutionLike", "SwitchingStructure",
+           "TranscribedSolution", "active_path_constraints", "control_bounds_at",
+           "detect_arcs", "detect_structure", "known_values", "no_control_crosses",
+           "outside_control_set", "path_activity", "snap_to_control_set", "transcribed"]
 
 
 def _runs(labels: list[str]) -> list[list]:
@@ -529,24 +86,6 @@ def _clusters(active: np.ndarray, max_gap: int) -> list[tuple[int, int, int]]:
     return out
 
 
-def _drop_uncrossable(sol: TranscribedSolution, at_lo: np.ndarray, at_up: np.ndarray) -> None:
-    """Clear the nodes where a state constraint sits at a limit no admissible control
-    could cross there (:func:`no_control_crosses`): not held by the constraint."""
-    pr = sol.problem
-    if not (at_lo.any() or at_up.any()):
-        return
-    values = known_values(sol)
-    box = [control_bounds_at(pr, n, values) for n in pr.control_names]
-    x = np.asarray(sol.x, dtype=float)
-    los = np.tile([b[0] for b in box], (len(x), 1))
-    his = np.tile([b[1] for b in box], (len(x), 1))
-    pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
-    for i, c in enumerate(pr.structure_path):
-        for side, at in (("lower", at_lo), ("upper", at_up)):
-            if at[:, i].any() and not ca.depends_on(c.expr, pr.u):
-                at[:, i] &= ~no_control_crosses(pr, c, side, x, los, his, pv)
-
-
 def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_gap: int,
                      min_nodes: int, control: str) -> None:
     """Relabel as ``"boundary:<i>:<side>"`` the intervals between the first and the last
@@ -557,7 +96,7 @@ def _boundary_labels(sol: TranscribedSolution, lab: list[str], tol: float, max_g
     control-only constraint is a face of the control set, not a boundary arc)."""
     pr = sol.problem
     at_lo, at_up = path_activity(sol, tol, kinds=("state", "mixed"))
-    _drop_uncrossable(sol, at_lo, at_up)
+    drop_uncrossable(sol, at_lo, at_up)
     for i in range(at_lo.shape[1]):
         if not (at_lo[:, i].any() or at_up[:, i].any()) or \
                 control not in riding_controls(pr, pr.structure_path[i]):

@@ -8,9 +8,10 @@ per-phase discretisations (:mod:`~ocp.transcriptions.discretization`,
 h-refinement), :mod:`~ocp.transcriptions.refinement` (refinement until converged, confirmed;
 multiple shooting's by doubling), :mod:`~ocp.transcriptions.indicators` (where the
 objective's error lies), :mod:`~ocp.transcriptions.nlp` (the parametric NLP, built once;
-Ipopt), :mod:`~ocp.transcriptions.verify` and :mod:`~ocp.transcriptions.extrema` (path
-constraints between the nodes, at their maxima along the interpolant),
-:mod:`~ocp.transcriptions.gridview` (how a solution's grid is read),
+Ipopt; where its solves start in :mod:`~ocp.transcriptions.start`, what it shares across
+meshes in :mod:`~ocp.transcriptions.grid_free`), :mod:`~ocp.transcriptions.verify` and
+:mod:`~ocp.transcriptions.extrema` (path constraints between the nodes, at their maxima
+along the interpolant), :mod:`~ocp.transcriptions.gridview` (how a solution's grid is read),
 :mod:`~ocp.transcriptions.blas` (CasADi's OpenBLAS under Ipopt on one thread),
 :mod:`~ocp.transcriptions.solver_output` (CasADi's messages logged, not printed) and
 :mod:`~ocp.transcriptions.solution` (:class:`~ocp.Solution`). Imports only

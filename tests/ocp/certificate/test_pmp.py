@@ -1,7 +1,6 @@
-"""Pontryagin certificate: analytic costates, a singular arc, the landing, refutation."""
+"""Pontryagin certificate: analytic costates, a singular arc (the landing's certificate is
+tested in tests/softlanding/optimal/test_landing_certificate.py)."""
 
-import dataclasses
-import json
 import math
 
 import numpy as np
@@ -10,11 +9,9 @@ import pytest
 from ocp import MultipleShooting, OptimalControlProblem, certify
 from ocp.certificate.certify import (
     CERTIFIED,
-    NOT_BANG_BANG,
     costates_from_multipliers,
 )
 from ocp.structure.switching import refine_switching
-from softlanding.optimal.landing import solve_landing
 from tests.oracles.problems import min_time_double_integrator
 
 
@@ -70,57 +67,3 @@ def test_singular_arc_is_certified_with_its_order():
     assert arc.start == pytest.approx(1.0, abs=0.1) and arc.end == pytest.approx(3.0)
     assert arc.order == 1 and arc.residuals["Kelley (-1)^k b min"] == pytest.approx(2.0)
 
-
-@pytest.mark.parametrize("v0", [-0.5, -3.0, -7.0, -10.0])
-def test_soft_landing_is_certified_bang_bang(v0):
-    r = solve_landing(v0, replay=False)
-    c = certify(r.transcribed, r.refined)
-    assert c.verdict == CERTIFIED, c.reasons
-    assert len(r.switch_times) == 1 and r.arcs == ["max", "min"]
-    assert c.H_expected == 0.0 and c.H_max_abs < 1e-9
-    assert c.switch_sigma_gap < 1e-9
-    assert c.sigma_sign_agreement == 1.0
-    assert c.costate_estimates_gap < 1e-2
-
-
-@pytest.mark.parametrize("how", ["late switch", "early switch", "swapped arcs"])
-def test_non_optimal_landing_is_refuted(how):
-    r = solve_landing(-3.0, replay=False)
-    ref = r.refined
-    if how == "late switch":
-        bad = dataclasses.replace(ref, durations=ref.durations * np.array([1.05, 0.96]))
-    elif how == "early switch":
-        bad = dataclasses.replace(ref, durations=ref.durations * np.array([0.9, 1.07]))
-    else:
-        bad = dataclasses.replace(ref, values=list(reversed(ref.values)))
-    c = certify(r.transcribed, bad)
-    assert c.verdict == NOT_BANG_BANG
-    assert c.reasons
-
-
-def test_transcription_alone_certifies_the_constrained_tail():
-    # at v0 = -10 the transcription ends with an arc on which v_f <= 0 is active. This test
-    # asserted the old limitation ("inconclusive": a state constraint active, left out of
-    # the checks); the tail is now checked as a state boundary arc of order 1 (on the
-    # constraint, the boundary control law, the multiplier's sign, the costate equation).
-    r = solve_landing(-10.0, replay=False)
-    c = certify(r.transcribed)
-    assert c.verdict == "certified (bang, state boundary order 1)", c.reasons
-    assert c.state_constraint_active_intervals
-    (arc,) = [a for a in c.arcs if a.kind == "state boundary"]
-    assert arc.control == "foot descending v_f <= 0" and arc.order == 1
-    assert arc.end == pytest.approx(r.transcribed.T)
-    assert arc.residuals["boundary control |u - u_b|"] < 1e-6
-
-
-def test_cli_pmp_json(tmp_path, cli):
-    png = tmp_path / "bb.png"
-    code, out, err = cli("solve", "--v0", "-2", "--pmp", "--json", "--plot", png)
-    assert code == 0, err
-    d = json.loads(out)["pmp"]
-    for k in ("verdict", "H_max_abs", "H_variation", "sigma_sign_agreement", "switch_sigma_gap",
-              "singular_intervals", "state_constraint_active_intervals",
-              "costate_estimates_gap"):
-        assert k in d
-    assert d["verdict"] == CERTIFIED
-    assert (tmp_path / "bb-pmp.png").stat().st_size > 10_000

@@ -301,21 +301,6 @@ def test_refinement_nlp_is_built_once_per_structure():
     assert nlp.newton(np.zeros(0), fast.w) is None
 
 
-def test_parametric_landing_refinement_is_reused_and_fast_path_agrees():
-    from softlanding.optimal.landing import solve_landing
-
-    sols = [solve_landing(v, replay=False, refine=False).transcribed for v in (-2.0, -4.0, -6.0)]
-    sts = [detect_arcs(s).without_trailing_constrained() for s in sols]
-    ipopt = [refine_switching(s, st, fast=False) for s, st in zip(sols, sts, strict=True)]
-    newton = [refine_switching(s, st, fast=True) for s, st in zip(sols, sts, strict=True)]
-    assert len({id(r.nlp) for r in ipopt + newton}) == 1  # one NLP for every v0
-    assert [r.path for r in ipopt] == ["ipopt"] * 3
-    assert [r.path for r in newton] == ["newton"] * 3
-    for a, b in zip(ipopt, newton, strict=True):
-        assert abs(a.xT[2] - b.xT[2]) <= 1e-12
-        np.testing.assert_allclose(a.durations, b.durations, atol=1e-12)
-
-
 def test_newton_fast_path_square_active_set_and_its_checks():
     ms = MultipleShooting(speed_limited(), nodes=80)
     sol = ms.solve({"d": 3.0, "vmax": 1.0}, guess=ms.initial_guess(T=4, x=lambda s: [3 * s, 0.5],
@@ -443,33 +428,6 @@ def test_public_docstrings_match_signatures():
                     assert names == params, f"{mn}.{f.__qualname__}: {names} != {params}"
                     checked += 1
     assert checked > 30
-
-
-def test_compiled_newton_agrees_with_the_python_loop_and_is_built_once():
-    from softlanding.optimal.landing import solve_landing
-
-    sol = solve_landing(-3.0, replay=False, refine=False).transcribed
-    st = detect_arcs(sol).without_trailing_constrained()
-    clear_cache(sol.problem)
-    first = refine_switching(sol, st, fast=False)
-    nlp, pv = first.nlp, np.array([first.params[k] for k in sol.problem.param_names])
-    pv[sol.problem.param_names.index("v0")] = -3.2
-    r = nlp.newton(pv, first.w)
-    assert r is not None and r["path"] == "newton" and r["primal"] <= 1e-12
-    assert len(nlp._newton_cache) == 1
-    rows, _, cols, _ = nlp.active_set()
-    target = np.where(nlp.active_set()[1] > 0, nlp.bounds(pv)["ubg"][rows],
-                      nlp.bounds(pv)["lbg"][rows])
-    w = first.w.copy()
-    assert nlp._newton_iterate(w, pv, rows, target, cols, 12) > 0
-    np.testing.assert_allclose(r["w"], w, rtol=0, atol=1e-13)
-    assert nlp.newton(pv, first.w) is not None and len(nlp._newton_cache) == 1
-    # the re-solve reports what a fresh Ipopt solve at the new velocity reports
-    fresh = refine_structure(sol.problem, first.modes, first.durations, r["w"][nlp.K:],
-                             {**first.params, "v0": -3.2}, fast=False)
-    np.testing.assert_allclose(fresh.durations, r["w"][:nlp.K], rtol=0, atol=1e-12)
-    assert fresh.end_path_violation == pytest.approx(
-        nlp.summary(r["w"], pv)["end_violation"], abs=1e-12)
 
 
 def test_an_overconstrained_structure_is_refused_without_building_ipopt(capfd):
