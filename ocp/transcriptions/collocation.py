@@ -361,8 +361,17 @@ class CollocationPhase(PhaseDiscretization):
                                data.raw["Z"].reshape(self.N, self.d, -1)], axis=1)
 
     def states(self, data: PhaseData, k: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """The state polynomials of intervals ``k`` at the fractions ``theta``, (n, nx)
-        (arguments as :meth:`local`'s)."""
+        """The state polynomials of intervals ``k`` at the fractions ``theta``, (n, nx).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's values.
+        k : ndarray of int
+            Interval of each point.
+        theta : ndarray
+            Fraction of its interval of each point, in [0, 1].
+        """
         return np.einsum("nr,nri->ni", lagrange_basis(np.r_[0.0, self.c], theta),
                          self.node_values(data)[k])
 

@@ -93,7 +93,13 @@ def tight_options(options: dict[str, Any]) -> dict[str, Any]:
 
 
 def is_tight(sol: Solution) -> bool:
-    """Whether a solution was solved with the relaxation :func:`tight_options` sets."""
+    """Whether a solution was solved with the relaxation :func:`tight_options` sets.
+
+    Parameters
+    ----------
+    sol : Solution
+        A transcription's solution.
+    """
     opts = sol.transcription.ipopt_options
     return opts == tight_options(opts)
 

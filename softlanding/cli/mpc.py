@@ -38,7 +38,21 @@ REPORTED = ("failure", "stroke_held", "force_held", "rest_proven", "stroke_min",
 
 @dataclass(frozen=True)
 class MPCOptions:
-    """``softlanding mpc``'s options, checked."""
+    """``softlanding mpc``'s options, checked.
+
+    Attributes
+    ----------
+    robot, impact, ground, model : Robot, Impact, ground, ground
+        The robot, its impact, the true ground and the controller's model of it.
+    plot : Path or None
+        The figure's file.
+    period, noise : float
+        Sample period and the sensor's noise (standard deviation).
+    delay, seed : int
+        Samples of delay and the noise's seed.
+    margin : float
+        Stroke margin of the compiled controller.
+    """
 
     robot: Any
     impact: Impact

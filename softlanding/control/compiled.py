@@ -52,6 +52,8 @@ class CompiledController:
         stepped inside the compiled call).
     period, margin : float
         The sample period; plan for the estimate less ``margin`` standard deviations.
+    record : LoopRecord, optional
+        Where its samples are recorded (default: a new one).
 
     Attributes
     ----------

@@ -37,6 +37,24 @@ class LoopRecord:
     :class:`~softlanding.control.result.MPCLanding` of the same names (each sample's wall and
     CPU time, path, estimate and integrator steps; the counts of re-plans, kept plans and
     fallback samples; the builds before the impact; the compiled samples for a replay).
+
+    Attributes
+    ----------
+    step_times_ms, step_cpu_ms : list of float
+        Each sample's wall and CPU time.
+    step_paths : list of str
+        Each sample's path (how the command was found).
+    estimates : list of GroundEstimate
+        Each sample's ground estimate.
+    step_work : list of int
+        Each sample's integrator steps.
+    replans, fallbacks, uncovered : int
+        Re-plans by transcription, fallback samples, samples the compiled structure did not
+        cover.
+    setup_ms : float
+        The builds before the impact.
+    compiled : CompiledRecord or None
+        The compiled samples, for :func:`~softlanding.control.loop_replay.replay`.
     """
 
     step_times_ms: list[float] = field(default_factory=list)
