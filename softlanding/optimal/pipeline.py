@@ -36,6 +36,7 @@ from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve
+from softlanding.optimal.smooth import SmoothOptimum, is_smooth, solve_smooth
 from softlanding.util.progress import progress as show_progress
 from softlanding.util.signals import raise_if_interrupted
 
@@ -48,6 +49,7 @@ class Solved(Protocol):
     refined: Any
     transcribed: Solution | None
     refine_requested: bool
+    smooth: Any
 
 
 L = TypeVar("L", bound=Solved)
@@ -169,6 +171,23 @@ class PhasedVariant(Generic[L]):
         """
         return refined_phases(sol, notes)
 
+    def smooth(self, sol: Solution, params: dict[str, float],
+               notes: list[str]) -> SmoothOptimum | None:
+        """A smooth optimum (interior arcs, no switching times) converged on a refined
+        mesh and certified arc by arc, or None with a note (default:
+        :func:`~softlanding.optimal.smooth.solve_smooth`).
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription (the problem and the first guess).
+        params : dict
+            Parameter values.
+        notes : list of str
+            Receives what was done, or why it failed.
+        """
+        return solve_smooth(sol, params, notes)
+
     def resolve(self, neighbour: L, params: dict[str, float]) -> Any:
         """``neighbour``'s refined structure re-solved directly for ``params``, or None when
         it does not hold here (default: :func:`~softlanding.optimal.phase_solve.
@@ -283,10 +302,14 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
         except InfeasibleError as err:
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             raise variant.explain(err, guess()) from None
-        ref = variant.refinement(sol, notes) if refine else None
-        if refine:
+        smooth = variant.smooth(sol, params, notes) if is_smooth(sol) else None
+        ref = variant.refinement(sol, notes) if refine and smooth is None else None
+        if refine and smooth is None:
             sol, ref = variant.retry(sol, ref, guess(), notes)
+        if smooth is not None:  # (no switching times: the same with or without refine)
+            sol = smooth.solution
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
+        out.smooth = smooth
     out.refine_requested = refine
     if replay:
         variant.replay(out)
