@@ -259,6 +259,12 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
                  refine: bool = True, replay: bool = True) -> L:
     """Solve a phased landing: structure re-solve or transcription, refinement, replay.
 
+    A smooth optimum (a running cost curved in the force, interior arcs:
+    :func:`~softlanding.optimal.smooth.is_smooth`) has no switching times: it is converged
+    on a refined collocation mesh and certified arc by arc instead
+    (:meth:`PhasedVariant.smooth`), with or without ``refine``, and the result's ``smooth``
+    holds that.
+
     Parameters
     ----------
     variant : PhasedVariant
@@ -308,6 +314,10 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
             sol, ref = variant.retry(sol, ref, guess(), notes)
         if smooth is not None:  # (no switching times: the same with or without refine)
             sol = smooth.solution
+            if not refine:
+                notes.append("refine=False (--no-refine) skips switching-time refinement; "
+                             "this smooth optimum has no switching times, and its mesh is "
+                             "refined either way")
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
         out.smooth = smooth
     out.refine_requested = refine
