@@ -49,16 +49,12 @@ def slack(min_energy):
     return min_energy.solve_min_energy(V0, depth_max=5.0)
 
 
-def test_the_closed_form_is_the_papers_case():
-    energy, T, depth = closed_form(V0, PAPER_ROBOT.r_m)
-    assert energy == pytest.approx(25 / 3, abs=1e-15)  # the issue's case
-    assert T == 3.0 and depth == pytest.approx((11 + math.sqrt(175)) / 6, abs=1e-15)
-
-
 def test_a_slack_budget_gives_the_closed_form_verified_and_certified(slack):
     """The default run of a smooth optimum: no "switching times not refined"; the mesh
     converged with an error estimate; every arc certified (interior); verified."""
     energy, T, depth = closed_form(V0, PAPER_ROBOT.r_m)
+    assert energy == pytest.approx(25 / 3, abs=1e-15)  # the issue's case
+    assert T == 3.0 and depth == pytest.approx((11 + math.sqrt(175)) / 6, abs=1e-15)
     assert slack.energy == pytest.approx(energy, abs=1e-8)
     assert slack.T == pytest.approx(T, abs=1e-7)
     assert slack.depth == pytest.approx(depth, abs=1e-7) and not slack.budget_active
