@@ -49,7 +49,6 @@ class Solved(Protocol):
     refined: Any
     transcribed: Solution | None
     refine_requested: bool
-    smooth: Any
 
 
 L = TypeVar("L", bound=Solved)
@@ -319,7 +318,8 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
                              "this smooth optimum has no switching times, and its mesh is "
                              "refined either way")
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
-        out.smooth = smooth
+        if smooth is not None:  # (a result without the field is never smooth)
+            out.smooth = smooth
     out.refine_requested = refine
     if replay:
         variant.replay(out)
