@@ -172,7 +172,18 @@ class MinEnergy(TwoPhase):
 
 
 def read_config(path: str) -> dict[str, float]:
-    """``depth_max`` (and ``stroke_margin``) from a TOML file."""
+    """``depth_max`` (and ``stroke_margin``) from a TOML file.
+
+    Parameters
+    ----------
+    path : str
+        The file, e.g. holding ``depth_max = 3.0``.
+
+    Raises
+    ------
+    ParameterError
+        An unreadable file, no ``depth_max``, or another key.
+    """
     try:
         with open(path, "rb") as f:
             d = tomllib.load(f)
@@ -190,15 +201,38 @@ def solve_min_energy(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                      config: str | None = None, stroke_margin: float = 0.0,
                      refine: bool = True, warm_start: Any = None) -> MinEnergyLanding:
     """The landing of least ``∫u² dt`` with the final depth at most ``depth_max`` (given, or
-    read from the TOML file ``config``), the leg ``stroke_margin`` inside its stroke."""
+    read from the TOML file ``config``), the leg ``stroke_margin`` inside its stroke.
+
+    Parameters
+    ----------
+    impact, robot, ground
+        The landing.
+    depth_max : float, optional
+        The depth budget (or give ``config``).
+    config : str, optional
+        A TOML file holding ``depth_max`` (and optionally ``stroke_margin``).
+    stroke_margin : float
+        The leg stays within ``[m, s - m]`` (0: the stroke itself).
+    refine, warm_start
+        As every variant's (a smooth optimum has no switching times to refine).
+
+    Raises
+    ------
+    ParameterError
+        Neither or both of ``depth_max`` and ``config``; a budget <= 0; a margin outside
+        ``[0, s/2)``.
+    """
     if (depth_max is None) == (config is None):
-        raise ParameterError("--depth-max", "give the budget or a --config file, not both")
+        raise ParameterError("--depth-max", "give the budget or a --config file holding "
+                             "it" + (", not both" if config is not None else ""))
     if config is not None:
         read = read_config(config)
         depth_max, stroke_margin = read["depth_max"], read.get("stroke_margin", stroke_margin)
     assert depth_max is not None
-    if not (math.isfinite(depth_max) and depth_max > 0) or not 0 <= stroke_margin < robot.s / 2:
-        raise ParameterError("depth_max", "a depth > 0 and a margin in [0, s/2) are needed")
+    if not (math.isfinite(depth_max) and depth_max > 0):
+        raise ParameterError("--depth-max", f"must be a depth > 0, got {depth_max:g}")
+    if not 0 <= stroke_margin < robot.s / 2:
+        raise ParameterError("--stroke-margin", f"must be in [0, s/2), got {stroke_margin:g}")
     warm = warm_start if isinstance(warm_start, MinEnergyLanding) else None
     variant = MinEnergy(robot, Impact.of(impact), ground, float(depth_max), float(stroke_margin))
     out = solve_phased(variant, warm, refine=refine)

@@ -134,6 +134,9 @@ def test_the_cli_runs_the_variant_from_its_file_with_the_same_verdict(cli, tmp_p
     code, out, err = cli("solve", "--variant", "min_energy:VARIANT", "--v0", V0,
                          "--config", toml, "--depth-max", "3")
     assert code == 2 and "not both" in err
+    code, out, err = cli("solve", "--variant", "min_energy:VARIANT", "--v0", V0,
+                         "--depth-max", "3", "--stroke-margin", "10")
+    assert code == 2 and "--stroke-margin" in err and out == ""
 
 
 @pytest.mark.slow
