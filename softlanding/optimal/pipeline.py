@@ -16,6 +16,8 @@ A variant is a problem (an ``ocp`` multi-phase problem and its transcription) pl
   default start after a failed guess),
   :meth:`PhasedVariant.explain` (an infeasible problem, in words),
   :meth:`PhasedVariant.retry` (a second attempt when refinement fails),
+  :meth:`PhasedVariant.smooth` (a smooth optimum: converged on a refined collocation mesh
+  and certified arc by arc, :mod:`softlanding.optimal.smooth`),
   :meth:`PhasedVariant.finish` and :meth:`PhasedVariant.replay`.
 
 :func:`solve_phased` runs the steps they share: re-solve a neighbour's refined structure
