@@ -86,6 +86,8 @@ def _cmd_simulate(a: argparse.Namespace) -> int:
 
 # ---------------------------------------------------------------------- solve
 def _certificate_rows(cert: Any) -> list[tuple[str, object]]:
+    if hasattr(cert, "rows"):  # a certificate that lays out its own rows (per arc)
+        return cert.rows()
     if hasattr(cert, "junction_gaps"):  # the phases' certificate
         return [("PMP verdict", cert.verdict),
                 ("max |H - H_expected| / H_scale", cert.H_max_abs),

@@ -13,6 +13,8 @@
   the MPC's state-started solve run on it too, with one-phase refinement hooks);
 * :mod:`.result` -- :class:`PhasedLanding`, the result every phased variant extends;
 * :mod:`.stance_phases` -- the ground modes as phases of an ``ocp.MultiPhaseProblem``;
+* :mod:`.smooth` -- a smooth optimum (a continuous force, interior arcs): converged on a
+  refined collocation mesh, certified arc by arc;
 * :mod:`.phase_solve`, :mod:`.phase_schedule`, :mod:`.verification` -- transcribe, refine,
   re-solve; refined arcs to a simulator controller; the checks every result states.
 
@@ -23,7 +25,8 @@
 
 A new variant is one module: its problem, a :class:`PhasedVariant` subclass, a
 :class:`PhasedLanding` subclass and a :class:`Variant` (see :mod:`.min_peak_force`, the
-least peak force within a depth budget).
+least peak force within a depth budget, and ``docs/examples/min_energy.py``, the least
+actuator energy, a smooth optimum).
 """
 
 import lazy_loader as _lazy

@@ -16,6 +16,8 @@ A variant is a problem (an ``ocp`` multi-phase problem and its transcription) pl
   default start after a failed guess),
   :meth:`PhasedVariant.explain` (an infeasible problem, in words),
   :meth:`PhasedVariant.retry` (a second attempt when refinement fails),
+  :meth:`PhasedVariant.smooth` (a smooth optimum: converged on a refined collocation mesh
+  and certified arc by arc, :mod:`softlanding.optimal.smooth`),
   :meth:`PhasedVariant.finish` and :meth:`PhasedVariant.replay`.
 
 :func:`solve_phased` runs the steps they share: re-solve a neighbour's refined structure
@@ -36,6 +38,7 @@ from ocp import InfeasibleError, MultipleShooting, Solution, SolveError
 from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_phases, structure_resolve, transcribed_solve
+from softlanding.optimal.smooth import SmoothOptimum, is_smooth, solve_smooth
 from softlanding.util.progress import progress as show_progress
 from softlanding.util.signals import raise_if_interrupted
 
@@ -169,6 +172,23 @@ class PhasedVariant(Generic[L]):
         """
         return refined_phases(sol, notes)
 
+    def smooth(self, sol: Solution, params: dict[str, float],
+               notes: list[str]) -> SmoothOptimum | None:
+        """A smooth optimum (interior arcs, no switching times) converged on a refined
+        mesh and certified arc by arc, or None with a note (default:
+        :func:`~softlanding.optimal.smooth.solve_smooth`).
+
+        Parameters
+        ----------
+        sol : ocp.Solution
+            The transcription (the problem and the first guess).
+        params : dict
+            Parameter values.
+        notes : list of str
+            Receives what was done, or why it failed.
+        """
+        return solve_smooth(sol, params, notes)
+
     def resolve(self, neighbour: L, params: dict[str, float]) -> Any:
         """``neighbour``'s refined structure re-solved directly for ``params``, or None when
         it does not hold here (default: :func:`~softlanding.optimal.phase_solve.
@@ -240,6 +260,12 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
                  refine: bool = True, replay: bool = True) -> L:
     """Solve a phased landing: structure re-solve or transcription, refinement, replay.
 
+    A smooth optimum (a running cost curved in the force, interior arcs:
+    :func:`~softlanding.optimal.smooth.is_smooth`) has no switching times: it is converged
+    on a refined collocation mesh and certified arc by arc instead
+    (:meth:`PhasedVariant.smooth`), with or without ``refine``, and the result's ``smooth``
+    holds that.
+
     Parameters
     ----------
     variant : PhasedVariant
@@ -283,10 +309,19 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
         except InfeasibleError as err:
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             raise variant.explain(err, guess()) from None
-        ref = variant.refinement(sol, notes) if refine else None
-        if refine:
+        smooth = variant.smooth(sol, params, notes) if is_smooth(sol) else None
+        ref = variant.refinement(sol, notes) if refine and smooth is None else None
+        if refine and smooth is None:
             sol, ref = variant.retry(sol, ref, guess(), notes)
+        if smooth is not None:  # (no switching times: the same with or without refine)
+            sol = smooth.solution
+            if not refine:
+                notes.append("refine=False (--no-refine) skips switching-time refinement; "
+                             "this smooth optimum has no switching times, and its mesh is "
+                             "refined either way")
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
+        if smooth is not None:  # (a result without the field is never smooth)
+            out.smooth = smooth
     out.refine_requested = refine
     if replay:
         variant.replay(out)

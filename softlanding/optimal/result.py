@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 from ocp import Solution
 from ocp.structure.phase_refinement import RefinedPhases
 from softlanding.model.robot import Impact, Robot
+from softlanding.optimal.smooth import SmoothOptimum
 from softlanding.optimal.verification import certificate_reasons, refined_result_reasons
 from softlanding.simulation.simulator import LandingResult
 from softlanding.util.jsonable import json_safe
@@ -58,6 +59,11 @@ class PhasedLanding:
     refine_requested : bool
         Whether the switching times were to be refined (False: ``refine=False``, and a
         transcribed result is then what was asked for, not a failure).
+    smooth : SmoothOptimum or None
+        A smooth optimum (interior arcs: a continuous force, no switching times): the
+        collocation solution it was converged on (``transcribed`` is that solution), its
+        mesh's convergence and its per-arc certificate
+        (:mod:`softlanding.optimal.smooth`), the same with or without ``refine``.
     """
 
     VARIANT: ClassVar[str] = ""
@@ -87,6 +93,7 @@ class PhasedLanding:
     notes: list[str] = field(default_factory=list)
     path: str = "transcription"
     refine_requested: bool = True
+    smooth: SmoothOptimum | None = None
 
     @property
     def certified_transcription(self) -> Solution | None:
@@ -103,12 +110,16 @@ class PhasedLanding:
         :meth:`uncertified_reason`)."""
         from ocp.certificate.phases import certify_phases
 
+        if self.smooth is not None:
+            return self.smooth.certificate
         if self.refined is None or self.certified_transcription is None:
             return None
         return certify_phases(self.certified_transcription, self.refined)
 
     def uncertified_reason(self) -> str:
         """One line: why :meth:`certify` gives no certificate (empty when it gives one)."""
+        if self.smooth is not None:
+            return ""
         if self.refined is None:
             if not self.refine_requested:
                 return "no PMP certificate: the switching times were not refined (--no-refine)"
@@ -150,8 +161,14 @@ class PhasedLanding:
         out = refined_result_reasons(
             self.refined is not None, self.notes, self.replay, self.replay_kind, self.depth,
             self.gain, self.WORSE_THAN_REFERENCE)
-        if not self.refine_requested:  # a transcribed result is what was asked for
+        if not self.refine_requested or self.smooth is not None:
+            # a transcribed result is what was asked for; a smooth optimum has no
+            # switching times, its mesh's convergence and certificate stand instead
             out = [r for r in out if not r.startswith("switching times not refined")]
+        if self.smooth is not None:
+            out += self.smooth.reasons()
+            if certificate is self.smooth.certificate:
+                certificate = None  # (its verdict is among the smooth reasons)
         return out + self.own_reasons() + certificate_reasons(certificate)
 
     def own_dict(self) -> dict[str, Any]:
@@ -169,6 +186,7 @@ class PhasedLanding:
             ("depth -x_f" + (" (refined)" if self.refined is not None else ""), self.depth),
             ("depth, transcribed", self.depth_transcribed), (self.REFERENCE, self.paper_depth)]
         rows += self.own_rows()
+        rows += self.smooth.rows() if self.smooth is not None else []
         rows += [("arcs per phase", " | ".join(" -> ".join(a) for a in self.arcs) or "-"),
                  ("phase start times", ", ".join(f"{t:.9g}" for t in self.phase_times)),
                  ("solved by", self.path), ("Ipopt status", self.status)]
@@ -202,6 +220,8 @@ class PhasedLanding:
             "impact": self.impact.to_dict(), **self.own_dict()}
         if self.refined is not None:
             d["refined"] = self.refined.to_dict()
+        if self.smooth is not None:
+            d["smooth"] = self.smooth.to_dict()
         if self.replay is not None:
             d["replay"] = {"depth": self.replay.depth, "difference": self.replay_difference,
                            "controller": self.replay_kind, "steps": self.replay.steps,

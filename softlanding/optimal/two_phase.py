@@ -34,7 +34,11 @@ from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
 from softlanding.optimal.limits import landing_input
-from softlanding.optimal.phase_schedule import replay_controller, transcribed_controller
+from softlanding.optimal.phase_schedule import (
+    replay_controller,
+    sampled_controller,
+    transcribed_controller,
+)
 from softlanding.optimal.phase_solve import phase_guess, transcribed_solve
 from softlanding.optimal.pipeline import (
     PhasedVariant,
@@ -44,7 +48,7 @@ from softlanding.optimal.pipeline import (
 )
 from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase_problem import OMITTABLE, two_phase_transcription
-from softlanding.simulation.simulator import simulate
+from softlanding.simulation.simulator import DEFAULT_MAX_SEGMENTS, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
 
@@ -222,6 +226,9 @@ class TwoPhase(PhasedVariant):
         try:
             if result.refined is not None:
                 ctrl, kind = replay_controller(result.refined, tail)
+            elif result.smooth is not None:  # a continuous force, finely sampled
+                ctrl, kind = sampled_controller(result.transcribed, tail,
+                                                u_max=result.force_bound)
             else:
                 assert result.transcribed is not None
                 ctrl, kind = transcribed_controller(result.transcribed, tail,
@@ -230,7 +237,9 @@ class TwoPhase(PhasedVariant):
             result.replay_kind = str(err)
             return
         result.replay_kind = kind
-        result.replay = simulate(result.robot, result.impact, ctrl, result.ground)
+        pieces = len(getattr(ctrl, "times", ()))  # a schedule: one segment or more a piece
+        result.replay = simulate(result.robot, result.impact, ctrl, result.ground,
+                                 max_segments=max(DEFAULT_MAX_SEGMENTS, 2 * pieces + 100))
 
 
 def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,

@@ -182,7 +182,9 @@ def plot_phased_landing(res: Any) -> plt.Figure:
         ends = [float(t) for t in res.phase_times]
         spans = [(a, b, p.problem.name) for a, b, p in zip(ends[:-1], ends[1:],
                                                            res.transcribed.phases, strict=True)]
-        what = " (transcribed, not refined)"
+        smooth = getattr(res, "smooth", None)
+        what = f" (smooth, mesh {smooth.convergence})" if smooth is not None else \
+            " (transcribed, not refined)"
     else:
         raise ValueError("neither a refinement nor a transcription to plot")
     p = res.robot
