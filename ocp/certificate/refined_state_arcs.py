@@ -50,7 +50,8 @@ def boundary_spans(ref: object) -> list[tuple[int, int, str, str]]:
     ----------
     ref : RefinedSwitching
     """
-    pr, out = ref.problem, []  # type: ignore[attr-defined]
+    out: list[tuple[int, int, str, str]] = []
+    pr = ref.problem  # type: ignore[attr-defined]
     for k, modes in enumerate(ref.interval_modes):  # type: ignore[attr-defined]
         held = [m for m in modes if m.kind == "boundary" and m.constraint is not None
                 and constraint_kind(pr, m.constraint) == STATE]

@@ -232,7 +232,7 @@ def _other_candidate(sol: Any, refined: Any) -> str:
         return ""
     # a refinement with decision variables ran on a problem derived from sol's (origin)
     mine = getattr(refined, "origin", None) or getattr(refined, "problem", None)
-    mine = getattr(copy_of(mine), "origin", mine)  # (costate copies: a derived problem too)
+    mine = getattr(copy_of(mine), "origin", mine) if mine is not None else None  # (copies)
     if _signature(mine) != _signature(getattr(sol, "problem", None)):
         return "it belongs to another problem"
     a, b = getattr(sol, "params", None) or {}, getattr(refined, "params", None) or {}

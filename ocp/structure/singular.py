@@ -207,7 +207,8 @@ def singular_feedback(pr: OptimalControlProblem, control: str,
     syms = ca.vertcat(*[pr.u[pr.control_names.index(n)] for n in names]) if names else None
 
     def sub(e: ca.SX) -> ca.SX:
-        return ca.substitute(e, syms, ca.vertcat(*[others[n] for n in names])) if names else e
+        return ca.substitute(e, syms, ca.vertcat(*[others[n] for n in names])) \
+            if syms is not None else e
 
     law = sub(alg.law)
     lam = alg.lam

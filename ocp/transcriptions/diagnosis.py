@@ -175,7 +175,7 @@ def _jacobian(tr: Any, w: np.ndarray, pv: np.ndarray) -> sp.csr_matrix:
 
 
 def dependent_ends(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
-                   scaling: Any) -> tuple[int, int, list[int], np.ndarray] | None:
+                   scaling: Any) -> tuple[int, int, list[int], dict[int, float]] | None:
     """Dependent equality end rows at ``w``, or None.
 
     The Jacobian is taken in the scaled variables (``dg/dw * D``), each row of unit
@@ -306,7 +306,7 @@ def _conserved(tr: Any, i: int, grad: ca.SX) -> bool:
         x = rng.normal(size=ph.nx)
         u = rng.uniform(-1.0, 1.0, size=ph.nu)
         s = rng.uniform(0.5, 1.5, size=cp.ns)
-        scale = np.linalg.norm(np.array(ca.Function("g", [ph.x], [grad])(x), dtype=float))
+        scale = float(np.linalg.norm(np.array(ca.Function("g", [ph.x], [grad])(x), dtype=float)))
         with np.errstate(all="ignore"):
             v = float(rate(0.3, x, u, s))
         if not math.isfinite(v) or abs(v) > 1e-10 * max(1.0, scale):

@@ -332,7 +332,8 @@ class PhaseDiscretization:
         data : PhaseData
             The phase's solved arrays (its static vector starts with the parameters).
         """
-        return self.check_bounds(data.s[:len(self.cp.phase.param_names)])[:2]
+        lo, hi = self.check_bounds(data.s[:len(self.cp.phase.param_names)])[:2]
+        return lo, hi
 
     def check_bounds(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:
         """``(ulo, uhi, clo, chi)``: the controls' and the check rows' bounds at the

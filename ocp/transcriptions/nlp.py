@@ -145,8 +145,8 @@ class Transcription(TranscriptionStart):
         self.verify_points = positive_int(verify_points, "verify_points")
         self.n_builds = 0
         self.dropped: dict[int, str] = {}  # rows of g left out of this solve (drop_dependent)
-        self._solvers: dict[tuple[bool, bool], Any] = {}
-        self._calls: dict[tuple[bool, bool], BufferedCall] = {}  # Ipopt on numpy arrays
+        self._solvers: dict[tuple[bool, bool, str], Any] = {}
+        self._calls: dict[tuple[bool, bool, str], BufferedCall] = {}  # Ipopt on numpy arrays
         self._nlp_fn = None
         self._grad_fn = None
         self._last_bounds: tuple[bytes, tuple[np.ndarray, ...]] | None = None

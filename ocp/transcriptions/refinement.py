@@ -42,6 +42,7 @@ the finest solution is returned.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -167,8 +168,51 @@ def doubling_error(values: list[float]) -> float:
     return max(last, CONFIRM_SAFETY * last * r / (1.0 - r))
 
 
-class MeshRefinement:
+class RefinementBase:
+    """What both refinements read of the transcription they are mixed into (its options,
+    its solve) and the objective accuracies they share."""
+
+    # set by the transcription (annotations only: the values are the transcription's)
+    codegen: bool
+    verify: str
+    verify_tol: float
+    verify_points: int
+    ipopt_options: dict[str, Any]
+    _solve: Callable[..., Solution]
+
+    def objective_floor(self) -> float:
+        """The relative objective accuracy below which mesh rounds chase the NLP solver's
+        own tolerance: ten times the larger of Ipopt's ``tol`` and its relaxation of
+        bounds (``bound_relax_factor``, 1e-8 by default), which move the objective of a
+        problem with active bounds by about that much whatever the mesh. (The final
+        solves are made with the relaxation off, so the result is usually more accurate
+        than this: the floor is what ``refine`` aims at by default, not what it reaches.)
+
+        Returns
+        -------
+        float
+        """
+        opts = self.ipopt_options
+        return 10.0 * max(float(opts.get("tol", 1e-8)),
+                          float(opts.get("bound_relax_factor", 1e-8)))
+
+    def resolution(self) -> float:
+        """The relative objective accuracy of a solve with the bound relaxation off: ten
+        times Ipopt's ``tol`` (no error estimate is reported below it).
+
+        Returns
+        -------
+        float
+        """
+        opts = tight_options(self.ipopt_options)
+        return 10.0 * max(float(opts.get("tol", 1e-8)),
+                          float(opts.get("bound_relax_factor", 0.0)))
+
+
+class MeshRefinement(RefinementBase):
     """:meth:`refine` for :class:`ocp.Collocation` (see the module)."""
+
+    degree: int  # (set by the transcription)
 
     def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
                max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
@@ -234,34 +278,6 @@ class MeshRefinement:
             warn_unconverged(sol)
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
-
-    def objective_floor(self) -> float:
-        """The relative objective accuracy below which mesh rounds chase the NLP solver's
-        own tolerance: ten times the larger of Ipopt's ``tol`` and its relaxation of
-        bounds (``bound_relax_factor``, 1e-8 by default), which move the objective of a
-        problem with active bounds by about that much whatever the mesh. (The final
-        solves are made with the relaxation off, so the result is usually more accurate
-        than this: the floor is what ``refine`` aims at by default, not what it reaches.)
-
-        Returns
-        -------
-        float
-        """
-        opts = self.ipopt_options
-        return 10.0 * max(float(opts.get("tol", 1e-8)),
-                          float(opts.get("bound_relax_factor", 1e-8)))
-
-    def resolution(self) -> float:
-        """The relative objective accuracy of a solve with the bound relaxation off: ten
-        times Ipopt's ``tol`` (no error estimate is reported below it).
-
-        Returns
-        -------
-        float
-        """
-        opts = tight_options(self.ipopt_options)
-        return 10.0 * max(float(opts.get("tol", 1e-8)),
-                          float(opts.get("bound_relax_factor", 0.0)))
 
     def round_errors(self, sol: Solution) -> tuple[list[np.ndarray], list[np.ndarray]]:
         """Per phase, every interval's error (its estimate or its violation between the
@@ -461,8 +477,11 @@ def _size(meshes: list[np.ndarray]) -> int:
     return sum(m.size - 1 for m in meshes)
 
 
-class NodeDoubling:
+class NodeDoubling(RefinementBase):
     """:meth:`refine` for :class:`ocp.MultipleShooting` (see the module)."""
+
+    nodes: list[int]  # per phase (set by the transcription)
+    with_nodes: Callable[..., Any]
 
     def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
                max_rounds: int = 6, max_nodes: int = 5000, guess: Any = None) -> Solution:
@@ -527,21 +546,3 @@ class NodeDoubling:
         sol.mesh_converged = error <= otol * max(1.0, abs(sol.objective))
         verify(sol, self.verify, self.verify_tol, self.verify_points)
         return sol
-
-    def objective_floor(self) -> float:
-        """See :meth:`MeshRefinement.objective_floor`.
-
-        Returns
-        -------
-        float
-        """
-        return MeshRefinement.objective_floor(self)
-
-    def resolution(self) -> float:
-        """See :meth:`MeshRefinement.resolution`.
-
-        Returns
-        -------
-        float
-        """
-        return MeshRefinement.resolution(self)

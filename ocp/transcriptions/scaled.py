@@ -79,9 +79,11 @@ def build_scaling(tr: Any, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
             sb.set_entries(np.arange(lay.iU.start, lay.iU.stop)[k::ph.nu],
                            sb.ref(name, user, lo, hi, guess))
         if lay.iT is not None:
-            sb.set_entries(lay.iT, sb.ref("time", None, *tm.T_bounds, tm.T_guess))
+            (lo, hi), guess = tm.T_bounds, tm.T_guess
+            sb.set_entries(lay.iT, sb.ref("time", None, lo, hi, guess))
         if lay.it0 is not None:
-            sb.set_entries(lay.it0, sb.ref("time", None, *tm.t0_bounds, tm.t0_guess))
+            (lo, hi), guess = tm.t0_bounds, tm.t0_guess
+            sb.set_entries(lay.it0, sb.ref("time", None, lo, hi, guess))
         if "path" in lay.blocks:
             rs = [sb.row_scale(c, j) for c in ph.path for j in range(c.expr.numel())]
             sl = lay.blocks["path"]
@@ -89,7 +91,8 @@ def build_scaling(tr: Any, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
     sh = mp.shared
     for k, name in enumerate(sh.var_names):
         sb.set_entries(tr.iV.start + k, sb.ref(name, sh.var_ref.get(name),
-                                               *sh.var_bounds[name], sh.var_guess.get(name)))
+                                               sh.var_bounds[name][0], sh.var_bounds[name][1],
+                                               sh.var_guess.get(name)))
     for i, kind, cs in tr.groups:
         sl = (tr.link_blocks if i == -1 else tr.layouts[i].blocks)[kind]
         sb.r[sl] = [sb.row_scale(c, j) for c in cs for j in range(c.expr.numel())]
@@ -186,7 +189,8 @@ def scaled_nlp(nlp: dict[str, Any], n_w: int, n_g: int, mode: str = "start",
         assert sc is not None
         D, c, r, P = ca.DM(sc.D), ca.DM(sc.c), ca.DM(sc.r), ca.vertcat(nlp["p"], kf)
     else:
-        D, c, r = (ca.MX.sym(n, k) for n, k in (("D", n_w), ("c", n_w), ("r", n_g)))
+        syms = (ca.MX.sym(n, k) for n, k in (("D", n_w), ("c", n_w), ("r", n_g)))
+        D, c, r = syms  # type: ignore[assignment]  # (symbols of the DMs' shapes)
         P = ca.vertcat(nlp["p"], kf, D, c, r)
     f, g = ca.substitute([nlp["f"], nlp["g"]], [nlp["x"]], [D * ws + c])
     return {"x": ws, "p": P, "f": kf * f, "g": r * g}

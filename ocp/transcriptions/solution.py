@@ -113,6 +113,9 @@ class Solution:
     mesh_converged: bool = False  # refine() met its tolerances (a single solve: False)
     objective_scale: float
     expanded: bool
+    scaling: Any
+    scaling_fallback: str | None
+    dropped: list[str]
 
     def __init__(self, **kw: Any) -> None:
         self.__dict__.update(kw)

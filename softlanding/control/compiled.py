@@ -21,7 +21,7 @@ from ocp.structure.switching import RefinedSwitching
 from softlanding.control import bangbang as bb
 from softlanding.control.commands import Command, plan_time
 from softlanding.control.estimation import GroundEstimate
-from softlanding.control.estimators import MeasuredEstimator, Reading
+from softlanding.control.estimators import FilteredEstimator, MeasuredEstimator, Reading
 from softlanding.control.fallback import fallback_step
 from softlanding.control.foot_filter import new_filter
 from softlanding.control.loop import LoopRecord
@@ -141,6 +141,7 @@ class CompiledController:
         if est.F is None:
             status = int(bb.control_step(self.P, M, r.x, r.a_f, r.u, r.h, fit, *self.ws))
         else:  # the filter's step, the sample's weight and the step in one call
+            assert isinstance(est, FilteredEstimator)  # (the one with a foot filter F)
             st, self.recovering = filtered_sample(
                 self.P, M, est.F, r.x, r.g, r.U1, r.U2, r.h, est.beta, est.noise, r.a_f,
                 r.u, fit, est.stop, self.recovering, *self.ws)
@@ -160,10 +161,13 @@ class CompiledController:
         rec.step_work.append(int(self.M[bb.M_WORK]))
         if rec.compiled is not None:
             F = est.F
+            filt = None
+            if F is not None:
+                assert isinstance(est, FilteredEstimator)  # (the one with a foot filter F)
+                filt = (float(r.g), float(r.U1), float(r.U2), float(est.beta),
+                        float(est.noise), float(est.stop))
             rec.compiled.samples.append(CompiledSample(
-                x_in, float(r.a_f), float(r.u), float(r.h), bool(fit),
-                None if F is None else (float(r.g), float(r.U1), float(r.U2), float(est.beta),
-                                        float(est.noise), float(est.stop)),
+                x_in, float(r.a_f), float(r.u), float(r.h), bool(fit), filt,
                 status, self.M.copy(), None if F is None else F.copy(), self.recovering))
         if est.enabled:
             rec.estimates.append(self.estimate())

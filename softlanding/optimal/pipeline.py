@@ -321,7 +321,7 @@ def solve_phased(variant: PhasedVariant[L], warm_start: L | Solution | None = No
                              "refined either way")
         out = variant.finish(variant.assemble(sol, ref, notes, "transcription"))
         if smooth is not None:  # (a result without the field is never smooth)
-            out.smooth = smooth
+            out.smooth = smooth  # type: ignore[attr-defined]
     out.refine_requested = refine
     if replay:
         variant.replay(out)
