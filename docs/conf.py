@@ -14,6 +14,7 @@ from __future__ import annotations
 import importlib
 import logging
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -62,7 +63,7 @@ html_css_files = ["custom.css"]
 html_show_sourcelink = False
 
 # -- MyST / myst-nb --------------------------------------------------------------------------
-myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
 # the notebooks are stored without outputs (tests/test_notebooks.py): executed here, each in
@@ -208,5 +209,16 @@ def _dot_products(app, what, name, obj, options, lines) -> None:
     lines[:] = [ln.replace(" . ", " · ") for ln in lines]
 
 
+_REMOTE_TABLE = re.compile(r"^  \.\. raw:: html\n(?:\n|    .*\n)*", re.MULTILINE)
+
+
+def _plain_execution_times(app, docname, source) -> None:
+    """sphinx-gallery's execution-times page loads jQuery, DataTables and Bootstrap from
+    the internet to sort its table: drop that block, the table stays (plain, offline)."""
+    if docname.endswith("sg_execution_times"):
+        source[0] = _REMOTE_TABLE.sub("", source[0])
+
+
 def setup(app):
     app.connect("autodoc-process-docstring", _dot_products, priority=100)
+    app.connect("source-read", _plain_execution_times)
