@@ -14,7 +14,6 @@ from __future__ import annotations
 import importlib
 import logging
 import os
-import re
 import sys
 from pathlib import Path
 
@@ -45,6 +44,7 @@ extensions = [
     "myst_nb",
     "sphinx_gallery.gen_gallery",
     "execution_log",  # docs/_ext: a line on stderr per executed example and notebook
+    "offline_timings",  # docs/_ext: the execution-times page without its CDN scripts
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
@@ -209,16 +209,5 @@ def _dot_products(app, what, name, obj, options, lines) -> None:
     lines[:] = [ln.replace(" . ", " · ") for ln in lines]
 
 
-_REMOTE_TABLE = re.compile(r"^  \.\. raw:: html\n(?:\n|    .*\n)*", re.MULTILINE)
-
-
-def _plain_execution_times(app, docname, source) -> None:
-    """sphinx-gallery's execution-times page loads jQuery, DataTables and Bootstrap from
-    the internet to sort its table: drop that block, the table stays (plain, offline)."""
-    if docname.endswith("sg_execution_times"):
-        source[0] = _REMOTE_TABLE.sub("", source[0])
-
-
 def setup(app):
     app.connect("autodoc-process-docstring", _dot_products, priority=100)
-    app.connect("source-read", _plain_execution_times)
