@@ -44,6 +44,7 @@ extensions = [
     "myst_nb",
     "sphinx_gallery.gen_gallery",
     "execution_log",  # docs/_ext: a line on stderr per executed example and notebook
+    "offline_timings",  # docs/_ext: the execution-times page without its CDN scripts
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
@@ -62,7 +63,7 @@ html_css_files = ["custom.css"]
 html_show_sourcelink = False
 
 # -- MyST / myst-nb --------------------------------------------------------------------------
-myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
 # the notebooks are stored without outputs (tests/test_notebooks.py): executed here, each in

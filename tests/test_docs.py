@@ -58,6 +58,11 @@ def test_the_site_builds_with_its_gallery_executed(tmp_path):
     # no CasADi message on any page (a notebook's cell printed 22 lines of them)
     pages = [p for p in html.rglob("*.html")]
     assert not [p for p in pages if "WARNING(" in p.read_text(errors="replace")]
+    # nothing from the network: no script or style sheet of another site (the execution
+    # times page loaded jQuery and DataTables from CDNs)
+    remote = re.compile(r'<(?:script|link)\b[^>]*\b(?:src|href)="(?:https?:)?//', re.I)
+    assert not [p for p in pages if remote.search(p.read_text(errors="replace"))]
+    assert (html / "auto_examples" / "sg_execution_times.html").is_file()
     # quiet: nothing printed but warnings (none: -W), errors and a line per executed example
     # and notebook (docs/_ext/execution_log.py); a notebook kernel's teardown noise (tornado
     # logging a ZMQ socket closed under it) is not the docs'

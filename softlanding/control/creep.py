@@ -36,7 +36,7 @@ What it does not reach: a momentum larger than the drag can take at the force li
 foot's speed saturates; the body then arrives moving and its arrest digs a little deeper),
 and ground with no drag (no creep: the law refuses, ``nan``). Its callers:
 :mod:`softlanding.control.bangbang` (phase ``CREEPING``); measured in the guide's "The creep
-law" (``docs/guides/unknown_ground.md``).
+law" (``docs/guides/unknown_ground_controller.md``).
 
 The foot's and body's coefficients are the controller's numbers (from
 :func:`softlanding.model.dynamics.robot_rhs`: one definition of the dynamics).

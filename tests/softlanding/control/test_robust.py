@@ -227,7 +227,7 @@ def test_the_search_converges_or_says_so(robust):
 @pytest.mark.slow
 @pytest.mark.parametrize("v0", [-1.0, -3.0, -6.0, -10.0])
 def test_the_guides_robust_and_tree_columns_are_runs(v0):
-    # issue 34: the unknown-ground guide's worst depths of the robust schedule and the tree
+    # issue 34: the unknown-ground study page's worst depths of the robust schedule and the tree
     # over the study's 15 grounds are these runs' (as the study makes them), marked "~" where
     # the robust search did not converge (its KKT check failed; minutes at v0 = -10)
     import itertools
@@ -240,7 +240,7 @@ def test_the_guides_robust_and_tree_columns_are_runs(v0):
     clear_cache()  # the re-plans' paths depend on the NLPs earlier tests left cached (the
     # tree's at v0 = -1: 2.238 in a fresh process, 2.137 after the mpc tests; either when the
     # robust schedule moves by 1e-13, as the searches of issue 44 found), as the study's
-    guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground.md"
+    guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground_study.md"
     rows = {float(m[1]): m[2].split("|") for m in
             re.finditer(r"^\| (-[\d.]+) \|(.*)\|$", guide.read_text(), re.M)}
     cells = [c.strip() for c in rows[v0]]

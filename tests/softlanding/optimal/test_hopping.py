@@ -167,7 +167,7 @@ def test_the_hybrid_guide_quotes_the_run(hop3):
 
     h = hop3
     guide = (Path(__file__).resolve().parents[3] / "docs" / "guides" / "hybrid.md").read_text()
-    m = re.search(r"At `v0 = -3`: ([\d.]+) \(60/80/60 nodes\),\s+([\d.]+)"
+    m = re.search(r"At \$v_0 = -3\$: ([\d.]+) \(60/80/60 nodes\),\s+([\d.]+)"
                   r" \(120/160/120\),"
                   r"\s+exact arcs ([\d.]+)", guide)
     assert m, "the hybrid guide's figures moved"
