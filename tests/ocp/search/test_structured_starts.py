@@ -104,7 +104,9 @@ def test_the_car_behind_finds_both_turns_where_sampled_starts_found_none():
     objs = [o.objective for o in res.optima]
     assert any(o == pytest.approx(RIGHT, rel=2e-3) for o in objs)
     bang = [s for s in res.starts if s.origin == "bang"]
-    assert len(bang) == round(0.75 * 7) and all(s.verified for s in bang)
+    # the first round alternates the kinds (2 of its 4 bang), later rounds follow the yields
+    assert len(bang) >= 2 and all(s.verified for s in bang)
+    assert sorted(s.origin for s in res.starts[1:5]) == ["bang", "bang", "sobol", "sobol"]
     assert sum(o.fraction for o in res.optima) == pytest.approx(
         1 - len(res.failures) / len(res.starts))
     assert "(x" in res.message and "%" in res.message and not res.stopped
