@@ -19,19 +19,22 @@ schedule is then:
   holds every limit, the tree's is never deeper, since the remainder stays a choice (a
   re-plan that holds the limits is preferred to a remainder that does not, even if deeper).
 
-The search is SLSQP (``scipy.optimize.minimize``) with finite-difference gradients over a
-handful of numbers, on the epigraph form ``min z`` s.t. ``depth_i <= z``; each evaluation is
-one exact simulation per ground. Started from the nominal plan, it keeps the best schedule
-it evaluated that holds every limit on every ground, so where the nominal plan holds them its
-worst depth is never above the nominal one. It is a local search within the nominal plan's
-piece structure. SLSQP's quasi-Newton model can degrade where the active grounds switch, so a
-run that stops short is restarted from its best point (a fresh model), up to
-:data:`RESTARTS` times. Convergence is then checked independently of SLSQP: the KKT
-conditions of the epigraph problem at the schedule returned, with central-difference
-gradients and the multipliers of the active constraints and bounds by non-negative least
-squares (``kkt_residual``, stationarity relative to the objective's gradient; ``converged``
-when it is below :data:`KKT_TOL` with every limit held): a local optimum, or the search
-says it is not. Every figure reported is an exact replay.
+The search (:mod:`~softlanding.control.robust_search`) is SLSQP on the epigraph form ``min z``
+s.t. ``depth_k <= z`` with finite-difference gradients over a handful of numbers, each
+evaluation one exact simulation per ground, on rows made smooth
+(:mod:`~softlanding.control.robust_family`: each low local minimum of the stroke a row of its
+own; where the binding ground's foot stops at a switch, the piece pinned to end at that stop).
+It starts from the clairvoyant optimum of the ground with the deepest one, when the caller
+has them (``clairvoyant``), pinned where that foot stops; then from the nominal plan, pinning
+the binding ground's stop where the unpinned search does not converge. Convergence is the
+KKT conditions of the epigraph problem, checked independently of SLSQP (central-difference
+gradients, the multipliers of the active rows by non-negative least squares; those of the
+binding grounds' depths sum to 1): a local optimum within the plan's piece structure, or the
+result says it is not. A schedule that is a clairvoyant optimum (one ground binding, the
+others slack) is reported as that ground's (``clairvoyant_of``): its worst depth is the
+largest clairvoyant depth (``lower_bound``), below which no plan for the set lands on that
+ground as far as its clairvoyant optimum is the least depth there. Every figure reported is
+an exact replay.
 """
 
 from __future__ import annotations
@@ -43,17 +46,28 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize
 
 from ocp import SolveError, Trajectory
 from softlanding.control.plant import SteppingPlant
+from softlanding.control.robust_family import PieceFamily, Pin
+from softlanding.control.robust_search import (
+    ACTIVE_TOL,
+    FD_STEP,
+    KKT_STEP,
+    KKT_TOL,
+    MAX_ITERATIONS,
+    RESTARTS,
+    Run,
+    Start,
+    kkt_residual,
+    search,
+)
 from softlanding.control.state_landing import ground_numbers, plan_from_state
 from softlanding.errors import InfeasibleLandingError, ParameterError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import Ground, ground_sequence
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing
-from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
@@ -61,25 +75,9 @@ from softlanding.util.signals import raise_if_interrupted
 DEFAULT_BRANCH_TIME = 0.05
 """The tree's branching time in the paper's time unit (five MPC samples; 1.3 ms on the
 paper's rig): by then the foot's deceleration has shown the ground."""
-MAX_ITERATIONS = 200
-"""SLSQP iterations of the search."""
-FD_STEP = 1e-7
-"""The finite-difference step of the search's gradients (durations and forces)."""
-RESTARTS = 4
-"""SLSQP runs after the first, each from the best point of the one before, while the KKT
-check fails."""
-KKT_TOL = 1e-4
-"""Largest KKT stationarity residual (relative to the objective's gradient) of a converged
-schedule. Measured where SLSQP converged: 2e-5 (v0 = -3, four grounds; the rest is the
-finite differences and a flat valley along the long last piece, whose linearised descent
-leaves the constraints at second order), 9e-7 and 3e-6 (v0 = -1, -3, the study's 15
-grounds); where it stopped at its iteration limit: 0.84 (v0 = -3, four grounds, first run),
-0.97 and 0.99 (v0 = -6, -10, 15 grounds, after every restart)."""
-KKT_STEP = 1e-6
-"""Central-difference step of the KKT check (relative to each variable, at least absolute)."""
-ACTIVE_TOL = 1e-6
-"""A constraint (scaled to order one) within this of its bound counts as active in the KKT
-check."""
+CLAIRVOYANT_RTOL = 1e-9
+"""A robust schedule whose worst depth is within this (relative) of a binding ground's
+clairvoyant depth is that ground's clairvoyant optimum."""
 
 
 @dataclass(frozen=True)
@@ -176,6 +174,20 @@ class RobustLanding:
         SLSQP iterations, over all its runs.
     cpu_time_s : float
         Process CPU time of the search.
+    multipliers : dict of int to float
+        The binding grounds (indices) and the multipliers of their depths in the KKT check
+        (they sum to 1 at a minimax point).
+    limits : list of (str, int or None, float)
+        The other active rows of the KKT check: kind, ground index (None: not a ground's) and
+        multiplier.
+    pin : tuple of (int, int) or None
+        ``(piece, ground)``: the schedule's piece (0-based) that ends when that ground's foot
+        first stops, in the family the search converged in (None: unpinned).
+    off_pin : str
+        With a pin: what the worst depth does off it (see
+        :func:`~softlanding.control.robust_search.off_pin_check`).
+    clairvoyant_depths : list of float or None
+        The clairvoyant depth on each ground, when given.
     """
 
     robot: Robot
@@ -193,6 +205,11 @@ class RobustLanding:
     kkt_residual: float = math.nan
     iterations: int = 0
     cpu_time_s: float = 0.0
+    multipliers: dict[int, float] = field(default_factory=dict)
+    limits: list[tuple[str, int | None, float]] = field(default_factory=list)
+    pin: tuple[int, int] | None = None
+    off_pin: str = ""
+    clairvoyant_depths: list[float] | None = None
 
     @property
     def converged(self) -> bool:
@@ -220,6 +237,23 @@ class RobustLanding:
     def feasible(self) -> bool:
         """Every ground's landing held the stroke and came to rest."""
         return all(g.feasible for g in self.landings)
+
+    @property
+    def lower_bound(self) -> float | None:
+        """The largest clairvoyant depth (no plan for the set lands shallower on that ground),
+        when the clairvoyant depths were given."""
+        return None if self.clairvoyant_depths is None else max(self.clairvoyant_depths)
+
+    @property
+    def clairvoyant_of(self) -> int | None:
+        """The ground whose clairvoyant optimum the open-loop schedule is: it binds alone and
+        its depth is its clairvoyant depth (to :data:`CLAIRVOYANT_RTOL`), the others lie
+        below; None otherwise (or without the clairvoyant depths, or for a tree)."""
+        if self.clairvoyant_depths is None or self.kind != "open-loop" or not self.feasible:
+            return None
+        k = int(np.argmax(self.depths))
+        c = self.clairvoyant_depths[k]
+        return k if abs(self.worst - c) <= CLAIRVOYANT_RTOL * c else None
 
     @property
     def nominal_worst(self) -> float:
@@ -250,53 +284,58 @@ class RobustLanding:
             "message": self.message, "converged": self.converged,
             "kkt_residual": self.kkt_residual, "kkt_tol": KKT_TOL,
             "iterations": self.iterations,
+            "multipliers": [{"ground": k, "multiplier": v} for k, v in self.multipliers.items()],
+            "limits": [{"kind": kind, "ground": k, "multiplier": v}
+                       for kind, k, v in self.limits],
+            "pin": None if self.pin is None else {"piece": self.pin[0], "ground": self.pin[1]},
+            "off_pin": self.off_pin, "clairvoyant_depths": self.clairvoyant_depths,
+            "lower_bound": self.lower_bound, "clairvoyant_of": self.clairvoyant_of,
             "robot": self.robot.to_dict(), "impact": self.impact.to_dict()})
 
 
-class _Pieces:
-    """The schedule family: forces ``u_1..u_{n-1}`` and durations ``d_1..d_n`` free, ``u_n``
-    the force that stops the body at the end of piece ``n`` (then the body's weight)."""
-
-    def __init__(self, robot: Robot, impact: Impact, n: int) -> None:
-        self.robot, self.impact, self.n = robot, impact, n
-        self.gain = (1 + robot.r_m) / robot.r_m  # body acceleration per unit force
-
-    def last_force(self, d: np.ndarray, u: np.ndarray) -> float:
-        """The force of the last piece that brings ``v_b`` to zero at its end."""
-        v = self.impact.v0 + float(np.sum((-1 + self.gain * u) * d[:-1]))
-        return (1 - v / d[-1]) / self.gain
-
-    def split(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Durations and forces, projected onto their bounds (the search may step a rounding
-        beyond them)."""
-        u_max = force_limit(self.robot)
-        return (np.maximum(np.asarray(theta[:self.n], float), 1e-9),
-                np.clip(np.asarray(theta[self.n:], float), -u_max, u_max))
-
-    def split_longest(self, theta: np.ndarray) -> np.ndarray:
-        """One more piece, the same schedule: the longest piece halved."""
-        d, u = self.split(theta)
-        j = int(np.argmax(d))
-        forces = [*u, self.last_force(d, u)]
-        d = np.concatenate([d[:j], [d[j] / 2, d[j] / 2], d[j + 1:]])
-        forces = forces[:j + 1] + forces[j:]
-        self.n += 1
-        return np.concatenate([d, forces[:-1]])
-
-    def schedule(self, theta: np.ndarray) -> ForceSchedule:
-        d, u = self.split(theta)
-        values = [*map(float, u), self.last_force(d, u), self.robot.r_m / (1 + self.robot.r_m)]
-        return ForceSchedule(tuple(np.cumsum(d)), tuple(values))
-
-
-def _nominal_theta(schedule: ForceSchedule | FeedbackSchedule) -> np.ndarray:
-    """The durations and forces (but the last) of a nominal plan's constant pieces."""
+def _pieces(schedule: ForceSchedule | FeedbackSchedule) -> tuple[np.ndarray, np.ndarray]:
+    """The durations and forces (but the last) of a plan's constant pieces."""
     if not isinstance(schedule, ForceSchedule):  # well posed, beyond this method
         raise InfeasibleLandingError("the robust landing starts from a bang-bang plan of "
                                      "constant forces; the nominal one holds a stroke limit "
                                      "(a feedback arc), which the search does not vary")
     d = np.diff((0.0,) + schedule.times)
-    return np.concatenate([d, np.asarray(schedule.values[:len(d) - 1], float)])
+    return d, np.asarray(schedule.values[:len(d) - 1], float)
+
+
+def _split_longest(fam: PieceFamily, st: Start) -> Start:
+    """One more piece, the same schedule: the longest piece halved (a pin kept on its
+    piece)."""
+    d, u = st.d, st.u
+    j = int(np.argmax(d))
+    forces = [*u, fam.last_force(d, u)]
+    d = np.concatenate([d[:j], [d[j] / 2, d[j] / 2], d[j + 1:]])
+    forces = forces[:j + 1] + forces[j:]
+    pin = st.pin
+    if pin is not None and j <= pin.piece:  # the pinned piece's end moved one piece on
+        pin = Pin(pin.piece + 1, pin.ground)
+    return Start(d, np.asarray(forces[:-1], float), pin)
+
+
+def _starts(robot: Robot, impact: Impact, grounds: tuple[Ground, ...], nominal: BangBangLanding,
+            clairvoyant: Sequence[BangBangLanding] | None) -> list[Start]:
+    """The search's starts: the deepest clairvoyant optimum pinned where its foot stops; the
+    nominal plan pinned so where it is the plan of the ground it binds on; the nominal plan."""
+    starts = []
+    if clairvoyant is not None:
+        k = int(np.argmax([c.depth for c in clairvoyant]))
+        sched = clairvoyant[k].schedule()
+        if isinstance(sched, ForceSchedule) and len(sched.times) >= 2:
+            d, u = _pieces(sched)
+            starts.append(Start(d, u, Pin(len(d) - 2, k)))
+    d, u = _pieces(nominal.schedule())
+    if nominal.ground in grounds and len(d) >= 2:
+        sched = nominal.schedule()
+        depths = [simulate(robot, impact, sched, g, energy=False).depth for g in grounds]
+        k = grounds.index(nominal.ground)
+        if depths[k] >= max(depths):
+            starts.append(Start(d, u, Pin(len(d) - 2, k)))
+    return [*starts, Start(d, u)]
 
 
 def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
@@ -304,7 +343,8 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
                    branch_time: float = DEFAULT_BRANCH_TIME,
                    nominal: BangBangLanding | None = None,
                    max_iterations: int = MAX_ITERATIONS,
-                   extra_pieces: int = 0) -> RobustLanding:
+                   extra_pieces: int = 0,
+                   clairvoyant: Sequence[BangBangLanding] | None = None) -> RobustLanding:
     """The robust open-loop landing (or the two-stage tree) over ``grounds``.
 
     Parameters
@@ -324,8 +364,12 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
     max_iterations : int
         Bound on the search's iterations.
     extra_pieces : int
-        Pieces added to the nominal plan's (its longest piece halved, repeatedly) before the
+        Pieces added to each start's (its longest piece halved, repeatedly) before the
         search: a larger family, a slower search.
+    clairvoyant : sequence of BangBangLanding, optional
+        The clairvoyant optimum on each ground (``solve_landing(impact, robot, ground)``):
+        the deepest one is the first start (pinned where its foot stops), and the result
+        says whether its schedule is one of them (``clairvoyant_of``, ``lower_bound``).
 
     Returns
     -------
@@ -334,8 +378,8 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
     Raises
     ------
     ParameterError
-        Bad arguments (a nominal plan of another landing; with ``tree``, a ground whose law
-        is not ``K d + c_d v^2``).
+        Bad arguments (a nominal plan of another landing, clairvoyant optima of other
+        landings or grounds; with ``tree``, a ground whose law is not ``K d + c_d v^2``).
     InfeasibleLandingError
         The nominal plan holds a stroke limit (a feedback arc): not a family of constant
         forces this search varies.
@@ -361,25 +405,76 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
     if nominal.impact != impact or nominal.robot != robot:
         raise ParameterError("nominal", f"was solved for {nominal.impact} and {nominal.robot}, "
                                         f"not {impact} and {robot}")
+    _check_clairvoyant(clairvoyant, impact, robot, grounds)
     nominal_schedule = nominal.schedule()
     replays = [GroundLanding(g, [(0.0, simulate(robot, impact, nominal_schedule, g,
                                                 energy=False))]) for g in grounds]
-    theta0 = _nominal_theta(nominal_schedule)
-    pieces = _Pieces(robot, impact, (len(theta0) + 1) // 2)
-    for _ in range(extra_pieces):
-        theta0 = pieces.split_longest(theta0)
     cpu_start = time.process_time()
-    found = _search(pieces, grounds, theta0, max_iterations)
-    schedule = pieces.schedule(found.theta)
+
+    def family(n: int, pin: Pin | None) -> PieceFamily:
+        return PieceFamily(robot, impact, grounds, n, pin)
+
+    starts = []
+    for st in _starts(robot, impact, grounds, nominal, clairvoyant):
+        for _ in range(extra_pieces):
+            st = _split_longest(family(len(st.d), None), st)
+        starts.append(st)
+    chosen, runs = search(family, starts, max_iterations)
+    fam = chosen.family
+    p = chosen.point if chosen.point is not None else fam.resolve(chosen.theta)
+    if p is None:  # the least violating point of a pinned family that never resolved
+        p = family(len(starts[-1].d), None).resolve(fam.theta(starts[-1].d, starts[-1].u))
+    schedule = fam.schedule(p)
     landings = [GroundLanding(g, [(0.0, simulate(robot, impact, schedule, g, energy=False))])
                 for g in grounds]
     out = RobustLanding(
         robot=robot, impact=impact, grounds=grounds, kind="open-loop", schedule=schedule,
-        landings=landings, nominal=replays, evaluations=found.evaluations,
-        solve_time_s=time.perf_counter() - t_start, message=found.message,
-        kkt_residual=found.kkt, iterations=found.iterations,
-        cpu_time_s=time.process_time() - cpu_start)
+        landings=landings, nominal=replays, evaluations=sum(r.evaluations for r in runs),
+        solve_time_s=time.perf_counter() - t_start, message=_message(chosen, runs),
+        kkt_residual=chosen.kkt.residual if chosen.point is not None else math.nan,
+        iterations=sum(r.iterations for r in runs), cpu_time_s=time.process_time() - cpu_start,
+        multipliers=chosen.ground_multipliers(), limits=chosen.limit_multipliers(),
+        pin=None if fam.pin is None else (fam.pin.piece, fam.pin.ground),
+        off_pin=chosen.off_pin,
+        clairvoyant_depths=None if clairvoyant is None else [c.depth for c in clairvoyant])
     return two_stage_landing(out, branch_time) if tree else out
+
+
+def _check_clairvoyant(clairvoyant: Sequence[BangBangLanding] | None, impact: Impact,
+                      robot: Robot, grounds: tuple[Ground, ...]) -> None:
+    """Refuse clairvoyant optima that are not one per ground of this landing."""
+    if clairvoyant is None:
+        return
+    if isinstance(clairvoyant, BangBangLanding) or len(clairvoyant) != len(grounds):
+        raise ParameterError("clairvoyant", f"must be one landing per ground ({len(grounds)})")
+    for c, g in zip(clairvoyant, grounds, strict=True):
+        expect("clairvoyant", c, BangBangLanding)
+        if c.impact != impact or c.robot != robot or c.ground != g:
+            raise ParameterError("clairvoyant", f"was solved for {c.impact}, {c.robot} and "
+                                                f"{c.ground}, not {impact}, {robot} and {g}")
+
+
+def _run_line(run: Run) -> str:
+    """One search run: its family, SLSQP's last word and the KKT check."""
+    fam = run.family
+    where = ("unpinned" if fam.pin is None
+             else f"piece {fam.pin.piece + 1} ends at ground {fam.pin.ground}'s foot stop")
+    slsqp = (f"SLSQP: {run.messages[-1]}" + (f" ({len(run.messages)} runs)"
+                                               if len(run.messages) > 1 else "")
+             if run.messages else "SLSQP not needed")
+    if run.point is None:
+        return f"{where}: {slsqp}; none of the {run.evaluations} schedules evaluated held " \
+               f"every limit on every ground"
+    verdict = "converged" if run.converged else "NOT converged"
+    tail = f"; off the pin the worst depth {run.off_pin}" if run.off_pin else ""
+    return f"{where}: {slsqp}; KKT residual {run.kkt.residual:.2g} ({verdict}: tolerance " \
+           f"{KKT_TOL:g}){tail}"
+
+
+def _message(chosen: Run, runs: list[Run]) -> str:
+    """How the search ended: the chosen run first, then the others tried."""
+    others = [_run_line(r) for r in runs if r is not chosen]
+    return _run_line(chosen) + (f" [also tried: {'; '.join(others)}]" if others else "")
 
 
 def two_stage_landing(robust: RobustLanding,
@@ -419,164 +514,6 @@ def two_stage_landing(robust: RobustLanding,
                    solve_time_s=robust.solve_time_s + time.perf_counter() - t_start)
 
 
-@dataclass
-class _Found:
-    theta: np.ndarray
-    evaluations: int
-    message: str
-    kkt: float
-    iterations: int
-
-
-def _search(pieces: _Pieces, grounds: tuple[Ground, ...], theta0: np.ndarray,
-            max_iterations: int) -> _Found:
-    """``min z`` s.t. ``depth_i <= z`` and every ground's limits, over the pieces; SLSQP,
-    restarted from its best point while the KKT check fails."""
-    robot, impact = pieces.robot, pieces.impact
-    u_max = force_limit(robot)
-    s = robot.s
-    cache: dict[bytes, np.ndarray] = {}
-    holds: dict[bytes, bool] = {}  # every ground's landing feasible (the reported test)
-    n = pieces.n
-    scale_d = max(1.0, abs(impact.v0))
-    nowhere = np.array([math.inf, -s, -s] * len(grounds))
-
-    def measures(theta: np.ndarray) -> np.ndarray:
-        """Per ground: depth, stroke margins (inf, -s, -s without a proven rest); then the
-        last force's margin."""
-        key = np.asarray(theta, float).tobytes()
-        if key not in cache:
-            holds[key] = False
-            if not np.all(np.isfinite(theta)):
-                cache[key] = np.r_[nowhere, -u_max]
-                return cache[key]
-            d, u = pieces.split(theta)
-            u_last = pieces.last_force(d, u)
-            if not abs(u_last) <= u_max:  # the actuator cannot stop the body in time
-                cache[key] = np.r_[nowhere, u_max - abs(u_last)]
-                return cache[key]
-            if not np.all(np.diff(np.r_[0.0, np.cumsum(d)]) > 0.0):
-                # a search step far out: durations of 1e11 (seen) swallow one of 1e-6, so
-                # the pieces' times are no schedule; a point nowhere, not a crash
-                cache[key] = np.r_[nowhere, u_max - abs(u_last)]
-                return cache[key]
-            rows = []
-            sched = pieces.schedule(theta)
-            results = [simulate(robot, impact, sched, g, energy=False) for g in grounds]
-            for r in results:
-                ok = r.rest_proven and math.isfinite(r.stroke_min)
-                rows += [r.depth if ok else math.inf, r.stroke_min if ok else -s,
-                         s - r.stroke_max if ok else -s]
-            cache[key] = np.array(rows + [u_max - abs(u_last)])
-            holds[key] = all(r.stroke_held and r.rest_proven for r in results)
-        return cache[key]
-
-    def cons(x: np.ndarray) -> np.ndarray:
-        m = measures(x[:-1])
-        depth = m[:-1:3]
-        big = 10 * scale_d * max(1.0, s)
-        depth_margin = np.where(np.isfinite(depth), x[-1] - depth, -big)
-        return np.concatenate([depth_margin / scale_d, m[1:-1:3] / s, m[2:-1:3] / s,
-                               [m[-1] / u_max]])
-
-    def violation(key: bytes) -> float:
-        m = cache[key]
-        return float(-min(0.0, np.min(m[1:-1:3]), np.min(m[2:-1:3]), m[-1]))
-
-    def worst(key: bytes) -> float:
-        return float(np.max(cache[key][:-1:3]))
-
-    measures(theta0)
-    z0 = worst(theta0.tobytes())
-    x = np.concatenate([theta0, [z0 if math.isfinite(z0) else 10 * scale_d]])
-    lo = np.concatenate([np.full(n, 1e-6), np.full(n - 1, -u_max), [0.0]])
-    hi = np.concatenate([np.full(n, np.inf), np.full(n - 1, u_max), [np.inf]])
-    grad_f = np.eye(len(x))[-1] / scale_d
-    iterations, kkt, messages = 0, math.inf, []
-    for _ in range(1 + RESTARTS):
-        # SLSQP on finite differences: every measure is smooth while the landing's sequence
-        # of events is kept (a stroke extremum is an interior minimum: its derivative is the
-        # state's); deterministic, unlike the derivative-free searches tried (COBYQA)
-        res = minimize(lambda v: v[-1] / scale_d, x, method="SLSQP", jac=lambda v: grad_f,
-                       bounds=list(zip(lo, hi, strict=True)),
-                       constraints=[{"type": "ineq", "fun": cons}],
-                       options={"maxiter": max_iterations, "ftol": 1e-12, "eps": FD_STEP})
-        iterations += int(res.nit)
-        messages.append(str(res.message))
-        feasible = [k for k in cache if holds[k]]
-        if not feasible:
-            break
-        best = min(feasible, key=worst)
-        moved = not np.array_equal(np.frombuffer(best), x[:-1])
-        x = np.r_[np.frombuffer(best), worst(best)]
-        if moved or not math.isfinite(kkt):
-            kkt = kkt_residual(cons, x, lo, hi, grad_f)
-        if kkt <= KKT_TOL or not moved:  # converged, or a restart cannot move it
-            break
-    runs = f"SLSQP: {messages[-1]}" + (f" (run {len(messages)} of restarts from the best "
-                                       f"point; before: {', '.join(messages[:-1])})"
-                                       if len(messages) > 1 else "")
-    feasible = [k for k in cache if holds[k]]
-    if feasible:
-        verdict = "converged" if kkt <= KKT_TOL else "NOT converged"
-        return _Found(x[:-1].copy(), len(cache), f"{runs}; KKT residual {kkt:.2g} "
-                      f"({verdict}: tolerance {KKT_TOL:g})", kkt, iterations)
-    best = min(cache, key=violation)  # nothing holds: the least violating point
-    return _Found(np.frombuffer(best).copy(), len(cache),
-                  f"{runs}; none of the {len(cache)} schedules evaluated held every limit on "
-                  f"every ground", math.nan, iterations)
-
-
-def kkt_residual(cons: Any, x: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                 grad_f: np.ndarray, step: float = KKT_STEP,
-                 active_tol: float = ACTIVE_TOL) -> float:
-    """The KKT stationarity residual of ``min f`` s.t. ``cons(x) >= 0``, ``lo <= x <= hi``
-    at ``x`` (``f`` linear with gradient ``grad_f``): ``|grad_f - J_A^T lam - mu|_inf /
-    |grad_f|_inf`` with the multipliers ``lam >= 0`` of the active constraints (within
-    ``active_tol``) and ``mu`` of the active bounds (signed by the bound) fitted by
-    non-negative least squares; ``J`` by central differences. Infinite when ``x`` violates
-    a constraint by more than ``active_tol``.
-
-    Parameters
-    ----------
-    cons : callable
-        ``x -> constraint values`` (feasible where ``>= 0``, scaled to order one).
-    x : ndarray
-        The point.
-    lo, hi : ndarray
-        Bounds (infinite: none).
-    grad_f : ndarray
-        The objective's gradient.
-    step : float
-        Relative central-difference step.
-    active_tol : float
-        Activity tolerance.
-    """
-    from scipy.optimize import nnls
-
-    x = np.asarray(x, float)
-    g0 = np.asarray(cons(x), float)
-    if not np.all(g0 >= -active_tol):
-        return math.inf
-    cols = []
-    for j in range(len(x)):
-        h = step * max(1.0, abs(x[j]))
-        up, down = min(x[j] + h, hi[j]), max(x[j] - h, lo[j])  # stay within the bounds
-        xp, xm = x.copy(), x.copy()
-        xp[j], xm[j] = up, down
-        cols.append((np.asarray(cons(xp)) - np.asarray(cons(xm))) / (up - down))
-    jac = np.column_stack(cols)
-    eye = np.eye(len(x))
-    scale = np.maximum(1.0, np.abs(x))
-    basis = [jac[g0 <= active_tol].T, eye[:, x <= lo + active_tol * scale],
-             -eye[:, x >= hi - active_tol * scale]]
-    A = np.hstack(basis)
-    if A.shape[1] == 0:
-        return float(np.max(np.abs(grad_f)) / np.max(np.abs(grad_f)))
-    lam, _ = nnls(A, grad_f)
-    return float(np.max(np.abs(grad_f - A @ lam)) / np.max(np.abs(grad_f)))
-
-
 def _second_stages(robot: Robot, impact: Impact, schedule: ForceSchedule,
                    open_loop: list[GroundLanding],
                    branch_time: float) -> tuple[list[GroundLanding], list[str]]:
@@ -610,6 +547,6 @@ def _shifted_trajectory(res: LandingResult, t0: float) -> Trajectory | None:
     return res.trajectory(t_end=res.t_first_stop, n=200).after(t0)
 
 
-__all__ = ["ACTIVE_TOL", "DEFAULT_BRANCH_TIME", "FD_STEP", "KKT_STEP", "KKT_TOL",
-           "MAX_ITERATIONS", "RESTARTS", "GroundLanding", "RobustLanding", "kkt_residual",
-           "robust_landing", "two_stage_landing"]
+__all__ = ["ACTIVE_TOL", "CLAIRVOYANT_RTOL", "DEFAULT_BRANCH_TIME", "FD_STEP", "KKT_STEP",
+           "KKT_TOL", "MAX_ITERATIONS", "RESTARTS", "GroundLanding", "RobustLanding",
+           "kkt_residual", "robust_landing", "two_stage_landing"]

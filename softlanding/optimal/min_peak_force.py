@@ -5,8 +5,12 @@ depth, what is the smallest ``max |u|`` that still lands within it? The problem 
 two-phase landing (yielding, then static stance until the body rests; see
 :mod:`softlanding.optimal.two_phase_problem`) in epigraph form: a decision variable
 ``peak``, ``-peak <= u <= peak`` in both phases, ``peak`` minimised, the final depth at
-most ``depth_max``. Its answer ``P`` is the force limit at which the two-phase landing's
-least depth is exactly ``depth_max``.
+most ``depth_max``. Where the budget binds (``budget_active``: the landing reaches
+``depth_max``), its answer ``P`` is the force limit at which the two-phase landing's least
+depth is exactly ``depth_max``. A budget beyond the depth of the landing with the least peak
+that lands at all (it stops the body within the stroke on a crater that holds) is slack:
+``P`` is that least peak whatever the budget, and the two-phase landing with ``u_max = P``
+lands shallower than ``depth_max``.
 
 This module is the whole variant, written against public names only: the problem, the
 result (its own table rows and JSON fields), the hooks that
@@ -69,6 +73,12 @@ def budget_solved(depth_max: float, least_depth: float) -> float:
     return min(depth_max, BUDGET_CAP * max(1.0, least_depth))
 
 
+BUDGET_RTOL = 1e-6
+"""The budget binds where the depth is within this of it (relative to ``max(1, D)``): the
+refined depth meets an active budget to 1e-14, the transcribed one to Ipopt's tolerance; a
+slack budget leaves order-one room."""
+
+
 @lru_cache(maxsize=4)
 def min_peak_force_transcription(ground: Ground = LINEAR_GROUND) -> MultipleShooting:
     """Yielding, then static until the body rests, ``|u| <= peak``; minimise ``peak``
@@ -111,6 +121,10 @@ class MinPeakForceLanding(TwoPhaseLanding):
         The least peak force ``max |u|`` (refined, else transcribed).
     least_depth : float
         The two-phase landing's least depth with the robot's own force limit.
+    budget_active : bool
+        The depth budget binds (the depth reaches it, to :data:`BUDGET_RTOL`): ``peak`` is
+        the force limit whose two-phase least depth is ``depth_max``. Slack: ``peak`` is the
+        least peak that lands at all, and the budget plays no part.
     """
 
     VARIANT: ClassVar[str] = "min-peak-force"
@@ -122,9 +136,17 @@ class MinPeakForceLanding(TwoPhaseLanding):
     peak: float
     least_depth: float
 
+    @property
+    def budget_active(self) -> bool:
+        """The depth budget binds (see the class notes)."""
+        return self.depth_max - self.depth <= BUDGET_RTOL * max(1.0, self.depth_max)
+
     def own_rows(self) -> list[tuple[str, object]]:
         """The peak force first, then the two-phase rows."""
-        return [("peak force max |u|", self.peak),
+        budget = ("active (the depth reaches D)" if self.budget_active else
+                  f"slack (D - depth = {self.depth_max - self.depth:.6g}: the peak is the "
+                  f"least that lands at all)")
+        return [("peak force max |u|", self.peak), ("depth budget", budget),
                 ("least depth at u_max", self.least_depth), *super().own_rows()]
 
     def own_reasons(self) -> list[str]:
@@ -150,7 +172,8 @@ class MinPeakForceLanding(TwoPhaseLanding):
     def own_dict(self) -> dict[str, Any]:
         """The two-phase fields and the peak."""
         return {**super().own_dict(), "peak": self.peak, "depth_max": self.depth_max,
-                "least_depth": self.least_depth}
+                "least_depth": self.least_depth, "budget_active": self.budget_active,
+                "budget_slack": self.depth_max - self.depth}
 
 
 class MinPeakForce(TwoPhase):
@@ -290,5 +313,6 @@ VARIANT = Variant(
                     "least depth)", check=_positive, required=True, metavar="D"),))
 """``softlanding solve --variant min-peak-force --depth-max D``."""
 
-__all__ = ["BUDGET_CAP", "VARIANT", "MinPeakForce", "MinPeakForceLanding", "budget_solved",
+__all__ = ["BUDGET_CAP", "BUDGET_RTOL", "VARIANT", "MinPeakForce", "MinPeakForceLanding",
+           "budget_solved",
            "min_peak_force_transcription", "solve_min_peak_force"]

@@ -238,7 +238,8 @@ def test_the_guides_robust_and_tree_columns_are_runs(v0):
     from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
 
     clear_cache()  # the re-plans' paths depend on the NLPs earlier tests left cached (the
-    # tree's at v0 = -1: 2.238 in a fresh process, 2.137 after the mpc tests), as the study's
+    # tree's at v0 = -1: 2.238 in a fresh process, 2.137 after the mpc tests; either when the
+    # robust schedule moves by 1e-13, as the searches of issue 44 found), as the study's
     guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground.md"
     rows = {float(m[1]): m[2].split("|") for m in
             re.finditer(r"^\| (-[\d.]+) \|(.*)\|$", guide.read_text(), re.M)}
@@ -260,19 +261,20 @@ def test_a_search_step_far_out_is_a_point_nowhere_not_a_crash(monkeypatch):
     schedule_can_hold_..., after other tests in the process): their sums lose the 1e-6, the
     pieces' times are not increasing, and the schedule's ParameterError escaped as bad input
     (the CLI's exit 2)."""
-    import softlanding.control.robust as rb
+    import softlanding.control.robust_search as rs
 
-    real = rb.minimize
+    real = rs.minimize
     seen = []
 
     def far_out_first(fun, x, **kwargs):
         far = np.array(x, float)
-        n = (len(far)) // 2  # durations, then forces, then the bound
+        n = (len(far)) // 2  # durations, then forces, then the bound (an unpinned family)
         far[:n] = [1.95e11, 1e-6, 5.2e11][:n] + [1.0] * max(0, n - 3)
         seen.append(kwargs["constraints"][0]["fun"](far))
         return real(fun, x, **kwargs)
 
-    monkeypatch.setattr(rb, "minimize", far_out_first)
-    r = robust_landing(-3, [LinearGround()])
+    monkeypatch.setattr(rs, "minimize", far_out_first)
+    # the nominal plan is not this ground's optimum: the unpinned search runs first
+    r = robust_landing(-3, [LinearGround(2.0)], max_iterations=5)
     assert seen and np.all(np.isfinite(seen[0])) and np.min(seen[0]) < 0  # infeasible there
     assert r.feasible
