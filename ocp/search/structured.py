@@ -14,7 +14,9 @@ A structured start is built as one builds a guess by hand:
   of; where it is not (a heading angle in ``cos``/``sin``, a quadratic cost),
   the levels are random points of the low and the high half of the box
   instead. The six sequences (0, 1 or 2 switches, starting low or high) are
-  dealt in turn to the first control, at random to the others;
+  dealt in turn to the first control, at random to the others; a start identical to
+  one made before (a sequence without switches has no random time to vary it, so its
+  second turn would repeat the first solve) is replaced by the next sequence's;
 * the states are simulated forward from the default guess's initial state
   under that control (RK4, :data:`STEPS` steps over the phase's time box), so
   that they follow the dynamics;
@@ -108,6 +110,7 @@ class StructuredStarts:
         self.links = {b: a for a, b in tr.multiphase.time_links}
         by_name = {c.name: c for c in coords}
         self.phases = [self._setup(i, by_name) for i in range(len(base.phases))]
+        self.made: set[tuple[tuple[str, float], ...]] = set()  # the points of the starts made
 
     def _setup(self, i: int, by_name: dict[str, Coordinate]) -> _PhaseSetup:
         ps, cp = self.base.phases[i], self.tr.compiled[i]
@@ -142,8 +145,21 @@ class StructuredStarts:
         -------
         tuple
             ``(point, w)``: the start's times, first control levels and switch times by
-            name (``"u"``, ``"u.t1"``, ``"u.t2"``), and its decision vector.
+            name (``"u"``, ``"u.t1"``, ``"u.t2"``), and its decision vector. A start
+            identical to one made before (a sequence without switches whose closest
+            approach repeats) is replaced by the next sequence's.
         """
+        for shift in range(len(PATTERNS)):  # a start made before would be solved again
+            point, parts = self._best(number + shift, rng)
+            key = tuple(sorted(point.items()))
+            if key not in self.made:
+                break
+        self.made.add(key)
+        return point, assemble(self.tr, self.base, parts, point)
+
+    def _best(self, number: int, rng: np.random.Generator
+              ) -> tuple[dict[str, float], list[PhasePart]]:
+        """Of :data:`CANDIDATES` candidates of sequence ``number``, the one of least miss."""
         best: tuple[float, dict[str, float], list[PhasePart]] | None = None
         for _ in range(CANDIDATES):
             miss, point, parts = self._candidate(number, rng)
@@ -151,8 +167,7 @@ class StructuredStarts:
                 best = (miss, point, parts)
         assert best is not None
         _, point, parts = best
-        point |= self.var_point
-        return point, assemble(self.tr, self.base, parts, point)
+        return point | self.var_point, parts
 
     def _candidate(self, number: int, rng: np.random.Generator
                    ) -> tuple[float, dict[str, float], list[PhasePart]]:

@@ -67,6 +67,19 @@ def test_which_controls_get_bang_levels():
     assert affine_controls(p) == [False, False]
 
 
+def test_no_structured_start_is_made_twice():
+    """The sequences without switches have no random time: on the tree before, their
+    second turn (starts 7 and 8 of a run) repeated the first's solve exactly."""
+    tr = car()
+    maker = StructuredStarts(tr, {}, start_coordinates(tr, {}), default_solution(tr, {}))
+    rng = np.random.default_rng(0)
+    points = [maker.make(k, rng)[0] for k in range(2 * len(PATTERNS))]
+    keys = [tuple(sorted(p.items())) for p in points]
+    assert len(set(keys)) == len(keys)
+    assert [p["u"] for p in points[:2]] == [-1.0, 1.0]  # the first turn as dealt
+    assert all("u.t1" in p for p in points[len(PATTERNS):])  # then only switching ones
+
+
 def test_a_structured_start_follows_the_dynamics_to_its_closest_approach():
     """A start with u = +1 throughout (sequence 1: no switch, high): the heading is t, the
     position the unit circle round (0, 1), corrected linearly to the target; the final
