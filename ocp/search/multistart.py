@@ -15,20 +15,29 @@ that reached it::
 Starts
 ------
 Start 0 is the user's ``guess`` (or the default guess); it is solved first
-(its converged duration informs the time box). The others alternate between
-two kinds, a fraction ``structured`` of them structured:
+(its converged duration informs the time box). The others are of two kinds:
 
 * *structured starts* (:mod:`ocp.search.structured`, origin ``"bang"``): every
   control piecewise constant at the ends of its box with 0, 1 or 2 switches at
   random times, the states simulated forward from the initial state, a free
   final time where the simulation comes closest to the fixed terminal values;
-* *sampled starts* (:mod:`ocp.search.starts`, origin ``"sobol"`` or
-  ``"lhs"``): a scrambled Sobol' point or a Latin hypercube point in the box
-  of the states at mid-phase, constant controls, free times and decision
-  variables (seeded: the same seed gives the same starts).
+* *waypoint starts* (:mod:`ocp.search.waypoints`, origin ``"sobol"`` or
+  ``"lhs"``): the default guess bent through a scrambled Sobol' point (or a
+  Latin hypercube point) of the states' box at mid-phase, with the controls and
+  the free time that fit the dynamics along the path (seeded: the same seed
+  gives the same starts).
 
-``res.boxes`` reports the boxes; ``box={"name": (lo, hi)}`` sets one (it
-bounds the structured starts' control levels and time search too).
+The first round deals the kinds by the share ``structured`` (alternating at the
+default 1/2); later rounds give each start to the kind whose starts reached the
+best objective so far, by Thompson sampling (:mod:`ocp.search.allocation`;
+``adapt=False`` keeps the share). A failed start costs its solve alone: only
+start 0 retries a failed scaled solve as posed (``fallback``), and the analysis
+of a failed start's last iterate runs when its ``diagnosis`` is read
+(:mod:`ocp.search.runner`).
+
+``res.boxes`` reports the waypoints' boxes (a periodic state's spans a turn);
+``box={"name": (lo, hi)}`` sets one (it bounds the structured starts' control
+levels and time search too).
 
 Stopping early
 --------------
@@ -128,8 +137,8 @@ class MultistartResult:
     wall_time : float
         Seconds for the whole run.
     boxes : dict
-        ``name -> (lo, hi, log)``: the box each coordinate was sampled in, and
-        whether log-uniformly.
+        ``name -> (lo, hi, log)``: the box each coordinate of the waypoint starts was
+        sampled in, and whether log-uniformly.
     requested : int
         The ``n`` asked for.
     stopped : str
@@ -275,7 +284,8 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
         optima.add(0, sol0 if rec.verified else None)
         scales = _solved_times(tr, sol0) if sol0 is not None and sol0.success else {}
         coords = start_coordinates(tr, params, spread, box, scales)
-        plan = _Plan(tr, params, coords, n, method, seed, structured, adapt, optima)
+        way = start_coordinates(tr, params, spread, box, scales, turns=True)
+        plan = _Plan(tr, params, (coords, way), n, method, seed, structured, adapt, optima)
         size = max(ROUND, _capacity(workers if parallel else None, client))
         starts, stopped = [rec], ""
         while len(starts) < n and not stopped:
@@ -295,7 +305,7 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
     for k, opt in enumerate(ranked):  # the optima's ranks, best first
         for i in opt.starts:
             starts[i].optimum = k
-    boxes = {c.name: (c.lo, c.hi, c.log) for c in coords}
+    boxes = {c.name: (c.lo, c.hi, c.log) for c in way}
     return MultistartResult(ranked, starts, method, seed, time.perf_counter() - t_start, boxes,
                             n, stopped)
 
@@ -305,15 +315,16 @@ class _Plan:
     kind made on demand from its own seeded stream (so the same seed gives the same starts
     whatever the other kind drew)."""
 
-    def __init__(self, tr: Transcription, params: dict[str, float], coords: list[Coordinate],
+    def __init__(self, tr: Transcription, params: dict[str, float],
+                 coords: tuple[list[Coordinate], list[Coordinate]],
                  n: int, method: str, seed: int | np.random.Generator | None,
                  structured: float, adapt: bool, optima: Optima) -> None:
         rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
         way_rng, self.bang_rng, deal_rng = rng.spawn(3)
         base = default_solution(tr, params)
         self.method = method
-        self.bang = StructuredStarts(tr, params, coords, base) if structured > 0 else None
-        self.way = WaypointStarts(tr, params, coords, base, method, way_rng, n) \
+        self.bang = StructuredStarts(tr, params, coords[0], base) if structured > 0 else None
+        self.way = WaypointStarts(tr, params, coords[1], base, method, way_rng, n) \
             if structured < 1 else None
         self.deal = Allocation(structured, adapt, deal_rng, optima.same)
         self.made = {BANG: 0, "waypoint": 0}

@@ -122,7 +122,8 @@ def prefix(tr: Transcription, phase: int) -> str:
 
 def start_coordinates(tr: Transcription, params: dict[str, float], spread: float = 1.0,
                       box: dict[str, tuple[float, float]] | None = None,
-                      solved: dict[str, float] | None = None) -> list[Coordinate]:
+                      solved: dict[str, float] | None = None,
+                      turns: bool = False) -> list[Coordinate]:
     """The coordinates a start samples, with their boxes (see the module docstring).
 
     Parameters
@@ -138,6 +139,13 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
     solved : dict, optional
         Durations a converged start found, by the name of the time coordinate
         (they replace the guessed durations as a scale of the free times).
+    turns : bool
+        Widen the unbounded sides of a periodic state's box (one that enters the
+        dynamics only through periodic functions,
+        :func:`~ocp.transcriptions.diagnosis.periodic_states`) to at least half a turn
+        from its centre: the waypoints' box, where a heading may point anywhere. The
+        structured starts keep the narrower box, whose widths weigh their terminal
+        miss (a full turn there halved the pendulum's hits, measured).
     """
     box = box or {}
     solved = solved or {}
@@ -152,10 +160,10 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
         _, _, xlo, xhi, ulo, uhi, _, _ = (np.array(v, dtype=float).ravel()
                                           for v in cp.bounds(pv))
         xm, _ = ps.at(np.array([0.5 * (ps.t0 + ps.T)]))
-        turns = periodic_states(ps.problem)
+        turned = periodic_states(ps.problem) if turns else set()
         for j, name in enumerate(ps.problem.state_names):
             out.append(_coordinate(pre + name, xlo[j], xhi[j], xm[0, j], spread, box,
-                                   math.pi if name in turns else 0.0))
+                                   math.pi if name in turned else 0.0))
         for j, name in enumerate(ps.problem.control_names):
             lo, hi = ulo[j], uhi[j]
             mid = 0.5 * (lo + hi) if np.isfinite(lo) and np.isfinite(hi) else 0.0

@@ -231,8 +231,11 @@ def test_start_box():
 
     coords = start_coordinates(coarse_transcription(), {})
     assert [c.name for c in coords] == ["theta", "omega", "u", "T"]
-    # theta enters the dynamics through sin alone: its box spans a turn round the guess's pi/2
-    assert (coords[0].lo, coords[0].hi) == pytest.approx((-math.pi / 2, 1.5 * math.pi))
+    assert coords[0].lo == 0.0 and coords[0].hi == pytest.approx(math.pi)  # pi/2 -+ pi/2
+    # the waypoints': theta enters the dynamics through sin alone, its box spans a turn
+    way = start_coordinates(coarse_transcription(), {}, turns=True)
+    assert (way[0].lo, way[0].hi) == pytest.approx((-math.pi / 2, 1.5 * math.pi))
+    assert [(c.lo, c.hi) for c in way[1:]] == [(c.lo, c.hi) for c in coords[1:]]
     assert (coords[2].lo, coords[2].hi) == (-0.4, 0.4) and coords[3].log
 
 
