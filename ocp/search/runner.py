@@ -66,6 +66,9 @@ class StartResult:
         Index of the optimum reached.
     message : str
         Why it failed, when it did (the error's text, without the diagnosis).
+    analyse : callable or None
+        ``() -> diagnosis``: the deferred analysis of a failed start's last iterate, run
+        (once) when :attr:`diagnosis` is first read.
     """
 
     index: int
