@@ -15,20 +15,29 @@ that reached it::
 Starts
 ------
 Start 0 is the user's ``guess`` (or the default guess); it is solved first
-(its converged duration informs the time box). The others alternate between
-two kinds, a fraction ``structured`` of them structured:
+(its converged duration informs the time box). The others are of two kinds:
 
 * *structured starts* (:mod:`ocp.search.structured`, origin ``"bang"``): every
   control piecewise constant at the ends of its box with 0, 1 or 2 switches at
   random times, the states simulated forward from the initial state, a free
   final time where the simulation comes closest to the fixed terminal values;
-* *sampled starts* (:mod:`ocp.search.starts`, origin ``"sobol"`` or
-  ``"lhs"``): a scrambled Sobol' point or a Latin hypercube point in the box
-  of the states at mid-phase, constant controls, free times and decision
-  variables (seeded: the same seed gives the same starts).
+* *waypoint starts* (:mod:`ocp.search.waypoints`, origin ``"sobol"`` or
+  ``"lhs"``): the default guess bent through a scrambled Sobol' point (or a
+  Latin hypercube point) of the states' box at mid-phase, with the controls and
+  the free time that fit the dynamics along the path (seeded: the same seed
+  gives the same starts).
 
-``res.boxes`` reports the boxes; ``box={"name": (lo, hi)}`` sets one (it
-bounds the structured starts' control levels and time search too).
+The first round deals the kinds by the share ``structured`` (alternating at the
+default 1/2); later rounds give each start to the kind whose starts reached the
+best objective so far, by Thompson sampling (:mod:`ocp.search.allocation`;
+``adapt=False`` keeps the share). A failed start costs its solve alone: only
+start 0 retries a failed scaled solve as posed (``fallback``), and the analysis
+of a failed start's last iterate runs when its ``diagnosis`` is read
+(:mod:`ocp.search.runner`).
+
+``res.boxes`` reports the waypoints' boxes (a periodic state's spans a turn);
+``box={"name": (lo, hi)}`` sets one (it bounds the structured starts' control
+levels and time search too).
 
 Stopping early
 --------------
@@ -70,35 +79,32 @@ common normalised time grid relative to ``1 + max |x|``, to ``distance_tol``
 from __future__ import annotations
 
 import math
-import multiprocessing
 import numbers
 import pickle
 import time
-import warnings
-from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from collections.abc import Callable
 from contextlib import closing
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ..definition.errors import PathViolationWarning, ProblemDefinitionError, SolveError
+from ..definition.errors import ProblemDefinitionError, SolveError
 from ..definition.symbols import positive_int
 from ..transcriptions.nlp import Transcription
 from ..transcriptions.solution import Solution
-from ..transcriptions.verify import verify
+from .allocation import BANG, ROUND, Allocation
 from .optima import LocalOptimum, Optima, StopRule, trajectory_distance
+from .runner import FALLBACKS, Runner, StartResult, record, retries, solution_of
 from .starts import (
     TIME_SPAN,
     Coordinate,
     as_vector,
-    bent_guess,
     default_solution,
-    sampled_points,
     start_coordinates,
 )
 from .structured import StructuredStarts
+from .waypoints import WaypointStarts
 
 __all__ = ["STOP", "STRUCTURED", "TIME_SPAN", "LocalOptimum", "MultistartResult",
            "StartResult", "multistart", "start_coordinates", "trajectory_distance"]
@@ -106,55 +112,12 @@ __all__ = ["STOP", "STRUCTURED", "TIME_SPAN", "LocalOptimum", "MultistartResult"
 METHODS = ("sobol", "lhs")
 MAX_STARTS = 100_000
 """The most starts one call takes (each is an NLP solve; the sampler holds them all)."""
-STRUCTURED = 0.75
-"""Default fraction of the starts after start 0 that are structured (bang sequences)."""
+STRUCTURED = 0.5
+"""Default share of structured starts (bang sequences) in the first round (the rest are
+waypoint starts); later rounds follow the kinds' yields (:mod:`ocp.search.allocation`)."""
 STOP = (4, 6)
 """Default stopping rule ``(k, m)``: the best objective reached by k starts, none new in m."""
 Builder = Callable[[], Transcription]
-
-
-@dataclass
-class StartResult:
-    """What became of one start.
-
-    ``origin`` is ``"guess"`` (the user's guess), ``"default"`` (the default
-    guess), ``"bang"`` (a structured start) or the sampling method; ``point``
-    the start's coordinates by name (a structured start's: its times, every
-    control's first level and switch times ``"u.t1"``, ``"u.t2"``);
-    ``status`` Ipopt's return status (or the exception's name when the start
-    could not be solved); ``optimum`` the index in
-    :attr:`MultistartResult.optima` of the optimum it reached.
-
-    Attributes
-    ----------
-    index : int
-        The start's number.
-    origin, point, status
-        As above.
-    success, verified : bool
-        Ipopt converged; the solution passed the checks between nodes.
-    objective : float
-        Its objective (NaN when it failed).
-    iterations, solve_time
-        Ipopt's iterations and time.
-    optimum : int or None
-        Index of the optimum reached.
-    message : str
-        Why it failed, when it did.
-    """
-
-    index: int
-    origin: str
-    point: dict[str, float]
-    status: str
-    success: bool = False
-    verified: bool = False
-    objective: float = math.nan
-    iterations: int = 0
-    solve_time: float = 0.0
-    optimum: int | None = None
-    message: str = ""
-
 
 
 @dataclass
@@ -174,8 +137,8 @@ class MultistartResult:
     wall_time : float
         Seconds for the whole run.
     boxes : dict
-        ``name -> (lo, hi, log)``: the box each coordinate was sampled in, and
-        whether log-uniformly.
+        ``name -> (lo, hi, log)``: the box each coordinate of the waypoint starts was
+        sampled in, and whether log-uniformly.
     requested : int
         The ``n`` asked for.
     stopped : str
@@ -244,8 +207,8 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
                client: Any = None, spread: float = 1.0,
                box: dict[str, tuple[float, float]] | None = None,
                objective_rtol: float = 1e-6, distance_tol: float = 1e-3,
-               structured: float = STRUCTURED,
-               stop: tuple[int, int] | None = STOP) -> MultistartResult:
+               structured: float = STRUCTURED, stop: tuple[int, int] | None = STOP,
+               adapt: bool = True, fallback: str = "first") -> MultistartResult:
     """Solve from up to ``n`` starts spent where optima differ; keep the distinct local optima.
 
     Parameters
@@ -257,10 +220,10 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
         Number of starts, the user's (or the default) guess included; at most
         :data:`MAX_STARTS`.
     method : {"sobol", "lhs"}
-        The sampled starts: scrambled Sobol' points or a Latin hypercube.
+        The waypoints: scrambled Sobol' points or a Latin hypercube.
     seed : int or numpy.random.Generator, optional
-        Seed of the sampling and of the structured starts' switch times (the
-        same seed gives the same starts).
+        Seed of the waypoints, of the structured starts' switch times and of the
+        kinds' draws (the same seed gives the same starts).
     guess : Solution, Trajectory or decision vector, optional
         Start 0 (by default, the default guess).
     params : dict, optional
@@ -277,12 +240,19 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
     objective_rtol, distance_tol : float
         When two solutions are the same optimum (see the module docstring).
     structured : float
-        Fraction of the starts after start 0 that are structured (bang
-        sequences simulated), in [0, 1]; the others are sampled. 0 gives the
-        sampled starts alone.
+        Share of structured starts (bang sequences simulated) in the first round,
+        in [0, 1]; the others are waypoint starts. 0 or 1 gives one kind alone.
     stop : (int, int) or None
         Stop once the best objective has been reached by ``k`` starts and the
-        last ``m`` starts found no new objective; None runs all ``n``.
+        last ``m`` starts found no new objective
+        (:class:`~ocp.search.optima.StopRule`); None runs all ``n``.
+    adapt : bool
+        Deal the later rounds' starts to the kinds by their yields (default); False
+        keeps the share ``structured`` throughout.
+    fallback : {"first", "all", "none"}
+        Which starts retry a failed scaled solve on the NLP as posed (the
+        transcription's scaling fallback, where it has it on): start 0 alone
+        (default: what a solve from the guess gives), every start, or none.
 
     Returns
     -------
@@ -299,7 +269,7 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
     """
     n, workers = _check_arguments(n, method, seed, workers, spread, objective_rtol,
                                   distance_tol)
-    rule = _check_strategy(structured, stop)
+    rule = _check_strategy(structured, stop, adapt, fallback)
     parallel = client is not None or (workers is not None and workers > 1)
     tr, builder = _transcription_of(transcription, parallel)
     params = {} if params is None else dict(params)
@@ -307,33 +277,90 @@ def multistart(transcription: Transcription | Builder, n: int = 16, method: str 
     t_start = time.perf_counter()
     first = tr.default_guess(params) if guess is None else as_vector(tr, params, guess)
     optima = Optima(objective_rtol, distance_tol)
-    starts: list[StartResult] = []
-    stopped = ""
-    with _Runner(tr, builder, params, client, workers if parallel else None) as run:
-        raw0 = next(run.each([first]))
-        sol0 = _solution(tr, params, raw0)
-        rec = _record(0, "default" if guess is None else "guess", {}, sol0, raw0)
+    with Runner(tr, builder, params, client, workers if parallel else None) as run:
+        raw0 = next(run.each([(first, retries(fallback, 0))]))
+        sol0 = solution_of(tr, params, raw0)
+        rec = record(tr, params, 0, "default" if guess is None else "guess", {}, sol0, raw0)
         optima.add(0, sol0 if rec.verified else None)
-        starts.append(rec)
         scales = _solved_times(tr, sol0) if sol0 is not None and sol0.success else {}
         coords = start_coordinates(tr, params, spread, box, scales)
-        origins, points, guesses = _starts(tr, params, coords, n, method, seed, structured)
-        with closing(run.each(guesses)) as results:  # closed at a stop: the rest cancelled
-            for i, raw in enumerate(results, start=1):
-                sol = _solution(tr, params, raw)
-                rec = _record(i, origins[i - 1], points[i - 1], sol, raw)
-                optima.add(i, sol if rec.verified else None)
-                starts.append(rec)
-                stopped = rule.reason(optima, i) if rule is not None and i < n - 1 else ""
-                if stopped:
-                    break
+        way = start_coordinates(tr, params, spread, box, scales, turns=True)
+        plan = _Plan(tr, params, (coords, way), n, method, seed, structured, adapt, optima)
+        size = max(ROUND, _capacity(workers if parallel else None, client))
+        starts, stopped = [rec], ""
+        while len(starts) < n and not stopped:
+            made = plan.next_round(min(size, n - len(starts)), starts)
+            jobs = [(w, retries(fallback, len(starts) + k)) for k, (_, _, w) in enumerate(made)]
+            with closing(run.each(jobs)) as results:  # closed at a stop: the rest cancelled
+                for (origin, pt, _), raw in zip(made, results, strict=False):
+                    i = len(starts)
+                    sol = solution_of(tr, params, raw)
+                    rec = record(tr, params, i, origin, pt, sol, raw)
+                    optima.add(i, sol if rec.verified else None)
+                    starts.append(rec)
+                    stopped = rule.reason(optima, i) if rule is not None and i < n - 1 else ""
+                    if stopped:
+                        break
     ranked = optima.ranked()
     for k, opt in enumerate(ranked):  # the optima's ranks, best first
         for i in opt.starts:
             starts[i].optimum = k
-    boxes = {c.name: (c.lo, c.hi, c.log) for c in coords}
+    boxes = {c.name: (c.lo, c.hi, c.log) for c in way}
     return MultistartResult(ranked, starts, method, seed, time.perf_counter() - t_start, boxes,
                             n, stopped)
+
+
+class _Plan:
+    """The starts after start 0: their kinds dealt by :class:`~.allocation.Allocation`, each
+    kind made on demand from its own seeded stream (so the same seed gives the same starts
+    whatever the other kind drew)."""
+
+    def __init__(self, tr: Transcription, params: dict[str, float],
+                 coords: tuple[list[Coordinate], list[Coordinate]],
+                 n: int, method: str, seed: int | np.random.Generator | None,
+                 structured: float, adapt: bool, optima: Optima) -> None:
+        rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+        way_rng, self.bang_rng, deal_rng = rng.spawn(3)
+        base = default_solution(tr, params)
+        self.method = method
+        self.bang = StructuredStarts(tr, params, coords[0], base) if structured > 0 else None
+        self.way = WaypointStarts(tr, params, coords[1], base, method, way_rng, n) \
+            if structured < 1 else None
+        self.deal = Allocation(structured, adapt, deal_rng, optima.same)
+        self.made = {BANG: 0, "waypoint": 0}
+
+    def next_round(self, size: int, starts: list[StartResult]
+                   ) -> list[tuple[str, dict[str, float], np.ndarray]]:
+        """The next ``size`` starts: ``(origin, point, decision vector)``."""
+        results = [(_kind(s.origin), s.objective if s.verified else math.nan) for s in starts]
+        out = []
+        for kind in self.deal.next_round(size, results):
+            number = self.made[kind]
+            self.made[kind] += 1
+            if kind == BANG:
+                assert self.bang is not None
+                pt, w = self.bang.make(number, self.bang_rng)
+                out.append((BANG, pt, w))
+            else:
+                assert self.way is not None
+                pt, w = self.way.make(number)
+                out.append((self.method, pt, w))
+        return out
+
+
+def _kind(origin: str) -> str:
+    """The kind of a start's origin ("" for start 0)."""
+    return BANG if origin == BANG else "" if origin in ("default", "guess") else "waypoint"
+
+
+def _capacity(workers: int | None, client: Any) -> int:
+    """How many starts run at once: the pool's processes or the Dask cluster's threads."""
+    if client is not None:
+        try:
+            return max(1, int(sum(client.nthreads().values())))
+        except (AttributeError, TypeError, ValueError):
+            return 1
+    return workers or 1
 
 
 def _transcription_of(transcription: Any, parallel: bool) -> tuple[Transcription,
@@ -356,88 +383,18 @@ def _transcription_of(transcription: Any, parallel: bool) -> tuple[Transcription
     return tr, transcription
 
 
-def _starts(tr: Transcription, params: dict[str, float], coords: list[Coordinate], n: int,
-            method: str, seed: int | np.random.Generator | None, structured: float
-            ) -> tuple[list[str], list[dict[str, float]], list[np.ndarray]]:
-    """Origins, points and decision vectors of starts 1 to ``n - 1``: structured and sampled
-    starts interleaved, the structured ones at the multiples of ``1 / structured``."""
-    kinds = [math.floor(m * structured) > math.floor((m - 1) * structured)
-             for m in range(1, n)]
-    base = default_solution(tr, params)
-    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
-    sampled = iter(sampled_points(coords, kinds.count(False), method, rng))
-    bang = StructuredStarts(tr, params, coords, base) if any(kinds) else None
-    origins, points, vectors = [], [], []
-    for m, is_bang in enumerate(kinds):
-        if is_bang and bang is not None:
-            pt, w = bang.make(sum(kinds[:m]), rng)
-            origins.append("bang")
-        else:
-            pt = next(sampled)
-            w = bent_guess(tr, base, pt)
-            origins.append(method)
-        points.append(pt)
-        vectors.append(w)
-    return origins, points, vectors
-
-
-class _Runner:
-    """Solves starts here, on a process pool (kept for the whole run) or on Dask, yielding
-    the results in the order of the starts (queued ones are cancelled when the caller stops)."""
-
-    def __init__(self, tr: Transcription, builder: Builder | None, params: dict[str, float],
-                 client: Any, workers: int | None) -> None:
-        self.tr, self.builder, self.params = tr, builder, params
-        self.client, self.workers = client, workers
-        self.pool: ProcessPoolExecutor | None = None
-
-    def __enter__(self) -> _Runner:
-        if self.client is None and self.workers is not None:
-            # spawn, not fork: forking a process with Ipopt's and BLAS's threads can deadlock
-            self.pool = ProcessPoolExecutor(max_workers=self.workers,
-                                            mp_context=multiprocessing.get_context("spawn"))
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self.pool is not None:
-            self.pool.shutdown(cancel_futures=True)
-
-    def each(self, guesses: list[np.ndarray]) -> Iterator[Any]:
-        """The results of solving from ``guesses``, in their order.
-
-        Parameters
-        ----------
-        guesses : list of ndarray
-            Decision vectors.
-        """
-        if self.client is None and self.pool is None:
-            for g in guesses:
-                yield _solve_here(self.tr, self.params, g)
-            return
-        if self.client is not None:
-            futures = [self.client.submit(solve_start, self.builder, self.params, g, pure=False)
-                       for g in guesses]
-        else:
-            assert self.pool is not None
-            futures = [self.pool.submit(solve_start, self.builder, self.params, g)
-                       for g in guesses]
-        try:
-            for f in futures:
-                yield f.result()
-        finally:  # the caller stopped (or failed): drop what has not run
-            if self.client is not None:
-                self.client.cancel(futures)
-            else:
-                for f in futures:
-                    f.cancel()
-
-
-def _check_strategy(structured: Any, stop: Any) -> StopRule | None:
-    """``structured`` in [0, 1] and ``stop`` a pair of positive integers (or None)."""
+def _check_strategy(structured: Any, stop: Any, adapt: Any, fallback: Any) -> StopRule | None:
+    """``structured`` in [0, 1], ``adapt`` a bool, ``fallback`` one of :data:`FALLBACKS`
+    and ``stop`` a pair of positive integers (or None)."""
     if isinstance(structured, bool) or not isinstance(structured, numbers.Real) \
             or not 0.0 <= structured <= 1.0:
         raise ProblemDefinitionError("multistart(structured) must be a fraction in [0, 1], "
                                      f"got {structured!r}")
+    if not isinstance(adapt, bool):
+        raise ProblemDefinitionError(f"multistart(adapt) must be True or False, got {adapt!r}")
+    if fallback not in FALLBACKS:
+        raise ProblemDefinitionError(f"multistart(fallback) must be one of {FALLBACKS}, got "
+                                     f"{fallback!r}")
     if stop is None:
         return None
     try:
@@ -514,100 +471,3 @@ def _solved_times(tr: Transcription, sol: Solution) -> dict[str, float]:
         pre = f"{ps.problem.name}." if multi else ""
         out[pre + "T"] = out[pre + "duration"] = float(ps.T - ps.t0)
     return out
-
-
-# ---------------------------------------------------------------------- solving
-_BUILT: dict[Any, Transcription] = {}
-
-
-def solve_start(builder: Builder, params: dict[str, float], w0: np.ndarray) -> dict[str, Any]:
-    """Solve one start in a worker process: build (once per process), solve, return raw arrays.
-
-    Parameters
-    ----------
-    builder : callable
-        Zero-argument callable returning the transcription.
-    params : dict
-        Parameter values.
-    w0 : ndarray
-        The start's decision vector.
-    """
-    try:
-        tr = _BUILT[builder]
-    except (KeyError, TypeError):
-        tr = builder()
-        try:
-            _BUILT[builder] = tr
-        except TypeError:  # an unhashable builder is built for every start
-            pass
-    out = _solve_here(tr, params, w0)
-    if isinstance(out, dict):
-        return out
-    return {"w": out.w, "f": out.objective, "lam_g": out.lam_g, "lam_x": out.lam_x,
-            "success": out.success, "status": out.status, "iterations": out.iterations,
-            "solve_time": out.solve_time, "message": "",
-            "mesh_error": getattr(out, "mesh_error", None)}
-
-
-def _solve_here(tr: Transcription, params: dict[str, float], w0: np.ndarray
-                ) -> Solution | dict[str, Any]:
-    """A converged solution, or a dict saying why there is none."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", PathViolationWarning)
-            return tr.solve(params, guess=w0)
-    except SolveError as e:  # includes an infeasible start and a path violation ("raise")
-        it = e.iterate if isinstance(e.iterate, Solution) else None
-        return {"status": e.status, "message": str(e), "success": False,
-                "iterations": it.iterations if it is not None else 0,
-                "solve_time": it.solve_time if it is not None else 0.0}
-    except ProblemDefinitionError as e:  # a start that makes the dynamics non-finite
-        return {"status": type(e).__name__, "message": str(e), "success": False,
-                "iterations": 0, "solve_time": 0.0}
-    except (RuntimeError, ArithmeticError) as e:  # CasADi's evaluation errors and the like:
-        # one bad start is a failed start, not the end of the run
-        return {"status": type(e).__name__, "message": (str(e).splitlines() or [""])[0][:200],
-                "success": False, "iterations": 0, "solve_time": 0.0}
-
-
-def _solution(tr: Transcription, params: dict[str, float], raw: Any) -> Solution | None:
-    """A start's solution: solved here, or reassembled from a worker's raw result."""
-    return raw if isinstance(raw, Solution) else _reassemble(tr, params, raw)
-
-
-def _reassemble(tr: Transcription, params: dict[str, float],
-                raw: dict[str, Any]) -> Solution | None:
-    """The solution of a worker's raw result, on this process's build (checked between nodes)."""
-    if not raw.get("success") or "w" not in raw:
-        return None
-    if np.size(raw["w"]) != tr.n_w:
-        raise ProblemDefinitionError(
-            f"a worker's build has {np.size(raw['w'])} decision variables, this process's "
-            f"{tr.n_w}: the builder must return the same transcription every time")
-    res = {k: raw[k] for k in ("f", "lam_g", "lam_x")}
-    res["x"] = raw["w"]
-    stats = {"success": raw["success"], "return_status": raw["status"],
-             "iter_count": raw["iterations"]}
-    sol = Solution.from_nlp(tr, tr.param_vector(params), res, stats, raw["solve_time"])
-    if raw.get("mesh_error") is not None:
-        sol.mesh_error = raw["mesh_error"]
-    return sol
-
-
-def _record(i: int, origin: str, point: dict[str, float], sol: Solution | None,
-            raw: Any) -> StartResult:
-    if sol is None:
-        return StartResult(i, origin, point, raw["status"], False, False, math.nan,
-                           raw.get("iterations", 0), raw.get("solve_time", 0.0),
-                           message=raw.get("message", ""))
-    if sol.verified is None:  # not yet checked between nodes (verify="off", or a worker's)
-        tr = sol.transcription
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", PathViolationWarning)
-            verify(sol, "warn", tr.verify_tol, tr.verify_points)
-    ok = bool(sol.success and sol.verified)
-    return StartResult(i, origin, point, sol.status, sol.success, ok, sol.objective,
-                       sol.iterations, sol.solve_time,
-                       message="" if ok else "violates a path constraint between nodes")
-
-

@@ -106,11 +106,11 @@ class Optima:
         self.recorded += 1
         if sol is None:
             return None
-        if not any(self._same(sol.objective, o) for o in self._objectives):
+        if not any(self.same(sol.objective, o) for o in self._objectives):
             self.last_new = index
         self._objectives.append(sol.objective)
         for k, (founder, grp) in enumerate(zip(self._founders, self._groups, strict=True)):
-            if self._same(sol.objective, founder.objective) and \
+            if self.same(sol.objective, founder.objective) and \
                     trajectory_distance(sol, founder) <= self.distance_tol:
                 grp.starts.append(index)
                 if sol.objective < grp.objective:
@@ -120,7 +120,14 @@ class Optima:
         self._groups.append(LocalOptimum(sol.objective, sol, [index]))
         return len(self._groups) - 1
 
-    def _same(self, a: float, b: float) -> bool:
+    def same(self, a: float, b: float) -> bool:
+        """Whether two objectives are the same level (to ``objective_rtol * max(1, |b|)``).
+
+        Parameters
+        ----------
+        a, b : float
+            Two objectives.
+        """
         return abs(a - b) <= self.objective_rtol * max(1.0, abs(b))
 
     def best_count(self) -> int:
@@ -128,7 +135,7 @@ class Optima:
         if not self._objectives:
             return 0
         best = min(self._objectives)
-        return sum(1 for o in self._objectives if self._same(o, best))
+        return sum(1 for o in self._objectives if self.same(o, best))
 
     def ranked(self) -> list[LocalOptimum]:
         """The optima best first, each with the fraction of the recorded starts that reached it."""

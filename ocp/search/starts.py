@@ -41,11 +41,13 @@ from ..definition.multiphase import PhaseTimes
 from ..definition.scaling import loose_bounds
 from ..definition.sizes import transfer_time
 from ..definition.trajectory import Trajectory
+from ..transcriptions.diagnosis import periodic_states
 from ..transcriptions.nlp import Transcription
 from ..transcriptions.solution import Solution
 from ..transcriptions.transcription import decision_bounds
 
-__all__ = ["TIME_SPAN", "Coordinate", "PhasePart", "assemble", "start_coordinates"]
+__all__ = ["TIME_SPAN", "Coordinate", "PhasePart", "assemble", "duration_box",
+           "start_coordinates"]
 
 TIME_SPAN = 4.0
 """A free time's box spans its known scales divided and multiplied by this (module doc)."""
@@ -120,7 +122,8 @@ def prefix(tr: Transcription, phase: int) -> str:
 
 def start_coordinates(tr: Transcription, params: dict[str, float], spread: float = 1.0,
                       box: dict[str, tuple[float, float]] | None = None,
-                      solved: dict[str, float] | None = None) -> list[Coordinate]:
+                      solved: dict[str, float] | None = None,
+                      turns: bool = False) -> list[Coordinate]:
     """The coordinates a start samples, with their boxes (see the module docstring).
 
     Parameters
@@ -136,6 +139,13 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
     solved : dict, optional
         Durations a converged start found, by the name of the time coordinate
         (they replace the guessed durations as a scale of the free times).
+    turns : bool
+        Widen the unbounded sides of a periodic state's box (one that enters the
+        dynamics only through periodic functions,
+        :func:`~ocp.transcriptions.diagnosis.periodic_states`) to at least half a turn
+        from its centre: the waypoints' box, where a heading may point anywhere. The
+        structured starts keep the narrower box, whose widths weigh their terminal
+        miss (a full turn there halved the pendulum's hits, measured).
     """
     box = box or {}
     solved = solved or {}
@@ -150,8 +160,10 @@ def start_coordinates(tr: Transcription, params: dict[str, float], spread: float
         _, _, xlo, xhi, ulo, uhi, _, _ = (np.array(v, dtype=float).ravel()
                                           for v in cp.bounds(pv))
         xm, _ = ps.at(np.array([0.5 * (ps.t0 + ps.T)]))
+        turned = periodic_states(ps.problem) if turns else set()
         for j, name in enumerate(ps.problem.state_names):
-            out.append(_coordinate(pre + name, xlo[j], xhi[j], xm[0, j], spread, box))
+            out.append(_coordinate(pre + name, xlo[j], xhi[j], xm[0, j], spread, box,
+                                   math.pi if name in turned else 0.0))
         for j, name in enumerate(ps.problem.control_names):
             lo, hi = ulo[j], uhi[j]
             mid = 0.5 * (lo + hi) if np.isfinite(lo) and np.isfinite(hi) else 0.0
@@ -185,13 +197,15 @@ def _transfer_times(ps: Solution, var_values: list[float]) -> list[float]:
 
 
 def _coordinate(name: str, lo: float, hi: float, centre: float, spread: float,
-                box: dict[str, tuple[float, float]]) -> Coordinate:
+                box: dict[str, tuple[float, float]], least: float = 0.0) -> Coordinate:
+    """A coordinate's box: ``box``'s, else the bounds, an infinite side replaced by
+    ``centre -+ max(spread * max(1, |centre|), least)``."""
     if name in box:
         a, b = (float(v) for v in box[name])
         return Coordinate(name, a, b)
     if not math.isfinite(centre):
         centre = 0.0
-    half = spread * max(1.0, abs(centre))
+    half = max(spread * max(1.0, abs(centre)), least)
     a = lo if math.isfinite(lo) else min(centre, hi) - half
     b = hi if math.isfinite(hi) else max(centre, a) + half
     return Coordinate(name, float(a), float(b))
@@ -373,28 +387,26 @@ def assemble(tr: Transcription, base: Solution, parts: list[PhasePart],
     return w
 
 
-def bent_guess(tr: Transcription, base: Solution, pt: dict[str, float]) -> np.ndarray:
-    """The decision vector of a sampled start: the default guess bent through the point.
+def duration_box(tr: Transcription, i: int, by_name: dict[str, Coordinate],
+                 t0: float) -> tuple[Coordinate | None, str]:
+    """Phase ``i``'s free duration as a coordinate (an absolute ``T``'s box less ``t0``)
+    and the name of the time coordinate it comes from; ``(None, "")`` if the time is fixed.
 
     Parameters
     ----------
     tr : Transcription
         The transcription.
-    base : Solution
-        The default guess.
-    pt : dict
-        The sampled coordinates.
+    i : int
+        The phase.
+    by_name : dict
+        The coordinates by name.
+    t0 : float
+        The phase's (fixed) initial time, subtracted from an absolute ``T``.
     """
-    s = np.linspace(0.0, 1.0, SAMPLES)
-    bump = np.sin(np.pi * s)[:, None]
-    parts = []
-    for i, (ps, (t0, T)) in enumerate(zip(base.phases, phase_times(tr, base, pt),
-                                          strict=True)):
-        pre = prefix(tr, i)
-        x_def, _ = ps.at(ps.t0 + (ps.T - ps.t0) * s)
-        x_mid, _ = ps.at(np.array([0.5 * (ps.t0 + ps.T)]))
-        z = np.array([pt[pre + n] for n in ps.problem.state_names])
-        u = np.array([pt[pre + n] for n in ps.problem.control_names])
-        parts.append(PhasePart(t0 + (T - t0) * s, x_def + bump * (z - x_mid[0])[None, :],
-                               np.tile(u, (SAMPLES, 1))))
-    return assemble(tr, base, parts, pt)
+    pre = prefix(tr, i)
+    for key in ("T", "duration"):
+        if pre + key in by_name:
+            c = by_name[pre + key]
+            off = t0 if key == "T" else 0.0
+            return Coordinate(c.name, max(c.lo - off, 1e-12), c.hi - off, c.log), c.name
+    return None, ""

@@ -14,7 +14,9 @@ A structured start is built as one builds a guess by hand:
   of; where it is not (a heading angle in ``cos``/``sin``, a quadratic cost),
   the levels are random points of the low and the high half of the box
   instead. The six sequences (0, 1 or 2 switches, starting low or high) are
-  dealt in turn to the first control, at random to the others;
+  dealt in turn to the first control, at random to the others; a start identical to
+  one made before (a sequence without switches has no random time to vary it, so its
+  second turn would repeat the first solve) is replaced by the next sequence's;
 * the states are simulated forward from the default guess's initial state
   under that control (RK4, :data:`STEPS` steps over the phase's time box), so
   that they follow the dynamics;
@@ -48,7 +50,8 @@ from ..definition.problem import OptimalControlProblem
 from ..transcriptions.integrators import rk4_interval
 from ..transcriptions.nlp import Transcription
 from ..transcriptions.solution import Solution
-from .starts import SAMPLES, Coordinate, PhasePart, assemble, prefix
+from .feasibility import PathCheck
+from .starts import SAMPLES, Coordinate, PhasePart, assemble, duration_box, prefix
 
 __all__ = ["PATTERNS", "STEPS", "StructuredStarts"]
 
@@ -79,9 +82,7 @@ class _PhaseSetup:
     simulate: ca.Function
     pv: np.ndarray  # the parameters and decision variables, [p; v] of the static vector
     bang: list[bool]  # per control: the problem is affine in it (levels at the box's ends)
-    check: ca.Function  # the path constraints and bounded states on SAMPLES points
-    check_lo: np.ndarray
-    check_hi: np.ndarray
+    check: PathCheck  # the path constraints and bounded states on SAMPLES points
 
 
 class StructuredStarts:
@@ -109,21 +110,17 @@ class StructuredStarts:
         self.links = {b: a for a, b in tr.multiphase.time_links}
         by_name = {c.name: c for c in coords}
         self.phases = [self._setup(i, by_name) for i in range(len(base.phases))]
+        self.made: set[tuple[tuple[str, float], ...]] = set()  # the points of the starts made
 
     def _setup(self, i: int, by_name: dict[str, Coordinate]) -> _PhaseSetup:
         ps, cp = self.base.phases[i], self.tr.compiled[i]
         pre = prefix(self.tr, i)
         names = ps.problem.state_names
-        _, _, xlo, xhi, _, _, clo, chi = (np.array(v, dtype=float).ravel()
-                                          for v in cp.bounds(self.pv))
+        _, _, xlo, xhi, _, _, _, _ = (np.array(v, dtype=float).ravel()
+                                      for v in cp.bounds(self.pv))
         xbox = [by_name[pre + n] for n in names]
         ubox = [by_name[pre + n] for n in ps.problem.control_names]
-        duration, dname = None, ""
-        for key in ("T", "duration"):
-            if pre + key in by_name:
-                c, dname = by_name[pre + key], pre + key
-                off = ps.t0 if key == "T" else 0.0
-                duration = Coordinate(c.name, max(c.lo - off, 1e-12), c.hi - off, c.log)
+        duration, dname = duration_box(self.tr, i, by_name, ps.t0)
         x_end, _ = ps.at(np.array([ps.T]))
         targets = {k: float(x_end[0, k]) for k in fixed_ends(ps.problem)[1]}
         return _PhaseSetup(
@@ -132,7 +129,7 @@ class StructuredStarts:
             np.array([max(c.hi - c.lo, 1e-12) for c in xbox]),
             np.array([c.lo for c in ubox]), np.array([c.hi for c in ubox]), targets,
             _simulator(self.tr, i), np.concatenate([self.pv, self.v]), affine_controls(ps.problem),
-            _checker(self.tr, i), clo, chi)
+            PathCheck.of(self.tr, i, self.pv, SAMPLES))
 
     def make(self, number: int, rng: np.random.Generator) -> tuple[dict[str, float], np.ndarray]:
         """The ``number``-th structured start: its description and decision vector.
@@ -148,8 +145,21 @@ class StructuredStarts:
         -------
         tuple
             ``(point, w)``: the start's times, first control levels and switch times by
-            name (``"u"``, ``"u.t1"``, ``"u.t2"``), and its decision vector.
+            name (``"u"``, ``"u.t1"``, ``"u.t2"``), and its decision vector. A start
+            identical to one made before (a sequence without switches whose closest
+            approach repeats) is replaced by the next sequence's.
         """
+        for shift in range(len(PATTERNS)):  # a start made before would be solved again
+            point, parts = self._best(number + shift, rng)
+            key = tuple(sorted(point.items()))
+            if key not in self.made:
+                break
+        self.made.add(key)
+        return point, assemble(self.tr, self.base, parts, point)
+
+    def _best(self, number: int, rng: np.random.Generator
+              ) -> tuple[dict[str, float], list[PhasePart]]:
+        """Of :data:`CANDIDATES` candidates of sequence ``number``, the one of least miss."""
         best: tuple[float, dict[str, float], list[PhasePart]] | None = None
         for _ in range(CANDIDATES):
             miss, point, parts = self._candidate(number, rng)
@@ -157,8 +167,7 @@ class StructuredStarts:
                 best = (miss, point, parts)
         assert best is not None
         _, point, parts = best
-        point |= self.var_point
-        return point, assemble(self.tr, self.base, parts, point)
+        return point | self.var_point, parts
 
     def _candidate(self, number: int, rng: np.random.Generator
                    ) -> tuple[float, dict[str, float], list[PhasePart]]:
@@ -206,32 +215,6 @@ def _simulator(tr: Transcription, i: int) -> ca.Function:
     if key not in cache:
         cache[key] = rk4_interval(tr.compiled[i].ode, 1).mapaccum("simulate", STEPS)
     return cache[key]
-
-
-def _checker(tr: Transcription, i: int) -> ca.Function:
-    """Phase ``i``'s path constraints and bounded states on ``SAMPLES`` points (cached)."""
-    key = ("multistart_checker", i, SAMPLES)
-    cache = tr.grid_free.functions
-    if key not in cache:
-        cache[key] = tr.compiled[i].check.map(SAMPLES)
-    return cache[key]
-
-
-def _violation(ph: _PhaseSetup, t: np.ndarray, x: np.ndarray, u: np.ndarray,
-               static: np.ndarray) -> float:
-    """The sum over the path constraints of their largest violation along a start, each
-    relative to ``max(1, |bound|)`` (as the check between nodes measures it)."""
-    if ph.check_lo.size == 0:
-        return 0.0
-    c = np.asarray(ph.check(t[None, :], x.T, u.T, np.tile(static[:, None], (1, t.size))),
-                   dtype=float)
-    lo, hi = ph.check_lo[:, None], ph.check_hi[:, None]
-    with np.errstate(invalid="ignore"):
-        below = (lo - c) / np.maximum(1.0, np.abs(np.where(np.isfinite(lo), lo, 0.0)))
-        above = (c - hi) / np.maximum(1.0, np.abs(np.where(np.isfinite(hi), hi, 0.0)))
-        rel = np.maximum(np.maximum(below, above), 0.0)
-    rel[~np.isfinite(rel)] = 1.0  # a constraint the start makes non-finite
-    return float(np.sum(np.max(rel, axis=1)))
 
 
 def _levels(ph: _PhaseSetup, number: int, rng: np.random.Generator, duration: float,
@@ -296,7 +279,7 @@ def _phase_start(ph: _PhaseSetup, t0: float, x0: np.ndarray, number: int,
     for k, value in ph.targets.items():
         xg[:, k] += s * (value - xg[-1, k])
     ug = _controls_at(controls, t)
-    miss += _violation(ph, t0 + t, xg, ug, np.concatenate([ph.pv, [t0, t0 + duration]]))
+    miss += ph.check.violation(t0 + t, xg, ug, np.concatenate([ph.pv, [t0, t0 + duration]]))
     xg = np.clip(xg, ph.xlo, ph.xhi)  # after scoring: a start that leaves them scores worse
     if ph.duration is not None:
         plan[ph.duration_name] = duration + (t0 if ph.duration_name.endswith("T") else 0.0)

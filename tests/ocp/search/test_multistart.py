@@ -71,9 +71,10 @@ def test_starts_cover_the_box_and_are_deterministic():
     res = run()
     pts = [s.point for s in res.starts[1:]]
     sampled = [s.point for s in res.starts if s.origin == "sobol"]
-    assert len(sampled) == 2 and all(set(p) == {"theta", "omega", "u", "T"} for p in sampled)
-    assert [s.origin for s in res.starts] == ["default"] + ["sobol"] + ["bang"] * 3 + [
-        "sobol"] + ["bang"] * 2  # three in four structured, interleaved
+    assert len(sampled) >= 2 and all(set(p) == {"theta", "omega", "u", "T"} for p in sampled)
+    # the first round alternates the kinds; the later ones follow their yields
+    assert [s.origin for s in res.starts[:5]] == ["default"] + ["sobol", "bang"] * 2
+    assert {s.origin for s in res.starts[5:]} <= {"sobol", "bang"}
     u = np.array([p["u"] for p in pts])
     T = np.array([p["T"] for p in pts])
     # T's box: from the known durations (start 0's 17.29, the dynamics' pi) over and times
@@ -232,6 +233,10 @@ def test_start_box():
     coords = start_coordinates(coarse_transcription(), {})
     assert [c.name for c in coords] == ["theta", "omega", "u", "T"]
     assert coords[0].lo == 0.0 and coords[0].hi == pytest.approx(math.pi)  # pi/2 -+ pi/2
+    # the waypoints': theta enters the dynamics through sin alone, its box spans a turn
+    way = start_coordinates(coarse_transcription(), {}, turns=True)
+    assert (way[0].lo, way[0].hi) == pytest.approx((-math.pi / 2, 1.5 * math.pi))
+    assert [(c.lo, c.hi) for c in way[1:]] == [(c.lo, c.hi) for c in coords[1:]]
     assert (coords[2].lo, coords[2].hi) == (-0.4, 0.4) and coords[3].log
 
 
