@@ -1,6 +1,7 @@
 """A new user's first ``softlanding demo``: compile on an empty numba cache, then cached.
 
-Run:  python -m benchmarks.bench_first_run [--baseline REV | --baseline-tree DIR] [--repeats 3]
+Run:  python -m benchmarks.bench_first_run [--baseline REV | --baseline-tree DIR | --no-baseline]
+      [--repeats 3] [--cold-only]
 
 Each run is a fresh process of ``softlanding demo --out FILE.png`` timed from outside
 (``resource.getrusage`` of the child: user + system CPU, and wall time). A cold run gets an
@@ -10,7 +11,9 @@ own, as a fresh install has; a cached run reuses the caches of a cold run. With
 ``--baseline-tree DIR``, a source tree already there, e.g. ``git archive main | tar -x -C
 DIR``) and the two trees alternate run by run (the other one first every second repeat), so
 a drift of the shared machine's load falls on both; the medians' ratio now / baseline is
-printed. The tables printed by both must agree.
+printed. The tables printed by both must agree. The default baseline is 4695ed7, the tree
+issue 47 measured (22.4-24.7 s CPU cold; goal <= 15 s); ``--cold-only`` skips the cached
+runs.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+BASELINE = "4695ed7"
+"""The tree issue 47 measured the first demo on."""
 
 
 def run_demo(tree: Path, cache: Path, out: Path) -> tuple[float, float, str, str]:
@@ -47,11 +52,16 @@ def run_demo(tree: Path, cache: Path, out: Path) -> tuple[float, float, str, str
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     base = ap.add_mutually_exclusive_group()
-    base.add_argument("--baseline", help="git revision to compare against (default: none)")
+    base.add_argument("--baseline", default=BASELINE,
+                      help=f"git revision to compare against (default: {BASELINE})")
     base.add_argument("--baseline-tree", type=Path,
-                      help="source tree to compare against (default: none)")
+                      help="source tree to compare against (instead of a revision)")
+    base.add_argument("--no-baseline", action="store_true", help="this tree alone")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--cold-only", action="store_true", help="no cached runs")
     args = ap.parse_args()
+    if args.no_baseline or args.baseline_tree:
+        args.baseline = None
     with tempfile.TemporaryDirectory(prefix="bench-first-run-") as tmp:
         trees = {"now": ROOT}
         if args.baseline_tree:
@@ -61,7 +71,8 @@ def main() -> None:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q",
                             str(trees["base"]), args.baseline], check=True)
         try:
-            rows: dict[str, dict[str, list]] = {k: {"cold": [], "cached": []} for k in trees}
+            kinds = ("cold",) if args.cold_only else ("cold", "cached")
+            rows: dict[str, dict[str, list]] = {k: {kind: [] for kind in kinds} for k in trees}
             tables: dict[str, set[str]] = {k: set() for k in trees}
             for r in range(args.repeats):
                 order = list(trees) if r % 2 == 0 else list(trees)[::-1]
@@ -75,6 +86,8 @@ def main() -> None:
                                               if not line.startswith("figure written")))
                     print(f"{key:5s} cold   cpu {cpu:6.2f} s  wall {wall:6.2f} s  "
                           f"stderr {err.strip()!r}", flush=True)
+                    if args.cold_only:
+                        continue
                     cpu, wall, out, err = run_demo(trees[key], cache, png)
                     rows[key]["cached"].append((cpu, wall))
                     print(f"{key:5s} cached cpu {cpu:6.2f} s  wall {wall:6.2f} s  "
@@ -89,7 +102,7 @@ def main() -> None:
                           f"  wall {med[key, kind, 1]:6.2f} s  (least cpu "
                           f"{min(x[0] for x in xs):6.2f} s)")
             if "base" in trees:
-                for kind in ("cold", "cached"):
+                for kind in kinds:
                     print(f"  ratio now/base {kind:6s} cpu "
                           f"{med['now', kind, 0] / med['base', kind, 0]:.2f}  wall "
                           f"{med['now', kind, 1] / med['base', kind, 1]:.2f}")

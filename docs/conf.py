@@ -43,6 +43,7 @@ extensions = [
     "numpydoc",
     "myst_nb",
     "sphinx_gallery.gen_gallery",
+    "execution_log",  # docs/_ext: a line on stderr per executed example and notebook
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
@@ -103,6 +104,9 @@ sphinx_gallery_conf = {
     "matplotlib_animations": False,
     "image_scrapers": ("matplotlib",),
     "abort_on_example_error": True,
+    # each example announced on stderr as it runs (docs/_ext/execution_log.py)
+    "reset_modules": ("matplotlib", "execution_log.gallery_example"),
+    "reset_modules_order": "both",
 }
 
 # -- API pages from the front doors ----------------------------------------------------------

@@ -55,10 +55,19 @@ def test_the_site_builds_with_its_gallery_executed(tmp_path):
     # the guide's code names link to their API pages
     guide = (html / "guides" / "unknown_ground.html").read_text()
     assert "generated/softlanding.control.GroundEstimator.html" in guide
-    # quiet: nothing printed but warnings (none: -W) and errors; a notebook kernel's
-    # teardown noise (tornado logging a ZMQ socket closed under it) is not the docs'
+    # no CasADi message on any page (a notebook's cell printed 22 lines of them)
+    pages = [p for p in html.rglob("*.html")]
+    assert not [p for p in pages if "WARNING(" in p.read_text(errors="replace")]
+    # quiet: nothing printed but warnings (none: -W), errors and a line per executed example
+    # and notebook (docs/_ext/execution_log.py); a notebook kernel's teardown noise (tornado
+    # logging a ZMQ socket closed under it) is not the docs'
     err = re.sub(r"ERROR:tornado\.general:Uncaught exception in ZMQStream callback\n"
                  r"(?:.*\n)*?zmq\.error\.ZMQError: Socket operation on non-socket\n?", "",
                  res.stderr)
+    said = [ln for ln in err.splitlines() if ln.startswith("docs: ")]
+    assert sum("executing the gallery example" in ln for ln in said) >= 6, said
+    assert sum("executing the notebook" in ln for ln in said) == 7, said
+    assert sum(" done in " in ln for ln in said) == 7, said
+    err = "\n".join(ln for ln in err.splitlines() if not ln.startswith("docs: "))
     assert not res.stdout.strip() and not err.strip(), (res.stdout + err)[-4000:]
 

@@ -26,6 +26,9 @@ def test_notebook_executes_and_shows_its_figures(path, tmp_path):
     code = [c for c in nb.cells if c.cell_type == "code"]
     errors = [o for c in code for o in c.get("outputs", []) if o.get("output_type") == "error"]
     assert not errors
+    printed = "".join(o.get("text", "") for c in code for o in c.get("outputs", [])
+                      if o.get("output_type") == "stream")
+    assert "WARNING(" not in printed, printed[:2000]  # CasADi's messages: logged, not shown
     drawing = [c for c in code if _plots(c.source) and "import" not in c.source]
     assert drawing
     for c in drawing:  # inline figures: the library must not switch the backend away

@@ -59,6 +59,9 @@ class ArcSamples:
         Allowed relative residual.
     error : float
         The samples' own relative error (the solution's accuracy).
+    mesh : ndarray, optional
+        The transcription's grid (shooting nodes or collocation mesh), when the samples
+        come from one.
     """
 
     problem: OptimalControlProblem

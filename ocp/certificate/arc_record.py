@@ -90,7 +90,15 @@ class ArcCheck:
                           if within else ""))
 
     def mark(self, status: str, note: str) -> None:
-        """Lower the arc's status to ``status`` (never raise it) and note why."""
+        """Lower the arc's status to ``status`` (never raise it) and note why.
+
+        Parameters
+        ----------
+        status : str
+            ``"holds"``, ``"uncertain"`` or ``"fails"``.
+        note : str
+            Why.
+        """
         if _RANK[status] > _RANK[self.status]:
             self.status = status
         self.notes.append(note)
@@ -109,7 +117,12 @@ class ArcCheck:
 
 
 def worst(arcs: list[ArcCheck]) -> str:
-    """The worst status of ``arcs`` (``"holds"`` when empty)."""
+    """The worst status of ``arcs`` (``"holds"`` when empty).
+
+    Parameters
+    ----------
+    arcs : list of ArcCheck
+    """
     return max((a.status for a in arcs), key=_RANK.__getitem__, default=HOLDS)
 
 

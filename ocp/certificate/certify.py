@@ -74,7 +74,7 @@ from ..structure.arcs import ArcStructure, SolutionLike, detect_structure, trans
 from ..transcriptions.gridview import grid_spacing
 from .arc_table import transcription_table
 from .arc_verdict import NOT_EXTREMAL as NOT_EXTREMAL
-from .arc_verdict import settle
+from .arc_verdict import junction_margin, settle
 from .chattering import ChatteringResult as ChatteringResult
 from .chattering import detect_chattering as chattering_of
 from .checks import CERTIFIED as CERTIFIED
@@ -231,7 +231,7 @@ def certify(sol: SolutionLike, refined: Any = None, *,
         arcs = transcription_table(tsol, st, tol.sigma, 0.0)
         cert = certify_transcription(tsol, tol, verify, tol_switch is None, arcs)
         cert.arcs = arcs
-    settle(cert, st, refuting=refined is not None)
+    settle(cert, st, refuting=refined is not None, margin=junction_margin(tsol))
     in_dynamics = pr.nv and ca.depends_on(ca.vertcat(pr.rhs, pr.lagrange), pr.v)
     if chattering and in_dynamics:
         # the transcription's switching functions need the variables' values in f: read

@@ -24,18 +24,21 @@ from ..structure.arcs import TranscribedSolution, no_control_crosses
 from ..structure.switching import RefinedSwitching
 from ..transcriptions.gridview import grid_spacing
 from ..transcriptions.solution import along
+from .arc_record import HOLDS, ArcCheck
 from .arc_table import refined_table
-from .arc_verdict import covered
+from .arc_verdict import covered, junction_margin
 from .checks import (
     ERROR_MARGIN,
+    INCONCLUSIVE,
     Tolerances,
     figures,
     intervals_of,
     judge,
     verdict_of,
 )
-from .costates import adjoint_sweep, costates_from_multipliers
-from .result import PMPCertificate, build_certificate
+from .costates import adjoint_sweep, costates_from_multipliers, pmp_functions
+from .refined_state_arcs import copy_rows, refined_boundary_rows
+from .result import PMPCertificate, build_certificate, not_applicable
 
 
 def is_mixed(pr: OptimalControlProblem, name: str | None) -> bool:
@@ -138,7 +141,9 @@ def path_activity_along(pr: OptimalControlProblem, x: np.ndarray, u: np.ndarray,
 
 
 def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[float]]:
-    """Switch times of every control after ``after``, ignoring zero-length intervals."""
+    """Switch times of every control after ``after``, ignoring zero-length intervals: the
+    switches between two bang arcs (a junction with a singular arc is no sign change of
+    sigma, which vanishes on that arc; its row in the per-arc table checks it)."""
     edges = np.r_[0.0, np.cumsum(ref.durations)]
     tiny = 1e-10 * max(edges[-1], 1.0)
     out: dict[str, list[float]] = {}
@@ -147,7 +152,7 @@ def _effective_switches(ref: RefinedSwitching, after: float) -> dict[str, list[f
         modes = [(im[k][j], edges[k + 1]) for k in range(len(ref.durations))
                  if ref.durations[k] > tiny]
         out[name] = [float(e) for (m, e), (m2, _) in zip(modes[:-1], modes[1:], strict=True)
-                     if m != m2 and e > after + tiny]
+                     if m != m2 and e > after + tiny and "singular" not in (m.kind, m2.kind)]
     return out
 
 
@@ -183,6 +188,11 @@ def constrained_refined(ref: RefinedSwitching, n: int) -> tuple[list[tuple[float
                               bounds=effective_bounds(pr, x, ref.pv)) & (t > tiny) & \
         (t < T - tiny)
     dense = intervals_of(t, act, 2 * T / max(len(t), 1))
+    # the constraint's measure lives where it is active: the costate may jump anywhere there,
+    # not only at the path rows whose multipliers the refinement made non-zero (they are
+    # degenerate where the constraint is redundant, m >= m_f with m(T) = m_f and m' <= 0)
+    for _, b in dense:
+        last = max(last, T if b >= T - 2 * T / max(len(t), 1) else b)
     if ref.nlp is not None and "path" in ref.blocks and len(ref.lam_g):
         rows = ref.blocks["path"]
         lam = np.abs(ref.lam_g[rows])
@@ -218,9 +228,16 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
     """
     pr = ref.problem
     active, last = constrained_refined(ref, n)
-    sw = adjoint_sweep(ref, last, n)
     T = float(np.sum(ref.durations))
     tiny = 1e-10 * max(T, 1.0)
+    if last >= T - tiny:  # constrained to the end: no unconstrained costate to sweep
+        spans = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in active)
+        cert = not_applicable(INCONCLUSIVE, [
+            f"state constraint active on {spans}, up to the final time: the costate may jump "
+            "anywhere there, so no part of the horizon is checked from the refinement"])
+        cert.state_constraint_active_intervals, cert.checked_from = active, T
+        return cert
+    sw = adjoint_sweep(ref, last, n)
     keep = (sw.t >= last - tiny) & (ref.durations[sw.interval] > tiny)
     switches = _effective_switches(ref, last)
     values = {**ref.params, **ref.variables}  # the control set at the variables' values
@@ -242,7 +259,11 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                      if mixed else None)
         err["H"] += float(np.max(np.abs(fig.H - cf.H), initial=0.0)) / fig.H_scale
         dsig = np.max(np.abs(fig.sigma - cf.sigma), axis=0, initial=0.0)
-        err["sigma"] = float(np.max(dsig / np.maximum(np.max(np.abs(fig.sigma), axis=0), 1e-300)))
+        # relative to the size of sigma's terms (sigma itself vanishes on interior arcs)
+        terms = along(pmp_functions(pr).sigma_terms, sw.x[keep], sw.u[keep], sw.lam[keep],
+                      ref.pv)[0]
+        err["sigma"] = float(np.max(dsig / np.maximum(np.maximum(
+            np.max(np.abs(fig.sigma), axis=0), np.max(terms, axis=0, initial=0.0)), 1e-300)))
         err["switch"] = max((abs(fig.gap[k] - cf.gap[k]) for k in fig.gap
                              if math.isfinite(fig.gap[k]) and math.isfinite(cf.gap[k])),
                             default=0.0)
@@ -252,16 +273,57 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
                       ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
     arcs = refined_table(ref, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep], tol.sigma,
                          max(err["H"], err["costate"], err["sigma"]))
-    fig.singular = [r for r in fig.singular if not covered(arcs, r)]
+    fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=tol.singular)]
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
-    verdict, reasons = verdict_of(definite, uncertain, active, last, T)
+    H_after = sw.H_expected if sw.H_expected is not None else float(np.median(fig.H))
+    arcs, left, start = constrained_rows(sol, ref, arcs, (sw.t[keep], sw.lam[keep]), H_after,
+                                         tol, max(err["H"], err["costate"], err["sigma"]),
+                                         active, last, n)
+    verdict, reasons = verdict_of(definite, uncertain, left, start, T)
     gap_lam = _costate_gap(sol, ref, sw.t[keep], sw.lam[keep], last)
     src = "refined (adjoint integrated with the state along the refined arcs: " + (
         "exact arcs)" if ref.exact else f"RK8, error measured {sw.error_lam:.1e})")
     cert = build_certificate(verdict, reasons, sw.H_expected, fig, active, gap_lam, src,
-                             sw.t[keep], sw.lam[keep], sw.u[keep], err, last)
+                             sw.t[keep], sw.lam[keep], sw.u[keep], err, start)
     cert.arcs = arcs
     return cert
+
+
+def constrained_rows(sol: TranscribedSolution, ref: RefinedSwitching, arcs: list[ArcCheck],
+                     sweep: tuple[np.ndarray, np.ndarray], H_after: float, tol: Tolerances,
+                     error: float, active: list[tuple[float, float]], last: float,
+                     n: int) -> tuple[list[ArcCheck], list[tuple[float, float]], float]:
+    """The rows of the part before the last constrained time: state boundary arcs (their
+    multipliers and jumps, :mod:`ocp.certificate.refined_state_arcs`) and interior arcs
+    with their costate copies; the active spans those boundary rows do not answer, and
+    where the checked part starts (0 when holding rows cover all before ``last``).
+
+    Parameters
+    ----------
+    sol : TranscribedSolution
+    ref : RefinedSwitching
+    arcs : list of ArcCheck
+        The swept part's rows.
+    sweep : (ndarray, ndarray)
+        The sweep's times and costates.
+    H_after : float
+        H on the swept part.
+    tol : Tolerances
+    error : float
+    active : list of (float, float)
+        State-constrained spans.
+    last : float
+        The last constrained time.
+    n : int
+        About how many samples along ``ref``.
+    """
+    rows = refined_boundary_rows(ref, sol, sweep, tol.sigma, error, junction_margin(sol))
+    rows += copy_rows(ref, last, H_after, tol.sigma, error, n)
+    out = sorted(arcs + rows, key=lambda r: (r.start, r.control))
+    left = [a for a in active if not covered(rows, a, kinds=("state boundary",),
+                                             statuses=(HOLDS,), margin=tol.singular)]
+    start = 0.0 if last > 0 and covered(out, (0.0, last), statuses=(HOLDS,)) else last
+    return out, left, start
 
 
 def _costate_gap(sol: TranscribedSolution, ref: RefinedSwitching, t: np.ndarray, lam: np.ndarray,

@@ -225,17 +225,24 @@ def _persistent(coarse: Figures, fine: Figures, tol: Tolerances,
     return out
 
 
-def _leave_to_table(fig: Figures, active: list, arcs: list[ArcCheck]) -> list:
+def _leave_to_table(fig: Figures, active: list, arcs: list[ArcCheck], margin: float) -> list:
     """Leave the spans that rows of the per-arc table check to the table: runs of vanishing
     sigma on interior or singular arcs, and state-constrained spans on state boundary arcs.
-    Returns the active spans left."""
-    fig.singular = [r for r in fig.singular if not covered(arcs, r)]
+    Returns the active spans left. A span may stick out of its rows by ``margin`` at each
+    end (the shortest singular interval the certificate reports). A run that holds an
+    interior or singular row of any status is the table's too: sigma is small beside a
+    singular arc (it leaves zero as a power of the distance to the junction), and on a
+    transcription alone a failing row gives "inconclusive" (the control on a singular arc
+    carries the grid's error), never the global checks' refutation."""
+    free = [r for r in arcs if r.kind in ("interior", "singular")]
+    fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=margin)
+                    and not any(min(r[1], a.end) > max(r[0], a.start) for a in free)]
     for name in fig.agreement:
         mine = [r for r in arcs if r.control == name or r.kind == "state boundary"]
         if mine and all(r.kind in ("interior", "singular", "state boundary") for r in mine):
             # no bang arc: H_u = 0 is the table's check, not a bound sign(sigma) selects
             fig.agreement[name] = 1.0
-    return [a for a in active if not covered(arcs, a, kinds=("state boundary",))]
+    return [a for a in active if not covered(arcs, a, kinds=("state boundary",), margin=margin)]
 
 
 def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: bool,
@@ -260,7 +267,7 @@ def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: boo
     PMPCertificate
     """
     fig, H_exp, active, t = _transcription_figures(sol, tol)
-    left = _leave_to_table(fig, active, arcs or [])
+    left = _leave_to_table(fig, active, arcs or [], tol.singular)
     definite, uncertain = judge(fig, tol, {}, H_exp is not None)
     src = ("transcription (costates from collocation multipliers / Radau weights)"
            if is_collocation(sol) else "transcription (costates from continuity multipliers)")
@@ -279,7 +286,7 @@ def certify_transcription(sol: TranscribedSolution, tol: Tolerances, verify: boo
     tol_f = Tolerances(tol.H, tol.sigma, tol.switch / 2 if default_switch else tol.switch,
                        tol.singular / 2)
     fig2, H2, active2, t2 = _transcription_figures(fine, tol_f)
-    left2 = _leave_to_table(fig2, active2, arcs or [])
+    left2 = _leave_to_table(fig2, active2, arcs or [], tol_f.singular)
     persistent = _persistent(fig, fig2, tol, tol_f)
     src2 = f"{src}; re-checked on {fine.N} nodes"
     _, _, u2, lam2 = transcription_samples(fine)

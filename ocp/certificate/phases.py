@@ -26,7 +26,7 @@ from ..structure.arcs import detect_structure
 from ..structure.phase_refinement import RefinedPhases, local_phase
 from ..transcriptions.solution import Solution
 from .arc_record import certified_verdict
-from .arc_verdict import NOT_EXTREMAL, settle
+from .arc_verdict import NOT_EXTREMAL, junction_margin, settle
 from .checks import CERTIFIED, ERROR_MARGIN, INCONCLUSIVE, NOT_BANG_BANG, Tolerances
 from .costates import adjoint_sweep
 from .from_refined import certify_refined, constrained_refined
@@ -149,7 +149,8 @@ def certify_phases(sol: Solution | None, refined: RefinedPhases, *,
         else:
             certs.append(certify_refined(loc, r, tol, n))
             if sol is not None:  # never certify what the phase's own structure doubts
-                settle(certs[-1], detect_structure(loc), refuting=True)
+                settle(certs[-1], detect_structure(loc), refuting=True,
+                       margin=junction_margin(loc))
         gap, err = _junction_gap(r, refined.junction_costates[i], n)
         gaps.append(gap)
         if math.isfinite(gap) and gap > JUNCTION_TOL and gap > ERROR_MARGIN * err:

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..structure.arcs import ArcStructure, SolutionLike
+from ..structure.costate_copies import copy_of
 from .arc_record import ArcCheck
 from .chattering import ChatteringResult
 from .checks import CERTIFIED, INCONCLUSIVE, NOT_APPLICABLE, NOT_BANG_BANG, UNVERIFIED, Figures
@@ -231,6 +232,7 @@ def _other_candidate(sol: Any, refined: Any) -> str:
         return ""
     # a refinement with decision variables ran on a problem derived from sol's (origin)
     mine = getattr(refined, "origin", None) or getattr(refined, "problem", None)
+    mine = getattr(copy_of(mine), "origin", mine)  # (costate copies: a derived problem too)
     if _signature(mine) != _signature(getattr(sol, "problem", None)):
         return "it belongs to another problem"
     a, b = getattr(sol, "params", None) or {}, getattr(refined, "params", None) or {}

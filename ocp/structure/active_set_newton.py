@@ -27,6 +27,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..transcriptions.solver_output import solver_output
+
 RESIDUAL_TOL = 1e-14
 """Root accepted when every active row is within this of its limit, relative to
 ``max(1, |limit|)``, or once a Newton step is below it (rounding level)."""
@@ -105,7 +107,8 @@ class ActiveSetNewton:
         (ndarray, int) or None
             The full decision vector and the Newton steps taken.
         """
-        z = self.rootfinder(np.asarray(w0, dtype=float)[self.free], np.r_[pv, held])
+        with solver_output():  # a trial point's NaN: logged, not printed
+            z = self.rootfinder(np.asarray(w0, dtype=float)[self.free], np.r_[pv, held])
         st = self.rootfinder.stats()
         if not st["success"]:
             return None

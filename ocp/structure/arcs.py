@@ -107,7 +107,7 @@ class Arc:
     ----------
     kind : {"max", "min", "boundary", "vertex", "interior", "singular"}
         ``"singular"`` only where a caller has classified an interior arc as singular
-        (:func:`ocp.structure.singular_refinement.singular_structure`).
+        (:func:`ocp.structure.interior_arcs.refinable_arcs`).
     start, end : float
     active : tuple of str
         State and mixed path constraints active at every node of the arc.

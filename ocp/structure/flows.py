@@ -39,7 +39,8 @@ import casadi as ca
 import numpy as np
 
 from ..definition.problem import Constraint, OptimalControlProblem
-from .singular import singular_feedback
+from .costate_copies import copy_rhs
+from .free_laws import free_arc_laws
 
 TAYLOR_ORDER = 18
 """Degree of the Taylor polynomial of ``expm``: error ``theta^19/19!`` <= 8e-18 at theta = 1."""
@@ -66,27 +67,30 @@ class Mode:
 
     Parameters
     ----------
-    kind : {"max", "min", "boundary", "vertex", "singular"}
-        At its upper bound, at its lower bound, keeping (state or mixed) path
-        constraint ``constraint`` at its ``side`` limit, at the vertex of the
-        control set where control-only constraint ``constraint`` is at its
-        ``side`` limit (the other controls' modes fixing the rest), or on a
-        singular arc (the singular control as a state feedback,
-        :func:`ocp.structure.singular.singular_feedback`).
+    kind : {"max", "min", "boundary", "vertex", "singular", "interior"}
+        At a bound; keeping (state or mixed) path constraint ``constraint`` at its
+        ``side`` limit; at the vertex of the control set where control-only
+        constraint ``constraint`` is at its ``side`` limit (the other controls'
+        modes fixing the rest); on a singular arc (the singular control as a state
+        feedback); on a regular interior arc, ``H_u = 0`` with the costate copy of run
+        ``run`` (both: :mod:`ocp.structure.free_laws`).
     constraint : str, optional
         Name of the path constraint kept at its limit (boundary and vertex arcs).
     side : {"lower", "upper"}, optional
         Which limit of ``constraint``.
+    run : int, optional
+        An interior mode's run (which costate copy, :mod:`ocp.structure.costate_copies`).
     """
 
     kind: str
     constraint: str | None = None
     side: str | None = None
+    run: int | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in ("max", "min", "boundary", "vertex", "singular"):
-            raise ValueError("mode kind must be 'max', 'min', 'boundary', 'vertex' or "
-                             f"'singular', not {self.kind!r}")
+        if self.kind not in ("max", "min", "boundary", "vertex", "singular", "interior"):
+            raise ValueError(f"mode kind {self.kind!r} is not one of 'max', 'min', "
+                             "'boundary', 'vertex', 'singular', 'interior'")
         if self.held != (self.constraint is not None):
             raise ValueError(f"a {self.kind} mode needs a constraint, a bang mode none")
         if self.held and self.side not in ("lower", "upper"):
@@ -205,7 +209,7 @@ class ArcDynamics:
         usyms = [pr.u[i] for i in range(pr.nu)]
         fixed, values, by_name = [], [], {}
         for name, sym, mode in zip(pr.control_names, usyms, modes, strict=True):
-            if not mode.held and mode.kind != "singular":
+            if mode.kind in ("max", "min"):
                 lo, hi = pr.control_limits[name]
                 bound = hi if mode.kind == "max" else lo
                 if bound.is_constant() and not math.isfinite(float(bound)):
@@ -220,10 +224,10 @@ class ArcDynamics:
         self.law_bounds: list[tuple[str, ca.SX, ca.SX, ca.SX]] = []
         self.orders: dict[str, int] = {}
         by_name.update(self._boundary_laws(rhs, fixed, values))
-        by_name.update(self._singular_laws(by_name))
+        by_name.update(free_arc_laws(self, by_name))  # singular and interior arcs
         u = [by_name[name] for name in pr.control_names]
         self.u = ca.vertcat(*u)
-        self.rhs = ca.substitute(pr.rhs, pr.u, self.u)
+        self.rhs = ca.substitute(copy_rhs(pr, tuple(m.run for m in modes)), pr.u, self.u)
         self.lagrange = ca.substitute(ca.SX(pr.lagrange), pr.u, self.u)
         self.held = tuple(m.constraint for m in modes if m.constraint is not None)
         self.has_quad = has_running_cost(pr)
@@ -287,23 +291,6 @@ class ArcDynamics:
                 self.law_bounds.append((f"{name} within its bounds", kappa[i], lo, hi))
             out[name] = kappa[i]
         return out
-
-    def _singular_laws(self, others: dict[str, ca.SX]) -> dict[str, ca.SX]:
-        """The singular control of the (one) singular control of this mode, as a feedback;
-        the other controls sit at bounds (their values constant along the arc)."""
-        pr = self.problem
-        names = [n for n, m in zip(pr.control_names, self.modes, strict=True)
-                 if m.kind == "singular"]
-        if not names:
-            return {}
-        if len(names) > 1 or any(m.held for m in self.modes):
-            raise ValueError("a singular arc is refined alongside bang arcs of the other "
-                             "controls only (one singular control at a time)")
-        law = singular_feedback(pr, names[0], others)
-        if ca.depends_on(law, pr.x):  # (a constant law is no row: Ipopt needs slack)
-            lo, hi = pr.control_limits[names[0]]
-            self.law_bounds.append((f"{names[0]} within its bounds (singular)", law, lo, hi))
-        return {names[0]: law}
 
     # --------------------------------------------------------------- numeric
     def affine_numeric(self, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

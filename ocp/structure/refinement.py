@@ -46,6 +46,7 @@ import numpy as np
 from ..definition.problem import OptimalControlProblem
 from ..definition.symbols import INF, constant
 from ..transcriptions.blas import default_blas_threads
+from ..transcriptions.solver_output import solver_output
 from .active_set_newton import ActiveSetNewton
 from .constraint_kinds import control_constraints
 from .control_set import violated_control_constraint
@@ -391,7 +392,8 @@ class SwitchingNLP:
             # (multipliers of an NLP rebuilt with more RK8 steps have another size: cold)
             args.update(lam_g0=lam_g0, lam_x0=lam_x0)
         t0 = time.perf_counter()
-        res = self.solver(**args)
+        with solver_output():  # CasADi's messages: logged, not printed
+            res = self.solver(**args)
         elapsed = time.perf_counter() - t0
         st = self.solver.stats()
         self.n_solves += 1

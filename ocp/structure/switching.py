@@ -52,7 +52,9 @@ from .arcs import (
     path_activity,
     transcribed,
 )
+from .costate_copies import costate_guess, costates_as_states
 from .flows import Mode, has_running_cost, numeric_affine_flow, numeric_rk8_flow
+from .interior_arcs import refinable_arcs
 from .refinement import (
     DEFAULT_TOL,
     REFINE_IPOPT,
@@ -408,11 +410,8 @@ def _as_structure(sol: TranscribedSolution, structure: Any) -> ArcStructure:
             raise ValueError("a SwitchingStructure describes one control; pass an ArcStructure "
                              "(detect_structure) for a problem with several controls")
         structure = ArcStructure.from_controls([structure])
-    if not structure.refinable:
-        kinds = {s.control: s.kinds for s in structure.per_control}
-        raise ValueError(f"not bang-bang: arcs {kinds}; refinement needs bang and boundary "
-                         "arcs only (an interior arc is singular or free)")
-    return structure
+    # interior arcs: singular, or regular with costate copies (or a ValueError)
+    return refinable_arcs(sol.problem, structure)
 
 
 def insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
@@ -459,7 +458,11 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     sol : Solution
         A transcribed solution (parameters, bounds and starting guess).
     structure : SwitchingStructure or ArcStructure, optional
-        Default: :func:`detect_structure` of ``sol``. Bang and boundary arcs only.
+        Default: :func:`detect_structure` of ``sol``. Its interior arcs are refined as
+        singular arcs where the control enters H linearly with a singular order
+        (:func:`ocp.structure.interior_arcs.refinable_arcs`); regular interior arcs are
+        flown with ``H_u = 0`` and the costate as extra states
+        (:mod:`ocp.structure.costate_copies`).
     extra_arcs : int
         Single control only: try this many more bang arcs, to test whether more
         switches improve the objective (pairs are inserted inside the longest
@@ -486,7 +489,8 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
     Raises
     ------
     ValueError
-        If the structure has interior (singular or free) arcs.
+        If the structure has an interior arc that is not singular (a control that enters
+        H nonlinearly, or has no singular order).
     SolveError, InfeasibleError
         If Ipopt fails, or the integration accuracy cannot be reached.
     """
@@ -508,11 +512,19 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         x0 = np.r_[x0, [float(tsol.variables[n]) for n in tsol.problem.var_names]]
 
     def attempt(s: ArcStructure) -> RefinedSwitching:
+        s = refinable_arcs(tsol.problem, s)
         modes, durs = list(s.modes), list(s.durations)
         if extra_arcs:
             if len(s.controls) != 1:
                 raise ValueError("extra_arcs supports single-control problems")
             insert_extra_arcs(modes, durs, extra_arcs)
+        starts = [iv.start for k, iv in enumerate(s.intervals) if any(
+            m.kind == "interior" for m in iv.modes) and (k == 0 or all(
+                m.kind != "interior" for m in s.intervals[k - 1].modes))]
+        if starts:  # regular interior arcs: a costate copy per run, from the transcription's
+            return refine_structure(costates_as_states(pr, len(starts)), tuple(modes),
+                                    np.asarray(durs, dtype=float),
+                                    np.r_[x0, costate_guess(tsol, starts)], params, **opts)
         out = refine_structure(pr, tuple(modes), np.asarray(durs, dtype=float), x0, params,
                                **opts)
         if pr is not tsol.problem:
@@ -537,7 +549,7 @@ def _without_arc(st: ArcStructure, j: int, i: int) -> ArcStructure:
     per = list(st.per_control)
     arcs = [Arc(a.kind, a.start, a.end, a.active, a.constraint, a.side) for a in per[j].arcs]
     gone = arcs.pop(i)
-    if 0 < i < len(arcs) and arcs[i - 1].mode == arcs[i].mode:
+    if 0 < i < len(arcs) and arcs[i - 1].mode_key() == arcs[i].mode_key():
         arcs[i - 1].end = arcs[i].end
         del arcs[i]
     elif i > 0:

@@ -9,10 +9,12 @@ results written into fresh numpy arrays -- the same evaluation, the same numbers
 It falls back to the ordinary call where the buffer cannot serve: a Function with a
 sparse input or output, a call from a second thread while the first is inside, an
 evaluation that returns an error code or in which Python raised an exception (the
-ordinary call then handles it as CasADi does). :meth:`BufferedCall.stats` is the calling
+ordinary call then handles it as CasADi does; an exception the ordinary call does not raise
+again, a signal handler's, is raised as it is). :meth:`BufferedCall.stats` is the calling
 thread's last evaluation's, read as it ends (in the buffer's memory, under its lock; on the
 ordinary call, CasADi's ``Function.stats``, which another thread's ordinary call of the same
-Function may replace meanwhile: CasADi's own limit). One difference: an interruption (Ctrl-C,
+Function may replace meanwhile: CasADi's own limit). CasADi's messages during an evaluation
+are logged, not printed (:mod:`.solver_output`). One difference: an interruption (Ctrl-C,
 SIGTERM as the CLI turns it into one) inside the evaluation is raised as it is, where
 CasADi's call turns it into a failed evaluation (Ipopt's ``NonIpopt_Exception_Thrown``).
 """
@@ -25,6 +27,8 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+
+from .solver_output import solver_output
 
 
 class BufferedCall:
@@ -87,6 +91,10 @@ class BufferedCall:
         *args : array_like or None
             One per input.
         """
+        with solver_output():  # CasADi's messages (NaN in an evaluation, ...): logged
+            return self._call(args)
+
+    def _call(self, args: Sequence[Any]) -> list[np.ndarray]:
         if self.buffer is None or not self.lock.acquire(blocking=False):
             return self._ordinary(args)
         try:
@@ -99,10 +107,16 @@ class BufferedCall:
             try:
                 self.evaluate()
             except SystemError as exc:  # Python raised inside the evaluation
-                if isinstance(exc.__cause__, BaseException) and \
-                        not isinstance(exc.__cause__, Exception):
-                    raise exc.__cause__ from None  # an interruption (Ctrl-C): raised
-                return self._ordinary(args)  # CasADi's own handling of the error
+                cause = exc.__cause__
+                if isinstance(cause, BaseException) and not isinstance(cause, Exception):
+                    raise cause from None  # an interruption (Ctrl-C): raised
+                outs = self._ordinary(args)  # CasADi's own handling of the error
+                if isinstance(cause, Exception):
+                    # the ordinary call did not raise it again: it came from outside the
+                    # evaluation (a signal handler's, e.g. a caller's SIGALRM timeout), and
+                    # is the caller's, not an evaluation error to swallow
+                    raise cause from None
+                return outs
             if self.buffer.ret() != 0:  # the ordinary call raises CasADi's own error
                 return self._ordinary(args)
             self.local.stats, self.local.buffered = dict(self.buffer.stats()), True

@@ -16,6 +16,7 @@ interval function is mapped over the N intervals.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from functools import cache
 from typing import Any
@@ -32,6 +33,7 @@ from .discretization import (
     PhaseNLP,
     lagrange_basis,
     linear_guess,
+    locate,
     segment_index,
     static_vector,
 )
@@ -110,6 +112,47 @@ def collocation_matrices(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
     return C, D, B
 
 
+HULL_PIECES = 2
+"""The control points of ``inner_constraints`` are those of the state polynomial on this
+many equal pieces of its interval (de Casteljau subdivision): the hull of a piece's
+control points is ``HULL_PIECES**2`` times closer to the polynomial, so a bound held on
+them costs that much less (measured: Bryson-Denham's refined optimum 1.4e-8 above 4
+with the whole interval's control points, 1.0e-9 with two pieces)."""
+
+
+def bernstein_points(d: int, pieces: int = HULL_PIECES) -> tuple[np.ndarray, np.ndarray]:
+    """The Bernstein control points, inside an interval, of a degree-``d`` polynomial given
+    at the nodes ``0, c_1, ..., c_d`` (the Radau points) and restricted to each of
+    ``pieces`` equal pieces of the interval: their Greville abscissae and the weights ``W``
+    with ``control point i = W[i] @ node values`` (the interval's ends, where the
+    polynomial is its own control point, left out; ``pieces * d - 1`` points).
+
+    A polynomial lies in the convex hull of its control points on each piece: a bound on
+    the control points bounds it everywhere.
+
+    Parameters
+    ----------
+    d : int
+        The degree.
+    pieces : int
+        Pieces of the interval.
+    """
+    nodes = np.r_[0.0, radau_points(d)]
+    grid = np.arange(d + 1) / d
+    basis = np.array([[math.comb(d, i) * v**i * (1 - v) ** (d - i) for i in range(d + 1)]
+                      for v in grid])  # Bernstein basis at equally spaced points
+    to_bernstein = np.linalg.inv(basis)
+    theta, rows = [], []
+    for j in range(pieces):
+        s = (j + grid) / pieces  # the piece's equally spaced points in the interval
+        W = to_bernstein @ lagrange_basis(nodes, s)  # the piece's control points
+        first = 1 if j == 0 else 0  # the interval's start; a piece's start is the last's end
+        for i in range(first, d):  # a piece's end is the next one's start (or the end)
+            theta.append(s[i])
+            rows.append(W[i])
+    return np.array(theta), np.array(rows)
+
+
 class CollocationPhase(PhaseDiscretization):
     """Radau collocation of one phase on a (possibly non-uniform) mesh.
 
@@ -126,12 +169,17 @@ class CollocationPhase(PhaseDiscretization):
     functions : dict, optional
         Where the interval function is kept for other meshes of the same phase and
         degree (:attr:`ocp.transcriptions.nlp.GridFree.functions`).
+    inner : ndarray of bool, optional
+        The intervals where the checked rows (path constraints and state bounds, see
+        :meth:`checked_rows`) are also imposed between the collocation points, at the
+        :attr:`inner_theta` fractions (block ``path_inner``).
     """
 
     method = "collocation"
 
     def __init__(self, cp: CompiledPhase, times: PhaseTimes, mesh: np.ndarray,
-                 degree: int, functions: dict | None = None) -> None:
+                 degree: int, functions: dict | None = None,
+                 inner: np.ndarray | None = None) -> None:
         super().__init__(cp, times)
         self.tau = np.asarray(mesh, dtype=float)
         self.N, self.d = self.tau.size - 1, degree
@@ -149,10 +197,19 @@ class CollocationPhase(PhaseDiscretization):
         if key not in functions:
             functions[key] = self._interval_function()
         self.G = functions[key]
+        self.inner_theta, self.inner_states = bernstein_points(degree)
+        self.inner = np.zeros(N, bool) if inner is None else np.asarray(inner, bool)
+        if self.inner.shape != (N,):
+            raise ValueError(f"inner: {self.inner.shape[0]} flags for {N} intervals")
+        self.Gin: ca.Function | None = None
+        if self.inner.any() and self.checked_rows() and self.inner_theta.size:
+            key = ("radau inner", cp, degree)
+            if key not in functions:
+                functions[key] = self._inner_function()
+            self.Gin = functions[key]
         # normalised times of the collocation points, interval by interval
         self.tau_c = (self.tau[:-1, None] + np.diff(self.tau)[:, None] * self.c[None, :]).ravel()
         self.tau_points = np.concatenate([[0.0], self.tau_c])  # every point, normalised
-        self._check_bases: dict[int, tuple[np.ndarray, ...]] = {}
 
     def _interval_function(self) -> ca.Function:
         cp, d = self.cp, self.d
@@ -171,6 +228,51 @@ class CollocationPhase(PhaseDiscretization):
         return ca.Function("G", [xk, Z, U, t, h, s],
                            [ca.horzcat(*defects), xend, q, ca.horzcat(*paths)],
                            ["xk", "Z", "U", "t", "h", "s"], ["defect", "xend", "q", "path"])
+
+    def _inner_function(self) -> ca.Function:
+        """The checked rows between the points of one interval, at the Greville abscissae
+        ``i / d`` (:func:`bernstein_points`): a row free of the controls at the state
+        polynomial's Bernstein control points (a bound there holds along the whole
+        polynomial for a row affine in the states, or convex below an upper bound), a row
+        with controls on the polynomial, with :meth:`interpolate`'s control (unclipped:
+        an NLP row cannot clip)."""
+        cp, d, c1 = self.cp, self.d, float(self.c[0])
+        rows = self.checked_rows()
+        xk, Z = ca.SX.sym("xk", cp.nx), ca.SX.sym("Z", cp.nx, d)
+        U, up = ca.SX.sym("U", cp.nu, d), ca.SX.sym("up", cp.nu)
+        t, h, s = ca.SX.sym("t"), ca.SX.sym("h"), ca.SX.sym("s", cp.ns)
+        theta = self.inner_theta
+        bx = lagrange_basis(np.r_[0.0, self.c], theta)
+        bu = lagrange_basis(self.c, theta) if d > 1 else np.ones((theta.size, 1))
+        Zf = ca.horzcat(xk, Z)
+        out = []
+        for i, th in enumerate(theta):
+            u = ca.mtimes(U, ca.DM(bu[i])) if th >= c1 else up + (th / c1) * (U[:, 0] - up)
+            at_cp = cp.check(t + th * h, ca.mtimes(Zf, ca.DM(self.inner_states[i])), u, s)
+            on_curve = cp.check(t + th * h, ca.mtimes(Zf, ca.DM(bx[i])), u, s)
+            out.append(ca.vertcat(*[at_cp[r] if cp.check_u_free[r] else on_curve[r]
+                                    for r in rows]))
+        return ca.Function("Gin", [xk, Z, U, up, t, h, s], [ca.horzcat(*out)],
+                           ["xk", "Z", "U", "up", "t", "h", "s"], ["c"])
+
+    def _inner_rows(self, X: ca.MX, Z: ca.MX, U: ca.MX, tk: ca.MX, hk: ca.MX,
+                    s: ca.MX) -> tuple[str, ca.MX, ca.SX, ca.SX]:
+        """The block ``path_inner``: :meth:`_inner_function` on every flagged interval."""
+        d, idx = self.d, np.flatnonzero(self.inner)
+        n = idx.size
+        cols = (idx[:, None] * d + np.arange(d)[None, :]).ravel().tolist()
+        prev = np.where(idx > 0, idx * d - 1, 0).tolist()  # the previous interval's last
+        Ui = U[:, cols] if self.cp.nu else ca.MX(0, n * d)
+        Up = U[:, prev] if self.cp.nu else ca.MX(0, n)
+        assert self.Gin is not None
+        rows_in = self.Gin.map(n)(X[:, idx.tolist()], Z[:, cols], Ui, Up,
+                                  tk[:, idx.tolist()], hk[:, idx.tolist()],
+                                  ca.repmat(s, 1, n))
+        rows = self.checked_rows()
+        clo, chi = (self.cp.bounds(self.cp.phase.p)[i] for i in (6, 7))
+        reps = n * self.inner_theta.size
+        return ("path_inner", rows_in, ca.repmat(clo[rows], reps, 1),
+                ca.repmat(chi[rows], reps, 1))
 
     def size(self) -> int:
         """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.size`."""
@@ -201,6 +303,8 @@ class CollocationPhase(PhaseDiscretization):
         cons = [("continuity", xend - X[:, 1:], zx, zx), ("collocation", defect, zc, zc)]
         if cp.npath:
             cons.append(("path", H, ca.repmat(hlo, N * d, 1), ca.repmat(hhi, N * d, 1)))
+        if self.Gin is not None:
+            cons.append(self._inner_rows(X, Z, U, tk, hk, s))
         lbT, ubT, gT, lbt0, ubt0, gt0 = self._time_bounds()
         lbw = ca.vertcat(*lbT, ca.repmat(xlo, N + 1, 1), ca.repmat(ulo, N * d, 1), *lbt0,
                          ca.repmat(xlo, N * d, 1))
@@ -239,72 +343,98 @@ class CollocationPhase(PhaseDiscretization):
         theta : ndarray
             Local fraction of each sample.
         """
-        N, d = self.N, self.d
-        Zf = np.concatenate([data.raw["X"][:N, None, :],
-                             data.raw["Z"].reshape(N, d, -1)], axis=1)[k]
-        x = np.einsum("nr,nri->ni", lagrange_basis(np.r_[0.0, self.c], theta), Zf)
-        Uk = data.raw["U"].reshape(N, d, -1)[k]
-        u = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta), Uk) if d > 1 \
+        Uk = data.raw["U"].reshape(self.N, self.d, -1)[k]
+        u = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta), Uk) if self.d > 1 \
             else Uk[:, 0, :]
-        return x, u
+        return self.states(data, k, theta), u
 
-    def sample(self, data: PhaseData, t: np.ndarray,
-               substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.sample`."""
-        t = np.asarray(t, dtype=float)
-        k = segment_index(data.mesh, t)
-        h = np.diff(data.mesh)[k]
-        theta = np.where(h > 0, (t - data.mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
-        return self.local(data, k, theta)
-
-    def check_samples(self, data: PhaseData,
-                      per_interval: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Times, states and controls where the path constraints are checked after a solve.
-
-        The states are the collocation polynomials. The control is the method's between
-        its points, never extrapolated: on ``[c_1, 1]`` of an interval the Lagrange
-        polynomial through its values at the collocation points; before ``c_1``, the
-        straight line from the previous interval's last point (the mesh point, where the
-        control is that point's) to ``c_1`` -- on the first interval, the value at ``c_1``.
+    def node_values(self, data: PhaseData) -> np.ndarray:
+        """The state polynomials' values at every interval's nodes ``0, c_1, ..., c_d``,
+        shape (N, d + 1, nx).
 
         Parameters
         ----------
         data : PhaseData
             The phase's solved arrays.
-        per_interval : int
-            Points per mesh interval.
         """
-        if per_interval not in self._check_bases:
-            # the check points' fractions, the polynomial bases there and the indices of
-            # the intervals' values they combine depend on the mesh only: computed once
-            # per per_interval
-            N, d = self.N, self.d
-            frac = np.arange(per_interval) / per_interval
-            k = np.concatenate([np.repeat(np.arange(N), per_interval), [N - 1]])
-            theta = np.concatenate([np.tile(frac, N), [1.0]])
-            inside = theta >= self.c[0]
-            bu = lagrange_basis(self.c, theta[inside]) if d > 1 \
-                else np.ones((int(inside.sum()), 1))
-            kb = k[~inside]
-            self._check_bases[per_interval] = (
-                k, lagrange_basis(np.concatenate([[0.0], self.c]), theta),
-                np.flatnonzero(inside), np.flatnonzero(~inside), k[inside], bu, kb,
-                (kb > 0)[:, None], np.maximum(kb - 1, 0),
-                (theta[~inside] / self.c[0])[:, None])
-        k, bx, at_in, at_out, k_in, bu, kb, has_left, k_left, slope = \
-            self._check_bases[per_interval]
-        t = self.check_points(data, per_interval)
+        return np.concatenate([data.raw["X"][:self.N, None, :],
+                               data.raw["Z"].reshape(self.N, self.d, -1)], axis=1)
+
+    def states(self, data: PhaseData, k: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """The state polynomials of intervals ``k`` at the fractions ``theta``, (n, nx)
+        (arguments as :meth:`local`'s)."""
+        return np.einsum("nr,nri->ni", lagrange_basis(np.r_[0.0, self.c], theta),
+                         self.node_values(data)[k])
+
+    def resample(self, data: PhaseData, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The collocation polynomials (:meth:`local`) at times ``t``: a guess on another
+        mesh takes the control's polynomial as the NLP represents it, extrapolated before
+        the first collocation point (kept from before the interpolant of
+        :meth:`interpolate`: refinement's rounds start where they started).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        t : ndarray
+            Times.
+        """
+        return self.local(data, *locate(data.mesh, t))
+
+    def control_only_rows(self) -> list[int]:
+        """Rows of the check function on the controls and not on the states: checked and
+        imposed at the collocation points only (see :mod:`ocp.transcriptions.verify`)."""
+        cp = self.cp
+        if cp.nu == 0:
+            return []
+        on_x = set(cp.check.jac_sparsity(0, 1).get_triplet()[0])
+        return [i for i in range(cp.ncheck) if not cp.check_u_free[i] and i not in on_x]
+
+    def pieces(self, data: PhaseData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.pieces`: with a
+        checked row on the controls, every interval is cut at its first collocation point,
+        where the control interpolant turns from a straight line into a polynomial."""
+        if self.d == 1 or self.cp.nu == 0 or all(self.cp.check_u_free):
+            return super().pieces(data)
+        N, c1 = self.N, float(self.c[0])
+        k = np.repeat(np.arange(N), 2)
+        a = np.tile([0.0, c1], N)
+        return k, a, np.tile([c1, 1.0], N)
+
+    def interpolate(self, data: PhaseData, k: np.ndarray,
+                    theta: np.ndarray, substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.interpolate`.
+
+        The states are the collocation polynomials. The control is the method's between
+        its points, never extrapolated: on ``[c_1, 1]`` the Lagrange polynomial through the
+        interval's values at its collocation points; before ``c_1``, the straight line from
+        the previous interval's last point (the mesh point, where the control is that
+        point's) to ``c_1`` -- on the first interval, the value at ``c_1``; held within the
+        control's bounds at the solution's parameter values. ``sol.sample``, ``sol.at`` and
+        the check between points (:mod:`ocp.transcriptions.extrema`) read this
+        interpolant; a guess for another mesh and the mesh error estimate read
+        :meth:`local`, the polynomials as the NLP holds them.
+        """
         N, d = self.N, self.d
-        Zf = np.concatenate([data.raw["X"][:N, None, :], data.raw["Z"].reshape(N, d, -1)],
-                            axis=1)[k]
-        x = np.einsum("nr,nri->ni", bx, Zf)
+        k = np.asarray(k, dtype=int)
+        theta = np.asarray(theta, dtype=float)
+        x = self.states(data, k, theta)
         Uk = data.raw["U"].reshape(N, d, -1)
-        u = np.empty((t.size, Uk.shape[2]))
-        u[at_in] = np.einsum("nr,nri->ni", bu, Uk[k_in])
+        u = np.empty((theta.size, Uk.shape[2]))
+        if u.shape[1] == 0:
+            return x, u
+        inside = theta >= self.c[0]
+        if d > 1:
+            u[inside] = np.einsum("nr,nri->ni", lagrange_basis(self.c, theta[inside]),
+                                  Uk[k[inside]])
+        else:
+            u[inside] = Uk[k[inside], 0, :]
+        kb = k[~inside]
         first = Uk[kb, 0, :]
-        left = np.where(has_left, Uk[k_left, d - 1, :], first)
-        u[at_out] = left + slope * (first - left)
-        return t, x, u
+        left = np.where((kb > 0)[:, None], Uk[np.maximum(kb - 1, 0), d - 1, :], first)
+        u[~inside] = left + (theta[~inside] / self.c[0])[:, None] * (first - left)
+        ulo, uhi = self.control_bounds(data)
+        return x, np.clip(u, ulo, uhi)
 
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
                    t0: float, T: float) -> np.ndarray:
@@ -322,11 +452,30 @@ class CollocationPhase(PhaseDiscretization):
         out = dict(lam)
         shapes = {"continuity": (self.N, self.cp.nx),
                   "collocation": (self.N * self.d, self.cp.nx),
-                  "path": (self.N * self.d, self.cp.npath)}
+                  "path": (self.N * self.d, self.cp.npath),
+                  "path_inner": (int(self.inner.sum()) * self.inner_theta.size,
+                                 len(self.checked_rows()))}
         for k, shp in shapes.items():
             if k in out:
                 out[k] = out[k].reshape(shp)
         return out
+
+    def _inner_dual(self, old: CollocationPhase, lam: np.ndarray | None) -> np.ndarray:
+        """Multipliers of the rows between the points from another mesh's: a flagged
+        interval takes those of the interval holding its middle (a multiplier at a point
+        of an interval scales with its length), zero where that one had none."""
+        per = self.inner_theta.size * len(self.checked_rows())
+        idx = np.flatnonzero(self.inner)
+        out = np.zeros((idx.size, per))
+        if lam is None or old.Gin is None or not idx.size:
+            return out.ravel()
+        k_old = segment_index(old.tau, 0.5 * (self.tau[idx] + self.tau[idx + 1]))
+        pos = np.full(old.N, -1)
+        pos[np.flatnonzero(old.inner)] = np.arange(int(old.inner.sum()))
+        have = pos[k_old] >= 0
+        ratio = np.diff(self.tau)[idx] / np.diff(old.tau)[k_old]
+        out[have] = lam.reshape(-1, per)[pos[k_old[have]]] * ratio[have, None]
+        return out.ravel()
 
     def weights(self) -> np.ndarray:
         """Quadrature weight ``h_k B_j`` of every collocation point (normalised time), (N d,)."""
@@ -383,6 +532,8 @@ class CollocationPhase(PhaseDiscretization):
         out["collocation"] = density(lam_g["collocation"], nx, nodal).ravel()
         if "path" in lam_g:
             out["path"] = density(lam_g["path"], self.cp.npath).ravel()
+        if self.Gin is not None:
+            out["path_inner"] = self._inner_dual(old, lam_g.get("path_inner"))
         cont = lam_g["continuity"].reshape(-1, nx)
         out["continuity"] = np.column_stack([np.interp(self.tau[1:], old.tau[1:], cont[:, i])
                                              for i in range(nx)]).ravel()

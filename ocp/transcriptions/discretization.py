@@ -152,6 +152,21 @@ class PhaseDiscretization:
         self.nt0 = 1 if times.t0_free else 0
         self._check_maps: dict[int, ca.Function] = {}
         self._check_calls: dict[int, BufferedCall] = {}
+        self._last_bounds: tuple[bytes, tuple[np.ndarray, ...]] | None = None
+        self._checked: list[int] | None = None
+
+    def control_only_rows(self) -> list[int]:
+        """Rows of the check function this method checks at its points only (here none:
+        see :meth:`ocp.transcriptions.collocation.CollocationPhase.control_only_rows`)."""
+        return []
+
+    def checked_rows(self) -> list[int]:
+        """Rows of the check function (:attr:`ocp.definition.compiled.CompiledPhase.check`)
+        checked, and imposed with ``inner_constraints``, between the points."""
+        if self._checked is None:
+            only_u = set(self.control_only_rows())
+            self._checked = [i for i in range(self.cp.ncheck) if i not in only_u]
+        return self._checked
 
     def check_map(self, n: int) -> ca.Function:
         """The phase's check function mapped over ``n`` points (cached).
@@ -250,9 +265,28 @@ class PhaseDiscretization:
         """
         raise NotImplementedError
 
+    def interpolate(self, data: PhaseData, k: np.ndarray, theta: np.ndarray,
+                    substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """States and controls on mesh interval ``k`` at the fractions ``theta`` in [0, 1]:
+        the method's trajectory between its points, (n, nx) and (n, nu).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        k : ndarray of int
+            Interval of each sample.
+        theta : ndarray
+            Fraction of the interval of each sample.
+        substeps : int
+            RK4 steps per sample (multiple shooting).
+        """
+        raise NotImplementedError
+
     def sample(self, data: PhaseData, t: np.ndarray,
                substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """States and controls at times ``t`` (within the phase): (n, nx), (n, nu).
+        """States and controls at times ``t`` (within the phase): :meth:`interpolate` on
+        the interval holding each time, (n, nx) and (n, nu).
 
         Parameters
         ----------
@@ -263,7 +297,63 @@ class PhaseDiscretization:
         substeps : int
             RK4 steps per sample (multiple shooting).
         """
-        raise NotImplementedError
+        return self.interpolate(data, *locate(data.mesh, t), substeps)
+
+    def resample(self, data: PhaseData, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """States and controls at times ``t`` as the method represents them, for a guess
+        on another grid (here :meth:`sample`).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        t : ndarray
+            Times.
+        """
+        return self.sample(data, t)
+
+    def pieces(self, data: PhaseData) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The pieces on which the interpolant is smooth: ``(k, a, b)``, the interval of
+        each and its start and end fractions (here: every interval whole).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays.
+        """
+        N = data.mesh.size - 1
+        return np.arange(N), np.zeros(N), np.ones(N)
+
+    def control_bounds(self, data: PhaseData) -> tuple[np.ndarray, np.ndarray]:
+        """The controls' bounds at the solution's parameter values (the last values' kept).
+
+        Parameters
+        ----------
+        data : PhaseData
+            The phase's solved arrays (its static vector starts with the parameters).
+        """
+        return self.check_bounds(data.s[:len(self.cp.phase.param_names)])[:2]
+
+    def check_bounds(self, pv: np.ndarray) -> tuple[np.ndarray, ...]:
+        """``(ulo, uhi, clo, chi)``: the controls' and the check rows' bounds at the
+        parameter values ``pv`` (read-only; the last values' kept, so a re-solve at the
+        same values does not evaluate them again).
+
+        Parameters
+        ----------
+        pv : ndarray
+            The phase's parameter values.
+        """
+        pv = np.asarray(pv, dtype=float)
+        key = pv.tobytes()
+        last = self._last_bounds
+        if last is None or last[0] != key:
+            b = self.cp.bounds(pv)
+            arrays = tuple(np.array(b[i], dtype=float).ravel() for i in (4, 5, 6, 7))
+            for arr in arrays:
+                arr.setflags(write=False)
+            last = self._last_bounds = (key, arrays)
+        return last[1]
 
     maps_duals = False
     """Whether :meth:`dual_from` maps another discretisation's multipliers onto this one."""
@@ -306,36 +396,6 @@ class PhaseDiscretization:
         """
         return lam
 
-    def check_samples(self, data: PhaseData,
-                      per_interval: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Times, states and controls where the path constraints are checked after a solve.
-
-        Parameters
-        ----------
-        data : PhaseData
-            The phase's solved arrays.
-        per_interval : int
-            Points per mesh interval.
-        """
-        t = self.check_points(data, per_interval)
-        x, u = self.sample(data, t)
-        return t, x, u
-
-    def check_points(self, data: PhaseData, per_interval: int) -> np.ndarray:
-        """Times at which the path constraints are checked after a solve.
-
-        Parameters
-        ----------
-        data : PhaseData
-            The phase's solved arrays.
-        per_interval : int
-            Points per mesh interval.
-        """
-        mesh = data.mesh
-        frac = np.arange(per_interval) / per_interval
-        inner = (mesh[:-1, None] + np.diff(mesh)[:, None] * frac[None, :]).ravel()
-        return np.concatenate([inner, mesh[-1:]])
-
 
 def static_vector(P: ca.MX, V: ca.MX, t0: ca.MX, T: ca.MX) -> ca.MX:
     """``s = [p; v; t0; T]`` as used by the compiled phase functions.
@@ -362,6 +422,22 @@ def linear_guess(a: ca.SX, b: ca.SX, tau: np.ndarray) -> ca.SX:
     """
     row = ca.DM(np.asarray(tau, dtype=float)).T
     return ca.mtimes(a, 1 - row) + ca.mtimes(b, row)
+
+
+def locate(mesh: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh interval holding each time and the fraction of it there.
+
+    Parameters
+    ----------
+    mesh : ndarray
+        Increasing mesh times.
+    t : array_like
+        Query times.
+    """
+    t = np.asarray(t, dtype=float)
+    k = segment_index(mesh, t)
+    h = np.diff(mesh)[k]
+    return k, np.where(h > 0, (t - mesh[k]) / np.where(h > 0, h, 1.0), 0.0)
 
 
 def segment_index(mesh: np.ndarray, t: np.ndarray) -> np.ndarray:

@@ -68,6 +68,10 @@ class MeshRound:
         Ipopt's iterations and time.
     objective_error, refined_for
         As above.
+    kind : {"refine", "confirm"}
+        A refinement round, or the confirmation of the round before on its mesh
+        halved (:mod:`ocp.transcriptions.refinement`; its ``objective_error`` is the
+        estimate of the previous round's objective error).
     """
 
     intervals: list[int]  # per phase
@@ -77,6 +81,7 @@ class MeshRound:
     solve_time: float
     objective_error: float = math.inf
     refined_for: str = ""
+    kind: str = "refine"
 
 
 ONE_CHANGE_MARGIN = 3.0

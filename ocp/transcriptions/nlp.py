@@ -510,7 +510,7 @@ class Transcription:
                     f"phase {i}: the solution's states and controls {theirs[0] + theirs[1]} "
                     f"are not this problem's {ph.state_names + ph.control_names}; pass a "
                     "Trajectory to start from states matched by name")
-        parts = [d.guess_from(ps.at, ps.t0, ps.T) for d, ps in zip(self.phases, sol.phases,
+        parts = [d.guess_from(ps.resample, ps.t0, ps.T) for d, ps in zip(self.phases, sol.phases,
                                                                    strict=True)]
         parts.append(np.array([sol.variables[k] for k in self.multiphase.var_names]))
         return np.concatenate(parts)

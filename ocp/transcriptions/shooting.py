@@ -24,7 +24,6 @@ from .discretization import (
     PhaseLayout,
     PhaseNLP,
     linear_guess,
-    segment_index,
     static_vector,
 )
 from .integrators import cvodes_interval, rk4_interval
@@ -146,32 +145,17 @@ class ShootingPhase(PhaseDiscretization):
             self._samplers[key] = self._rk[substeps].map(n)
         return self._samplers[key]
 
-    def sample(self, data: PhaseData, t: np.ndarray,
-               substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.sample`."""
-        t = np.asarray(t, dtype=float)
-        k = segment_index(data.mesh, t)
-        n = t.size
+    def interpolate(self, data: PhaseData, k: np.ndarray, theta: np.ndarray,
+                    substeps: int = 8) -> tuple[np.ndarray, np.ndarray]:
+        """See :meth:`ocp.transcriptions.discretization.PhaseDiscretization.interpolate`:
+        the dynamics integrated from node ``k`` (RK4, ``substeps`` steps) over the
+        fraction ``theta`` of its interval with the interval's constant control."""
+        k = np.asarray(k, dtype=int)
+        n = k.size
+        h = np.diff(data.mesh)[k] * np.asarray(theta, dtype=float)
         xs = self.sampler(substeps, n)(data.x[k].T, data.u[k].T, data.mesh[k][None, :],
-                                           (t - data.mesh[k])[None, :], data.s)[0]
+                                       h[None, :], data.s)[0]
         return np.array(xs, dtype=float).T.reshape(n, -1), data.u[k]
-
-    def check_samples(self, data: PhaseData,
-                      per_interval: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Re-integrate every interval once with ``per_interval`` RK4 steps, keeping
-        each step's start (the check grid of :meth:`check_points`)."""
-        N, k = self.N, per_interval
-        key = (-k, N)  # one RK4 pass per interval, mapped over the intervals
-        if key not in self._samplers:
-            self._samplers[key] = rk4_interval(self.cp.ode, k).map(N)
-        h = np.diff(data.mesh)
-        xf, _, xs = self._samplers[key](data.x[:N].T, data.u.T, data.mesh[None, :N],
-                                        h[None, :], data.s)
-        inner = np.array(xs, dtype=float).reshape(self.cp.nx, N, k - 1)
-        x = np.concatenate([data.x[:N].T[:, :, None], inner], axis=2)  # (nx, N, k)
-        x = np.vstack([x.reshape(self.cp.nx, N * k).T, data.x[N:N + 1]])
-        u = np.vstack([np.repeat(data.u, k, axis=0), data.u[-1:]])
-        return self.check_points(data, k), x, u
 
     def guess_from(self, sample: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
                    t0: float, T: float) -> np.ndarray:

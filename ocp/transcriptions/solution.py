@@ -70,13 +70,19 @@ class Solution:
         End conditions loosened by ``solve(drop_dependent=True)`` and how well the
         solution meets them anyway (:mod:`ocp.transcriptions.failure`).
     path_violation : float
-        Largest violation of a path constraint or state bound found on a fine
-        grid between the nodes (relative to ``max(1, |bound|)``); ``verified``
+        Largest violation of a path constraint or state bound along the solution's
+        interpolant, its maximum located between the nodes (relative to
+        ``max(1, |bound|)``; :mod:`ocp.transcriptions.verify`); ``verified``
         is True when it is within the transcription's ``verify_tol``;
         ``violations`` names the offending constraints. ``unchecked`` names the
         constraints ``verified`` does not cover between the nodes (collocation:
-        those on the controls alone, checked at the collocation points only;
-        see :mod:`ocp.transcriptions.verify`).
+        those on the controls alone, checked at the collocation points only).
+    mesh_converged, objective_error, convergence
+        Whether the discretisation converged: after ``refine()``, whether the states'
+        and the objective's estimates met their tolerances (collocation: confirmed on
+        the mesh halved; :mod:`ocp.transcriptions.refinement`), the estimate of the
+        objective's absolute error, and both in words; after a single solve, False,
+        NaN and ``"not converged: one grid, ..."``.
     phases : list of Solution
         One per phase (a single-phase solution is its own only phase). A
         multi-phase solution has no ``t``, ``x``, ``u``: use ``phases[i]`` or
@@ -103,8 +109,8 @@ class Solution:
     unchecked: list[str]
     mesh_history: list[Any]
     mesh_error: float
-    objective_error: float  # Collocation.refine's estimate of the objective's error
-    mesh_converged: bool
+    objective_error: float = math.nan  # refine()'s estimate of the objective's error
+    mesh_converged: bool = False  # refine() met its tolerances (a single solve: False)
     objective_scale: float
     expanded: bool
 
@@ -133,6 +139,24 @@ class Solution:
             ``solution -> value``.
         """
         self.__dict__.setdefault("deferred", {})[name] = compute
+
+    @property
+    def convergence(self) -> str:
+        """Whether the discretisation converged, in words: ``"converged (mesh, estimated
+        error 3.2e-09)"`` after a :meth:`~ocp.Collocation.refine` (or
+        :meth:`~ocp.MultipleShooting.refine`) that met its tolerances with that estimate
+        of the objective's absolute error (``objective_error``), else what it is not."""
+        history = self.__dict__.get("mesh_history")
+        e = self.objective_error
+        if not history:
+            return "not converged: one grid, no estimate of its error (refine() converges)"
+        if self.mesh_converged:
+            return f"converged (mesh, estimated error {e:.2g})"
+        if not math.isfinite(e):
+            return ("not converged (mesh): no estimate of the objective's error could be "
+                    f"confirmed within the rounds and intervals allowed ({len(history)} solves)")
+        return (f"not converged (mesh): estimated error {e:.2g} above the tolerance after "
+                f"{len(history)} solves")
 
     # python-control / scipy style aliases
     @property
@@ -245,6 +269,20 @@ class Solution:
             Times within the phase.
         """
         return self.discretization.sample(self.data, np.atleast_1d(np.asarray(t, float)))
+
+    def resample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """States and controls of a phase at the times ``t`` as the method represents them,
+        what a guess on another grid is resampled from (collocation: the control's
+        polynomial through its collocation points, extrapolated before the first; see
+        :meth:`ocp.transcriptions.collocation.CollocationPhase.local`; multiple
+        shooting: :meth:`at`).
+
+        Parameters
+        ----------
+        t : array_like
+            Times within the phase.
+        """
+        return self.discretization.resample(self.data, np.atleast_1d(np.asarray(t, float)))
 
     def trajectory(self, n: int = 1000) -> Trajectory:
         """The solution as a :class:`ocp.definition.trajectory.Trajectory` on about ``n`` samples.

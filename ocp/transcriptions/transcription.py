@@ -27,38 +27,21 @@ import numpy as np
 from ..definition.errors import ProblemDefinitionError, SolveError
 from ..definition.multiphase import MultiPhaseProblem
 from ..definition.problem import OptimalControlProblem
-from ..definition.symbols import positive_int, relative_tolerance
+from ..definition.symbols import positive_int
 from .collocation import CollocationPhase
-from .discretization import PhaseDiscretization
-from .failure import warn_unconverged
+from .discretization import PhaseDiscretization, segment_index
 from .integrators import cvodes_function, rk4_function
-from .mesh import (
-    MeshRound,
-    interval_errors,
-    mesh_error,
-    objective_change,
-    objective_threshold,
-    refine_mesh,
-)
+from .mesh import mesh_error
 from .nlp import DEFAULT_IPOPT, INFEASIBLE_STATUSES, GridFree, Transcription, expand_mode
+from .refinement import MeshRefinement, NodeDoubling
 from .shooting import ShootingPhase
 from .solution import Solution
-from .verify import interval_excess, verify
 
 __all__ = ["DEFAULT_IPOPT", "INFEASIBLE_STATUSES", "Collocation", "MultipleShooting",
            "Transcription", "continuation", "cvodes_function", "decision_bounds",
            "rk4_function", "transcribe"]
 
 Problem = OptimalControlProblem | MultiPhaseProblem
-
-
-WARM_REFINE_ERROR = 1e-3
-"""A refinement round starts from the previous mesh's primal and dual solution (Ipopt's
-warm start) when the previous mesh's largest interval error estimate is at most this;
-from a coarser solution only its primal values are used. Measured on the alp rider
-(Betts, refinement from N = 20): the warm rounds take 12 iterations where the primal
-start took 91-156; from meshes with estimates 0.067 and 1.3 the warm start took 117 and
-1065 iterations where the primal start took 41 and 134."""
 
 
 def _per_phase(value: Any, n: int, what: str) -> list[Any]:
@@ -69,7 +52,7 @@ def _per_phase(value: Any, n: int, what: str) -> list[Any]:
     return [value] * n
 
 
-class MultipleShooting(Transcription):
+class MultipleShooting(NodeDoubling, Transcription):
     """Multiple-shooting transcription of an optimal control problem.
 
     Parameters
@@ -102,6 +85,8 @@ class MultipleShooting(Transcription):
         :mod:`ocp.definition.scaling`).
     codegen : bool
         Compiled NLP functions (RK4 only; see :class:`ocp.transcriptions.nlp.Transcription`).
+    grid_free : GridFree, optional
+        Reuse another transcription's compiled problem (:meth:`refine`'s doublings).
 
     Attributes
     ----------
@@ -116,7 +101,8 @@ class MultipleShooting(Transcription):
                  ipopt_options: dict | None = None, expand: bool | str = "auto", *,
                  inner_constraints: bool = False, verify: str = "warn",
                  verify_tol: float = 1e-6, verify_points: int = 10,
-                 scaling: Any = "auto", codegen: bool = False) -> None:
+                 scaling: Any = "auto", codegen: bool = False,
+                 grid_free: GridFree | None = None) -> None:
         if integrator not in ("rk4", "cvodes"):
             raise ProblemDefinitionError(f"integrator must be 'rk4' or 'cvodes', got "
                                          f"{integrator!r}")
@@ -129,14 +115,34 @@ class MultipleShooting(Transcription):
         self.substeps = positive_int(substeps, "substeps")
         self.inner_constraints = bool(inner_constraints)
         expand = expand_mode(expand)  # refused before the integrator can ignore it
+        self.scaling_arg = scaling
         super().__init__(problem, ipopt_options, expand if integrator == "rk4" else False,
-                         verify, verify_tol, verify_points, scaling, codegen=codegen)
+                         verify, verify_tol, verify_points, scaling, grid_free,
+                         codegen=codegen)
         self.N: int | list[int] = self.nodes[0] if n_ph == 1 else list(self.nodes)
         self.F = self.phases[0].F  # type: ignore[attr-defined]
 
     def _discretize(self) -> list[PhaseDiscretization]:
         return [ShootingPhase(cp, tm, n, self.integrator, self.substeps, self.inner_constraints)
                 for cp, tm, n in zip(self.compiled, self.times, self.nodes, strict=True)]
+
+    def with_nodes(self, nodes: list[int], ipopt_options: dict | None = None
+                   ) -> MultipleShooting:
+        """A new multiple shooting of the same problem and options on other node counts.
+
+        Parameters
+        ----------
+        nodes : list of int
+            Nodes per phase.
+        ipopt_options : dict, optional
+            Override of the Ipopt options (default: this transcription's).
+        """
+        return MultipleShooting(self.problem, nodes, self.integrator, self.substeps,
+                                ipopt_options or self.ipopt_options, self.expand,
+                                inner_constraints=self.inner_constraints, verify=self.verify,
+                                verify_tol=self.verify_tol, verify_points=self.verify_points,
+                                scaling=self.scaling_arg, codegen=self.codegen,
+                                grid_free=self.grid_free)
 
     def initial_guess(self, T: float | None = None, x: Any = None, u: Any = None,
                       params: dict[str, float] | None = None) -> np.ndarray:
@@ -166,7 +172,7 @@ class MultipleShooting(Transcription):
         return w
 
 
-class Collocation(Transcription):
+class Collocation(MeshRefinement, Transcription):
     """Direct collocation on Legendre-Gauss-Radau points, with mesh refinement.
 
     Parameters
@@ -196,6 +202,13 @@ class Collocation(Transcription):
     codegen : bool
         Compiled NLP functions (see :class:`ocp.transcriptions.nlp.Transcription`;
         not with :meth:`refine`, which builds an NLP per mesh).
+    inner_constraints : bool or sequence of bool arrays
+        Also impose the path constraints and state bounds between the collocation
+        points, at the midpoints between the state polynomial's nodes (``degree``
+        more points per interval; see
+        :class:`ocp.transcriptions.collocation.CollocationPhase`): True on every
+        interval, or per phase one flag per mesh interval. :meth:`refine` adds them
+        by itself on the intervals where it found a violation between the points.
 
     Notes
     -----
@@ -214,7 +227,8 @@ class Collocation(Transcription):
                  expand: bool | str = True, *,
                  verify: str = "warn", verify_tol: float = 1e-6,
                  verify_points: int = 10, scaling: Any = "auto",
-                 grid_free: GridFree | None = None, codegen: bool = False) -> None:
+                 grid_free: GridFree | None = None, codegen: bool = False,
+                 inner_constraints: bool | Sequence[Any] = False) -> None:
         n_ph = len(problem.phases) if isinstance(problem, MultiPhaseProblem) else 1
         self.scaling_arg = scaling
         self.degree = positive_int(degree, "degree")
@@ -225,14 +239,16 @@ class Collocation(Transcription):
         else:
             meshes = [mesh] if n_ph == 1 and np.ndim(mesh[0]) == 0 else list(mesh)
             self.meshes = [_check_mesh(m) for m in _per_phase(meshes, n_ph, "mesh")]
+        self.inner = _inner_flags(inner_constraints, self.meshes)
         super().__init__(problem, ipopt_options, expand, verify, verify_tol, verify_points,
                          scaling, grid_free, codegen=codegen)
         counts = [m.size - 1 for m in self.meshes]
         self.N: int | list[int] = counts[0] if n_ph == 1 else counts
 
     def _discretize(self) -> list[PhaseDiscretization]:
-        return [CollocationPhase(cp, tm, m, self.degree, self.grid_free.functions)
-                for cp, tm, m in zip(self.compiled, self.times, self.meshes, strict=True)]
+        return [CollocationPhase(cp, tm, m, self.degree, self.grid_free.functions, inner)
+                for cp, tm, m, inner in zip(self.compiled, self.times, self.meshes,
+                                            self.inner, strict=True)]
 
     def _solve(self, params: dict[str, float] | None, guess: Any,
                warm_start: Solution | None, verify_mode: str,
@@ -243,7 +259,9 @@ class Collocation(Transcription):
         sol.objective_error = math.nan  # one mesh: nothing to compare the objective with
         return sol
 
-    def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None) -> Collocation:
+    def with_mesh(self, meshes: list[np.ndarray], verify: str | None = None,
+                  inner: list[np.ndarray] | None = None,
+                  ipopt_options: dict | None = None) -> Collocation:
         """A new collocation of the same problem and options on other meshes.
 
         Parameters
@@ -252,157 +270,21 @@ class Collocation(Transcription):
             Normalised mesh points per phase.
         verify : str, optional
             Override of the post-solve check mode.
+        inner : list of ndarray, optional
+            Per phase, the intervals with constraints between the points (default: those
+            inside an interval of this mesh that has them).
+        ipopt_options : dict, optional
+            Override of the Ipopt options (default: this transcription's).
         """
+        if inner is None:
+            inner = [old[segment_index(m_old, 0.5 * (m[1:] + m[:-1]))]
+                     for old, m_old, m in zip(self.inner, self.meshes, meshes, strict=True)]
         return Collocation(self.problem, degree=self.degree, mesh=meshes,
-                           ipopt_options=self.ipopt_options, expand=self.expand,
-                           verify=verify or self.verify, verify_tol=self.verify_tol,
-                           verify_points=self.verify_points, scaling=self.scaling_arg,
-                           grid_free=self.grid_free, codegen=self.codegen)
-
-    def refine(self, params: dict[str, float] | None = None, tol: float = 1e-6,
-               max_rounds: int = 10, max_intervals: int = 5000, guess: Any = None,
-               max_split: int = 8, objective_tol: float | None = None) -> Solution:
-        """Solve, then refine the mesh until the states and the objective are accurate.
-
-        Parameters
-        ----------
-        params : dict, optional
-            Parameter values.
-        tol : float
-            Requested relative accuracy of the states (and cost quadratures):
-            every interval's error estimate must be below it.
-        max_rounds : int
-            Most refinements (each builds and solves one NLP).
-        max_intervals : int
-            Stop before a mesh (all phases) would exceed this many intervals.
-        guess : Solution or decision vector, optional
-            Start of the first solve.
-        max_split : int
-            Most pieces an interval is split into per round.
-        objective_tol : float, optional
-            Requested accuracy of the objective, relative to ``max(1, |J|)``
-            (default: ``tol``, but not below :meth:`objective_floor`, what the NLP
-            solver itself resolves; ``math.inf`` switches the criterion off). The
-            objective's error estimate is its change between the last two
-            meshes (see :mod:`ocp.transcriptions.mesh`): the states' estimate does not see
-            the error of a control that jumps inside an interval (an L1 cost,
-            bang-bang arcs), which can leave the objective ten times less
-            accurate than the states. Meeting it takes at least two solves.
-
-        Returns
-        -------
-        Solution
-            On the last mesh; ``mesh_history`` lists every round (with its
-            objective estimate and the criterion that drove the next round),
-            ``mesh_error`` is the final state estimate, ``objective_error``
-            the final objective estimate (absolute; ``inf`` if there was one
-            round only) and ``mesh_converged`` tells whether both met their
-            tolerances. ``sol.transcription`` re-solves on that mesh.
-
-        Notes
-        -----
-        A round whose previous mesh's largest estimate is at most
-        :data:`WARM_REFINE_ERROR` starts from that mesh's solution and multipliers
-        interpolated (Ipopt's warm start; on the unexpanded graph, cheaper to build
-        than its few iterations would gain from expansion), other rounds from its
-        primal values. The error of an interval is the larger of its estimate (see
-        :mod:`ocp.transcriptions.mesh`) and the path-constraint violation found inside it on
-        the fine check grid when that exceeds ``verify_tol`` (Ipopt itself
-        relaxes bounds by about 1e-8), so refinement also closes gaps between
-        points. While an interval exceeds ``tol`` the rounds are driven by the
-        states; once none does, by the objective, splitting the intervals with
-        the largest estimates (:func:`ocp.transcriptions.mesh.objective_threshold`).
-        """
-        if self.codegen:
-            raise ProblemDefinitionError(
-                "refine() builds a new NLP on every mesh, which codegen=True would compile "
-                "each time: refine without it, then re-solve on the final mesh with "
-                "Collocation(problem, mesh=sol.transcription.meshes, codegen=True)")
-        tol = relative_tolerance(tol, "refine(tol)")
-        otol = max(tol, self.objective_floor()) if objective_tol is None \
-            else relative_tolerance(objective_tol, "refine(objective_tol)", allow_inf=True)
-        tr = self  # every round is checked between points by the refinement itself
-        sol = tr._solve(params, guess, None, "off")
-        # every round keeps the first round's objective scale: the same problem on
-        # another mesh is the same NLP to Ipopt (a scale re-derived from each round's
-        # start moved the alp rider's second round from 134 to 2,937 iterations)
-        fref = sol.objective_scale
-        history: list[MeshRound] = []
-        previous: list[float] = []  # objectives of the earlier rounds
-        for rnd in range(max_rounds + 1):
-            errs = [np.maximum(interval_errors(ph), self._gaps(ph, sol.params))
-                    for ph in sol.phases]
-            emax = float(max(e.max() for e in errs))
-            change = objective_change(previous, sol.objective)
-            target = otol * max(1.0, abs(sol.objective))
-            driver = "state" if emax > tol else "objective" if change > target else ""
-            history.append(MeshRound([e.size for e in errs], emax, sol.objective,
-                                     sol.iterations, sol.solve_time, change, driver))
-            if not driver:
-                break
-            new = self._next_meshes(tr.meshes, errs, driver, tol, change, target, max_split)
-            if rnd == max_rounds or sum(m.size - 1 for m in new) > max_intervals:
-                history[-1].refined_for = ""
-                break
-            tr = tr.with_mesh(new)
-            previous.append(sol.objective)
-            sol = tr._next_solve(params, sol, guess, emax <= WARM_REFINE_ERROR, fref)
-        sol.mesh_history, sol.mesh_error, sol.objective_error = history, emax, change
-        sol.mesh_converged = emax <= tol and change <= target
-        if not sol.mesh_converged:  # name what the problem suggests as the cause
-            warn_unconverged(sol)
-        verify(sol, self.verify, self.verify_tol, self.verify_points)
-        return sol
-
-    def _next_solve(self, params: dict[str, float] | None, sol: Solution,
-                    guess: Any, close: bool, objective_scale: float) -> Solution:
-        """A refinement round's solve: from the previous mesh's solution with its
-        multipliers interpolated (Ipopt's warm start) when that solution is ``close``
-        (see :data:`WARM_REFINE_ERROR`), else (or if that fails) from its primal values
-        only, else from the first round's start."""
-        starts: tuple[tuple[Any, Solution | None], ...] = ((None, sol), (sol, None), (guess, None))
-        if not close:
-            starts = starts[1:]
-        for k, (g, warm) in enumerate(starts):
-            try:  # a warm round takes few iterations: the unexpanded graph is cheaper
-                return self._solve(params, g, warm, "off", False if warm else None,
-                                   objective_scale)
-            except SolveError:  # the previous mesh's solution may mislead: start afresh
-                if k == len(starts) - 1:
-                    raise
-        raise AssertionError("unreachable")
-
-    def objective_floor(self) -> float:
-        """The relative objective accuracy below which mesh rounds chase the NLP solver's
-        own tolerance: ten times the larger of Ipopt's ``tol`` and its relaxation of
-        bounds (``bound_relax_factor``, 1e-8 by default), which move the objective of a
-        problem with active bounds by about that much whatever the mesh.
-
-        Returns
-        -------
-        float
-        """
-        opts = self.ipopt_options
-        return 10.0 * max(float(opts.get("tol", 1e-8)),
-                          float(opts.get("bound_relax_factor", 1e-8)))
-
-    def _next_meshes(self, meshes: list[np.ndarray], errs: list[np.ndarray], driver: str,
-                     tol: float, change: float, target: float,
-                     max_split: int) -> list[np.ndarray]:
-        """The refined meshes for a round driven by the states or by the objective."""
-        if driver == "state":
-            return [refine_mesh(m, e, tol, self.degree, max_split)
-                    for m, e in zip(meshes, errs, strict=True)]
-        emax = float(max(e.max() for e in errs))
-        if emax <= 0.0:  # nothing to localise the objective's error by: halve every interval
-            return [refine_mesh(m, np.ones(m.size - 1), 0.5, self.degree, 2) for m in meshes]
-        cut = objective_threshold(emax, change, target)
-        return [refine_mesh(m, e, cut, self.degree, max_split)
-                for m, e in zip(meshes, errs, strict=True)]
-
-    def _gaps(self, ph: Solution, params: dict[str, float]) -> np.ndarray:
-        excess = interval_excess(ph, params, self.verify_points)
-        return np.where(excess > self.verify_tol, excess, 0.0)
+                           ipopt_options=ipopt_options or self.ipopt_options,
+                           expand=self.expand, verify=verify or self.verify,
+                           verify_tol=self.verify_tol, verify_points=self.verify_points,
+                           scaling=self.scaling_arg, grid_free=self.grid_free,
+                           codegen=self.codegen, inner_constraints=inner)
 
 
 def transcribe(problem: Problem, method: str = "multiple_shooting", **options: Any
@@ -441,6 +323,19 @@ def decision_bounds(transcription: Transcription, params: dict[str, float] | Non
     pv = transcription.param_vector({} if params is None else params)
     lbw, ubw = transcription.bounds_function(pv)[:2]
     return np.array(lbw, dtype=float).ravel(), np.array(ubw, dtype=float).ravel()
+
+
+def _inner_flags(spec: Any, meshes: list[np.ndarray]) -> list[np.ndarray]:
+    """Per phase, the intervals with constraints between the points (``inner_constraints``)."""
+    if isinstance(spec, bool | np.bool_):
+        return [np.full(m.size - 1, bool(spec)) for m in meshes]
+    flags = [np.asarray(f) for f in spec] if isinstance(spec, Sequence) else None
+    if flags is None or len(flags) != len(meshes) or any(
+            f.dtype != bool or f.shape != (m.size - 1,) for f, m in zip(flags, meshes,
+                                                                        strict=True)):
+        raise ProblemDefinitionError("inner_constraints must be True, False or, per phase, "
+                                     "one bool per mesh interval")
+    return flags
 
 
 def _check_mesh(mesh: Any) -> np.ndarray:

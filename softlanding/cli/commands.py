@@ -21,7 +21,8 @@ from typing import Any
 
 from softlanding.cli.cache import cache_command
 from softlanding.cli.export import export_command
-from softlanding.cli.ground import model_ground
+from softlanding.cli.ground import ground_text
+from softlanding.cli.mpc import mpc_command
 from softlanding.cli.output import (
     EXIT_FAILURE,
     EXIT_OK,
@@ -230,9 +231,9 @@ def _cmd_impedance(a: argparse.Namespace) -> int:
                             f"{o.objective}={g['value']:.10g}"),
         ("landings simulated", o.evaluations)]
     if several:
-        rows.insert(6, ("worst ground(s)", "; ".join(_ground_text(o.grounds[i])
+        rows.insert(6, ("worst ground(s)", "; ".join(ground_text(o.grounds[i])
                                                      for i in o.worst)))
-        rows += [(f"depth on {_ground_text(gr)}", f"{d:.10g} (stroke margin {m:.3g})")
+        rows += [(f"depth on {ground_text(gr)}", f"{d:.10g} (stroke margin {m:.3g})")
                  for gr, d, m in zip(o.grounds, o.ground_depths, o.ground_margins,
                                      strict=True)]
     print_table(rows)
@@ -493,20 +494,22 @@ def _cmd_hop(a: argparse.Namespace) -> int:
 
     hop_input(robot, a.v0, a.eta)  # checked before the solver loads
     from softlanding.optimal.hopping import best_impedance_hop, rigid_hop, solve_hop
+    from softlanding.util.progress import activity
 
     cycles: dict[str, Any] = {}
-    for leg in legs:
-        if leg == "free":
-            cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta, doublings=doublings)
-        elif leg == "rigid":
-            cycles[leg] = rigid_hop(Impact(a.v0), robot, a.eta)
-        else:
-            cycles[leg] = best_impedance_hop(Impact(a.v0), robot, a.eta, grid=grid)
-            if cycles[leg] is None:
-                raise InfeasibleLandingError(
-                    f"no impedance in the {grid} x {grid} gain grid (k_p in [0.05, 2], "
-                    f"k_d in [0, 2]) hops to the apex: no thrust within u_max = "
-                    f"{robot.u_max:g} restores it inside the stroke")
+    for leg in legs:  # tens of seconds each: a bar on a terminal (the solves report steps)
+        with activity(f"hop, {leg} leg"):
+            if leg == "free":
+                cycles[leg] = solve_hop(Impact(a.v0), robot, a.eta, doublings=doublings)
+            elif leg == "rigid":
+                cycles[leg] = rigid_hop(Impact(a.v0), robot, a.eta)
+            else:
+                cycles[leg] = best_impedance_hop(Impact(a.v0), robot, a.eta, grid=grid)
+        if leg == "impedance" and cycles[leg] is None:
+            raise InfeasibleLandingError(
+                f"no impedance in the {grid} x {grid} gain grid (k_p in [0.05, 2], "
+                f"k_d in [0, 2]) hops to the apex: no thrust within u_max = "
+                f"{robot.u_max:g} restores it inside the stroke")
     # a verified cycle: its replay closes (apex, energy balance) and its energy is the
     # continuous optimum, not a grid's value
     reasons = {k: c.unverified_reasons() + [r for r in [c.unconverged_reason()] if r]
@@ -545,112 +548,10 @@ def _cmd_hop(a: argparse.Namespace) -> int:
 
 
 
-# ------------------------------------------------------------------------ mpc
-def _ground_text(g: Any) -> str:
-    """A ground in words: its name and parameters (``drag, c_d = 0.2, stiffness = 2``)."""
-    d = g.to_dict()
-    if "stiffness" not in d and hasattr(g, "stiffness"):  # (to_dict leaves out K = 1)
-        d["stiffness"] = g.stiffness
-    rest = [f"{k} = {v:g}" if isinstance(v, float | int) else f"{k} = {v}"
-            for k, v in d.items() if k != "model"]
-    return ", ".join([str(d.get("model", g.name)), *rest])
-
-
-def _ms(v: float | None) -> str:
-    return "none" if v is None else f"{v:.3g}"
-
-
-def _cmd_mpc(a: argparse.Namespace) -> int:
-    from softlanding.control.mpc import check_period
-
-    period = 0.01 if a.period is None else check_period("--period", a.period)
-    from softlanding.errors import check, check_count
-
-    noise = check("--noise-std", a.noise_std, (lambda v: v >= 0, "must be >= 0"))
-    delay = check_count("--delay", a.delay, 0, 1000)
-    seed = check_count("--seed", a.seed, 0, 2**63 - 1)
-    margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
-    if a.margin and a.controller != "bangbang":
-        raise ParameterError("--margin", "applies to --controller bangbang")
-    if a.estimator is not None and not noise:
-        raise ParameterError("--estimator", "applies with --noise-std > 0 (exact "
-                                            "measurements need no filter)")
-    robot, impact, ground, plot = robot_of(a), Impact(a.v0), ground_of_args(a), target(a)
-    model = model_ground(a)
-    from softlanding.optimal.limits import force_limit
-
-    force_limit(robot)
-    if not impact.v0 < 0:
-        raise ParameterError("v0", "a landing under control needs v0 < 0")
-    from softlanding.control.mpc import mpc_landing
-    from softlanding.optimal.landing import solve_landing
-    from softlanding.simulation.simulator import simulate
-
-    m = mpc_landing(impact, robot, ground, model=model, period=period,
-                    estimate=not a.no_estimate, controller=a.controller, noise=noise,
-                    delay=delay, seed=seed, margin=margin,
-                    estimator=a.estimator or "filtered")
-    clair = solve_landing(impact, robot, ground)
-    nominal = solve_landing(impact, robot, model)
-    ol = simulate(robot, impact, nominal.schedule(), ground)
-    d = m.to_dict()
-    out = {"depth": m.depth, "clairvoyant_depth": clair.depth,
-           "ratio_to_clairvoyant": m.depth / clair.depth,
-           "clairvoyant_verified": not clair.unverified_reasons(),
-           "open_loop_depth": ol.depth, "open_loop_feasible": ol.feasible,
-           "open_loop_status": ol.status,
-           "feasible": m.feasible, **{k_: d[k_] for k_ in (
-               "failure", "stroke_held", "rest_proven", "stroke_min", "stroke_max", "u_peak",
-               "period", "period_rig_ms", "controller", "uncovered", "deferred",
-               "creep_samples", "step_work_max", "noise", "delay",
-               "seed", "margin", "estimator", "samples", "steps", "replans",
-               "fallbacks", "step_time_median_ms", "step_time_p99_ms", "step_time_max_ms",
-               "step_cpu_median_ms", "step_cpu_p99_ms", "step_cpu_max_ms", "prepare_time_s",
-               "setup_ms", "estimate", "ground", "model_ground")}}
-    written = None
-    if plot:
-        from softlanding.plots.control import plot_mpc_landing
-
-        written = savefig(plot_mpc_landing(m, clair.replay, ol), plot)
-    if a.json:
-        print_json(out)
-    else:
-        e = out["estimate"] or {}
-        print_table([
-            ("controller", m.controller),
-            ("true ground", _ground_text(m.ground)), ("model ground", _ground_text(m.model)),
-            ("depth (MPC)", m.depth), ("clairvoyant depth", clair.depth),
-            ("MPC / clairvoyant", out["ratio_to_clairvoyant"]),
-            ("clairvoyant verified", out["clairvoyant_verified"]),
-            ("open-loop depth (nominal plan)", ol.depth),
-            ("open-loop feasible", ol.feasible), ("feasible (MPC)", m.feasible),
-            ("stroke min .. max", f"{m.stroke_min:.6g} .. {m.stroke_max:.6g}"),
-            ("peak |u|", m.u_peak),
-            ("samples (period)", f"{m.samples} ({m.period:g} = {out['period_rig_ms']:.3g} ms "
-                                 f"on the paper's rig)"),
-            ("re-plans by transcription", m.replans), ("fallbacks", m.fallbacks),
-            ("samples not covered (bangbang)", m.uncovered),
-            ("samples deferred (bangbang)", m.deferred),
-            ("samples under the creep law", m.creep_samples),
-            ("noise std, delay (samples)", f"{m.noise:g}, {m.delay}"
-                                           + (", filtered estimate" if m.estimator == "filtered"
-                                              else "")),
-            ("step time median / p99 / max [ms]",
-             " / ".join(_ms(out[f"step_time_{q}_ms"]) for q in ("median", "p99", "max"))),
-            ("preparation before impact [s]", f"{m.prepare_time_s:.3g}"),
-            ("estimate K, c_d", f"{e.get('stiffness', float('nan')):.6g}, "
-                                f"{e.get('c_d', float('nan')):.6g}")])
-        if written:
-            print(f"figure written to {written}")
-    if not m.feasible:
-        print(f"softlanding: mpc: the landing is not feasible: {m.failure()}", file=sys.stderr)
-    return EXIT_OK if m.feasible else EXIT_FAILURE
-
-
 HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_solve_sweep,
             "impedance": _cmd_impedance, "map": _cmd_map, "sweep": _cmd_sweep,
             "compare": _cmd_compare, "scale": scale_command, "demo": _cmd_demo,
-            "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": _cmd_mpc,
+            "reproduce": _cmd_reproduce, "hop": _cmd_hop, "mpc": mpc_command,
             "robust": robust_command, "export-controller": export_command,
             "cache": cache_command}
 

@@ -17,18 +17,15 @@ def export_command(a: argparse.Namespace) -> int:
     a : argparse.Namespace
         Parsed arguments.
     """
-    from softlanding.control import bangbang as bb
-    from softlanding.control.export_c.binding import find_compiler
-    from softlanding.control.mpc import DEFAULT_PERIOD, check_period
-    from softlanding.control.state_landing import ground_numbers
+    from softlanding.control.options import DEFAULT_PERIOD, check_noise, check_period
     from softlanding.optimal.limits import force_limit
-    from softlanding.util.files import atomic_folder, output_folder
 
+    # (every option checked before the controller's compiled code is imported)
     if a.l0 is not None:
         raise ParameterError("--l0", "does not apply: the controller does not use the leg's "
                                      "rest length")
     period = DEFAULT_PERIOD if a.period is None else check_period("--period", a.period)
-    noise = check("--noise-std", a.noise_std, (lambda v: v >= 0, "must be >= 0"))
+    noise = check_noise("--noise-std", a.noise_std)
     margin = check("--margin", a.margin, (lambda v: v >= 0, "must be >= 0"))
     filtered = a.estimator == "filtered"
     if filtered and not noise:
@@ -36,7 +33,13 @@ def export_command(a: argparse.Namespace) -> int:
                                             "measurements have nothing to filter)")
     robot = robot_of(a)
     u_max = force_limit(robot)
-    k, c_d = ground_numbers(model_ground(a))
+    model = model_ground(a)
+    from softlanding.control import bangbang as bb
+    from softlanding.control.export_c.binding import find_compiler
+    from softlanding.control.state_landing import ground_numbers
+    from softlanding.util.files import atomic_folder, output_folder
+
+    k, c_d = ground_numbers(model)
     if a.check and find_compiler() is None:
         raise ParameterError("--check", "needs a C compiler (cc, gcc or $CC on the path); "
                                         "none found")

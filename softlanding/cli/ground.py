@@ -214,5 +214,21 @@ def rft_stiffness_of(a: argparse.Namespace) -> float:
     return rft_stiffness(medium(a.medium), d)
 
 
-__all__ = ["GROUNDS", "ground_args", "ground_of", "grounds_of", "model_ground", "numbers",
-           "rft_stiffness_of"]
+def ground_text(g: Any) -> str:
+    """A ground in words: its name and parameters (``drag, c_d = 0.2, stiffness = 2``).
+
+    Parameters
+    ----------
+    g : Ground
+        The ground.
+    """
+    d = g.to_dict()
+    if "stiffness" not in d and hasattr(g, "stiffness"):  # (to_dict leaves out K = 1)
+        d["stiffness"] = g.stiffness
+    rest = [f"{k} = {v:g}" if isinstance(v, float | int) else f"{k} = {v}"
+            for k, v in d.items() if k != "model"]
+    return ", ".join([str(d.get("model", g.name)), *rest])
+
+
+__all__ = ["GROUNDS", "ground_args", "ground_of", "ground_text", "grounds_of", "model_ground",
+           "numbers", "rft_stiffness_of"]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 import sys
 from collections.abc import Sequence
@@ -77,8 +78,7 @@ def print_table(rows: Sequence[tuple[str, object]]) -> None:
         The rows.
     """
     w = max(len(k) for k, _ in rows)
-    for k, v in rows:
-        print(f"{k:<{w}}  {fmt(v)}")
+    write_out("".join(f"{k:<{w}}  {fmt(v)}\n" for k, v in rows))
 
 
 def print_json(obj: Any) -> None:
@@ -89,7 +89,24 @@ def print_json(obj: Any) -> None:
     obj : object
         A JSON-able structure.
     """
-    print(json.dumps(json_safe(obj)))
+    write_out(json.dumps(json_safe(obj)) + "\n")
+
+
+def write_out(text: str) -> None:
+    """Write ``text`` to standard output, flushed. A closed one (piped into ``head``, which
+    has read enough) ends the output, not the run: the rest goes nowhere and the command
+    still ends with its own exit code (a failed landing is still 1).
+
+    Parameters
+    ----------
+    text : str
+        What to write.
+    """
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def robot_of(a: argparse.Namespace) -> Robot:

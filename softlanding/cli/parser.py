@@ -366,13 +366,15 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
 
 def _mpc(sub: Any) -> argparse.ArgumentParser:
     m = sub.add_parser("mpc", help="model-predictive landing on ground the robot does not know",
-                       description="Land on the true ground (the ground options) under MPC: "
-                                   "every --period the controller measures the state and the "
-                                   "foot's acceleration, updates a least-squares estimate of "
-                                   "the ground (f = K d + c_d v^2), re-solves the landing from "
-                                   "the measured state and applies it for one period. Compared "
-                                   "with the clairvoyant optimum (knows the ground) and the "
-                                   "nominal open-loop plan replayed on the true ground.")
+                       description="Land on the true ground (the ground options) under "
+                                   "closed-loop control: every --period the controller "
+                                   "measures the state and the foot's acceleration, updates a "
+                                   "least-squares estimate of the ground (f = K d + c_d v^2), "
+                                   "re-solves the landing from the measured state (compiled, "
+                                   "within the rig's period, unless --controller replan) and "
+                                   "applies it for one period. Compared with the clairvoyant "
+                                   "optimum (knows the ground) and the nominal open-loop plan "
+                                   "replayed on the true ground.")
     m.add_argument("--v0", type=float, required=True, help="impact velocity (< 0)")
     _model_args(m, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
     m.add_argument("--period", type=float, default=None,
@@ -387,11 +389,12 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
                    help="its drag number (--model-ground drag)")
     m.add_argument("--no-estimate", action="store_true",
                    help="keep the model ground (no on-line estimation)")
-    m.add_argument("--controller", choices=["replan", "bangbang"], default="replan",
-                   help="replan: re-solve the landing every sample (Newton on the plan's "
-                        "structure, else a transcription; default); bangbang: the compiled "
-                        "real-time Newton on the push/pull switching times (microseconds a "
-                        "sample), falling back to replan where that structure does not fit")
+    m.add_argument("--controller", choices=["bangbang", "replan"], default="bangbang",
+                   help="bangbang (default): the compiled real-time controller, microseconds "
+                        "a sample (Newton on the push/pull switching times, the creep law, "
+                        "and a compiled fallback where neither covers the state); replan: "
+                        "re-solve the landing OCP every sample (milliseconds to seconds a "
+                        "sample: the slow baseline)")
     m.add_argument("--noise-std", type=float, default=0.0, metavar="S",
                    help="Gaussian noise (standard deviation, paper units) on the measured "
                         "foot position, velocity, acceleration and force (default 0)")

@@ -78,14 +78,19 @@ def robust_command(a: argparse.Namespace) -> int:
         raise ParameterError("v0", "a landing under control needs v0 < 0")
     from softlanding.control.robust import DEFAULT_BRANCH_TIME, robust_landing, two_stage_landing
     from softlanding.optimal.landing import solve_landing
+    from softlanding.util.progress import activity, step
 
-    nominal = solve_landing(impact, robot, replay=False)
-    clair = [solve_landing(impact, robot, g) for g in grounds]
+    with activity("robust plan"):  # a minute or more: a bar with its stage on a terminal
+        nominal = solve_landing(impact, robot, replay=False)
+        step("nominal plan")
+        clair = [solve_landing(impact, robot, g) for g in grounds]
+        step("clairvoyant plans")
+        robust = robust_landing(impact, grounds, robot, nominal=nominal, extra_pieces=extra,
+                                clairvoyant=clair)
+        step("robust schedule")
+        branch = DEFAULT_BRANCH_TIME if a.branch_time is None else a.branch_time
+        tree = two_stage_landing(robust, branch) if a.tree else None
     clair_depth = [c.depth for c in clair]
-    robust = robust_landing(impact, grounds, robot, nominal=nominal, extra_pieces=extra,
-                            clairvoyant=clair)
-    branch = DEFAULT_BRANCH_TIME if a.branch_time is None else a.branch_time
-    tree = two_stage_landing(robust, branch) if a.tree else None
     chosen = tree if tree is not None else robust
     names = [f"K = {k:g}, c_d = {c:g}" for k, c in itertools.product(a.stiffness, a.cd)]
     written = None

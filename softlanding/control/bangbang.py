@@ -33,9 +33,12 @@ the creep law's own plan reaches that depth with the momentum spent, judged on t
 :data:`CREEP_SIGMAS` standard deviations stiffer and less draggy) the step hands over to the
 creep law (:mod:`softlanding.control.creep`, phase :data:`CREEPING`, status
 :data:`CREEP_LAW`) with ``P[P_CREEP] = 1``. A state neither covers (Newton fails, a duration
-turns negative beyond the switch, the arrest cannot hold, a limit on the plan's path) is
-reported, and the caller falls back to the re-planning MPC
-(:func:`~softlanding.control.mpc.mpc_landing` counts it).
+turns negative beyond the switch, the arrest cannot hold, a limit on the plan's path) is met
+by the compiled fallback in the same call (:mod:`softlanding.control.fallback`: the plan kept
+with the margin dropped, the creep law, or the safe brake), within the sample's bound.
+
+The arrays' layout, phases, statuses and tolerances are
+:mod:`softlanding.control.bangbang_layout`'s (every name re-exported here).
 """
 
 from __future__ import annotations
@@ -45,189 +48,97 @@ import math
 import numpy as np
 from numba import njit
 
-from softlanding.control.creep import creep_force, creep_reachable
-from softlanding.model.dynamics import VB, VF, robot_rhs
+from softlanding.control import bangbang_layout
+from softlanding.control.bangbang_layout import (  # noqa: F401 (re-exported: bangbang.X)
+    ARREST_FAILS,
+    BRAKE,
+    BRAKING,
+    BUDGET,
+    CONVERGING,
+    CREEP,
+    CREEP_LAW,
+    CREEP_SIGMAS,
+    CREEPING,
+    DEFERRED,
+    FILTERED_REGRESSOR,
+    HOLDS,
+    KEPT,
+    LOOSE_RTOL,
+    M_CPLAN,
+    M_DEFERRED,
+    M_FALLBACKS,
+    M_ITER,
+    M_KPLAN,
+    M_LAST_STEP,
+    M_P00,
+    M_P01,
+    M_P11,
+    M_PHASE,
+    M_PRED,
+    M_PRED_OK,
+    M_SAMPLES,
+    M_STATUS,
+    M_TAU1,
+    M_TAU2,
+    M_TH0,
+    M_TH1,
+    M_UCREEP,
+    M_UNCONVERGED,
+    M_VBT,
+    M_WHY,
+    M_WORK,
+    M_XBT,
+    M_XFT,
+    MARCH_FAILED,
+    MARCHED,
+    MAX_NEWTON,
+    MAX_UNCONVERGED,
+    NEWTON_FAILED,
+    NEWTON_TOL,
+    NM,
+    NP,
+    OK,
+    P_AB0,
+    P_AF0,
+    P_BB,
+    P_BF,
+    P_BUDGET,
+    P_CD,
+    P_CREEP,
+    P_GF,
+    P_HOLD0,
+    P_K,
+    P_MARGIN,
+    P_NOISE,
+    P_PERIOD,
+    P_RM,
+    P_S,
+    P_UMAX,
+    P_WORK,
+    PATH_LIMIT,
+    PLAN_HOLDS_TOL,
+    PULL,
+    PUSH,
+    RTOL,
+    SPENT,
+    STATUS_NAMES,
+    STROKE_MARGIN,
+    TIGHTEN,
+    WORK,
+    foot_acc,
+    force_coefficients,
+    ground_force_noise,
+    new_memory,
+    robot_numbers,
+    workspace,
+)
+from softlanding.control.creep import creep_reachable
+from softlanding.control.fallback import brake, creep_phase, fallback, stroke_guard
 from softlanding.simulation.kernel.const import ENTRY, JIT
 from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
 from softlanding.simulation.kernel.dop853 import B as DB
-
-#: Relative and absolute tolerance of the foot's integration (Newton's last steps).
-RTOL = 1e-13
-
-#: Newton's iterations per sample at most, and its tolerance on the durations (relative to
-#: the plan's length).
-MAX_NEWTON, NEWTON_TOL = 30, 1e-13
-
-#: The relative tolerance of the arcs while Newton's last step (relative to the plan's
-#: length) is above ``TIGHTEN`` (the error of the arcs is then far below the step: the step
-#: is as good; the last steps, to convergence, are at :data:`RTOL`), and the relative change
-#: of the estimated ground after which a sample's first step counts as large.
-LOOSE_RTOL, TIGHTEN = 1e-8, 1e-6
-
-#: The integrator steps (taken or rejected) one sample may spend: the hard bound on its
-#: work. A sample that runs out keeps the last whole Newton iterate (or the last plan,
-#: shifted) and the next sample's Newton goes on from there (``M_DEFERRED`` counts them).
-WORK = 100
-
-#: What :func:`_flow` returns: the arc marched, the march failed, no integrator step left.
-MARCH_FAILED, MARCHED, SPENT = 0, 1, 2
-
-# the layout of the robot and ground numbers P
-(P_AB0, P_BB, P_AF0, P_BF, P_GF, P_K, P_CD, P_RM, P_S, P_UMAX, P_HOLD0, P_NOISE,
- P_MARGIN, P_BUDGET, P_PERIOD, P_WORK, P_CREEP) = range(17)
-NP = 17
-# the layout of the controller's memory M
-(M_PHASE, M_TAU1, M_TAU2, M_TH0, M_TH1, M_P00, M_P01, M_P11, M_SAMPLES, M_ITER,
- M_STATUS, M_XBT, M_VBT, M_XFT, M_UNCONVERGED, M_PRED, M_PRED_OK, M_KPLAN,
- M_CPLAN, M_LAST_STEP, M_WORK, M_DEFERRED, M_UCREEP) = (*range(15), 15, 19, 20, 21, 22, 23,
-                                                       24, 25)
-NM = 26
-
-#: Phases: pushing (both arcs left), pulling (the foot's stop left), creeping (the creep
-#: law's force, :mod:`softlanding.control.creep`, every sample to the foot's stop).
-PUSH, PULL, CREEPING = 0, 1, 2
-#: Statuses of a step: covered (the plan re-solved), and why not.
-#: (:data:`DEFERRED`: the sample's integrator steps ran out, see :data:`WORK`.)
-#: (:data:`CREEP_LAW`: the creep law's force, in ``M[M_UCREEP]``, covers the state; only with
-#: ``P[P_CREEP] = 1``, else such a state is :data:`CREEP`, not covered.)
-(OK, NEWTON_FAILED, ARREST_FAILS, PATH_LIMIT, CONVERGING, HOLDS, CREEP, DEFERRED,
- CREEP_LAW) = range(9)
-STATUS_NAMES = {OK: "ok", NEWTON_FAILED: "newton failed", ARREST_FAILS: "arrest fails",
-                PATH_LIMIT: "path limit", CONVERGING: "converging", HOLDS: "plan holds",
-                CREEP: "creep", DEFERRED: "deferred", CREEP_LAW: "creep law"}
-
-#: Relative agreement of the measured state with the plan's prediction, and of the estimate
-#: with the plan's ground, under which a sample keeps the plan (as the re-planning MPC's).
-PLAN_HOLDS_TOL = 1e-8
-
-#: Standard deviations of the estimate by which the ground the creep law's takeover is judged
-#: on is stiffer and less draggy than the estimate (:func:`_step`).
-CREEP_SIGMAS = 3.0
-
-#: The creep law's force is limited to keep the stroke this fraction of ``s`` inside its
-#: limits (:func:`stroke_guard`; the force is held over a sample, the ground's changes).
-STROKE_MARGIN = 1e-3
-
-#: Newton iterations per sample while the switch is more than three samples away (one:
-#: acados' real-time iteration).
-BUDGET = 1
-#: Samples in a row whose Newton step is still above a tenth of the period before the
-#: state counts as not covered.
-MAX_UNCONVERGED = 12
-
-
-def force_coefficients(r_m: float) -> tuple[float, float]:
-    """``beta, gamma`` of the foot's acceleration ``alpha + beta u + gamma f_g``.
-
-    Parameters
-    ----------
-    r_m : float
-        Mass ratio.
-    """
-    P = robot_numbers(r_m, 1.0, 1.0, 1.0, 0.0)
-    return float(P[P_BF]), float(P[P_GF])
-
-
-def ground_force_noise(r_m: float, sensor_noise: float, filtered: bool = False) -> float:
-    """Standard deviation of one ground force the estimator derives from the foot's measured
-    acceleration and force, each with noise ``sensor_noise`` (at least ``1e-6``: the
-    estimator's weight of an exact measurement).
-
-    Parameters
-    ----------
-    r_m : float
-        Mass ratio.
-    sensor_noise : float
-        Standard deviation of the measured acceleration and force.
-    filtered : bool
-        The force is the one applied (known) and the foot's state filtered
-        (:mod:`softlanding.control.foot_filter`): the acceleration's noise, and
-        :data:`FILTERED_REGRESSOR` for the filtered state's error in the regressors.
-    """
-    beta, gamma = force_coefficients(r_m)
-    if filtered:
-        return max(sensor_noise * float(np.hypot(1.0 / gamma, FILTERED_REGRESSOR)), 1e-6)
-    return max(sensor_noise * float(np.hypot(1.0, beta)) / abs(gamma), 1e-6)
-
-
-#: The ground force's error from the filtered foot state in the regressors (its position
-#: times ``K``, its velocity times ``2 c_d |v_f|``), relative to the sensor's noise: about
-#: 1e-2 and 5e-2 of it measured at ``v0 = -1``; 0.1 (0.3: deeper on 4 of 5 cases).
-FILTERED_REGRESSOR = 0.1
-
-
-def robot_numbers(r_m: float, s: float, u_max: float, stiffness: float, c_d: float,
-                  noise_std: float = 1e-6, margin: float = 0.0,
-                  period: float = 0.01, creep: bool = False) -> np.ndarray:
-    """The numbers the compiled step reads (``P``), from the one definition of the dynamics.
-
-    Parameters
-    ----------
-    r_m, s, u_max : float
-        Mass ratio, stroke, force limit.
-    stiffness, c_d : float
-        The ground's ``K`` and drag number (the plan's).
-    noise_std : float
-        Standard deviation of one measured ground force (the estimator's).
-    margin : float
-        Plan for the estimate less ``margin`` standard deviations.
-    period : float
-        The sample period (the plan-holds check predicts the next sample).
-    creep : bool
-        A state whose plan ends with the body rising (:data:`CREEP`) on ground with drag
-        switches to the creep law (:mod:`softlanding.control.creep`; status
-        :data:`CREEP_LAW`) instead of being reported not covered (``mpc_landing`` and
-        ``softlanding export-controller``'s numbers have it on; the exported C has the law
-        too).
-    """
-    x = np.zeros(4)
-    b0 = robot_rhs(x, 0.0, 0.0, r_m)
-    b1 = robot_rhs(x, 1.0, 0.0, r_m)
-    g1 = robot_rhs(x, 0.0, 1.0, r_m)
-    P = np.zeros(NP)
-    P[P_AB0], P[P_BB] = float(b0[VB]), float(b1[VB] - b0[VB])
-    P[P_AF0], P[P_BF], P[P_GF] = float(b0[VF]), float(b1[VF] - b0[VF]), float(g1[VF] - b0[VF])
-    P[P_K], P[P_CD], P[P_RM], P[P_S], P[P_UMAX] = stiffness, c_d, r_m, s, u_max
-    P[P_HOLD0] = 1.0 / (1.0 + r_m)
-    P[P_NOISE] = noise_std
-    P[P_MARGIN] = margin
-    P[P_BUDGET] = BUDGET
-    P[P_PERIOD] = period
-    P[P_WORK] = WORK
-    P[P_CREEP] = 1.0 if creep else 0.0
-    return P
-
-
-def new_memory(tau1: float, tau2: float, prior: tuple[float, float],
-               prior_std: tuple[float, float], noise_std: float) -> np.ndarray:
-    """The controller's memory (``M``) before impact: the first plan and the estimator's prior.
-
-    Parameters
-    ----------
-    tau1, tau2 : float
-        The first plan's push and pull durations (``tau1 = 0``: pulling from the start).
-    prior, prior_std : (float, float)
-        The estimator's prior ``(K, c_d)`` and its standard deviations.
-    noise_std : float
-        Standard deviation of one measured ground force.
-    """
-    M = np.zeros(NM)
-    M[M_PHASE] = PUSH if tau1 > 0 else PULL
-    M[M_TAU1], M[M_TAU2] = tau1, tau2
-    M[M_TH0], M[M_TH1] = prior
-    M[M_P00] = (prior_std[0] / noise_std) ** 2
-    M[M_P11] = (prior_std[1] / noise_std) ** 2
-    return M
-
-
-def workspace() -> tuple[np.ndarray, np.ndarray]:
-    """Work arrays of the compiled step: nothing is allocated per sample, and two arrays
-    (not nine) keep the call's dispatch short. ``K``: the 13 stages, then the Jacobian
-    (rows 13-14); ``W``: trial state, new state, state, residuals, path and end numbers,
-    body, largest ``v_f``, integrator steps left."""
-    return np.zeros((15, 6)), np.zeros(33)
 
 
 @njit(**JIT, inline="always")
@@ -236,20 +147,12 @@ def _views(K, W):
             W[31:32], W[32:33])
 
 
-@njit(**JIT, inline="always")
-def _foot_acc(P, u, xf, vf):
-    """The foot's acceleration under force ``u`` (``-c_d v_f |v_f|``: the law ``c_d v_f^2`` of
-    a descending foot, continued past the stop as a drag, so that a guess whose pull runs
-    past the stop still marches)."""
-    return P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
-
-
 @njit(**JIT)
 def _rhs(P, u, y, n, out, row):
     """The foot's ``[x_f, v_f]`` (and, ``n = 6``, its transition matrix, row-major) slope."""
     xf, vf = y[0], y[1]
     out[row, 0] = vf
-    out[row, 1] = _foot_acc(P, u, xf, vf)
+    out[row, 1] = foot_acc(P, u, xf, vf)
     if n == 6:
         j10 = -P[P_GF] * P[P_K]
         j11 = -2.0 * P[P_GF] * P[P_CD] * abs(vf)
@@ -352,7 +255,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
     if st != MARCHED:
         return st
     xf1, vf1 = y[0], y[1]
-    acc1 = _foot_acc(P, umax, xf1, vf1)
+    acc1 = foot_acc(P, umax, xf1, vf1)
     xb1 = x[0] + x[1] * tau1 + 0.5 * a1 * tau1 * tau1
     vb1 = x[1] + a1 * tau1
     y[2], y[3], y[4], y[5] = 1.0, 0.0, 0.0, 1.0
@@ -372,7 +275,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
     lim[3], lim[4], lim[5] = xbT, vbT, xfT
     if not jac:
         return MARCHED
-    accT = _foot_acc(P, -umax, xfT, vfT)
+    accT = foot_acc(P, -umax, xfT, vfT)
     # d/dtau1 (tau2 fixed): the pull arc's transition matrix on the push's slope at the switch
     dxf1 = y[2] * vf1 + y[3] * acc1
     dvf1 = y[4] * vf1 + y[5] * acc1
@@ -484,7 +387,7 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left):
             return DEFERRED
         if st != MARCHED:
             return NEWTON_FAILED
-        acc = _foot_acc(P, -umax, y[0], y[1])
+        acc = foot_acc(P, -umax, y[0], y[1])
         if not acc > 0.0:
             return NEWTON_FAILED
         d = r[0] / acc
@@ -525,67 +428,6 @@ def _estimate(P, M, x, a_f, u):
     M[M_P01] = q01 - k0 * pp1
     M[M_P11] = q11 - k1 * pp1
     M[M_SAMPLES] += 1
-
-
-@njit(**JIT)
-def _creep(P, M, x):
-    """The creep law's force from ``x`` on the planned ground into ``M[M_UCREEP]``, the phase
-    :data:`CREEPING`; :data:`CREEP_LAW`, or :data:`CREEP` where the law does not apply (no
-    drag estimated: not covered)."""
-    u = creep_force(P[P_AF0], P[P_BF], P[P_GF], P[P_AB0], P[P_BB], P[P_UMAX], P[P_HOLD0],
-                    P[P_K], P[P_CD], x, P[P_PERIOD])
-    M[M_ITER] = 0
-    if not math.isfinite(u):
-        M[M_STATUS] = CREEP
-        return CREEP
-    M[M_PHASE] = CREEPING
-    M[M_UCREEP] = stroke_guard(P, x, u)
-    M[M_STATUS] = CREEP_LAW
-    return CREEP_LAW
-
-
-@njit(**JIT)
-def _approach_limit(dist, vel, h, decel):
-    """The largest constant acceleration towards a limit ``dist`` away (approached at
-    ``vel``) over a sample ``h`` after which the approach still stops short of it at
-    ``decel``: the end speed ``w`` meets ``dist >= h (vel + w) / 2 + max(w, 0)^2 / (2 decel)``
-    (receding by the end, ``w < 0``, when even stopping at the end is too late). No limit
-    (``inf``) without a deceleration to stop by (``decel <= 0``: a force limit not above the
-    body's weight)."""
-    if not decel > 0.0:
-        return np.inf
-    c = dist - 0.5 * h * vel
-    if c >= 0.0:
-        w = decel * (math.sqrt(0.25 * h * h + 2.0 * c / decel) - 0.5 * h)
-    else:
-        w = 2.0 * c / h
-    return (w - vel) / h
-
-
-@njit(**ENTRY)
-def stroke_guard(P, x, u):
-    """The creep law's force ``u`` (held over a sample) limited so that the leg's extension
-    (or compression) can still stop at half the body's own relative deceleration under the
-    force limit (pulled extending, pushed compressing: the foot may rest) before the stroke
-    leaves ``[m, s - m]`` (``m = STROKE_MARGIN s``; :func:`_approach_limit`): the law plans
-    the foot only. The relative acceleration is affine in ``u`` (the yielding foot's
-    included; a resting foot is taken to stay at rest, which a push beyond the crater's hold
-    makes optimistic). A safety net, not a plan: a law that turns in time is untouched; where
-    both limits cannot hold, the compression's wins, and the force limit over both."""
-    S, V = x[0] - x[2], x[1] - x[3]
-    m = STROKE_MARGIN * P[P_S]
-    h, ab0, bb, umax = P[P_PERIOD], P[P_AB0], P[P_BB], P[P_UMAX]
-    a0, slope = ab0, bb
-    if x[3] < 0.0:
-        a0 -= _foot_acc(P, 0.0, x[2], x[3])
-        slope -= P[P_BF]
-    top = _approach_limit(P[P_S] - m - S, V, h, 0.5 * (bb * umax - ab0))
-    if a0 + slope * u > top:
-        u = (top - a0) / slope
-    floor = _approach_limit(S - m, -V, h, 0.5 * (ab0 + bb * umax))
-    if -(a0 + slope * u) > floor:
-        u = (-floor - a0) / slope
-    return min(umax, max(-umax, u))
 
 
 @njit(**JIT)
@@ -651,8 +493,10 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     """One sample of the controller, compiled: the estimate updated from the measurement
     (``estimate``), the plan shifted by the sample ``h`` just applied and re-solved from
     ``x`` for the estimated ground, in at most ``P[P_WORK]`` integrator steps (``M_WORK``
-    says how many). Returns the status (:data:`OK` or why not covered); the plan is in
-    ``M``.
+    says how many). Where that structure does not cover the state, the fallback acts in the
+    same call (:func:`~softlanding.control.fallback.fallback`: the plan kept with the margin
+    dropped, the creep law or the safe brake). Returns the status; the plan (or the force)
+    is in ``M``.
 
     Parameters
     ----------
@@ -671,6 +515,18 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     K, W : arrays
         :func:`workspace`.
     """
+    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
+    left[0] = P[P_WORK]
+    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
+    M[M_WORK] = P[P_WORK] - left[0]
+    return fallback(P, M, x, st)
+
+
+@njit(**ENTRY)
+def structure_step(P, M, x, a_f, u, h, estimate, K, W):
+    """:func:`control_step` without the fallback (the filtered step's recovery comes before
+    it), its arguments the same: the status (:data:`OK`, or why the structure does not
+    cover the state)."""
     Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
     left[0] = P[P_WORK]
     st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
@@ -707,7 +563,9 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
                 holds = False
     M[M_PRED_OK] = 0.0
     if M[M_PHASE] == CREEPING:  # (feedback every sample to the foot's stop)
-        return _creep(P, M, x)
+        return creep_phase(P, M, x)
+    if M[M_PHASE] == BRAKING:  # (the fallback's brake, every sample to the foot's stop)
+        return brake(P, M, x)
     # the creep law reaches the static depth, the least any landing can: it takes over
     # (judged on the ground CREEP_SIGMAS standard deviations stiffer and less draggy: a
     # shallower static depth, less drag to spend the momentum)
@@ -718,7 +576,7 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
                            P[P_HOLD0], k_hi, c_lo, x):
             # (not where the planned ground, the margin's, has no drag left for the law:
             # the bang-bang plan goes on)
-            if _creep(P, M, x) == CREEP_LAW:
+            if creep_phase(P, M, x) == CREEP_LAW:
                 return CREEP_LAW
     if M[M_PHASE] == PUSH:
         if M[M_TAU1] > h:
@@ -743,7 +601,7 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
                 _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
             M[M_STATUS] = st
             if st == CREEP and P[P_CREEP] == 1.0:
-                return _creep(P, M, x)
+                return creep_phase(P, M, x)
             return st
         # the switch fell within the sample
         M[M_TAU2] = max(M[M_TAU2] - (h - M[M_TAU1]), 1e-3 * M[M_TAU2])
@@ -760,14 +618,9 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
         _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
     M[M_STATUS] = st
     if st == CREEP and P[P_CREEP] == 1.0:
-        return _creep(P, M, x)
+        return creep_phase(P, M, x)
     return st
 
 
-__all__ = ["ARREST_FAILS", "BUDGET", "CONVERGING", "CREEP", "CREEPING", "CREEP_LAW", "CREEP_SIGMAS",
-           "DEFERRED", "HOLDS", "LOOSE_RTOL",
-           "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "NEWTON_FAILED",
-           "NEWTON_TOL", "OK", "PATH_LIMIT", "PLAN_HOLDS_TOL", "PULL", "PUSH", "RTOL", "SPENT",
-           "TIGHTEN", "WORK", "STATUS_NAMES", "control_step",
-           "force_coefficients", "ground_force_noise", "new_memory", "robot_numbers",
-           "solve_plan", "STROKE_MARGIN", "stroke_guard", "workspace"]
+__all__ = [*bangbang_layout.__all__, "control_step", "solve_plan", "structure_step",
+           "stroke_guard"]

@@ -20,8 +20,9 @@ from numba import njit
 
 from softlanding.control import bangbang as bb
 from softlanding.control.estimation import filtered_weight
+from softlanding.control.fallback import fallback
 from softlanding.control.foot_filter import covariance, filter_step
-from softlanding.simulation.kernel.const import ENTRY
+from softlanding.simulation.kernel.const import ENTRY, JIT
 
 #: Most samples in a row the filtered estimate's bounded full solve may go on over (each
 #: within the work bound) before the landing falls back.
@@ -79,7 +80,8 @@ def filtered_step(P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: fl
     (counted in ``M[M_WORK]``, which may then reach twice the bound); one that runs out
     keeps the plan (the push goes on: :data:`~softlanding.control.bangbang.DEFERRED`,
     counted in ``M_DEFERRED``) and goes on from its iterate at the next sample, for at most
-    :data:`RECOVERY_SAMPLES` samples in a row.
+    :data:`RECOVERY_SAMPLES` samples in a row. A state still not covered gets the compiled
+    fallback (:func:`~softlanding.control.fallback.fallback`).
 
     Parameters
     ----------
@@ -98,15 +100,22 @@ def filtered_step(P: np.ndarray, M: np.ndarray, x: np.ndarray, a_f: float, u: fl
     K, W : array
         :func:`~softlanding.control.bangbang.workspace`.
     """
+    st, recovering = _recovered(P, M, x, a_f, u, h, estimate, weight, recovering, K, W)
+    return fallback(P, M, x, st), recovering
+
+
+@njit(**JIT)
+def _recovered(P, M, x, a_f, u, h, estimate, weight, recovering, K, W):
+    """:func:`filtered_step` before its fallback: the weighted step and the recovery."""
     if weight == 1.0 or not estimate:
-        st = int(bb.control_step(P, M, x, a_f, u, h, estimate, K, W))
+        st = int(bb.structure_step(P, M, x, a_f, u, h, estimate, K, W))
     else:
         noise = P[bb.P_NOISE]
         M[bb.M_P00] *= weight
         M[bb.M_P01] *= weight
         M[bb.M_P11] *= weight
         P[bb.P_NOISE] = noise / np.sqrt(weight)
-        st = int(bb.control_step(P, M, x, a_f, u, h, estimate, K, W))
+        st = int(bb.structure_step(P, M, x, a_f, u, h, estimate, K, W))
         P[bb.P_NOISE] = noise
         M[bb.M_P00] /= weight
         M[bb.M_P01] /= weight

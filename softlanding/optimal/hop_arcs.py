@@ -35,6 +35,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ocp.transcriptions.solver_output import solver_output
 from softlanding.model.controllers import FeedbackSchedule, rigid_lock_gains
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.robot import Impact, Robot
@@ -402,7 +403,8 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
     opti.solver("ipopt", {"print_time": False, "expand": True,
                           "detect_simple_bounds": True}, opts)
     try:
-        val = opti.solve().value
+        with solver_output():  # CasADi's messages: logged, not printed
+            val = opti.solve().value
     except RuntimeError:  # Ipopt stopped short: its status says how (else a CasADi error)
         if "return_status" not in opti.stats():
             raise

@@ -44,6 +44,7 @@ from softlanding.optimal.pipeline import landing_parameters
 from softlanding.simulation.actuator_work import Work, result_work, state_at
 from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
 from softlanding.util.jsonable import json_safe
+from softlanding.util.progress import step
 from softlanding.util.signals import raise_if_interrupted
 
 SLACK_NOTE = ("the transcription meets its power slack p >= u (v_b - v_f) at its nodes and "
@@ -483,9 +484,11 @@ def solve_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: float = 0
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             starts.append({"stretch": stretch, "error": err.status})
             last_error = err
+            step(f"start {len(starts)} of {len(HOP_STARTS)}")
             continue
         starts.append({"stretch": stretch, "energy": c.energy, "depth": c.depth,
                        "verified": not c.unverified_reasons()})
+        step(f"start {len(starts)} of {len(HOP_STARTS)}")
         if best is None or (not c.unverified_reasons(), -c.energy) > (
                 not best.unverified_reasons(), -best.energy):
             best = c
@@ -569,6 +572,7 @@ def _grid_sequence(base: HopCycle, robot: Robot, impact: Impact, eta: float,
         c.starts = base.starts
         grids.append(_grid_row(c))
         cur = c
+        step(f"grid {k} of {doublings} doublings")
     cur.grids = grids
     e = [g["energy"] for g in grids]
     if len(e) >= 2:
@@ -863,18 +867,20 @@ def best_impedance_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: 
     """
     robot, impact = hop_input(robot, impact, eta)
     cands = []
-    for kp in np.linspace(0.05, 2.0, grid):
+    for i, kp in enumerate(np.linspace(0.05, 2.0, grid), 1):
         for kd in np.linspace(0.0, 2.0, grid):
             u_t = _thrust_for(robot, impact, float(kp), float(kd))
             if u_t is None:
                 continue
             cands.append((_stance(robot, impact, kp, kd, u_t).work.drawn(eta), float(kp),
                           float(kd)))
+        step(f"gain grid, row {i} of {grid}")
     if not cands:
         return None
     best: HopCycle | None = None
     for _, kp, kd in sorted(cands)[:top]:
         h = impedance_hop(impact, kp, kd, robot, eta, flight_guess=flight_guess)
+        step("a flight solved")
         if h is not None and (best is None or h.energy < best.energy):
             best = h
         if h is not None:

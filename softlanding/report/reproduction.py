@@ -24,6 +24,7 @@ from softlanding.report.terrain import TERRAIN_SECTION
 from softlanding.report.unknown_ground import UNKNOWN_GROUND_SECTION
 from softlanding.util.files import atomic_folder
 from softlanding.util.jsonable import json_safe
+from softlanding.util.progress import activity
 
 SECTIONS: tuple[Section, ...] = (*PAPER_SECTIONS, TERRAIN_SECTION, PHASED_SECTION,
                                  UNKNOWN_GROUND_SECTION)
@@ -75,7 +76,9 @@ def _run_sections(out: Path, st: Settings, progress: bool,
     t_all = time.perf_counter()
     for i, section in enumerate(SECTIONS, 1):
         t0 = time.perf_counter()
-        summary[section.key] = section.run(ctx)
+        # sections of seconds to minutes: on a terminal a line with its elapsed time
+        with activity(f"[{i}/{len(SECTIONS)}] {section.title}", enabled=progress):
+            summary[section.key] = section.run(ctx)
         timings[section.key] = time.perf_counter() - t0
         if log is not None:
             log(f"[{i}/{len(SECTIONS)}] {section.title:<20} {timings[section.key]:6.1f} s")

@@ -434,6 +434,27 @@ SECONDS_PER_LANDING = 60e-6
 """Typical CPU time per landing (paper grid, measured), for the estimate in messages."""
 
 
+def available_memory() -> int:
+    """Bytes the kernel can give a new allocation: free memory plus reclaimable page cache.
+
+    ``MemAvailable`` of ``/proc/meminfo`` where there is one; bare free pages would refuse a
+    batch on a machine whose memory is mostly cache (a busy CI runner), falsely.
+    """
+    import os
+
+    try:
+        with open("/proc/meminfo", encoding="ascii") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return 8 * 2**30
+
+
 def check_batch_size(n: int, option: str = "grid") -> None:
     """Refuse a batch that would not fit in memory, before anything is allocated.
 
@@ -449,16 +470,11 @@ def check_batch_size(n: int, option: str = "grid") -> None:
     ParameterError
         With the estimated memory and time.
     """
-    import os
-
     need = n * BYTES_PER_LANDING
-    try:
-        avail = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
-        avail = 8 * 2**30
+    avail = available_memory()
     if need > 0.5 * avail:
         raise ParameterError(option, f"{n:,} landings need about {need / 2**30:.1f} GiB of "
-                                     f"memory ({avail / 2**30:.1f} GiB free) and about "
+                                     f"memory ({avail / 2**30:.1f} GiB available) and about "
                                      f"{n * SECONDS_PER_LANDING / 3600:.1f} CPU hours; "
                                      "ask for fewer")
 

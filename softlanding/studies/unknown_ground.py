@@ -97,7 +97,7 @@ def unknown_ground_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *
     if gains is None:
         o = optimize_impedance(impact, robot)
         gains = Impedance(o.k_p, o.k_d)
-    m = mpc_landing(impact, robot, ground, period=period)
+    m = mpc_landing(impact, robot, ground, period=period, controller="replan")
     row: dict[str, Any] = {
         "v0": v0, "ground": ground.to_dict(), "clairvoyant_depth": clair.depth,
         "clairvoyant_verified": not clair.unverified_reasons(),

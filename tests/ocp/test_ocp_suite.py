@@ -45,8 +45,10 @@ def test_suite_covers_what_the_issue_asks():
     assert sum(math.isfinite(p.published) for p in PROBLEMS) >= 10
 
 
-REACH_SLOW = {"pinene", "hanging_chain", "rayleigh_min_time"}  # 3.7, 2.8, 3.1 s CPU: the
-# README's command's budget
+REACH_SLOW = {"pinene", "hanging_chain", "rayleigh_min_time", "goddard"}  # 3.7, 2.8, 3.1 s
+# CPU: the README's command's budget; goddard's singular arc converges at first order, and
+# its refinement to 1e-6 confirmed on the halved mesh takes ~20 s CPU (issue 44: the tree
+# before stopped at 1.5 s claiming 3.9e-7 where the error was 2.7e-6)
 
 
 @pytest.mark.parametrize("name", [
@@ -103,8 +105,8 @@ def test_mesh_refinement_builds_once_per_mesh_and_resolves_without_rebuild():
 # the certificate against the literature's verdict, on every single-phase problem with a
 # control: bang-bang ones are certified from their collocation solution and its refined
 # switching times; the others (singular, chattering, smooth) are never certified
-CERT_SLOW = {"robot_arm", "hanging_chain", "rayleigh_min_time"}  # robot_arm: 2 s CPU; the
-# other two: their refined solves are REACH_SLOW
+CERT_SLOW = {"robot_arm", "hanging_chain", "rayleigh_min_time", "goddard"}  # robot_arm: 2 s
+# CPU; the others: their refined solves are REACH_SLOW
 
 
 # the verdict is what is tested: a refined mesh a hair over a state limit between its points

@@ -1,10 +1,10 @@
 """The suite's bang-bang problems refined and certified with default settings; its singular
-problems get "not bang-bang" (from multiple-shooting transcriptions)."""
+problems, from a multiple-shooting transcription alone, are "inconclusive" (never refuted)."""
 
 import pytest
 
 from ocp import MultipleShooting, certify
-from ocp.certificate.certify import CERTIFIED, NOT_BANG_BANG
+from ocp.certificate.certify import CERTIFIED, INCONCLUSIVE
 from ocp.structure.switching import detect_structure, refine_switching
 from tests.oracles.ocp_suite import problems as P
 
@@ -32,10 +32,14 @@ def test_robot_arm_three_controls_refined_and_certified():
 
 
 @pytest.mark.parametrize("name", ["catalyst_mixing", "goddard"])
-def test_singular_problems_are_not_bang_bang(name):
+def test_singular_optima_from_a_transcription_are_inconclusive_never_refuted(name):
+    # the transcription's control on the singular arc is off the singular control by the
+    # grid's error (0.13-0.17 here): that names the arc and refutes nothing (these are the
+    # published optima); refine_switching flies the arc exactly (test_singular_arcs.py)
     sol = MultipleShooting(getattr(P, name)(), nodes=100).solve({})
     st = detect_structure(sol)
     assert not st.refinable  # a bang, an interior (singular) arc, a bang
     c = certify(sol)
-    assert c.verdict == NOT_BANG_BANG
-    assert c.singular_intervals
+    assert c.verdict == INCONCLUSIVE, c.reasons
+    assert any(r.kind == "singular" and r.order == 1 for r in c.arcs)
+    assert any("refine_switching" in r for r in c.reasons)

@@ -207,9 +207,10 @@ class CController:
         return F
 
     def filter_step(self, F: np.ndarray, x: np.ndarray, g: float, U1: float, U2: float,
-                    h: float, beta: float, noise: float) -> bool:
+                    h: float, beta: float, noise: float) -> int:
         """``sl_filter_step`` (as :func:`~softlanding.control.foot_filter.filter_step`): ``F``
-        and ``x`` updated in place; whether the innovation check widened the prediction.
+        and ``x`` updated in place; 1 if the innovation check widened the prediction, else
+        0; ``SL_REFUSED`` (-1), nothing changed, for a non-finite input.
 
         Parameters
         ----------
@@ -220,7 +221,7 @@ class CController:
         g, U1, U2, h, beta, noise : float
             As :func:`~softlanding.control.foot_filter.filter_step`.
         """
-        return bool(self.lib.sl_filter_step(_ptr(F), _ptr(x), g, U1, U2, h, beta, noise))
+        return int(self.lib.sl_filter_step(_ptr(F), _ptr(x), g, U1, U2, h, beta, noise))
 
     def filtered_weight(self, P: np.ndarray, M: np.ndarray, F: np.ndarray, x: np.ndarray,
                         a_f: float, u: float) -> float:

@@ -20,6 +20,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from softlanding.control import bangbang as bb
+from softlanding.control import bangbang_layout as bbl
 from softlanding.control import creep, estimation, recovery
 from softlanding.control import foot_filter as ff
 from softlanding.simulation.kernel import dop853
@@ -47,7 +48,8 @@ P_DOC = {
 
 #: What each entry of ``M`` holds.
 M_DOC = {
-    "M_PHASE": "SL_PUSH (both arcs left), SL_PULL (the foot's stop left) or SL_CREEPING",
+    "M_PHASE": "SL_PUSH (both arcs left), SL_PULL (the foot's stop left), SL_CREEPING or "
+               "SL_BRAKING",
     "M_TAU1": "push left from the last step (while SL_PUSH)",
     "M_TAU2": "pull from the switch (SL_PUSH) or from the last step (SL_PULL) to the stop",
     "M_TH0": "estimate of K",
@@ -69,7 +71,10 @@ M_DOC = {
     "M_LAST_STEP": "size |dtau1| + |dtau2| of the last Newton step",
     "M_WORK": "integrator steps of the last sl_control_step (at most P[SL_P_WORK])",
     "M_DEFERRED": "calls whose integrator steps ran out (SL_DEFERRED)",
-    "M_UCREEP": "the creep law's force of the last step (while SL_CREEPING): sl_force",
+    "M_UCREEP": "the creep law's or the brake's force of the last step (while SL_CREEPING, "
+                "SL_BRAKING): sl_force",
+    "M_FALLBACKS": "samples the fallback acted on (the structure did not cover the state)",
+    "M_WHY": "the status the fallback last took over from",
 }
 
 #: What each entry of the foot filter's memory ``F`` holds.
@@ -96,8 +101,8 @@ FILTER_CONSTANTS = ("PROVISIONAL", "PROCESS", "INNOVATION", "START_STD")
 #: The phases and statuses, and the tolerances the C uses (names of
 #: :mod:`~softlanding.control.bangbang`).
 STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "HOLDS",
-            "CREEP", "DEFERRED", "CREEP_LAW")
-CONSTANTS = ("PUSH", "PULL", "CREEPING", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL",
+            "CREEP", "DEFERRED", "CREEP_LAW", "KEPT", "BRAKE")
+CONSTANTS = ("PUSH", "PULL", "CREEPING", "BRAKING", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL",
              "PLAN_HOLDS_TOL", "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED",
              "MARCHED", "SPENT", "CREEP_SIGMAS", "STROKE_MARGIN")
 
@@ -141,7 +146,7 @@ def indices(prefix: str) -> dict[str, int]:
     prefix : str
         ``"P_"``, ``"M_"`` or ``"F_"``.
     """
-    module = ff if prefix == "F_" else bb
+    module = ff if prefix == "F_" else bbl
     found = {k: v for k, v in vars(module).items() if k.startswith(prefix) and type(v) is int}
     return dict(sorted(found.items(), key=lambda kv: kv[1]))
 
@@ -160,7 +165,7 @@ def layout_lines(prefix: str) -> list[str]:
     KeyError
         The controller (or the filter) has an entry this module does not describe.
     """
-    doc, module, size = {"P_": (P_DOC, bb, "NP"), "M_": (M_DOC, bb, "NM"),
+    doc, module, size = {"P_": (P_DOC, bbl, "NP"), "M_": (M_DOC, bbl, "NM"),
                          "F_": (F_DOC, ff, "NF")}[prefix]
     found = indices(prefix)
     missing = sorted(set(found) - set(doc))

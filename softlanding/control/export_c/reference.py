@@ -15,8 +15,9 @@ from softlanding.optimal.landing import arrest_schedule
 
 def plan_schedule(P: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The plan in ``M`` as a piecewise-constant force from the step, from the Python
-    schedule (push, pull, then :func:`~softlanding.optimal.landing.arrest_schedule`; while
-    creeping, the creep law's force ``M[M_UCREEP]`` held, as ``mpc_landing``'s):
+    schedule (push, pull, then :func:`~softlanding.optimal.landing.arrest_schedule`, its
+    force saturated at the limit; while creeping or braking, the creep law's or the brake's
+    force ``M[M_UCREEP]`` held, as ``mpc_landing``'s):
     ``values[i]`` until ``times[i]``, the last value after.
 
     Parameters
@@ -24,7 +25,7 @@ def plan_schedule(P: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     P, M : arrays
         The controller's numbers and memory.
     """
-    if M[bb.M_PHASE] == bb.CREEPING:
+    if M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING):
         return np.array([]), np.array([float(M[bb.M_UCREEP])])
     t1 = float(M[bb.M_TAU1]) if M[bb.M_PHASE] == bb.PUSH else 0.0
     t2 = t1 + float(M[bb.M_TAU2])
@@ -33,7 +34,8 @@ def plan_schedule(P: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]
                            float(P[bb.P_RM]))
     assert isinstance(tail, ForceSchedule)  # (a constant arrest force, then the weight)
     times = np.array([t1, t2, *(t2 + np.array(tail.times))])
-    return times, np.array([u_max, -u_max, *tail.values])
+    arrest = [min(u_max, max(-u_max, v)) for v in tail.values]  # (saturated, as applied)
+    return times, np.array([u_max, -u_max, *arrest])
 
 
 def plan_forces(P: np.ndarray, M: np.ndarray, times: np.ndarray) -> np.ndarray:

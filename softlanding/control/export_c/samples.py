@@ -7,8 +7,9 @@ state (:func:`~softlanding.control.bangbang.solve_plan`), then the samples follo
 gave (a plant by Euler steps on the true ground, whose ``K`` and ``c_d`` are off the
 controller's prior by up to 50 %, and noisy sensors; or, in a fifth of the landings, the
 state the plan predicted, after a first sample at the impact: the plan-holds path),
-until the plan's foot stop or a state the controller does not cover; every other landing
-with the creep law on (``P_CREEP = 1``: creeping, the plant's foot stop ends it). Every
+until the plan's foot stop (a state the structure does not cover gets the compiled fallback:
+its samples too); every other landing with the creep law on (``P_CREEP = 1``: creeping or
+braking, the plant's foot stop ends it). Every
 call's inputs (``P`` and ``M`` before it included) are recorded, so that another
 implementation can be run on exactly the same ones.
 """
@@ -185,7 +186,7 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
                 st = int(bb.solve_plan(P, M, x, *ws))
             else:
                 hk = h
-                creeping = M[bb.M_PHASE] == bb.CREEPING
+                creeping = M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING)  # (a force, held)
                 if case.exact and not creeping:  # the plan's own prediction (first: a
                     # sample at impact)
                     hk = h if M[bb.M_PRED_OK] == 1.0 else 0.0
@@ -204,11 +205,10 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
                 calls.append(Call(P.copy(), M.copy(), x, a_f, u, hk, False))
                 st = int(bb.control_step(P, M, x, a_f, u, hk, True, *ws))
                 steps += 1
-            length = np.inf if M[bb.M_PHASE] == bb.CREEPING else (
+            length = np.inf if M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING) else (
                 (M[bb.M_TAU1] if M[bb.M_PHASE] == bb.PUSH else 0.0) + M[bb.M_TAU2])
-            if steps >= n_steps or length <= h or st not in (bb.OK, bb.CONVERGING, bb.HOLDS,
-                                                                  bb.DEFERRED, bb.CREEP_LAW):
-                break  # the foot's stop within the next sample, or a state not covered
+            if steps >= n_steps or length <= h or (sample == 0 and st != bb.OK):
+                break  # the foot's stop within the next sample, or a first plan not made
     pr = CREEP_PROBE
     P = bb.robot_numbers(robot.r_m, robot.s, force_limit(robot), pr.K, pr.c_d)
     M = bb.new_memory(*pr.guess, (pr.K, pr.c_d), (1.0, 1.0), 1e-6)
@@ -227,8 +227,8 @@ def _plant(P: np.ndarray, M: np.ndarray, x: np.ndarray, h: float,
     u = a_f = 0.0
     for i in range(20):
         u = float(P[bb.P_UMAX]) if (i + 1) * dt <= t1 else -float(P[bb.P_UMAX])
-        if M[bb.M_PHASE] == bb.CREEPING:  # (the creep law's force, held)
-            u = float(M[bb.M_UCREEP])
+        if M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING):  # (the creep law's or the brake's
+            u = float(M[bb.M_UCREEP])  # force, held)
         a_f = float(P[bb.P_AF0] + P[bb.P_BF] * u
                     + P[bb.P_GF] * (truth[0] * -xf + truth[1] * vf * vf))
         vb += dt * float(P[bb.P_AB0] + P[bb.P_BB] * u)

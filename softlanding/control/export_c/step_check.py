@@ -79,7 +79,8 @@ class StepComparison:
                 f"{self.worst():.3g}")
 
 
-def recovery_outcome(status: int, M: np.ndarray, before: int, after: int) -> str | None:
+def recovery_outcome(status: int, M: np.ndarray, before: int, after: int,
+                     M_before: np.ndarray | None = None) -> str | None:
     """What the recovery did in a sample (:data:`OUTCOMES`), or None where it did not run.
 
     Parameters
@@ -90,13 +91,18 @@ def recovery_outcome(status: int, M: np.ndarray, before: int, after: int) -> str
         The memory after it (its ``M_STATUS`` the real-time step's own).
     before, after : int
         The recovery's count before and after it.
+    M_before : array, optional
+        The memory before it: a recovery that failed is a Newton failure of a push whose
+        iteration had been unconverged for ``MAX_UNCONVERGED`` samples, which the fallback
+        then met (``M_FALLBACKS`` up, ``M_WHY`` the failure).
     """
     if status == bb.OK and M[bb.M_STATUS] == bb.NEWTON_FAILED:
         return "recovered"
     if status == bb.DEFERRED and after == before + 1:
         return "recovery deferred"
-    if status == bb.NEWTON_FAILED and M[bb.M_PHASE] == bb.PUSH \
-            and M[bb.M_UNCONVERGED] > bb.MAX_UNCONVERGED:
+    if M_before is not None and M[bb.M_FALLBACKS] > M_before[bb.M_FALLBACKS] \
+            and M[bb.M_WHY] == bb.NEWTON_FAILED and M_before[bb.M_PHASE] == bb.PUSH \
+            and M_before[bb.M_UNCONVERGED] >= bb.MAX_UNCONVERGED:
         return "recovery failed"
     return None
 
@@ -156,7 +162,7 @@ def compare_steps(c: CController, calls: list[StepCall]) -> StepComparison:
         out.weighted += w < 1.0
         name = bb.STATUS_NAMES[sp]
         out.statuses[name] = out.statuses.get(name, 0) + 1
-        outcome = recovery_outcome(sp, Mp, k.recovering, rp)
+        outcome = recovery_outcome(sp, Mp, k.recovering, rp, k.M)
         if outcome is not None:
             out.outcomes[outcome] += 1
         length = (Mp[bb.M_TAU1] if Mp[bb.M_PHASE] == bb.PUSH else 0.0) + Mp[bb.M_TAU2]

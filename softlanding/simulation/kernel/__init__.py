@@ -44,7 +44,11 @@ shrinking hops' limit depth, else NaN) and
 
 from __future__ import annotations
 
+import contextlib
+import sys
 import threading
+from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -81,92 +85,74 @@ STATUS_NAMES = {
 # ------------------------------------------------------------------ the first compile
 _CHECKED: set[str] = set()
 
-
-def compiled_before(dispatcher) -> bool:
-    """True if ``dispatcher`` needs no compile: it has machine code in this process, or an
-    up-to-date entry in numba's on-disk cache (its index exists and matches the source).
-
-    Parameters
-    ----------
-    dispatcher : numba Dispatcher
-        A compiled kernel function.
-    """
-    if dispatcher.signatures:
-        return True
-    try:
-        return cache_index_current(dispatcher.py_func)
-    except Exception:  # no on-disk cache (NUMBA_DISABLE_JIT, another numba): assume compiled
-        return True
+FIRST_COMPILE = {
+    # kind -> (what is compiled, its CPU seconds on a cold cache on 2 shared cores, rounded
+    # up; how many functions numba compiles for it, for the bar), measured by
+    # benchmarks/bench_first_run.py (the demo) and tests/softlanding/simulation/test_first_run.py
+    "affine": ("the simulator", 10, 80),
+    "proofs": ("the simulator's creep and hop proofs", 5, 30),
+    "batch": ("the simulator's batch loop", 10, 40),
+    "non-affine": ("the simulator for non-affine grounds", 15, 80),
+    "non-affine batch": ("the non-affine simulator's batch loop", 10, 40),
+}
+"""What a first call of each kernel entry compiles (see :func:`first_compile`)."""
 
 
-def cache_index_current(py_func) -> bool:
-    """True if numba's on-disk cache index of ``py_func`` exists and is not older than its
-    source (numba names it ``<module>.<qualname>-<line>.py<ver>.nbi``, in ``__pycache__``
-    beside the source or in ``NUMBA_CACHE_DIR``; read from the file system, not from
-    numba's private cache objects).
+class _CompileProgress:
+    """numba's compile events during a first call: the notice at the first one, then a bar
+    (on a terminal) over the functions compiled."""
 
-    Parameters
-    ----------
-    py_func : function
-        The Python function of a ``cache=True`` dispatcher.
-    """
-    import hashlib
-    import inspect
-    import sys
-    from pathlib import Path
+    def __init__(self, kind: str) -> None:
+        self.kind = kind
+        self.notice: str | None = None
+        self.stack = contextlib.ExitStack()
+        self.bar: Any = None
 
-    import numba
+    def notify(self, event) -> None:
+        if event.is_start and self.notice is None:
+            what, seconds, total = FIRST_COMPILE[self.kind]
+            self.notice = f"softlanding: compiling {what} (once, about {seconds} s)..."
+            print(self.notice, file=sys.stderr, flush=True)
+            from softlanding.util.progress import progress_bar
 
-    src = Path(inspect.getsourcefile(py_func) or "").resolve()
-    cache_dir = getattr(numba.config, "CACHE_DIR", "")
-    if cache_dir:  # NUMBA_CACHE_DIR: numba's folder per source folder there
-        folder = Path(cache_dir) / (
-            f"{src.parent.name}_{hashlib.sha1(str(src.parent).encode()).hexdigest()}")
-    else:
-        folder = src.parent / "__pycache__"
-    ver = f"{sys.version_info[0]}{sys.version_info[1]}"
-    index = folder / (
-        f"{src.stem}.{py_func.__qualname__}-{py_func.__code__.co_firstlineno}.py{ver}.nbi")
-    return index.is_file() and index.stat().st_mtime >= src.stat().st_mtime
+            self.bar = self.stack.enter_context(progress_bar(total, "compiling", "function"))
+        elif event.is_end and self.bar is not None:
+            self.bar.update(1)
 
 
-def compile_notice(kind: str = "affine") -> str | None:
-    """Say on stderr, once per process and only on a cold cache, that the simulator is about
-    to be compiled (numba, then cached on disk): the first landing of a fresh install waits
-    while it compiles, and would otherwise print nothing.
+@contextlib.contextmanager
+def first_compile(kind: str) -> Iterator[_CompileProgress | None]:
+    """Around a kernel entry's call: if numba compiles anything during it (a cold cache),
+    say so on stderr once (``softlanding: compiling the simulator (once, about 10 s)...``)
+    and, when stderr is a terminal, draw a bar over the functions compiled. Only the first
+    call of each kind in a process is watched (numba compiles an entry once); a warm cache
+    prints nothing (numba's compile event fires on a compile, not on a load from its cache).
 
     Parameters
     ----------
-    kind : {"affine", "non-affine"}
-        Which simulator is about to run: the exact one, or the one that integrates the
-        yielding segments of a non-affine ground.
+    kind : str
+        A key of :data:`FIRST_COMPILE`.
 
-    Returns
-    -------
-    str or None
-        The notice printed, if any.
+    Yields
+    ------
+    object or None
+        What was watched (its ``notice``: the line printed, or None), or None if this kind
+        was watched before in this process.
     """
     if kind in _CHECKED:
-        return None
+        yield None
+        return
     _CHECKED.add(kind)
-    from softlanding.simulation.kernel import landing
+    from numba.core import event
 
-    if kind == "affine":
-        entries, inner, seconds, what = (simulate_one, batch_range), simulate_one, 5, ""
-    else:
-        from softlanding.simulation.kernel import nonaffine
-
-        entries = (nonaffine.landing_entry_nl, nonaffine.batch_range_nl)
-        inner, seconds, what = nonaffine.simulate_one_nl, 10, " for non-affine grounds"
-    if compiled_before(inner) or all(compiled_before(e) for e in entries):
-        return None
-    if not compiled_before(landing.step_map):  # the parts both simulators share
-        seconds += 5
-    notice = f"softlanding: compiling the simulator{what} (once, about {seconds} s)..."
-    import sys
-
-    print(notice, file=sys.stderr, flush=True)
-    return notice
+    watch = _CompileProgress(kind)
+    listener = type("_Listener", (event.Listener,), {
+        "on_start": lambda self, e: watch.notify(e), "on_end": lambda self, e: watch.notify(e)})()
+    try:
+        with event.install_listener("numba:compile", listener):
+            yield watch
+    finally:
+        watch.stack.close()
 
 
 _PACKED: dict[int, tuple[dict, np.ndarray]] = {}
@@ -243,19 +229,23 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
         segment start times (and the end time), closed-loop matrices, start
         states, control functionals and ground modes.
     """
-    compile_notice("affine")
     args = (packed_model(mats), (_f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u)),
             _f64(x0), (float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps)))
     # this thread's records, taken while in use (a landing run meanwhile, by a signal
     # handler, makes its own)
     first = _RECORDS.__dict__.pop("rec", None) or _new_records(RECORDS_FIRST)
     first[0][0] = np.nan  # the end time of a landing not simulated (the other rows used are set)
-    rec, out = first, np.zeros(N_OUT)
-    simulate_one(*args, out, rec)
+    rec, out, proofs = first, np.zeros(N_OUT), None
+    with first_compile("affine"):  # the lite kernel (.landing): no creep or hop proof
+        simulate_one(*args, out, rec, proofs)
+    if out[O_STATUS] == NEEDS_PROOFS:  # it needs one: the whole kernel, from the start
+        proofs = True
+        with first_compile("proofs"):
+            simulate_one(*args, out, rec, proofs)
     n = int(out[O_NSEG])
     if n > RECORDS_FIRST:  # more segments than records: once more, with room for all
         rec, out = _new_records(n), np.zeros(N_OUT)
-        simulate_one(*args, out, rec)
+        simulate_one(*args, out, rec, proofs)
     seg = {"t": rec[0][:n + 1].copy(), "A": rec[1][:n].copy(), "z": rec[2][:n].copy(),
            "cu": rec[3][:n].copy(), "mode": rec[4][:n].copy()}
     _RECORDS.rec = first
@@ -348,11 +338,11 @@ def run_batch(mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
     max_steps : int
         Work budget per landing, as in :func:`run_landing`.
     """
-    compile_notice("affine")
     Ps = np.stack([packed_model(m) for m in mats_list])
     args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(Kf), _f64(umax), _f64(x0),
             _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps))
-    _in_chunks(batch_range, args, len(args[4]), out, threads, chunk, (16, 1024))
+    with first_compile("batch"):
+        _in_chunks(batch_range, args, len(args[4]), out, threads, chunk, (16, 1024))
 
 
 @njit(**ENTRY)
@@ -416,11 +406,11 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
     from softlanding.simulation.kernel.nonaffine import landing_entry_nl
 
     G, fp = law
-    compile_notice("non-affine")
-    out, t, A, z, cu, mode = landing_entry_nl(
-        packed_model(mats), _f64(G), fp, _f64(Kf), float(umax), _f64(sched_t),
-        _gain_rows(sched_u), _f64(x0), float(s_lim), float(t_max), int(max_seg), bool(energy),
-        float(max_steps), float(rtol), RECORDS_FIRST)
+    with first_compile("non-affine"):
+        out, t, A, z, cu, mode = landing_entry_nl(
+            packed_model(mats), _f64(G), fp, _f64(Kf), float(umax), _f64(sched_t),
+            _gain_rows(sched_u), _f64(x0), float(s_lim), float(t_max), int(max_seg),
+            bool(energy), float(max_steps), float(rtol), RECORDS_FIRST)
     return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode, "law": (G, fp, float(rtol))}
 
 
@@ -443,12 +433,12 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
     from softlanding.simulation.kernel.nonaffine import batch_range_nl
 
     G, fp = law
-    compile_notice("non-affine")
     Ps = np.stack([packed_model(m) for m in mats_list])
     args = (Ps, np.ascontiguousarray(ridx, dtype=np.int64), _f64(G), fp, _f64(Kf), _f64(umax),
             _f64(x0), _f64(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps),
             float(rtol))
-    _in_chunks(batch_range_nl, args, len(args[6]), out, threads, chunk, (4, 256))
+    with first_compile("non-affine batch"):
+        _in_chunks(batch_range_nl, args, len(args[6]), out, threads, chunk, (4, 256))
 
 
 def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,

@@ -14,6 +14,9 @@ EV_STOP, EV_YIELD, EV_LIFT, EV_LAND, EV_SAT_HIGH, EV_SAT_LOW, EV_UNSAT = range(7
 REST_PROVEN, HORIZON, TOO_MANY_SEGMENTS, NEVER_RESTS_CREEP = 0, 1, 2, 3
 STEP_BUDGET, BODY_THROUGH_FOOT, BODY_FLIES_OFF, OUT_OF_RANGE = 4, 5, 6, 7
 HOPS_TO_LIMIT = 8
+# not a landing's status: the lite kernel (no creep or hop proof compiled) stopped where the
+# landing needs one, and the landing is run again by the whole kernel (see .landing)
+NEEDS_PROOFS = 9
 
 # output layout
 O_DEPTH, O_STEPS, O_TSTOP, O_T, O_UPEAK, O_SMIN, O_SMAX, O_FEAS, O_STATUS = range(9)

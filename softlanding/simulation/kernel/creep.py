@@ -140,6 +140,37 @@ def det_inv3(V):
 
 
 @njit(**JIT)
+def creep_candidate(A, cu, C, ne):
+    """The first checks of :func:`creep_setup`: the yielding subsystem is free of ``x_b``
+    and its eigenvalues have negative real parts. Returns ``(ok, eigenvalues,
+    eigenvectors)`` as :func:`eig3` gives them (empty when not ``ok``)."""
+    no = np.empty(0, dtype=np.complex128)
+    for i in range(1, 4):
+        if A[i, 0] != 0.0:
+            return False, no, no
+    if A[1, 1] == 0.0 and A[1, 2] == 0.0 and A[1, 3] == 0.0:
+        return False, no, no  # the body's velocity is not restored: eigenvalue 0
+    if A[2, 1] != 0.0 or A[2, 2] != 0.0 or A[2, 3] != 1.0 or A[2, 4] != 0.0:
+        return False, no, no
+    if cu[0] != 0.0:
+        return False, no, no
+    for k in range(ne):
+        if C[k, 0] != 0.0:
+            return False, no, no
+    for i in range(3):
+        for j in range(3):
+            if not np.isfinite(A[1 + i, 1 + j]):
+                return False, no, no
+    info, lam0, V0 = eig3(A)
+    if info != 0:
+        return False, no, no
+    for i in range(3):
+        if not lam0[i].real < 0.0:
+            return False, no, no
+    return True, lam0, V0
+
+
+@njit(**JIT)
 def creep_setup(A, cu, C, ne, data):
     """Eigen-data of the ``x_b``-free yielding subsystem; returns False if not applicable.
 
@@ -148,28 +179,9 @@ def creep_setup(A, cu, C, ne, data):
     rows), column 7 the equilibrium ``y*`` and, in ``data[0, 7].imag``, the
     condition number of the eigenvectors.
     """
-    for i in range(1, 4):
-        if A[i, 0] != 0.0:
-            return False
-    if A[1, 1] == 0.0 and A[1, 2] == 0.0 and A[1, 3] == 0.0:
-        return False  # the body's velocity is not restored: eigenvalue 0
-    if A[2, 1] != 0.0 or A[2, 2] != 0.0 or A[2, 3] != 1.0 or A[2, 4] != 0.0:
+    ok, lam0, V0 = creep_candidate(A, cu, C, ne)
+    if not ok:
         return False
-    if cu[0] != 0.0:
-        return False
-    for k in range(ne):
-        if C[k, 0] != 0.0:
-            return False
-    for i in range(3):
-        for j in range(3):
-            if not np.isfinite(A[1 + i, 1 + j]):
-                return False
-    info, lam0, V0 = eig3(A)
-    if info != 0:
-        return False
-    for i in range(3):
-        if not lam0[i].real < 0.0:
-            return False
     order = _slowest_first(lam0)
     lam = np.empty(3, dtype=np.complex128)
     V = np.empty((3, 3), dtype=np.complex128)

@@ -192,6 +192,13 @@ def first_symmetric_hop(P, cu, s_lift, T):
 
 
 @njit(**JIT)
+def hops_pending(hk):
+    """False while :func:`hops_settled` has nothing to check: the energy balance failed
+    once, or the leg has not flown yet."""
+    return not (hk[H_EREF] == np.inf or hk[H_T] != hk[H_T])
+
+
+@njit(**JIT)
 def hops_settled(P, A, z, z0, d, C, cu, hk):
     """At a stance entry of an eligible landing: True once the hops are settled.
 
@@ -202,8 +209,8 @@ def hops_settled(P, A, z, z0, d, C, cu, hk):
     ``eps`` lost per hop is at most :data:`RHO` and has fallen for three hops in a
     row. Then ``hk[H_DLIM]`` is the limit depth.
     """
-    if hk[H_EREF] == np.inf or hk[H_T] != hk[H_T]:
-        return False  # the balance failed once, or no flight yet
+    if not hops_pending(hk):
+        return False
     lo, hi = future_range(A, z, row5(C[0]))
     if hi > 0.0:
         hk[H_N], hk[H_EPS] = 0.0, np.nan

@@ -8,6 +8,18 @@
 * :func:`simulate_one` -- the loop over segments (Python's entry for one landing), and
   :func:`batch_range`.
 
+The loop is compiled twice, from the same source, by the type of its argument ``proofs``:
+with ``proofs=True`` it is the whole kernel; with ``proofs=None`` the **lite** kernel, in
+which numba prunes the branches ``if proofs is None`` select (at compile time, by the
+argument's type) and so never compiles the proof that a foot creeps forever
+(:mod:`.creep`'s eigen-decomposition past its first checks, and the proof tried after
+every step) nor the proof that an undamped leg's hops settle (:mod:`.hops` past its first
+check). Where a landing would need one, the lite kernel ends it with the code
+``NEEDS_PROOFS`` and the landing is run again, from the start, by the whole kernel: every
+landing's numbers are the whole kernel's (the two share every operation up to that point).
+A landing that never needs the proofs (the demo's, most of a study's) compiles only the
+lite kernel: about a third less to compile on a fresh install.
+
 Per-landing bookkeeping lives in two small arrays: ``ext`` (extrema of the
 stroke and the force, the actuator work) and ``bk`` (first stop time, rest
 time, energy and actuator work at the start of the final static phase).
@@ -36,6 +48,7 @@ from softlanding.simulation.kernel.const import (
     HORIZON,
     JIT,
     LINEAR,
+    NEEDS_PROOFS,
     NEVER_RESTS_CREEP,
     O_DEPTH,
     O_DLIM,
@@ -67,7 +80,12 @@ from softlanding.simulation.kernel.const import (
     TOO_MANY_SEGMENTS,
     YIELDING,
 )
-from softlanding.simulation.kernel.creep import creep_limit_depth, creep_proof, creep_setup
+from softlanding.simulation.kernel.creep import (
+    creep_candidate,
+    creep_limit_depth,
+    creep_proof,
+    creep_setup,
+)
 from softlanding.simulation.kernel.events import (
     build_events,
     classify,
@@ -82,6 +100,7 @@ from softlanding.simulation.kernel.hops import (
     hop_eligible,
     hop_event,
     hop_state,
+    hops_pending,
     hops_settled,
 )
 from softlanding.simulation.kernel.linalg import (
@@ -214,7 +233,8 @@ def step_map(A, mode, key, Qe, energy, phic, gc, hc):
 
 
 @njit(**JIT, inline="always")
-def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext, creep, ws):
+def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext, creep, ws,
+          proofs):
     """Propagate ``z`` in place to the segment's first event, schedule switch or horizon.
 
     Inlined (numba's IR) into each segment loop: as a compiled function of its own, every
@@ -224,10 +244,10 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
     ``ws`` is the landing's :func:`workspace`. The step map ``exp(A h)`` (and the
     energy Gramian) of a closed loop are cached under ``key`` (mode and regime;
     -1: no caching). With ``creep`` (see :mod:`.creep`) the proof that the foot
-    creeps forever is tried after every step. Returns ``(t, hit, time_event, stop)``:
-    the new time, the index of the event that fired (-1 if none), whether a
-    schedule switch ended the segment, and a status code that ends the landing
-    (``HORIZON``, ``NEVER_RESTS_CREEP``, ``STEP_BUDGET`` once ``ext[X_WORK]``, the
+    creeps forever is tried after every step (``proofs`` None: never, not compiled).
+    Returns ``(t, hit, time_event, stop)``: the new time, the index of the event that
+    fired (-1 if none), whether a schedule switch ended the segment, and a status code that
+    ends the landing (``HORIZON``, ``NEVER_RESTS_CREEP``, ``STEP_BUDGET`` once ``ext[X_WORK]``, the
     landing's count of steps and segments, reaches ``max_steps``) or -1.
     """
     cs, C, dC, _, cdata, cres, phic, gc, hc = ws
@@ -264,7 +284,7 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
         ext[X_WORK] += 1.0
         stop = -1
         if hit < 0 and not time_event:
-            if creep and creep_proof(cdata, zt, C, ne, cu, (ext[X_UMIN], ext[X_UMAX]), cres):
+            if creep_proven(proofs, creep, cdata, zt, C, ne, cu, ext, cres):
                 stop = NEVER_RESTS_CREEP
             elif t > t_max:
                 stop = HORIZON
@@ -274,6 +294,35 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
             for i in range(5):
                 z[i] = zt[i]
             return t, hit, time_event, stop
+
+
+@njit(**JIT)
+def creep_proven(proofs, creep, cdata, z, C, ne, cu, ext, cres):
+    """:func:`.creep.creep_proof` after a step if ``creep``; never in the lite kernel
+    (``proofs`` None: the proof is not compiled)."""
+    if proofs is None:
+        return False
+    return creep and creep_proof(cdata, z, C, ne, cu, (ext[X_UMIN], ext[X_UMAX]), cres)
+
+
+@njit(**JIT)
+def creep_start(proofs, A, cu, C, ne, cdata):
+    """A yielding segment: ``(creep, needs_proofs)``. ``creep``: the creep proof applies
+    (:func:`.creep.creep_setup` filled ``cdata``). The lite kernel (``proofs`` None) runs
+    only the first checks (:func:`.creep.creep_candidate`): ``needs_proofs`` if they pass."""
+    if proofs is None:
+        return False, creep_candidate(A, cu, C, ne)[0]
+    return creep_setup(A, cu, C, ne, cdata), False
+
+
+@njit(**JIT)
+def hops_end(proofs, P, A, z, z0, d, C, cu, hk):
+    """A stance entry of an eligible landing: ``(settled, needs_proofs)``, as
+    :func:`.hops.hops_settled`; the lite kernel (``proofs`` None) stops where that would
+    go past its first check (:func:`.hops.hops_pending`)."""
+    if proofs is None:
+        return False, hops_pending(hk)
+    return hops_settled(P, A, z, z0, d, C, cu, hk), False
 
 
 @njit(**JIT)
@@ -488,7 +537,7 @@ def fresh_landing(x0, sched_K):
 
 
 @njit(**ENTRY, nogil=True)
-def simulate_one(P, pol, x0, lim, out, rec):
+def simulate_one(P, pol, x0, lim, out, rec, proofs):
     """Simulate one landing; fill ``out`` (layout ``O_*``) and the segment records.
 
     Python calls it for one landing (:func:`softlanding.simulation.kernel.run_landing`:
@@ -513,6 +562,9 @@ def simulate_one(P, pol, x0, lim, out, rec):
     out : (N_OUT,) array
     rec : tuple ``(t, A, z, cu, mode)`` of arrays with ``len(t) - 1`` rows (or 0)
         Segment records; the row after the last holds the end time.
+    proofs : None or True
+        True: the whole kernel. None: the lite kernel, which ends a landing that needs the
+        creep or hop proof with ``out[O_STATUS] = NEEDS_PROOFS`` (see the module's notes).
     """
     Kf, umax, sched_t, sched_K = pol
     s_lim, t_max, max_seg, energy, max_steps = lim
@@ -542,18 +594,28 @@ def simulate_one(P, pol, x0, lim, out, rec):
         if mode == STATIC and t_next == np.inf and rest_proof(A, z, C, ne, cs, cu, ext):
             status = REST_PROVEN
             break
-        if hops and mode == STATIC and hops_settled(P, A, z, z0, d, C, cu, hk):
-            status = HOPS_TO_LIMIT
-            d = hk[H_DLIM]
-            break
+        if hops and mode == STATIC:
+            settled, needs_proofs = hops_end(proofs, P, A, z, z0, d, C, cu, hk)
+            if needs_proofs:
+                status = NEEDS_PROOFS
+                break
+            if settled:
+                status = HOPS_TO_LIMIT
+                d = hk[H_DLIM]
+                break
         derivative_functionals(C, A, ne, dC)
         hit = due_event(C, dC, ne, z)
         if hit < 0:
-            creep = (mode == YIELDING and t_next == np.inf
-                     and creep_setup(A, cu, C, ne, cdata))
+            creep = False
+            if mode == YIELDING and t_next == np.inf:
+                creep, needs_proofs = creep_start(proofs, A, cu, C, ne, cdata)
+                if needs_proofs:
+                    status = NEEDS_PROOFS
+                    break
             key = -1 if open_loop else 4 * mode + regime
             t, hit, time_event, stop = march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu,
-                                             energy_form(cu, energy), energy, ext, creep, ws)
+                                             energy_form(cu, energy), energy, ext, creep, ws,
+                                             proofs)
             if stop >= 0:
                 status = stop
                 break
@@ -581,8 +643,9 @@ def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_s
                 i1):
     """Feedback-policy landings ``i0 <= i < i1``; row i uses the packed model ``Ps[ridx[i]]``.
 
-    Serial and GIL-free: :func:`softlanding.simulation.kernel.run_batch` runs chunks of a
-    batch on a pool of threads that take the next chunk when done (dynamic
+    The whole kernel (``proofs=True``): a batch is many landings, some of which may need
+    the proofs. Serial and GIL-free: :func:`softlanding.simulation.kernel.run_batch` runs
+    chunks of a batch on a pool of threads that take the next chunk when done (dynamic
     scheduling: no spinning, no idle core behind a busy one).
     """
     empty_t = np.zeros(0)
@@ -591,4 +654,4 @@ def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_s
            np.zeros(0, dtype=np.int64))
     for i in range(i0, i1):
         simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_K), x0s[i],
-                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec)
+                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec, True)

@@ -247,7 +247,7 @@ def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
                 key = -1 if open_loop else 4 * mode + regime
                 t, hit, time_event, stop = march(A, mode, key, z, t, t_next, t_max, max_steps,
                                                  ne, cu, energy_form(cu, energy), energy, ext,
-                                                 False, ws)
+                                                 False, ws, None)
             if stop >= 0:
                 status = stop
                 break

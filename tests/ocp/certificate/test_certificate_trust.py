@@ -59,14 +59,20 @@ def test_fuller_reference_is_independent():
 def test_fuller_is_not_certified_it_chatters():
     """Fuller's problem with time to rest at the origin (x0 = (1, 0), T = 6, i.e. mintOC's
     problem rescaled by homogeneity with horizon 0.6): the transcription's structure has an
-    interior arc and refine_switching refuses, yet today's certify says "bang-bang
-    certified". Now: chattering suspected near T_0 = 2.7152 (or its mirror T - T_0), with the
-    switch ratio near Fuller's 0.2421."""
+    interior arc, which refine_switching flies as a singular arc of order 2 (the best
+    bang-singular candidate: Fuller's optimum has no such junction), yet today's certify
+    says "bang-bang certified". Now: chattering suspected near T_0 = 2.7152 (or its mirror
+    T - T_0), with the switch ratio near Fuller's 0.2421, and the refined candidate's
+    singular arc fails its conditions."""
     sol = _solve(1.0, 6.0, False, 40)
     st = detect_structure(sol)
     assert not st.refinable
-    with pytest.raises(ValueError, match="not bang-bang"):
-        refine_switching(sol)
+    r = refine_switching(sol)
+    assert "singular" in r.kinds and r.objective < sol.objective
+    refined = certify(sol, r)
+    assert refined.verdict == CHATTERING and not refined.certified
+    assert any(a.kind == "singular" and a.order == 2 and a.status == "fails"
+               for a in refined.arcs)
     cert = certify(sol)
     assert cert.verdict == CHATTERING and not cert.certified
     assert cert.reasons[0].startswith("chattering suspected near t = ")

@@ -268,8 +268,11 @@ def test_bryson_denham_boundary_detected_and_reported(l_):
     assert st.kinds == ["interior", "boundary", "interior"] and not st.refinable
     assert st.arcs[1].start == pytest.approx(3 * l_, abs=0.03)
     assert st.arcs[1].end == pytest.approx(1 - 3 * l_, abs=0.03)
-    with pytest.raises(ValueError, match="interior"):
-        refine_switching(sol, st)
+    # the default route refines it: regular interior arcs with their costate copies
+    r = refine_switching(sol, st)
+    assert r.kinds == ["interior", "boundary", "interior"]
+    assert r.objective == pytest.approx(4 / (9 * l_), rel=1e-12)
+    assert r.switch_times == pytest.approx([3 * l_, 1 - 3 * l_], abs=1e-6)
     c = certify(sol)
     (a, b), = c.state_constraint_active_intervals
     assert a == pytest.approx(3 * l_, abs=0.03) and b == pytest.approx(1 - 3 * l_, abs=0.03)

@@ -16,7 +16,7 @@ import pytest
 from ocp import Collocation
 from ocp.transcriptions.collocation import collocation_matrices, degree_matrices, radau_points
 from ocp.transcriptions.mesh import interval_errors
-from tests.oracles.ocp_suite.problems import bryson_denham, moon_lander
+from tests.oracles.ocp_suite.problems import bryson_denham, moon_lander, moon_lander_exact
 
 
 @pytest.fixture(scope="module")
@@ -51,8 +51,14 @@ def test_refinement_reuses_the_build_and_lands_on_the_final_mesh_optimum():
     assert final.grid_free is tr.grid_free and final.compiled is tr.compiled
     assert final.phases[0].G is tr.phases[0].G  # the interval function, built once
     assert len(sol.mesh_history) >= 2 and sol.mesh_converged and sol.verified
-    fresh = Collocation(moon_lander(), mesh=final.meshes[0]).solve()
-    assert sol.objective == pytest.approx(fresh.objective, rel=1e-9)
+    # the final round is solved with Ipopt's bound relaxation off (and the constraints
+    # between the points where refinement imposed them): the same NLP afresh
+    fresh = Collocation(moon_lander(), mesh=final.meshes[0], ipopt_options=final.ipopt_options,
+                        inner_constraints=final.inner).solve()
+    # within the refined objective's error estimate: from a cold start Ipopt stops at
+    # another point of this degenerate bang-bang NLP (1.4e-8 apart; exact 1.42031259905)
+    assert abs(sol.objective - fresh.objective) <= sol.objective_error
+    assert abs(fresh.objective - moon_lander_exact()) <= sol.objective_error
 
 
 def test_error_estimate_is_computed_when_read(coarse):

@@ -247,7 +247,9 @@ def test_a_failed_run_leaves_no_file_behind(tmp_path, cli, monkeypatch):
     monkeypatch.setattr(imp, "optimize_impedance", boom)
     code, _, err = cli("map", "--v0", "-2", "--n", "11", "--out", tmp_path / "m.nc",
                        "--plot", tmp_path / "m.png")
-    assert code == 130 and err.strip() == "softlanding: interrupted"
+    # (a cold numba cache adds its one compile notice before the run's work)
+    lines = [ln for ln in err.splitlines() if not ln.startswith("softlanding: compiling")]
+    assert code == 130 and lines == ["softlanding: interrupted"]
     assert list(tmp_path.iterdir()) == []  # no dataset, no figure, no temporary file
 
 

@@ -145,7 +145,7 @@ def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, 
                          # its children inherit that (the CLI keeps an ignored SIGINT ignored)
                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(3.0)  # imports and the first chunks: the run takes minutes
-    assert p.poll() is None
+    assert p.poll() is None, p.communicate()[1]
     p.send_signal(signum)
     returncode = p.wait(timeout=60)
     err = p.stderr.read()

@@ -101,7 +101,8 @@ def test_an_unknown_controller_is_refused_at_once():
 
 @pytest.mark.parametrize("args", [["--noise-std", "-1"], ["--noise-std", "nan"],
                                   ["--delay", "1.5"], ["--delay", "-1"], ["--seed", "-1"],
-                                  ["--margin", "1"], ["--controller", "x"],
+                                  ["--margin", "1", "--controller", "replan"],
+                                  ["--controller", "x"],
                                   ["--estimator", "x"], ["--estimator", "filtered"]])
 def test_cli_bad_sensing_one_line_exit_2(cli, args):
     code, _, err = cli("mpc", "--v0", "-3", *args)
@@ -293,11 +294,13 @@ def test_the_work_bound_holds_every_sample_and_keeps_the_depth(monkeypatch, work
     # benchmark's cases (107 in one sample, Newton to convergence near the switch): bounded,
     # a sample runs out, keeps its last whole iterate, and the next ones go on converging
     # before the switch; the landing's depth is the unbounded one's
+    from softlanding.control import bangbang_layout  # (robot_numbers reads WORK there)
+
     ground = linear_or_drag(2.0, 1.0)
-    monkeypatch.setattr(bb, "WORK", 1e9)
+    monkeypatch.setattr(bangbang_layout, "WORK", 1e9)
     free = mpc_landing(-3, PAPER_ROBOT, ground, controller="bangbang")
     assert free.deferred == 0 and max(free.step_work) > work
-    monkeypatch.setattr(bb, "WORK", work)
+    monkeypatch.setattr(bangbang_layout, "WORK", work)
     tight = mpc_landing(-3, PAPER_ROBOT, ground, controller="bangbang")
     assert max(tight.step_work) <= work and tight.deferred >= 1
     assert tight.step_paths.count("bangbang (deferred)") == tight.deferred

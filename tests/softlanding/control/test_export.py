@@ -102,7 +102,10 @@ def test_the_header_holds_the_python_modules_numbers(exported):
 
 
 def test_an_entry_the_export_does_not_describe_fails_the_export(monkeypatch):
-    monkeypatch.setattr(bb, "M_NEW", bb.NM, raising=False)
+    # (the layout is bangbang_layout's, which bangbang re-exports)
+    from softlanding.control import bangbang_layout
+
+    monkeypatch.setattr(bangbang_layout, "M_NEW", bb.NM, raising=False)
     with pytest.raises(KeyError, match="M_NEW"):
         layout.layout_lines("M_")
 
@@ -559,3 +562,39 @@ def test_c_and_numba_filters_and_filtered_steps_agree_on_5000_more_samples(expor
     steps = compare_steps(c, calls.steps)  # and the filtered step on them
     assert steps.steps == 5000 and steps.worst() == 0.0, steps.describe()
     assert steps.weighted >= 2500 and steps.outcomes["recovered"] >= 1, steps.describe()
+
+
+@needs_cc
+def test_a_non_finite_input_is_refused_and_the_filter_goes_on(compiled):
+    # one NaN sample left the exported filter NaN for good (status 0, "not widened"), and a
+    # NaN weight gave a covered status with the estimate's covariance NaN
+    c = compiled
+    F = c.filter_init(np.array([10.0, -3.0, 0.0, -3.0]))
+    x = np.array([10.0, -3.0, -0.03, -2.9])
+    beta = bb.force_coefficients(PAPER_ROBOT.r_m)[0]
+    for bad in (dict(g=np.nan), dict(U1=np.inf), dict(x2=np.nan), dict(h=0.0)):
+        kw = dict(g=1.0, U1=0.08, U2=4e-4, h=0.01, x2=-0.03) | bad
+        F0, xb = F.copy(), x.copy()
+        xb[2] = kw["x2"]
+        assert c.filter_step(F, xb, kw["g"], kw["U1"], kw["U2"], kw["h"], beta, 1e-3) == -1
+        assert np.array_equal(F, F0, equal_nan=True)
+    assert c.filter_step(F, x.copy(), 1.0, 0.08, 4e-4, 0.01, beta, 1e-3) in (0, 1)
+    assert np.all(np.isfinite(F))
+    P = np.ascontiguousarray(c.robot_numbers)
+    M = c.new_memory(0.1, 0.05, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
+    P0, M0 = P.copy(), M.copy()
+    assert c.filtered_step(P, M, x, 2.0, 8.2, 0.01, True, np.nan, 0) == (-1, 0)
+    assert np.array_equal(P, P0) and np.array_equal(M, M0)
+
+
+@needs_cc
+def test_the_exported_arrest_force_is_saturated_at_the_limit(compiled):
+    # a plan whose body reaches the foot's stop fast with little stroke left: the arrest's
+    # constant force would be far beyond u_max; sl_force gives u_max, as the Python schedule
+    c = compiled
+    P = np.ascontiguousarray(c.robot_numbers)
+    M = c.new_memory(0.0, 0.05, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
+    M[bb.M_XBT], M[bb.M_VBT], M[bb.M_XFT] = 0.5, -6.0, -1.0  # (stroke 1.5, v_b = -6)
+    t = 0.06
+    assert c.force(P, M, t) == P[bb.P_UMAX] == float(plan_forces(P, M, np.array([t]))[0])
+    assert np.array_equal(c.force_integrals(P, M, 0.2), plan_force_integrals(P, M, 0.2))

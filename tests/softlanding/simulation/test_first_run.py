@@ -1,18 +1,18 @@
 """The first run of a fresh install: the simulator says on stderr, once and before it starts,
-that it is compiling, and only when numba's cache is cold (issue 24)."""
+that it is compiling, only when numba compiles (issue 24), with a bar on a terminal; a demo
+compiles the lite kernel only, not the creep and hop proofs it never needs (issue 47)."""
 
 import json
 import os
 import subprocess
 import sys
 
+import numba
 import pytest
 
+from softlanding.simulation import kernel as K
+
 NOTICE = "softlanding: compiling the simulator"
-CHECK = ("from softlanding.simulation import kernel as K\n"
-         "first, again = K.compile_notice(), K.compile_notice()\n"
-         "K.compile_notice('non-affine')\n"
-         "print(first is not None, again is None)")
 
 
 def _run(args, cache_dir=None):
@@ -23,21 +23,63 @@ def _run(args, cache_dir=None):
                           timeout=600, check=True)
 
 
-def test_the_notice_is_printed_on_a_cold_cache_once_per_kind(tmp_path):
-    p = _run(["-c", CHECK], cache_dir=tmp_path)  # an empty cache: nothing compiled yet
-    lines = p.stderr.splitlines()
-    assert lines == [f"{NOTICE} (once, about 10 s)...",
-                     f"{NOTICE} for non-affine grounds (once, about 15 s)..."], p.stderr
-    assert p.stdout.split() == ["True", "True"]  # returned when printed; once per process
+def test_the_notice_is_printed_when_numba_compiles_once_per_kind(monkeypatch, capsys):
+    monkeypatch.setattr(K, "_CHECKED", set())
+    fresh = numba.njit(lambda x: x + 1)  # not compiled yet
+    with K.first_compile("affine") as first:
+        fresh(1)  # a compile: the notice, at its start
+    with K.first_compile("affine") as again:
+        fresh(2.0)  # watched once per kind and process
+    with K.first_compile("proofs") as nothing:
+        fresh(3)  # compiled already: no notice
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"{NOTICE} (once, about 10 s)..."], err
+    assert first.notice == err.strip() and again is None and nothing.notice is None
+
+
+def test_the_bar_counts_the_functions_compiled_on_a_terminal(monkeypatch, capsys):
+    from softlanding.util import progress
+
+    monkeypatch.setattr(K, "_CHECKED", set())
+    monkeypatch.setattr(progress, "FORCE", True)  # as --progress: a bar without a terminal
+    fresh = numba.njit(lambda x: 2 * x)
+    with K.first_compile("proofs") as watch:
+        fresh(1)
+    err = capsys.readouterr().err
+    assert err.startswith(f"{NOTICE}'s creep and hop proofs (once, about 5 s)...\n")
+    assert "compiling" in err.split("\n", 1)[1] and "function" in err
+    assert watch.bar.n >= 1
 
 
 def test_no_notice_once_compiled():
     from softlanding import Impact, Impedance, Robot, simulate
 
     simulate(Robot(5, 20), Impact(-1.0), Impedance(0.2, 0.18))  # compiled, cached on disk
-    p = _run(["-c", "from softlanding.simulation import kernel as K\n"
-                    "print(K.compile_notice())"])
-    assert p.stderr == "" and p.stdout.strip() == "None"
+    p = _run(["-c", "from softlanding import Impact, Impedance, Robot, simulate\n"
+                    "print(simulate(Robot(5, 20), Impact(-1.0), Impedance(0.2, 0.18)).steps)"])
+    assert p.stderr == "" and p.stdout.strip() == "2"
+
+
+COMPILED = """
+import json
+from numba.core import event
+from softlanding.report.demo import demo_table, stepped_intrusions
+with event.install_recorder("numba:compile") as rec:
+    demo_table(), stepped_intrusions()
+print(json.dumps(sorted({e.data["dispatcher"].py_func.__qualname__ for _, e in rec.buffer})))
+"""
+
+
+@pytest.mark.slow
+def test_a_cold_demo_compiles_no_creep_or_hop_proof(tmp_path):
+    """The demo's landings never need the proofs: in a fresh cache they are not compiled
+    (they were a third of the first demo's compile)."""
+    p = _run(["-c", COMPILED], cache_dir=tmp_path)
+    compiled = set(json.loads(p.stdout))
+    assert "simulate_one" in compiled and "creep_candidate" in compiled
+    assert not compiled & {"creep_proof", "creep_setup", "det_inv3", "hops_settled",
+                           "first_symmetric_hop", "threshold_energy", "limit_depth"}, compiled
+    assert p.stderr.splitlines() == [f"{NOTICE} (once, about 10 s)..."]
 
 
 @pytest.mark.slow

@@ -1,0 +1,53 @@
+"""The compiled fallback: a state the push-then-pull structure does not cover is met within
+the sample (the plan kept with the margin dropped, the creep law, the safe brake), never by an
+NLP solve in the loop."""
+
+import numpy as np
+import pytest
+
+from softlanding import PAPER_ROBOT, solve_landing
+from softlanding.control import bangbang as bb
+from softlanding.control import mpc_landing
+from softlanding.control.fallback import fallback_step
+from softlanding.control.loop_replay import replay
+from softlanding.studies.unknown_ground import true_ground
+
+
+def _numbers(c_d):
+    r = PAPER_ROBOT
+    P = bb.robot_numbers(r.r_m, r.s, r.u_max, 0.5, c_d, 1e-3, 2.0, 0.01, creep=True)
+    M = bb.new_memory(0.3, 0.05, (0.5, c_d), (1.0, 1.0), 1e-3)
+    return P, M
+
+
+@pytest.mark.parametrize("c_d,then", [(0.2, bb.CREEP_LAW), (0.0, bb.BRAKE)])
+def test_the_fallback_keeps_the_plan_once_then_creeps_or_brakes(c_d, then):
+    P, M = _numbers(c_d)
+    x = np.array([9.9, -1.0, -0.2, -1.0])
+    # a status that covers the state is left alone
+    assert fallback_step(P, M, x, bb.CONVERGING) == bb.CONVERGING and M[bb.M_FALLBACKS] == 0
+    # the first Newton failure: the plan goes on, the margin dropped for the rest
+    assert fallback_step(P, M, x, bb.NEWTON_FAILED) == bb.KEPT
+    assert P[bb.P_MARGIN] == 0.0 and M[bb.M_PHASE] == bb.PUSH and M[bb.M_FALLBACKS] == 1
+    # the next: the creep law where there is drag, else the brake (the pull at the limit)
+    assert fallback_step(P, M, x, bb.NEWTON_FAILED) == then and M[bb.M_FALLBACKS] == 2
+    assert M[bb.M_WHY] == bb.NEWTON_FAILED and abs(M[bb.M_UCREEP]) <= P[bb.P_UMAX]
+    if then == bb.BRAKE:
+        assert M[bb.M_PHASE] == bb.BRAKING and M[bb.M_UCREEP] == -P[bb.P_UMAX]
+        # braking goes on every sample to the foot's stop, in the step itself
+        st = bb.control_step(P, M, x, 0.0, 0.0, 0.01, False, *bb.workspace())
+        assert st == bb.BRAKE and M[bb.M_FALLBACKS] == 2
+
+
+def test_a_noisy_landing_the_structure_does_not_cover_stays_compiled():
+    # noise 1e-2 (ten times the study's), a soft draggy ground at v0 = -1: the real-time
+    # iteration is not covered at one sample, which re-planned by transcription (0.65 s CPU)
+    ground = true_ground(0.5, 0.2)
+    m = mpc_landing(-1, PAPER_ROBOT, ground, noise=1e-2, delay=1, seed=0, margin=2.0)
+    assert m.uncovered >= 1 and m.replans == m.fallbacks == 0
+    assert all(p.startswith("bangbang") for p in m.step_paths)
+    assert any(p.startswith("bangbang (kept") for p in m.step_paths)
+    assert max(m.step_work) <= 2 * bb.WORK  # (the bound on a sample's work, recovery's too)
+    assert m.feasible and m.force_held
+    assert m.depth <= 1.03 * solve_landing(-1, PAPER_ROBOT, ground).depth
+    replay(m.compiled)  # every sample one compiled call, identical replayed
