@@ -46,3 +46,28 @@ def test_the_trees_re_plan_of_a_creep_holds_its_limits_whatever_the_rounding(tim
     # the creep's clairvoyant depth is 1/K = 2 (the crater holds the weight there); the
     # transcription (60 intervals) reaches it to 1e-4
     assert 2.0 - 1e-9 <= landing.depth <= 2.0 + 1e-4
+
+
+@pytest.mark.slow  # the search over the study's 15 grounds, twice, and three trees: minutes
+def test_the_trees_worst_depth_at_v0_minus_1_is_the_clairvoyant_one_run_after_run():
+    import itertools
+
+    from softlanding import solve_landing
+    from softlanding.control import robust_landing
+    from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
+
+    grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
+    first = robust_landing(-1, grounds)
+    a, b = two_stage_landing(first), two_stage_landing(first)
+    assert a.second_stage == b.second_stage
+    assert a.depths.tolist() == pytest.approx(b.depths.tolist(), rel=1e-12, abs=0)
+    # the nominal plan solved again in this process differs by 1e-14 (the NLPs it cached),
+    # and the search's end by 1e-8: the tree's worst depth does not move
+    second = robust_landing(-1, grounds)
+    c = two_stage_landing(second)
+    assert c.worst == pytest.approx(a.worst, rel=1e-12)
+    assert a.feasible and c.feasible
+    # it is the clairvoyant depth of K = 0.5 (linear), the largest: the bound, attained
+    binding = solve_landing(-1, PAPER_ROBOT, grounds[0])
+    assert a.worst == pytest.approx(binding.depth, rel=1e-9)
+    assert a.worst == pytest.approx(2.137, abs=5e-4)  # the guide's tree column
