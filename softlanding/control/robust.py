@@ -39,6 +39,7 @@ an exact replay.
 
 from __future__ import annotations
 
+import copy
 import math
 import time
 from collections.abc import Sequence
@@ -47,7 +48,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp import SolveError, Trajectory
+from ocp import Solution, SolveError, Trajectory
 from softlanding.control.plant import SteppingPlant
 from softlanding.control.robust_family import PieceFamily, Pin
 from softlanding.control.robust_search import (
@@ -62,12 +63,13 @@ from softlanding.control.robust_search import (
     kkt_residual,
     search,
 )
-from softlanding.control.state_landing import ground_numbers, plan_from_state
+from softlanding.control.state_landing import ground_numbers, plan_schedule, solve_from_state
 from softlanding.errors import InfeasibleLandingError, ParameterError, check, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
 from softlanding.model.ground import Ground, ground_sequence
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
-from softlanding.optimal.landing import BangBangLanding, solve_landing
+from softlanding.optimal.landing import BangBangLanding, solve_landing, transcribed_schedule
+from softlanding.optimal.limits import force_limit
 from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
@@ -78,6 +80,9 @@ paper's rig): by then the foot's deceleration has shown the ground."""
 CLAIRVOYANT_RTOL = 1e-9
 """A robust schedule whose worst depth is within this (relative) of a binding ground's
 clairvoyant depth is that ground's clairvoyant optimum."""
+RESIDUAL_V = 1e-6
+"""A transcribed re-plan whose body ends with ``|v_b|`` below this (Ipopt's accuracy: 1e-8 on
+the creeps of the study) ends at rest: its body's weight is held, damped, with no arrest."""
 
 
 @dataclass(frozen=True)
@@ -518,26 +523,55 @@ def _second_stages(robot: Robot, impact: Impact, schedule: ForceSchedule,
                    open_loop: list[GroundLanding],
                    branch_time: float) -> tuple[list[GroundLanding], list[str]]:
     """Each ground's landing: the schedule until ``branch_time``, then the better (feasible
-    first, then shallower) of the schedule's remainder and a landing re-planned there."""
+    first, then shallower) of the schedule's remainder and a landing re-planned there (from
+    the remainder's path as a guess; where that one breaks a limit, also from Ipopt's default
+    start: on a creep the guess's NLP has a second local optimum, at ``v0 = -1`` on
+    ``K = 0.5``, ``c_d = 1`` a creep of 4.7 time units whose replay breaks the stroke, which
+    a change of 1e-14 in the state picks)."""
     out, stages = [], []
     for kept in open_loop:
         g = kept.ground
-        plant = SteppingPlant(robot, impact, g)
-        plant.step(schedule, branch_time)
         best, how = kept, "remainder"
-        if plant.x[3] < 0:  # the foot still digs: re-plan for the ground now known
-            rest = kept.pieces[0][1]
-            guess = _shifted_trajectory(rest, branch_time)
+        for guessed in (True, False):
+            plant = SteppingPlant(robot, impact, g)
+            plant.step(schedule, branch_time)
+            if not plant.x[3] < 0:  # the foot has stopped: the remainder is the landing
+                break
+            guess = _shifted_trajectory(kept.pieces[0][1], branch_time) if guessed else None
             try:
-                plant.finish(plan_from_state(robot, g, plant.x, guess))
-                replanned = GroundLanding(g, list(plant.history))
-                if (replanned.feasible, -replanned.depth) > (kept.feasible, -kept.depth):
-                    best, how = replanned, "re-planned"
+                plant.finish(_replanned(robot, g, plant.x, guess))
             except (SolveError, ParameterError):  # no re-plan there: the remainder stays
                 raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
+                continue
+            replanned = GroundLanding(g, list(plant.history))
+            if (replanned.feasible, -replanned.depth) > (best.feasible, -best.depth):
+                best, how = replanned, "re-planned"
+            if replanned.feasible:
+                break
         out.append(best)
         stages.append(how)
     return out, stages
+
+
+def _replanned(robot: Robot, ground: Ground, x: np.ndarray,
+               guess: Trajectory | None) -> ForceSchedule | FeedbackSchedule:
+    """The landing re-planned from state ``x`` on ``ground``, as a schedule: that of
+    :func:`~softlanding.control.state_landing.plan_schedule`, but a transcription (a creep)
+    whose body ends within :data:`RESIDUAL_V` of rest is held there, damped.
+
+    (``plan_schedule`` arrests a body ending at ``v_b = -1e-8``, the transcription's error,
+    over ``2 stroke / |v_b|`` ~ 1e9 time units, which no replay proves at rest, and holds
+    one ending at ``+1e-8`` damped: which one a creep got followed the sign of its rounding,
+    and the tree's worst depth at ``v0 = -1`` on the study's grounds with it, 2.238 (the
+    remainder kept on ``K = 0.5``, ``c_d = 1``) or 2.137.)
+    """
+    plan = solve_from_state(robot, ground, x, guess=guess)
+    if isinstance(plan, Solution) and abs(float(plan.x[-1][1])) <= RESIDUAL_V:
+        held = copy.copy(plan)  # the body at rest to the transcription's accuracy
+        held.x = np.array(plan.x, float)
+        held.x[-1, 1] = 0.0
+        return transcribed_schedule(held, robot.r_m, force_limit(robot), damped=True)
+    return plan_schedule(plan, robot)
 
 
 def _shifted_trajectory(res: LandingResult, t0: float) -> Trajectory | None:
@@ -548,5 +582,5 @@ def _shifted_trajectory(res: LandingResult, t0: float) -> Trajectory | None:
 
 
 __all__ = ["ACTIVE_TOL", "CLAIRVOYANT_RTOL", "DEFAULT_BRANCH_TIME", "FD_STEP", "KKT_STEP",
-           "KKT_TOL", "MAX_ITERATIONS", "RESTARTS", "GroundLanding", "RobustLanding",
+           "KKT_TOL", "MAX_ITERATIONS", "RESIDUAL_V", "RESTARTS", "GroundLanding", "RobustLanding",
            "kkt_residual", "robust_landing", "two_stage_landing"]

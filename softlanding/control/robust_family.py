@@ -244,6 +244,11 @@ def stroke_extrema(r: LandingResult, t_end: float = math.inf) -> tuple[np.ndarra
         ts = np.r_[ts[ts < t_end], t_end]
     grid = np.unique(np.concatenate([np.linspace(a, b, 12) for a, b in zip(ts[:-1], ts[1:],
                                                                              strict=True)]))
+    if not t_end < ts[-1]:
+        # the replay's end: at rest ``v_b - v_f`` is zero there to rounding, whose sign would
+        # make a minimum come and go with a change of 1e-13 in the schedule (a row that jumps);
+        # the end's stroke is a row of its own (:func:`stroke_slots`)
+        grid = grid[:-1]
 
     def rate(t: np.ndarray) -> np.ndarray:
         order = np.argsort(t)
@@ -303,7 +308,23 @@ def stroke_slots(r: LandingResult) -> tuple[list[float], list[float]]:
     if r.stroke_min >= NEAR * s and r.stroke_max <= (1 - NEAR) * s:
         return [r.stroke_min] * SLOTS, [r.stroke_max] * SLOTS
     minima, maxima = stroke_extrema(r)
+    end = final_stroke(r)  # at rest the stroke stays there: a minimum and a maximum
+    minima, maxima = np.r_[minima, end], np.r_[maxima, end]
     return _lowest(minima, r.stroke_min), [-v for v in _lowest(-maxima, -r.stroke_max)]
+
+
+def final_stroke(r: LandingResult) -> float:
+    """The stroke ``x_b - x_f`` where a replay ends (at its rest).
+
+    Parameters
+    ----------
+    r : LandingResult
+        A replay.
+    """
+    seg = r.segments
+    sampler = K.sample_segments_nl if "law" in seg else K.sample_segments
+    z = sampler(seg, np.array([float(seg["t"][-1])]))[0][0]
+    return float(z[0] - z[2])
 
 
 def body_extrema(family: PieceFamily, p: Point) -> tuple[list[float], list[float]]:

@@ -237,9 +237,9 @@ def test_the_guides_robust_and_tree_columns_are_runs(v0):
     from ocp.structure.switching import clear_cache
     from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
 
-    clear_cache()  # the re-plans' paths depend on the NLPs earlier tests left cached (the
-    # tree's at v0 = -1: 2.238 in a fresh process, 2.137 after the mpc tests; either when the
-    # robust schedule moves by 1e-13, as the searches of issue 44 found), as the study's
+    clear_cache()  # the re-plans' paths depend on the NLPs earlier tests left cached, as
+    # the study's (the tree's at v0 = -1 was 2.238 or 2.137 with them, or with a change of
+    # 1e-13 in the robust schedule, before its re-plan of the creep held its rest damped)
     guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground_study.md"
     rows = {float(m[1]): m[2].split("|") for m in
             re.finditer(r"^\| (-[\d.]+) \|(.*)\|$", guide.read_text(), re.M)}
