@@ -468,15 +468,8 @@ class PaperLanding(PhasedVariant[BangBangLanding]):
             self.nodes, self.ground), self.impact.initial_state(self.robot), params)
 
     def explain(self, err: SolveError, guess: Any) -> Exception:
-        """Name the condition(s) whose removal makes the request feasible.
-
-        Parameters
-        ----------
-        err : ocp.SolveError
-            Ipopt's verdict.
-        guess : object
-            Unused (each diagnosis starts from its own rigid guess).
-        """
+        """Name the condition(s) whose removal makes the request feasible (``guess``
+        unused: each diagnosis starts from its own rigid guess)."""
         return _explain_infeasible(err, self.robot, self.impact, self.ground, self.nodes)
 
     def assemble(self, sol: Solution | None, ref: RefinedSwitching | None, notes: list[str],

@@ -180,14 +180,8 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
 
     Parameters
     ----------
-    v0 : float
-        Impact velocity.
-    ground : Ground
-        The true ground.
-    robot : Robot
-        The robot.
-    period : float
-        The sample period.
+    v0, ground, robot, period
+        As for :func:`unknown_ground_case` (``period``: the controller's sample period).
     noise, delay, seed : float, int, int
         The noisy sensing (:func:`~softlanding.control.mpc_landing`).
     margins : sequence of float

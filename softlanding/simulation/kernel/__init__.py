@@ -423,11 +423,8 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
     ----------
     mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out, threads, chunk, max_steps
         As :func:`run_batch`.
-    law : tuple
-        The ground's law as the kernel takes it
-        (:func:`softlanding.simulation.groundcode.kernel_law`).
-    rtol : float
-        Relative tolerance of the integrator of the yielding segments.
+    law, rtol
+        As :func:`run_landing_nl` (the ground's law, the integrator's tolerance).
     """
 
     from softlanding.simulation.kernel.nonaffine import batch_range_nl
