@@ -235,12 +235,8 @@ def controller_study(v0_values: Sequence[float] = STUDY_V0,
 
     Parameters
     ----------
-    v0_values, stiffness, drag : sequences of float
-        The grid.
-    robot : Robot
-        The robot.
-    progress : bool, optional
-        A progress bar.
+    v0_values, stiffness, drag, robot, progress
+        As for :func:`unknown_ground_study` (the grid, the robot, a progress bar).
     **kw
         To :func:`controller_case` (``bang_bang``: only those cases).
     """
