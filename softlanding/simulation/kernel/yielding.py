@@ -38,6 +38,7 @@ from softlanding.simulation.kernel.groundlaw import (
     control_at,
     yield_rhs,
 )
+from softlanding.simulation.kernel.linalg import bracketed_step
 
 # ext layout (as in .landing)
 X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT, X_WORK = range(6)
@@ -152,14 +153,9 @@ def refine_nl(sysd, y, K, c, slope, a, b, ga, gb, rtol, s0, K2, Yt, yt):
         else:
             dg = cdot(c, K2[12])
             sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
-        if not (a < sn < b):
-            sn = 0.5 * (a + b)
-        if abs(sn - s) <= 0.25 * rtol * max(1.0, abs(s)):
-            step = 1e-15 * max(1.0, abs(sn))
-            sn = sn + step if g <= 0.0 else sn - step
-            sn = min(max(sn, a), b)
-            if sn == s:
-                break
+        sn, stalled = bracketed_step(sn, s, g, a, b, 0.25 * rtol * max(1.0, abs(s)))
+        if stalled:
+            break
         s = sn
     if s != b:
         trial(sysd, y, K, b, K2, Yt, yt)

@@ -258,7 +258,7 @@ def test_progress_bars_only_on_a_terminal(cli):
     code, out, err = cli("solve-sweep", "--n", "3", "--v0-min", "-2")
     assert code == 0 and "\r" not in err and err == ""
     code, out, err = cli("--progress", "solve-sweep", "--n", "3", "--v0-min", "-2")
-    assert code == 0 and "\r" in err and "bang-bang sweep" in err
+    assert code == 0 and "\r" in err and "paper sweep" in err
     from softlanding.util import progress as _progress
 
     _progress.FORCE = False
