@@ -256,13 +256,8 @@ class ForceSchedule:
         return f"open-loop schedule with {len(self.times)} switches"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``times_s`` [s] and ``forces_N`` [N].
-
-        Parameters
-        ----------
-        units : Units
-            The scale of the times [s] and of the forces [N].
-        """
+        """``times_s`` [s] and ``forces_N`` [N], in the scale of ``units`` (a
+        :class:`Units`)."""
         return {"times_s": [t * units.time for t in self.times],
                 "forces_N": [u * units.force for u in self.values]}
 
@@ -313,15 +308,8 @@ class FeedbackSchedule:
 
     @classmethod
     def from_arcs(cls, durations, gains) -> FeedbackSchedule:
-        """Schedule from arc durations (> 0) and the law on each arc (and after).
-
-        Parameters
-        ----------
-        durations : sequence of float
-            Length of each arc but the last (held forever).
-        gains : sequence of sequence of float
-            Rows of 5; one more than ``durations``.
-        """
+        """Schedule from arc durations (> 0, as for :meth:`ForceSchedule.from_arcs`) and
+        the law on each arc and after (``gains``: rows of 5, one more than ``durations``)."""
         d = check("durations", np.asarray(durations, float).ravel())
         return cls(tuple(np.cumsum(d)), tuple(tuple(r) for r in gains))
 
@@ -344,13 +332,8 @@ class FeedbackSchedule:
         return f"open-loop schedule with {len(self.times)} switches ({n} feedback pieces)"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N).
-
-        Parameters
-        ----------
-        units : Units
-            The scale of the times and of the gains' rows.
-        """
+        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N), in the
+        scale of ``units`` (a :class:`Units`)."""
         scale = np.array([units.force / units.length, units.force / units.velocity,
                           units.force / units.length, units.force / units.velocity,
                           units.force])

@@ -28,6 +28,7 @@ from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
 from softlanding.simulation.kernel.dop853 import B as DB
+from softlanding.simulation.kernel.events import step_to
 from softlanding.simulation.kernel.groundlaw import (
     G_LOCK,
     NY,
@@ -287,11 +288,7 @@ def march_yield(sysd, z, t, t_next, t_max, max_steps, C, ne, ext, acc, wsn):
     rejected = False
     hit, time_event, stop = -1, False, -1
     while True:
-        hs = h
-        time_event = False
-        if t + hs >= t_next:
-            hs = t_next - t
-            time_event = True
+        hs, time_event = step_to(t, h, t_next)
         dop_step(A, cu, G, fp, buf, y, hs, K, Yt, ynew)
         ext[X_WORK] += 1.0
         err = error_norm(K, y, ynew, hs, rtol)
