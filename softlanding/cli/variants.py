@@ -263,7 +263,8 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
     rows = []
     for x, r in zip(v0, res, strict=True):
         rd = rigid_depth(float(x), ground)
-        rows.append({"v0": float(x), **labelled_dict(variant, r.to_dict()),
+        d = labelled_dict(variant, r.to_dict())
+        rows.append({"v0": float(x), **d, "path": getattr(r, "path", d.get("path", "-")),
                      "objective": float(getattr(r, attr)), "rigid_depth": rd,
                      "ratio_to_rigid": float(r.depth) / rd,
                      "unverified_reasons": r.unverified_reasons()})
@@ -302,8 +303,7 @@ def _print_sweep(label: str, what: str | None, rows: list[dict[str, Any]]) -> No
           + f" {'rigid':>10} {'ratio':>7}" + (f" {'T':>8}  switch  " if timed else "")
           + "  verified  solved by")
     for r in rows:
-        path = str(r.get("path", "-")).split(" ")[0]  # (the refinement's way aside)
-        by = "structure re-solve" if path == "structure" else path
+        by = "structure re-solve" if r["path"] == "structure" else str(r["path"])
         if "iterations" in r:
             by += f" ({r['iterations']} it.)"
         sw = ",".join(f"{t:.5f}" for t in r["switch_times"]) if timed else ""
