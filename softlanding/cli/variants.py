@@ -293,11 +293,16 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
     return code
 
 
+def _flat(times: Any) -> list[float]:
+    """Switch times, a phased variant's (a list per phase) in one list."""
+    return [t for v in times for t in _flat(v)] if isinstance(times, list | tuple) else [times]
+
+
 def _print_sweep(label: str, what: str | None, rows: list[dict[str, Any]]) -> None:
     """The sweep's table: ``v0``, depth, the objective (``what``, None: the depth), the
     rigid leg's depth and the ratio, the landing's time and switches where the variant
     reports them, and how each was solved."""
-    timed = all("T" in r and "switch_times" in r for r in rows)
+    timed = all(isinstance(r.get("T"), float) and "switch_times" in r for r in rows)
     print(f"variant {label}" + (f", minimising {what}" if what else ""))
     print(f"{'v0':>7} {'depth':>14}" + (f" {what[:14]:>14}" if what else "")
           + f" {'rigid':>10} {'ratio':>7}" + (f" {'T':>8}  switch  " if timed else "")
@@ -306,7 +311,7 @@ def _print_sweep(label: str, what: str | None, rows: list[dict[str, Any]]) -> No
         by = "structure re-solve" if r["path"] == "structure" else str(r["path"])
         if "iterations" in r:
             by += f" ({r['iterations']} it.)"
-        sw = ",".join(f"{t:.5f}" for t in r["switch_times"]) if timed else ""
+        sw = ",".join(f"{t:.5f}" for t in _flat(r["switch_times"])) if timed else ""
         print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}"
               + (f" {r['objective']:>14.10f}" if what else "")
               + f" {r['rigid_depth']:>10.6f} {r['ratio_to_rigid']:>7.4f}"
