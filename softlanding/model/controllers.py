@@ -256,8 +256,13 @@ class ForceSchedule:
         return f"open-loop schedule with {len(self.times)} switches"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``times_s`` [s] and ``forces_N`` [N], in the scale of ``units`` (a
-        :class:`Units`)."""
+        """``times_s`` [s] and ``forces_N`` [N].
+
+        Parameters
+        ----------
+        units : Units
+            The scale of the times [s] and of the forces [N].
+        """
         return {"times_s": [t * units.time for t in self.times],
                 "forces_N": [u * units.force for u in self.values]}
 
@@ -332,8 +337,13 @@ class FeedbackSchedule:
         return f"open-loop schedule with {len(self.times)} switches ({n} feedback pieces)"
 
     def to_si(self, units: Units) -> dict[str, Any]:
-        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N), in the
-        scale of ``units`` (a :class:`Units`)."""
+        """``times_s`` [s] and ``gains_SI`` (rows in N/m, N s/m, N/m, N s/m, N).
+
+        Parameters
+        ----------
+        units : Units
+            The scale of the times and of the gains' rows.
+        """
         scale = np.array([units.force / units.length, units.force / units.velocity,
                           units.force / units.length, units.force / units.velocity,
                           units.force])

@@ -278,7 +278,15 @@ class HopCycle:
 # ---------------------------------------------------------------- helpers
 def hop_parameters(robot: Robot, impact: Impact, eta: float,
                    start: np.ndarray | None = None) -> dict[str, float]:
-    """The hop problem's parameter values (``start``: a given first state)."""
+    """The hop problem's parameter values.
+
+    Parameters
+    ----------
+    robot, impact, eta
+        The robot, the touchdown and the regenerative efficiency.
+    start : array, optional
+        A given first state (the flight's lift-off, the push-off's rest).
+    """
     p = {**landing_parameters(robot, impact), "l0": robot.s / 2, "eta": eta}
     if start is not None:
         p.update(zip(START_PARAMETERS, map(float, start), strict=True))
@@ -286,14 +294,28 @@ def hop_parameters(robot: Robot, impact: Impact, eta: float,
 
 
 def crater_depth(res: LandingResult, t_end: float) -> float:
-    """The crater's depth up to ``t_end`` (deepest foot position at the segment ends)."""
+    """The crater's depth up to ``t_end`` (deepest foot position at the segment ends).
+
+    Parameters
+    ----------
+    res : LandingResult
+        An exact replay.
+    t_end : float
+        Up to this time.
+    """
     seg = res.segments
     ends = [float(-seg["z"][k][2]) for k in range(len(seg["t"]) - 1) if seg["t"][k] <= t_end]
     return max([0.0, *ends, float(-state_at(res, t_end)[2])])
 
 
 def force_schedule(sols: list[Solution]) -> tuple[ForceSchedule, float]:
-    """The transcriptions' piecewise-constant force, phase after phase, and its length."""
+    """The transcriptions' piecewise-constant force, phase after phase, and its length.
+
+    Parameters
+    ----------
+    sols : list of ocp.Solution
+        Transcriptions, in the order they are flown.
+    """
     durs: list[float] = []
     vals: list[float] = []
     for sol in sols:
@@ -307,7 +329,23 @@ def force_schedule(sols: list[Solution]) -> tuple[ForceSchedule, float]:
 
 def evaluate_replay(leg: str, robot: Robot, impact: Impact, eta: float, res: LandingResult,
                     t_apex: float, pre: Work, E_td: float) -> HopCycle:
-    """Energy, depth, CoT and the checks of an exact replay ending at the apex."""
+    """Energy, depth, CoT and the checks of an exact replay ending at the apex.
+
+    Parameters
+    ----------
+    leg : str
+        Which leg (``"free"`` also gets its landing's CoT).
+    robot, impact, eta
+        The robot, the touchdown and the regenerative efficiency.
+    res : LandingResult
+        The replay.
+    t_apex : float
+        Its apex time.
+    pre : Work
+        The actuator's work before the replay starts.
+    E_td : float
+        The mechanical energy at touchdown.
+    """
     w = pre + result_work(res, t_apex)
     x_apex = state_at(res, t_apex)
     err = float(np.max(np.abs(apex_residuals(x_apex, robot.body_mass, robot.foot_mass,
@@ -327,7 +365,15 @@ def evaluate_replay(leg: str, robot: Robot, impact: Impact, eta: float, res: Lan
 
 def landing_cot(robot: Robot, impact: Impact, res: LandingResult) -> float:
     """The landing's cost of transport: the mechanical energy lost from touchdown to the
-    foot's first stop, over the impact energy."""
+    foot's first stop, over the impact energy.
+
+    Parameters
+    ----------
+    robot, impact
+        The robot and the touchdown.
+    res : LandingResult
+        The landing's replay.
+    """
     x0 = impact.initial_state(robot.replace(l0=None))
     x = state_at(res, res.t_first_stop)
     rel = float(mechanical_energy(x, robot.r_m) - mechanical_energy(x0, robot.r_m))
@@ -335,7 +381,13 @@ def landing_cot(robot: Robot, impact: Impact, res: LandingResult) -> float:
 
 
 def grid_row(c: HopCycle) -> dict[str, Any]:
-    """One grid of a cycle's grid sequence: its nodes per phase and energies."""
+    """One grid of a cycle's grid sequence: its nodes per phase and energies.
+
+    Parameters
+    ----------
+    c : HopCycle
+        The cycle solved on that grid.
+    """
     sol = c.transcribed[0]
     return {"nodes": [int(ph.N) for ph in sol.phases], "energy": c.energy,
             "energy_transcribed": c.energy_transcribed}
@@ -344,7 +396,17 @@ def grid_row(c: HopCycle) -> dict[str, Any]:
 # ------------------------------------------------------------- flight alone
 def flight_to_apex(robot: Robot, impact: Impact, eta: float, start: np.ndarray,
                    guess_from: Solution | None = None) -> Solution:
-    """The minimum-energy flight from a lift-off state to the apex posture."""
+    """The minimum-energy flight from a lift-off state to the apex posture.
+
+    Parameters
+    ----------
+    robot, impact, eta
+        The robot, the touchdown and the regenerative efficiency.
+    start : array
+        The lift-off state.
+    guess_from : ocp.Solution, optional
+        A neighbouring flight (its start; a cold guess when it fails).
+    """
     tr = hop_transcription("lift-off")
     p = hop_parameters(robot, impact, eta, start)
     notes: list[str] = []

@@ -93,15 +93,31 @@ def apex_target(mb: Any, height: Any, s: Any) -> tuple[Any, Any, Any, Any]:
 
 
 def apex_posture(x: Any, mb: Any, mf: Any) -> tuple[Any, Any, Any, Any]:
-    """What :func:`apex_target` prescribes, of a state ``x = [x_b, v_b, x_f, v_f, ...]``:
-    centre of mass height and velocity, leg length and rate."""
+    """What :func:`apex_target` prescribes, of a state: centre of mass height and velocity,
+    leg length and rate.
+
+    Parameters
+    ----------
+    x : array or CasADi expression
+        ``[x_b, v_b, x_f, v_f, ...]``.
+    mb, mf : float or CasADi expression
+        Body and foot masses (fractions of the total).
+    """
     return (mb * x[0] + mf * x[2], mb * x[1] + mf * x[3], x[0] - x[2], x[1] - x[3])
 
 
 def apex_residuals(x: Any, mb: Any, mf: Any, height: Any, s: Any) -> list[Any]:
     """The apex conditions as residuals, zero at the apex (named by :data:`APEX`):
     :func:`apex_posture` less :func:`apex_target`; on numbers, arrays or CasADi
-    expressions."""
+    expressions.
+
+    Parameters
+    ----------
+    x, mb, mf
+        As for :func:`apex_posture`.
+    height, s
+        As for :func:`apex_target`.
+    """
     return [p - t for p, t in zip(apex_posture(x, mb, mf), apex_target(mb, height, s),
                                   strict=True)]
 

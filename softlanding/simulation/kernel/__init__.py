@@ -447,9 +447,14 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
 
 def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
                                                                    np.ndarray]:
-    """:func:`sample_segments` (same parameters and returns) for a non-affine landing: its
-    yielding segments are integrated again from their recorded starts (same integrator and
-    tolerance)."""
+    """:func:`sample_segments` for a non-affine landing: its yielding segments are integrated
+    again from their recorded starts (same integrator and tolerance).
+
+    Parameters
+    ----------
+    segments, grid
+        As for :func:`sample_segments`: the landing's segment records, the times.
+    """
     from softlanding.simulation.kernel.nonaffine import sample_nl
 
     G, fp, rtol = segments["law"]
