@@ -161,50 +161,11 @@ def _v0_grid(a: argparse.Namespace) -> Any:
 
 
 def _cmd_solve_sweep(a: argparse.Namespace) -> int:
-    from softlanding.cli.variants import DEFAULT_VARIANT, sweep_command, variant_of
+    from softlanding.cli.variants import sweep_command, variant_of
 
     v, plot, ground, robot = _v0_grid(a), target(a), ground_of_args(a), robot_of(a)
     variant, options = variant_of(a, ground)
-    if variant.name != DEFAULT_VARIANT:  # the paper's sweep also compares with a rigid leg
-        return sweep_command(a, variant, options, v, robot, ground, plot)
-    nodes = options["nodes"]
-    import numpy as np
-
-    from softlanding.optimal.landing import sweep_landing
-    from softlanding.studies.comparison import rigid_depth
-
-    res = sweep_landing(v, robot, ground, nodes=nodes, progress=not a.json)
-    rigid = [rigid_depth(x, ground) for x in v]
-    rows: list[dict[str, Any]] = [
-        {"v0": r.impact.v0, "depth": r.depth, "depth_transcribed": r.depth_transcribed,
-         "rigid_depth": rd, "ratio_to_rigid": r.depth / rd, "T": r.T,
-         "switch_times": r.switch_times, "arcs": r.arcs, "iterations": r.iterations,
-         "path": r.path, "unverified_reasons": r.unverified_reasons()}
-        for r, rd in zip(res, rigid, strict=True)]
-    unverified = [r for r in rows if r["unverified_reasons"]]
-    code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
-    written = None
-    if plot:
-        from softlanding.plots.paper import plot_depth_vs_velocity
-
-        written = savefig(plot_depth_vs_velocity(
-            v, {"rigid leg": np.array(rigid),
-                "bang-bang (refined)": np.array([r.depth for r in res])}), plot)
-    if a.json:
-        print_json({"verified": not unverified, "sweep": rows})
-        return code
-    if unverified:
-        print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
-            f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
-    print(f"{'v0':>7} {'depth':>14} {'rigid':>10} {'ratio':>7} {'T':>8}  switch   solved by")
-    for r in rows:
-        sw = ",".join(f"{t:.5f}" for t in r["switch_times"])
-        by = ("transcription" if r["path"] == "transcription" else "structure re-solve")
-        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f} {r['rigid_depth']:>10.6f} "
-              f"{r['ratio_to_rigid']:>7.4f} {r['T']:>8.5f}  {sw}  {by} ({r['iterations']} it.)")
-    if written:
-        print(f"figure written to {written}")
-    return code
+    return sweep_command(a, variant, options, v, robot, ground, plot)
 
 
 # ------------------------------------------------------------------ impedance

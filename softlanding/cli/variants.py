@@ -235,7 +235,9 @@ def variant_of(a: argparse.Namespace, ground: Any) -> tuple[Variant, dict[str, A
 
 def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, Any],
                   v0: Any, robot: Any, ground: Any, plot: Any) -> int:
-    """``softlanding solve-sweep --variant NAME``: any variant over ``v0`` by continuation.
+    """``softlanding solve-sweep [--variant NAME]``: any variant, the paper's too, over
+    ``v0`` by continuation; one table, JSON and figure for all (the depth, the variant's
+    objective when it minimises something else, and the rigid leg's depth for scale).
 
     Parameters
     ----------
@@ -254,13 +256,18 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
     """
     from softlanding.cli.output import EXIT_FAILURE, EXIT_OK, print_json, savefig
     from softlanding.optimal.variants import sweep_variant
+    from softlanding.studies.comparison import rigid_depth
 
     res = sweep_variant(variant, v0, robot, ground, options, progress=not a.json)
     attr, what = variant.objective
-    rows = [{"v0": float(x), **labelled_dict(variant, r.to_dict()),
-             "objective": float(getattr(r, attr)),
-             "unverified_reasons": r.unverified_reasons()}
-            for x, r in zip(v0, res, strict=True)]
+    rows = []
+    for x, r in zip(v0, res, strict=True):
+        rd = rigid_depth(float(x), ground)
+        d = labelled_dict(variant, r.to_dict())
+        rows.append({"v0": float(x), **d, "path": getattr(r, "path", d.get("path", "-")),
+                     "objective": float(getattr(r, attr)), "rigid_depth": rd,
+                     "ratio_to_rigid": float(r.depth) / rd,
+                     "unverified_reasons": r.unverified_reasons()})
     unverified = [r for r in rows if r["unverified_reasons"]]
     code = EXIT_OK if not unverified or a.accept_unverified else EXIT_FAILURE
     written = None
@@ -271,8 +278,8 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
 
         written = savefig(plot_variant_sweep(
             np.asarray(v0), np.array([r["depth"] for r in rows]), variant_label(variant),
-            None if attr == "depth" else (what, np.array([r["objective"] for r in rows]))),
-            plot)
+            None if attr == "depth" else (what, np.array([r["objective"] for r in rows])),
+            {"rigid leg": np.array([r["rigid_depth"] for r in rows])}), plot)
     if a.json:
         print_json({"verified": not unverified, "variant": variant.name, "objective": attr,
                     "sweep": rows})
@@ -280,17 +287,36 @@ def sweep_command(a: argparse.Namespace, variant: Variant, options: dict[str, An
     if unverified:
         print(f"UNVERIFIED at {len(unverified)} of {len(rows)} velocities: " + "; ".join(
             f"v0 = {r['v0']:g}: {r['unverified_reasons'][0]}" for r in unverified[:3]))
-    own = attr != "depth"
-    print(f"variant {variant_label(variant)}" + (f", minimising {what}" if own else ""))
-    print(f"{'v0':>7} {'depth':>14}" + (f" {what[:14]:>14}" if own else "")
-          + "  verified  solved by")
-    for r in rows:
-        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}"
-              + (f" {r['objective']:>14.10f}" if own else "")
-              + f"  {'no' if r['unverified_reasons'] else 'yes':>8}  {r.get('path', '-')}")
+    _print_sweep(variant_label(variant), None if attr == "depth" else what, rows)
     if written:
         print(f"figure written to {written}")
     return code
+
+
+def _flat(times: Any) -> list[float]:
+    """Switch times, a phased variant's (a list per phase) in one list."""
+    return [t for v in times for t in _flat(v)] if isinstance(times, list | tuple) else [times]
+
+
+def _print_sweep(label: str, what: str | None, rows: list[dict[str, Any]]) -> None:
+    """The sweep's table: ``v0``, depth, the objective (``what``, None: the depth), the
+    rigid leg's depth and the ratio, the landing's time and switches where the variant
+    reports them, and how each was solved."""
+    timed = all(isinstance(r.get("T"), float) and "switch_times" in r for r in rows)
+    print(f"variant {label}" + (f", minimising {what}" if what else ""))
+    print(f"{'v0':>7} {'depth':>14}" + (f" {what[:14]:>14}" if what else "")
+          + f" {'rigid':>10} {'ratio':>7}" + (f" {'T':>8}  switch  " if timed else "")
+          + "  verified  solved by")
+    for r in rows:
+        by = "structure re-solve" if r["path"] == "structure" else str(r["path"])
+        if "iterations" in r:
+            by += f" ({r['iterations']} it.)"
+        sw = ",".join(f"{t:.5f}" for t in _flat(r["switch_times"])) if timed else ""
+        print(f"{r['v0']:>7.3f} {r['depth']:>14.10f}"
+              + (f" {r['objective']:>14.10f}" if what else "")
+              + f" {r['rigid_depth']:>10.6f} {r['ratio_to_rigid']:>7.4f}"
+              + (f" {r['T']:>8.5f}  {sw:<7}" if timed else "")
+              + f"  {'no' if r['unverified_reasons'] else 'yes':>8}  {by}")
 
 
 def _cmd_variants(a: argparse.Namespace) -> int:

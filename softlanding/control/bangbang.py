@@ -459,6 +459,19 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
     M[M_PRED_OK] = 1.0
 
 
+@njit(**JIT)
+def _settled(st, P, x, M, K, Yt, ynew, y, body, vmax, left):
+    """A sample's end after a Newton solve of status ``st``: the next sample's prediction
+    when it converged, the status recorded, the creep law where the plan gives way to it;
+    the sample's status."""
+    if st == OK:
+        _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
+    M[M_STATUS] = st
+    if st == CREEP and P[P_CREEP] == 1.0:
+        return creep_phase(P, M, x)
+    return st
+
+
 @njit(**ENTRY)
 def solve_plan(P, M, x, K, W, work=np.inf):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
@@ -597,12 +610,7 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
                 M[M_UNCONVERGED] = M[M_UNCONVERGED] + 1 if far else 0
             if M[M_UNCONVERGED] > MAX_UNCONVERGED:
                 st = NEWTON_FAILED
-            if st == OK:
-                _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
-            M[M_STATUS] = st
-            if st == CREEP and P[P_CREEP] == 1.0:
-                return creep_phase(P, M, x)
-            return st
+            return _settled(st, P, x, M, K, Yt, ynew, y, body, vmax, left)
         # the switch fell within the sample
         M[M_TAU2] = max(M[M_TAU2] - (h - M[M_TAU1]), 1e-3 * M[M_TAU2])
         M[M_PHASE] = PULL
@@ -614,12 +622,7 @@ def _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, l
         M[M_STATUS] = HOLDS
         return HOLDS
     st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
-    if st == OK:
-        _predict(P, x, M, K, Yt, ynew, y, body, vmax, left)
-    M[M_STATUS] = st
-    if st == CREEP and P[P_CREEP] == 1.0:
-        return creep_phase(P, M, x)
-    return st
+    return _settled(st, P, x, M, K, Yt, ynew, y, body, vmax, left)
 
 
 __all__ = [*bangbang_layout.__all__, "control_step", "solve_plan", "structure_step",

@@ -269,14 +269,8 @@ def transcribed_plan(plan: Any, applied: float, robot: Robot, believed: Ground,
     ----------
     plan : RefinedSwitching or ocp.Solution
         The last plan (the guess).
-    applied : float
-        How much of it has been applied.
-    robot : Robot
-        The robot.
-    believed : Ground
-        The ground to plan for.
-    x : array of 4
-        The state the new plan starts from.
+    applied, robot, believed, x
+        As for :func:`replan_structure`.
 
     Raises
     ------

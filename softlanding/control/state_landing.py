@@ -192,14 +192,9 @@ class StateStarted(PhasedVariant[StatePlan]):
 
     Parameters
     ----------
-    robot : Robot
-        The robot (with a force limit).
-    ground : LinearGround or DragGround
-        The ground.
-    x : array of 4
-        The state (a yielding foot); it stands for the impact, which the hooks do not read.
-    guess : ocp.Trajectory or None
-        A start for the solver (times from the state's instant).
+    robot, ground, x, guess
+        As for :func:`solve_from_state` (``x`` stands for the impact, which the hooks do
+        not read).
     """
 
     default_start = True  # a guess from the last plan's rest may mislead from a new state
@@ -316,21 +311,13 @@ def plan_from_state(robot: Robot, ground: Ground, x: np.ndarray,
 
     Parameters
     ----------
-    robot : Robot
-        The robot (with a force limit).
-    ground : LinearGround or DragGround
-        The ground.
-    x : array of 4
-        The state (a yielding foot, ``v_f < 0``).
-    guess : ocp.Trajectory, optional
-        A start for the solver (times from the state's instant).
+    robot, ground, x, guess
+        As for :func:`solve_from_state` (a yielding foot's state, a start for the solver).
 
     Raises
     ------
-    ParameterError
-        Not a state of a yielding foot.
-    ocp.SolveError
-        No plan from this state.
+    ParameterError, ocp.SolveError
+        As :func:`solve_from_state` does.
     """
     return plan_schedule(solve_from_state(robot, ground, x, guess=guess), robot)
 

@@ -313,15 +313,8 @@ class FeedbackSchedule:
 
     @classmethod
     def from_arcs(cls, durations, gains) -> FeedbackSchedule:
-        """Schedule from arc durations (> 0) and the law on each arc (and after).
-
-        Parameters
-        ----------
-        durations : sequence of float
-            Length of each arc but the last (held forever).
-        gains : sequence of sequence of float
-            Rows of 5; one more than ``durations``.
-        """
+        """Schedule from arc durations (> 0, as for :meth:`ForceSchedule.from_arcs`) and
+        the law on each arc and after (``gains``: rows of 5, one more than ``durations``)."""
         d = check("durations", np.asarray(durations, float).ravel())
         return cls(tuple(np.cumsum(d)), tuple(tuple(r) for r in gains))
 

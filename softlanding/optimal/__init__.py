@@ -1,13 +1,15 @@
 """Optimal landings: one pipeline, one module per variant.
 
 * :mod:`.landing` -- the paper's single-phase landing (:func:`solve_landing`,
-  :func:`sweep_landing`, :class:`BangBangLanding`);
+  :func:`sweep_landing`, :class:`BangBangLanding`), problem in :mod:`.landing_problem`, its
+  open-loop schedules in :mod:`.landing_schedule`;
 * :mod:`.two_phase` -- the body's arrest optimised too (:func:`solve_two_phase`,
   :func:`sweep_two_phase`, :func:`two_step_check`), problem in :mod:`.two_phase_problem`;
 * :mod:`.leg_extension` -- the touchdown leg state optimised (:func:`solve_leg_extension`),
   problem in :mod:`.leg_extension_problem`;
 * :mod:`.hopping` -- the minimum-energy hop cycle (:func:`solve_hop`), problem in
-  :mod:`.hopping_problem`;
+  :mod:`.hopping_problem`, its record and replay checks in :mod:`.hop_cycle`, its exact
+  arcs in :mod:`.hop_arcs`, the impedance leg in :mod:`.hop_impedance`;
 * :mod:`.pipeline` -- what every variant shares: :class:`PhasedVariant` (the hooks a
   variant fills), :func:`solve_phased`, :func:`continuation` (the single-phase landing and
   the MPC's state-started solve run on it too, with one-phase refinement hooks);

@@ -35,10 +35,12 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ocp.structure.flows import expm_taylor
 from ocp.transcriptions.solver_output import solver_output
 from softlanding.model.controllers import FeedbackSchedule, rigid_lock_gains
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.robot import Impact, Robot
+from softlanding.optimal.hopping_problem import apex_residuals
 
 MODES = ("yielding", "static", "flight")
 KINDS = ("coast", "lock", "capacity", "+", "-")
@@ -241,14 +243,11 @@ def detect_arcs(sol: Any, robot: Robot, pieces: int = PIECES,
 # ---------------------------------------------------------------- the NLP
 @lru_cache(maxsize=1)
 def _expm() -> ca.Function:
-    """``exp(M)`` of a 5x5 matrix: Taylor series after scaling, then squaring."""
+    """``exp(M)`` of a 5x5 matrix: :func:`ocp.structure.flows.expm_taylor` (degree
+    :data:`TERMS`) after scaling by ``2^-SQUARINGS``, then squaring (the piece's length is
+    an unknown: its norm is not known when the expression is built)."""
     M = ca.SX.sym("M", 5, 5)
-    S = M / 2.0 ** SQUARINGS
-    term = ca.SX.eye(5)
-    E = ca.SX.eye(5)
-    for k in range(1, TERMS + 1):
-        term = ca.mtimes(term, S) / k
-        E = E + term
+    E = expm_taylor(M / 2.0 ** SQUARINGS, TERMS)
     for _ in range(SQUARINGS):
         E = ca.mtimes(E, E)
     return ca.Function("expm5", [M], [E])
@@ -277,123 +276,123 @@ def _law(arc: Arc, force: Any, rows: dict[str, np.ndarray]) -> Any:
     return ca.horzcat(0, 0, 0, 0, force)
 
 
-def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
-                samples: int = SAMPLES, ipopt: dict | None = None) -> RefinedHop:
-    """The hop on the arcs of ``guess``, their pieces' durations and forces optimised,
-    every piece flowed exactly.
+class _HopNLP:
+    """The refinement NLP under construction: the robot's matrices, the unknowns and the
+    cost, built arc by arc (:meth:`add_arc`) in the order Ipopt sees them."""
 
-    Parameters
-    ----------
-    guess : ArcGuess
-        The arcs and a start (:func:`detect_arcs`).
-    robot, impact, eta
-        The robot, the touchdown and the regenerative efficiency.
-    samples : int
-        Path-constraint samples inside every piece.
-    ipopt : dict, optional
-        Extra Ipopt options.
-    """
-    mats = mode_matrices(robot.r_m)
-    A, B = mats["A"], mats["B"]
-    Fz, Fu = ca.DM(mats["Fz"]).T, float(mats["Fu"])
-    EQ, Ec, Wg, hold = ca.DM(mats["EQ"]), ca.DM(mats["Ec"]).T, float(mats["Wg"]), \
-        float(mats["hold"])
-    rows = _rows(robot)
-    expm = _expm()
-    u_max, s = float(robot.u_max), float(robot.s)  # type: ignore[arg-type]
-    mb, mf = robot.body_mass, robot.foot_mass
+    def __init__(self, guess: ArcGuess, robot: Robot, samples: int) -> None:
+        self.mats = mats = mode_matrices(robot.r_m)
+        self.Fz, self.Fu = ca.DM(mats["Fz"]).T, float(mats["Fu"])
+        self.EQ, self.Ec = ca.DM(mats["EQ"]), ca.DM(mats["Ec"]).T
+        self.Wg, self.hold = float(mats["Wg"]), float(mats["hold"])
+        self.rows = _rows(robot)
+        self.expm = _expm()
+        self.u_max, self.s = float(robot.u_max), float(robot.s)  # type: ignore[arg-type]
+        self.samples = samples
+        self.opti = opti = ca.Opti()
+        self.d = opti.variable()
+        opti.set_initial(self.d, guess.depth)
+        opti.subject_to(self.d >= 0)
+        self.zs = []
+        for x0 in guess.starts:
+            z = opti.variable(4)
+            opti.set_initial(z, x0)
+            self.zs.append(z)
+        self.cost: Any = 0
+        self.taus: list[list[Any]] = []
+        self.forces: list[list[Any]] = []
 
-    def energy(z: Any) -> Any:
-        return 0.5 * ca.mtimes(z.T, ca.mtimes(EQ, z)) + ca.mtimes(Ec, z)
+    def energy(self, z: Any) -> Any:
+        """The robot's mechanical energy at the augmented state ``z``."""
+        return 0.5 * ca.mtimes(z.T, ca.mtimes(self.EQ, z)) + ca.mtimes(self.Ec, z)
 
-    opti = ca.Opti()
-    d = opti.variable()
-    opti.set_initial(d, guess.depth)
-    opti.subject_to(d >= 0)
-    zs = []
-    for x0 in guess.starts:
-        z = opti.variable(4)
-        opti.set_initial(z, x0)
-        zs.append(z)
-    x_td = impact.initial_state(robot.replace(l0=None))
-    opti.subject_to(zs[0] == ca.DM(x_td[:4]))
-    cost: Any = 0
-    taus: list[list[Any]] = []
-    forces: list[list[Any]] = []
-    prev_mode = "yielding"
-    z_end: Any = None
-    for i, arc in enumerate(guess.arcs):
-        z = ca.vertcat(zs[i], 1)
-        if i:
-            opti.subject_to(zs[i] == z_end[:4])
+    def mode_change(self, prev_mode: str, mode: str, z: Any) -> None:
+        """The conditions where the ground mode changes from ``prev_mode`` to ``mode``."""
+        if mode == prev_mode:
+            return
+        if (prev_mode, mode) == ("yielding", "static"):
+            self.opti.subject_to(z[3] == 0)  # the foot stops
+            self.opti.subject_to(self.d == -z[2])
+        elif (prev_mode, mode) != ("static", "flight"):
+            raise ValueError(f"exact arcs: no {prev_mode} -> {mode} transition")
+
+    def path(self, arc: Arc, K: Any, j: int, zj: Any) -> None:
+        """The path constraints at the sample ``zj`` (the ``j``-th of its piece)."""
+        opti = self.opti
+        u = ca.mtimes(K, zj)
+        leg = zj[0] - zj[2]
+        opti.subject_to(opti.bounded(0, leg, self.s))
+        if arc.kind in ("lock", "capacity"):  # (free forces have bounds)
+            opti.subject_to(opti.bounded(-self.u_max, u, self.u_max))
+        power = u * (zj[1] - zj[3])
+        if arc.kind == "+":
+            opti.subject_to(power >= 0)
+        elif arc.kind in ("-", "capacity"):
+            opti.subject_to(power <= 0)
+        if arc.mode == "yielding":
+            opti.subject_to(zj[3] <= 0)
+        elif arc.mode == "static":
+            sup = ca.mtimes(self.Fz, zj) + self.Fu * u
+            opti.subject_to(sup >= 0)
+            opti.subject_to(sup <= self.hold * self.d)
+        elif j > 0:
+            opti.subject_to(zj[2] >= -self.d)  # above the crater bottom
+
+    def piece(self, arc: Arc, k: int, dur: float, z: Any, lift_off: bool
+              ) -> tuple[Any, Any, Any]:
+        """The ``k``-th piece of ``arc`` from ``z``: its duration, its force (or None) and
+        its end state, flowed exactly and sampled."""
+        opti = self.opti
+        tau = opti.variable()
+        opti.set_initial(tau, max(dur, 1e-6))
+        opti.subject_to(tau >= 0)
+        f = None
+        if arc.free:
+            f = opti.variable()
+            opti.set_initial(f, arc.forces[k])
+            opti.subject_to(opti.bounded(-self.u_max, f, self.u_max))
+        K = _law(arc, f, self.rows)
         m = MODES.index(arc.mode)
-        if arc.mode != prev_mode:  # the ground mode changes here
-            if (prev_mode, arc.mode) == ("yielding", "static"):
-                opti.subject_to(z[3] == 0)  # the foot stops
-                opti.subject_to(d == -z[2])
-            elif (prev_mode, arc.mode) != ("static", "flight"):
-                raise ValueError(f"exact arcs: no {prev_mode} -> {arc.mode} transition")
+        M = ca.DM(self.mats["A"][m]) + ca.mtimes(ca.DM(self.mats["B"][m]), K)
+        n = self.samples + 1
+        pts = [ca.mtimes(self.expm(M * (tau * j / n)), z) for j in range(n + 1)]
+        for j, zj in enumerate(pts):
+            self.path(arc, K, j, zj)
+        if lift_off and k == 0:
+            u0 = ca.mtimes(K, z)  # lift-off: the ground would have to pull
+            opti.subject_to(ca.mtimes(self.Fz, z) + self.Fu * u0 <= 0)
+        return tau, f, pts[-1]
+
+    def add_arc(self, i: int, arc: Arc, prev_mode: str, z_end: Any, eta: float) -> Any:
+        """Arc ``i`` from the previous arc's end ``z_end``; returns its end state."""
+        z = ca.vertcat(self.zs[i], 1)
+        if i:
+            self.opti.subject_to(self.zs[i] == z_end[:4])
+        self.mode_change(prev_mode, arc.mode, z)
         if arc.kind == "lock":
-            opti.subject_to(z[1] - z[3] == 0)
+            self.opti.subject_to(z[1] - z[3] == 0)
         t_arc, f_arc = [], []
         z_a = z
+        lift_off = arc.mode == "flight" and prev_mode == "static"
         for k, dur in enumerate(arc.durations):
-            tau = opti.variable()
-            opti.set_initial(tau, max(dur, 1e-6))
-            opti.subject_to(tau >= 0)
-            f = None
-            if arc.free:
-                f = opti.variable()
-                opti.set_initial(f, arc.forces[k])
-                opti.subject_to(opti.bounded(-u_max, f, u_max))
-            K = _law(arc, f, rows)
-            M = ca.DM(A[m]) + ca.mtimes(ca.DM(B[m]), K)
-            pts = [ca.mtimes(expm(M * (tau * j / (samples + 1))), z) for j in
-                   range(samples + 2)]
-            for j, zj in enumerate(pts):
-                u = ca.mtimes(K, zj)
-                leg = zj[0] - zj[2]
-                opti.subject_to(opti.bounded(0, leg, s))
-                if arc.kind in ("lock", "capacity"):  # (free forces have bounds)
-                    opti.subject_to(opti.bounded(-u_max, u, u_max))
-                power = u * (zj[1] - zj[3])
-                if arc.kind == "+":
-                    opti.subject_to(power >= 0)
-                elif arc.kind in ("-", "capacity"):
-                    opti.subject_to(power <= 0)
-                if arc.mode == "yielding":
-                    opti.subject_to(zj[3] <= 0)
-                elif arc.mode == "static":
-                    sup = ca.mtimes(Fz, zj) + Fu * u
-                    opti.subject_to(sup >= 0)
-                    opti.subject_to(sup <= hold * d)
-                elif j > 0:
-                    opti.subject_to(zj[2] >= -d)  # above the crater bottom
-            if arc.mode == "flight" and prev_mode == "static" and k == 0:
-                u0 = ca.mtimes(K, z)  # lift-off: the ground would have to pull
-                opti.subject_to(ca.mtimes(Fz, z) + Fu * u0 <= 0)
-            z = pts[-1]
+            tau, f, z = self.piece(arc, k, dur, z, lift_off)
             t_arc.append(tau)
             f_arc.append(f)
-        work = energy(z) - energy(z_a)
+        work = self.energy(z) - self.energy(z_a)
         if arc.mode == "yielding":
-            work = work + Wg * (z[2] ** 2 - z_a[2] ** 2)
+            work = work + self.Wg * (z[2] ** 2 - z_a[2] ** 2)
         if arc.kind == "+":
-            cost = cost + work
+            self.cost = self.cost + work
         elif arc.kind in ("-", "capacity") and eta:
-            cost = cost + eta * work
-        taus.append(t_arc)
-        forces.append(f_arc)
-        prev_mode = arc.mode
-        z_end = z
-    if prev_mode != "flight":
-        raise ValueError("exact arcs: the cycle does not end in flight")
-    zT = z_end
-    opti.subject_to(mb * zT[0] + mf * zT[2] == impact.energy + mb * s / 2)
-    opti.subject_to(mb * zT[1] + mf * zT[3] == 0)
-    opti.subject_to(zT[0] - zT[2] == s / 2)
-    opti.subject_to(zT[1] - zT[3] == 0)
-    opti.minimize(cost)
+            self.cost = self.cost + eta * work
+        self.taus.append(t_arc)
+        self.forces.append(f_arc)
+        return z
+
+
+def _solve(opti: ca.Opti, ipopt: dict | None) -> tuple[Any, str]:
+    """Ipopt on ``opti``: the values (the last iterate if it stopped short) and its
+    status."""
     # (a tighter constr_viol_tol sends Ipopt wandering in the flat valley: the replay, not
     # the NLP, is the figure reported, and the two are compared)
     opts = {"tol": 1e-12, "acceptable_tol": 1e-10, "max_iter": 500, "print_level": 0,
@@ -411,26 +410,70 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
         val = opti.debug.value
     # Ipopt's own word: opti.solve() also returns on Solved_To_Acceptable_Level, which the
     # caller does not take for an optimum
-    status = str(opti.stats()["return_status"])
+    return val, str(opti.stats()["return_status"])
+
+
+def _refined(guess: ArcGuess, nlp: _HopNLP, val: Any, status: str) -> RefinedHop:
+    """The solved NLP's arcs and their feedback schedule (pieces of no length left out)."""
     durs: list[float] = []
     gains: list[list[float]] = []
     out_arcs: list[Arc] = []
-    for arc, t_arc, f_arc in zip(guess.arcs, taus, forces, strict=True):
+    for arc, t_arc, f_arc in zip(guess.arcs, nlp.taus, nlp.forces, strict=True):
         d_vals = tuple(max(float(val(t)), 0.0) for t in t_arc)
-        f_vals = tuple(float(np.clip(val(f), -u_max, u_max)) for f in f_arc
+        f_vals = tuple(float(np.clip(val(f), -nlp.u_max, nlp.u_max)) for f in f_arc
                        if f is not None)
         out_arcs.append(Arc(arc.mode, arc.kind, d_vals, f_vals))
         for k, dur in enumerate(d_vals):
-            K = _law(arc, f_vals[k] if arc.free else None, rows)
+            K = _law(arc, f_vals[k] if arc.free else None, nlp.rows)
             durs.append(dur)
             gains.append([float(v) for v in np.asarray(ca.DM(K)).ravel()])
     keep = [k for k, t in enumerate(durs) if t > 0]
     durs = [durs[k] for k in keep]
     gains = [gains[k] for k in keep]
     sched = FeedbackSchedule.from_arcs(durs, gains + [[0.0] * 5])
-    return RefinedHop(out_arcs, sched, float(np.sum(durs)), float(val(d)),
+    cost = nlp.cost
+    return RefinedHop(out_arcs, sched, float(np.sum(durs)), float(val(nlp.d)),
                       float(val(cost)) if not isinstance(cost, int) else 0.0, status,
-                      [np.asarray(val(z), float).ravel() for z in zs])
+                      [np.asarray(val(z), float).ravel() for z in nlp.zs])
+
+
+def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
+                samples: int = SAMPLES, ipopt: dict | None = None) -> RefinedHop:
+    """The hop on the arcs of ``guess``, their pieces' durations and forces optimised,
+    every piece flowed exactly.
+
+    Parameters
+    ----------
+    guess : ArcGuess
+        The arcs and a start (:func:`detect_arcs`).
+    robot, impact, eta
+        The robot, the touchdown and the regenerative efficiency.
+    samples : int
+        Path-constraint samples inside every piece.
+    ipopt : dict, optional
+        Extra Ipopt options.
+
+    Raises
+    ------
+    ValueError
+        When the arcs' ground modes do not run yielding, static, flight.
+    """
+    nlp = _HopNLP(guess, robot, samples)
+    opti = nlp.opti
+    x_td = impact.initial_state(robot.replace(l0=None))
+    opti.subject_to(nlp.zs[0] == ca.DM(x_td[:4]))
+    prev_mode = "yielding"
+    z_end: Any = None
+    for i, arc in enumerate(guess.arcs):
+        z_end = nlp.add_arc(i, arc, prev_mode, z_end, eta)
+        prev_mode = arc.mode
+    if prev_mode != "flight":
+        raise ValueError("exact arcs: the cycle does not end in flight")
+    for res in apex_residuals(z_end, robot.body_mass, robot.foot_mass, impact.energy, nlp.s):
+        opti.subject_to(res == 0)
+    opti.minimize(nlp.cost)
+    val, status = _solve(opti, ipopt)
+    return _refined(guess, nlp, val, status)
 
 
 __all__ = ["KINDS", "MODES", "PIECES", "Arc", "ArcGuess", "RefinedHop", "detect_arcs",

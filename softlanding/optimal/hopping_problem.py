@@ -66,6 +66,60 @@ from softlanding.optimal.stance_phases import (
 LEGS = ("free", "impedance", "rigid")
 POWER = "slack p >= actuator power u (v_b - v_f)"
 FORCE = "force limit |u| <= u_max"
+APEX = ("apex: centre of mass back at its height", "apex: centre of mass at rest",
+        "apex: leg at s/2", "apex: leg at rest")
+"""The names of :func:`apex_residuals`, in order."""
+
+
+def apex_target(mb: Any, height: Any, s: Any) -> tuple[Any, Any, Any, Any]:
+    """The apex posture: centre of mass height and velocity, leg length and rate.
+
+    The centre of mass at rest at ``height + m_b s/2`` (the foot at ``height = v0^2/2``
+    above the surface with the leg at ``s/2``), the leg at ``s/2`` and at rest. With
+    :func:`apex_posture` the one definition of the apex, used by the transcribed problem,
+    the exact-arc refinement (:mod:`softlanding.optimal.hop_arcs`) and the replay's check
+    and the thrust's target (:mod:`softlanding.optimal.hopping`).
+
+    Parameters
+    ----------
+    mb : float or CasADi expression
+        Body mass (fraction of the total).
+    height : float or CasADi expression
+        The foot's apex height ``v0^2/2``.
+    s : float or CasADi expression
+        The stroke.
+    """
+    return (height + mb * s / 2, 0.0, s / 2, 0.0)
+
+
+def apex_posture(x: Any, mb: Any, mf: Any) -> tuple[Any, Any, Any, Any]:
+    """What :func:`apex_target` prescribes, of a state: centre of mass height and velocity,
+    leg length and rate.
+
+    Parameters
+    ----------
+    x : array or CasADi expression
+        ``[x_b, v_b, x_f, v_f, ...]``.
+    mb, mf : float or CasADi expression
+        Body and foot masses (fractions of the total).
+    """
+    return (mb * x[0] + mf * x[2], mb * x[1] + mf * x[3], x[0] - x[2], x[1] - x[3])
+
+
+def apex_residuals(x: Any, mb: Any, mf: Any, height: Any, s: Any) -> list[Any]:
+    """The apex conditions as residuals, zero at the apex (named by :data:`APEX`):
+    :func:`apex_posture` less :func:`apex_target`; on numbers, arrays or CasADi
+    expressions.
+
+    Parameters
+    ----------
+    x, mb, mf
+        As for :func:`apex_posture`.
+    height, s
+        As for :func:`apex_target`.
+    """
+    return [p - t for p, t in zip(apex_posture(x, mb, mf), apex_target(mb, height, s),
+                                  strict=True)]
 
 
 def _add(mp: MultiPhaseProblem, name: str, par: dict, mode: str, law: Any, bounds: tuple,
@@ -190,11 +244,9 @@ def _cycle(mp: MultiPhaseProblem, par: dict, stance: list[OptimalControlProblem]
         up.free_duration(1e-3, ARREST_MAX, guess=1.0)
     else:
         up.free_final_time(1e-3, ARREST_MAX, guess=1.0)
-    up.terminal_constraint(mb * x[0] + mf * x[2] - (par["v0"] ** 2 / 2 + mb * par["s"] / 2),
-                           0.0, name="apex: centre of mass back at its height")
-    up.terminal_constraint(mb * x[1] + mf * x[3], 0.0, name="apex: centre of mass at rest")
-    up.terminal_constraint(x[0] - x[2] - par["s"] / 2, 0.0, name="apex: leg at s/2")
-    up.terminal_constraint(x[1] - x[3], 0.0, name="apex: leg at rest")
+    for res, name in zip(apex_residuals(x, mb, mf, par["v0"] ** 2 / 2, par["s"]), APEX,
+                         strict=True):
+        up.terminal_constraint(res, 0.0, name=name)
     chain = [*stance, up]
     for a, b in zip(chain[:-1], chain[1:], strict=True):
         mp.link(a, b, states=list(STATE_NAMES))
@@ -233,5 +285,6 @@ def hop_transcription(start: str = "touchdown", steps: int = 1,
                             ipopt_options={"max_iter": 1500, **near})
 
 
-__all__ = ["FORCE", "LEGS", "POWER", "START", "START_PARAMETERS", "build_hop_problem",
-           "hop_transcription", "impedance_law"]
+__all__ = ["APEX", "FORCE", "LEGS", "POWER", "START", "START_PARAMETERS", "apex_posture",
+           "apex_residuals", "apex_target", "build_hop_problem", "hop_transcription",
+           "impedance_law"]

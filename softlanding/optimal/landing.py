@@ -31,14 +31,36 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ocp import MultipleShooting, OptimalControlProblem, Solution, SolveError
+from ocp import MultipleShooting, Solution, SolveError
 from ocp.structure.switching import RefinedSwitching, detect_arcs
 from ocp.transcriptions.integrators import rk4_function
 from softlanding.errors import InfeasibleLandingError, ParameterError, check_count, expect
 from softlanding.model.controllers import FeedbackSchedule, ForceSchedule
-from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
+from softlanding.model.dynamics import stance_dynamics
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
+from softlanding.optimal.landing_problem import (
+    ARREST,
+    ARREST_FORCE,
+    DESCENDING,
+    DIAGNOSABLE,
+    MAX_NODES,
+    PARAMETERS,
+    STROKE,
+    T_MAX,
+    arrest_force,
+    arrest_force_times_stroke,
+    build_landing_problem,
+    build_landing_problem_of,
+    landing_stance,
+    landing_transcription,
+)
+from softlanding.optimal.landing_schedule import (
+    affine_laws,
+    arrest_schedule,
+    landing_schedule,
+    transcribed_schedule,
+)
 from softlanding.optimal.limits import force_limit, landing_input
 from softlanding.optimal.phase_solve import refined_switching, switching_resolve
 from softlanding.optimal.pipeline import (
@@ -52,131 +74,6 @@ from softlanding.optimal.verification import certificate_reasons, replay_reasons
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
-
-T_MAX = 30.0
-MAX_NODES = 5000
-"""Largest transcription (the NLP grows linearly; 5000 nodes take about a minute)."""
-
-
-STROKE = "stroke limits 0 <= x_b - x_f <= s"
-DESCENDING = "foot descending v_f <= 0"
-ARREST = "body arrest -x_f(T) >= 1/(1+r_m) + u_b"
-ARREST_FORCE = "arrest force u_b <= u_max"
-DIAGNOSABLE = (ARREST_FORCE, ARREST, STROKE, DESCENDING)
-
-
-PARAMETERS = ("r_m", "s", "v0", "u_max", "l0")
-"""The landing OCP's parameters, in order."""
-
-
-def build_landing_problem(omit: tuple[str, ...] = (),
-                          ground: Ground = LINEAR_GROUND) -> OptimalControlProblem:
-    """The soft-landing OCP with parameters ``r_m, s, v0, u_max, l0``.
-
-    Parameters
-    ----------
-    omit : tuple of str
-        Named conditions to drop (used to diagnose infeasible requests).
-    ground : Ground
-        Ground model of the yielding stance.
-    """
-    p = OptimalControlProblem("soft_landing")
-    xb, vb, xf, vf = (p.state(n) for n in STATE_NAMES)
-    r_m, s, v0, u_max, l0 = (p.parameter(n) for n in PARAMETERS)
-    landing_stance(p, r_m, s, u_max, ground, omit)
-    p.initial_constraint(xb - l0, 0.0, name="x_b(0) = l0")
-    p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
-    p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
-    p.initial_constraint(vf - v0, 0.0, name="v_f(0) = v0")
-    return p
-
-
-def landing_stance(p: OptimalControlProblem, r_m: Any, s: Any, u_max: Any, ground: Any,
-                   omit: tuple[str, ...] = ()) -> None:
-    """Everything of the landing OCP but its start: the force, the yielding stance's
-    dynamics, the stroke and descent limits, the foot's stop, the body-arrest conditions,
-    the free final time and the depth objective (on ``p``'s states ``x_b, v_b, x_f, v_f``).
-
-    Parameters
-    ----------
-    p : OptimalControlProblem
-        A problem with the four states declared.
-    r_m, s, u_max : float or parameter expression
-        Mass ratio, stroke, force limit.
-    ground : Ground
-        Ground model (its law may hold parameter expressions).
-    omit : tuple of str
-        Named conditions to drop.
-    """
-    x = p.x
-    xb, xf, vf = x[0], x[2], x[3]
-    u = p.control("u", lower=-u_max, upper=u_max)
-    p.set_dynamics(stance_dynamics(x, u, r_m, ground))
-    stroke = xb - xf
-    if STROKE not in omit:
-        p.path_constraint(stroke, 0, s, name=STROKE)
-    if DESCENDING not in omit:
-        p.path_constraint(vf, -ca.inf, 0, name=DESCENDING)
-    p.terminal_constraint(vf, 0.0, name="foot stopped v_f(T) = 0")
-    # stroke * (hold - 1/(1+r_m) - u_b) >= 0 and stroke * (u_max - u_b) >= 0, with the
-    # crater's hold f(-x_f, 0) (-x_f on the paper's spring)
-    ub_stroke = arrest_force_times_stroke(x, r_m)
-    if ARREST not in omit:
-        p.terminal_constraint(stroke * (crater_capacity(x, ground) - 1 / (1 + r_m)) - ub_stroke,
-                              0, ca.inf, name=ARREST)
-    if ARREST_FORCE not in omit:
-        p.terminal_constraint(stroke * u_max - ub_stroke, 0, ca.inf, name=ARREST_FORCE)
-    p.free_final_time(lower=1e-3, upper=T_MAX, guess=1.0)
-    p.minimize_terminal(-xf)
-
-
-@lru_cache(maxsize=16)
-def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, ...] = (),
-                          ground: Ground = LINEAR_GROUND) -> MultipleShooting:
-    """The transcribed soft-landing NLP, built once per arguments and reused.
-
-    Expanded to SX: slower to build once, faster at every re-solve of a sweep.
-
-    Parameters
-    ----------
-    nodes : int
-        Shooting intervals.
-    substeps : int
-        RK4 steps per interval.
-    omit : tuple of str
-        Conditions dropped (diagnosis of infeasible requests).
-    ground : Ground
-        Ground model.
-    """
-    return MultipleShooting(build_landing_problem(omit, ground), nodes=nodes, integrator="rk4",
-                            substeps=substeps, expand=True)
-
-
-def arrest_force_times_stroke(x, r_m):
-    """``u_b (x_b - x_f)``, where ``u_b = r_m/(1+r_m) (1 + v_b^2 / (2 (x_b - x_f)))`` is the
-    constant force that stops the body in the remaining stroke (symbolic or numeric).
-
-    Parameters
-    ----------
-    x : array or casadi expression of 4
-        State at the foot's stop.
-    r_m : float or expression
-        Mass ratio.
-    """
-    return r_m / (1 + r_m) * ((x[0] - x[2]) + x[1] ** 2 / 2)
-
-
-def arrest_force(r_m: float, x_T: np.ndarray) -> float:
-    """``u_b``: the constant force that stops the body in the remaining stroke.
-
-    Parameters
-    ----------
-    r_m : float
-        Mass ratio.
-    x_T : array of 4
-        State at the foot's stop.
-    """
-    return float(arrest_force_times_stroke(x_T, r_m) / (x_T[0] - x_T[2]))
 
 
 @dataclass
@@ -348,126 +245,6 @@ class BangBangLanding:
                            "stroke_max": self.replay.stroke_max}
         return json_safe(d)
 
-
-def affine_laws(refined: RefinedSwitching) -> bool:
-    """Whether every arc's control is a constant or an affine state feedback ``u = K x + k0``
-    (what :func:`landing_schedule` replays exactly). A boundary arc on a drag ground holds
-    the stroke with a law in ``v_f^2``: not affine, so no exact schedule.
-
-    Parameters
-    ----------
-    refined : RefinedSwitching
-        Refined arcs.
-    """
-    return all(law is None or "gain" in law for law in (refined.control_laws or []))
-
-
-def landing_schedule(refined: RefinedSwitching, r_m: float) -> ForceSchedule | FeedbackSchedule:
-    """A refined landing's open-loop control: its arcs, then ``u_b`` until the body stops,
-    then the body's weight.
-
-    A bang arc is a constant force; a boundary arc (a stroke limit held) is the state
-    feedback that holds it, so the schedule is then a :class:`FeedbackSchedule`.
-
-    Parameters
-    ----------
-    refined : RefinedSwitching
-        The refined arcs (of the landing OCP or of one started mid-landing).
-    r_m : float
-        Mass ratio.
-
-    Raises
-    ------
-    ValueError
-        An arc's law is not affine (:func:`affine_laws`).
-    """
-    if not affine_laws(refined):
-        raise ValueError("a boundary arc's law is not affine in the state (drag): no exact "
-                         "schedule; replay the transcription (transcribed_schedule)")
-    keep = [i for i, d in enumerate(refined.durations) if d > 1e-14]
-    durs = [float(refined.durations[i]) for i in keep]
-    rows = [_law_row(refined, i) for i in keep]
-    return _with_arrest(durs, rows, refined.xT, r_m)
-
-
-def transcribed_schedule(sol: Solution, r_m: float, u_max: float = math.inf,
-                         damped: bool = False) -> ForceSchedule | FeedbackSchedule:
-    """A transcribed landing's open-loop control: its piecewise-constant force, then ``u_b``
-    until the body stops, then the body's weight (see :func:`landing_schedule`).
-
-    Parameters
-    ----------
-    sol : ocp.Solution
-        A one-phase transcription of the landing OCP (or of one started mid-landing).
-    r_m : float
-        Mass ratio.
-    u_max : float
-        The force limit: Ipopt meets its bounds to its tolerance (~1e-8), the actuator
-        exactly, so forces beyond it by at most
-        :data:`~softlanding.optimal.phase_schedule.FORCE_TOLERANCE` are clipped to it (a
-        larger excess is kept, and the replay's check flags it).
-    damped : bool
-        Hold the body's weight with a damper on its velocity
-        (:data:`~softlanding.optimal.phase_schedule.TAIL_DAMPING`): the transcription
-        leaves the body a residual velocity of its accuracy (~1e-8) that would otherwise
-        carry it through the stroke limit forever.
-    """
-    from softlanding.optimal.phase_schedule import clipped_forces
-
-    u, _ = clipped_forces(sol.u[:, 0], u_max)
-    h = sol.T / sol.N
-    return _with_arrest([h] * len(u), [_const_row(v) for v in u], sol.x[-1], r_m,
-                        damped=damped)
-
-
-def arrest_schedule(x: np.ndarray, r_m: float) -> ForceSchedule | FeedbackSchedule:
-    """From a foot at rest in state ``x``: the constant force that stops the body in the
-    stroke left, then the body's weight (the tail of :func:`landing_schedule`).
-
-    Parameters
-    ----------
-    x : array of 4
-        The state (the foot stopped).
-    r_m : float
-        Mass ratio.
-    """
-    return _with_arrest([], [], np.asarray(x, float), r_m)
-
-
-def _with_arrest(durs: list[float], rows: list[list[float]], xT: np.ndarray,
-                 r_m: float, damped: bool = False) -> ForceSchedule | FeedbackSchedule:
-    """``durs, rows`` then the arrest force until the body stops, then the body's weight
-    (``damped``: with a damper on the body's velocity, for a transcribed schedule whose
-    body keeps a residual velocity of the transcription's accuracy)."""
-    stroke = xT[0] - xT[2]
-    if xT[1] < 0 and stroke > 0:  # the arrest force until the body stops (none if stopped)
-        rows.append(_const_row(arrest_force(r_m, xT)))
-        decel = xT[1] ** 2 / (2 * stroke)
-        durs.append(-xT[1] / decel)
-    rows.append(_const_row(r_m / (1 + r_m)))
-    if damped:
-        from softlanding.optimal.phase_schedule import TAIL_DAMPING
-
-        rows[-1][1] = -TAIL_DAMPING
-    if all(not any(r[:4]) for r in rows):
-        return ForceSchedule.from_arcs(durs, [r[4] for r in rows])
-    return FeedbackSchedule.from_arcs(durs, rows)
-
-
-def _const_row(u: float) -> list[float]:
-    return [0.0, 0.0, 0.0, 0.0, float(u)]
-
-
-def _law_row(refined: RefinedSwitching, i: int) -> list[float]:
-    """Interval ``i``'s control as a row of ``u = K . [x, 1]``: its bang value, or the
-    boundary arc's law ``u = K x + k0``."""
-    law = refined.control_laws[i] if refined.control_laws else None
-    if law is None:
-        return _const_row(refined.values[i])
-    return [float(k) for k in np.asarray(law["gain"], float).reshape(-1)[:4]] + [
-        float(np.asarray(law["offset"], float).reshape(-1)[0])]
-
-
 def rigid_guess(tr: MultipleShooting, robot: Robot, impact: Impact,
                 ground: Ground = LINEAR_GROUND) -> np.ndarray:
     """Initial guess: the rigid-leg landing up to the foot's first stop (nearly feasible).
@@ -620,21 +397,6 @@ def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: G
         f"s={robot.s:g}, u_max={robot.u_max:g}: {why} (Ipopt: {err.status})")
 
 
-def build_landing_problem_of(nodes: int, ground: Ground) -> OptimalControlProblem:
-    """The (cached) landing problem of :func:`landing_transcription` (one phase).
-
-    Parameters
-    ----------
-    nodes : int
-        Shooting intervals of the transcription it belongs to.
-    ground : Ground
-        Ground model.
-    """
-    problem = landing_transcription(nodes, ground=ground).problem
-    assert isinstance(problem, OptimalControlProblem)
-    return problem
-
-
 class PaperLanding(PhasedVariant[BangBangLanding]):
     """The paper's single-phase landing's hooks in the pipeline
     (:func:`~softlanding.optimal.pipeline.solve_phased`): one phase, refined as one
@@ -706,15 +468,8 @@ class PaperLanding(PhasedVariant[BangBangLanding]):
             self.nodes, self.ground), self.impact.initial_state(self.robot), params)
 
     def explain(self, err: SolveError, guess: Any) -> Exception:
-        """Name the condition(s) whose removal makes the request feasible.
-
-        Parameters
-        ----------
-        err : ocp.SolveError
-            Ipopt's verdict.
-        guess : object
-            Unused (each diagnosis starts from its own rigid guess).
-        """
+        """Name the condition(s) whose removal makes the request feasible (``guess``
+        unused: each diagnosis starts from its own rigid guess)."""
         return _explain_infeasible(err, self.robot, self.impact, self.ground, self.nodes)
 
     def assemble(self, sol: Solution | None, ref: RefinedSwitching | None, notes: list[str],
@@ -857,8 +612,11 @@ def sweep_landing(v0_values, robot: Robot = PAPER_ROBOT, ground: Ground = LINEAR
         progress, "bang-bang sweep")
 
 
-__all__ = ["BangBangLanding", "InfeasibleLandingError", "PARAMETERS", "PaperLanding",
-           "ParameterError",
-           "arrest_force", "arrest_schedule", "build_landing_problem", "landing_schedule",
-           "landing_stance", "landing_transcription", "solve_landing", "sweep_landing",
-           "transcribed_schedule"]
+# the problem (landing_problem) and the schedules (landing_schedule) are imported here too,
+# where they were first defined
+__all__ = ["ARREST", "ARREST_FORCE", "DESCENDING", "DIAGNOSABLE", "MAX_NODES", "PARAMETERS",
+           "STROKE", "T_MAX", "BangBangLanding", "InfeasibleLandingError", "PaperLanding",
+           "ParameterError", "affine_laws", "arrest_force", "arrest_force_times_stroke",
+           "arrest_schedule", "build_landing_problem", "build_landing_problem_of",
+           "landing_schedule", "landing_stance", "landing_transcription", "rigid_guess",
+           "solve_landing", "sweep_landing", "transcribed_schedule"]

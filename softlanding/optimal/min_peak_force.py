@@ -35,6 +35,7 @@ from softlanding.errors import ParameterError
 from softlanding.model import LINEAR_GROUND, PAPER_ROBOT, Ground, Impact, Robot
 from softlanding.optimal import (
     Option,
+    PhasedVariant,
     TwoPhase,
     TwoPhaseLanding,
     Variant,
@@ -220,21 +221,10 @@ class MinPeakForce(TwoPhase):
         """
         return isinstance(neighbour, MinPeakForceLanding)
 
-    def bound(self) -> float | None:
-        """No bound on a re-solved structure's objective."""
-        return None
-
-    def explain(self, err: Any, guess: Any) -> Exception:
-        """Ipopt's verdict as it is (the budget was checked before).
-
-        Parameters
-        ----------
-        err : ocp.SolveError
-            Ipopt's verdict.
-        guess : object
-            The guess it started from.
-        """
-        return err
+    # the pipeline's own hooks, not the two-phase landing's: no bound on a re-solved
+    # structure's objective, and Ipopt's verdict as it is (the budget was checked before)
+    bound = PhasedVariant.bound
+    explain = PhasedVariant.explain
 
     def assemble(self, sol: Any, ref: Any, notes: list[str], path: str) -> MinPeakForceLanding:
         """The two-phase result, with the peak and the budget.

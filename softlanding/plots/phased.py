@@ -117,7 +117,8 @@ def wrapped_title(title: str, width: int = TITLE_WIDTH) -> str:
 
 
 def plot_variant_sweep(v0: np.ndarray, depth: np.ndarray, label: str,
-                       objective: tuple[str, np.ndarray] | None = None) -> plt.Figure:
+                       objective: tuple[str, np.ndarray] | None = None,
+                       references: dict[str, np.ndarray] | None = None) -> plt.Figure:
     """A variant's sweep over ``v0``: the depth and, for a variant that minimises
     something else (the peak force within a depth budget...), its objective in a second
     panel.
@@ -132,10 +133,15 @@ def plot_variant_sweep(v0: np.ndarray, depth: np.ndarray, label: str,
         The variant's name.
     objective : (str, ndarray), optional
         The objective's name and values (None: the depth is the objective).
+    references : dict, optional
+        Other depths at ``v0`` for scale (label -> depths: the rigid leg's...), drawn
+        first on the depth panel.
     """
     fig, axes = plt.subplots(1, 1 if objective is None else 2, squeeze=False,
                              figsize=(6.4 if objective is None else 11.0, 4.4))
     a = axes[0, 0]
+    for i, (name, values) in enumerate((references or {}).items()):
+        a.plot(v0, values, f"C{i + 1}s--", ms=3, lw=1, label=name)
     a.plot(v0, depth, "C0o-", ms=3, label=label)
     a.set_xlabel(r"impact velocity $v_0$ [$x_s / \tau_s$]")
     a.set_ylabel(r"penetration depth $-x_f(T)$ [$x_s$]")

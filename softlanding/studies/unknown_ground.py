@@ -180,14 +180,8 @@ def controller_case(v0: float, ground: Ground, robot: Robot = PAPER_ROBOT, *,
 
     Parameters
     ----------
-    v0 : float
-        Impact velocity.
-    ground : Ground
-        The true ground.
-    robot : Robot
-        The robot.
-    period : float
-        The sample period.
+    v0, ground, robot, period
+        As for :func:`unknown_ground_case` (``period``: the controller's sample period).
     noise, delay, seed : float, int, int
         The noisy sensing (:func:`~softlanding.control.mpc_landing`).
     margins : sequence of float
@@ -241,12 +235,8 @@ def controller_study(v0_values: Sequence[float] = STUDY_V0,
 
     Parameters
     ----------
-    v0_values, stiffness, drag : sequences of float
-        The grid.
-    robot : Robot
-        The robot.
-    progress : bool, optional
-        A progress bar.
+    v0_values, stiffness, drag, robot, progress
+        As for :func:`unknown_ground_study` (the grid, the robot, a progress bar).
     **kw
         To :func:`controller_case` (``bang_bang``: only those cases).
     """

@@ -248,14 +248,10 @@ class CController:
 
         Parameters
         ----------
-        P, M : array
-            The numbers and the memory, updated in place.
+        P, M, a_f, u, h, estimate
+            As for :meth:`control_step`.
         x : array of 4
             The filtered state.
-        a_f, u, h : float
-            The measured foot acceleration, the force the sample ended under, its length.
-        estimate : bool
-            Update the estimate.
         weight : float
             The sample's weight.
         recovering : int

@@ -177,47 +177,49 @@ def layout_lines(prefix: str) -> list[str]:
     return lines
 
 
+def define_line(name: str, v: int | float) -> str:
+    """``#define name value``: an int as it is, a float to the last bit (:func:`c_double`).
+
+    Parameters
+    ----------
+    name : str
+        The macro's name (padded by the caller, so that the values line up).
+    v : int or float
+        The value.
+    """
+    return f"#define {name} {str(v) if type(v) is int else c_double(v)}"
+
+
 def constant_lines() -> list[str]:
     """``#define`` lines of :data:`CONSTANTS` (the status's meaning in its comment)."""
     lines = []
     for name in CONSTANTS:
         v = getattr(bb, name)
-        value = str(v) if type(v) is int else c_double(v)
         note = bb.STATUS_NAMES[v] if name in STATUSES else None
-        lines.append(f"#define SL_{name:<16} {value}" + (f"  /* {note} */" if note else ""))
+        lines.append(define_line(f"SL_{name:<16}", v) + (f"  /* {note} */" if note else ""))
     return lines
 
 
 def filter_constant_lines() -> list[str]:
     """``#define SL_FILTER_*`` lines of :data:`FILTER_CONSTANTS`, and the impact state's
     variance ``START_STD ** 2`` (as Python squares it)."""
-    lines = []
-    for name in FILTER_CONSTANTS:
-        v = getattr(ff, name)
-        value = str(v) if type(v) is int else c_double(v)
-        lines.append(f"#define SL_FILTER_{name:<12} {value}")
+    lines = [define_line(f"SL_FILTER_{name:<12}", getattr(ff, name))
+             for name in FILTER_CONSTANTS]
     lines.append(f"#define SL_FILTER_{'START_VAR':<12} {c_double(ff.START_STD ** 2)}")
     return lines
 
 
 def filtered_constant_lines() -> list[str]:
     """``#define`` lines of :data:`FILTERED_CONSTANTS`."""
-    lines = []
-    for module, name in FILTERED_CONSTANTS:
-        v = getattr(module, name)
-        value = str(v) if type(v) is int else c_double(v)
-        lines.append(f"#define SL_{name:<18} {value}")
-    return lines
+    return [define_line(f"SL_{name:<18}", getattr(module, name))
+            for module, name in FILTERED_CONSTANTS]
 
 
 def creep_constant_lines() -> list[str]:
     """``#define SL_CREEP_*`` lines of :data:`CREEP_CONSTANTS`, and ``SL_CREEP_GL_N``, the
     number of Gauss-Legendre nodes."""
-    lines = []
-    for name in CREEP_CONSTANTS:
-        v = getattr(creep, name)
-        value = str(v) if type(v) is int else c_double(v)
-        lines.append(f"#define SL_CREEP_{name:<10} {value}")
+    lines = [define_line(f"SL_CREEP_{name:<10}", getattr(creep, name))
+             for name in CREEP_CONSTANTS]
     lines.append(f"#define SL_CREEP_{'GL_N':<10} {creep.GL_X.size}")
     return lines
 
@@ -259,5 +261,5 @@ def robot_lines(P: np.ndarray) -> list[str]:
 
 __all__ = ["CONSTANTS", "CREEP_CONSTANTS", "FILTERED_CONSTANTS", "FILTER_CONSTANTS", "F_DOC",
            "M_DOC", "P_DOC", "STATUSES", "c_double", "constant_lines", "creep_constant_lines",
-           "creep_gl_text", "dop853_text", "filter_constant_lines",
+           "creep_gl_text", "define_line", "dop853_text", "filter_constant_lines",
            "filtered_constant_lines", "indices", "layout_lines", "robot_lines"]

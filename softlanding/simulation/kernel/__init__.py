@@ -369,13 +369,20 @@ def sample_segments(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.nd
     grid : ndarray
         Times to sample at (non-decreasing).
     """
-    ts = segments["t"]
-    nseg = len(ts) - 1
-    idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
+    grid, idx = _segment_of(segments, grid)
     z = np.empty((len(grid), 5))
-    _sample(ts, segments["A"], segments["z"], np.asarray(grid, float), idx.astype(np.int64), z)
+    _sample(segments["t"], segments["A"], segments["z"], grid, idx.astype(np.int64), z)
     u = np.einsum("ij,ij->i", segments["cu"][idx], z)
     return z, u, segments["mode"][idx]
+
+
+def _segment_of(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``grid`` as floats, and the segment each of its times falls in (the last one for a
+    time past the records' end)."""
+    ts = segments["t"]
+    nseg = len(ts) - 1
+    grid = np.asarray(grid, float)
+    return grid, np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
 
 
 # ------------------------------------------------- non-affine grounds (integrated yielding)
@@ -423,11 +430,8 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
     ----------
     mats_list, ridx, Kf, umax, x0, s_lim, t_max, max_seg, energy, out, threads, chunk, max_steps
         As :func:`run_batch`.
-    law : tuple
-        The ground's law as the kernel takes it
-        (:func:`softlanding.simulation.groundcode.kernel_law`).
-    rtol : float
-        Relative tolerance of the integrator of the yielding segments.
+    law, rtol
+        As :func:`run_landing_nl` (the ground's law, the integrator's tolerance).
     """
 
     from softlanding.simulation.kernel.nonaffine import batch_range_nl
@@ -448,20 +452,15 @@ def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np
 
     Parameters
     ----------
-    segments : dict
-        The segment records a landing returned.
-    grid : ndarray
-        Times to sample at (non-decreasing).
+    segments, grid
+        As for :func:`sample_segments`: the landing's segment records, the times.
     """
     from softlanding.simulation.kernel.nonaffine import sample_nl
 
     G, fp, rtol = segments["law"]
-    ts = segments["t"]
-    nseg = len(ts) - 1
-    grid = np.asarray(grid, float)
-    idx = np.clip(np.searchsorted(ts[:nseg], grid, side="right") - 1, 0, nseg - 1)
+    grid, idx = _segment_of(segments, grid)
     z = np.empty((len(grid), 5))
     u = np.empty(len(grid))
-    sample_nl(np.zeros(1), _f64(G), fp, rtol, ts, segments["A"], segments["z"], segments["cu"],
-              segments["mode"], grid, idx.astype(np.int64), z, u)
+    sample_nl(np.zeros(1), _f64(G), fp, rtol, segments["t"], segments["A"], segments["z"],
+              segments["cu"], segments["mode"], grid, idx.astype(np.int64), z, u)
     return z, u, segments["mode"][idx]

@@ -193,3 +193,12 @@ def earliest_event(A, nrm, z, z1, h, C, dC, ne):
             sbest = sk
             hit = k
     return sbest, hit
+
+
+@njit(**JIT, forceinline=True)
+def step_to(t, h, t_next):
+    """A step of ``h`` from ``t`` cut at the time event ``t_next``: its length, and whether
+    it reaches the event."""
+    if t + h >= t_next:
+        return t_next - t, True
+    return h, False

@@ -94,6 +94,7 @@ from softlanding.simulation.kernel.events import (
     due_event,
     earliest_event,
     rows4,
+    step_to,
 )
 from softlanding.simulation.kernel.hops import (
     H_DLIM,
@@ -262,11 +263,7 @@ def march(A, mode, key, z, t, t_next, t_max, max_steps, ne, cu, Qe, energy, ext,
     ddcu = covector_t(dcu, At)
     zt = row5(z)
     while True:
-        h = hstep
-        time_event = False
-        if t + h >= t_next:
-            h = t_next - t
-            time_event = True
+        h, time_event = step_to(t, hstep, t_next)
         if time_event or h != hstep:
             z1 = prop4_t(At, nrm, zt, h)
         else:

@@ -293,17 +293,28 @@ def refine_t(A, nrm, z, c, a, b, ga, gb, rtol=2e-15, s0=-1.0):
             break
         dg = dot(dc, xs)
         sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
-        if not (a < sn < b):
-            sn = 0.5 * (a + b)
-        if abs(sn - s) <= 0.5 * rtol * max(1.0, abs(s)):
-            # converged: step just past the root to close the bracket
-            step = 1e-15 * max(1.0, abs(sn))
-            sn = sn + step if g <= 0.0 else sn - step
-            sn = min(max(sn, a), b)
-            if sn == s:
-                break
+        sn, stalled = bracketed_step(sn, s, g, a, b, 0.5 * rtol * max(1.0, abs(s)))
+        if stalled:
+            break
         s = sn
     return b
+
+
+@njit(**JIT, forceinline=True)
+def bracketed_step(sn, s, g, a, b, tol):
+    """The next iterate of a root search safeguarded by the bracket ``(a, b)``: ``sn``, or
+    the bisection where ``sn`` leaves the bracket; where it moves from ``s`` by at most
+    ``tol`` (converged), a step just past the root (``g``: the value at ``s``) to close
+    the bracket. Returns the iterate and whether the search stalls (that step is ``s``)."""
+    if not (a < sn < b):
+        sn = 0.5 * (a + b)
+    if abs(sn - s) <= tol:
+        step = 1e-15 * max(1.0, abs(sn))
+        sn = sn + step if g <= 0.0 else sn - step
+        sn = min(max(sn, a), b)
+        if sn == s:
+            return sn, True
+    return sn, False
 
 
 @njit(**JIT, forceinline=True)

@@ -28,6 +28,7 @@ from softlanding.simulation.kernel.dop853 import E3 as DE3
 from softlanding.simulation.kernel.dop853 import E5 as DE5
 from softlanding.simulation.kernel.dop853 import A as DA
 from softlanding.simulation.kernel.dop853 import B as DB
+from softlanding.simulation.kernel.events import step_to
 from softlanding.simulation.kernel.groundlaw import (
     G_LOCK,
     NY,
@@ -38,6 +39,7 @@ from softlanding.simulation.kernel.groundlaw import (
     control_at,
     yield_rhs,
 )
+from softlanding.simulation.kernel.linalg import bracketed_step
 
 # ext layout (as in .landing)
 X_SMIN, X_SMAX, X_UMIN, X_UMAX, X_ACT, X_WORK = range(6)
@@ -152,14 +154,9 @@ def refine_nl(sysd, y, K, c, slope, a, b, ga, gb, rtol, s0, K2, Yt, yt):
         else:
             dg = cdot(c, K2[12])
             sn = s - g / dg if dg != 0.0 else 0.5 * (a + b)
-        if not (a < sn < b):
-            sn = 0.5 * (a + b)
-        if abs(sn - s) <= 0.25 * rtol * max(1.0, abs(s)):
-            step = 1e-15 * max(1.0, abs(sn))
-            sn = sn + step if g <= 0.0 else sn - step
-            sn = min(max(sn, a), b)
-            if sn == s:
-                break
+        sn, stalled = bracketed_step(sn, s, g, a, b, 0.25 * rtol * max(1.0, abs(s)))
+        if stalled:
+            break
         s = sn
     if s != b:
         trial(sysd, y, K, b, K2, Yt, yt)
@@ -291,11 +288,7 @@ def march_yield(sysd, z, t, t_next, t_max, max_steps, C, ne, ext, acc, wsn):
     rejected = False
     hit, time_event, stop = -1, False, -1
     while True:
-        hs = h
-        time_event = False
-        if t + hs >= t_next:
-            hs = t_next - t
-            time_event = True
+        hs, time_event = step_to(t, h, t_next)
         dop_step(A, cu, G, fp, buf, y, hs, K, Yt, ynew)
         ext[X_WORK] += 1.0
         err = error_norm(K, y, ynew, hs, rtol)

@@ -257,8 +257,14 @@ def test_progress_bars_only_on_a_terminal(cli):
     """A log or a pipe gets no carriage-return frames; --progress forces them."""
     code, out, err = cli("solve-sweep", "--n", "3", "--v0-min", "-2")
     assert code == 0 and "\r" not in err and err == ""
+    # the paper's sweep is any variant's (issue 46 item 5: one sweep path): its table names
+    # it and says which landings are verified, beside the rigid leg's depth
+    lines = out.splitlines()
+    assert lines[0] == "variant paper" and lines[1].split()[:4] == ["v0", "depth", "rigid",
+                                                                    "ratio"]
+    assert "verified" in lines[1] and all(ln.split()[6] == "yes" for ln in lines[2:5])
     code, out, err = cli("--progress", "solve-sweep", "--n", "3", "--v0-min", "-2")
-    assert code == 0 and "\r" in err and "bang-bang sweep" in err
+    assert code == 0 and "\r" in err and "paper sweep" in err
     from softlanding.util import progress as _progress
 
     _progress.FORCE = False

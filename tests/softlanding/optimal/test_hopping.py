@@ -64,6 +64,20 @@ def test_exact_arcs_converge_only_cross_checked_and_agreeing(free):
     assert not gap.converged and "differ" in gap.unconverged_reason()
 
 
+def test_the_apex_is_defined_once(free):
+    # issue 46 item 5: the problem's apex conditions are the ones the replay is checked
+    # against (and the exact arcs pose): one definition, in hopping_problem
+    from softlanding.optimal.hopping_problem import APEX, apex_residuals, build_hop_problem
+    from softlanding.simulation.actuator_work import state_at
+
+    up = build_hop_problem("touchdown").phases[-1]
+    assert tuple(c.name for c in up.terminal)[-len(APEX):] == APEX
+    x = state_at(free.replay, free.times["apex"])
+    res = apex_residuals(x, PAPER_ROBOT.body_mass, PAPER_ROBOT.foot_mass,
+                         free.impact.energy, PAPER_ROBOT.s)
+    assert float(np.max(np.abs(res))) == free.apex_error
+
+
 def test_one_grid_says_it_is_discretised(free):
     # issue 34: the energy is a grid's (exact replay of its control), not the continuous
     # optimum; one grid gives no error estimate, and the cycle says both
