@@ -12,3 +12,17 @@ def grid_hop():
     with pytest.MonkeyPatch.context() as m:
         m.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])
         return hopping.solve_hop(-2.0, PAPER_ROBOT, eta=0.0, refine=False)
+
+
+@pytest.fixture(scope="session")
+def arrest_infeasible():
+    """The error of the paper's landing at ``v0 = -10`` with ``u_max = 2`` (no arrest within
+    the force limit): four relaxed solves name the condition (about 7 s CPU on a loaded
+    machine), so the API's test and the two-phase CLI's read it from one solve."""
+    from softlanding import PAPER_ROBOT
+    from softlanding.errors import InfeasibleLandingError
+    from softlanding.optimal.landing import solve_landing
+
+    with pytest.raises(InfeasibleLandingError) as info:
+        solve_landing(-10.0, PAPER_ROBOT.replace(u_max=2.0), replay=False)
+    return info.value
