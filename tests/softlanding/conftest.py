@@ -26,3 +26,20 @@ def arrest_infeasible():
     with pytest.raises(InfeasibleLandingError) as info:
         solve_landing(-10.0, PAPER_ROBOT.replace(u_max=2.0), replay=False)
     return info.value
+
+
+@pytest.fixture(scope="session")
+def paper_impedance_optimum():
+    """``optimize_impedance(v0)`` on the paper's robot and ground, each ``v0`` once per
+    session (about 2.5 s CPU each): read by the refined optimum's checks and by the
+    recorded single-ground result of the worst-case study. Results are only read."""
+    from softlanding.studies.impedance import optimize_impedance
+
+    cache = {}
+
+    def optimum(v0):
+        if v0 not in cache:
+            cache[v0] = optimize_impedance(v0)
+        return cache[v0]
+
+    return optimum
