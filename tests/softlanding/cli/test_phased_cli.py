@@ -99,9 +99,12 @@ def test_infeasible_exit_1(cli, monkeypatch, arrest_infeasible):
     # the paper's infeasible solve is the session's (test_landing checks it); the two-phase
     # variant's wrapping of it and the CLI's exit code are what is tested here
     import softlanding.optimal.two_phase as two_phase
+    from softlanding import PAPER_ROBOT
+    from softlanding.model.ground import LINEAR_GROUND
 
-    def solve_landing(impact, robot, ground):
-        assert (impact.v0, robot.u_max) == (-10.0, 2.0)
+    def solve_landing(impact, robot, ground):  # the session's request, nothing else
+        assert impact.v0 == -10.0 and robot == PAPER_ROBOT.replace(u_max=2.0)
+        assert ground == LINEAR_GROUND
         raise arrest_infeasible
 
     monkeypatch.setattr(two_phase, "solve_landing", solve_landing)
