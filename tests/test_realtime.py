@@ -47,19 +47,29 @@ def test_with_privilege_the_process_runs_fifo_on_one_cpu():
     assert check == "True 1"
 
 
-def test_the_benchmarks_refuse_it_with_exit_2_where_it_does_not_apply():
-    out = subprocess.run([sys.executable, "-m", "benchmarks.study_unknown_ground", "--realtime"],
-                         cwd=ROOT, text=True, capture_output=True, timeout=120)
-    assert out.returncode == 2
-    assert "--realtime applies to --controllers only" in out.stderr
+def _study(monkeypatch, capsys, *args) -> tuple[object, str]:
+    """``python -m benchmarks.study_unknown_ground ARGS`` in-process (its refusals come
+    before any work: a subprocess only added the package's import, 2 s CPU each):
+    (exit code, stderr)."""
+    from benchmarks import study_unknown_ground
+
+    monkeypatch.setattr(sys, "argv", ["study_unknown_ground.py", *args])
+    with pytest.raises(SystemExit) as exit_:
+        study_unknown_ground.main()
+    return exit_.value.code, capsys.readouterr().err
 
 
-def test_the_study_refuses_an_existing_json_file_before_any_work(tmp_path):
+def test_the_benchmarks_refuse_it_with_exit_2_where_it_does_not_apply(monkeypatch, capsys):
+    code, err = _study(monkeypatch, capsys, "--realtime")
+    assert code == 2
+    assert "--realtime applies to --controllers only" in err
+
+
+def test_the_study_refuses_an_existing_json_file_before_any_work(tmp_path, monkeypatch,
+                                                                 capsys):
     # (its --json was opened after the study: an existing file replaced silently)
     out_file = tmp_path / "rows.json"
     out_file.write_text("keep")
-    out = subprocess.run([sys.executable, "-m", "benchmarks.study_unknown_ground",
-                          "--controllers", "--json", str(out_file)],
-                         cwd=ROOT, text=True, capture_output=True, timeout=120)
-    assert out.returncode == 2 and "exists" in out.stderr and "--force" in out.stderr
+    code, err = _study(monkeypatch, capsys, "--controllers", "--json", str(out_file))
+    assert code == 2 and "exists" in err and "--force" in err
     assert out_file.read_text() == "keep" and list(tmp_path.iterdir()) == [out_file]

@@ -12,3 +12,34 @@ def grid_hop():
     with pytest.MonkeyPatch.context() as m:
         m.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])
         return hopping.solve_hop(-2.0, PAPER_ROBOT, eta=0.0, refine=False)
+
+
+@pytest.fixture(scope="session")
+def arrest_infeasible():
+    """The error of the paper's landing at ``v0 = -10`` with ``u_max = 2`` (no arrest within
+    the force limit): four relaxed solves name the condition (about 7 s CPU on a loaded
+    machine), so the API's test and the two-phase CLI's read it from one solve."""
+    from softlanding import PAPER_ROBOT
+    from softlanding.errors import InfeasibleLandingError
+    from softlanding.optimal.landing import solve_landing
+
+    with pytest.raises(InfeasibleLandingError) as info:
+        solve_landing(-10.0, PAPER_ROBOT.replace(u_max=2.0), replay=False)
+    return info.value
+
+
+@pytest.fixture(scope="session")
+def paper_impedance_optimum():
+    """``optimize_impedance(v0)`` on the paper's robot and ground, each ``v0`` once per
+    session (about 2.5 s CPU each): read by the refined optimum's checks and by the
+    recorded single-ground result of the worst-case study. Results are only read."""
+    from softlanding.studies.impedance import optimize_impedance
+
+    cache = {}
+
+    def optimum(v0):
+        if v0 not in cache:
+            cache[v0] = optimize_impedance(v0)
+        return cache[v0]
+
+    return optimum

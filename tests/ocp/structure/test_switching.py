@@ -97,10 +97,10 @@ def test_rayleigh_certificate_is_fast_and_measures_its_own_error(ray):
     np.testing.assert_allclose(c.lam[0], z[:2], atol=1e-8)
 
 
-def test_rayleigh_transcription_alone_does_not_refute():
+def test_rayleigh_transcription_alone_does_not_refute(ray):
     # a grid-level violation (a 'singular arc' next to a switch, H off by 4%) must
     # shrink on a finer grid before it counts: here it does, so no refutation
-    c = certify(solve_rayleigh())
+    c = certify(ray[0])
     assert c.verdict != NOT_BANG_BANG, c.reasons
     assert c.singular_intervals == []
     assert "re-checked on 200 nodes" in c.source
@@ -365,9 +365,8 @@ def test_trajectory_and_sample_agree_with_the_exact_arcs():
     assert d["control_laws"][0] is None and d["control_laws"][1]["offset"] == [0.0]
 
 
-def test_edited_values_are_certified_as_edited():
-    sol = solve_rayleigh()
-    r = refine_switching(sol)
+def test_edited_values_are_certified_as_edited(ray):
+    sol, r = ray  # (the module's solve and refinement: dataclasses.replace copies)
     bad = dataclasses.replace(r, values=[4.0, 4.0, 4.0])
     assert [m[0].kind for m in bad.interval_modes] == ["max", "max", "max"]
     assert certify(sol, bad).verdict == NOT_BANG_BANG

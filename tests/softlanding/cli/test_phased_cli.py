@@ -95,6 +95,18 @@ def test_bad_input_exit_2(cli):
     assert cli("solve", "--v0", "-1", "--variant", "nope")[0] == 2
 
 
-def test_infeasible_exit_1(cli):
+def test_infeasible_exit_1(cli, monkeypatch, arrest_infeasible):
+    # the paper's infeasible solve is the session's (test_landing checks it); the two-phase
+    # variant's wrapping of it and the CLI's exit code are what is tested here
+    import softlanding.optimal.two_phase as two_phase
+    from softlanding import PAPER_ROBOT
+    from softlanding.model.ground import LINEAR_GROUND
+
+    def solve_landing(impact, robot, ground):  # the session's request, nothing else
+        assert impact.v0 == -10.0 and robot == PAPER_ROBOT.replace(u_max=2.0)
+        assert ground == LINEAR_GROUND
+        raise arrest_infeasible
+
+    monkeypatch.setattr(two_phase, "solve_landing", solve_landing)
     code, _, err = cli("solve", "--v0", "-10", "--umax", "2", "--variant", "two-phase")
-    assert code == 1 and "u_b <= u_max" in err
+    assert code == 1 and "u_b <= u_max" in err and "no two-phase landing either" in err

@@ -40,10 +40,10 @@ def test_one_ground_in_a_sequence_is_that_ground_bitwise(optima):
     assert soft.ground_depths == (soft.depth,) and soft.ground_values == (soft.value,)
 
 
-def test_single_ground_result_is_unchanged():
+def test_single_ground_result_is_unchanged(paper_impedance_optimum):
     """Recorded before optimize_impedance took several grounds (commit 865cfde): the single
-    ground path is the same computation."""
-    o = optimize_impedance(-3.0, R)
+    ground path is the same computation (``optimize_impedance(-3.0, R)``, the session's)."""
+    o = paper_impedance_optimum(-3.0)  # (R is the paper's robot)
     assert o.evaluations == 41822
     assert (o.k_p, o.k_d) == pytest.approx((0.13598202364998815, 0.257741495), rel=1e-12)
     assert o.depth == pytest.approx(1.7281126525126356, rel=1e-12)
