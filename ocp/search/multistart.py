@@ -387,7 +387,7 @@ def _check_strategy(structured: Any, stop: Any, adapt: Any, fallback: Any) -> St
     """``structured`` in [0, 1], ``adapt`` a bool, ``fallback`` one of :data:`FALLBACKS`
     and ``stop`` a pair of positive integers (or None)."""
     if isinstance(structured, bool) or not isinstance(structured, numbers.Real) \
-            or not 0.0 <= structured <= 1.0:
+            or not 0.0 <= float(structured) <= 1.0:
         raise ProblemDefinitionError("multistart(structured) must be a fraction in [0, 1], "
                                      f"got {structured!r}")
     if not isinstance(adapt, bool):

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import multiprocessing
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -236,7 +236,7 @@ class Runner:
         if self.pool is not None:
             self.pool.shutdown(cancel_futures=True)
 
-    def each(self, starts: list[tuple[np.ndarray, bool]]) -> Iterator[Any]:
+    def each(self, starts: list[tuple[np.ndarray, bool]]) -> Generator[Any, None, None]:
         """The results of solving from ``starts``, in their order.
 
         Parameters
@@ -252,7 +252,7 @@ class Runner:
             futures = [self.client.submit(solve_start, self.builder, self.params, g, fb,
                                           pure=False) for g, fb in starts]
         else:
-            assert self.pool is not None
+            assert self.pool is not None and self.builder is not None
             futures = [self.pool.submit(solve_start, self.builder, self.params, g, fb)
                        for g, fb in starts]
         try:

@@ -96,6 +96,9 @@ class Solution:
     """
 
     phases: list[Solution]
+    t: np.ndarray  # (a single phase's; see the attributes above)
+    x: np.ndarray
+    u: np.ndarray
     problem: Any
     transcription: Any
     objective: float

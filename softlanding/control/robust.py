@@ -429,6 +429,7 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
     p = chosen.point if chosen.point is not None else fam.resolve(chosen.theta)
     if p is None:  # the least violating point of a pinned family that never resolved
         p = family(len(starts[-1].d), None).resolve(fam.theta(starts[-1].d, starts[-1].u))
+    assert p is not None  # (an unpinned family resolves every theta)
     schedule = fam.schedule(p)
     landings = [GroundLanding(g, [(0.0, simulate(robot, impact, schedule, g, energy=False))])
                 for g in grounds]

@@ -186,10 +186,12 @@ class PieceFamily:
         d, u : ndarray
             Durations (without the pinned one) and forces.
         """
-        j = self.pin.piece
+        pin = self.pin
+        assert pin is not None  # (a pinned family's)
+        j = pin.piece
         t0 = float(np.sum(d[:j]))
         held = ForceSchedule(tuple(np.cumsum(d[:j])), tuple(u[:j + 1]))
-        r = simulate(self.robot, self.impact, held, self.grounds[self.pin.ground],
+        r = simulate(self.robot, self.impact, held, self.grounds[pin.ground],
                      energy=False, max_segments=j + 8)
         if not (math.isfinite(r.t_first_stop) and r.t_first_stop > t0):
             return None
@@ -221,6 +223,7 @@ class PieceFamily:
         p : Point
             A point of the pinned family.
         """
+        assert self.pin is not None  # (a pinned family's)
         j = self.pin.piece
         return [*map(float, p.u[j + 1:]), p.u_last, self.robot.r_m / (1 + self.robot.r_m)]
 
@@ -331,6 +334,7 @@ def body_extrema(family: PieceFamily, p: Point) -> tuple[list[float], list[float
     """The local minima and maxima of the body's height after the pinned stop (the body's
     motion holds no ground: ``x_b'' = -1 + (1 + r_m)/r_m u``, piece by piece in closed form),
     the final rest included."""
+    assert p.stop is not None and family.pin is not None  # (a pinned family's point)
     x, v = float(p.stop[0]), float(p.stop[1])
     j = family.pin.piece
     forces = [*map(float, p.u[j + 1:]), p.u_last]
@@ -354,6 +358,7 @@ def pinned_stroke_slots(family: PieceFamily, p: Point) -> tuple[list[float], lis
     foot's stop, then the foot at rest there while the body moves on (the crater's capacity
     is a row of its own, so a force beyond it does not make these rows jump)."""
     held = p.held
+    assert held is not None and p.stop is not None  # (a pinned family's point)
     t_stop = held.t_first_stop
     minima, maxima = stroke_extrema(held, t_stop)
     after_min, after_max = body_extrema(family, p)
@@ -455,16 +460,16 @@ class Measures:
                 low, high = stroke_slots(r)
             else:  # the structure search: the global extrema (its depths have kinks anyway)
                 low, high = [r.stroke_min] * SLOTS, [r.stroke_max] * SLOTS
-            rows += [-float(p.stop[2]) if pinned else r.depth, *low,
+            rows += [-float(p.stop[2]) if pinned else r.depth, *low,  # type: ignore[index]
                      *[fam.robot.s - v for v in high]]
         rows.append(margin)
         if fam.pin is not None:
             g, r_m = fam.grounds[fam.pin.ground], fam.robot.r_m
             support = [float(support_force(p.stop, f, r_m)) for f in fam.later_forces(p)]
             capacity = float(crater_capacity(p.stop, g))
-            pinned = [capacity - f for f in support] + support
-            rows += pinned
-            holds = holds and min(pinned) >= -K.FEAS_TOL * max(1.0, capacity)
+            loads = [capacity - f for f in support] + support
+            rows += loads
+            holds = holds and min(loads) >= -K.FEAS_TOL * max(1.0, capacity)
         return np.array(rows), holds, replayed
 
 

@@ -47,7 +47,7 @@ from __future__ import annotations
 import contextlib
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -66,6 +66,9 @@ from softlanding.simulation.kernel.linalg import flat25, norm_rows4, prop4_t, ro
 from softlanding.simulation.kernel.model import pack_model  # noqa: E402
 
 # ------------------------------------------------------------ Python entry points
+Segments = Mapping[str, np.ndarray]
+"""A landing's segment records (``LandingResult.segments``): arrays by field."""
+
 STATUS_NAMES = {
     REST_PROVEN: "rest proven",
     HORIZON: "horizon reached before rest could be proven",
@@ -121,6 +124,7 @@ class _CompileProgress:
 
 
 @contextlib.contextmanager
+
 def first_compile(kind: str) -> Iterator[_CompileProgress | None]:
     """Around a kernel entry's call: if numba compiles anything during it (a cold cache),
     say so on stderr once (``softlanding: compiling the simulator (once, about 10 s)...``)
@@ -355,8 +359,8 @@ def _sample(ts, A, z, grid, idx, out):
             out[i, j] = zk[j]
 
 
-def sample_segments(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                                np.ndarray]:
+def sample_segments(segments: Segments, grid: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The exact solution at the times ``grid`` (non-decreasing), from the segment records,
     with the kernel's own propagator (a pinned foot keeps exactly zero velocity).
 
@@ -376,7 +380,7 @@ def sample_segments(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.nd
     return z, u, segments["mode"][idx]
 
 
-def _segment_of(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _segment_of(segments: Segments, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``grid`` as floats, and the segment each of its times falls in (the last one for a
     time past the records' end)."""
     ts = segments["t"]
@@ -445,8 +449,8 @@ def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, ener
         _in_chunks(batch_range_nl, args, len(args[6]), out, threads, chunk, (4, 256))
 
 
-def sample_segments_nl(segments: dict, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                                   np.ndarray]:
+def sample_segments_nl(segments: Segments, grid: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`sample_segments` for a non-affine landing: its yielding segments are integrated
     again from their recorded starts (same integrator and tolerance).
 
