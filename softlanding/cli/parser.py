@@ -352,14 +352,15 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
                        description="Regenerate every figure of the paper (PNG and PDF), "
                                    "summary.md and summary.json with the headline numbers, "
                                    "and a robustness study of the nominal bang-bang and "
-                                   "impedance controllers under +-30 % model error. The full "
-                                   "run takes several minutes on 2 cores; --quick (coarser "
-                                   "grids, fewer velocities) about one.")
+                                   "impedance controllers under +-30 % model error. --quick "
+                                   "(coarser grids, fewer velocities) takes 5 to 10 minutes "
+                                   "of CPU (330 s measured on a quiet machine, 576 s under "
+                                   "load); the full run several times that.")
     r.add_argument("--out", required=True, metavar="DIR",
                    help="folder to write: new or empty, or with --force an existing one whose "
                         "files of the same names are replaced")
     _force_arg(r)
-    r.add_argument("--quick", action="store_true", help="coarser grids, about three minutes")
+    r.add_argument("--quick", action="store_true", help="coarser grids: 5 to 10 minutes of CPU")
     r.add_argument("--json", action="store_true", help="print summary.json's contents")
     return r
 
