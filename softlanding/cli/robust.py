@@ -56,6 +56,36 @@ def _stiffness_shown(plan: dict) -> dict:
     return plan
 
 
+def _table(robust: Any, tree: Any, clair: list[Any], names: list[str],
+           branch: float) -> list[tuple[str, object]]:
+    """The table's rows: each ground's depths, then the worst cases and the search."""
+    rows: list[tuple[str, object]] = []
+    for i, name in enumerate(names):
+        nom, rob = robust.nominal[i], robust.landings[i]
+        cells = [f"nominal {nom.depth:.5g}{'' if nom.feasible else ' (limit broken)'}",
+                 f"robust {rob.depth:.5g}{'' if rob.feasible else ' (limit broken)'}"]
+        if tree is not None:
+            t = tree.landings[i]
+            cells.append(f"tree {t.depth:.5g}{'' if t.feasible else ' (limit broken)'}")
+        cells.append(f"clairvoyant {clair[i].depth:.5g}")
+        rows.append((name, ", ".join(cells)))
+    rows += [("worst: nominal / robust", f"{robust.nominal_worst:.6g} / {robust.worst:.6g}"),
+             ("worst: clairvoyant (a bound)", f"{max(c.depth for c in clair):.6g}"),
+             ("robust feasible on every ground", robust.feasible),
+             ("robust search converged (KKT)", "yes" if robust.converged else
+              f"NO (KKT residual {robust.kkt_residual:.2g})"),
+             ("robust plan", _plan_line(robust, names, clair)),
+             ("binding (KKT multipliers)", _binding_line(robust, names)),
+             ("nominal feasible on every ground", robust.nominal_feasible),
+             ("search", f"{robust.message} ({robust.iterations} iterations, "
+                        f"{robust.evaluations} points, {robust.solve_time_s:.3g} s wall, "
+                        f"{robust.cpu_time_s:.3g} s CPU)")]
+    if tree is not None:
+        rows += [(f"worst: tree (branch at {branch:g})", f"{tree.worst:.6g}"),
+                 ("tree feasible on every ground", tree.feasible)]
+    return rows
+
+
 def robust_command(a: argparse.Namespace) -> int:
     """Run ``softlanding robust`` (the parsed arguments; the exit code).
 
@@ -116,31 +146,7 @@ def robust_command(a: argparse.Namespace) -> int:
             "robust": _stiffness_shown(robust.to_dict()),
             "tree": None if tree is None else _stiffness_shown(tree.to_dict())})
     else:
-        rows: list[tuple[str, object]] = []
-        for i, name in enumerate(names):
-            nom, rob = robust.nominal[i], robust.landings[i]
-            cells = [f"nominal {nom.depth:.5g}{'' if nom.feasible else ' (limit broken)'}",
-                     f"robust {rob.depth:.5g}{'' if rob.feasible else ' (limit broken)'}"]
-            if tree is not None:
-                t = tree.landings[i]
-                cells.append(f"tree {t.depth:.5g}{'' if t.feasible else ' (limit broken)'}")
-            cells.append(f"clairvoyant {clair_depth[i]:.5g}")
-            rows.append((name, ", ".join(cells)))
-        rows += [("worst: nominal / robust", f"{robust.nominal_worst:.6g} / {robust.worst:.6g}"),
-                 ("worst: clairvoyant (a bound)", f"{max(clair_depth):.6g}"),
-                 ("robust feasible on every ground", robust.feasible),
-                 ("robust search converged (KKT)", "yes" if robust.converged else
-                  f"NO (KKT residual {robust.kkt_residual:.2g})"),
-                 ("robust plan", _plan_line(robust, names, clair)),
-                 ("binding (KKT multipliers)", _binding_line(robust, names)),
-                 ("nominal feasible on every ground", robust.nominal_feasible),
-                 ("search", f"{robust.message} ({robust.iterations} iterations, "
-                            f"{robust.evaluations} points, {robust.solve_time_s:.3g} s wall, "
-                            f"{robust.cpu_time_s:.3g} s CPU)")]
-        if tree is not None:
-            rows += [(f"worst: tree (branch at {branch:g})", f"{tree.worst:.6g}"),
-                     ("tree feasible on every ground", tree.feasible)]
-        print_table(rows)
+        print_table(_table(robust, tree, clair, names, branch))
         if written:
             print(f"figure written to {written}")
     # an unconverged search's schedule is feasible but not an optimum: say so by the exit code
