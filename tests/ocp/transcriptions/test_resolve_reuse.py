@@ -85,6 +85,8 @@ def test_refinement_rounds_keep_the_first_rounds_objective_scale():
     tr = Collocation(alp_rider(), intervals=20)
     first = tr.solve()
     sol = tr.refine(tol=1e-6, max_rounds=1)
-    assert sol.objective_scale == first.objective_scale == 1e4
+    # (the scale itself is the automatic rule's: 1e4 when it was written, from the objective
+    # at the start; the gradient-based rule of issue 45 picks another power of ten)
+    assert sol.objective_scale == first.objective_scale
     assert len(sol.mesh_history) == 2 and sol.mesh_history[1].iterations < 500
     assert sol.mesh_history[1].objective == pytest.approx(2061.85, rel=1e-3)
