@@ -58,6 +58,8 @@ EXPENSIVE = {
 VOLATILE = (
     re.compile(r"^(solve time \[s\]) .*"),  # the solve's wall-clock time
     re.compile(r"^(replay difference) .*"),  # rounding level, machine dependent
+    re.compile(r"^(\[\d+/\d+\] \S.*?)\s+\d+(\.\d+)? s$"),  # a section's duration (reproduce)
+    re.compile(r"^(\d+ files written to .*); total \d+(\.\d+)? s$"),  # the run's duration
 )
 
 
