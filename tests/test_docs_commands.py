@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import io
 import itertools
+import json
 import os
 import re
 import subprocess
@@ -57,6 +58,8 @@ EXPENSIVE = {
 VOLATILE = (
     re.compile(r"^(solve time \[s\]) .*"),  # the solve's wall-clock time
     re.compile(r"^(replay difference) .*"),  # rounding level, machine dependent
+    re.compile(r"^(\[\d+/\d+\] \S.*?)\s+\d+(\.\d+)? s$"),  # a section's duration (reproduce)
+    re.compile(r"^(\d+ files written to .*); total \d+(\.\d+)? s$"),  # the run's duration
 )
 
 
@@ -221,6 +224,15 @@ def _masked(lines) -> list[str]:
     return out
 
 
+def _json(lines) -> object:
+    """The object or array ``lines`` hold as one JSON document (None if they hold none)."""
+    try:
+        value = json.loads("\n".join(lines))
+    except ValueError:
+        return None
+    return value if isinstance(value, (dict, list)) else None
+
+
 RUN = [s for s in SHOWN if (s.output is not None or s.caption) and s.text not in EXPENSIVE]
 
 
@@ -235,6 +247,11 @@ def test_the_command_prints_what_the_page_shows(shown, tmp_path):
     output = shown.output or ("...",)
     assert res.returncode == expected_exit(output), f"{shown}\n" + "\n".join(printed)
     assert not [ln for ln in printed if "WARNING(" in ln], printed  # no CasADi message
+    shown_json = _json(output)
+    if shown_json is not None:  # a JSON document, wrapped on the page: the same value
+        assert _json(printed) == shown_json, \
+            "\n".join([str(shown), "page:", *output, "printed:", *printed])
+        return
     assert _matches(_masked(output), _masked(printed)), \
         "\n".join([str(shown), "page:", *output, "printed:", *printed])
     arcs = re.search(r"arcs `([^`]*)`", shown.caption)
