@@ -16,6 +16,7 @@ import logging
 import os
 import sys
 import threading
+import warnings
 from collections.abc import Iterator, Sequence
 from typing import Any
 
@@ -519,6 +520,13 @@ HANDLERS = {"simulate": _cmd_simulate, "solve": _cmd_solve, "solve-sweep": _cmd_
             "cache": cache_command}
 
 
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, file: Any = None, line: str | None = None) -> None:
+    """A warning as the console script's one line (``softlanding: warning: ...``): the
+    module path and source line Python adds are the package's, not the user's."""
+    print(f"softlanding: warning: {category.__name__}: {message}", file=sys.stderr)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``softlanding`` console script.
 
@@ -548,8 +556,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     _progress.FORCE = bool(args.progress)
     _quiet_matplotlib_caches()
     files = getattr(args, "plot", None) or getattr(args, "out", None) or args.command == "demo"
-    with _files_backend(bool(files)):
-        return _run(args)
+    previous, warnings.showwarning = warnings.showwarning, _one_line_warning
+    try:
+        with _files_backend(bool(files)):
+            return _run(args)
+    finally:  # (main is also called in-process: the caller's hook comes back)
+        warnings.showwarning = previous
 
 
 def console_main() -> int:
