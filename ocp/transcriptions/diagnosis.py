@@ -337,7 +337,7 @@ def unreachable_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
     lbw, ubw, lbg, ubg = bounds
     eq_rows = np.setdiff1d(np.flatnonzero(np.isfinite(lbg) | np.isfinite(ubg)), _base_rows(tr))
     J = _jacobian(tr, w, pv)[eq_rows].tocsr()
-    fn, out = tr.nlp_function(), []
+    fmap, out = tr.nlp_function().map(65), []  # (built once: one evaluation per row)
     for j, k in enumerate(eq_rows):
         cols = J[j].indices
         if cols.size != 1 or not (np.isfinite(lbw[cols[0]]) and np.isfinite(ubw[cols[0]])):
@@ -347,7 +347,7 @@ def unreachable_rows(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
         W = np.repeat(w[:, None], pts.size, axis=1)
         W[c] = pts
         with np.errstate(all="ignore"):
-            g = np.array(fn.map(pts.size)(W, pv)[1], dtype=float)[k]
+            g = np.array(fmap(W, pv)[1], dtype=float)[k]
         if np.all((g < lbg[k] - 1e-9 * max(1.0, abs(lbg[k]))) |
                   (g > ubg[k] + 1e-9 * max(1.0, abs(ubg[k])))):
             out.append(f"{labels[k]} with its variable within [{lbw[c]:g}, {ubw[c]:g}]")
