@@ -79,6 +79,11 @@ CREEP_SIGMAS = 3.0
 #: limits (:func:`stroke_guard`; the force is held over a sample, the ground's changes).
 STROKE_MARGIN = 1e-3
 
+#: The fraction of the body's deceleration under the force limit the safe brake keeps in
+#: reserve to stop the body by, above the foot's present position, while the foot yields
+#: (:func:`~softlanding.control.fallback.body_floor`).
+BODY_DECEL = 1.0
+
 #: Newton iterations per sample while the switch is more than three samples away (one:
 #: acados' real-time iteration).
 BUDGET = 1
@@ -207,7 +212,7 @@ def foot_acc(P, u, xf, vf):
     return P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
 
 
-__all__ = ["ARREST_FAILS", "BRAKE", "BRAKING", "BUDGET", "CONVERGING", "CREEP", "CREEPING",
+__all__ = ["ARREST_FAILS", "BODY_DECEL", "BRAKE", "BRAKING", "BUDGET", "CONVERGING", "CREEP", "CREEPING",
            "CREEP_LAW", "CREEP_SIGMAS", "DEFERRED", "FILTERED_REGRESSOR", "HOLDS", "KEPT",
            "LOOSE_RTOL", "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "M_CPLAN",
            "M_DEFERRED", "M_FALLBACKS", "M_ITER", "M_KPLAN", "M_LAST_STEP", "M_P00", "M_P01",
