@@ -137,14 +137,14 @@ def stroke_guard(P, x, u):
 
 @njit(**JIT)
 def body_floor(P, x, u):
-    """A force ``u`` raised, while the foot yields, so that the body itself can still stop
-    at :data:`BODY_DECEL` of its deceleration under the force limit before it comes within ``m`` (as
-    :func:`stroke_guard`'s) of the foot's present position: the foot only descends, so the
-    stroke stays above the body's height over it, and the push at the limit decelerates the
-    body at ``a_b0 + b_b u_max`` whatever the ground (its acceleration holds none). The
-    relative approach :func:`stroke_guard` judges by is the foot's still-yielding one: a
-    foot the pull stops leaves the body's whole speed to arrest (issue 46: a body that fell
-    5 through the stroke after the brake)."""
+    """The brake's force ``u`` raised, while the foot yields, so that the body itself can
+    still stop at :data:`BODY_DECEL` of its deceleration under the force limit before it
+    comes within ``m`` (:func:`stroke_guard`'s) of the foot's present position. The foot
+    only descends, so the stroke stays above the body's height over that position; the
+    push at the limit decelerates the body at ``a_b0 + b_b u_max`` whatever the ground (its
+    acceleration holds none). :func:`stroke_guard` judges by the relative approach, the
+    still-yielding foot's: a foot the pull stops leaves the body's whole speed to arrest
+    (issue 46: a body that fell 0.2 through the stroke's lower limit under that guard)."""
     if not x[3] < 0.0:
         return u
     ab0, bb, umax = P[P_AB0], P[P_BB], P[P_UMAX]
@@ -203,4 +203,5 @@ def fallback_step(P, M, x, st):
     return fallback(P, M, x, st)
 
 
-__all__ = ["body_floor", "brake", "covered", "creep_phase", "fallback", "fallback_step", "stroke_guard"]
+__all__ = ["body_floor", "brake", "covered", "creep_phase", "fallback", "fallback_step",
+           "stroke_guard"]
