@@ -51,7 +51,7 @@ class MPCOptions:
     delay, seed : int
         Samples of delay and the noise's seed.
     margin : float
-        Stroke margin of the compiled controller.
+        The compiled controller's margin on the ground estimate (standard deviations).
     """
 
     robot: Any

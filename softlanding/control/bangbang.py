@@ -51,6 +51,7 @@ from numba import njit
 from softlanding.control import bangbang_layout
 from softlanding.control.bangbang_layout import (  # noqa: F401 (re-exported: bangbang.X)
     ARREST_FAILS,
+    BODY_DECEL,
     BRAKE,
     BRAKING,
     BUDGET,
@@ -240,6 +241,22 @@ def _arrest(P, xb, vb, xf):
 
 
 @njit(**JIT)
+def _arrest_too_strong(P, xb, vb, xf):
+    """The body's arrest after the foot's stop needs more than the force limit: the constant
+    force ``u_b`` that stops it in the stroke left exceeds ``u_max`` (the landing OCP's
+    ``ARREST_FORCE``, ``S u_max - u_b S >= 0``, to ``1e-9``). Where the crater holds the
+    arrest (the pull's plan, checked after :data:`ARREST_FAILS`) the schedule would hold
+    ``u_max`` over a foot at rest and the body fall through the stroke's lower limit: a limit
+    on the plan's path beyond the arcs' (whose check ends at the foot's stop). (Not checked
+    on a push's plan, whose arrest is active, ``u_b`` the crater's hold: the study's
+    landings whose first plans broke it landed within the limits, 0.1 % from the optimum,
+    as the estimate moved the plan; the fallback from the impact was 14-48 % deeper.)"""
+    S = xb - xf
+    c = P[P_RM] / (1.0 + P[P_RM])
+    return c * (S + 0.5 * vb * vb) - S * P[P_UMAX] > 1e-9 * (1.0 + abs(S)) * P[P_UMAX]
+
+
+@njit(**JIT)
 def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, left):
     """Residuals ``r`` (and, ``jac``, their Jacobian ``J`` in ``(tau1, tau2)``) of the plan
     ``(tau1, tau2)`` from ``x``, the arcs marched to ``tol``; ``lim`` gets ``[max v_f before
@@ -407,6 +424,8 @@ def _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left):
         return CREEP
     if r[1] < -1e-9 * (1.0 + abs(x[0] - x[2])):
         return ARREST_FAILS
+    if _arrest_too_strong(P, lim[3], lim[4], lim[5]):  # (the crater holds: not covered)
+        return PATH_LIMIT
     return OK
 
 

@@ -79,6 +79,11 @@ CREEP_SIGMAS = 3.0
 #: limits (:func:`stroke_guard`; the force is held over a sample, the ground's changes).
 STROKE_MARGIN = 1e-3
 
+#: The fraction of the body's deceleration under the force limit the safe brake keeps in
+#: reserve to stop the body by, above the foot's present position, while the foot yields
+#: (:func:`~softlanding.control.fallback.body_floor`).
+BODY_DECEL = 1.0
+
 #: Newton iterations per sample while the switch is more than three samples away (one:
 #: acados' real-time iteration).
 BUDGET = 1
@@ -207,15 +212,15 @@ def foot_acc(P, u, xf, vf):
     return P[P_AF0] + P[P_BF] * u + P[P_GF] * (-P[P_K] * xf - P[P_CD] * vf * abs(vf))
 
 
-__all__ = ["ARREST_FAILS", "BRAKE", "BRAKING", "BUDGET", "CONVERGING", "CREEP", "CREEPING",
-           "CREEP_LAW", "CREEP_SIGMAS", "DEFERRED", "FILTERED_REGRESSOR", "HOLDS", "KEPT",
-           "LOOSE_RTOL", "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED", "M_CPLAN",
-           "M_DEFERRED", "M_FALLBACKS", "M_ITER", "M_KPLAN", "M_LAST_STEP", "M_P00", "M_P01",
-           "M_P11", "M_PHASE", "M_PRED", "M_PRED_OK", "M_SAMPLES", "M_STATUS", "M_TAU1",
+__all__ = ["ARREST_FAILS", "BODY_DECEL", "BRAKE", "BRAKING", "BUDGET", "CONVERGING", "CREEP",
+           "CREEPING", "CREEP_LAW", "CREEP_SIGMAS", "DEFERRED", "FILTERED_REGRESSOR", "HOLDS",
+           "KEPT", "LOOSE_RTOL", "MARCHED", "MARCH_FAILED", "MAX_NEWTON", "MAX_UNCONVERGED",
+           "M_CPLAN", "M_DEFERRED", "M_FALLBACKS", "M_ITER", "M_KPLAN", "M_LAST_STEP", "M_P00",
+           "M_P01", "M_P11", "M_PHASE", "M_PRED", "M_PRED_OK", "M_SAMPLES", "M_STATUS", "M_TAU1",
            "M_TAU2", "M_TH0", "M_TH1", "M_UCREEP", "M_UNCONVERGED", "M_VBT", "M_WHY", "M_WORK",
            "M_XBT", "M_XFT", "NEWTON_FAILED", "NEWTON_TOL", "NM", "NP", "OK", "PATH_LIMIT",
-           "PLAN_HOLDS_TOL", "PULL", "PUSH", "P_AB0", "P_AF0", "P_BB", "P_BF", "P_BUDGET",
-           "P_CD", "P_CREEP", "P_GF", "P_HOLD0", "P_K", "P_MARGIN", "P_NOISE", "P_PERIOD",
-           "P_RM", "P_S", "P_UMAX", "P_WORK", "RTOL", "SPENT", "STATUS_NAMES", "STROKE_MARGIN",
-           "TIGHTEN", "WORK", "foot_acc", "force_coefficients", "ground_force_noise",
-           "new_memory", "robot_numbers", "workspace"]
+           "PLAN_HOLDS_TOL", "PULL", "PUSH", "P_AB0", "P_AF0", "P_BB", "P_BF", "P_BUDGET", "P_CD",
+           "P_CREEP", "P_GF", "P_HOLD0", "P_K", "P_MARGIN", "P_NOISE", "P_PERIOD", "P_RM", "P_S",
+           "P_UMAX", "P_WORK", "RTOL", "SPENT", "STATUS_NAMES", "STROKE_MARGIN", "TIGHTEN", "WORK",
+           "foot_acc", "force_coefficients", "ground_force_noise", "new_memory", "robot_numbers",
+           "workspace"]

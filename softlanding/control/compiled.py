@@ -104,7 +104,8 @@ class CompiledController:
         if not self.covered:  # (before the impact: no bound on the work)
             x = np.array(x0, float)
             st = int(bb.solve_plan(self.P, self.M, x, *self.ws))
-            fallback_step(self.P, self.M, x, st)
+            if fallback_step(self.P, self.M, x, st) != st:  # (counted as a sample's would be)
+                self.record.uncovered += 1
         F = self.estimator.F
         # the compiled samples' inputs, for a replay as a control loop (:mod:`.loop_replay`)
         self.record.compiled = CompiledRecord(self.P.copy(), self.M.copy(),

@@ -31,6 +31,7 @@ from numba import njit
 
 from softlanding.control.bangbang_layout import (
     ARREST_FAILS,
+    BODY_DECEL,
     BRAKE,
     BRAKING,
     CONVERGING,
@@ -135,13 +136,33 @@ def stroke_guard(P, x, u):
 
 
 @njit(**JIT)
+def body_floor(P, x, u):
+    """The brake's force ``u`` raised, while the foot yields, so that the body itself can
+    still stop at :data:`BODY_DECEL` of its deceleration under the force limit before it
+    comes within ``m`` (:func:`stroke_guard`'s) of the foot's present position. The foot
+    only descends, so the stroke stays above the body's height over that position; the
+    push at the limit decelerates the body at ``a_b0 + b_b u_max`` whatever the ground (its
+    acceleration holds none). :func:`stroke_guard` judges by the relative approach, the
+    still-yielding foot's: a foot the pull stops leaves the body's whole speed to arrest
+    (issue 46: a body that fell 0.2 through the stroke's lower limit under that guard)."""
+    if not x[3] < 0.0:
+        return u
+    ab0, bb, umax = P[P_AB0], P[P_BB], P[P_UMAX]
+    floor = _approach_limit(x[0] - x[2] - STROKE_MARGIN * P[P_S], -x[1], P[P_PERIOD],
+                            BODY_DECEL * (ab0 + bb * umax))
+    if -(ab0 + bb * u) > floor:
+        u = (-floor - ab0) / bb
+    return min(umax, max(-umax, u))
+
+
+@njit(**JIT)
 def brake(P, M, x):
     """The safe brake's force from ``x`` into ``M[M_UCREEP]`` (the phase :data:`BRAKING`):
     the pull at the force limit, the foot's fastest stop, limited by :func:`stroke_guard`;
     :data:`BRAKE`."""
     M[M_PHASE] = BRAKING
     M[M_ITER] = 0
-    M[M_UCREEP] = stroke_guard(P, x, -P[P_UMAX])
+    M[M_UCREEP] = body_floor(P, x, stroke_guard(P, x, -P[P_UMAX]))
     M[M_STATUS] = BRAKE
     return BRAKE
 
@@ -182,4 +203,5 @@ def fallback_step(P, M, x, st):
     return fallback(P, M, x, st)
 
 
-__all__ = ["brake", "covered", "creep_phase", "fallback", "fallback_step", "stroke_guard"]
+__all__ = ["body_floor", "brake", "covered", "creep_phase", "fallback", "fallback_step",
+           "stroke_guard"]

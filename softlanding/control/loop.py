@@ -49,8 +49,8 @@ class LoopRecord:
     step_work : list of int
         Each sample's integrator steps.
     replans, fallbacks, uncovered : int
-        Re-plans by transcription, fallback samples, samples the compiled structure did not
-        cover.
+        Re-plans by transcription, fallback samples, samples (and the impact's first plan)
+        the compiled structure did not cover.
     setup_ms : float
         The builds before the impact.
     compiled : CompiledRecord or None

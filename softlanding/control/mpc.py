@@ -105,7 +105,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     margin : float
         ``controller="bangbang"``: plan for ``K - margin sigma_K``, ``c_d - margin
         sigma_c`` (the estimate less ``margin`` of its standard deviations) while the
-        estimate is uncertain.
+        estimate is uncertain: a margin on the ground, not on the stroke (a plan whose
+        optimum touches a stroke limit still touches it). Refused with ``"replan"``.
     estimator : str
         What the ground estimate regresses (:data:`ESTIMATORS`) from noisy measurements.
         ``"measured"``: the measured foot position, velocity, acceleration and force, as
@@ -134,6 +135,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     check_choice("controller", controller, CONTROLLERS)
     period = check_period("period", period)
     margin = check("margin", margin, (lambda v: v >= 0, "must be >= 0"))
+    if margin and controller != "bangbang":  # (the re-planning MPC plans for the estimate)
+        raise ParameterError("margin", "applies to controller='bangbang' only")
     check_choice("estimator", estimator, ESTIMATORS)
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
     sensor = Sensor(noise, delay, seed)

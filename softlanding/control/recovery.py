@@ -24,6 +24,10 @@ from softlanding.control.fallback import fallback
 from softlanding.control.foot_filter import covariance, filter_step
 from softlanding.simulation.kernel.const import ENTRY, JIT
 
+# (numba caches this module's entries with the step's and the fallback's code compiled in, and
+# checks only this file for changes: an edit to bangbang.py or fallback.py alone leaves them
+# stale; softlanding.control has no sources stamp as the kernel has, freshness.py)
+
 #: Most samples in a row the filtered estimate's bounded full solve may go on over (each
 #: within the work bound) before the landing falls back.
 RECOVERY_SAMPLES = 6

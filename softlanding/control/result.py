@@ -74,8 +74,9 @@ class MPCLanding:
         ``max_samples`` ended the sampling before the foot stopped.
     uncovered : int
         ``controller="bangbang"``: samples the compiled controller did not cover (its
-        structure, push then pull, did not fit the state and estimate): the compiled
-        fallback met each within the sample (``step_paths``: ``"bangbang (kept: ...)"``,
+        structure, push then pull, did not fit the state and estimate; the impact's state
+        counts as one): the compiled fallback met each within the sample (``step_paths``:
+        ``"bangbang (kept: ...)"``,
         ``"bangbang (creep law: ...)"``, ``"bangbang (brake: ...)"``, after the colon why).
     deferred : int
         ``controller="bangbang"``: samples whose integrator steps ran out (the bound on one

@@ -104,7 +104,7 @@ STATUSES = ("OK", "NEWTON_FAILED", "ARREST_FAILS", "PATH_LIMIT", "CONVERGING", "
             "CREEP", "DEFERRED", "CREEP_LAW", "KEPT", "BRAKE")
 CONSTANTS = ("PUSH", "PULL", "CREEPING", "BRAKING", *STATUSES, "RTOL", "MAX_NEWTON", "NEWTON_TOL",
              "PLAN_HOLDS_TOL", "MAX_UNCONVERGED", "LOOSE_RTOL", "TIGHTEN", "MARCH_FAILED",
-             "MARCHED", "SPENT", "CREEP_SIGMAS", "STROKE_MARGIN")
+             "MARCHED", "SPENT", "CREEP_SIGMAS", "STROKE_MARGIN", "BODY_DECEL")
 
 #: The creep law's constants (names of :mod:`~softlanding.control.creep`), written
 #: ``SL_CREEP_<name>``; its Gauss-Legendre nodes and weights are :func:`creep_gl_text`'s.
