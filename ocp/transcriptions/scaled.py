@@ -13,9 +13,13 @@ parameters (after the problem's: the objective factor ``kf = 1 / f_ref``, then `
   size from the problem (:mod:`ocp.definition.sizes`), their linked phase's size, and
   the change the dynamics make over the phase's duration at the start's points
   (``duration * (|f| + sum_j |df/dx_j| s_j + sum_k |df/du_k| s_k)``, other states
-  ``j`` only, twice, so a position at rest gets its size from its velocity's). A
-  guess passed later to ``solve``/``refine`` thus informs the scaling, and a start at
-  rest (velocities 0) still gets the velocities' sizes from the thrust that moves them;
+  ``j`` only, twice, so a position at rest gets its size from its velocity's); a
+  magnitude or rate at most :data:`NOISE` of the phase's largest is roundoff, not a size
+  (:func:`denoised`). A guess passed later to ``solve``/``refine`` thus informs the
+  scaling, and a start at rest (velocities 0) still gets the velocities' sizes from the
+  thrust that moves them. A refinement round, and a solve warm-started from a solution of
+  the same problem on another grid at the same parameters, keep that solution's scaling
+  (:func:`carried_scaling`);
 * ``scaling="none"`` (and the fallback, :mod:`ocp.transcriptions.failure`) solves with
   ``D = 1``, ``c = 0``, ``r = 1``, ``kf = 1``: the NLP as posed, exactly.
 """
@@ -459,7 +463,9 @@ def carried_scaling(tr: Any, start: Any) -> Scaling | None:
     another mesh), mapped onto ``tr``; None if ``start`` carries none.
 
     Mesh refinement keeps its first round's scaling (and objective scale) in every
-    round: the same problem on another mesh is then the same NLP to Ipopt.
+    round, and a solve warm-started from a solution of the same problem on another grid
+    at the same parameters keeps that solution's: the same problem on another mesh is
+    then the same NLP to Ipopt.
 
     Parameters
     ----------

@@ -13,6 +13,7 @@ from softlanding.model.dynamics import mode_matrices
 from softlanding.optimal.hopping import best_impedance_hop, impedance_hop, rigid_hop, solve_hop
 from softlanding.simulation.actuator_work import segment_work
 
+
 @pytest.fixture(scope="module")
 def free(grid_hop):
     # these tests check the cycle, not the search (tests/softlanding/conftest.py)
