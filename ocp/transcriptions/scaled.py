@@ -475,8 +475,24 @@ def carried_scaling(tr: Any, start: Any) -> Scaling | None:
         Where the solve starts from.
     """
     sc = getattr(start, "scaling", None) if hasattr(start, "transcription") else None
-    if sc is None or getattr(start.transcription, "multiphase", None) is not tr.multiphase:
+    if sc is None or not same_problem(getattr(start.transcription, "multiphase", None),
+                                      tr.multiphase):
         return None
     if not sc.enabled:
         return identity(tr.n_w, tr.n_g)
     return with_state_refs(tr, sc.state_refs) if sc.state_refs is not None else None
+
+
+def same_problem(a: Any, b: Any) -> bool:
+    """Whether two transcriptions' problems are the same: the same multi-phase problem, or
+    views of the same phases (a one-phase problem is wrapped anew by each transcription).
+
+    Parameters
+    ----------
+    a, b : MultiPhaseProblem or None
+        The transcriptions' ``multiphase``.
+    """
+    if a is None or b is None:
+        return False
+    return a is b or (len(a.phases) == len(b.phases) and a.shared is b.shared
+                      and all(p is q for p, q in zip(a.phases, b.phases, strict=True)))

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import warnings
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -178,3 +179,36 @@ def test_a_rate_at_roundoff_sizes_nothing():
     # piecewise-constant control on 20 intervals costs slightly more
     assert 2.0 + 1.5 < sol.objective < 2.0 + 1.5 * (1 + 1e-2)
     assert np.max(np.abs(sol.phases[0].x[:, 3])) < 1e-12  # the foot stays at rest
+
+
+def step_tracking() -> OptimalControlProblem:
+    """``x' = u`` tracking a steep step ``tanh(200 (t - 1/2))`` from ``x(0) = -1``: on a
+    grid the optimal ``u`` peaks at about twice the step over one interval (72 on 60
+    nodes), so the duration times the peak rate (the start rule) overstates ``x``'s
+    size (1) by far."""
+    p = OptimalControlProblem("step")
+    x = p.state("x")
+    u = p.control("u")
+    p.set_dynamics({"x": u})
+    p.fixed_final_time(1.0)
+    p.initial_constraint(x + 1.0, 0.0)
+    p.minimize_integral((x - ca.tanh(200 * (p.t - 0.5))) ** 2 + 1e-6 * u**2)
+    return p
+
+
+def test_a_warm_start_on_another_grid_keeps_its_scaling():
+    """The same problem on a doubled grid, warm-started from the coarse optimum at the same
+    parameters, is the coarse grid's NLP to Ipopt (as a refinement round is): on the tree
+    before it was sized again from that start (objective scale 0.01 where the coarse solve
+    had 1; a hop's doubled grid so reached another local optimum, 9.603457 against
+    9.597996)."""
+    p = step_tracking()
+    coarse = MultipleShooting(p, nodes=60, integrator="rk4").solve()
+    fine = MultipleShooting(p, nodes=120, integrator="rk4").solve(warm_start=coarse)
+    assert fine.scaling.state_refs == coarse.scaling.state_refs
+    assert fine.objective_scale == coarse.objective_scale == 1.0
+    plain = MultipleShooting(p, nodes=60, integrator="rk4", scaling="none").solve()
+    plain_fine = MultipleShooting(p, nodes=120, integrator="rk4",
+                                  scaling="none").solve(warm_start=plain)
+    assert np.array_equal(fine.w, plain_fine.w)  # the NLP as posed, as the coarse one was
+    assert fine.objective < coarse.objective  # the finer grid tracks the step better
