@@ -163,7 +163,7 @@ def test_a_rate_at_roundoff_sizes_nothing():
     nothing of its size. On the tree before, the start scaling took that rate for the
     foot speed's size (ref 1e-15: its defect rows times 1e15, amplifying the integrator's
     roundoff), the scaled NLP ran out of 200 iterations and the solve fell back to the NLP
-    as posed (10 iterations); the same rule failed a hop's push-off in 1500."""
+    as posed (7 iterations); the same rule failed a hop's push-off in 1500."""
     tr = MultipleShooting(held_foot(), nodes=20, integrator="rk4",
                           ipopt_options={"max_iter": 200})
     with warnings.catch_warnings():
