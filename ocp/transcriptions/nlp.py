@@ -392,8 +392,9 @@ class Transcription(TranscriptionStart):
                        objective_scale: float | None) -> tuple[Scaling, float]:
         """The scaling and objective scale of a solve from ``args`` (see
         :mod:`ocp.transcriptions.scaled`): a re-solve at its own solution keeps that
-        solve's; a solve given ``objective_scale`` (a refinement round) keeps the
-        scaling of the solution it starts from; any other is sized from its start."""
+        solve's; a solve given ``objective_scale`` (a refinement round), or warm-started
+        from a solution of the same problem on another grid at the same parameters, keeps
+        the scaling of the solution it starts from; any other is sized from its start."""
         if warm_start is not None and warm_start.transcription is self and \
                 np.array_equal(pv, self.param_vector(warm_start.params)) and \
                 math.isfinite(warm_start.objective) and math.isfinite(warm_start.objective_scale):
@@ -402,8 +403,20 @@ class Transcription(TranscriptionStart):
             return getattr(warm_start, "scaling", self.scaling), warm_start.objective_scale
         x0 = np.asarray(args["x0"], dtype=float)
         f0 = self._check_start(x0, pv)
-        carried = carried_scaling(self, warm_start if warm_start is not None else guess) \
-            if objective_scale is not None else None
+        start = warm_start if warm_start is not None else guess
+        carried = carried_scaling(self, start) if objective_scale is not None else None
+        if objective_scale is None and warm_start is not None and \
+                math.isfinite(warm_start.objective_scale):
+            # a warm start from the same problem on another grid at the same parameters
+            # keeps its scaling, as a refinement round keeps its first round's (sized again
+            # from such a start, a hop's foot speed of 4.2 got the reference 1e3 of its peak
+            # rate times the flight, and its doubled grid another local optimum, 0.06 %
+            # above the one solved as posed)
+            carried = carried_scaling(self, warm_start)
+            if carried is not None and np.array_equal(pv, self.param_vector(warm_start.params)):
+                objective_scale = warm_start.objective_scale
+            else:
+                carried = None
         sc = carried if carried is not None else start_scaling(self, x0, pv)
         fref = objective_scale if objective_scale is not None else \
             sc.objective_scale(f0, self._objective_variation(x0, pv, sc))

@@ -13,9 +13,13 @@ parameters (after the problem's: the objective factor ``kf = 1 / f_ref``, then `
   size from the problem (:mod:`ocp.definition.sizes`), their linked phase's size, and
   the change the dynamics make over the phase's duration at the start's points
   (``duration * (|f| + sum_j |df/dx_j| s_j + sum_k |df/du_k| s_k)``, other states
-  ``j`` only, twice, so a position at rest gets its size from its velocity's). A
-  guess passed later to ``solve``/``refine`` thus informs the scaling, and a start at
-  rest (velocities 0) still gets the velocities' sizes from the thrust that moves them;
+  ``j`` only, twice, so a position at rest gets its size from its velocity's); a
+  magnitude or rate at most :data:`NOISE` of the phase's largest is roundoff, not a size
+  (:func:`denoised`). A guess passed later to ``solve``/``refine`` thus informs the
+  scaling, and a start at rest (velocities 0) still gets the velocities' sizes from the
+  thrust that moves them. A refinement round, and a solve warm-started from a solution of
+  the same problem on another grid at the same parameters, keep that solution's scaling
+  (:func:`carried_scaling`);
 * ``scaling="none"`` (and the fallback, :mod:`ocp.transcriptions.failure`) solves with
   ``D = 1``, ``c = 0``, ``r = 1``, ``kf = 1``: the NLP as posed, exactly.
 """
@@ -40,6 +44,9 @@ from ..definition.scaling import (
 from ..definition.sizes import phase_state_sizes
 
 PASSES = 2  # rounds of the dynamics rule: a velocity's size, then its position's
+NOISE = math.sqrt(np.finfo(float).eps)
+"""A start's magnitude or rate at most this fraction of the phase's largest is roundoff
+(:func:`denoised`)."""
 
 
 def build_scaling(tr: Any, ends: list[tuple[ca.SX, ca.SX]]) -> Scaling:
@@ -331,6 +338,7 @@ def _phase_refs(tr: Any, i: int, data: Any, pv: np.ndarray, linked: dict[str, fl
     xlo, xhi, ulo, uhi = bounds[2], bounds[3], bounds[4], bounds[5]
     X, U = np.asarray(data.x, dtype=float), np.asarray(data.u_points, dtype=float)
     mags = np.max(np.abs(X), axis=0) if X.size else np.zeros(ph.nx)
+    mags = denoised(mags, float(np.max(mags, initial=0.0)))
     given = [opts["refs"].get(n, ph.state_ref.get(n)) for n in ph.state_names]
     open_ = np.array([g is None and informative_bounds(xlo[k], xhi[k], mags[k]) is None
                       for k, g in enumerate(given)], dtype=bool)
@@ -344,7 +352,11 @@ def _phase_refs(tr: Any, i: int, data: Any, pv: np.ndarray, linked: dict[str, fl
     duration = float(data.T - data.t0)
     if rates is None or not (math.isfinite(duration) and duration > 0):
         rates = None
-    f_change = duration * rates[0] if rates is not None else np.zeros(ph.nx)
+    f_change = np.zeros(ph.nx)
+    if rates is not None:  # a rate at the roundoff of the phase's others is none
+        scale = max(float(np.max(rates[0], initial=0.0)),
+                    float(np.max(_coupled(rates, s, su), initial=0.0)))
+        f_change = duration * denoised(rates[0], scale)
     # a state the start says nothing of (0, not moving there) is sized by the others
     silent = open_ & (mags == 0.0) & (f_change == 0.0)
     for k in np.flatnonzero(open_):
@@ -364,6 +376,31 @@ def _phase_refs(tr: Any, i: int, data: Any, pv: np.ndarray, linked: dict[str, fl
         ref = 10.0 ** math.ceil(math.log10(s[k]) - 1e-9)  # a power of ten above the size
         refs[k] = (0.0, ref) if not AUTO_RANGE[0] <= ref <= AUTO_RANGE[1] else (0.0, 1.0)
     return refs, sizes
+
+
+def denoised(values: np.ndarray, reference: float) -> np.ndarray:
+    """``values`` with those at or below :data:`NOISE` times ``reference`` set to 0.
+
+    A start's magnitude or rate that small beside the phase's largest is the roundoff of a
+    cancellation, not a size: a foot held at rest by the support force that cancels the
+    others has the rate ``-1 + (1 + r_m) (1/(1 + r_m) + u - u)``, 2e-16, and a solution's
+    resting foot speeds of 1e-13; sized by them, its defect rows were multiplied by 1e14,
+    which amplified the integrator's roundoff beyond Ipopt's tolerance (a hop's push-off:
+    ``Maximum_Iterations_Exceeded`` after 1500 iterations, 58 as posed). Left at 0, the
+    state is sized as one the start says nothing of. A size that small beside the others
+    is also beyond what the NLP resolves in double precision, so treating it as none
+    costs at most the scaling of ``scaling="none"`` for that state.
+
+    Parameters
+    ----------
+    values : ndarray
+        Non-negative magnitudes, one per state.
+    reference : float
+        The phase's largest such magnitude.
+    """
+    out = np.array(values, dtype=float)
+    out[out <= NOISE * reference] = 0.0
+    return out
 
 
 def _control_size(lo: float, hi: float, values: np.ndarray) -> float:
@@ -426,7 +463,9 @@ def carried_scaling(tr: Any, start: Any) -> Scaling | None:
     another mesh), mapped onto ``tr``; None if ``start`` carries none.
 
     Mesh refinement keeps its first round's scaling (and objective scale) in every
-    round: the same problem on another mesh is then the same NLP to Ipopt.
+    round, and a solve warm-started from a solution of the same problem on another grid
+    at the same parameters keeps that solution's: the same problem on another mesh is
+    then the same NLP to Ipopt.
 
     Parameters
     ----------
@@ -436,8 +475,24 @@ def carried_scaling(tr: Any, start: Any) -> Scaling | None:
         Where the solve starts from.
     """
     sc = getattr(start, "scaling", None) if hasattr(start, "transcription") else None
-    if sc is None or getattr(start.transcription, "multiphase", None) is not tr.multiphase:
+    if sc is None or not same_problem(getattr(start.transcription, "multiphase", None),
+                                      tr.multiphase):
         return None
     if not sc.enabled:
         return identity(tr.n_w, tr.n_g)
     return with_state_refs(tr, sc.state_refs) if sc.state_refs is not None else None
+
+
+def same_problem(a: Any, b: Any) -> bool:
+    """Whether two transcriptions' problems are the same: the same multi-phase problem, or
+    views of the same phases (a one-phase problem is wrapped anew by each transcription).
+
+    Parameters
+    ----------
+    a, b : MultiPhaseProblem or None
+        The transcriptions' ``multiphase``.
+    """
+    if a is None or b is None:
+        return False
+    return a is b or (len(a.phases) == len(b.phases) and a.shared is b.shared
+                      and all(p is q for p, q in zip(a.phases, b.phases, strict=True)))

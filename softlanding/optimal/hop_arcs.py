@@ -390,13 +390,41 @@ class _HopNLP:
         return z
 
 
+RESTART = {"warm_start_init_point": "yes", "mu_init": 1e-11, "warm_start_bound_push": 1e-12,
+           "warm_start_bound_frac": 1e-12, "warm_start_mult_bound_push": 1e-12,
+           "warm_start_slack_bound_push": 1e-12, "warm_start_slack_bound_frac": 1e-12}
+"""Ipopt's options for the one restart of :func:`_solve`: from the last iterate, primal and
+dual, at a barrier parameter of the tolerance's order."""
+
+
 def _solve(opti: ca.Opti, ipopt: dict | None) -> tuple[Any, str]:
     """Ipopt on ``opti``: the values (the last iterate if it stopped short) and its
-    status."""
+    status.
+
+    Where Ipopt runs out of iterations it is restarted once from its last iterate, primal
+    and dual (:data:`RESTART`), and the restart's status is returned. The NLP is
+    degenerate (the control on arcs of one-signed power is not unique: a flat valley), and
+    Ipopt's adaptive barrier can reach the optimum and then wander along the valley short
+    of the tolerance, depending on the last bits of its start: at v0 = -3 a grid optimum
+    2.7e-12 away from another stopped after 500 iterations where that one converged in
+    271, both at 9.56429510071 (the stopped run met the constraints to 7e-12 and the
+    dual conditions to 9e-10 at its 200th iteration); the restart finished in one
+    iteration.
+    """
     # (a tighter constr_viol_tol sends Ipopt wandering in the flat valley: the replay, not
     # the NLP, is the figure reported, and the two are compared)
     opts = {"tol": 1e-12, "acceptable_tol": 1e-10, "max_iter": 500, "print_level": 0,
             "mu_strategy": "adaptive", **(ipopt or {})}
+    val, status = _ipopt(opti, opts)
+    if status == "Maximum_Iterations_Exceeded":
+        opti.set_initial(opti.x, val(opti.x))
+        opti.set_initial(opti.lam_g, val(opti.lam_g))
+        val, status = _ipopt(opti, {**opts, **RESTART})
+    return val, status
+
+
+def _ipopt(opti: ca.Opti, opts: dict) -> tuple[Any, str]:
+    """One Ipopt run on ``opti`` with ``opts``: its values and status."""
     # the forces' limits as simple bounds, which Ipopt honours exactly on return (a
     # general constraint is met only to 1e-8 of its size: clipped back, the apex moves)
     opti.solver("ipopt", {"print_time": False, "expand": True,

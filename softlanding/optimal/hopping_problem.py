@@ -255,6 +255,13 @@ def _cycle(mp: MultiPhaseProblem, par: dict, stance: list[OptimalControlProblem]
                            name="crater depth carried into the flight")
 
 
+@lru_cache(maxsize=4)
+def _hop_problem(start: str, steps: int) -> MultiPhaseProblem:
+    """The problem every grid of :func:`hop_transcription` transcribes (one object: a grid
+    warm-started from another's optimum is then the same problem, and keeps its scaling)."""
+    return build_hop_problem(start, steps)
+
+
 @lru_cache(maxsize=10)
 def hop_transcription(start: str = "touchdown", steps: int = 1,
                       doublings: int = 0) -> MultipleShooting:
@@ -280,13 +287,9 @@ def hop_transcription(start: str = "touchdown", steps: int = 1,
     # at 0.1) sent the v0 = -3 hop's 120/160/120 grid to another local optimum, 1.3 % above
     # its 60/80/60 start; kept at the start, it improves on it
     near = {"mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8} if doublings else {}
-    # posed unscaled there: scaled as sized from that start, the v0 = -3 doubled grid left
-    # the coarse optimum's basin (eta = 0: 9.603457, unscaled 9.597996; eta = 0.9:
-    # 2.637060, above the coarse grid's 2.625803; unscaled 2.624066)
-    return MultipleShooting(build_hop_problem(start, steps), nodes=nodes, integrator="rk4",
+    return MultipleShooting(_hop_problem(start, steps), nodes=nodes, integrator="rk4",
                             substeps=4, expand=True, inner_constraints=True,
-                            ipopt_options={"max_iter": 1500, **near},
-                            scaling="none" if doublings else "auto")
+                            ipopt_options={"max_iter": 1500, **near})
 
 
 __all__ = ["APEX", "FORCE", "LEGS", "POWER", "START", "START_PARAMETERS", "apex_posture",

@@ -19,7 +19,9 @@ minimum time ``2 sqrt(d)``.
 from __future__ import annotations
 
 import math
+import warnings
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -134,3 +136,79 @@ def test_a_failed_scaled_solve_is_retried_as_posed():
                       scaling={"v": 1e-5, "fallback": False}, ipopt_options={"max_iter": 30})
     with pytest.raises(Exception, match="Maximum_Iterations_Exceeded"):
         off.solve({"d": 2.0})
+
+
+def held_foot() -> OptimalControlProblem:
+    """A body pushed 1 up in 2 s against its weight (``min int u^2``) off a foot held at rest
+    by the ground: the ground force, written as weight plus push ``m_f (1 + u / m_f)``,
+    cancels the push in the foot's rate ``w' = (f - u) / m_f - 1`` exactly in theory and to
+    roundoff in floating point (2e-16 at ``u = 0.3``; CasADi does not simplify it)."""
+    p = OptimalControlProblem("held foot")
+    x, v, y, w = (p.state(n) for n in ("x", "v", "y", "w"))
+    u = p.control("u", lower=-3.0, upper=3.0, guess=0.3)
+    mf = 1.0 / 6.0
+    ground = mf * (1.0 + u / mf)
+    p.set_dynamics({"x": v, "v": u - 1.0, "y": w, "w": (ground - u) / mf - 1.0})
+    for s in (x, v, y, w):
+        p.initial_constraint(s, 0.0)
+    p.terminal_constraint(x - 1.0, 0.0)
+    p.terminal_constraint(v, 0.0)
+    p.fixed_final_time(2.0)
+    p.minimize_integral(u**2)
+    return p
+
+
+def test_a_rate_at_roundoff_sizes_nothing():
+    """The foot's rate at the start is roundoff (a cancellation), its start value 0: it says
+    nothing of its size. On the tree before, the start scaling took that rate for the
+    foot speed's size (ref 1e-15: its defect rows times 1e15, amplifying the integrator's
+    roundoff), the scaled NLP ran out of 200 iterations and the solve fell back to the NLP
+    as posed (7 iterations); the same rule failed a hop's push-off in 1500."""
+    tr = MultipleShooting(held_foot(), nodes=20, integrator="rk4",
+                          ipopt_options={"max_iter": 200})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ScalingFallbackWarning)
+        sol = tr.solve()
+    assert sol.success and sol.scaling_fallback is None
+    assert sol.scaling.state_refs == [[(0.0, 1.0)] * 4]  # nothing sized from roundoff
+    plain = MultipleShooting(held_foot(), nodes=20, integrator="rk4", scaling="none").solve()
+    assert sol.iterations == plain.iterations
+    assert sol.objective == pytest.approx(plain.objective, rel=1e-12)
+    # the continuous optimum: with a = x'' = u - 1, int u^2 = T + 2 int a + int a^2, int a =
+    # v(T) - v(0) = 0, and the least int a^2 moving 1 in T = 2 at rest is 12 / T^3; a
+    # piecewise-constant control on 20 intervals costs slightly more
+    assert 2.0 + 1.5 < sol.objective < 2.0 + 1.5 * (1 + 1e-2)
+    assert np.max(np.abs(sol.phases[0].x[:, 3])) < 1e-12  # the foot stays at rest
+
+
+def step_tracking() -> OptimalControlProblem:
+    """``x' = u`` tracking a steep step ``tanh(200 (t - 1/2))`` from ``x(0) = -1``: on a
+    grid the optimal ``u`` peaks at about twice the step over one interval (72 on 60
+    nodes), so the duration times the peak rate (the start rule) overstates ``x``'s
+    size (1) by far."""
+    p = OptimalControlProblem("step")
+    x = p.state("x")
+    u = p.control("u")
+    p.set_dynamics({"x": u})
+    p.fixed_final_time(1.0)
+    p.initial_constraint(x + 1.0, 0.0)
+    p.minimize_integral((x - ca.tanh(200 * (p.t - 0.5))) ** 2 + 1e-6 * u**2)
+    return p
+
+
+def test_a_warm_start_on_another_grid_keeps_its_scaling():
+    """The same problem on a doubled grid, warm-started from the coarse optimum at the same
+    parameters, is the coarse grid's NLP to Ipopt (as a refinement round is): on the tree
+    before it was sized again from that start (objective scale 0.01 where the coarse solve
+    had 1; a hop's doubled grid so reached another local optimum, 9.603457 against
+    9.597996)."""
+    p = step_tracking()
+    coarse = MultipleShooting(p, nodes=60, integrator="rk4").solve()
+    fine = MultipleShooting(p, nodes=120, integrator="rk4").solve(warm_start=coarse)
+    assert fine.scaling.state_refs == coarse.scaling.state_refs
+    assert fine.objective_scale == coarse.objective_scale == 1.0
+    plain = MultipleShooting(p, nodes=60, integrator="rk4", scaling="none").solve()
+    plain_fine = MultipleShooting(p, nodes=120, integrator="rk4",
+                                  scaling="none").solve(warm_start=plain)
+    assert np.array_equal(fine.w, plain_fine.w)  # the NLP as posed, as the coarse one was
+    assert fine.objective < coarse.objective  # the finer grid tracks the step better

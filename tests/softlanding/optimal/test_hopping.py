@@ -13,12 +13,6 @@ from softlanding.model.dynamics import mode_matrices
 from softlanding.optimal.hopping import best_impedance_hop, impedance_hop, rigid_hop, solve_hop
 from softlanding.simulation.actuator_work import segment_work
 
-HOP_REFINEMENT_REGRESSED = pytest.mark.xfail(
-    reason="known regression, open: since the automatic scaling (issue 45) the v0 = -3 free "
-           "hop's base grid falls back to the unscaled NLP and its exact-arc refinement stops "
-           "at Maximum_Iterations_Exceeded (the cycle is reported 'discretised', verified NO); "
-           "these checks of the converged optimum 9.5642950 fail until it is found again",
-    strict=False)
 
 @pytest.fixture(scope="module")
 def free(grid_hop):
@@ -130,7 +124,6 @@ def hop3():
 
 
 @pytest.mark.slow
-@HOP_REFINEMENT_REGRESSED
 def test_the_exact_arcs_reach_the_continuous_optimum(hop3):
     # issue 34, v0 = -3, eta = 0: the continuous optimum, established independently in the
     # issue from uniform grids of 120 to 480 nodes per phase, each replayed exactly (9.612566,
@@ -164,7 +157,6 @@ def test_the_exact_arcs_reach_the_continuous_optimum(hop3):
 
 
 @pytest.mark.slow
-@HOP_REFINEMENT_REGRESSED
 def test_the_exact_arcs_do_not_depend_on_their_pieces(hop3):
     # on the arcs of one-signed power the cost is their end states' work: more constant
     # pieces per arc reach the same optimum
@@ -178,7 +170,6 @@ def test_the_exact_arcs_do_not_depend_on_their_pieces(hop3):
 
 
 @pytest.mark.slow
-@HOP_REFINEMENT_REGRESSED
 def test_the_hybrid_guide_quotes_the_run(hop3):
     # the hybrid guide's figures are a run of this. The grids' figures move from run to run
     # (the hop is a non-convex NLP with a flat valley of near-optimal controls, and the
