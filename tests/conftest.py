@@ -28,17 +28,24 @@ def console(tmp_path_factory):
     completed process and its folder. The documentation shows some commands on two pages,
     and ``reproduce --out paper --quick`` (5 to 10 minutes of CPU) is both a page's command
     (tests/test_docs_commands.py) and the run whose files tests/softlanding/report read.
-    Outputs are only read."""
-    done: dict[tuple[str, ...], tuple[subprocess.CompletedProcess, object]] = {}
+    Outputs are only read; a run that timed out is not run again (its error is raised to
+    every test that reads it)."""
+    done: dict[tuple[str, ...], object] = {}
 
     def run(*args):
         key = tuple(str(a) for a in args)
         if key not in done:
             cwd = tmp_path_factory.mktemp("console")
             env = dict(os.environ, COLUMNS="100")
-            res = subprocess.run([sys.executable, "-m", "softlanding", *key], capture_output=True,
-                                 text=True, cwd=cwd, timeout=1200, env=env)
-            done[key] = (res, cwd)
+            try:  # a hang guard only: reproduce --quick took over 20 min wall on 2 loaded cores
+                res = subprocess.run([sys.executable, "-m", "softlanding", *key],
+                                     capture_output=True, text=True, cwd=cwd, timeout=3600,
+                                     env=env)
+                done[key] = (res, cwd)
+            except subprocess.TimeoutExpired as err:
+                done[key] = err
+        if isinstance(done[key], Exception):
+            raise done[key]
         return done[key]
 
     return run
