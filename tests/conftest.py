@@ -1,4 +1,6 @@
 import os
+import subprocess
+import sys
 
 import pytest
 
@@ -17,6 +19,55 @@ def cli(capsys):
         return code, out.out, out.err
 
     return run
+
+
+@pytest.fixture(scope="session")
+def console(tmp_path_factory):
+    """Run ``python -m softlanding ARGS`` (a real process: real exit codes, the console's
+    output) in a fresh folder, once per test run for each argument list: returns the
+    completed process and its folder. The documentation shows some commands on two pages,
+    and ``reproduce --out paper --quick`` (5 to 10 minutes of CPU) is both a page's command
+    (tests/test_docs_commands.py) and the run whose files tests/softlanding/report read.
+    Outputs are only read; a run that timed out is not run again (its error is raised to
+    every test that reads it)."""
+    done: dict[tuple[str, ...], object] = {}
+
+    def run(*args):
+        key = tuple(str(a) for a in args)
+        if key not in done:
+            cwd = tmp_path_factory.mktemp("console")
+            env = dict(os.environ, COLUMNS="100")
+            try:  # a hang guard only: reproduce --quick took over 20 min wall on 2 loaded cores
+                res = subprocess.run([sys.executable, "-m", "softlanding", *key],
+                                     capture_output=True, text=True, cwd=cwd, timeout=3600,
+                                     env=env)
+                done[key] = (res, cwd)
+            except subprocess.TimeoutExpired as err:
+                done[key] = err
+        if isinstance(done[key], Exception):
+            raise done[key]
+        return done[key]
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def docs_site(tmp_path_factory):
+    """The documentation site built once per test run, its gallery and its seven notebooks
+    executed (``sphinx -W --keep-going -b html``): returns the completed build and its folder
+    (``html``, ``doctrees``, and ``jupyter_execute``, where myst-nb writes each notebook as it
+    executed it). tests/test_docs.py checks the site, tests/test_notebooks.py the executed
+    notebooks: each notebook runs once, not once per file."""
+    out = tmp_path_factory.mktemp("docs")
+    # no MPLBACKEND: the notebooks' kernels inherit it, and under Agg their figures are not
+    # shown inline (conf.py selects Agg for the build's own process)
+    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
+    env["SOFTLANDING_DOCS_GALLERY"] = "1"
+    docs = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
+    res = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b",
+                          "html", "-d", str(out / "doctrees"), docs, str(out / "html")],
+                         capture_output=True, text=True, env=env, timeout=2400)
+    return res, out
 
 
 @pytest.fixture(autouse=True, scope="session")

@@ -3,38 +3,23 @@
 The full build executes the gallery (docs/examples; about 50 s with the API pages on 2
 cores, numba's kernels already compiled) and the seven teaching notebooks (myst-nb; about a
 minute each; the whole build took 8 min CPU on a 2-core machine loaded 8-fold), so it is
-``slow`` (CI runs it with the second test command). A structural check of every page,
-docstring and cross-reference without executing the gallery or the notebooks takes about
-15 s, too much for the fast suite; run it locally with
+``slow`` (CI runs it with the second test command). The build is the ``docs_site`` fixture of
+tests/conftest.py: tests/test_notebooks.py checks the notebooks as this build executed them.
+A structural check of every page, docstring and cross-reference without executing the gallery
+or the notebooks takes about 15 s, too much for the fast suite; run it locally with
 ``SOFTLANDING_DOCS_GALLERY=0 make -C docs dummy``.
 """
 
-import os
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-DOCS = Path(__file__).resolve().parents[1] / "docs"
-
-
-def _build(builder: str, out: Path, gallery: bool) -> subprocess.CompletedProcess:
-    # no MPLBACKEND: the notebooks' kernels inherit it, and under Agg their figures are not
-    # shown inline (conf.py selects Agg for the build's own process)
-    env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
-    env["SOFTLANDING_DOCS_GALLERY"] = "1" if gallery else "0"
-    return subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b",
-                           builder, "-d", str(out / "doctrees"), str(DOCS), str(out / builder)],
-                          capture_output=True, text=True, env=env, timeout=1200)
-
 
 @pytest.mark.slow
-def test_the_site_builds_with_its_gallery_executed(tmp_path):
-    res = _build("html", tmp_path, gallery=True)
+def test_the_site_builds_with_its_gallery_executed(docs_site):
+    res, out = docs_site  # built once per test run; tests/test_notebooks.py reads its notebooks
     assert res.returncode == 0, res.stderr[-4000:]
-    html = tmp_path / "html"
+    html = out / "html"
     for page in ("index.html", "getting_started.html", "guides/landing.html",
                  "guides/ocp_scenarios.html", "api/softlanding.html", "api/ocp.html",
                  "auto_examples/index.html", "auto_examples/fastest_arrest.html",

@@ -15,8 +15,10 @@ The commands are read from the pages (README.md, docs/*.md, docs/guides/*.md):
 Every command is parsed by the CLI's own parser, in-process (fast: an argument error such as
 ``--plot`` without its file is caught without running anything). Each cheap one shown with
 its output (in a block or a caption) is also run, in a temporary folder, and its exit code
-and output compared with what the page shows (``slow``: about a minute in all); the
-expensive ones (:data:`EXPENSIVE`, with their measured cost) are parsed only.
+and output compared with what the page shows (``slow``); a command shown on several pages runs
+once per test run (the ``console`` fixture of tests/conftest.py), each page's output compared
+with it, and ``reproduce --out paper --quick`` is the same run tests/softlanding/report read.
+The expensive ones (:data:`EXPENSIVE`, with their measured cost) are parsed only.
 """
 
 from __future__ import annotations
@@ -25,10 +27,7 @@ import contextlib
 import io
 import itertools
 import json
-import os
 import re
-import subprocess
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -240,11 +239,9 @@ RUN = [s for s in SHOWN if (s.output is not None or s.caption) and s.text not in
 
 @pytest.mark.slow
 @pytest.mark.parametrize("shown", RUN, ids=str)
-def test_the_command_prints_what_the_page_shows(shown, tmp_path):
+def test_the_command_prints_what_the_page_shows(shown, console):
     [args] = expand(shown.text)
-    env = dict(os.environ, COLUMNS="100")
-    res = subprocess.run([sys.executable, "-m", "softlanding", *args], capture_output=True,
-                         text=True, cwd=tmp_path, timeout=600, env=env)
+    res, _ = console(*args)  # a command two pages show runs once
     printed = (res.stdout + res.stderr).rstrip("\n").split("\n")
     output = shown.output or ("...",)
     assert res.returncode == expected_exit(output), f"{shown}\n" + "\n".join(printed)

@@ -43,3 +43,31 @@ def paper_impedance_optimum():
         return cache[v0]
 
     return optimum
+
+
+@pytest.fixture(scope="session")
+def study_robust():
+    """``robust_landing(v0, grounds, nominal=solve_landing(v0))`` over the unknown-ground
+    study's 15 grounds, from the nominal plan (the study's start), each ``v0`` once per
+    session (a minute or two of CPU each at v0 = -6 and -10): read by the guide's robust
+    column (tests/softlanding/control/test_robust.py) and by the convergence test's run from
+    the nominal plan alone. The NLP cache is cleared first, as the study's run starts (the
+    re-plans' paths depend on the NLPs earlier solves left cached). Results are only read."""
+    import itertools
+
+    from ocp.structure.switching import clear_cache
+    from softlanding import solve_landing
+    from softlanding.control import robust_landing
+    from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
+
+    cache = {}
+
+    def run(v0):
+        if v0 not in cache:
+            clear_cache()
+            grounds = [true_ground(k, c)
+                       for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
+            cache[v0] = (grounds, robust_landing(v0, grounds, nominal=solve_landing(v0)))
+        return cache[v0]
+
+    return run

@@ -226,26 +226,22 @@ def test_the_search_converges_or_says_so(robust):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("v0", [-1.0, -3.0, -6.0, -10.0])
-def test_the_guides_robust_and_tree_columns_are_runs(v0):
+def test_the_guides_robust_and_tree_columns_are_runs(v0, study_robust):
     # issue 34: the unknown-ground study page's worst depths of the robust schedule and the tree
     # over the study's 15 grounds are these runs' (as the study makes them), marked "~" where
     # the robust search did not converge (its KKT check failed; minutes at v0 = -10)
-    import itertools
     import re
     from pathlib import Path
 
-    from ocp.structure.switching import clear_cache
-    from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
-
-    clear_cache()  # the re-plans' paths depend on the NLPs earlier tests left cached, as
-    # the study's (the tree's at v0 = -1 was 2.238 or 2.137 with them, or with a change of
-    # 1e-13 in the robust schedule, before its re-plan of the creep held its rest damped)
+    # study_robust clears the NLP cache first: the re-plans' paths depend on the NLPs earlier
+    # tests left cached, as the study's (the tree's at v0 = -1 was 2.238 or 2.137 with them,
+    # or with a change of 1e-13 in the robust schedule, before its re-plan of the creep held
+    # its rest damped)
     guide = Path(__file__).resolve().parents[3] / "docs" / "guides" / "unknown_ground_study.md"
     rows = {float(m[1]): m[2].split("|") for m in
             re.finditer(r"^\| (-[\d.]+) \|(.*)\|$", guide.read_text(), re.M)}
     cells = [c.strip() for c in rows[v0]]
-    grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
-    r = robust_landing(v0, grounds, nominal=solve_landing(v0))
+    _, r = study_robust(v0)
     t = two_stage_landing(r)
     if r.converged:
         assert cells[2] == f"{r.worst:.3f}" + ("" if r.feasible else " !"), r.message

@@ -127,12 +127,8 @@ def test_the_robust_schedule_over_the_studys_grounds_converges_at_v0_minus_10():
 
 
 @pytest.mark.slow  # 15 clairvoyant optima and two searches: minutes
-def test_the_robust_schedule_over_the_studys_grounds_converges_at_v0_minus_6():
-    import itertools
-
-    from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
-
-    grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
+def test_the_robust_schedule_over_the_studys_grounds_converges_at_v0_minus_6(study_robust):
+    grounds, plain = study_robust(-6.0)  # from the nominal plan: the guide's run, shared
     clair = [solve_landing(-6, PAPER_ROBOT, g) for g in grounds]
     r = robust_landing(-6, grounds, clairvoyant=clair)
     assert r.converged and r.kkt_residual < 1e-6, r.message  # 0.95 before (issue 44)
@@ -145,6 +141,5 @@ def test_the_robust_schedule_over_the_studys_grounds_converges_at_v0_minus_6():
     assert r.worst < 6.2957  # the unconverged searches ended at 6.2957 to 6.355
     # from the nominal plan alone (the study's start, which ended at 6.355 unconverged): the
     # same optimum
-    plain = robust_landing(-6, grounds)
     assert plain.converged, plain.message
     assert plain.worst == pytest.approx(r.worst, rel=1e-9)

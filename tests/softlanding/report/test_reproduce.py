@@ -12,8 +12,9 @@ from softlanding.optimal.landing import solve_landing
 from softlanding.studies.impedance import optimize_impedance
 from softlanding.studies.robustness import NOMINAL_UNITS, design, replay, transfer
 
-# the quick reproduction alone takes about two minutes: it runs with the long studies (the
-# README's second test command, which CI runs too), keeping the default command fast
+# the quick reproduction takes 5 to 10 minutes of CPU: it runs with the long studies (the
+# README's second test command, which CI runs too), keeping the default command fast; the
+# landing guide's command (tests/test_docs_commands.py) is the same run, shared
 pytestmark = pytest.mark.slow
 
 FIGURES = ("fig_bang_bang_trajectory", "fig_stepped_intrusions", "fig_depth_maps",
@@ -22,9 +23,12 @@ FIGURES = ("fig_bang_bang_trajectory", "fig_stepped_intrusions", "fig_depth_maps
 
 
 @pytest.fixture(scope="module")
-def run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reproduce")
-    assert main(["reproduce", "--out", str(out), "--quick"]) == 0
+def run(console):
+    """The landing guide's ``softlanding reproduce --out paper --quick``, run once per test
+    run (tests/test_docs_commands.py compares its printed output with the page's)."""
+    res, cwd = console("reproduce", "--out", "paper", "--quick")
+    assert res.returncode == 0, res.stdout + res.stderr
+    out = cwd / "paper"
     return out, json.loads((out / "summary.json").read_text())
 
 
