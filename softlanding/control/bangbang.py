@@ -473,7 +473,7 @@ def _settled(st, P, x, M, K, Yt, ynew, y, body, vmax, left):
 
 
 @njit(**ENTRY)
-def solve_plan(P, M, x, K, W, work=np.inf):
+def solve_plan(P, M, x, K, W, work):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
     (no estimate, no shift); the status.
 
@@ -486,9 +486,10 @@ def solve_plan(P, M, x, K, W, work=np.inf):
     K, W : arrays
         :func:`workspace`.
     work : float
-        Most integrator steps (default: no bound, as before the impact); with a bound, the
+        Most integrator steps (``np.inf``: no bound, as before the impact); with a bound, the
         steps taken are added to ``M[M_WORK]`` and a solve that runs out returns
-        :data:`DEFERRED`.
+        :data:`DEFERRED`. Always given, as a float: one compiled signature for every caller
+        (a default, omitted, was a second compile of the whole solve).
     """
     Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
     left[0] = work
@@ -498,6 +499,18 @@ def solve_plan(P, M, x, K, W, work=np.inf):
         st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
     if work < np.inf:
         M[M_WORK] += work - left[0]
+    return st
+
+
+@njit(**ENTRY)
+def structure_step(P, M, x, a_f, u, h, estimate, K, W):
+    """:func:`control_step` without the fallback (the filtered step's recovery comes before
+    it), its arguments the same: the status (:data:`OK`, or why the structure does not
+    cover the state)."""
+    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
+    left[0] = P[P_WORK]
+    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
+    M[M_WORK] = P[P_WORK] - left[0]
     return st
 
 
@@ -528,23 +541,9 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     K, W : arrays
         :func:`workspace`.
     """
-    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
-    left[0] = P[P_WORK]
-    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
-    M[M_WORK] = P[P_WORK] - left[0]
-    return fallback(P, M, x, st)
-
-
-@njit(**ENTRY)
-def structure_step(P, M, x, a_f, u, h, estimate, K, W):
-    """:func:`control_step` without the fallback (the filtered step's recovery comes before
-    it), its arguments the same: the status (:data:`OK`, or why the structure does not
-    cover the state)."""
-    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
-    left[0] = P[P_WORK]
-    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
-    M[M_WORK] = P[P_WORK] - left[0]
-    return st
+    # (:func:`structure_step` called, not its body inlined a second time: the compiled
+    # controller, the filtered sample and this step share one compiled step)
+    return fallback(P, M, x, structure_step(P, M, x, a_f, u, h, estimate, K, W))
 
 
 @njit(**JIT, inline="always")  # (a call would pass its nine arrays, refcounted)

@@ -103,7 +103,7 @@ class CompiledController:
         self._compile()
         if not self.covered:  # (before the impact: no bound on the work)
             x = np.array(x0, float)
-            st = int(bb.solve_plan(self.P, self.M, x, *self.ws))
+            st = int(bb.solve_plan(self.P, self.M, x, *self.ws, np.inf))
             fallback_step(self.P, self.M, x, st)
         F = self.estimator.F
         # the compiled samples' inputs, for a replay as a control loop (:mod:`.loop_replay`)
