@@ -494,7 +494,8 @@ def solve_plan(P, M, x, K, W, work):
     Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
     left[0] = work
     if M[M_PHASE] == PUSH:
-        st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, MAX_NEWTON)
+        st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left,
+                         np.int64(MAX_NEWTON))  # (as the step passes it: one compile)
     else:
         st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
     if work < np.inf:
