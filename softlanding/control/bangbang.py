@@ -251,7 +251,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
     S0 = x[0] - x[2]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, S0, S0
     y[0], y[1] = x[2], x[3]
-    st = _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax, tol, left)
+    st = _flow(P, umax, y, np.int64(2), tau1, K, Yt, ynew, body, vmax, tol, left)
     if st != MARCHED:
         return st
     xf1, vf1 = y[0], y[1]
@@ -262,7 +262,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
     body[0], body[1], body[2] = xb1, vb1, a2
     vmax[0] = max(vmax[0], vf1)
     vmax_push = vmax[0]
-    st = _flow(P, -umax, y, 6, tau2, K, Yt, ynew, body, vmax, tol, left)
+    st = _flow(P, -umax, y, np.int64(6), tau2, K, Yt, ynew, body, vmax, tol, left)
     if st != MARCHED:
         return st
     xfT, vfT = y[0], y[1]
@@ -445,13 +445,13 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
     tp = min(hn, t1)
     y[0], y[1] = x[2], x[3]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, 0.0, 0.0
-    if _flow(P, umax, y, 2, tp, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
+    if _flow(P, umax, y, np.int64(2), tp, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
         return
     xb = x[0] + x[1] * tp + 0.5 * a1 * tp * tp
     vb = x[1] + a1 * tp
     tq = hn - tp
     body[0], body[1], body[2] = xb, vb, a2
-    if _flow(P, -umax, y, 2, tq, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
+    if _flow(P, -umax, y, np.int64(2), tq, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
         return
     M[M_PRED], M[M_PRED + 1] = xb + vb * tq + 0.5 * a2 * tq * tq, vb + a2 * tq
     M[M_PRED + 2], M[M_PRED + 3] = y[0], y[1]
