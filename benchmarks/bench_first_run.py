@@ -102,6 +102,8 @@ def main() -> None:
                           f"  wall {med[key, kind, 1]:6.2f} s  (least cpu "
                           f"{min(x[0] for x in xs):6.2f} s)")
             if "base" in trees:
+                named = args.baseline or str(trees["base"])
+                print(f"  base = {named}, now = this tree ({ROOT})")
                 for kind in kinds:
                     print(f"  ratio now/base {kind:6s} cpu "
                           f"{med['now', kind, 0] / med['base', kind, 0]:.2f}  wall "

@@ -268,7 +268,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
     S0 = x[0] - x[2]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, S0, S0
     y[0], y[1] = x[2], x[3]
-    st = _flow(P, umax, y, 2, tau1, K, Yt, ynew, body, vmax, tol, left)
+    st = _flow(P, umax, y, np.int64(2), tau1, K, Yt, ynew, body, vmax, tol, left)
     if st != MARCHED:
         return st
     xf1, vf1 = y[0], y[1]
@@ -279,7 +279,7 @@ def _plan(P, x, tau1, tau2, K, Yt, ynew, y, J, r, lim, body, vmax, jac, tol, lef
     body[0], body[1], body[2] = xb1, vb1, a2
     vmax[0] = max(vmax[0], vf1)
     vmax_push = vmax[0]
-    st = _flow(P, -umax, y, 6, tau2, K, Yt, ynew, body, vmax, tol, left)
+    st = _flow(P, -umax, y, np.int64(6), tau2, K, Yt, ynew, body, vmax, tol, left)
     if st != MARCHED:
         return st
     xfT, vfT = y[0], y[1]
@@ -464,13 +464,13 @@ def _predict(P, x, M, K, Yt, ynew, y, body, vmax, left):
     tp = min(hn, t1)
     y[0], y[1] = x[2], x[3]
     body[0], body[1], body[2], body[3], body[4] = x[0], x[1], a1, 0.0, 0.0
-    if _flow(P, umax, y, 2, tp, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
+    if _flow(P, umax, y, np.int64(2), tp, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
         return
     xb = x[0] + x[1] * tp + 0.5 * a1 * tp * tp
     vb = x[1] + a1 * tp
     tq = hn - tp
     body[0], body[1], body[2] = xb, vb, a2
-    if _flow(P, -umax, y, 2, tq, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
+    if _flow(P, -umax, y, np.int64(2), tq, K, Yt, ynew, body, vmax, RTOL, left) != MARCHED:
         return
     M[M_PRED], M[M_PRED + 1] = xb + vb * tq + 0.5 * a2 * tq * tq, vb + a2 * tq
     M[M_PRED + 2], M[M_PRED + 3] = y[0], y[1]
@@ -492,7 +492,7 @@ def _settled(st, P, x, M, K, Yt, ynew, y, body, vmax, left):
 
 
 @njit(**ENTRY)
-def solve_plan(P, M, x, K, W, work=np.inf):
+def solve_plan(P, M, x, K, W, work):
     """The plan in ``M`` re-solved from ``x`` for the ground in ``P``, Newton to convergence
     (no estimate, no shift); the status.
 
@@ -505,18 +505,32 @@ def solve_plan(P, M, x, K, W, work=np.inf):
     K, W : arrays
         :func:`workspace`.
     work : float
-        Most integrator steps (default: no bound, as before the impact); with a bound, the
+        Most integrator steps (``np.inf``: no bound, as before the impact); with a bound, the
         steps taken are added to ``M[M_WORK]`` and a solve that runs out returns
-        :data:`DEFERRED`.
+        :data:`DEFERRED`. Always given, as a float: one compiled signature for every caller
+        (a default, omitted, was a second compile of the whole solve).
     """
     Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
     left[0] = work
     if M[M_PHASE] == PUSH:
-        st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left, MAX_NEWTON)
+        st = _solve_push(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left,
+                         np.int64(MAX_NEWTON))  # (as the step passes it: one compile)
     else:
         st = _solve_pull(P, x, M, K, Yt, ynew, y, J, r, lim, body, vmax, left)
     if work < np.inf:
         M[M_WORK] += work - left[0]
+    return st
+
+
+@njit(**ENTRY)
+def structure_step(P, M, x, a_f, u, h, estimate, K, W):
+    """:func:`control_step` without the fallback (the filtered step's recovery comes before
+    it), its arguments the same: the status (:data:`OK`, or why the structure does not
+    cover the state)."""
+    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
+    left[0] = P[P_WORK]
+    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
+    M[M_WORK] = P[P_WORK] - left[0]
     return st
 
 
@@ -547,23 +561,9 @@ def control_step(P, M, x, a_f, u, h, estimate, K, W):
     K, W : arrays
         :func:`workspace`.
     """
-    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
-    left[0] = P[P_WORK]
-    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
-    M[M_WORK] = P[P_WORK] - left[0]
-    return fallback(P, M, x, st)
-
-
-@njit(**ENTRY)
-def structure_step(P, M, x, a_f, u, h, estimate, K, W):
-    """:func:`control_step` without the fallback (the filtered step's recovery comes before
-    it), its arguments the same: the status (:data:`OK`, or why the structure does not
-    cover the state)."""
-    Yt, ynew, y, J, r, lim, body, vmax, left = _views(K, W)
-    left[0] = P[P_WORK]
-    st = _step(P, M, x, a_f, u, h, estimate, K, Yt, ynew, y, J, r, lim, body, vmax, left)
-    M[M_WORK] = P[P_WORK] - left[0]
-    return st
+    # (:func:`structure_step` called, not its body inlined a second time: the compiled
+    # controller, the filtered sample and this step share one compiled step)
+    return fallback(P, M, x, structure_step(P, M, x, a_f, u, h, estimate, K, W))
 
 
 @njit(**JIT, inline="always")  # (a call would pass its nine arrays, refcounted)

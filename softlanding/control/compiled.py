@@ -103,7 +103,7 @@ class CompiledController:
         self._compile()
         if not self.covered:  # (before the impact: no bound on the work)
             x = np.array(x0, float)
-            st = int(bb.solve_plan(self.P, self.M, x, *self.ws))
+            st = int(bb.solve_plan(self.P, self.M, x, *self.ws, np.inf))
             if fallback_step(self.P, self.M, x, st) != st:  # (counted as a sample's would be)
                 self.record.uncovered += 1
         F = self.estimator.F

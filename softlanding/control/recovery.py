@@ -141,7 +141,8 @@ def _recovered(P, M, x, a_f, u, h, estimate, weight, recovering, K, W):
     if solved != bb.OK:
         return st, 0
     trial[bb.M_UNCONVERGED] = 0
-    M[:] = trial
+    for i in range(M.shape[0]):  # (not ``M[:] = trial``: its shape check's error message
+        M[i] = trial[i]          # compiled numba's string formatting, ~4 s of a cold start)
     return bb.OK, 0
 
 

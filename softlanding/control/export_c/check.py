@@ -154,7 +154,7 @@ def compare_calls(c: CController, calls: list[Call], landings: int) -> Compariso
     for k in calls:
         Pp, Pc, Mp, Mc = k.P.copy(), k.P.copy(), k.M.copy(), k.M.copy()
         if k.first:
-            sp, sc = int(bb.solve_plan(Pp, Mp, k.x, *ws)), c.solve_plan(Pc, Mc, k.x)
+            sp, sc = int(bb.solve_plan(Pp, Mp, k.x, *ws, np.inf)), c.solve_plan(Pc, Mc, k.x)
         else:
             sp = int(bb.control_step(Pp, Mp, k.x, k.a_f, k.u, k.h, k.estimate, *ws))
             sc = c.control_step(Pc, Mc, k.x, k.a_f, k.u, k.h, k.estimate)

@@ -214,7 +214,7 @@ def _landing(robot: Robot, v0: float, prior: tuple[float, float], truth: tuple[f
     M = bb.new_memory(0.1, 0.1, prior, (1.0, 1.0), float(P[bb.P_NOISE]))
     ws = bb.workspace()
     x = np.ascontiguousarray(Impact(v0).initial_state(robot), float)
-    if int(bb.solve_plan(P, M, x, *ws)) != bb.OK:
+    if int(bb.solve_plan(P, M, x, *ws, np.inf)) != bb.OK:
         return 0
     rng = np.random.default_rng(seed)
     F = ff.new_filter(x)

@@ -183,7 +183,7 @@ def recorded_calls(robot: Robot, n_steps: int, seed: int = 0) -> tuple[list[Call
         for sample in range(MAX_SAMPLES + 1):
             if sample == 0:
                 calls.append(Call(P.copy(), M.copy(), x, 0.0, 0.0, 0.0, True))
-                st = int(bb.solve_plan(P, M, x, *ws))
+                st = int(bb.solve_plan(P, M, x, *ws, np.inf))
             else:
                 hk = h
                 creeping = M[bb.M_PHASE] in (bb.CREEPING, bb.BRAKING)  # (a force, held)

@@ -414,14 +414,26 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
     rtol : float
         Relative tolerance of the integrator of the yielding segments.
     """
-    from softlanding.simulation.kernel.nonaffine import landing_entry_nl
+    from softlanding.simulation.kernel.nonaffine import N_OUT_NL, simulate_one_nl
 
     G, fp = law
-    with first_compile("non-affine"):
-        out, t, A, z, cu, mode = landing_entry_nl(
-            packed_model(mats), _f64(G), fp, _f64(Kf), float(umax), _f64(sched_t),
-            _gain_rows(sched_u), _f64(x0), float(s_lim), float(t_max), int(max_seg),
-            bool(energy), float(max_steps), float(rtol), RECORDS_FIRST)
+    # the compiled loop called as it is (records allocated here): a compiled entry wrapping
+    # it was a second compile of the whole loop, as for :func:`run_landing`
+    args = (packed_model(mats), (_f64(G), fp, np.zeros(5)),
+            (_f64(Kf), float(umax), _f64(sched_t), _gain_rows(sched_u)), _f64(x0),
+            (float(s_lim), float(t_max), int(max_seg), bool(energy), float(max_steps),
+             float(rtol)))
+    nrec = RECORDS_FIRST
+    while True:
+        out, rec = np.zeros(N_OUT_NL), _new_records(nrec)
+        with first_compile("non-affine"):
+            simulate_one_nl(*args, out, rec)
+        n = int(out[O_NSEG])
+        if n <= nrec:
+            break
+        nrec = n
+    t, A, z, cu, mode = (rec[0][:n + 1].copy(), rec[1][:n].copy(), rec[2][:n].copy(),
+                         rec[3][:n].copy(), rec[4][:n].copy())
     return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode, "law": (G, fp, float(rtol))}
 
 

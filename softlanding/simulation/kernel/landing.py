@@ -651,4 +651,6 @@ def batch_range(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_s
            np.zeros(0, dtype=np.int64))
     for i in range(i0, i1):
         simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], empty_t, empty_K), x0s[i],
-                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec, True)
+                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec,
+                     np.bool_(True))  # (not the literal True: one compile, the one Python's
+                     # run_landing makes, not a second of the whole loop)

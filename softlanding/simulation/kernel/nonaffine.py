@@ -38,7 +38,6 @@ from softlanding.simulation.kernel.const import (
     N_OUT,
     O_EGND,
     O_ET,
-    O_NSEG,
     REST_PROVEN,
     SAT_HIGH,
     SAT_LOW,
@@ -190,12 +189,15 @@ def due_event_yield(A, cu, G, fp, buf, C, ne, z, K):
     return -1
 
 
-@njit(**JIT)
+@njit(**ENTRY, nogil=True)
 def simulate_one_nl(P, law_args, pol, x0, lim, out, rec):
-    """Simulate one landing on a non-affine ground; fill ``out`` (:data:`N_OUT_NL` columns).
+    """Simulate one landing on a non-affine ground; fill ``out`` (:data:`N_OUT_NL` columns)
+    and the segment records ``rec`` (as :func:`.landing.simulate_one`).
 
     ``law_args = (G, fp, buf)``; ``pol``, ``lim`` as :func:`.landing.simulate_one`, and
-    ``lim`` ends with the integrator's relative tolerance.
+    ``lim`` ends with the integrator's relative tolerance. Python calls it for one landing
+    (:func:`softlanding.simulation.kernel.run_landing_nl`), :func:`batch_range_nl` for each
+    landing of a batch. Releases the GIL.
     """
     Kf, umax, sched_t, sched_K = pol
     s_lim, t_max, max_seg, energy, max_steps, rtol = lim
@@ -276,28 +278,6 @@ def write_output_nl(P, out, status, z, z0, d, steps, nseg, s_lim, energy, ext, b
     out[O_EGND] = acc[A_PLAST] if foot_rests else np.nan
     out[O_EDRAG] = acc[A_DRAG] if foot_rests else np.nan
     out[O_EGRAIN] = acc[A_GRAIN] if foot_rests else np.nan
-
-
-@njit(**ENTRY, nogil=True)
-def landing_entry_nl(P, G, fp, Kf, umax, sched_t, sched_K, x0, s_lim, t_max, max_seg, energy,
-                     max_steps, rtol, nrec):
-    """One non-affine landing with its segment records (as :func:`.landing.landing_entry`).
-
-    Returns ``(out, t, A, z, cu, mode)``. Releases the GIL.
-    """
-    buf = np.zeros(5)
-    while True:
-        out = np.zeros(N_OUT_NL)
-        rec = (np.full(nrec + 1, np.nan), np.empty((nrec, 5, 5)), np.empty((nrec, 5)),
-               np.empty((nrec, 5)), np.empty(nrec, dtype=np.int64))
-        simulate_one_nl(P, (G, fp, buf), (Kf, umax, sched_t, sched_K), x0,
-                        (s_lim, t_max, max_seg, energy, max_steps, rtol), out, rec)
-        n = int(out[O_NSEG])
-        if n <= nrec:
-            break
-        nrec = n
-    return (out, rec[0][:n + 1].copy(), rec[1][:n].copy(), rec[2][:n].copy(),
-            rec[3][:n].copy(), rec[4][:n].copy())
 
 
 @njit(**ENTRY, nogil=True)

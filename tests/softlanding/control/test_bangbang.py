@@ -26,7 +26,7 @@ def test_newton_plan_stops_the_foot_with_the_arrest_exactly_held(ground, v0, gue
     P = bb.robot_numbers(r.r_m, r.s, r.u_max, k, c)
     M = bb.new_memory(*guess, (k, c), (1.0, 1.0), 1e-6)
     x0 = Impact(v0).initial_state(r)
-    assert bb.solve_plan(P, M, x0, *bb.workspace()) == bb.OK
+    assert bb.solve_plan(P, M, x0, *bb.workspace(), np.inf) == bb.OK
     t1, t2 = M[bb.M_TAU1], M[bb.M_TAU2]
     res = simulate(r, v0, ForceSchedule((t1, t1 + t2), (r.u_max, -r.u_max, 0.0)), ground,
                    x0=x0, t_max=t1 + t2)
@@ -228,7 +228,7 @@ def test_the_compiled_plan_of_a_creep_is_not_covered():
     P = bb.robot_numbers(r.r_m, r.s, r.u_max, k, c)
     M = bb.new_memory(0.05, 0.04, (k, c), (1.0, 1.0), 1e-6)
     x = np.array([9.9768, 0.768, -0.5035, -2.7782])
-    assert bb.solve_plan(P, M, x, *bb.workspace()) == bb.CREEP
+    assert bb.solve_plan(P, M, x, *bb.workspace(), np.inf) == bb.CREEP
     t1, t2 = M[bb.M_TAU1], M[bb.M_TAU2]
     res = simulate(r, x[3], ForceSchedule((t1, t1 + t2), (r.u_max, -r.u_max, 0.0)),
                    linear_or_drag(k, c), x0=x, t_max=t1 + t2)
@@ -315,7 +315,7 @@ def test_a_sample_without_work_keeps_the_last_plan_shifted():
     P = bb.robot_numbers(r.r_m, r.s, r.u_max, k, c)
     M = bb.new_memory(0.2, 0.2, (k, c), (1.0, 1.0), 1e-6)
     x = Impact(-6.0).initial_state(r)
-    assert bb.solve_plan(P, M, x, *bb.workspace()) == bb.OK
+    assert bb.solve_plan(P, M, x, *bb.workspace(), np.inf) == bb.OK
     t1, t2, h = M[bb.M_TAU1], M[bb.M_TAU2], 0.01
     P[bb.P_WORK] = 0.0
     x = x + h * np.array([x[1], 0.0, x[3], 0.0])  # (not the plan's prediction)

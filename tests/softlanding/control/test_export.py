@@ -267,7 +267,7 @@ def test_a_c_program_following_the_readme_runs_as_the_python_controller(exported
     P = bb.robot_numbers(r.r_m, r.s, r.u_max, 1.0, 0.0, creep=True)
     M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
     x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
-    st = bb.solve_plan(P, M, x, *ws)
+    st = bb.solve_plan(P, M, x, *ws, np.inf)
     want = [[st, M[bb.M_TAU1], M[bb.M_TAU2], float(plan_forces(P, M, 0.0))]]
     for _ in range(8):
         if M[bb.M_PRED_OK] == 1.0:
@@ -519,7 +519,7 @@ def test_a_c_program_filtering_as_the_readme_runs_as_python(exported_filtered, t
                          creep=True)
     M = bb.new_memory(0.1, 0.1, (1.0, 0.0), (1.0, 1.0), float(P[bb.P_NOISE]))
     x, h, ws = np.array([10.0, -3.0, 0.0, -3.0]), float(P[bb.P_PERIOD]), bb.workspace()
-    bb.solve_plan(P, M, x, *ws)
+    bb.solve_plan(P, M, x, *ws, np.inf)
     F = ff.new_filter(x)
     est = GroundEstimator(r)
     want = []

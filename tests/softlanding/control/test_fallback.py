@@ -66,7 +66,7 @@ def test_an_arrest_beyond_the_force_limit_is_not_covered_and_the_brake_holds_the
     P = bb.robot_numbers(robot.r_m, robot.s, robot.u_max, k, 0.0, creep=True)
     M = bb.new_memory(0.05, 0.5, (k, 0.0), (1.0, 1.0), 1e-6)
     x0 = np.array([0.5 * robot.s, v0, 0.0, v0])
-    assert bb.solve_plan(P, M, x0, *bb.workspace()) == bb.PATH_LIMIT
+    assert bb.solve_plan(P, M, x0, *bb.workspace(), np.inf) == bb.PATH_LIMIT
     S, c = M[bb.M_XBT] - M[bb.M_XFT], robot.r_m / (1 + robot.r_m)
     assert c * (S + 0.5 * M[bb.M_VBT] ** 2) / S > 1.2 * robot.u_max  # (the plan's u_b)
     m = mpc_landing(v0, robot, true_ground(k, 0.0), noise=1e-3, delay=1, margin=0)

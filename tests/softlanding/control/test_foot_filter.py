@@ -45,7 +45,7 @@ def test_the_filter_follows_an_exactly_measured_foot():
         t = k * H
         x, v, g, _ = _motion(np.array(t))
         m = np.array([5.0, 0.0, float(x), float(v)])
-        filter_step(F, m, float(g), *_integrals(t - H), H, BETA)
+        filter_step(F, m, float(g), *_integrals(t - H), H, BETA, 0.0)
         if k <= PROVISIONAL:  # (no value at the impact: the first samples are redone)
             continue
         assert m[2] == pytest.approx(float(x), abs=1e-12)
@@ -63,7 +63,7 @@ def test_the_filter_is_far_more_accurate_than_one_noisy_measurement():
         x, v, g, _ = _motion(np.array(t))
         e = rng.normal(0.0, sigma, 3)
         m = np.array([5.0, 0.0, float(x) + e[0], float(v) + e[1]])
-        filter_step(F, m, float(g) + e[2], *_integrals(t - H), H, BETA)
+        filter_step(F, m, float(g) + e[2], *_integrals(t - H), H, BETA, 0.0)
         errors.append((m[2] - float(x), m[3] - float(v)))
     err = np.abs(np.array(errors[PROVISIONAL:]))  # (the first ones are provisional)
     # the position to 1e-2 of the noise, the velocity to 1e-1 (measured: 3e-3, 3e-2)
