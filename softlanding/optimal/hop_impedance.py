@@ -288,7 +288,9 @@ def best_impedance_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: 
             flight_guess = h.transcribed[0]
     if best is not None:
         best.notes.append(f"best of a {grid} x {grid} gain grid in [0.05, 2] x [0, 2] "
-                          f"({len(cands)} gains hop; the {top} best stances got their flight)")
+                          f"({len(cands)} gains hop; the {top} best stances got their flight, "
+                          "each a local optimum started from the previous candidate's: an upper "
+                          "bound on the best impedance hop)")
     return best
 
 
