@@ -250,10 +250,16 @@ def run_landing(mats, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_seg, ene
     if n > RECORDS_FIRST:  # more segments than records: once more, with room for all
         rec, out = _new_records(n), np.zeros(N_OUT)
         simulate_one(*args, out, rec, proofs)
-    seg = {"t": rec[0][:n + 1].copy(), "A": rec[1][:n].copy(), "z": rec[2][:n].copy(),
-           "cu": rec[3][:n].copy(), "mode": rec[4][:n].copy()}
+    seg = _segments(rec, n)
     _RECORDS.rec = first
     return out, seg
+
+
+def _segments(rec: tuple, n: int) -> dict[str, np.ndarray]:
+    """The first ``n`` segments of the records ``rec`` (:func:`_new_records`), copied, by
+    field: ``t`` (n+1,), ``A``, ``z``, ``cu``, ``mode``."""
+    return {"t": rec[0][:n + 1].copy(), "A": rec[1][:n].copy(), "z": rec[2][:n].copy(),
+            "cu": rec[3][:n].copy(), "mode": rec[4][:n].copy()}
 
 
 def _new_records(n: int) -> tuple:
@@ -432,9 +438,7 @@ def run_landing_nl(mats, law, Kf, umax, sched_t, sched_u, x0, s_lim, t_max, max_
         if n <= nrec:
             break
         nrec = n
-    t, A, z, cu, mode = (rec[0][:n + 1].copy(), rec[1][:n].copy(), rec[2][:n].copy(),
-                         rec[3][:n].copy(), rec[4][:n].copy())
-    return out, {"t": t, "A": A, "z": z, "cu": cu, "mode": mode, "law": (G, fp, float(rtol))}
+    return out, {**_segments(rec, n), "law": (G, fp, float(rtol))}
 
 
 def run_batch_nl(mats_list, ridx, law, Kf, umax, x0, s_lim, t_max, max_seg, energy, out,
