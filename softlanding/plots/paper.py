@@ -96,7 +96,7 @@ def plot_stepped_intrusions(results: Sequence[LandingResult], ax=None) -> plt.Fi
     fig, ax = _axes(ax, (6.5, 4.0))
     t_end = 1.2 * max(r.T for r in results)
     for r in results:
-        tr = r.trajectory(t_end=t_end)
+        tr = r.trajectory(t_end=t_end, n=400)  # the events are added: every corner exact
         ax.plot(tr.t, tr.x[:, 2],
                 label=f"{r.controller.describe()}: {r.steps} step(s), depth {r.depth:.3f}")
     ax.set_xlabel(r"time $\tau$ [$\sqrt{m_t / k_g}$]")

@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from softlanding.simulation.kernel.freshness import drop_stale_cache
+from softlanding.simulation.kernel_cache import drop_stale_cache
 
 drop_stale_cache()  # before any compiled module is loaded (numba misses inlined edits)
 

@@ -172,6 +172,7 @@ def test_demo_runs_and_writes_figure(tmp_path, cli, monkeypatch):
     for row in d["table"]:
         assert row["rigid_depth"] == pytest.approx(row["rigid_depth_analytic"], abs=1e-10)
     assert [s["steps"] for s in d["stepped_intrusions"]] == [1, 2, 3]
+    assert d["simulator"] == "compiled"  # in-process: the caller's numba is left as it is
     assert out_png.stat().st_size > 10_000
 
 
