@@ -14,6 +14,14 @@ them. :func:`mpc_landing` composes them for one landing. :func:`robust_landing` 
 ground shows itself); and the state-started landing OCP they share.
 """
 
+from pathlib import Path
+
 import lazy_loader as _lazy
+
+from softlanding.simulation.kernel_cache import KERNEL, drop_stale_cache
+
+# before any compiled controller module is loaded: numba checks only a function's own file,
+# and the controller's compiled functions inline the kernel's and the model's
+drop_stale_cache(Path(__file__).parent, (KERNEL, KERNEL.parents[1] / "model"))
 
 __getattr__, __dir__, __all__ = _lazy.attach_stub(__name__, __file__)

@@ -25,8 +25,8 @@ from softlanding.control.foot_filter import covariance, filter_step
 from softlanding.simulation.kernel.const import ENTRY, JIT
 
 # (numba caches this module's entries with the step's and the fallback's code compiled in, and
-# checks only this file for changes: an edit to bangbang.py or fallback.py alone leaves them
-# stale; softlanding.control has no sources stamp as the kernel has, freshness.py)
+# checks only this file for changes: the package's sources stamp drops them when bangbang.py or
+# fallback.py changes, softlanding/control/__init__.py)
 
 #: Most samples in a row the filtered estimate's bounded full solve may go on over (each
 #: within the work bound) before the landing falls back.

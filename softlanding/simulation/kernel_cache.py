@@ -31,24 +31,25 @@ LOOP_INDEX = "landing.simulate_one-*.nbi"
 """numba's index file of the landing loop (every landing's entry point)."""
 
 
-def sources_digest(folder: Path) -> str:
-    """The SHA-256 of the folder's ``*.py`` files (names and contents, in name order).
+def sources_digest(folder: Path, *more: Path) -> str:
+    """The SHA-256 of the folders' ``*.py`` files (names and contents, in name order).
 
     Parameters
     ----------
-    folder : Path
-        The kernel's package folder.
+    folder, *more : Path
+        The package folders whose sources the compiled code is made of.
     """
     h = hashlib.sha256()
-    for f in sorted(folder.glob("*.py")):
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
+    for d in (folder, *more):
+        for f in sorted(d.glob("*.py")):
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
     return h.hexdigest()
 
 
-def drop_stale_cache(folder: Path = KERNEL) -> bool:
-    """Remove the folder's numba cache files if its sources changed since they were stamped;
-    whether anything was dropped.
+def drop_stale_cache(folder: Path = KERNEL, inlined: tuple[Path, ...] = ()) -> bool:
+    """Remove the folder's numba cache files if its sources (or the ones it inlines) changed
+    since they were stamped; whether anything was dropped.
 
     Only numba's default cache location (``__pycache__`` beside the sources) is handled;
     with ``NUMBA_CACHE_DIR`` set, that folder is the user's to manage. A read-only install
@@ -57,13 +58,16 @@ def drop_stale_cache(folder: Path = KERNEL) -> bool:
     Parameters
     ----------
     folder : Path
-        The kernel's package folder.
+        The package folder of the compiled functions (default: the kernel's).
+    inlined : tuple of Path
+        Other folders whose compiled functions it inlines (``softlanding.control`` inlines
+        the kernel's and the model's).
     """
     if os.environ.get("NUMBA_CACHE_DIR"):
         return False
     cache = folder / "__pycache__"
     stamp = cache / STAMP
-    digest = sources_digest(folder)
+    digest = sources_digest(folder, *inlined)
     try:
         if stamp.read_text() == digest:
             return False

@@ -2,8 +2,12 @@
 dropped whenever any kernel source changes; a demo on a cache without the landing loop runs
 the kernel as Python (softlanding.simulation.kernel_cache)."""
 
+import os
 import subprocess
 import sys
+from pathlib import Path
+
+import pytest
 
 from softlanding.simulation.kernel_cache import (
     LOOP_INDEX,
@@ -84,3 +88,32 @@ def test_an_empty_cache_runs_the_kernel_as_python(tmp_path):
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                        env={"NUMBA_CACHE_DIR": str(tmp_path), "PATH": ""}, timeout=120)
     assert p.stdout.split() == ["True", "True", "function"], p.stderr
+
+
+def test_an_edit_in_an_inlined_folder_drops_the_cache(tmp_path, monkeypatch):
+    """softlanding.control's compiled functions inline the kernel's: its cache goes when a
+    kernel source changes, though none of its own did."""
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    control, kernel = tmp_path / "control", tmp_path / "kernel"
+    control.mkdir()
+    kernel.mkdir()
+    (control / "bangbang.py").write_text("x = 1\n")
+    (kernel / "linalg.py").write_text("y = 1\n")
+    cache = _cache(control)
+    assert drop_stale_cache(control, (kernel,))
+    _cache(control)
+    assert not drop_stale_cache(control, (kernel,)) and len(list(cache.iterdir())) == 3
+    (kernel / "linalg.py").write_text("y = 2\n")
+    assert drop_stale_cache(control, (kernel,))
+    assert [p.name for p in cache.iterdir()] == [STAMP]
+
+
+def test_the_controller_package_is_stamped_with_the_kernel_and_the_model(monkeypatch):
+    import softlanding.control as control
+    from softlanding.simulation.kernel_cache import KERNEL
+
+    folder = Path(control.__file__).parent
+    stamp = folder / "__pycache__" / STAMP
+    if os.environ.get("NUMBA_CACHE_DIR") or not stamp.exists():
+        pytest.skip("a user's numba cache folder or a read-only install: nothing stamped")
+    assert stamp.read_text() == sources_digest(folder, KERNEL, KERNEL.parents[1] / "model")
