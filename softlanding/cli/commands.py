@@ -345,6 +345,7 @@ def _cmd_demo(a: argparse.Namespace) -> int:
     python = a.own_process and interpret_unless_cached()
     from softlanding.report.demo import (
         DEMO_GAINS,
+        DEMO_LANDINGS,
         STEPPED_KD,
         STEPPED_KP,
         STEPPED_V0,
@@ -352,14 +353,16 @@ def _cmd_demo(a: argparse.Namespace) -> int:
         plot_demo,
         stepped_intrusions,
     )
+    from softlanding.util.progress import activity
 
-    rows = demo_table()
-    stepped = stepped_intrusions()
-    written = savefig(plot_demo(stepped=stepped), out) if out else None
-    if own is not None:
-        with atomic_folder(own, force=True) as tmp:
-            savefig(plot_demo(stepped=stepped), tmp / DEMO_FIGURE)
-        written = str(own / DEMO_FIGURE)
+    with activity("demo", total=DEMO_LANDINGS, unit="landing"):
+        rows = demo_table()
+        stepped = stepped_intrusions()
+        written = savefig(plot_demo(stepped=stepped), out) if out else None
+        if own is not None:
+            with atomic_folder(own, force=True) as tmp:
+                savefig(plot_demo(stepped=stepped), tmp / DEMO_FIGURE)
+            written = str(own / DEMO_FIGURE)
     if a.json:
         print_json({"table": rows, "stepped_intrusions": [
             {"k_d": kd, "steps": s.steps, "depth": s.depth}
