@@ -93,7 +93,8 @@ def loop_cached(folder: Path = KERNEL) -> bool:
     In numba's default location (``__pycache__`` beside the sources) the stamp must match the
     sources; under ``NUMBA_CACHE_DIR`` (the user's to manage) an index file is enough. An
     index compiled for another machine or signature reads as cached: the landing then
-    compiles, slower but the same numbers.
+    compiles, slower but the same numbers. A read-only install (numba then caches in the
+    user's folder) always reads as not cached: a demo there runs as Python (about 5 s).
 
     Parameters
     ----------
