@@ -95,7 +95,8 @@ def test_the_search_is_never_above_a_cold_start(landscape):
 @pytest.fixture(scope="module")
 def best_at_3():
     # v0 = -3, the three best stances of the 9 x 9 grid (k_d = 0): k_p = 0.29375 flies cold
-    # to 19.90, k_p = 0.5375 to 17.92; from the latter's flight k_p = 0.29375 reaches 17.04
+    # to 19.90, k_p = 0.5375 to 17.92, k_p = 0.78125 to 25.40; from the best cold flight
+    # (0.5375's) k_p = 0.29375 reaches 17.04
     return best_impedance_hop(-3.0)
 
 
