@@ -331,10 +331,10 @@ def best_impedance_hop(impact: Impact | float, robot: Robot = PAPER_ROBOT, eta: 
         if best is None or _rank(h) < _rank(best):
             best = h
     if best is not None:
-        first = "the caller's flight" if flight_guess is not None else "the default guess"
         best.notes.append(
             f"best of a {grid} x {grid} gain grid in [0.05, 2] x [0, 2] ({len(cands)} gains "
-            f"hop; the {len(chosen)} best stances got their flight, solved from {first}, "
+            f"hop; the {len(chosen)} best stances got their flight, solved from "
+            f"{best.starts[0]['start']}, "
             "then again from the best of those flights, each candidate's lowest verified "
             "energy kept: the best of those starts, a local optimum, not a global one)")
     return best
