@@ -90,9 +90,10 @@ class HopCycle:
     notes : list of str
     starts : list of dict
         ``solve_hop``'s deterministic starts (``stretch``: the push-off and flight of the
-        start stretched in time) with the energy each converged to (or its error): the
-        cycle is the best of them, and their spread shows whether the optimum found is
-        unique (local optima of a non-convex problem).
+        start stretched in time), or the impedance hop's flight starts (``start``: the
+        default guess or the caller's flight, then the best candidate's), with the energy
+        each converged to (or its error): the cycle is the best of them, and their spread
+        shows whether the optimum found is unique (local optima of a non-convex problem).
     grids : list of dict
         The grid sequence (``nodes`` per phase, replayed ``energy``), coarse to fine; the
         cycle reported is the finest grid's. Its controls are piecewise constant and the
