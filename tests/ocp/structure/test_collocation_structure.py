@@ -134,15 +134,9 @@ def moon_lander_switch() -> float:
     return brentq(end_height, 0.0, 1.0, xtol=1e-15)
 
 
-@pytest.fixture(scope="module")
-def moon_ms():
-    sol = MultipleShooting(P.moon_lander(), nodes=60).solve({})
-    return sol, refine_switching(sol)
-
-
 @pytest.mark.parametrize("refine", [False, True])
-def test_moon_lander_collocation_matches_shooting_and_closed_form(refine, moon_ms):
-    ms, r_ms = moon_ms
+def test_moon_lander_collocation_matches_shooting_and_closed_form(refine, moon_lander_shooting):
+    ms, r_ms, c_ms = moon_lander_shooting  # 60 nodes (tests/ocp/conftest.py)
     tr = Collocation(P.moon_lander(), intervals=10 if refine else 20)
     sol = quiet(tr.refine, {}, tol=1e-8) if refine else quiet(tr.solve, {})
     st = detect_structure(sol)
@@ -157,8 +151,7 @@ def test_moon_lander_collocation_matches_shooting_and_closed_form(refine, moon_m
     assert c0.verdict == (CERTIFIED if sol.verified else UNVERIFIED), c0.reasons
     assert c1.verdict == CERTIFIED, c1.reasons
     # the multiplier costate of collocation is as close to the adjoint as shooting's
-    gap_ms = certify(ms, r_ms).costate_estimates_gap
-    assert c1.costate_estimates_gap < 3 * gap_ms
+    assert c1.costate_estimates_gap < 3 * c_ms.costate_estimates_gap
 
 
 # -------------------------------------------------------- harmonic oscillator
