@@ -18,6 +18,7 @@ value (robot arm).
 
 import math
 import warnings
+from functools import cache
 
 import numpy as np
 import pytest
@@ -70,13 +71,20 @@ def double_integrator() -> OptimalControlProblem:
     return min_time_double_integrator(T_guess=None, name="double_integrator")
 
 
+@cache
+def di_collocation(d: float, refine: bool):
+    """The double integrator by collocation on 21 intervals, solved or refined to 1e-8,
+    once per module (read by the two tests below; each builds its own problem object's
+    transcription, so the refinement's NLP cache starts empty for every (d, refine))."""
+    tr = Collocation(double_integrator(), intervals=21)
+    return tr.refine({"d": d}, tol=1e-8) if refine else tr.solve({"d": d})
+
+
 @pytest.mark.parametrize("refine", [False, True])
 @pytest.mark.parametrize("d", [2.0, 2.5])
 def test_double_integrator_collocation_structure_refinement_and_certificate(d, refine):
-    p = double_integrator()
-    tr = Collocation(p, intervals=21)
-    sol = tr.refine({"d": d}, tol=1e-8) if refine else tr.solve({"d": d})
-    ms = MultipleShooting(p, nodes=41).solve({"d": d})
+    sol = di_collocation(d, refine)
+    ms = MultipleShooting(sol.problem, nodes=41).solve({"d": d})  # the same problem object
     st, st_ms = detect_structure(sol), detect_structure(ms)
     assert kinds(st) == kinds(st_ms) == [["max", "min"]]
     # closed form: full thrust to sqrt(d), full brake to 2 sqrt(d)
@@ -99,8 +107,7 @@ def test_collocation_costates_are_the_analytic_ones(refine):
     """lambda = (-1/sqrt(d), -1 + t/sqrt(d)) (H = -1, sigma = lambda_2 = 0 at sqrt(d)),
     from the defect multipliers divided by the Radau weights, at every collocation point."""
     d = 2.5
-    tr = Collocation(double_integrator(), intervals=21)
-    sol = tr.refine({"d": d}, tol=1e-8) if refine else tr.solve({"d": d})
+    sol = di_collocation(d, refine)
     t, lam = costates_from_multipliers(sol)
     assert t.shape == (sol.N,) and lam.shape == (sol.N, 2)
     exact = np.column_stack([np.full_like(t, -1 / math.sqrt(d)), -1 + t / math.sqrt(d)])
