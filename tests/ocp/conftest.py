@@ -44,6 +44,25 @@ def suite_refined() -> Callable[[str], Any]:
 
 
 @pytest.fixture(scope="session")
+def suite_switching(suite_refined: Callable[[str], Any]) -> Callable[[str], tuple[Any, Any]]:
+    """``switching(name)``: the switching-time refinement of a bang-bang suite problem's
+    refined solve (default settings) and its certificate, ``(r, certify(sol, r))``, once
+    per test run (read by tests/ocp/test_ocp_suite.py and, for the moon lander and the
+    oscillator, structure/test_collocation_structure.py). Only this fixture refines the
+    suite's solves: each refinement is built on an empty cache and solved by Ipopt."""
+    done: dict[str, tuple[Any, Any]] = {}
+
+    def switching(name: str) -> tuple[Any, Any]:
+        if name not in done:
+            sol = suite_refined(name)
+            r = refine_switching(sol)
+            done[name] = (r, certify(sol, r))
+        return done[name]
+
+    return switching
+
+
+@pytest.fixture(scope="session")
 def moon_lander_shooting() -> tuple[Any, Any, Any]:
     """Meditch's moon lander by multiple shooting on 60 nodes, its switching-time
     refinement with default settings and the certificate of the two (read by
