@@ -2,9 +2,10 @@
 
 Each is an exact computation that several files did on their own (the same problem built
 afresh, the same transcription, the same options): one copy now, read by all. Readers only
-read (a reader that changes a result works on a copy), and every shared result is computed
-from a problem object of its own, so no earlier in-process solve (a warm start, the
-refinement's NLP cache) changes what a reader gets.
+read (the one exception: test_ocp_suite.py re-solves the brachistochrone's transcription, an
+entry no other file reads), and every shared result is computed from a problem object of its
+own, refined by :func:`suite_switching` alone, so no earlier in-process solve (a warm start,
+the refinement's NLP cache and its Newton fast path) changes what a reader gets.
 """
 
 from __future__ import annotations
