@@ -9,26 +9,14 @@ tolerance is 1e-7 on the states, Ipopt's bound relaxation is 1e-8).
 """
 
 import math
-import warnings
-from functools import cache
 
 import pytest
 
-from ocp import Collocation, MultipleShooting, PathViolationWarning, certify, refine_switching
+from ocp import MultipleShooting, certify
 from ocp.certificate.certify import CERTIFIED
 from tests.oracles.ocp_suite import PROBLEMS
 
 BY_NAME = {p.name: p for p in PROBLEMS}
-
-
-@cache
-def refined(name: str):
-    sp = BY_NAME[name]
-    tr = Collocation(sp.build(), intervals=sp.intervals, degree=sp.degree)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", PathViolationWarning)
-        return tr.refine(tol=sp.tol, max_rounds=sp.max_rounds,
-                         guess=sp.guess() if sp.guess else None)
 
 
 def test_suite_covers_what_the_issue_asks():
@@ -54,9 +42,9 @@ REACH_SLOW = {"pinene", "hanging_chain", "rayleigh_min_time", "goddard"}  # 3.7,
 @pytest.mark.parametrize("name", [
     pytest.param(p.name, marks=pytest.mark.slow) if p.name in REACH_SLOW else p.name
     for p in PROBLEMS])
-def test_reaches_the_published_value(name):
+def test_reaches_the_published_value(name, suite_refined):
     sp = BY_NAME[name]
-    sol = refined(name)
+    sol = suite_refined(name)
     assert sol.success and sol.verified and sol.mesh_converged, sol.mesh_history[-1]
     value = sp.value(sol)
     if math.isfinite(sp.published):
@@ -80,21 +68,21 @@ SLOW = {"robot_arm", "teo_state_constraint", "rayleigh_mixed", "goddard"}  # god
 
 @pytest.mark.parametrize("name", [
     pytest.param(n, marks=pytest.mark.slow) if n in SLOW else n for n in CROSS])
-def test_multiple_shooting_agrees(name):
+def test_multiple_shooting_agrees(name, suite_refined):
     sp = BY_NAME[name]
     nodes, order, rtol = CROSS[name]
     values = []
     for n in nodes:
         ms = MultipleShooting(sp.build(), nodes=n, inner_constraints=True, expand=True,
                               verify="off")
-        values.append(sp.value(ms.solve(guess=refined(name))))
+        values.append(sp.value(ms.solve(guess=suite_refined(name))))
     if order is not None:
         values.append(values[1] + (values[1] - values[0]) / (2**order - 1))
-    assert values[-1] == pytest.approx(sp.value(refined(name)), rel=rtol)
+    assert values[-1] == pytest.approx(sp.value(suite_refined(name)), rel=rtol)
 
 
-def test_mesh_refinement_builds_once_per_mesh_and_resolves_without_rebuild():
-    sol = refined("brachistochrone")
+def test_mesh_refinement_builds_once_per_mesh_and_resolves_without_rebuild(suite_refined):
+    sol = suite_refined("brachistochrone")
     rounds = sol.mesh_history
     assert len(rounds) >= 2 and rounds[-1].max_error < rounds[0].max_error
     tr = sol.transcription
@@ -115,11 +103,11 @@ CERT_SLOW = {"robot_arm", "hanging_chain", "rayleigh_min_time", "goddard"}  # ro
 @pytest.mark.parametrize("name", [
     pytest.param(p.name, marks=pytest.mark.slow) if p.name in CERT_SLOW else p.name
     for p in PROBLEMS if not p.name.startswith(("bryson_denham_3", "pinene", "cannonball"))])
-def test_certificate_agrees_with_the_literature(name):
+def test_certificate_agrees_with_the_literature(name, suite_refined, suite_switching):
     sp = BY_NAME[name]
-    sol = refined(name)
+    sol = suite_refined(name)
     if sp.bang_bang:
-        cert = certify(sol, refine_switching(sol))
+        _, cert = suite_switching(name)  # certify(sol, refine_switching(sol))
         assert cert.verdict == CERTIFIED, cert.reasons
         return
     try:

@@ -9,12 +9,11 @@ from ocp.structure.switching import detect_structure, refine_switching
 from tests.oracles.ocp_suite import problems as P
 
 
-def test_moon_lander_refines_to_the_closed_form_and_is_certified():
-    sol = MultipleShooting(P.moon_lander(), nodes=60).solve({})
-    r = refine_switching(sol, detect_structure(sol))
+def test_moon_lander_refines_to_the_closed_form_and_is_certified(moon_lander_shooting):
+    # 60 nodes, refine_switching(sol) (its structure: detect_structure(sol)), certify(sol, r)
+    sol, r, c = moon_lander_shooting  # (tests/ocp/conftest.py)
     assert r.kinds == ["min", "max"]  # free fall, then full thrust (Meditch 1964)
     assert r.objective == pytest.approx(P.moon_lander_exact(), rel=1e-9)
-    c = certify(sol, r)
     assert c.verdict == CERTIFIED, c.reasons
 
 

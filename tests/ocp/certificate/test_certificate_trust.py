@@ -8,7 +8,9 @@ Fuller problem, and the double integrator's reachable set.
 
 from __future__ import annotations
 
+import copy
 import math
+from functools import cache
 
 import numpy as np
 import pytest
@@ -33,7 +35,10 @@ from tests.oracles.problems import min_time_double_integrator
 T0_FULLER = cost_to_origin(1.0)[1]  # time to reach the origin from (1, 0): 2.7152
 
 
+@cache
 def _solve(x0: float, T: float, free_end: bool, nodes: int):
+    """Fuller's problem by multiple shooting, solved once per module (several tests read
+    the same solutions: they are only read; the one test that edits one edits a copy)."""
     return MultipleShooting(fuller(x0, T, free_end), nodes=nodes).solve({})
 
 
@@ -184,7 +189,7 @@ def test_failed_solves_are_refused():
         ms.solve({})
     assert certify(info2.value.iterate).verdict == NOT_APPLICABLE
 
-    sol = _solve(1.0, 5.0, False, 30)
+    sol = copy.copy(_solve(1.0, 5.0, False, 30))
     sol.verified = False  # as a PathViolationError's iterate carries it
     assert certify(sol).verdict == UNVERIFIED
 

@@ -18,6 +18,7 @@ value (robot arm).
 
 import math
 import warnings
+from functools import cache
 
 import numpy as np
 import pytest
@@ -35,6 +36,7 @@ from ocp import (
 from ocp.certificate.certify import CERTIFIED, INCONCLUSIVE, UNVERIFIED, finer_transcription
 from ocp.certificate.costates import costates_from_multipliers
 from ocp.structure.switching import detect_structure, refine_switching
+from tests.oracles.ocp_suite import PROBLEMS
 from tests.oracles.ocp_suite import problems as P
 from tests.oracles.ocp_suite.oscillator_min_time import (
     T_FINAL,
@@ -51,6 +53,13 @@ from tests.oracles.problems import min_time_double_integrator
 from tests.oracles.switching_problems import ceiling, speed_limited
 
 IVP = {"method": "DOP853", "rtol": 1e-13, "atol": 1e-13}
+
+
+def suite_settings(name: str) -> tuple:
+    """A suite entry's (intervals, degree, tol, guess): a test reading the suite's shared
+    solve (tests/ocp/conftest.py) checks they are its own."""
+    sp = next(p for p in PROBLEMS if p.name == name)
+    return sp.intervals, sp.degree, sp.tol, sp.guess
 
 
 def kinds(st):
@@ -70,13 +79,20 @@ def double_integrator() -> OptimalControlProblem:
     return min_time_double_integrator(T_guess=None, name="double_integrator")
 
 
+@cache
+def di_collocation(d: float, refine: bool):
+    """The double integrator by collocation on 21 intervals, solved or refined to 1e-8,
+    once per module (read by the two tests below; each builds its own problem object's
+    transcription, so the refinement's NLP cache starts empty for every (d, refine))."""
+    tr = Collocation(double_integrator(), intervals=21)
+    return tr.refine({"d": d}, tol=1e-8) if refine else tr.solve({"d": d})
+
+
 @pytest.mark.parametrize("refine", [False, True])
 @pytest.mark.parametrize("d", [2.0, 2.5])
 def test_double_integrator_collocation_structure_refinement_and_certificate(d, refine):
-    p = double_integrator()
-    tr = Collocation(p, intervals=21)
-    sol = tr.refine({"d": d}, tol=1e-8) if refine else tr.solve({"d": d})
-    ms = MultipleShooting(p, nodes=41).solve({"d": d})
+    sol = di_collocation(d, refine)
+    ms = MultipleShooting(sol.problem, nodes=41).solve({"d": d})  # the same problem object
     st, st_ms = detect_structure(sol), detect_structure(ms)
     assert kinds(st) == kinds(st_ms) == [["max", "min"]]
     # closed form: full thrust to sqrt(d), full brake to 2 sqrt(d)
@@ -99,8 +115,7 @@ def test_collocation_costates_are_the_analytic_ones(refine):
     """lambda = (-1/sqrt(d), -1 + t/sqrt(d)) (H = -1, sigma = lambda_2 = 0 at sqrt(d)),
     from the defect multipliers divided by the Radau weights, at every collocation point."""
     d = 2.5
-    tr = Collocation(double_integrator(), intervals=21)
-    sol = tr.refine({"d": d}, tol=1e-8) if refine else tr.solve({"d": d})
+    sol = di_collocation(d, refine)
     t, lam = costates_from_multipliers(sol)
     assert t.shape == (sol.N,) and lam.shape == (sol.N, 2)
     exact = np.column_stack([np.full_like(t, -1 / math.sqrt(d)), -1 + t / math.sqrt(d)])
@@ -134,47 +149,47 @@ def moon_lander_switch() -> float:
     return brentq(end_height, 0.0, 1.0, xtol=1e-15)
 
 
-@pytest.fixture(scope="module")
-def moon_ms():
-    sol = MultipleShooting(P.moon_lander(), nodes=60).solve({})
-    return sol, refine_switching(sol)
-
-
 @pytest.mark.parametrize("refine", [False, True])
-def test_moon_lander_collocation_matches_shooting_and_closed_form(refine, moon_ms):
-    ms, r_ms = moon_ms
-    tr = Collocation(P.moon_lander(), intervals=10 if refine else 20)
-    sol = quiet(tr.refine, {}, tol=1e-8) if refine else quiet(tr.solve, {})
+def test_moon_lander_collocation_matches_shooting_and_closed_form(refine, moon_lander_shooting,
+                                                                 suite_refined, suite_switching):
+    ms, r_ms, c_ms = moon_lander_shooting  # 60 nodes (tests/ocp/conftest.py)
+    if refine:  # 10 intervals refined to 1e-8: the suite's entry, its solve and refinement
+        assert suite_settings("moon_lander") == (10, 3, 1e-8, None)
+        sol = suite_refined("moon_lander")
+    else:
+        sol = quiet(Collocation(P.moon_lander(), intervals=20).solve, {})
     st = detect_structure(sol)
     assert kinds(st) == kinds(detect_structure(ms)) == [["min", "max"]]
-    r = refine_switching(sol, st)
+    r, c1 = suite_switching("moon_lander") if refine else (refine_switching(sol, st), None)
     assert r.switch_times == pytest.approx([moon_lander_switch()], abs=1e-10)
     assert r.objective == pytest.approx(P.moon_lander_exact(), rel=1e-10)
     assert r.switch_times == pytest.approx(r_ms.switch_times, abs=1e-12)
-    c0, c1 = certify(sol), certify(sol, r)
+    c0, c1 = certify(sol), c1 if c1 is not None else certify(sol, r)
     # 20 unrefined intervals leave the mass bound violated between the points by ~4e-5:
     # that transcription is no verified candidate, the refined solution is
     assert c0.verdict == (CERTIFIED if sol.verified else UNVERIFIED), c0.reasons
     assert c1.verdict == CERTIFIED, c1.reasons
     # the multiplier costate of collocation is as close to the adjoint as shooting's
-    gap_ms = certify(ms, r_ms).costate_estimates_gap
-    assert c1.costate_estimates_gap < 3 * gap_ms
+    assert c1.costate_estimates_gap < 3 * c_ms.costate_estimates_gap
 
 
 # -------------------------------------------------------- harmonic oscillator
 @pytest.mark.parametrize("refine", [False, True])
-def test_oscillator_min_time_collocation_closed_form(refine):
-    tr = Collocation(oscillator_min_time(), intervals=10 if refine else 15)
-    sol = tr.refine(tol=1e-8) if refine else tr.solve()
+def test_oscillator_min_time_collocation_closed_form(refine, suite_refined, suite_switching):
+    if refine:  # 10 intervals refined to 1e-8: the suite's entry, its solve and refinement
+        assert suite_settings("oscillator_min_time") == (10, 3, 1e-8, None)
+        sol = suite_refined("oscillator_min_time")
+    else:
+        sol = Collocation(oscillator_min_time(), intervals=15).solve()
     st = detect_structure(sol)
     assert kinds(st) == [["min", "max"]]
-    r = refine_switching(sol, st)
+    r, c1 = suite_switching("oscillator_min_time") if refine else (refine_switching(sol, st), None)
     assert r.exact  # linear: matrix exponentials
     assert r.switch_times == pytest.approx([T_SWITCH], abs=1e-12)
     assert r.T == pytest.approx(T_FINAL, abs=1e-12)
     assert np.max(np.abs(oscillator_min_time_check())) < 1e-11  # scipy: the origin
     assert certify(sol).verdict == CERTIFIED
-    assert certify(sol, r).verdict == CERTIFIED
+    assert (c1 if c1 is not None else certify(sol, r)).verdict == CERTIFIED
 
 
 # ------------------------------------------------------------------- Rayleigh
