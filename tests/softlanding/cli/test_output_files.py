@@ -22,6 +22,34 @@ ROOT = Path(__file__).resolve().parents[3]
 ENV = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
 
 
+@pytest.fixture(scope="module")
+def _map_results():
+    """What ``map --v0 -3 --n 11`` computed, by call: the tests of its files run it five
+    times (about 1.3 s CPU each), and which files are left is what they check."""
+    return {}
+
+
+@pytest.fixture
+def map_once(monkeypatch, _map_results):
+    """``depth_map`` and ``optimize_impedance`` (the map command's work) computed once per
+    module for each argument list; every caller gets its own copy of the result."""
+    import copy
+
+    import softlanding.studies.impedance as impedance
+
+    def once(name, real):
+        def run(*a, **k):
+            key = (name, repr(a), repr(sorted(k.items())))
+            if key not in _map_results:
+                _map_results[key] = real(*a, **k)
+            return copy.deepcopy(_map_results[key])
+        return run
+
+    monkeypatch.setattr(sweeps, "depth_map", once("depth_map", sweeps.depth_map))
+    monkeypatch.setattr(impedance, "optimize_impedance",
+                        once("optimize_impedance", impedance.optimize_impedance))
+
+
 def _appears_meanwhile(monkeypatch, path, content=b"the other run's"):
     """A concurrent run writes ``path`` while this one computes its depth map."""
     real = sweeps.depth_map
@@ -34,7 +62,7 @@ def _appears_meanwhile(monkeypatch, path, content=b"the other run's"):
 
 
 def test_map_whose_out_file_appeared_meanwhile_exits_2_and_leaves_nothing(tmp_path, cli,
-                                                                          monkeypatch):
+                                                                          monkeypatch, map_once):
     out, png = tmp_path / "same.nc", tmp_path / "same.png"
     _appears_meanwhile(monkeypatch, out)
     code, stdout, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", png)
@@ -45,7 +73,7 @@ def test_map_whose_out_file_appeared_meanwhile_exits_2_and_leaves_nothing(tmp_pa
     assert "written" not in stdout
 
 
-def test_a_later_output_failing_removes_the_earlier_one(tmp_path, cli, monkeypatch):
+def test_a_later_output_failing_removes_the_earlier_one(tmp_path, cli, monkeypatch, map_once):
     out, png = tmp_path / "m5.nc", tmp_path / "m5.png"
     _appears_meanwhile(monkeypatch, png)
     code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", out, "--plot", png)
@@ -54,7 +82,8 @@ def test_a_later_output_failing_removes_the_earlier_one(tmp_path, cli, monkeypat
     assert png.read_bytes() == b"the other run's"
 
 
-def test_with_force_a_failed_run_restores_the_file_it_replaced(tmp_path, cli, monkeypatch):
+def test_with_force_a_failed_run_restores_the_file_it_replaced(tmp_path, cli, monkeypatch,
+                                                               map_once):
     import softlanding.plots.paper as figures
 
     out = tmp_path / "m.nc"
@@ -267,7 +296,7 @@ def _disk_fills_up(monkeypatch):
     monkeypatch.setattr(Figure, "savefig", savefig)
 
 
-def test_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_path, cli, monkeypatch):
+def test_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_path, cli, monkeypatch, map_once):
     _disk_fills_up(monkeypatch)
     code, _, err = cli("map", "--v0", "-3", "--n", "11", "--out", tmp_path / "m.nc", "--plot",
                        tmp_path / "m.pdf")
@@ -296,7 +325,7 @@ def test_reproduce_onto_a_full_disk_is_one_line_exit_1_and_leaves_nothing(tmp_pa
 
 
 def test_matplotlibs_cache_notes_on_a_full_home_are_not_printed(tmp_path, cli, monkeypatch,
-                                                                caplog):
+                                                                map_once, caplog):
     """A full disk also fills matplotlib's caches: its notes made a full-disk map 3 lines."""
     import logging
 

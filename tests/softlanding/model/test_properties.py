@@ -14,7 +14,13 @@ SETTINGS = settings(max_examples=60, deadline=None, derandomize=True,
 
 robots = st.builds(Robot, r_m=st.floats(0.5, 20.0), s=st.floats(2.0, 50.0),
                    u_max=st.one_of(st.none(), st.floats(1.0, 12.0)))
-gains = st.builds(Impedance, k_p=st.floats(0.0, 2.0), k_d=st.floats(0.0, 2.0))
+# no subnormal gains: hypothesis draws from constants of the modules loaded before it, so
+# which examples run depends on the tests run earlier; k_p = 1.1e-308 (after a drag landing's
+# test) never comes to rest, and sampling its trajectory over the 1e4-long horizon took 13 to
+# 15 s of the fast suite's CPU (the kernel's Taylor sub-steps on subnormal numbers); gains
+# 0 and from 2.2e-308 up are still drawn
+gains = st.builds(Impedance, k_p=st.floats(0.0, 2.0, allow_subnormal=False),
+                  k_d=st.floats(0.0, 2.0, allow_subnormal=False))
 impacts = st.builds(Impact, v0=st.floats(-10.0, 0.0))
 
 
