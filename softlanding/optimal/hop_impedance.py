@@ -278,12 +278,12 @@ def _cold_then_best(impact: Impact, robot: Robot, eta: float, gains: list[tuple[
 
     first = "the caller's flight" if flight_guess is not None else "the default guess"
     tries = {k: [(first, solved(k, flight_guess))] for k in sorted(gains)}
-    flown = [k for k, t in tries.items() if t[0][1] is not None]
+    flown = {k: h for k, t in tries.items() if (h := t[0][1]) is not None}
     if flown:
-        b = min(flown, key=lambda k: _rank(tries[k][0][1]))  # first of equals: sorted gains
+        b = min(flown, key=lambda k: _rank(flown[k]))  # first of equals: sorted gains
         for k in [k for k in tries if k != b]:
             tries[k].append((f"the flight of k_p={b[0]:g}, k_d={b[1]:g}",
-                             solved(k, tries[b][0][1].transcribed[0])))
+                             solved(k, flown[b].transcribed[0])))
     return tries
 
 

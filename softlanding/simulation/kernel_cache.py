@@ -124,7 +124,7 @@ def interpret_unless_cached() -> bool:
         return False
     from numba import config
 
-    config.DISABLE_JIT = True
+    config.DISABLE_JIT = True  # type: ignore[attr-defined]
     return True
 
 
