@@ -4,6 +4,8 @@ import sys
 
 import pytest
 
+from tests.parallel import assign_groups
+
 
 @pytest.fixture
 def cli(capsys):
@@ -99,3 +101,20 @@ def pytest_runtest_protocol(item, nextitem):
     cpu = sum(b - a for a, b in zip(t0[:4], t1[:4], strict=True))
     with open(path, "a") as f:
         f.write(f"{cpu:.2f}\t{item.nodeid}\n")
+
+
+def pytest_collection_modifyitems(config, items):
+    """On a pytest-xdist worker (the second test command's ``-n 2``), the tests grouped by what
+    they share and the longest groups first (tests/parallel.py)."""
+    if hasattr(config, "workerinput"):
+        items[:] = assign_groups(items)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """One group per worker at a time, in the order tests/parallel.py gives (xdist would
+    otherwise put the groups with the most tests first, not the longest)."""
+    from xdist.scheduler import LoadGroupScheduling
+
+    config.option.loadscopereorder = False
+    return LoadGroupScheduling(config, log)
