@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import math
 import os
 import sys
 import threading
@@ -430,10 +431,11 @@ def _hop_rows(c: Any) -> list[tuple[str, object]]:
         ("energy per cycle", c.energy), ("energy / apex height", c.specific_energy),
         ("positive work", c.work.positive), ("negative work", c.work.negative),
         ("ground loss d^2/2", c.depth ** 2 / 2), ("crater depth", c.depth),
-        ("paper's CoT of the landing", c.cot),
-        ("energy (refined NLP)" if c.exact_arcs else "energy (optimiser's slack)",
-         c.energy_transcribed),
-        ("apex posture error", c.apex_error), ("energy balance error", c.balance_error)]
+        ("paper's CoT of the landing", c.cot)]
+    if not math.isnan(c.energy_transcribed):  # an impedance cycle has no optimiser's figure
+        rows.append(("energy (refined NLP)" if c.exact_arcs else "energy (optimiser's slack)",
+                     c.energy_transcribed))
+    rows += [("apex posture error", c.apex_error), ("energy balance error", c.balance_error)]
     if len(c.grids) > 1:  # the grid sequence behind the continuous optimum's estimate
         rows += [("grids (energy each)", ", ".join(
                     f"{'/'.join(map(str, g['nodes']))}: {g['energy']:.7g}" for g in c.grids)),
@@ -444,8 +446,9 @@ def _hop_rows(c: Any) -> list[tuple[str, object]]:
         rows.append(("refined NLP vs replay", c.refined_gap))
     if c.starts:  # a non-convex problem: how far apart its local optima are
         rows += [("starts (energy each)", ", ".join(
-                    f"{st['energy']:.6g}" if "energy" in st else st["error"] for st in c.starts)),
-                 ("local optima spread", c.local_optima_spread)]
+                    f"{st['energy']:.6g}" if "energy" in st else st["error"] for st in c.starts))]
+        if not math.isnan(c.local_optima_spread):  # NaN: fewer than two converged starts
+            rows.append(("local optima spread", c.local_optima_spread))
     rows += [(k, v) for k, v in c.gains.items()]
     rows += [(f"time: {k}", v) for k, v in c.times.items()]
     return rows

@@ -58,6 +58,23 @@ def test_hop_json_and_plot(cli, tmp_path, monkeypatch, grid_hop):
     _check_hop_json(code, out, png)
 
 
+def test_an_impedance_hop_prints_no_optimiser_figure(cli, monkeypatch, grid_hop):
+    # an impedance cycle has no optimiser's energy (NaN): its row is left out, not "nan"
+    import copy
+    import math
+
+    import softlanding.optimal.hopping as hopping
+
+    cycle = copy.copy(grid_hop)
+    cycle.energy_transcribed = math.nan
+    monkeypatch.setattr(hopping, "best_impedance_hop", lambda *a, **k: cycle)
+    code, out, _ = cli("hop", "--v0", "-2", "--leg", "impedance")
+    assert code in (0, 1) and "energy per cycle" in out
+    assert "optimiser's slack" not in out and "nan" not in out.lower(), out
+    monkeypatch.setattr(hopping, "best_impedance_hop", lambda *a, **k: grid_hop)
+    assert "optimiser's slack" in cli("hop", "--v0", "-2", "--leg", "impedance")[1]
+
+
 @pytest.mark.slow  # the hop end to end from one start: about 9 s CPU
 def test_hop_json_and_plot_end_to_end(cli, tmp_path, monkeypatch):
     import softlanding.optimal.hopping as hopping
