@@ -329,12 +329,9 @@ def optimize_impedance(impact: Impact | float, robot: Robot = PAPER_IMPEDANCE_RO
     batches = [one(g) for g in grounds]
 
     def batch(kp, kd) -> np.ndarray:
-        kp, kd = np.broadcast_arrays(np.asarray(kp, float), np.asarray(kd, float))
-        J = np.array(batches[0](kp, kd), float)
-        for f in batches[1:]:  # the worst case; inf (infeasible) on any ground stays inf,
-            live = np.isfinite(J)  # so the later grounds land only the gains still finite
-            if live.any():
-                J[live] = np.maximum(J[live], f(kp[live], kd[live]))
+        J = batches[0](kp, kd)
+        for f in batches[1:]:  # the worst case; inf (infeasible) on any ground stays inf
+            J = np.maximum(J, f(kp, kd))
         return J
 
     kp = np.linspace(*kp_range, grid)
