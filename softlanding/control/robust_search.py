@@ -19,9 +19,12 @@ schedule must rise (or a limit break) on both sides of the pinned duration
 (:func:`off_pin_check`; one direction, not a proof over every direction).
 
 **Starts** (:func:`search`), in order: each given start in its family (a clairvoyant plan
-pinned where its foot stops); where a start is not pinned and its search does not converge,
-the binding ground's stop is pinned to the nearest switch before it (:func:`pin_at`) and the
-search goes on in that family from the best point.
+pinned where its foot stops); where a start is not pinned and its first SLSQP run does not
+converge, the binding ground's stop is pinned to the nearest switch before it (:func:`pin_at`)
+and the search goes on in that family from the best point; only where that does not converge
+either do the unpinned restarts run, and the pin is tried again from their best point (on the
+study's grounds at v0 = -6 and -10 the pinned search converged to the same schedule, to 1e-11,
+in 2,006 and 2,271 evaluations where the unpinned restarts first had taken 11,904 and 9,194).
 """
 
 from __future__ import annotations
