@@ -70,7 +70,8 @@ from softlanding.model.ground import Ground, ground_sequence
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
 from softlanding.optimal.landing import BangBangLanding, solve_landing, transcribed_schedule
 from softlanding.optimal.limits import force_limit
-from softlanding.simulation.simulator import LandingResult, joined_trajectory, simulate
+from softlanding.simulation.on_grounds import simulate_on_grounds
+from softlanding.simulation.simulator import LandingResult, joined_trajectory
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
 
@@ -336,7 +337,7 @@ def _starts(robot: Robot, impact: Impact, grounds: tuple[Ground, ...], nominal: 
     d, u = _pieces(nominal.schedule())
     if nominal.ground in grounds and len(d) >= 2:
         sched = nominal.schedule()
-        depths = [simulate(robot, impact, sched, g, energy=False).depth for g in grounds]
+        depths = [r.depth for r in simulate_on_grounds(robot, impact, sched, grounds)]
         k = grounds.index(nominal.ground)
         if depths[k] >= max(depths):
             starts.append(Start(d, u, Pin(len(d) - 2, k)))
@@ -412,8 +413,9 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
                                         f"not {impact} and {robot}")
     _check_clairvoyant(clairvoyant, impact, robot, grounds)
     nominal_schedule = nominal.schedule()
-    replays = [GroundLanding(g, [(0.0, simulate(robot, impact, nominal_schedule, g,
-                                                energy=False))]) for g in grounds]
+    replays = [GroundLanding(g, [(0.0, r)]) for g, r in
+               zip(grounds, simulate_on_grounds(robot, impact, nominal_schedule, grounds),
+                   strict=True)]
     cpu_start = time.process_time()
 
     def family(n: int, pin: Pin | None) -> PieceFamily:
@@ -431,8 +433,8 @@ def robust_landing(impact: Impact | float, grounds: Sequence[Ground],
         p = family(len(starts[-1].d), None).resolve(fam.theta(starts[-1].d, starts[-1].u))
     assert p is not None  # (an unpinned family resolves every theta)
     schedule = fam.schedule(p)
-    landings = [GroundLanding(g, [(0.0, simulate(robot, impact, schedule, g, energy=False))])
-                for g in grounds]
+    landings = [GroundLanding(g, [(0.0, r)]) for g, r in
+                zip(grounds, simulate_on_grounds(robot, impact, schedule, grounds), strict=True)]
     out = RobustLanding(
         robot=robot, impact=impact, grounds=grounds, kind="open-loop", schedule=schedule,
         landings=landings, nominal=replays, evaluations=sum(r.evaluations for r in runs),

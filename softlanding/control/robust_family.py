@@ -43,6 +43,7 @@ from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.stance_phases import crater_capacity, support_force
 from softlanding.simulation import kernel as K
+from softlanding.simulation.on_grounds import simulate_on_grounds
 from softlanding.simulation.simulator import LandingResult, simulate
 
 SLOTS = 2
@@ -445,8 +446,8 @@ class Measures:
         sched = fam.schedule(p)
         rows: list[float] = []
         holds, replayed = True, -math.inf
-        for k, g in enumerate(fam.grounds):
-            r = simulate(fam.robot, fam.impact, sched, g, energy=False)
+        replays = simulate_on_grounds(fam.robot, fam.impact, sched, fam.grounds)
+        for k, r in enumerate(replays):
             holds = holds and r.stroke_held and r.rest_proven
             replayed = max(replayed, r.depth)
             if not (r.rest_proven and math.isfinite(r.stroke_min)
