@@ -1,8 +1,9 @@
 """The documentation site builds with warnings as errors (``make -C docs html``).
 
 The full build executes the gallery (docs/examples; about 50 s with the API pages on 2
-cores, numba's kernels already compiled) and the seven teaching notebooks (myst-nb; about a
-minute each; the whole build took 8 min CPU on a 2-core machine loaded 8-fold), so it is
+cores, numba's kernels already compiled) and the seven teaching notebooks (one per core, at
+most four, at a time: docs/_ext/notebooks_ahead.py; a few seconds to about a minute of CPU
+each; the whole build took about 6 min CPU on a 2-core machine loaded 4-fold), so it is
 ``slow`` (CI runs it with the second test command). The build is the ``docs_site`` fixture of
 tests/conftest.py: tests/test_notebooks.py checks the notebooks as this build executed them.
 A structural check of every page, docstring and cross-reference without executing the gallery
