@@ -3,8 +3,10 @@
 Offline and reproducible: no intersphinx, no remote assets. The API reference is generated
 from the front doors' ``__all__`` (see :func:`write_api_pages`), the gallery executes
 ``docs/examples/*.py`` (sphinx-gallery), the teaching notebooks (stored without outputs) are
-executed by myst-nb at build so that their pages show the figures, cached under
-``_build/.jupyter_cache`` (re-executed only when a notebook changes). MathJax is bundled
+executed at build so that their pages show the figures, several at a time
+(docs/_ext/notebooks_ahead.py; ``SOFTLANDING_DOCS_JOBS``, default the cores) into myst-nb's
+cache under ``_build/.jupyter_cache`` (re-executed only when a notebook changes), which
+myst-nb then reads. MathJax is bundled
 (sphinx-mathjax-offline): the maths renders without a network. ``SOFTLANDING_DOCS_GALLERY=0``
 skips executing the gallery and the notebooks (a fast structural build).
 """
@@ -44,6 +46,7 @@ extensions = [
     "myst_nb",
     "sphinx_gallery.gen_gallery",
     "execution_log",  # docs/_ext: a line on stderr per executed example and notebook
+    "notebooks_ahead",  # docs/_ext: the notebooks executed two (the cores) at a time
     "offline_timings",  # docs/_ext: the execution-times page without its CDN scripts
 ]
 
@@ -67,9 +70,10 @@ myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
 # the notebooks are stored without outputs (tests/test_notebooks.py): executed here, each in
-# a temporary folder, a failing cell fails the build
+# a temporary folder, a failing cell fails the build (notebooks_ahead.py runs them first, as
+# myst-nb's cache mode would, several at a time)
 nb_execution_mode = "cache" if RUN_GALLERY else "off"
-nb_execution_timeout = 600  # per cell; the longest notebook takes about a minute in all
+nb_execution_timeout = 600  # per cell; the longest notebook takes about a minute of CPU in all
 nb_execution_in_temp = True
 nb_execution_raise_on_error = True
 nb_execution_show_tb = True  # the traceback in the log when a cell fails
