@@ -1,7 +1,8 @@
 """Two revisions of this toolkit on the same workloads, interleaved.
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
-      python -m benchmarks.bench_revisions --baseline REV --workload simulator|landing|stiffness
+      python -m benchmarks.bench_revisions --baseline REV --workload WORKLOAD
+      (WORKLOAD: simulator, landing, stiffness or impedance)
 
 ``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
 over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
@@ -12,6 +13,8 @@ depth, printed); each child runs once untimed first (numba's cache, CasADi's cod
 ``--workload stiffness`` times the simulator on the ground ``LinearGround(2.0)``: a 101 x 101
 gain map on all cores and 300 runs of one landing (integrated before the kernel took ``K``,
 exact after: the checksums then agree to the integrator's tolerance, not bit for bit).
+``--workload impedance`` times ``optimize_impedance`` at v0 = -3 on the paper's ground and at
+-4.8 on ``DragGround(0.2)`` (the depths agree to about 1e-12 across a change of its search).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -133,9 +136,26 @@ print(json.dumps({"batch": bw, "batch_cpu": bc, "single": sw, "single_cpu": sc,
                   "check": float(np.nansum(grid.depth)) + float(np.nansum(depths))}))
 """
 
+IMPEDANCE = r"""
+import json, time
+from softlanding import optimize_impedance, simulate_batch, PAPER_IMPEDANCE_ROBOT
+from softlanding.model.ground import DragGround
+simulate_batch(PAPER_IMPEDANCE_ROBOT, -3.0, k_p=[0.2], k_d=[0.2])  # load the compiled kernels
+simulate_batch(PAPER_IMPEDANCE_ROBOT, -3.0, k_p=[0.2], k_d=[0.2], ground=DragGround(0.2))
+w, c = time.perf_counter(), time.process_time()
+one = optimize_impedance(-3.0)
+ow, oc = time.perf_counter() - w, time.process_time() - c
+w, c = time.perf_counter(), time.process_time()
+drag = optimize_impedance(-4.8, ground=DragGround(0.2))
+dw, dc = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"batch": ow, "batch_cpu": oc, "single": dw, "single_cpu": dc,
+                  "check": one.depth + drag.depth}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "landing": (LANDING, "cold solve", "sweep of 20"),
-             "stiffness": (STIFFNESS, "batch 101x101", "300 x one")}
+             "stiffness": (STIFFNESS, "batch 101x101", "300 x one"),
+             "impedance": (IMPEDANCE, "optimum -3", "drag 0.2 -4.8")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
@@ -186,7 +206,8 @@ def main() -> None:
     ap.add_argument("--workload", choices=["suite", *WORKLOADS], default="suite",
                     help="suite: the published problems (default); simulator: the exact "
                          "simulator; stiffness: the simulator on LinearGround(2.0); landing: "
-                         "the landing OCP end to end")
+                         "the landing OCP end to end; impedance: optimize_impedance on the "
+                         "paper's ground and a drag ground")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:
