@@ -4,7 +4,7 @@ import sys
 
 import pytest
 
-from tests.parallel import assign_groups
+from tests.parallel import assign_groups, require_group_tags, require_loadgroup
 
 
 @pytest.fixture
@@ -103,18 +103,29 @@ def pytest_runtest_protocol(item, nextitem):
         f.write(f"{cpu:.2f}\t{item.nodeid}\n")
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's own hook, which reads the groups' marks
 def pytest_collection_modifyitems(config, items):
-    """On a pytest-xdist worker (the second test command's ``-n 2``), the tests grouped by what
-    they share and the longest groups first (tests/parallel.py)."""
+    """On a pytest-xdist worker (the second test command's ``-n 2 --dist loadgroup``), the
+    tests grouped by what they share and the longest groups first (tests/parallel.py)."""
     if hasattr(config, "workerinput"):
         items[:] = assign_groups(items)
 
 
 @pytest.hookimpl(optionalhook=True)
+def pytest_xdist_node_collection_finished(node, ids):
+    """Every test a worker collected tagged with its group, or the run stopped (pytest-xdist
+    3.8 under pytest 9.2 drops the tags silently: pytest-xdist#1386)."""
+    require_group_tags(ids)
+
+
+@pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
     """One group per worker at a time, in the order tests/parallel.py gives (xdist would
-    otherwise put the groups with the most tests first, not the longest)."""
+    otherwise put the groups with the most tests first, not the longest). Refused without
+    ``--dist loadgroup``: xdist then ignores the groups (it tags a test with its group only in
+    that mode), and two workers would each build what a group shares."""
     from xdist.scheduler import LoadGroupScheduling
 
+    require_loadgroup(config.getvalue("dist"))
     config.option.loadscopereorder = False
     return LoadGroupScheduling(config, log)

@@ -1,11 +1,12 @@
 """Which tests must share a worker when the second test command runs on both cores.
 
-``pytest -m "slow or notebook" -n 2`` (pytest-xdist) sends each group of tests to one worker:
-a session or module fixture is computed once per worker that needs it, so tests reading the
-same costly result (the documentation build, ``reproduce --quick``, the robust search over the
-study's grounds, a module's fixtures) are kept together. The groups are the connected
+``pytest -m "slow or notebook" -n 2 --dist loadgroup`` (pytest-xdist) sends each group of tests
+to one worker: a session or module fixture is computed once per worker that needs it, so tests
+reading the same costly result (the documentation build, ``reproduce --quick``, the robust search
+over the study's grounds, a module's fixtures) are kept together. The groups are the connected
 components of "same file" and "same shared fixture"; the longest known groups go first so that
-neither core idles at the end.
+neither core idles at the end. xdist honours the groups only in its ``loadgroup`` mode, and
+pytest-xdist 3.8 not under pytest 9.2 (pytest-xdist#1386): tests/conftest.py refuses both.
 """
 
 from __future__ import annotations
@@ -27,6 +28,48 @@ INDEPENDENT_FILES = ("tests/test_docs_commands.py",)
 
 LONG_FIRST = ("docs_site", "console:reproduce", "study_robust")
 """Groups of several minutes, started first (longest first) so the others fill in beside."""
+
+
+def require_loadgroup(dist: str) -> None:
+    """Refuse a run on several workers whose groups xdist would ignore.
+
+    Parameters
+    ----------
+    dist : str
+        pytest-xdist's ``--dist`` mode of the run.
+
+    Raises
+    ------
+    pytest.UsageError
+        Unless ``dist`` is ``"loadgroup"``: in any other mode xdist does not tag a test with
+        its group, so the tests of a group would be spread over the workers and each worker
+        would build what they share (the documentation build twice at once, in one folder).
+    """
+    if dist != "loadgroup":
+        raise pytest.UsageError(
+            f"tests/conftest.py: on several workers run the tests with --dist loadgroup (not "
+            f"{dist!r}): tests that share a costly result must share a worker (tests/parallel.py)")
+
+
+def require_group_tags(ids: Sequence[str]) -> None:
+    """Stop a run whose tests xdist did not tag with their groups.
+
+    Parameters
+    ----------
+    ids : sequence of str
+        The test ids a worker collected, each tagged ``...::test@group`` by xdist's
+        ``--dist loadgroup`` (:func:`assign_groups` gives every test a group).
+
+    Raises
+    ------
+    pytest.exit.Exception
+        If a test's id has no group: xdist would then spread the group's tests over the
+        workers (pytest-xdist 3.8 under pytest 9.2, pytest-xdist#1386).
+    """
+    untagged = [i for i in ids if i.rfind("@") <= i.rfind("]")]
+    if untagged:
+        pytest.exit(f"tests/conftest.py: pytest-xdist did not tag {untagged[0]} with its group; "
+                    f"the groups would be ignored (pytest-xdist#1386: use pytest<9.2)", 4)
 
 
 class _Groups:

@@ -43,3 +43,25 @@ def test_shared_results_and_files_keep_their_tests_on_one_worker_longest_first()
     firsts = [it.group for it in ordered[:8]]
     assert firsts == ["docs_site"] * 2 + ["console:reproduce"] * 3 + ["study_robust"] * 3
     assert [it.nodeid for it in ordered[8:]] == ["tests/c.py::t", f"{docs}[hop]"]
+
+
+def test_a_run_on_several_workers_without_groups_is_refused():
+    import pytest
+
+    from tests.parallel import require_loadgroup
+
+    require_loadgroup("loadgroup")
+    for dist in ("load", "loadscope", "worksteal"):
+        with pytest.raises(pytest.UsageError, match="--dist loadgroup"):
+            require_loadgroup(dist)
+
+
+def test_a_run_whose_tests_xdist_left_untagged_stops():
+    import pytest
+
+    from tests.parallel import require_group_tags
+
+    require_group_tags(["tests/a.py::t@file:tests/a.py", "tests/b.py::t[x]@docs_site"])
+    for untagged in ("tests/a.py::t", "tests/a.py::t[a@b]"):
+        with pytest.raises(pytest.exit.Exception, match="did not tag"):
+            require_group_tags(["tests/b.py::t@docs_site", untagged])
