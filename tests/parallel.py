@@ -105,15 +105,21 @@ def shared_keys(item: pytest.Item) -> list[str]:
 
 def assign_groups(items: Sequence[pytest.Item]) -> list[pytest.Item]:
     """Mark every item with its group (``xdist_group``) and return the items with the
-    :data:`LONG_FIRST` groups first, each group's tests in their collected order."""
+    :data:`LONG_FIRST` groups first, each group's tests in their collected order. A group's
+    name is a shared key (a file, a fixture) or, for a test alone, ``alone:<n>``: xdist reads
+    the group from the test id after its last ``@``, so a name cannot hold a test id's
+    brackets."""
     groups = _Groups()
     for item in items:
         for key in shared_keys(item):
             groups.join(item.nodeid, key)
     rank = {}
+    alone: dict[str, str] = {}
     for item in items:
         root = groups.find(item.nodeid)
         label = next((n for n in LONG_FIRST if groups.find(n) == root), root)
+        if "::" in label:  # a test id: the test shares nothing
+            label = alone.setdefault(label, f"alone:{len(alone)}")
         item.add_marker(pytest.mark.xdist_group(label))
         rank[item.nodeid] = LONG_FIRST.index(label) if label in LONG_FIRST else len(LONG_FIRST)
     return sorted(items, key=lambda it: rank[it.nodeid])  # stable: collected order within

@@ -38,6 +38,7 @@ def test_shared_results_and_files_keep_their_tests_on_one_worker_longest_first()
     assert group[f"{docs}[reproduce --out paper --quick]"] == "console:reproduce"
     assert group["tests/softlanding/report/test_reproduce.py::t2"] == "console:reproduce"
     assert group[f"{docs}[hop]"] not in ("console:reproduce", group["tests/c.py::t"])
+    assert group[f"{docs}[hop]"] == "alone:0"  # xdist reads a group after the id's last "@"
     assert group["tests/test_notebooks.py::t"] == group["tests/test_docs.py::t"] == "docs_site"
     # the long groups first, in the order given; the others as collected
     firsts = [it.group for it in ordered[:8]]
