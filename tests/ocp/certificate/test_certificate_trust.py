@@ -198,8 +198,8 @@ def test_failed_refinement_is_refused():
     """A refinement that ran out of iterations raises SolveError; its iterate says
     success False and certify refuses it (today: "not bang-bang", a refutation of a point
     that is no extremal)."""
-    clear_cache()
     sol = _solve(1.0, 5.0, False, 30)
+    clear_cache(sol.problem)  # this problem's refinement NLPs built afresh, no one else's
     with pytest.raises(SolveError) as info:
         refine_switching(sol, ipopt_options={"max_iter": 1}, fast=False, repair=False)
     it = info.value.iterate
@@ -214,9 +214,10 @@ def test_refinement_at_machine_precision_says_converged():
     Solve_Succeeded (Solved_To_Acceptable_Level here; Search_Direction_Becomes_Too_Small
     from other grids) while the result matches the independent value to 1e-12. The status
     now says it converged and names Ipopt's message (today: the bare Ipopt message)."""
-    clear_cache()
+    sol = _solve(1.0, 5.0, False, 24)
+    clear_cache(sol.problem)
     J, _ = _short_fuller_value()
-    r = refine_switching(_solve(1.0, 5.0, False, 24), fast=False)
+    r = refine_switching(sol, fast=False)
     assert r.success
     assert r.status.startswith("Solve_Succeeded (KKT residual ")
     assert "; Ipopt said " in r.status and "Ipopt said Solve_Succeeded" not in r.status
