@@ -16,6 +16,9 @@ def cache(tmp_path, monkeypatch):
 
 
 @pytest.mark.slow
+# 6 nodes: the bound of x is crossed between the nodes, and both solves say so (the check is
+# tested in test_between_points.py; here the two solves' equality is)
+@pytest.mark.filterwarnings("ignore::ocp.definition.errors.PathViolationWarning")
 def test_compiled_nlp_solves_as_the_uncompiled_one_and_is_cached(cache):
     if not codegen.has_compiler():
         pytest.skip("no C compiler on this machine")

@@ -76,6 +76,9 @@ def test_degree_matrices_once_per_degree():
 
 
 @pytest.mark.slow
+# one refinement round of 20 intervals: the terrain is crossed between the points, as said
+# (the objective scale and the round's iterations are what is tested)
+@pytest.mark.filterwarnings("ignore::ocp.definition.errors.PathViolationWarning")
 def test_refinement_rounds_keep_the_first_rounds_objective_scale():
     """Betts' alp rider: its second round starts from the coarse solution, whose objective
     varies ten times less than the first start's; re-deriving the scale there (1e3 instead
