@@ -252,7 +252,7 @@ def test_dask_client_gives_the_same_results():
 
 @pytest.mark.slow
 def test_reference_value_is_the_best_structure():
-    """The independent computation behind REFERENCE (scipy, about 3 minutes)."""
+    """The independent computation behind REFERENCE (scipy, about a minute of CPU)."""
     assert structure_optimum(4, 1.0) == pytest.approx(REFERENCE, rel=1e-9)
     assert exact() == pytest.approx(REFERENCE, rel=1e-9)
 

@@ -13,10 +13,10 @@ extremal is bang-bang.
 Independent value (:func:`exact`): the optimum within each bang-bang
 structure (first sign, number of arcs) is found by optimising the arc
 durations with scipy (SLSQP, arcs integrated by ``odeint`` at rtol
-1e-12); the minimum over the structures with 2 to 5 arcs is
-T* = 9.853736876 (:data:`REFERENCE`; four arcs: +, -, +, -). Other
-extremals: five arcs (T = 17.288) and more. From the default guess, a 50-interval collocation
-converges to the five-arc one, 75 % above the best.
+1e-12, with their transition matrices: the constraints' exact derivative); the minimum over
+the structures with 2 to 5 arcs is T* = 9.853736876 (:data:`REFERENCE`; four arcs: +, -, +,
+-). Other extremals: five arcs (T = 17.288) and more. From the default guess, a 50-interval
+collocation converges to the five-arc one, 75 % above the best.
 """
 
 from __future__ import annotations
@@ -56,19 +56,38 @@ def transcription() -> Collocation:
     return Collocation(build(), intervals=INTERVALS)
 
 
-def _end(durations: np.ndarray, first: float) -> np.ndarray:
-    """State after the bang-bang arcs of these durations, the first with sign ``first``."""
-    y = np.zeros(2)
-    for k, tau in enumerate(durations):
-        if tau <= 0:
-            continue
-        u = first * UMAX * (-1) ** k
-        y = odeint(_rhs, y, [0.0, tau], args=(u,), rtol=1e-12, atol=1e-12, mxstep=100000)[-1]
-    return y
-
-
 def _rhs(z: np.ndarray, _t: float, u: float) -> list[float]:
     return [z[1], u - math.sin(z[0])]
+
+
+def _rhs_sensitivity(z: np.ndarray, _t: float, u: float) -> list[float]:
+    """The state and its transition matrix ``Phi`` (row-major), ``Phi' = A(theta) Phi`` with
+    ``A = [[0, 1], [-cos(theta), 0]]``."""
+    c = math.cos(z[0])
+    return [z[1], u - math.sin(z[0]), z[4], z[5], -c * z[2], -c * z[3]]
+
+
+def _end(durations: np.ndarray, first: float) -> tuple[np.ndarray, np.ndarray]:
+    """State after the bang-bang arcs of these durations, the first with sign ``first``,
+    and its derivative in the durations (2 x arcs): arc ``k`` lengthened moves the end by the
+    later arcs' transition matrices times the field at arc ``k``'s end."""
+    y = np.zeros(2)
+    ends, phis = [], []
+    for k, tau in enumerate(durations):
+        u = first * UMAX * (-1) ** k
+        phi = np.eye(2)
+        if tau > 0:
+            z = odeint(_rhs_sensitivity, np.r_[y, phi.ravel()], [0.0, tau], args=(u,),
+                       rtol=1e-12, atol=1e-12, mxstep=100000)[-1]
+            y, phi = z[:2], z[2:].reshape(2, 2)
+        ends.append(np.array(_rhs(y, 0.0, u)))
+        phis.append(phi)
+    jac = np.empty((2, len(durations)))
+    after = np.eye(2)  # the transition matrix of the arcs after arc k
+    for k in range(len(durations) - 1, -1, -1):
+        jac[:, k] = after @ ends[k]
+        after = after @ phis[k]
+    return y, jac
 
 
 @cache  # the slow test reads the four-arc optimum, then exact() the same one among the rest
@@ -76,21 +95,23 @@ def structure_optimum(arcs: int, first: float, starts: int = 4) -> float:
     """Least total duration of ``arcs`` alternating bang arcs reaching (pi, 0) (inf if none)."""
     best = math.inf
     rng = np.random.default_rng(arcs * 10 + (first > 0))
+    target = np.array([math.pi, 0.0])
     for _ in range(starts):
         x0 = rng.uniform(0.5, 4.0, arcs)
         res = minimize(np.sum, x0, jac=lambda d: np.ones_like(d), method="SLSQP",
                        bounds=[(0.0, 12.0)] * arcs,
-                       constraints=[{"type": "eq",
-                                     "fun": lambda d: _end(d, first) - [math.pi, 0.0]}],
+                       constraints=[{"type": "eq", "fun": lambda d: _end(d, first)[0] - target,
+                                     "jac": lambda d: _end(d, first)[1]}],
                        options={"ftol": 1e-13, "maxiter": 300})
-        if res.success and np.max(np.abs(_end(res.x, first) - [math.pi, 0.0])) < 1e-9:
+        if res.success and np.max(np.abs(_end(res.x, first)[0] - target)) < 1e-9:
             best = min(best, float(res.fun))
     return best
 
 
-# exact() (about 3 min of scipy) gave 9.853736876228 (four arcs, +-+-; the six-arc structures
-# collapse onto it); the fast tests use this value, a slow test recomputes it
-REFERENCE = 9.853736876228
+# exact() (about a minute of scipy) gives 9.8537368761452 (four arcs, +-+-; the five-arc
+# structure -+-+- collapses onto it); with finite-difference derivatives it gave 9.853736876228
+# (8e-12 apart). The fast tests use this value, a slow test recomputes it
+REFERENCE = 9.8537368761452
 
 
 @cache
