@@ -379,7 +379,7 @@ def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: G
     params = landing_parameters(robot, impact)
     culprits = []
     for name in DIAGNOSABLE:
-        tr = landing_transcription(nodes, omit=(name,), ground=ground)
+        tr = landing_transcription(nodes, omit=(name,), ground=ground, expand=False)
         try:
             tr.solve(params, guess=rigid_guess(tr, robot, impact, ground))
             culprits.append(name)

@@ -98,10 +98,10 @@ def landing_stance(p: OptimalControlProblem, r_m: Any, s: Any, u_max: Any, groun
 
 @lru_cache(maxsize=16)
 def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, ...] = (),
-                          ground: Ground = LINEAR_GROUND) -> MultipleShooting:
+                          ground: Ground = LINEAR_GROUND, expand: bool = True) -> MultipleShooting:
     """The transcribed soft-landing NLP, built once per arguments and reused.
 
-    Expanded to SX: slower to build once, faster at every re-solve of a sweep.
+    Expanded to SX by default: slower to build once, faster at every re-solve of a sweep.
 
     Parameters
     ----------
@@ -113,9 +113,13 @@ def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, 
         Conditions dropped (diagnosis of infeasible requests).
     ground : Ground
         Ground model.
+    expand : bool
+        Expand to SX. A problem solved once (the diagnosis' relaxed ones) is cheaper
+        unexpanded: the four relaxations of the paper's infeasible ``v0 = -10``,
+        ``u_max = 2`` took 4.5 s CPU unexpanded against 9.2 s expanded, same verdicts.
     """
     return MultipleShooting(build_landing_problem(omit, ground), nodes=nodes, integrator="rk4",
-                            substeps=substeps, expand=True)
+                            substeps=substeps, expand=expand)
 
 
 def arrest_force_times_stroke(x, r_m):
