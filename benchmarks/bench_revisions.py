@@ -2,7 +2,7 @@
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
       python -m benchmarks.bench_revisions --baseline REV --workload WORKLOAD
-      (WORKLOAD: simulator, landing, stiffness or impedance)
+      (WORKLOAD: simulator, landing, stiffness, impedance or infeasible)
 
 ``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
 over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
@@ -15,6 +15,9 @@ gain map on all cores and 300 runs of one landing (integrated before the kernel 
 exact after: the checksums then agree to the integrator's tolerance, not bit for bit).
 ``--workload impedance`` times ``optimize_impedance`` at v0 = -3 on the paper's ground and at
 -4.8 on ``DragGround(0.2)`` (the depths agree to about 1e-12 across a change of its search).
+``--workload infeasible`` times the diagnosis of an infeasible request: ``solve_landing`` at
+v0 = -10 with ``u_max = 2`` (the failed solve, then one relaxed solve per condition), first in
+the process and again (the checksum is of the two messages' characters).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -152,10 +155,35 @@ print(json.dumps({"batch": ow, "batch_cpu": oc, "single": dw, "single_cpu": dc,
                   "check": one.depth + drag.depth}))
 """
 
+INFEASIBLE = r"""
+import json, time
+from softlanding import PAPER_ROBOT, solve_landing
+from softlanding.errors import InfeasibleLandingError
+
+
+def diagnose():
+    try:
+        solve_landing(-10.0, PAPER_ROBOT.replace(u_max=2.0), replay=False)
+    except InfeasibleLandingError as err:
+        return str(err)
+    raise SystemExit("the request was feasible")
+
+
+w, c = time.perf_counter(), time.process_time()
+first = diagnose()
+fw, fc = time.perf_counter() - w, time.process_time() - c
+w, c = time.perf_counter(), time.process_time()
+again = diagnose()
+aw, ac = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"batch": fw, "batch_cpu": fc, "single": aw, "single_cpu": ac,
+                  "check": float(sum(map(ord, first + again)))}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "landing": (LANDING, "cold solve", "sweep of 20"),
              "stiffness": (STIFFNESS, "batch 101x101", "300 x one"),
-             "impedance": (IMPEDANCE, "optimum -3", "drag 0.2 -4.8")}
+             "impedance": (IMPEDANCE, "optimum -3", "drag 0.2 -4.8"),
+             "infeasible": (INFEASIBLE, "first request", "again")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
@@ -207,7 +235,8 @@ def main() -> None:
                     help="suite: the published problems (default); simulator: the exact "
                          "simulator; stiffness: the simulator on LinearGround(2.0); landing: "
                          "the landing OCP end to end; impedance: optimize_impedance on the "
-                         "paper's ground and a drag ground")
+                         "paper's ground and a drag ground; infeasible: the diagnosis of an "
+                         "infeasible landing request")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:
