@@ -69,6 +69,9 @@ html_show_sourcelink = False
 myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 myst_heading_anchors = 3
 RUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_GALLERY", "1") != "0"
+# the test build (tests/conftest.py: docs_site) runs every example even if an earlier build left
+# its output in docs/auto_examples (sphinx-gallery skips an example whose checksum it has)
+RERUN_GALLERY = os.environ.get("SOFTLANDING_DOCS_RERUN") == "1"
 # the notebooks are stored without outputs (tests/test_notebooks.py): executed here, each in
 # a temporary folder, a failing cell fails the build (notebooks_ahead.py runs them first, as
 # myst-nb's cache mode would, several at a time)
@@ -101,6 +104,7 @@ sphinx_gallery_conf = {
     "gallery_dirs": ["auto_examples"],
     "filename_pattern": r".*\.py$",  # every example is executed
     "plot_gallery": "True" if RUN_GALLERY else "False",
+    "run_stale_examples": RERUN_GALLERY,
     "within_subsection_order": "gallery_order.gallery_order",
     "capture_repr": (),  # no "<Figure ...>" under the output
     "download_all_examples": False,

@@ -65,6 +65,7 @@ def docs_site(tmp_path_factory):
     # shown inline (conf.py selects Agg for the build's own process)
     env = {k: v for k, v in os.environ.items() if k != "MPLBACKEND"}
     env["SOFTLANDING_DOCS_GALLERY"] = "1"
+    env["SOFTLANDING_DOCS_RERUN"] = "1"  # every example, whatever docs/auto_examples holds
     docs = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "docs")
     res = subprocess.run([sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b",
                           "html", "-d", str(out / "doctrees"), docs, str(out / "html")],
