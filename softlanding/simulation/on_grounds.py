@@ -39,8 +39,8 @@ def _executor(threads: int) -> ThreadPoolExecutor:
 def simulate_on_grounds(robot: Robot, impact: Impact | float, controller: Controller,
                         grounds: Sequence[Ground], *, energy: bool = False,
                         threads: int | None = 1) -> list[LandingResult]:
-    """``[simulate(robot, impact, controller, g, energy=energy) for g in grounds]``, the
-    landings run on worker threads.
+    """``[simulate(robot, impact, controller, g, energy=energy) for g in grounds]``, on worker
+    threads if asked (``threads``).
 
     Parameters
     ----------

@@ -22,7 +22,7 @@ collocation converges to the five-arc one, 75 % above the best.
 from __future__ import annotations
 
 import math
-from functools import cache
+from functools import cache, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -67,10 +67,11 @@ def _rhs_sensitivity(z: np.ndarray, _t: float, u: float) -> list[float]:
     return [z[1], u - math.sin(z[0]), z[4], z[5], -c * z[2], -c * z[3]]
 
 
-def _end(durations: np.ndarray, first: float) -> tuple[np.ndarray, np.ndarray]:
+@lru_cache(maxsize=8)  # SLSQP asks the constraint, then its derivative, at the same point
+def _end(durations: tuple[float, ...], first: float) -> tuple[np.ndarray, np.ndarray]:
     """State after the bang-bang arcs of these durations, the first with sign ``first``,
     and its derivative in the durations (2 x arcs): arc ``k`` lengthened moves the end by the
-    later arcs' transition matrices times the field at arc ``k``'s end."""
+    later arcs' transition matrices times the field at arc ``k``'s end. Read only."""
     y = np.zeros(2)
     ends, phis = [], []
     for k, tau in enumerate(durations):
@@ -100,10 +101,11 @@ def structure_optimum(arcs: int, first: float, starts: int = 4) -> float:
         x0 = rng.uniform(0.5, 4.0, arcs)
         res = minimize(np.sum, x0, jac=lambda d: np.ones_like(d), method="SLSQP",
                        bounds=[(0.0, 12.0)] * arcs,
-                       constraints=[{"type": "eq", "fun": lambda d: _end(d, first)[0] - target,
-                                     "jac": lambda d: _end(d, first)[1]}],
+                       constraints=[{"type": "eq",
+                                     "fun": lambda d: _end(tuple(d), first)[0] - target,
+                                     "jac": lambda d: _end(tuple(d), first)[1]}],
                        options={"ftol": 1e-13, "maxiter": 300})
-        if res.success and np.max(np.abs(_end(res.x, first)[0] - target)) < 1e-9:
+        if res.success and np.max(np.abs(_end(tuple(res.x), first)[0] - target)) < 1e-9:
             best = min(best, float(res.fun))
     return best
 
