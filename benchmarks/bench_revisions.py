@@ -2,7 +2,7 @@
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
       python -m benchmarks.bench_revisions --baseline REV --workload WORKLOAD
-      (WORKLOAD: simulator, landing, stiffness, impedance or infeasible)
+      (WORKLOAD: simulator, landing, stiffness, impedance, infeasible or work)
 
 ``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
 over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
@@ -18,6 +18,11 @@ exact after: the checksums then agree to the integrator's tolerance, not bit for
 ``--workload infeasible`` times the diagnosis of an infeasible request: ``solve_landing`` at
 v0 = -10 with ``u_max = 2`` (the failed solve, then one relaxed solve per condition), first in
 the process and again (the checksum is of the two messages' characters).
+``--workload work`` times the actuator's positive and negative work along exact simulations
+(:func:`softlanding.simulation.actuator_work.result_work`, the hop cycle's independent energy
+check): 60 impedance landings with random gains, grounds and velocities plus 20 push/pull
+schedules, then the replayed work of the hop at v0 = -2 (one start, one grid, the solve
+itself untimed; the checksum is of every work).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -179,11 +184,47 @@ print(json.dumps({"batch": fw, "batch_cpu": fc, "single": aw, "single_cpu": ac,
                   "check": float(sum(map(ord, first + again)))}))
 """
 
+WORK = r"""
+import json, time
+import numpy as np
+from softlanding import PAPER_ROBOT, simulate
+from softlanding.model.controllers import ForceSchedule, Impedance
+from softlanding.model.ground import LinearGround
+from softlanding.simulation.actuator_work import result_work
+import softlanding.optimal.hopping as hopping
+rng = np.random.default_rng(1)
+runs = []
+for i in range(60):
+    v0, kp, kd = -rng.uniform(0.5, 10), rng.uniform(0.01, 2), rng.uniform(0.01, 2)
+    robot = PAPER_ROBOT.replace(u_max=None) if i % 2 else PAPER_ROBOT
+    runs.append(simulate(robot, v0, Impedance(kp, kd), LinearGround(rng.uniform(0.3, 3)),
+                         t_max=20))
+for i in range(20):
+    t1 = rng.uniform(0.05, 0.5)
+    t2 = t1 + rng.uniform(0.05, 0.5)
+    runs.append(simulate(PAPER_ROBOT, -3, ForceSchedule((t1, t2), (8.2, -8.2, 0.0)),
+                         t_max=3))
+w, c = time.perf_counter(), time.process_time()
+works = [result_work(r, float(r.segments["t"][-1])) for r in runs]
+lw, lc = time.perf_counter() - w, time.process_time() - c
+replays = []  # the hop's replays, as its solve evaluates them (the solve untimed)
+evaluate = hopping.evaluate_replay
+hopping.evaluate_replay = lambda *a: replays.append((a[4], a[5])) or evaluate(*a)
+hopping.HOP_STARTS = hopping.HOP_STARTS[:1]
+hopping.solve_hop(-2.0, PAPER_ROBOT, eta=0.0, refine=False)
+w, c = time.perf_counter(), time.process_time()
+works += [result_work(res, t) for res, t in replays]
+hw, hc = time.perf_counter() - w, time.process_time() - c
+print(json.dumps({"batch": lw, "batch_cpu": lc, "single": hw, "single_cpu": hc,
+                  "check": float(sum(x.positive + 2 * x.negative for x in works))}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "landing": (LANDING, "cold solve", "sweep of 20"),
              "stiffness": (STIFFNESS, "batch 101x101", "300 x one"),
              "impedance": (IMPEDANCE, "optimum -3", "drag 0.2 -4.8"),
-             "infeasible": (INFEASIBLE, "first request", "again")}
+             "infeasible": (INFEASIBLE, "first request", "again"),
+             "work": (WORK, "80 landings", "hop replay")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
@@ -236,7 +277,8 @@ def main() -> None:
                          "simulator; stiffness: the simulator on LinearGround(2.0); landing: "
                          "the landing OCP end to end; impedance: optimize_impedance on the "
                          "paper's ground and a drag ground; infeasible: the diagnosis of an "
-                         "infeasible landing request")
+                         "infeasible landing request; work: the actuator's work along exact "
+                         "landings and a hop's replay")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:

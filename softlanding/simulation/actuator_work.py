@@ -76,11 +76,19 @@ def segment_work(A: np.ndarray, z0: np.ndarray, c: np.ndarray, duration: float,
         z = expm(A * t) @ z0
         return float(c @ z) * float(z[VB] - z[VF])
 
+    # the probes by one step's exact flow, applied probe to probe (one matrix exponential,
+    # not one per probe: the probes only bracket; a bracket is checked on the exact power)
     ts = np.linspace(0.0, duration, probes + 1)
-    ps = np.array([power(t) for t in ts])
+    step = expm(A * (duration / probes))
+    zs = np.empty((probes + 1, len(z0)))
+    zs[0] = z0
+    for k in range(probes):
+        zs[k + 1] = step @ zs[k]
+    ps = (zs @ c) * (zs[:, VB] - zs[:, VF])
     cuts = [0.0]
-    for a, b, pa, pb in zip(ts[:-1], ts[1:], ps[:-1], ps[1:], strict=True):
-        if pa * pb < 0:
+    for j in np.flatnonzero(ps[:-1] * ps[1:] < 0):
+        a, b = float(ts[j]), float(ts[j + 1])
+        if power(a) * power(b) < 0:
             cuts.append(brentq(power, a, b, xtol=1e-15, rtol=1e-15))
     cuts.append(duration)
     out = Work()
