@@ -14,9 +14,11 @@ Independent value (:func:`exact`): the optimum within each bang-bang
 structure (first sign, number of arcs) is found by optimising the arc
 durations with scipy (SLSQP, arcs integrated by ``odeint`` at rtol
 1e-12, with their transition matrices: the constraints' exact derivative); the minimum over
-the structures with 2 to 5 arcs is T* = 9.853736876 (:data:`REFERENCE`; four arcs: +, -, +,
--). Other extremals: five arcs (T = 17.288) and more. From the default guess, a 50-interval
-collocation converges to the five-arc one, 75 % above the best.
+the structures with 3 to 5 arcs is T* = 9.853736876 (:data:`REFERENCE`; four arcs: +, -, +,
+-). Two arcs (or one) cannot swing up at all, by the energy ``E = omega^2/2 - cos(theta)``
+(:func:`two_arc_energy_bound`): SLSQP searched them in vain for two thirds of the minute
+the search took. Other extremals: five arcs (T = 17.288) and more. From the default guess,
+a 50-interval collocation converges to the five-arc one, 75 % above the best.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from functools import cache, lru_cache
 import casadi as ca
 import numpy as np
 from scipy.integrate import odeint
-from scipy.optimize import minimize
+from scipy.optimize import brentq, minimize
 
 from ocp import Collocation, OptimalControlProblem, Trajectory
 from tests.oracles.ocp_suite.problems import SuiteProblem
@@ -110,16 +112,36 @@ def structure_optimum(arcs: int, first: float, starts: int = 4) -> float:
     return best
 
 
-# exact() (about a minute of scipy) gives 9.8537368761452 (four arcs, +-+-; the five-arc
+# exact() (about 20 s of scipy) gives 9.8537368761452 (four arcs, +-+-; the five-arc
 # structure -+-+- collapses onto it); with finite-difference derivatives it gave 9.853736876228
 # (8e-12 apart). The fast tests use this value, a slow test recomputes it
 REFERENCE = 9.8537368761452
 
 
+def two_arc_energy_bound() -> float:
+    """The most energy ``E = omega^2/2 - cos(theta)`` two bang arcs from hanging at rest can
+    have on reaching ``theta = pi``: below the upright rest's ``E = 1``, so no structure of
+    one or two arcs swings up.
+
+    On an arc of constant ``u``, ``E' = u omega``: ``E`` changes by ``u`` times the angle
+    swept. From rest (``E = -1``) the first arc stays in its well, ``u theta + cos(theta)
+    >= 1``, so it ends within ``theta*`` of 0 on its torque's side (``0.4 theta* +
+    cos(theta*) = 1``). First ``+``: the second arc (``u = -0.4``) sweeps ``theta`` up to
+    ``pi`` against its torque and loses energy, ending below ``-1 + 0.4 theta*``. First
+    ``-``: it ends at ``theta_1`` in ``[-theta*, 0]`` and the second (``u = +0.4``) gains
+    ``0.4 (pi - theta_1)``: at most ``-1 + 0.4 pi + 0.8 theta*``, the larger of the two.
+    """
+    theta_star = brentq(lambda th: UMAX * th + math.cos(th) - 1.0, 0.1, math.pi)
+    return -1.0 + UMAX * math.pi + 2 * UMAX * theta_star
+
+
 @cache
 def exact() -> float:
-    """The global minimum time: the best structure with 2 to 5 arcs (see the module)."""
-    return min(structure_optimum(a, s) for a in range(2, 6) for s in (1.0, -1.0))
+    """The global minimum time: the best structure with 3 to 5 arcs (see the module; fewer
+    arcs cannot reach the upright rest, :func:`two_arc_energy_bound`)."""
+    if not two_arc_energy_bound() < 1.0:
+        raise AssertionError("two arcs could reach the upright rest: search them too")
+    return min(structure_optimum(a, s) for a in range(3, 6) for s in (1.0, -1.0))
 
 
 def reference() -> float:
