@@ -35,8 +35,6 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from .labels import row_labels
 
@@ -162,13 +160,15 @@ def _summary(d: Diagnosis) -> str:
 
 
 # ------------------------------------------------------------------ dependence
-def _jacobian(tr: Any, w: np.ndarray, pv: np.ndarray) -> sp.csr_matrix:
+def _jacobian(tr: Any, w: np.ndarray, pv: np.ndarray) -> Any:
     """``dg/dw`` at ``w`` in the user's units, sparse (its function built once)."""
     fn = getattr(tr, "jacobian_function", None)
     if fn is None:
         nlp = tr.nlp
         fn = ca.Function("jac_g", [nlp["x"], nlp["p"]], [ca.jacobian(nlp["g"], nlp["x"])])
         tr.jacobian_function = fn
+    import scipy.sparse as sp  # here: scipy.sparse costs 0.2 s of every solving process
+
     J = fn(w, pv)
     rows, cols = J.sparsity().get_triplet()
     return sp.csr_matrix((np.array(J.nonzeros(), dtype=float), (rows, cols)), shape=J.shape)
@@ -201,6 +201,9 @@ def dependent_ends(tr: Any, w: np.ndarray, pv: np.ndarray, bounds: tuple,
     tuple or None
         ``(rank, number of end rows, dependent rows of g, null combination)``.
     """
+    import scipy.sparse as sp  # only a failed solve's diagnosis needs it (see _jacobian)
+    from scipy.sparse.linalg import splu
+
     lbw, ubw, lbg, ubg = bounds
     eq = np.flatnonzero((lbg == ubg) & np.isfinite(lbg))
     base_rows = _base_rows(tr)
