@@ -2,7 +2,7 @@
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
       python -m benchmarks.bench_revisions --baseline REV --workload WORKLOAD
-      (WORKLOAD: simulator, landing, stiffness, impedance, infeasible or work)
+      (WORKLOAD: simulator, landing, stiffness, impedance, infeasible, work or startup)
 
 ``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
 over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
@@ -22,7 +22,9 @@ the process and again (the checksum is of the two messages' characters).
 (:func:`softlanding.simulation.actuator_work.result_work`, the hop cycle's independent energy
 check): 60 impedance landings with random gains, grounds and velocities plus 20 push/pull
 schedules, then the replayed work of the hop at v0 = -2 (one start, one grid, the solve
-itself untimed; the checksum is of every work).
+itself untimed; the checksum is of every work). ``--workload startup`` times what a fresh
+process pays before its first landing: importing the landing solve's modules, then that
+import and ``solve_landing(-3)`` together (the checksum is the depth).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -219,12 +221,24 @@ print(json.dumps({"batch": lw, "batch_cpu": lc, "single": hw, "single_cpu": hc,
                   "check": float(sum(x.positive + 2 * x.negative for x in works))}))
 """
 
+STARTUP = r"""
+import json, time
+w, c = time.perf_counter(), time.process_time()
+import softlanding.optimal.landing, softlanding.simulation.simulator  # noqa: E401
+iw, ic = time.perf_counter() - w, time.process_time() - c
+from softlanding import solve_landing
+one = solve_landing(-3.0)
+print(json.dumps({"batch": iw, "batch_cpu": ic, "single": time.perf_counter() - w,
+                  "single_cpu": time.process_time() - c, "check": one.depth}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "landing": (LANDING, "cold solve", "sweep of 20"),
              "stiffness": (STIFFNESS, "batch 101x101", "300 x one"),
              "impedance": (IMPEDANCE, "optimum -3", "drag 0.2 -4.8"),
              "infeasible": (INFEASIBLE, "first request", "again"),
-             "work": (WORK, "80 landings", "hop replay")}
+             "work": (WORK, "80 landings", "hop replay"),
+             "startup": (STARTUP, "imports", "first solve")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
@@ -278,7 +292,8 @@ def main() -> None:
                          "the landing OCP end to end; impedance: optimize_impedance on the "
                          "paper's ground and a drag ground; infeasible: the diagnosis of an "
                          "infeasible landing request; work: the actuator's work along exact "
-                         "landings and a hop's replay")
+                         "landings and a hop's replay; startup: a fresh process's imports and "
+                         "first landing solve")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:
