@@ -4,6 +4,14 @@ import sys
 
 import pytest
 
+# One thread per batch of landings in the tests (before numba is imported, and inherited by
+# every process a test starts: the CLI's, the documentation's notebooks): the second command
+# already runs one worker per core, and on this 2-core machine a second thread per batch cost
+# 20-30 % more CPU for 12 % less wall time when idle (notebook 03's robustness study, 11.9
+# against 14.9 s CPU), nothing when both cores are busy. The results do not depend on it
+# (tests/softlanding/simulation/test_batch_threads.py checks the threads' batches, bit for bit).
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
 from tests.parallel import assign_groups, require_group_tags, require_loadgroup
 
 
