@@ -4,15 +4,16 @@ import sys
 
 import pytest
 
+from tests.parallel import assign_groups, require_group_tags, require_loadgroup
+
 # One thread per batch of landings in the tests (before numba is imported, and inherited by
 # every process a test starts: the CLI's, the documentation's notebooks): the second command
 # already runs one worker per core, and on this 2-core machine a second thread per batch cost
-# 20-30 % more CPU for 12 % less wall time when idle (notebook 03's robustness study, 11.9
-# against 14.9 s CPU), nothing when both cores are busy. The results do not depend on it
-# (tests/softlanding/simulation/test_batch_threads.py checks the threads' batches, bit for bit).
+# 20-30 % more CPU for 12 % less wall time when idle (notebook 03's robustness study: 11.7 to
+# 12.3 s CPU on one thread, 14.1 to 15.7 s on two), and saves no time when both cores are busy.
+# The results do not depend on it (tests/softlanding/simulation/test_batch_threads.py checks
+# a batch on three threads against the one-thread batch, bit for bit).
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
-
-from tests.parallel import assign_groups, require_group_tags, require_loadgroup
 
 
 @pytest.fixture
