@@ -35,7 +35,8 @@ def batch_prange(Ps, ridx, Kfs, umaxs, x0s, s_lims, t_max, max_seg, energy, max_
            np.zeros(0, dtype=np.int64))
     for i in prange(x0s.shape[0]):
         simulate_one(Ps[ridx[i]], (Kfs[i], umaxs[i], e, eK), x0s[i],
-                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec)
+                     (s_lims[i], t_max, max_seg, energy, max_steps), out[i], rec,
+                     np.bool_(True))  # the whole kernel, as run_batch's batch_range
 
 def run():
     if how.startswith("pool"):

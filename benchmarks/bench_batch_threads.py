@@ -1,6 +1,6 @@
 """How to run a batch of landings on a few (shared) cores: thread pool vs numba prange.
 
-Run:  python -m benchmarks.bench_batch_threads [--every 5] [--repeats 3]
+Run:  python -m benchmarks.bench_batch_threads [--every 5] [--repeats 3] [--variants pool-2,pool-1]
 
 The same compiled landing (``softlanding.simulation.kernel.landing.simulate_one``) on a
 sample of the paper's grid (every ``--every``-th landing, k_d = 0 hops
@@ -40,10 +40,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--every", type=int, default=5)
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--variants", default=",".join(VARIANTS),
+                    help="comma-separated, of: " + ", ".join(VARIANTS))
     a = ap.parse_args()
+    names = [k.strip() for k in a.variants.split(",") if k.strip()]
+    unknown = [k for k in names if k not in VARIANTS]
+    if unknown or not names:
+        ap.error(f"--variants: unknown {unknown}, choose from {', '.join(VARIANTS)}")
     print("before: load average {:.2f} {:.2f} {:.2f}".format(*os.getloadavg()))
-    res = {k: [] for k in VARIANTS}
-    names = list(VARIANTS)
+    res: dict[str, list] = {k: [] for k in names}
     n = 0
     for r in range(a.repeats):
         for k in names if r % 2 == 0 else names[::-1]:

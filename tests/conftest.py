@@ -8,9 +8,10 @@ from tests.parallel import assign_groups, require_group_tags, require_loadgroup
 
 # One thread per batch of landings in the tests (before numba is imported, and inherited by
 # every process a test starts: the CLI's, the documentation's notebooks): the second command
-# already runs one worker per core, and on this 2-core machine a second thread per batch cost
-# 20-30 % more CPU for 12 % less wall time when idle (notebook 03's robustness study: 11.7 to
-# 12.3 s CPU on one thread, 14.1 to 15.7 s on two), and saves no time when both cores are busy.
+# already runs one worker per core, and on this 2-core machine a second thread per batch costs
+# CPU: 7 % on one large affine batch (benchmarks/bench_batch_threads.py, 1.8x faster on an idle
+# machine), 10-30 % on a study's many small ones (notebook 03's robustness study: 11.7 to 12.3 s
+# CPU on one thread, 14.1 to 15.7 s on two, 12 % faster), and it saves no time on busy cores.
 # The results do not depend on it (tests/softlanding/simulation/test_batch_threads.py checks
 # a batch on three threads against the one-thread batch, bit for bit).
 os.environ.setdefault("NUMBA_NUM_THREADS", "1")
