@@ -18,7 +18,9 @@ def test_threads_take_chunks_and_give_the_serial_batch(ground, monkeypatch):
     one = simulate_batch(PAPER_IMPEDANCE_ROBOT, v0, kp[:, None], kd[None, :], ground)
     monkeypatch.setattr(kernel, "default_threads", lambda: 3)
     three = simulate_batch(PAPER_IMPEDANCE_ROBOT, v0, kp[:, None], kd[None, :], ground)
-    # 143 landings in chunks of 16 (affine) or 4 (integrated): the batch ran on the pool
+    # 143 landings in chunks of 16 (affine) or 4 (integrated), so more than one chunk: the
+    # thread count was read and the batch given to a pool of three (the pool outlives a
+    # batch: for the second ground it is the first one's)
     workers = [t for t in threading.enumerate() if t.name.startswith("softlanding_")]
     assert len(workers) >= 3
     for name in ("depth", "u_peak", "stroke_min", "stroke_max", "status"):

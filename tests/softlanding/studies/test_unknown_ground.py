@@ -18,5 +18,3 @@ def test_one_case_of_the_study():
 def test_true_ground_is_linear_without_drag():
     assert true_ground(1.5, 0.0).to_dict() == {"model": "linear", "stiffness": 1.5}
     assert true_ground(1.0, 0.2).to_dict() == {"model": "drag", "c_d": 0.2}
-
-
