@@ -14,8 +14,8 @@ every arc of it is one of five kinds, each exact in the affine modes of the mode
   On them the cost is the arc's work ``int P dt``, which depends on the arc's end states
   only (the robot's mechanical energy, plus the ground's ``K x_f^2 / 2`` while yielding):
   the optimum's control there is not unique (a flat valley, hence the transcription's
-  "interior" arcs), and a few constant pieces of free length reach the same end states
-  at the same cost.
+  "interior" arcs), and a constant piece of free length reaches the same end states at
+  the same cost (:data:`PIECES`).
 
 The arcs are read off a transcription (:func:`detect_arcs`); the unknowns are every
 piece's duration (and force, on ``+``/``-`` arcs), the state at every arc's start and
@@ -44,8 +44,12 @@ from softlanding.optimal.hopping_problem import apex_residuals
 
 MODES = ("yielding", "static", "flight")
 KINDS = ("coast", "lock", "capacity", "+", "-")
-PIECES = 2
-"""Constant pieces per ``+``/``-`` arc (their end states are what matters)."""
+PIECES = 1
+"""Constant pieces per ``+``/``-`` arc (their end states are what matters). One: with two,
+the second shrank to no length or took the first's force at every optimum measured (13
+hops, v0 from -1 to -8, eta from 0 to 0.9), and a piece of no length leaves its force
+free, a flat direction that kept Ipopt from converging (it stopped at its iteration cap in
+10 of the 13 first runs); with one, the same optima to 1e-11 of the energy."""
 SAMPLES = 12
 """Path-constraint samples per piece (besides its ends)."""
 SQUARINGS, TERMS = 10, 12
@@ -355,7 +359,12 @@ class _HopNLP:
         m = MODES.index(arc.mode)
         M = ca.DM(self.mats["A"][m]) + ca.mtimes(ca.DM(self.mats["B"][m]), K)
         n = self.samples + 1
-        pts = [ca.mtimes(self.expm(M * (tau * j / n)), z) for j in range(n + 1)]
+        # one exponential per piece, its powers at the samples (exp(M tau j/n) =
+        # exp(M tau/n)^j): a 13th of the expression Ipopt's derivatives are built from
+        E = self.expm(M * (tau / n))
+        pts = [z]
+        for _ in range(n):
+            pts.append(ca.mtimes(E, pts[-1]))
         for j, zj in enumerate(pts):
             self.path(arc, K, j, zj)
         if lift_off and k == 0:
@@ -389,6 +398,16 @@ class _HopNLP:
         self.forces.append(f_arc)
         return z
 
+
+SETTINGS: tuple[dict[str, Any], ...] = (
+    {"bound_push": 1e-8, "bound_frac": 1e-8, "mu_init": 1e-6}, {},
+    {"nlp_scaling_method": "none"})
+"""Ipopt's settings for :func:`refine_arcs`, to be tried in this order (``setting``). The
+first keeps the start (the finest grid's optimum, near the exact one, which Ipopt's default
+push off the bounds, 1e-2, and barrier, 0.1, leave); then Ipopt's defaults; then without
+scaling. The NLP is not convex and where Ipopt stops depends on them: on 15 hops (v0 from
+-1 to -8, eta from 0 to 0.9) each alone missed the lowest energy the three found in 1 to 3
+(it stopped short, or at a local optimum up to 5 % above)."""
 
 RESTART = {"warm_start_init_point": "yes", "mu_init": 1e-11, "warm_start_bound_push": 1e-12,
            "warm_start_bound_frac": 1e-12, "warm_start_mult_bound_push": 1e-12,
@@ -466,7 +485,8 @@ def _refined(guess: ArcGuess, nlp: _HopNLP, val: Any, status: str) -> RefinedHop
 
 
 def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
-                samples: int = SAMPLES, ipopt: dict | None = None) -> RefinedHop:
+                samples: int = SAMPLES, ipopt: dict | None = None, setting: int = 0
+                ) -> RefinedHop:
     """The hop on the arcs of ``guess``, their pieces' durations and forces optimised,
     every piece flowed exactly.
 
@@ -480,6 +500,9 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
         Path-constraint samples inside every piece.
     ipopt : dict, optional
         Extra Ipopt options.
+    setting : int
+        Which of :data:`SETTINGS` Ipopt runs with (the NLP is not convex: a caller tries
+        the next where one fails).
 
     Raises
     ------
@@ -500,9 +523,9 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
     for res in apex_residuals(z_end, robot.body_mass, robot.foot_mass, impact.energy, nlp.s):
         opti.subject_to(res == 0)
     opti.minimize(nlp.cost)
-    val, status = _solve(opti, ipopt)
+    val, status = _solve(opti, {**SETTINGS[setting], **(ipopt or {})})
     return _refined(guess, nlp, val, status)
 
 
-__all__ = ["KINDS", "MODES", "PIECES", "Arc", "ArcGuess", "RefinedHop", "detect_arcs",
-           "refine_arcs"]
+__all__ = ["KINDS", "MODES", "PIECES", "SETTINGS", "Arc", "ArcGuess", "RefinedHop",
+           "detect_arcs", "refine_arcs"]

@@ -3,6 +3,7 @@ energy bookkeeping is exact, and the three legs compare as they must."""
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
@@ -154,19 +155,32 @@ def test_the_exact_arcs_reach_the_continuous_optimum(hop3):
     assert abs(est - h.energy) <= h.energy_error == abs(h.grids[1]["energy"]
                                                         - h.grids[0]["energy"])
     assert h.refined_gap <= 1e-6 and h.to_dict()["refined_gap"] == h.refined_gap
+    # the refinement's Ipopt runs (hop_arcs.SETTINGS in turn, until one converges): the
+    # last is the one kept
+    [runs] = [re.search(r"Ipopt's runs: (.*)\); the energy", n).group(1) for n in h.notes
+              if "Ipopt's runs: " in n]
+    assert float(runs.split("; ")[-1]) == pytest.approx(h.energy_transcribed, rel=1e-9)
 
 
 @pytest.mark.slow
 def test_the_exact_arcs_do_not_depend_on_their_pieces(hop3):
     # on the arcs of one-signed power the cost is their end states' work: more constant
-    # pieces per arc reach the same optimum
+    # pieces per arc than the default (one) reach the same optimum
     from softlanding.model.robot import Impact
-    from softlanding.optimal.hop_arcs import detect_arcs, refine_arcs
+    from softlanding.optimal.hop_arcs import PIECES, SETTINGS, detect_arcs, refine_arcs
 
+    assert PIECES == 1
     sol = hop3.transcribed[0]
-    three = refine_arcs(detect_arcs(sol, PAPER_ROBOT, pieces=3), PAPER_ROBOT, Impact(-3.0), 0.0)
-    assert three.status == "Solve_Succeeded"
-    assert three.energy == pytest.approx(hop3.energy_transcribed, rel=1e-7)
+    for pieces in (2, 3):
+        guess = detect_arcs(sol, PAPER_ROBOT, pieces=pieces)
+        for setting in range(len(SETTINGS)):  # Ipopt's settings in turn, as solve_hop does
+            more = refine_arcs(guess, PAPER_ROBOT, Impact(-3.0), 0.0, setting=setting)
+            if more.status == "Solve_Succeeded":
+                break
+        assert more.status == "Solve_Succeeded"
+        # (an arc shorter than that many grid intervals keeps one piece per interval)
+        assert max(len(a.durations) for a in more.arcs if a.free) == pieces
+        assert more.energy == pytest.approx(hop3.energy_transcribed, rel=1e-7)
 
 
 @pytest.mark.slow
@@ -176,7 +190,6 @@ def test_the_hybrid_guide_quotes_the_run(hop3):
     # local optimum Ipopt stops at moves with last-bit differences of its start: a CI run
     # gave 9.629904 and 9.589214 where a local run gave 9.616021 and 9.596944); the exact
     # arcs' energy does not
-    import re
     from pathlib import Path
 
     h = hop3
