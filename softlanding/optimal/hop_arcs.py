@@ -37,6 +37,7 @@ import numpy as np
 
 from ocp.structure.flows import expm_taylor
 from ocp.transcriptions.solver_output import solver_output
+from softlanding.errors import check_count
 from softlanding.model.controllers import FeedbackSchedule, rigid_lock_gains
 from softlanding.model.dynamics import mode_matrices
 from softlanding.model.robot import Impact, Robot
@@ -506,9 +507,12 @@ def refine_arcs(guess: ArcGuess, robot: Robot, impact: Impact, eta: float,
 
     Raises
     ------
+    ParameterError
+        A ``setting`` that is not an index of :data:`SETTINGS`.
     ValueError
         When the arcs' ground modes do not run yielding, static, flight.
     """
+    setting = check_count("setting", setting, 0, len(SETTINGS) - 1)
     nlp = _HopNLP(guess, robot, samples)
     opti = nlp.opti
     x_td = impact.initial_state(robot.replace(l0=None))

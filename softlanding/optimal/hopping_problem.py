@@ -287,9 +287,15 @@ def hop_transcription(start: str = "touchdown", steps: int = 1,
     # at 0.1) sent the v0 = -3 hop's 120/160/120 grid to another local optimum, 1.3 % above
     # its 60/80/60 start; kept at the start, it improves on it
     near = {"mu_init": 1e-6, "bound_push": 1e-8, "bound_frac": 1e-8} if doublings else {}
+    # the flight alone is degenerate near its optima: Ipopt, trying its linear systems'
+    # constraint block unperturbed first at every iteration, regularised the Hessian up to
+    # 1e14 and spent about 0.1 s an iteration factorising (2 to 7.5 s a flight); with that
+    # block always perturbed, 0.2 to 0.6 s (best_impedance_hop(-3): 27 -> 5 s), and at
+    # v0 = -3 the default guess reaches the lower local optimum (17.036, not 19.90)
+    flight = {"perturb_always_cd": "yes"} if start == "lift-off" else {}
     return MultipleShooting(_hop_problem(start, steps), nodes=nodes, integrator="rk4",
                             substeps=4, expand=True, inner_constraints=True,
-                            ipopt_options={"max_iter": 1500, **near})
+                            ipopt_options={"max_iter": 1500, **near, **flight})
 
 
 __all__ = ["APEX", "FORCE", "LEGS", "POWER", "START", "START_PARAMETERS", "apex_posture",

@@ -17,6 +17,8 @@ from softlanding.control.robust import robust_landing
 from softlanding.errors import ParameterError
 from softlanding.model import Impedance, LinearGround, Rigid
 from softlanding.model.ground import MAX_GROUNDS, AddedMassGround, CustomGround, DragGround
+from softlanding.model.robot import Impact
+from softlanding.optimal.hop_arcs import SETTINGS, ArcGuess, refine_arcs
 from softlanding.simulation.simulator import simulate_batch
 
 CASES = [
@@ -32,6 +34,8 @@ CASES = [
     ("eta", lambda: solve_hop(-3, eta="0.5")),
     ("robot", lambda: solve_hop(-3, robot=None)),
     ("doublings", lambda: solve_hop(-3, doublings=5)),
+    ("setting", lambda: refine_arcs(ArcGuess([], [], 0.0), PAPER_ROBOT, Impact(-3), 0.0,
+                                    setting=len(SETTINGS))),
     ("robot", lambda: optimize_impedance(-3, robot="x")),
     ("warm_start", lambda: solve_landing(-3, warm_start="previous")),
     ("warm_start", lambda: solve_two_phase(-3, warm_start=object())),

@@ -95,12 +95,13 @@ def test_the_search_is_never_above_a_cold_start(landscape):
 @pytest.fixture(scope="module")
 def best_at_3():
     # v0 = -3, the three best stances of the 9 x 9 grid (k_d = 0): k_p = 0.29375 flies cold
-    # to 19.90, k_p = 0.5375 to 17.92, k_p = 0.78125 to 25.40; from the best cold flight
-    # (0.5375's) k_p = 0.29375 reaches 17.04
+    # to 17.036, k_p = 0.5375 to 17.92, k_p = 0.78125 to 24.96 (24.80 from the best cold
+    # flight, 0.29375's). (Before the flight's Ipopt perturbed its constraint block at every
+    # iteration, 0.29375 flew cold to 19.90 and reached 17.04 from 0.5375's flight.)
     return best_impedance_hop(-3.0)
 
 
-@pytest.mark.slow  # 5 flight solves (about 10 s CPU each) and a cold one
+@pytest.mark.slow  # 5 flight solves (0.2 to 0.6 s CPU each) and a cold one
 def test_the_real_search_is_never_above_a_cold_start(best_at_3):
     h = best_at_3
     assert h is not None and h.unverified_reasons() == []
@@ -110,7 +111,9 @@ def test_the_real_search_is_never_above_a_cold_start(best_at_3):
     assert h.starts[0]["start"] == "the default guess"
     assert h.starts[0]["energy"] == pytest.approx(cold.energy, rel=1e-9)
     assert h.energy == min(s["energy"] for s in h.starts if "energy" in s)
-    assert h.energy < 17.5 < cold.energy  # the warm start found the lower local optimum
+    # the lower of the two local optima from the default guess (the other 19.90): the one
+    # the earlier settings reached only from k_p = 0.78125's flight, 17.036 (the guide said)
+    assert abs(h.energy - 17.036) < 5e-4 and cold.energy < 17.5
 
 
 @pytest.mark.slow  # the grid and 5 more flight solves
