@@ -232,13 +232,26 @@ print(json.dumps({"batch": iw, "batch_cpu": ic, "single": time.perf_counter() - 
                   "single_cpu": time.process_time() - c, "check": one.depth}))
 """
 
+HOP = r"""
+import json, time
+from softlanding.optimal.hopping import best_impedance_hop, solve_hop
+w, c = time.perf_counter(), time.process_time()
+imp = best_impedance_hop(-3.0)
+iw, ic = time.perf_counter() - w, time.process_time() - c
+w, c = time.perf_counter(), time.process_time()
+free = solve_hop(-2.0, doublings=1)
+print(json.dumps({"batch": iw, "batch_cpu": ic, "single": time.perf_counter() - w,
+                  "single_cpu": time.process_time() - c, "check": imp.energy + free.energy}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "landing": (LANDING, "cold solve", "sweep of 20"),
              "stiffness": (STIFFNESS, "batch 101x101", "300 x one"),
              "impedance": (IMPEDANCE, "optimum -3", "drag 0.2 -4.8"),
              "infeasible": (INFEASIBLE, "first request", "again"),
              "work": (WORK, "80 landings", "hop replay"),
-             "startup": (STARTUP, "imports", "first solve")}
+             "startup": (STARTUP, "imports", "first solve"),
+             "hop": (HOP, "impedance -3", "free hop -2")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
@@ -293,7 +306,8 @@ def main() -> None:
                          "paper's ground and a drag ground; infeasible: the diagnosis of an "
                          "infeasible landing request; work: the actuator's work along exact "
                          "landings and a hop's replay; startup: a fresh process's imports and "
-                         "first landing solve")
+                         "first landing solve; hop: best_impedance_hop(-3) and solve_hop(-2, "
+                         "doublings=1) with its exact arcs")
     ap.add_argument("names", nargs="*", help="problems (default: all that both revisions have)")
     args = ap.parse_args()
     if args.repeats < 1:
