@@ -48,6 +48,7 @@ extensions = [
     "execution_log",  # docs/_ext: a line on stderr per executed example and notebook
     "notebooks_ahead",  # docs/_ext: the notebooks executed two (the cores) at a time
     "offline_timings",  # docs/_ext: the execution-times page without its CDN scripts
+    "api_navigation",  # docs/_ext: the API's object pages out of the sidebar
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
