@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, ClassVar
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -33,6 +33,7 @@ from softlanding.optimal.landing import (
     landing_stance,
     transcribed_schedule,
 )
+from softlanding.optimal.landing_problem import ParametricGround
 from softlanding.optimal.limits import force_limit
 from softlanding.optimal.phase_solve import refined_switching
 from softlanding.optimal.pipeline import PhasedVariant, solve_phased
@@ -48,41 +49,6 @@ COAST = "a rising body coasts to its top within the stroke"
 
 STATE_PARAMETERS = ("r_m", "s", "u_max", "stiffness", "c_d", "x_b0", "v_b0", "x_f0", "v_f0")
 """The parameters of :func:`state_landing_problem`, in order."""
-
-
-class ParametricGround:
-    """``f = K d + c_d v_f^2`` with ``K`` and ``c_d`` symbols (a ground for the OCP only).
-
-    Parameters
-    ----------
-    stiffness, c_d : casadi.SX
-        The parameters.
-    """
-
-    name: ClassVar[str] = "parametric"
-
-    def __init__(self, stiffness: Any, c_d: Any) -> None:
-        self.stiffness, self.c_d = stiffness, c_d
-
-    def yield_force(self, depth: Any, v_f: Any) -> Any:
-        """``K d + c_d v_f^2``.
-
-        Parameters
-        ----------
-        depth, v_f : expression
-            Foot depth and velocity.
-        """
-        return self.stiffness * depth + self.c_d * v_f ** 2
-
-    def added_mass(self, depth: Any) -> Any:
-        """No grains move with the foot.
-
-        Parameters
-        ----------
-        depth : expression
-            Unused.
-        """
-        return 0.0
 
 
 @lru_cache(maxsize=1)
@@ -354,7 +320,7 @@ def plan_schedule(plan: RefinedSwitching | Solution,
     return FeedbackSchedule(times, (*out.gains[:-1], (0.0,) * 5, out.gains[-1]))
 
 
-__all__ = ["COAST", "STATE_NODES", "STATE_PARAMETERS", "ParametricGround", "StatePlan",
+__all__ = ["COAST", "STATE_NODES", "STATE_PARAMETERS", "StatePlan",
            "StateStarted", "ground_numbers", "plan_from_state", "plan_schedule",
            "solve_from_state",
            "state_landing_problem", "state_parameters", "state_transcription"]

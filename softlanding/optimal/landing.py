@@ -52,6 +52,7 @@ from softlanding.optimal.landing_problem import (
     arrest_force_times_stroke,
     build_landing_problem,
     build_landing_problem_of,
+    ground_values,
     landing_stance,
     landing_transcription,
 )
@@ -376,7 +377,7 @@ def _lock_stop(x0: np.ndarray, r_m: float, ground: Ground) -> float:
 def _explain_infeasible(err: SolveError, robot: Robot, impact: Impact, ground: Ground,
                         nodes: int) -> InfeasibleLandingError:
     """Name the condition(s) whose removal makes the request feasible."""
-    params = landing_parameters(robot, impact)
+    params = {**landing_parameters(robot, impact), **ground_values(ground)}
     culprits = []
     for name in DIAGNOSABLE:
         tr = landing_transcription(nodes, omit=(name,), ground=ground, expand=False)
@@ -419,6 +420,10 @@ class PaperLanding(PhasedVariant[BangBangLanding]):
         super().__init__(robot, impact)
         self.ground, self.nodes, self.extra_arcs = ground, nodes, extra_arcs
         self.structure: Any = None  # the detected (trimmed) arcs, when refinement was tried
+
+    def parameters(self) -> dict[str, float]:
+        """The landing's parameter values and its ground family's (:func:`ground_values`)."""
+        return {**super().parameters(), **ground_values(self.ground)}
 
     def transcription(self) -> MultipleShooting:
         """The (cached) :func:`landing_transcription`."""

@@ -8,15 +8,14 @@ subject to the yielding-stance dynamics, ``|u| <= u_max``, ``0 <= x_b - x_f <= s
 
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Any
+from typing import Any, ClassVar
 
 import casadi as ca
 import numpy as np
 
 from ocp import MultipleShooting, OptimalControlProblem
 from softlanding.model.dynamics import STATE_NAMES, stance_dynamics
-from softlanding.model.ground import LINEAR_GROUND, Ground
+from softlanding.model.ground import LINEAR_GROUND, DragGround, Ground, LinearGround
 from softlanding.optimal.stance_phases import crater_capacity
 
 T_MAX = 30.0
@@ -35,6 +34,99 @@ PARAMETERS = ("r_m", "s", "v0", "u_max", "l0")
 """The landing OCP's parameters, in order."""
 
 
+GROUND_PARAMETERS = ("stiffness", "c_d")
+"""The parameters a ground family adds to the landing OCP (after :data:`PARAMETERS`)."""
+
+
+class ParametricGround:
+    """``f = K d + c_d v_f^2`` with ``K`` and ``c_d`` symbols (a ground for the OCP only;
+    ``c_d = 0``: the linear family, ``K d``).
+
+    Parameters
+    ----------
+    stiffness, c_d : casadi.SX or float
+        The parameters.
+    """
+
+    name: ClassVar[str] = "parametric"
+
+    def __init__(self, stiffness: Any, c_d: Any) -> None:
+        self.stiffness, self.c_d = stiffness, c_d
+
+    def yield_force(self, depth: Any, v_f: Any) -> Any:
+        """``K d + c_d v_f^2``.
+
+        Parameters
+        ----------
+        depth, v_f : expression
+            Foot depth and velocity.
+        """
+        spring = self.stiffness * depth
+        return spring if isinstance(self.c_d, float) and self.c_d == 0.0 else \
+            spring + self.c_d * v_f ** 2
+
+    def added_mass(self, depth: Any) -> Any:
+        """No grains move with the foot.
+
+        Parameters
+        ----------
+        depth : expression
+            Unused.
+        """
+        return 0.0
+
+
+def ground_family(ground: Ground) -> tuple[str, ...]:
+    """The ground's numbers that are parameters of its landing OCP: ``stiffness`` for a
+    linear ground other than the paper's, ``stiffness, c_d`` for a drag ground; none for the
+    paper's spring and the other laws (their numbers are constants of their own NLP).
+
+    One transcription, and one set of switching NLPs, then serve every ground of a family:
+    building them (0.5 s, and up to 3 s for a switching NLP of a drag arc) cost more than a
+    solve, and a study lands on many grounds (the unknown-ground study's 15).
+
+    Parameters
+    ----------
+    ground : Ground
+        Ground model.
+    """
+    if type(ground) is LinearGround and ground != LINEAR_GROUND:
+        return GROUND_PARAMETERS[:1]
+    if type(ground) is DragGround:
+        return GROUND_PARAMETERS
+    return ()
+
+
+def ground_values(ground: Ground) -> dict[str, float]:
+    """The values of the parameters :func:`ground_family` adds for ``ground``.
+
+    Parameters
+    ----------
+    ground : Ground
+        Ground model.
+    """
+    return {n: float(getattr(ground, n)) for n in ground_family(ground)}
+
+
+def ocp_ground(p: OptimalControlProblem, ground: Ground) -> Any:
+    """The ground as the landing OCP ``p`` sees it: for a family's ground
+    (:func:`ground_family`), a :class:`ParametricGround` on parameters declared on ``p``;
+    else the ground itself.
+
+    Parameters
+    ----------
+    p : OptimalControlProblem
+        The problem being built.
+    ground : Ground
+        Ground model.
+    """
+    family = ground_family(ground)
+    if not family:
+        return ground
+    k, *c_d = (p.parameter(n) for n in family)
+    return ParametricGround(k, c_d[0] if c_d else 0.0)
+
+
 def build_landing_problem(omit: tuple[str, ...] = (),
                           ground: Ground = LINEAR_GROUND) -> OptimalControlProblem:
     """The soft-landing OCP with parameters ``r_m, s, v0, u_max, l0``.
@@ -44,12 +136,13 @@ def build_landing_problem(omit: tuple[str, ...] = (),
     omit : tuple of str
         Named conditions to drop (used to diagnose infeasible requests).
     ground : Ground
-        Ground model of the yielding stance.
+        Ground model of the yielding stance (a linear ground other than the paper's, or a
+        drag ground: its numbers are parameters, :func:`ground_family`).
     """
     p = OptimalControlProblem("soft_landing")
     xb, vb, xf, vf = (p.state(n) for n in STATE_NAMES)
     r_m, s, v0, u_max, l0 = (p.parameter(n) for n in PARAMETERS)
-    landing_stance(p, r_m, s, u_max, ground, omit)
+    landing_stance(p, r_m, s, u_max, ocp_ground(p, ground), omit)
     p.initial_constraint(xb - l0, 0.0, name="x_b(0) = l0")
     p.initial_constraint(vb - v0, 0.0, name="v_b(0) = v0")
     p.initial_constraint(xf, 0.0, name="x_f(0) = 0")
@@ -96,10 +189,16 @@ def landing_stance(p: OptimalControlProblem, r_m: Any, s: Any, u_max: Any, groun
     p.minimize_terminal(-xf)
 
 
-@lru_cache(maxsize=16)
+_TRANSCRIPTIONS: dict[tuple, MultipleShooting] = {}
+TRANSCRIPTIONS_KEPT = 16
+"""How many landing transcriptions are kept (the oldest is dropped)."""
+
+
 def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, ...] = (),
                           ground: Ground = LINEAR_GROUND, expand: bool = True) -> MultipleShooting:
-    """The transcribed soft-landing NLP, built once per arguments and reused.
+    """The transcribed soft-landing NLP, built once per arguments and reused (once per
+    family for a family's grounds, :func:`ground_family`: solve it with
+    :func:`ground_values` among the parameters).
 
     Expanded to SX by default: slower to build once, faster at every re-solve of a sweep.
 
@@ -118,8 +217,14 @@ def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, 
         unexpanded: the four relaxations of the paper's infeasible ``v0 = -10``,
         ``u_max = 2`` took 4.5 s CPU unexpanded against 9.2 s expanded, same verdicts.
     """
-    return MultipleShooting(build_landing_problem(omit, ground), nodes=nodes, integrator="rk4",
-                            substeps=substeps, expand=expand)
+    key = (nodes, substeps, omit, ground_family(ground) or ground, expand)
+    if key not in _TRANSCRIPTIONS:
+        if len(_TRANSCRIPTIONS) >= TRANSCRIPTIONS_KEPT:
+            del _TRANSCRIPTIONS[next(iter(_TRANSCRIPTIONS))]
+        _TRANSCRIPTIONS[key] = MultipleShooting(build_landing_problem(omit, ground), nodes=nodes,
+                                                integrator="rk4", substeps=substeps,
+                                                expand=expand)
+    return _TRANSCRIPTIONS[key]
 
 
 def arrest_force_times_stroke(x, r_m):
@@ -164,7 +269,8 @@ def build_landing_problem_of(nodes: int, ground: Ground) -> OptimalControlProble
     return problem
 
 
-__all__ = ["ARREST", "ARREST_FORCE", "DESCENDING", "DIAGNOSABLE", "MAX_NODES", "PARAMETERS",
-           "STROKE", "T_MAX", "arrest_force", "arrest_force_times_stroke",
-           "build_landing_problem", "build_landing_problem_of", "landing_stance",
-           "landing_transcription"]
+__all__ = ["ARREST", "ARREST_FORCE", "DESCENDING", "DIAGNOSABLE", "GROUND_PARAMETERS",
+           "MAX_NODES", "PARAMETERS", "STROKE", "T_MAX", "TRANSCRIPTIONS_KEPT",
+           "ParametricGround", "arrest_force", "arrest_force_times_stroke",
+           "build_landing_problem", "build_landing_problem_of", "ground_family", "ground_values",
+           "landing_stance", "landing_transcription", "ocp_ground"]

@@ -128,6 +128,36 @@ def test_resolving_does_not_rebuild_the_nlp():
     assert tr.n_builds == before == 1
 
 
+def test_a_ground_family_shares_one_nlp_and_lands_as_its_own_law():
+    """Linear grounds other than the paper's, and drag grounds, are families whose numbers
+    are NLP parameters: one transcription (and its switching NLPs) serves them all, and a
+    landing agrees with the same law as a CustomGround, whose numbers are constants of its
+    own NLP (a second build, an independent check)."""
+    from softlanding.model.ground import CustomGround, LinearGround
+    from softlanding.optimal.landing_problem import ground_family, ground_values
+
+    assert ground_family(LinearGround()) == () and ground_values(LinearGround()) == {}
+    assert ground_family(LinearGround(2.0)) == ("stiffness",)
+    assert ground_values(DragGround(0.5, stiffness=2.0)) == {"stiffness": 2.0, "c_d": 0.5}
+    tr = landing_transcription(100, ground=LinearGround(0.5))
+    assert landing_transcription(100, ground=LinearGround(2.0)) is tr
+    assert landing_transcription(100) is not tr
+    assert landing_transcription(100, ground=DragGround(1.0)) is \
+        landing_transcription(100, ground=DragGround(0.2, stiffness=1.5))
+    for ground, law in ((LinearGround(2.0), lambda d, v: 2.0 * d),
+                        (DragGround(1.0, stiffness=0.5),
+                         lambda d, v: 0.5 * d + 1.0 * v ** 2)):
+        fam = solve_landing(-6.0, PAPER_ROBOT, ground)
+        own = solve_landing(-6.0, PAPER_ROBOT, CustomGround(f"own {ground.to_dict()}", law))
+        assert not fam.unverified_reasons() and not own.unverified_reasons()
+        assert fam.arcs == own.arcs
+        assert fam.depth == pytest.approx(own.depth, rel=1e-10)
+        assert fam.switch_times == pytest.approx(own.switch_times, rel=1e-8)
+        assert fam.replay.depth == pytest.approx(fam.depth, rel=1e-9)
+    other = solve_landing(-6.0, PAPER_ROBOT, DragGround(0.2, stiffness=2.0), replay=False)
+    assert other.refined.problem is fam.refined.problem  # the drag family's
+
+
 def test_extra_switches_change_depth_by_less_than_one_percent():
     base = solve_landing(-3.0, replay=False)
     more = solve_landing(-3.0, extra_arcs=2, replay=False)
