@@ -8,6 +8,7 @@ subject to the yielding-stance dynamics, ``|u| <= u_max``, ``0 <= x_b - x_f <= s
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from typing import Any, ClassVar
 
 import casadi as ca
@@ -78,8 +79,9 @@ class ParametricGround:
 
 def ground_family(ground: Ground) -> tuple[str, ...]:
     """The ground's numbers that are parameters of its landing OCP: ``stiffness`` for a
-    linear ground other than the paper's, ``stiffness, c_d`` for a drag ground; none for the
-    paper's spring and the other laws (their numbers are constants of their own NLP).
+    linear ground other than the paper's, ``stiffness, c_d`` for a drag ground (``stiffness``
+    for one without drag); none for the paper's spring and the other laws (their numbers are
+    constants of their own NLP).
 
     One transcription, and one set of switching NLPs, then serve every ground of a family:
     building them (0.5 s, and up to 3 s for a switching NLP of a drag arc) cost more than a
@@ -92,8 +94,8 @@ def ground_family(ground: Ground) -> tuple[str, ...]:
     """
     if type(ground) is LinearGround and ground != LINEAR_GROUND:
         return GROUND_PARAMETERS[:1]
-    if type(ground) is DragGround:
-        return GROUND_PARAMETERS
+    if type(ground) is DragGround:  # without drag a spring: the linear family (affine arcs)
+        return GROUND_PARAMETERS if ground.c_d else GROUND_PARAMETERS[:1]
     return ()
 
 
@@ -189,9 +191,9 @@ def landing_stance(p: OptimalControlProblem, r_m: Any, s: Any, u_max: Any, groun
     p.minimize_terminal(-xf)
 
 
-_TRANSCRIPTIONS: dict[tuple, MultipleShooting] = {}
+_TRANSCRIPTIONS: OrderedDict[tuple, MultipleShooting] = OrderedDict()
 TRANSCRIPTIONS_KEPT = 16
-"""How many landing transcriptions are kept (the oldest is dropped)."""
+"""How many landing transcriptions are kept (the least recently used is dropped)."""
 
 
 def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, ...] = (),
@@ -218,9 +220,11 @@ def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, 
         ``u_max = 2`` took 4.5 s CPU unexpanded against 9.2 s expanded, same verdicts.
     """
     key = (nodes, substeps, omit, ground_family(ground) or ground, expand)
-    if key not in _TRANSCRIPTIONS:
+    if key in _TRANSCRIPTIONS:
+        _TRANSCRIPTIONS.move_to_end(key)
+    else:
         if len(_TRANSCRIPTIONS) >= TRANSCRIPTIONS_KEPT:
-            del _TRANSCRIPTIONS[next(iter(_TRANSCRIPTIONS))]
+            _TRANSCRIPTIONS.popitem(last=False)
         _TRANSCRIPTIONS[key] = MultipleShooting(build_landing_problem(omit, ground), nodes=nodes,
                                                 integrator="rk4", substeps=substeps,
                                                 expand=expand)

@@ -139,6 +139,7 @@ def test_a_ground_family_shares_one_nlp_and_lands_as_its_own_law():
     assert ground_family(LinearGround()) == () and ground_values(LinearGround()) == {}
     assert ground_family(LinearGround(2.0)) == ("stiffness",)
     assert ground_values(DragGround(0.5, stiffness=2.0)) == {"stiffness": 2.0, "c_d": 0.5}
+    assert ground_family(DragGround(0.0)) == ("stiffness",)  # a spring: affine, exact arcs
     tr = landing_transcription(100, ground=LinearGround(0.5))
     assert landing_transcription(100, ground=LinearGround(2.0)) is tr
     assert landing_transcription(100) is not tr
@@ -156,6 +157,13 @@ def test_a_ground_family_shares_one_nlp_and_lands_as_its_own_law():
         assert fam.replay.depth == pytest.approx(fam.depth, rel=1e-9)
     other = solve_landing(-6.0, PAPER_ROBOT, DragGround(0.2, stiffness=2.0), replay=False)
     assert other.refined.problem is fam.refined.problem  # the drag family's
+    # a drag ground without drag is a spring (the CLI's --ground drag --cd 0): exact arcs, and
+    # a boundary arc's law affine, so its schedule replays exactly (in the drag family, with
+    # c_d a symbol, the replay left a short stroke by 6.7e-4)
+    short = Robot(r_m=5.0, s=1.0, u_max=8.2)
+    spring = solve_landing(-3.0, short, DragGround(0.0))
+    assert "boundary" in spring.arcs and not spring.unverified_reasons()
+    assert spring.refined.exact and spring.replay_difference < 1e-12
 
 
 def test_extra_switches_change_depth_by_less_than_one_percent():
