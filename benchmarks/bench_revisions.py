@@ -2,7 +2,8 @@
 
 Run:  python -m benchmarks.bench_revisions --baseline REV [--repeats 3] [names...]
       python -m benchmarks.bench_revisions --baseline REV --workload WORKLOAD
-      (WORKLOAD: simulator, landing, stiffness, impedance, infeasible, work or startup)
+      (WORKLOAD: simulator, landing, stiffness, impedance, infeasible, work, startup, hop
+      or unknown)
 
 ``--workload simulator`` times the exact simulator (bench_simulator's workloads: one batch
 over a 150 x 150 gain grid on all cores, and 300 single landings with random gains and impact
@@ -24,7 +25,11 @@ check): 60 impedance landings with random gains, grounds and velocities plus 20 
 schedules, then the replayed work of the hop at v0 = -2 (one start, one grid, the solve
 itself untimed; the checksum is of every work). ``--workload startup`` times what a fresh
 process pays before its first landing: importing the landing solve's modules, then that
-import and ``solve_landing(-3)`` together (the checksum is the depth).
+import and ``solve_landing(-3)`` together (the checksum is the depth). ``--workload hop``
+times ``best_impedance_hop(-3)`` and ``solve_hop(-2, doublings=1)``. ``--workload unknown``
+times the unknown-ground study's 15 clairvoyant optima at v0 = -10 (one landing OCP per
+ground, or per ground family) and the impedance tuned for the worst case over four of its
+grounds at v0 = -3 (the checksum: the depths' sum and the worst case's value).
 
 Answers "is anything slower than before?" for a change to ``ocp``: the baseline
 revision ``REV`` (a commit, tag or branch) is checked out into a temporary git
@@ -244,6 +249,24 @@ print(json.dumps({"batch": iw, "batch_cpu": ic, "single": time.perf_counter() - 
                   "single_cpu": time.process_time() - c, "check": imp.energy + free.energy}))
 """
 
+UNKNOWN = r"""
+import itertools, json, time
+from softlanding import PAPER_ROBOT, solve_landing
+from softlanding.studies.impedance import optimize_impedance
+from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, true_ground
+solve_landing(-3.0)  # (the process's first landing: imports and the paper's NLP, untimed)
+grounds = [true_ground(k, c) for k, c in itertools.product(STUDY_STIFFNESS, STUDY_DRAG)]
+w, c = time.perf_counter(), time.process_time()
+clair = [solve_landing(-10.0, PAPER_ROBOT, g) for g in grounds]
+cw, cc = time.perf_counter() - w, time.process_time() - c
+four = [true_ground(k, d) for k in (0.5, 2.0) for d in (0.0, 1.0)]
+w, c = time.perf_counter(), time.process_time()
+worst = optimize_impedance(-3.0, PAPER_ROBOT, four, grid=41)
+print(json.dumps({"batch": cw, "batch_cpu": cc, "single": time.perf_counter() - w,
+                  "single_cpu": time.process_time() - c,
+                  "check": sum(r.depth for r in clair) + worst.value}))
+"""
+
 WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "landing": (LANDING, "cold solve", "sweep of 20"),
              "stiffness": (STIFFNESS, "batch 101x101", "300 x one"),
@@ -251,7 +274,8 @@ WORKLOADS = {"simulator": (SIMULATOR, "batch 150x150", "300 single"),
              "infeasible": (INFEASIBLE, "first request", "again"),
              "work": (WORK, "80 landings", "hop replay"),
              "startup": (STARTUP, "imports", "first solve"),
-             "hop": (HOP, "impedance -3", "free hop -2")}
+             "hop": (HOP, "impedance -3", "free hop -2"),
+             "unknown": (UNKNOWN, "15 grounds -10", "worst case -3")}
 
 
 def compare_workload(base: Path, workload: str, repeats: int) -> None:
