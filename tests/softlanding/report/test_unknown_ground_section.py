@@ -86,7 +86,7 @@ def test_section_is_registered_last_with_its_grids():
         "unknown_ground"
     quick = Settings.make(True)
     assert (quick.unknown_v0, quick.unknown_stiffness, quick.unknown_drag) == \
-        ((-3.0, -10.0), (0.5, 2.0), (0.0, 1.0))
+        ((-3.0,), (0.5, 2.0), (0.0, 1.0))
     from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, STUDY_V0
 
     full = Settings.make(False)
