@@ -101,8 +101,10 @@ def test_with_force_a_failed_run_restores_the_file_it_replaced(tmp_path, cli, mo
 
 @pytest.mark.slow
 def test_two_concurrent_runs_onto_one_file_exactly_one_wins(tmp_path):
+    # both start at once and pass the check of the outputs before the work (their imports take
+    # longer than the maps): the exclusive creation at the end decides
     out = tmp_path / "same.nc"
-    runs = [subprocess.Popen([*CMD, "map", "--v0", v0, "--n", "151", "--out", str(out)],
+    runs = [subprocess.Popen([*CMD, "map", "--v0", v0, "--n", "61", "--out", str(out)],
                              env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
             for v0 in ("-3", "-5")]
     results = [(p.wait(timeout=120), p.stderr.read()) for p in runs]
@@ -115,7 +117,7 @@ def test_two_concurrent_runs_onto_one_file_exactly_one_wins(tmp_path):
     assert len(lines) == 1 and "exists; pass --force to overwrite it" in lines[0], loser
     winner_v0 = -3.0 if results[0][0] == 0 else -5.0
     ds = sweeps.load_dataset(out)
-    assert float(ds.v0) == winner_v0 and ds.depth.shape == (151, 151)
+    assert float(ds.v0) == winner_v0 and ds.depth.shape == (61, 61)
     assert os.listdir(tmp_path) == ["same.nc"]
 
 
@@ -167,21 +169,35 @@ def test_reproduce_into_an_unusable_folder_exits_2_before_any_work(cli):
 def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, code, line):
     """Mid-way through the simulations of a large map (numba returns to Python between its
     chunks, so the signal is taken within a chunk): one line, 128 + the signal, no file."""
+    site, out = tmp_path / "site", tmp_path / "out"
+    site.mkdir(), out.mkdir()
+    started = site / "started"  # the map's work has begun (a fixed wait was mostly idle CPU)
+    (site / "sitecustomize.py").write_text(
+        "import pathlib\n"
+        "import softlanding.studies.sweeps as s\n"
+        "def depth_map(*a, _map=s.depth_map, **k):\n"
+        f"    pathlib.Path({str(started)!r}).touch()\n"
+        "    return _map(*a, **k)\n"
+        "s.depth_map = depth_map\n")
+    env = {**ENV, "PYTHONPATH": f"{site}{os.pathsep}{ENV['PYTHONPATH']}"}
     p = subprocess.Popen([*CMD, "map", "--v0", "-10", "--n", "2001", "--out",
-                          str(tmp_path / "m.nc"), "--plot", str(tmp_path / "m.png")], env=ENV,
+                          str(out / "m.nc"), "--plot", str(out / "m.png")], env=env,
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                          # a suite run as a background job (`pytest &`) ignores SIGINT, and
                          # its children inherit that (the CLI keeps an ignored SIGINT ignored)
                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    time.sleep(3.0)  # imports and the first chunks: the run takes minutes
-    assert p.poll() is None, p.communicate()[1]
+    deadline = time.monotonic() + 60
+    while not started.exists() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)  # into the simulations (the run takes minutes)
+    assert started.exists() and p.poll() is None, p.communicate()[1]
     p.send_signal(signum)
     returncode = p.wait(timeout=60)
     err = p.stderr.read()
     p.stderr.close()
     assert returncode == code, err
     assert err == line + "\n"
-    assert os.listdir(tmp_path) == []  # no dataset, no figure, no temporary file
+    assert os.listdir(out) == []  # no dataset, no figure, no temporary file
 
 
 def test_an_interruption_inside_generated_code_still_exits_130_under_python_m(tmp_path):

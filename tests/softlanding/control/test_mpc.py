@@ -26,8 +26,14 @@ def test_mpc_lands_near_the_clairvoyant_optimum(ground, v0):
     assert not open_loop.feasible or open_loop.depth > m.depth * (1 + 1e-3)
 
 
-def test_without_estimation_it_is_the_nominal_plan_re_solved():
-    m = mpc_landing(-3, PAPER_ROBOT, LinearGround(), estimate=False, controller="replan")
+@pytest.fixture(scope="module")
+def replan_on_the_model():
+    """The re-planning MPC without estimation on the ground it assumes (two tests read it)."""
+    return mpc_landing(-3, PAPER_ROBOT, LinearGround(), estimate=False, controller="replan")
+
+
+def test_without_estimation_it_is_the_nominal_plan_re_solved(replan_on_the_model):
+    m = replan_on_the_model
     assert m.depth == pytest.approx(solve_landing(-3).depth, rel=1e-10) and m.fallbacks == 0
     assert m.to_dict()["step_time_median_ms"] > 0
 
@@ -142,9 +148,9 @@ def test_a_failed_re_solve_is_transcribed_and_lands_as_before():
     assert clair.depth * (1 - 1e-9) <= m.depth <= 1.02 * clair.depth
 
 
-def test_on_the_ground_it_assumes_the_plan_always_holds():
+def test_on_the_ground_it_assumes_the_plan_always_holds(replan_on_the_model):
     # the model is the truth: every sample goes as planned, no re-solve at all
-    m = mpc_landing(-3, PAPER_ROBOT, LinearGround(), estimate=False, controller="replan")
+    m = replan_on_the_model
     assert m.step_paths and set(m.step_paths) == {"plan holds"}
     assert m.depth == pytest.approx(solve_landing(-3).depth, rel=1e-10)
 
