@@ -2,10 +2,13 @@
 
 from softlanding.cli import console_main
 
-code = console_main()
-# CPython marks a KeyboardInterrupt that ended a string exec or eval (code a library generated
-# with exec: a dataclass's methods, numba's) as unhandled even when it was caught, and under
-# ``-m`` then ends the process by SIGINT (status -2) after the run's own one-line report and
-# exit code 130; each string exec clears that mark (the console script is not affected).
-exec("")
+try:
+    code = console_main()
+finally:
+    # CPython marks a KeyboardInterrupt that ended a string exec or eval (code a library
+    # generated with exec: a dataclass's methods, numba's) as unhandled even once caught, and
+    # under ``-m`` then ends the process by SIGINT (status -2) after the run's own report and
+    # exit code 130. A string exec clears the mark; an interruption that does escape sets it
+    # again on its way out, as it should.
+    exec("")
 raise SystemExit(code)
