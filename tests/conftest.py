@@ -38,7 +38,7 @@ def console(tmp_path_factory):
     """Run ``python -m softlanding ARGS`` (a real process: real exit codes, the console's
     output) in a fresh folder, once per test run for each argument list: returns the
     completed process and its folder. The documentation shows some commands on two pages,
-    and ``reproduce --out paper --quick`` (5 to 10 minutes of CPU) is both a page's command
+    and ``reproduce --out paper --quick`` (about 3 minutes of CPU) is both a page's command
     (tests/test_docs_commands.py) and the run whose files tests/softlanding/report read.
     Outputs are only read; a run that timed out is not run again (its error is raised to
     every test that reads it)."""

@@ -357,14 +357,14 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
                                    "summary.md and summary.json with the headline numbers, "
                                    "and a robustness study of the nominal bang-bang and "
                                    "impedance controllers under +-30 % model error. --quick "
-                                   "(coarser grids, fewer velocities) takes 5 to 10 minutes "
-                                   "of CPU (330 s measured on a quiet machine, 576 s under "
-                                   "load); the full run several times that.")
+                                   "(coarser grids, fewer velocities) takes about 3 minutes "
+                                   "of CPU (170 s measured on a quiet machine, 2 min 12 s "
+                                   "wall on 2 cores); the full run several times that.")
     r.add_argument("--out", required=True, metavar="DIR",
                    help="folder to write: new or empty, or with --force an existing one whose "
                         "files of the same names are replaced")
     _force_arg(r)
-    r.add_argument("--quick", action="store_true", help="coarser grids: 5 to 10 minutes of CPU")
+    r.add_argument("--quick", action="store_true", help="coarser grids: about 3 minutes of CPU")
     r.add_argument("--json", action="store_true", help="print summary.json's contents")
     return r
 

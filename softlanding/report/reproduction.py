@@ -5,7 +5,7 @@ PDF, ``summary.json`` (every headline number, machine-readable), ``summary.md``
 (the same as tables, with the paper's values beside ours where it gives them)
 and the computed datasets under ``data/`` (netCDF; the unknown-ground study's rows as
 JSON and CSV). ``quick=True`` uses
-coarser grids and fewer impact velocities (5 to 10 minutes of CPU); the
+coarser grids and fewer impact velocities (about 3 minutes of CPU); the
 numbers it reports are still exact for the grids it uses, and each of them is
 what the public API returns for the same arguments (the test suite checks).
 """
@@ -41,7 +41,7 @@ def reproduce(out_dir: str | Path, quick: bool = False, *, progress: bool = True
         Folder to write into (created if missing; files of the same names are replaced,
         and only once the whole run has succeeded).
     quick : bool
-        Coarser grids and fewer impact velocities (5 to 10 minutes of CPU).
+        Coarser grids and fewer impact velocities (about 3 minutes of CPU).
     progress : bool
         Progress bars for the long sweeps.
     log : callable or None

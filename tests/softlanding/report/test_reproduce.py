@@ -12,7 +12,7 @@ from softlanding.optimal.landing import solve_landing
 from softlanding.studies.impedance import optimize_impedance
 from softlanding.studies.robustness import NOMINAL_UNITS, design, replay, transfer
 
-# the quick reproduction takes 5 to 10 minutes of CPU: it runs with the long studies (the
+# the quick reproduction takes about 3 minutes of CPU: it runs with the long studies (the
 # README's second test command, which CI runs too), keeping the default command fast; the
 # landing guide's command (tests/test_docs_commands.py) is the same run, shared
 pytestmark = pytest.mark.slow
