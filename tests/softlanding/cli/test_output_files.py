@@ -163,6 +163,13 @@ def test_reproduce_into_an_unusable_folder_exits_2_before_any_work(cli):
 
 
 # ------------------------------------------------------------------------- signals
+def _with_sitecustomize(folder, code: str) -> dict:
+    """The child's environment with ``code`` run at its start-up (a ``sitecustomize`` module
+    in ``folder``, first on its path): a hook into the real process's run."""
+    (folder / "sitecustomize.py").write_text(code)
+    return {**ENV, "PYTHONPATH": f"{folder}{os.pathsep}{ENV['PYTHONPATH']}"}
+
+
 @pytest.mark.parametrize(("signum", "code", "line"), [
     (signal.SIGTERM, 143, "softlanding: terminated (SIGTERM)"),
     pytest.param(signal.SIGINT, 130, "softlanding: interrupted", marks=pytest.mark.slow)])
@@ -172,14 +179,13 @@ def test_a_signal_mid_run_cleans_up_and_exits_128_plus_signal(tmp_path, signum, 
     site, out = tmp_path / "site", tmp_path / "out"
     site.mkdir(), out.mkdir()
     started = site / "started"  # the map's work has begun (a fixed wait was mostly idle CPU)
-    (site / "sitecustomize.py").write_text(
+    env = _with_sitecustomize(site, (
         "import pathlib\n"
         "import softlanding.studies.sweeps as s\n"
         "def depth_map(*a, _map=s.depth_map, **k):\n"
         f"    pathlib.Path({str(started)!r}).touch()\n"
         "    return _map(*a, **k)\n"
-        "s.depth_map = depth_map\n")
-    env = {**ENV, "PYTHONPATH": f"{site}{os.pathsep}{ENV['PYTHONPATH']}"}
+        "s.depth_map = depth_map\n"))
     p = subprocess.Popen([*CMD, "map", "--v0", "-10", "--n", "2001", "--out",
                           str(out / "m.nc"), "--plot", str(out / "m.png")], env=env,
                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
@@ -207,12 +213,11 @@ def test_an_interruption_inside_generated_code_still_exits_130_under_python_m(tm
     even once caught, and ``python -m`` then died by SIGINT (-2) after printing the run's one
     line (the SIGINT test above failed so, now and then: the signal had landed in such code,
     an import's dataclass or a compile, under load)."""
-    (tmp_path / "sitecustomize.py").write_text(
+    env = _with_sitecustomize(tmp_path, (
         "import softlanding.cli.commands as c\n"
         "def main(own_process=False):\n"
         "    exec('raise KeyboardInterrupt')\n"
-        "c.main = main\n")
-    env = {**ENV, "PYTHONPATH": f"{tmp_path}{os.pathsep}{ENV['PYTHONPATH']}"}
+        "c.main = main\n"))
     res = subprocess.run([*CMD, "simulate", "--v0", "-1", "--rigid"], env=env,
                          capture_output=True, text=True, timeout=120)
     assert (res.returncode, res.stderr) == (130, "softlanding: interrupted\n")
