@@ -59,8 +59,9 @@ class Settings:
             The quick run.
         """
         if quick:
+            # robustness: the factors 0.7, 1 and 1.3 (the worst regrets are at the ends)
             return cls(True, 41, 41, _grid(0.0, -10.0, 6), _grid(0.0, -10.0, 6),
-                       _grid(-1.0, -10.0, 5), 51, 5, (-3.0,), (0.5, 2.0), (0.0, 1.0))
+                       _grid(-1.0, -10.0, 5), 51, 3, (-3.0,), (0.5, 2.0), (0.0, 1.0))
         from softlanding.studies.unknown_ground import STUDY_DRAG, STUDY_STIFFNESS, STUDY_V0
 
         return cls(False, 101, 101, _grid(0.0, -10.0, 41), _grid(0.0, -10.0, 21),

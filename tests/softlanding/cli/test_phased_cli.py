@@ -43,8 +43,9 @@ def test_leg_extension_fixed_and_free(cli):
 
 
 def test_hop_json_and_plot(cli, tmp_path, monkeypatch, grid_hop):
-    # the CLI's rendering of a one-grid cycle (the solve is the shared fixture's; the whole
-    # command end to end is the slow test below)
+    # the CLI's rendering of a one-grid cycle (the solve is the shared fixture's; the
+    # command end to end, Ipopt's starts and grids included, is the hybrid guide's
+    # `softlanding hop --v0 -3 --leg all` and `--eta 0.9`, run by tests/test_docs_commands.py)
     import softlanding.optimal.hopping as hopping
 
     def solve_hop(impact, robot, eta, *, doublings):
@@ -73,17 +74,6 @@ def test_an_impedance_hop_prints_no_optimiser_figure(cli, monkeypatch, grid_hop)
     assert "optimiser's slack" not in out and "nan" not in out.lower(), out
     monkeypatch.setattr(hopping, "best_impedance_hop", lambda *a, **k: grid_hop)
     assert "optimiser's slack" in cli("hop", "--v0", "-2", "--leg", "impedance")[1]
-
-
-@pytest.mark.slow  # the hop end to end from one start: about 9 s CPU
-def test_hop_json_and_plot_end_to_end(cli, tmp_path, monkeypatch):
-    import softlanding.optimal.hopping as hopping
-
-    monkeypatch.setattr(hopping, "HOP_STARTS", hopping.HOP_STARTS[:1])  # the CLI, not the search
-    png = tmp_path / "hop.png"
-    code, out, _ = cli("hop", "--v0", "-1.5", "--doublings", "0", "--json", "--plot", png,
-                       "--pmp")
-    _check_hop_json(code, out, png)
 
 
 def _check_hop_json(code, out, png):
