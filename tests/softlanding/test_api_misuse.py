@@ -68,3 +68,36 @@ def test_a_warm_start_of_another_variant_is_refused():
     two = solve_two_phase(-1.0)
     with pytest.raises(ParameterError, match="warm_start"):
         solve_landing(-1.0, warm_start=two)
+
+
+def test_a_ground_is_checked_by_its_members_whether_they_are_its_class_or_its_own():
+    # expect() remembers a class that has every member of the Ground Protocol (its isinstance
+    # looks each member up, 24 us a call); an instance whose members are its own attributes
+    # is checked each time, and one that lacks a member is refused each time
+    from softlanding.errors import expect
+    from softlanding.model.ground import Ground
+
+    class Own:
+        def __init__(self, complete):
+            self.yield_force, self.added_mass = (lambda d, v: d), (lambda d: 0.0)
+            self.is_affine, self.to_dict = False, dict
+            if complete:
+                self.name = "own"
+
+    class Lacking:
+        name, is_affine = "lacking", False
+
+        def yield_force(self, d, v):
+            return d
+
+    for _ in range(2):
+        ok = Own(True)
+        assert expect("ground", ok, Ground) is ok
+        with pytest.raises(ParameterError, match="ground"):
+            expect("ground", Own(False), Ground)
+        with pytest.raises(ParameterError, match="ground"):
+            expect("ground", Lacking(), Ground)
+    g = DragGround(1.0, 0.5)
+    assert expect("ground", g, Ground) is g and expect("ground", g, Ground) is g
+    with pytest.raises(ParameterError, match="robot"):
+        simulate(g, -1, Rigid())
