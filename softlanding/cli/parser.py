@@ -358,7 +358,7 @@ def _reproduce(sub: Any) -> argparse.ArgumentParser:
                                    "and a robustness study of the nominal bang-bang and "
                                    "impedance controllers under +-30 % model error. --quick "
                                    "(coarser grids, fewer velocities) takes about 3 minutes "
-                                   "of CPU (170 s measured on a quiet machine, 2 min 12 s "
+                                   "of CPU (179 s measured on a quiet machine, 2 min 20 s "
                                    "wall on 2 cores); the full run several times that.")
     r.add_argument("--out", required=True, metavar="DIR",
                    help="folder to write: new or empty, or with --force an existing one whose "

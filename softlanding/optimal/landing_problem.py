@@ -217,7 +217,8 @@ def landing_transcription(nodes: int = 100, substeps: int = 4, omit: tuple[str, 
     substeps : int
         RK4 steps per interval.
     omit : tuple of str
-        Conditions dropped (diagnosis of infeasible requests).
+        Conditions dropped (diagnosis of infeasible requests): such a relaxed problem is
+        solved with :data:`RELAXED_IPOPT` (Ipopt's heuristics for an infeasible problem).
     ground : Ground
         Ground model.
     expand : bool

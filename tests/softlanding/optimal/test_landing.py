@@ -190,6 +190,17 @@ def test_infeasible_requests_name_the_condition(arrest_infeasible):
     assert "arrest force u_b <= u_max" in str(arrest_infeasible)
 
 
+def test_only_the_diagnosis_solves_with_the_infeasible_problem_heuristics():
+    # Ipopt's expect_infeasible_problem (restoration sooner) speeds up the relaxed problems
+    # the diagnosis solves; the landing itself must keep Ipopt's default path
+    from softlanding.optimal.landing_problem import ARREST, RELAXED_IPOPT, landing_transcription
+
+    main = landing_transcription(10).ipopt_options
+    relaxed = landing_transcription(10, omit=(ARREST,), expand=False).ipopt_options
+    assert "expect_infeasible_problem" not in main
+    assert relaxed.items() >= RELAXED_IPOPT.items() and relaxed["tol"] == main["tol"]
+
+
 @pytest.mark.parametrize("kwargs,name", [({"v0": 1.0}, "v0"), ({"v0": -1, "u_max": -2}, "u_max"),
                                          ({"v0": -1, "s": math.nan}, "s")])
 def test_bad_parameters(kwargs, name):
