@@ -71,7 +71,12 @@ from softlanding.optimal.pipeline import (
     solve_phased,
 )
 from softlanding.optimal.stance_phases import crater_capacity
-from softlanding.optimal.verification import certificate_reasons, replay_reasons
+from softlanding.optimal.verification import (
+    certificate_reasons,
+    replay_reasons,
+    static_depth,
+    static_depth_reason,
+)
 from softlanding.simulation.simulator import LandingResult, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
@@ -163,7 +168,19 @@ class BangBangLanding:
             out.append("the transcription violates a path constraint between its nodes")
         if self.replay is not None:
             out += replay_reasons(self.replay, self.depth, self.refined is not None)
-        return out + certificate_reasons(certificate)
+        out += certificate_reasons(certificate)
+        if out:  # (why, when the landing stops at the least depth a landing can rest at)
+            sol: Any = self.refined.xT if self.refined is not None else self.transcribed
+            v_b = float(sol[1] if self.refined is not None else sol.x[-1, 1])
+            out += static_depth_reason(self.depth, self.static_depth, v_b, self.u_b,
+                                       self.robot.body_mass)
+        return out
+
+    @property
+    def static_depth(self) -> float:
+        """The static depth ``W / K``, the least depth any landing can rest at on this ground
+        (NaN where the crater's hold is not ``K d``): a lower bound of :attr:`depth`."""
+        return static_depth(self.ground)
 
     @property
     def replay_difference(self) -> float:

@@ -8,7 +8,11 @@ its PMP certificate certifies it; otherwise each failed check is one line of
 
 from __future__ import annotations
 
+import math
 from typing import Any
+
+from softlanding.model.ground import Ground
+from softlanding.simulation.groundcode import hold_stiffness
 
 
 def _within_grid(replay: Any, refined: bool) -> bool:
@@ -51,6 +55,47 @@ def replay_reasons(replay: Any, depth: float, refined: bool) -> list[str]:
     if not diff <= tol:
         out.append(f"the replay's depth differs by {diff:.2e} (> {tol:.0e})")
     return out
+
+
+def static_depth(ground: Ground) -> float:
+    """The static depth ``W / K``: the least depth at which a landing can come to rest on
+    ``ground`` whose crater's static hold is ``K d`` (at rest it holds the robot's weight
+    ``W``, 1 in the paper's units, so no landing rests shallower); NaN where the hold is
+    not proportional to the depth.
+
+    Parameters
+    ----------
+    ground : Ground
+        The ground model.
+    """
+    k = hold_stiffness(ground)
+    return math.nan if k is None else 1.0 / k
+
+
+def static_depth_reason(depth: float, bound: float, v_b: float, u_b: float,
+                        body_weight: float) -> list[str]:
+    """The line an unverified landing at the static depth adds (empty elsewhere): its depth
+    is the least any landing that rests can reach, and why its replay cannot rest there.
+
+    Parameters
+    ----------
+    depth : float
+        The landing's depth.
+    bound : float
+        :func:`static_depth` of its ground (NaN: no line).
+    v_b : float
+        The body's velocity when the foot stops.
+    u_b, body_weight : float
+        The arrest force and the body's weight ``r_m / (1 + r_m)``.
+    """
+    if not abs(depth - bound) <= 1e-7 * bound:  # (NaN: no bound known)
+        return []
+    return [f"the depth is the static depth W/K = {bound:.10g} (to {abs(depth - bound):.1e}),"
+            " the least at which any landing rests: no schedule stops shallower; but there the"
+            " crater holds the robot's weight with no margin (arrest force u_b ="
+            f" {u_b:.10g}, the body's weight {body_weight:.10g}), so the body must already be"
+            f" at rest when the foot stops, and this schedule's body velocity then, {v_b:.1e},"
+            " is never arrested"]
 
 
 def refined_result_reasons(refined: bool, notes: list[str], replay: Any, replay_kind: str,

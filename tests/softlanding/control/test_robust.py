@@ -52,6 +52,21 @@ def test_robust_open_loop_holds_every_limit_and_beats_the_nominal_worst_case(rob
     assert robust.active == [int(np.argmax(robust.depths))] or len(robust.active) > 1
 
 
+def test_a_clairvoyant_optimum_at_the_static_depth_says_why_it_cannot_rest(clairvoyant):
+    """(issue 46's noticed case, on this file's clairvoyant landings): on the drag ground of
+    stiffness 0.5 the optimum stops the foot at the static depth W/K = 2, the least depth at
+    which a crater of that stiffness holds the robot's weight; none of the landings stops
+    shallower, and only that one says so."""
+    for g, c in zip(GROUNDS, clairvoyant, strict=True):
+        assert c.depth >= c.static_depth * (1 - 1e-7), g  # the bound holds for every one
+    c = clairvoyant[1]
+    assert c.static_depth == 2.0 and c.depth == pytest.approx(2.0, rel=1e-7)
+    assert c.u_b == pytest.approx(PAPER_ROBOT.body_mass, rel=1e-8)  # no margin left
+    why = c.unverified_reasons()
+    assert why and "static depth W/K = 2 " in why[-1] and "never arrested" in why[-1]
+    assert all("static depth" not in r for x in clairvoyant[2:] for r in x.unverified_reasons())
+
+
 def test_on_one_ground_it_is_the_optimum():
     r = robust_landing(-3, [LinearGround()])
     clair = solve_landing(-3)

@@ -174,6 +174,20 @@ def test_a_family_lands_as_its_own_law():
         assert fam.replay.depth == pytest.approx(fam.depth, rel=1e-9)
 
 
+def test_the_static_depth_is_the_weight_over_the_craters_stiffness_where_it_has_one():
+    # at rest the crater holds the robot's weight (1 in m_t g): f(d, 0) = K d >= 1
+    import casadi as ca
+
+    from softlanding.model.ground import CustomGround, LinearGround
+    from softlanding.optimal.verification import static_depth
+
+    assert static_depth(LinearGround(0.5)) == 2.0
+    assert static_depth(DragGround(1.0, 4.0)) == 0.25
+    assert static_depth(CustomGround("lin3", lambda d, v: 3 * d + 0.2 * v * v)) == \
+        pytest.approx(1 / 3, rel=1e-15)  # a law whose hold is K d, whatever its drag
+    assert math.isnan(static_depth(CustomGround("p", lambda d, v: ca.fmax(d, 0) ** 1.5)))
+
+
 def test_extra_switches_change_depth_by_less_than_one_percent():
     base = solve_landing(-3.0, replay=False)
     more = solve_landing(-3.0, extra_arcs=2, replay=False)
