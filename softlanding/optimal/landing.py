@@ -170,16 +170,17 @@ class BangBangLanding:
             out += replay_reasons(self.replay, self.depth, self.refined is not None)
         out += certificate_reasons(certificate)
         if out:  # (why, when the landing stops at the least depth a landing can rest at)
-            sol: Any = self.refined.xT if self.refined is not None else self.transcribed
-            v_b = float(sol[1] if self.refined is not None else sol.x[-1, 1])
-            out += static_depth_reason(self.depth, self.static_depth, v_b, self.u_b,
-                                       self.robot.body_mass)
+            done: Any = self.refined.xT if self.refined is not None else self.transcribed
+            xT = done if self.refined is not None else done.x[-1]
+            out += static_depth_reason(self.depth, self.static_depth, float(xT[1]), self.u_b,
+                                       self.robot.body_mass, self.replay)
         return out
 
     @property
     def static_depth(self) -> float:
-        """The static depth ``W / K``, the least depth any landing can rest at on this ground
-        (NaN where the crater's hold is not ``K d``): a lower bound of :attr:`depth`."""
+        """The static depth ``W / K``, the least depth at which any landing can come to rest
+        on this ground (NaN where the crater's hold is not ``K d``): a lower bound of
+        :attr:`depth` to the NLP's tolerance."""
         return static_depth(self.ground)
 
     @property

@@ -3,7 +3,8 @@
 A result is *verified* when its switching times were refined, its schedule replayed in the
 exact simulator comes to rest inside the stroke at the same depth, and (when one is given)
 its PMP certificate certifies it; otherwise each failed check is one line of
-``unverified_reasons``. These are the shared lines.
+``unverified_reasons``. These are the shared lines, and the one that says why a landing at
+the static depth (the least depth any landing rests at) cannot be verified.
 """
 
 from __future__ import annotations
@@ -73,9 +74,10 @@ def static_depth(ground: Ground) -> float:
 
 
 def static_depth_reason(depth: float, bound: float, v_b: float, u_b: float,
-                        body_weight: float) -> list[str]:
+                        body_weight: float, replay: Any = None) -> list[str]:
     """The line an unverified landing at the static depth adds (empty elsewhere): its depth
-    is the least any landing that rests can reach, and why its replay cannot rest there.
+    is the least any landing that rests can reach, and, when its replay does not come to
+    rest, why.
 
     Parameters
     ----------
@@ -87,15 +89,20 @@ def static_depth_reason(depth: float, bound: float, v_b: float, u_b: float,
         The body's velocity when the foot stops.
     u_b, body_weight : float
         The arrest force and the body's weight ``r_m / (1 + r_m)``.
+    replay : LandingResult, optional
+        The landing's replay in the exact simulator.
     """
-    if not abs(depth - bound) <= 1e-7 * bound:  # (NaN: no bound known)
+    # (an absolute tolerance on the NLP's side: a stiff ground's bound is below 1)
+    if not abs(depth - bound) <= 1e-7 * max(1.0, bound):  # (NaN: no bound known)
         return []
-    return [f"the depth is the static depth W/K = {bound:.10g} (to {abs(depth - bound):.1e}),"
-            " the least at which any landing rests: no schedule stops shallower; but there the"
-            " crater holds the robot's weight with no margin (arrest force u_b ="
-            f" {u_b:.10g}, the body's weight {body_weight:.10g}), so the body must already be"
-            f" at rest when the foot stops, and this schedule's body velocity then, {v_b:.1e},"
-            " is never arrested"]
+    line = (f"the depth is the static depth W/K = {bound:.10g} (to {abs(depth - bound):.1e}),"
+            " the least at which any landing comes to rest (to the NLP's tolerance); there"
+            " the crater holds the robot's weight with no margin (arrest force u_b ="
+            f" {u_b:.10g}, the body's weight {body_weight:.10g})")
+    if replay is not None and not replay.rest_proven and v_b != 0.0:
+        line += (", so the body must already be at rest when the foot stops, and this"
+                 f" schedule's body velocity then, {v_b:.1e}, is never arrested in the replay")
+    return [line]
 
 
 def refined_result_reasons(refined: bool, notes: list[str], replay: Any, replay_kind: str,
@@ -147,4 +154,5 @@ def certificate_reasons(certificate: Any) -> list[str]:
     return [f"PMP certificate {certificate.verdict}{why}"]
 
 
-__all__ = ["certificate_reasons", "refined_result_reasons", "replay_reasons"]
+__all__ = ["certificate_reasons", "refined_result_reasons", "replay_reasons", "static_depth",
+           "static_depth_reason"]

@@ -178,7 +178,7 @@ def test_the_static_depth_is_the_weight_over_the_craters_stiffness_where_it_has_
     # at rest the crater holds the robot's weight (1 in m_t g): f(d, 0) = K d >= 1
     import casadi as ca
 
-    from softlanding.model.ground import CustomGround, LinearGround
+    from softlanding.model.ground import AddedMassGround, CustomGround, LinearGround
     from softlanding.optimal.verification import static_depth
 
     assert static_depth(LinearGround(0.5)) == 2.0
@@ -186,6 +186,27 @@ def test_the_static_depth_is_the_weight_over_the_craters_stiffness_where_it_has_
     assert static_depth(CustomGround("lin3", lambda d, v: 3 * d + 0.2 * v * v)) == \
         pytest.approx(1 / 3, rel=1e-15)  # a law whose hold is K d, whatever its drag
     assert math.isnan(static_depth(CustomGround("p", lambda d, v: ca.fmax(d, 0) ** 1.5)))
+    # the grains' added mass moves only with the foot: at rest the hold is f(d, 0) still
+    assert static_depth(AddedMassGround(0.5, 1.0, 1.0)) == 1.0
+    assert static_depth(CustomGround("m", lambda d, v: 3 * d, mass=lambda d: 0.1 * d)) == \
+        pytest.approx(1 / 3, rel=1e-15)
+
+
+class _Replay:
+    rest_proven = False
+
+
+def test_the_static_depth_line_only_at_the_bound_and_its_replays_claim_only_with_one():
+    from softlanding.optimal.verification import static_depth_reason
+
+    at = static_depth_reason(2.0 - 2e-9, 2.0, -1e-9, 5 / 6, 5 / 6, _Replay())
+    assert len(at) == 1 and "W/K = 2 (to 2.0e-09)" in at[0] and "never arrested" in at[0]
+    assert static_depth_reason(2.0 + 3e-7, 2.0, -1e-9, 5 / 6, 5 / 6, _Replay()) == []
+    assert static_depth_reason(2.0, math.nan, -1e-9, 5 / 6, 5 / 6, _Replay()) == []
+    assert static_depth_reason(0.25 + 5e-8, 0.25, 0.0, 5 / 6, 5 / 6) != []  # (absolute tol)
+    for v_b, replay in ((-1e-9, None), (0.0, _Replay())):  # no claim it cannot check
+        assert "never arrested" not in static_depth_reason(2.0, 2.0, v_b, 5 / 6, 5 / 6,
+                                                           replay)[0]
 
 
 def test_extra_switches_change_depth_by_less_than_one_percent():
