@@ -48,6 +48,7 @@ from softlanding.optimal.pipeline import (
 )
 from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase_problem import OMITTABLE, two_phase_transcription
+from softlanding.optimal.verification import static_depth
 from softlanding.simulation.simulator import DEFAULT_MAX_SEGMENTS, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
@@ -290,8 +291,20 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                 f"no two-phase landing either: {err} (a phase-2 arrest within the force "
                 "limit and the crater's capacity exists exactly when the paper's does)"
             ) from None
-    out = solve_phased(TwoPhase(robot, impact, ground, steps, paper), warm_start,
-                       refine=refine, replay=replay)
+    try:
+        out = solve_phased(TwoPhase(robot, impact, ground, steps, paper), warm_start,
+                           refine=refine, replay=replay)
+    except SolveError as err:
+        bound = static_depth(ground)
+        if not abs(paper.depth - bound) <= 1e-7 * max(1.0, bound):
+            raise
+        # the static phase has no margin there (the arrest force is the body's weight):
+        # say so, not only the scaling of the last iterate
+        raise type(err)(err.status, err.iterate, f"{err}; the single-phase landing already "
+                        f"stops at the static depth W/K = {bound:.10g}, the least at which "
+                        "any landing comes to rest, so no two-phase landing stops shallower "
+                        "(its static phase would hold the robot's weight with no margin)"
+                        ) from err
     assert isinstance(out, TwoPhaseLanding)
     return out
 

@@ -6,8 +6,10 @@ import time
 import numpy as np
 import pytest
 
+from ocp import InfeasibleError, SolveError
 from softlanding import PAPER_ROBOT, Impact, Robot
 from softlanding.errors import InfeasibleLandingError
+from softlanding.model.ground import DragGround
 from softlanding.optimal.landing import solve_landing
 from softlanding.optimal.phase_schedule import arc_laws
 from softlanding.optimal.two_phase import solve_two_phase, sweep_two_phase, two_step_check
@@ -82,6 +84,29 @@ def test_infeasible_request_names_the_condition():
 def test_infeasible_arrest_is_named():
     with pytest.raises(InfeasibleLandingError, match="u_b <= u_max cannot be met"):
         solve_two_phase(Impact(-10.0), Robot(r_m=5, s=20, u_max=2.0))
+
+
+@pytest.mark.parametrize("error", [SolveError, InfeasibleError])
+def test_a_failure_at_the_static_depth_says_no_two_phase_landing_stops_shallower(
+        monkeypatch, error):
+    # (by hand: --variant two-phase on a drag ground of stiffness 0.5 at v0 = -3 ends in
+    # Ipopt's iteration limit after 30 s, the last iterate badly scaled)
+    import softlanding.optimal.two_phase as tp
+
+    def fails(*a, **k):
+        raise error("Maximum_Iterations_Exceeded", None, "Ipopt failed: it stopped")
+
+    monkeypatch.setattr(tp, "solve_phased", fails)
+    ground = DragGround(1.0, 0.5)
+    at = solve_landing(-1, PAPER_ROBOT, ground, replay=False)  # stops at W/K = 2
+    with pytest.raises(error) as info:
+        solve_two_phase(-1, PAPER_ROBOT, ground, paper=at)
+    assert info.value.status == "Maximum_Iterations_Exceeded"
+    assert str(info.value).startswith("Ipopt failed: it stopped; the single-phase landing "
+                                      "already stops at the static depth W/K = 2,")
+    with pytest.raises(error) as info:  # elsewhere: Ipopt's word only
+        solve_two_phase(-1, PAPER_ROBOT, paper=solve_landing(-1, replay=False))
+    assert str(info.value) == "Ipopt failed: it stopped"
 
 
 def test_json_dict_has_the_figures():
