@@ -170,11 +170,18 @@ class BangBangLanding:
             out += replay_reasons(self.replay, self.depth, self.refined is not None)
         out += certificate_reasons(certificate)
         if out:  # (why, when the landing stops at the least depth a landing can rest at)
-            done: Any = self.refined.xT if self.refined is not None else self.transcribed
-            xT = done if self.refined is not None else done.x[-1]
-            out += static_depth_reason(self.depth, self.static_depth, float(xT[1]), self.u_b,
+            out += static_depth_reason(self.depth, self.static_depth,
+                                       float(self.final_state[1]), self.u_b,
                                        self.robot.body_mass, self.replay)
         return out
+
+    @property
+    def final_state(self) -> np.ndarray:
+        """The state when the foot stops: the refinement's, else the transcription's."""
+        if self.refined is not None:
+            return np.asarray(self.refined.xT, dtype=float)
+        assert self.transcribed is not None  # (one of them, always: see assemble)
+        return np.asarray(self.transcribed.x[-1], dtype=float)
 
     @property
     def static_depth(self) -> float:

@@ -48,7 +48,7 @@ from softlanding.optimal.pipeline import (
 )
 from softlanding.optimal.result import PhasedLanding
 from softlanding.optimal.two_phase_problem import OMITTABLE, two_phase_transcription
-from softlanding.optimal.verification import static_depth
+from softlanding.optimal.verification import at_static_depth, static_depth
 from softlanding.simulation.simulator import DEFAULT_MAX_SEGMENTS, simulate
 from softlanding.util.jsonable import json_safe
 from softlanding.util.signals import raise_if_interrupted
@@ -296,7 +296,7 @@ def solve_two_phase(impact: Impact | float, robot: Robot = PAPER_ROBOT,
                            refine=refine, replay=replay)
     except SolveError as err:
         bound = static_depth(ground)
-        if not abs(paper.depth - bound) <= 1e-7 * max(1.0, bound):
+        if not at_static_depth(paper.depth, bound):
             raise
         # the static phase has no margin there (the arrest force is the body's weight):
         # say so, not only the scaling of the last iterate

@@ -73,6 +73,18 @@ def static_depth(ground: Ground) -> float:
     return math.nan if k is None else 1.0 / k
 
 
+def at_static_depth(depth: float, bound: float) -> bool:
+    """Whether ``depth`` is the static depth ``bound`` to the NLP's tolerance (1e-7, absolute
+    below 1: the NLP's error is; False where no bound is known, NaN).
+
+    Parameters
+    ----------
+    depth, bound : float
+        A landing's depth and :func:`static_depth` of its ground.
+    """
+    return abs(depth - bound) <= 1e-7 * max(1.0, bound)
+
+
 def static_depth_reason(depth: float, bound: float, v_b: float, u_b: float,
                         body_weight: float, replay: Any = None) -> list[str]:
     """The line an unverified landing at the static depth adds (empty elsewhere): its depth
@@ -92,8 +104,7 @@ def static_depth_reason(depth: float, bound: float, v_b: float, u_b: float,
     replay : LandingResult, optional
         The landing's replay in the exact simulator.
     """
-    # (an absolute tolerance on the NLP's side: a stiff ground's bound is below 1)
-    if not abs(depth - bound) <= 1e-7 * max(1.0, bound):  # (NaN: no bound known)
+    if not at_static_depth(depth, bound):
         return []
     line = (f"the depth is the static depth W/K = {bound:.10g} (to {abs(depth - bound):.1e}),"
             " the least at which any landing comes to rest (to the NLP's tolerance); there"
@@ -154,5 +165,5 @@ def certificate_reasons(certificate: Any) -> list[str]:
     return [f"PMP certificate {certificate.verdict}{why}"]
 
 
-__all__ = ["certificate_reasons", "refined_result_reasons", "replay_reasons", "static_depth",
-           "static_depth_reason"]
+__all__ = ["at_static_depth", "certificate_reasons", "refined_result_reasons", "replay_reasons",
+           "static_depth", "static_depth_reason"]
