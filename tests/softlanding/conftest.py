@@ -4,8 +4,9 @@ import pytest
 @pytest.fixture(scope="session")
 def grid_hop():
     """The free hop at ``v0 = -2``, ``eta = 0`` from the first of ``HOP_STARTS`` only, one
-    grid, no exact-arc refinement: shared by the tests of the cycle and of the CLI's
-    rendering of it (the search, the doubled grids and the refinement run in slow tests)."""
+    grid, no exact-arc refinement (4.6 s CPU): shared by the tests of the cycle and of the
+    CLI's rendering of it, all in the second test command (issue 46), as are the search, the
+    doubled grids and the refinement."""
     import softlanding.optimal.hopping as hopping
     from softlanding import PAPER_ROBOT
 

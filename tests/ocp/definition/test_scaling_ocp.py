@@ -48,6 +48,7 @@ REFS = {"x": {"ref": 1e3, "ref0": 5.0}, "v": {"ref": 30.0}, "u": {"ref": 0.5},
 
 
 # ------------------------------------------------------------------ the cannonball
+@pytest.mark.slow  # the suite's refined cannonball (1.9 s CPU, issue 46)
 def test_cannonball_collocation_refine_reaches_the_published_and_independent_optimum(
         suite_refined):
     """SI units, default guesses only, Radau with mesh refinement: 10 intervals a phase to
@@ -112,6 +113,7 @@ def test_default_guess_avoids_the_non_finite_dynamics():
         Collocation(p, intervals=4).solve()
 
 
+@pytest.mark.slow  # two transcriptions and a mesh refinement (2.8 s CPU, issue 46)
 def test_bare_cannonball_solves_with_both_transcriptions():
     """No ref anywhere, only bounds and default guesses: r >= 0, h >= 0, v >= 0 with
     guesses 0 say nothing of their sizes, which the automatic scaling takes from

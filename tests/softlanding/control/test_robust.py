@@ -12,6 +12,11 @@ from softlanding.errors import ParameterError
 from softlanding.model.ground import DragGround, LinearGround
 
 GROUNDS = [LinearGround(0.5), DragGround(1.0, 0.5), LinearGround(2.0), DragGround(1.0, 2.0)]
+# The tests that read the search over these four grounds (its fixtures below: 7 s CPU with the
+# tree and the clairvoyant optima, 9 s with test_cli_robust's own run) are in the second test
+# command (issue 46: the README's first keeps its CPU budget); the first keeps a robust search
+# on one ground here, the input checks, and a short robust run on two grounds by the CLI
+# (tests/softlanding/cli/test_cli.py).
 
 
 @pytest.fixture(scope="module")
@@ -29,6 +34,7 @@ def clairvoyant():
     return [solve_landing(-3, PAPER_ROBOT, g) for g in GROUNDS]
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_the_body_moves_alike_on_every_ground(robust):
     """The premise: the body's motion depends on the force only."""
     for t in np.linspace(0.1, robust.schedule.times[-2], 5):
@@ -37,6 +43,7 @@ def test_the_body_moves_alike_on_every_ground(robust):
             assert np.max(np.abs(other - body[0])) < 1e-8  # on the others
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_robust_open_loop_holds_every_limit_and_beats_the_nominal_worst_case(robust,
                                                                                clairvoyant):
     assert robust.feasible and not robust.nominal_feasible
@@ -52,6 +59,7 @@ def test_robust_open_loop_holds_every_limit_and_beats_the_nominal_worst_case(rob
     assert robust.active == [int(np.argmax(robust.depths))] or len(robust.active) > 1
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_a_clairvoyant_optimum_at_the_static_depth_says_why_it_cannot_rest(clairvoyant):
     """(issue 46's noticed case, on this file's clairvoyant landings): on the drag ground of
     stiffness 0.5 the optimum stops the foot at the static depth W/K = 2, the least depth at
@@ -76,6 +84,7 @@ def test_on_one_ground_it_is_the_optimum():
     assert clair.depth * (1 - 1e-9) <= r.worst <= clair.depth * (1 + 1e-6)
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_the_tree_is_never_worse_than_the_robust_open_loop(robust, tree, clairvoyant):
     assert tree.kind == "tree" and tree.branch_time == pytest.approx(0.05)
     assert tree.feasible and tree.worst <= robust.worst
@@ -91,6 +100,7 @@ def test_the_tree_is_never_worse_than_the_robust_open_loop(robust, tree, clairvo
     assert "re-planned" in tree.second_stage
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_json_of_both(robust, tree):
     d = json.loads(json.dumps(tree.to_dict()))
     assert d["kind"] == "tree" and len(d["grounds"]) == 4
@@ -109,11 +119,13 @@ def test_bad_input(call, name):
         call()
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_a_tree_does_not_branch_twice(tree):
     with pytest.raises(ParameterError, match="already"):
         two_stage_landing(tree)
 
 
+@pytest.mark.slow  # the same search and tree, end to end by the CLI
 def test_cli_robust(cli, tmp_path):
     png = tmp_path / "robust.png"
     code, out, err = cli("robust", "--v0", "-3", "--stiffness", "0.5,2", "--cd", "0,1",
@@ -230,6 +242,7 @@ def test_the_kkt_check_tells_a_minimax_optimum_from_a_point_that_is_not():
                         np.array([0.0, np.inf]), grad) < KKT_TOL
 
 
+@pytest.mark.slow  # reads the search over the four grounds
 def test_the_search_converges_or_says_so(robust):
     # issue 34: the schedule is a KKT point of the epigraph problem, checked independently
     from softlanding.control.robust import KKT_TOL

@@ -38,6 +38,7 @@ def test_segment_work_is_exact_on_a_flight_arc():
     assert w.positive == pytest.approx(pos, rel=1e-12)
 
 
+@pytest.mark.slow  # reads the session's hop (4.6 s CPU, issue 46)
 def test_the_optimal_cycle_closes_and_balances(free):
     assert free.unverified_reasons() == []
     assert free.apex_error < 1e-5 and free.balance_error < 1e-9
@@ -49,6 +50,7 @@ def test_the_optimal_cycle_closes_and_balances(free):
         < free.times["apex"]
 
 
+@pytest.mark.slow  # reads the session's hop (4.6 s CPU, issue 46)
 def test_exact_arcs_converge_only_cross_checked_and_agreeing(free):
     # the rule (issue 34 review): a refined cycle is converged when its NLP and its replay
     # agree to 1e-6 AND it lies within the grids' extrapolation and its error
@@ -65,6 +67,7 @@ def test_exact_arcs_converge_only_cross_checked_and_agreeing(free):
     assert not gap.converged and "differ" in gap.unconverged_reason()
 
 
+@pytest.mark.slow  # reads the session's hop (4.6 s CPU, issue 46)
 def test_the_apex_is_defined_once(free):
     # issue 46 item 5: the problem's apex conditions are the ones the replay is checked
     # against (and the exact arcs pose): one definition, in hopping_problem
@@ -79,6 +82,7 @@ def test_the_apex_is_defined_once(free):
     assert float(np.max(np.abs(res))) == free.apex_error
 
 
+@pytest.mark.slow  # reads the session's hop (4.6 s CPU, issue 46)
 def test_one_grid_says_it_is_discretised(free):
     # issue 34: the energy is a grid's (exact replay of its control), not the continuous
     # optimum; one grid gives no error estimate, and the cycle says both

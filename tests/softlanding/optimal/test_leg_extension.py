@@ -32,6 +32,7 @@ def test_free_extension_lowers_the_depth_and_stays_in_the_stroke():
     assert r.unverified_reasons() == []
 
 
+@pytest.mark.slow  # a solve of its own (1 s CPU, issue 46)
 def test_a_touch_point_of_the_stroke_is_imposed_exactly():
     # from a fresh refinement cache: run after other tests' refinements, this landing
     # has converged to a local optimum worse than the paper's touchdown state (an order
@@ -121,6 +122,7 @@ def test_second_start_refines_where_the_first_transcription_dives_through_the_st
     assert ref.objective == pytest.approx(direct.depth, abs=1e-9)
 
 
+@pytest.mark.slow  # a solve of its own (1 s CPU, issue 46)
 def test_a_guess_that_misleads_ipopt_falls_back_to_the_default_start(monkeypatch):
     """Ipopt failing from the two-phase guess (as seen after another variant's solve in the
     same process) is not the answer: the default start is tried."""

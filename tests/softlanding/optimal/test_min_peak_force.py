@@ -13,6 +13,7 @@ from softlanding.optimal.min_peak_force import solve_min_peak_force
 LEAST = 1.516295632282  # the two-phase least depth at v0 = -3 (tests/softlanding/cli)
 
 
+@pytest.mark.slow  # two solves (1.5 s CPU, issue 46); the binding budget's is fast
 def test_a_slack_budget_is_reported_and_its_peak_is_the_least_that_lands():
     budget = LEAST + 2.0
     r = solve_min_peak_force(-3, depth_max=budget)

@@ -53,7 +53,8 @@ def replay(ref, s):
     return x, lo, hi
 
 
-@pytest.mark.parametrize("s,v0", CASES)
+@pytest.mark.parametrize("s,v0", [  # s = 5, v0 = -10: 1.6 s CPU (issue 46)
+    pytest.param(*c, marks=pytest.mark.slow) if c == (5.0, -10.0) else c for c in CASES])
 def test_short_stroke_landing_refines_with_boundary_arcs(s, v0):
     tr = solve_landing(v0, Robot(r_m=R_M, s=s, u_max=U_MAX), refine=False, replay=False)
     sol = tr.transcribed

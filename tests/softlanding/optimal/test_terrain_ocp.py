@@ -14,7 +14,9 @@ from softlanding.studies.impedance import optimize_impedance
 GROUNDS = [DragGround(0.2), poppy_seed_added_mass(paper_rig_units())]
 
 
-@pytest.mark.parametrize("ground", GROUNDS, ids=["drag", "added-mass"])
+@pytest.mark.parametrize("ground", [  # the added-mass ground: 1.9 s CPU (issue 46)
+    pytest.param(GROUNDS[0], id="drag"),
+    pytest.param(GROUNDS[1], id="added-mass", marks=pytest.mark.slow)])
 def test_refined_bang_bang_replays_and_certifies(ground):
     from ocp import certify
 

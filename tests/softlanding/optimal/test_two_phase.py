@@ -16,13 +16,14 @@ from softlanding.optimal.two_phase import solve_two_phase, sweep_two_phase, two_
 
 
 @pytest.fixture(scope="module")
-def sweep():
+def sweep():  # 41 landings, 2.3 s CPU: its tests are in the second test command (issue 46)
     v0 = np.linspace(-0.5, -10.0, 41)
     t0 = time.perf_counter()
     rows = sweep_two_phase(v0, PAPER_ROBOT)
     return rows, time.perf_counter() - t0
 
 
+@pytest.mark.slow
 def test_two_phase_never_worse_than_the_paper_and_equal_to_it(sweep):
     rows, elapsed = sweep
     assert len(rows) == 41
@@ -32,6 +33,7 @@ def test_two_phase_never_worse_than_the_paper_and_equal_to_it(sweep):
     assert elapsed < 60
 
 
+@pytest.mark.slow
 def test_every_landing_of_the_sweep_is_refined_and_replayed_exactly(sweep):
     for r in sweep[0]:
         assert r.unverified_reasons() == [], (r.impact.v0, r.unverified_reasons())
@@ -39,6 +41,7 @@ def test_every_landing_of_the_sweep_is_refined_and_replayed_exactly(sweep):
         assert r.arcs == [["max", "min"], ["boundary"]]
 
 
+@pytest.mark.slow
 def test_the_optimal_arrest_is_the_constant_crater_capacity(sweep):
     for r in sweep[0]:
         lo, hi = r.arrest_force_range

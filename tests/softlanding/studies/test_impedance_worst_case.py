@@ -159,6 +159,7 @@ def test_cli_a_ground_named_twice_is_refused(cli):
 
 
 
+@pytest.mark.slow  # two worst-case searches with a drag ground (3 s CPU, issue 46)
 def test_a_ground_is_skipped_where_the_gains_already_fail_in_any_order(monkeypatch):
     """A further ground is simulated only at gains feasible on the grounds before it (inf on
     one ground is inf in the worst case): the grounds in either order give the same optimum

@@ -5,6 +5,7 @@ import pytest
 from softlanding.studies.unknown_ground import study_summary, true_ground, unknown_ground_case
 
 
+@pytest.mark.slow  # a case of the study: six controllers on one ground (1.8 s CPU, issue 46)
 def test_one_case_of_the_study():
     row = unknown_ground_case(-3.0, true_ground(2.0, 0.0))
     assert row["clairvoyant_verified"]
