@@ -51,6 +51,7 @@ def test_single_ground_result_is_unchanged(paper_impedance_optimum):
     assert o.depth == pytest.approx(1.7281126525126347, rel=1e-12)
 
 
+@pytest.mark.slow  # reads the three optimisations (3.9 s CPU, issue 46)
 def test_worst_case_lies_between_the_single_ground_optima_and_their_cross_values(optima):
     soft, stiff, worst = optima
     assert worst.value >= soft.value and worst.value >= stiff.value
@@ -64,6 +65,7 @@ def test_worst_case_lies_between_the_single_ground_optima_and_their_cross_values
     assert (worst.k_p, worst.k_d) not in {(soft.k_p, soft.k_d), (stiff.k_p, stiff.k_d)}
 
 
+@pytest.mark.slow  # reads the three optimisations (3.9 s CPU, issue 46)
 def test_worst_case_gains_are_feasible_on_every_ground_and_described(optima):
     worst = optima[2]
     runs = [simulate(R, Impact(V0), worst.controller, g) for g in (SOFT, STIFF)]
