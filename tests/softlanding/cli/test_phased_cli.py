@@ -42,7 +42,7 @@ def test_leg_extension_fixed_and_free(cli):
     assert code == 0 and d["gain"] > 0 and d["extension"] > 10
 
 
-@pytest.mark.slow  # reads the session's hop (4.5 s CPU, issue 46)
+@pytest.mark.slow  # reads the session's hop (4.6 s CPU, issue 46)
 def test_hop_json_and_plot(cli, tmp_path, monkeypatch, grid_hop):
     # the CLI's rendering of a one-grid cycle (the solve is the shared fixture's; the
     # command end to end, Ipopt's starts and grids included, is the hybrid guide's
@@ -60,7 +60,7 @@ def test_hop_json_and_plot(cli, tmp_path, monkeypatch, grid_hop):
     _check_hop_json(code, out, png)
 
 
-@pytest.mark.slow  # reads the session's hop (4.5 s CPU, issue 46)
+@pytest.mark.slow  # reads the session's hop (4.6 s CPU, issue 46)
 def test_an_impedance_hop_prints_no_optimiser_figure(cli, monkeypatch, grid_hop):
     # an impedance cycle has no optimiser's energy (NaN): its row is left out, not "nan"
     import copy

@@ -74,7 +74,7 @@ def test_depth_converges_as_the_tolerance_tightens():
     assert errs[0] < 1e-4
 
 
-@pytest.mark.slow  # compiles fixed_steps, which no fast test else runs (0.9 s, issue 46)
+@pytest.mark.slow  # compiles fixed_steps, which no other fast test runs (0.9 s, issue 46)
 def test_dop853_is_eighth_order_on_the_yielding_field():
     """Fixed steps: halving the step divides the error by about 2^8."""
     from softlanding.simulation.kernel import _f64
