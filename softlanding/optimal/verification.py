@@ -74,8 +74,9 @@ def static_depth(ground: Ground) -> float:
 
 
 def at_static_depth(depth: float, bound: float) -> bool:
-    """Whether ``depth`` is the static depth ``bound`` to the NLP's tolerance (1e-7, absolute
-    below 1: the NLP's error is; False where no bound is known, NaN).
+    """Whether ``depth`` is the static depth ``bound`` to the NLP's tolerance: 1e-7, absolute
+    for a bound below 1 (the NLP's error is absolute), relative above; False where no bound is
+    known (NaN).
 
     Parameters
     ----------

@@ -59,7 +59,7 @@ def test_robust_open_loop_holds_every_limit_and_beats_the_nominal_worst_case(rob
     assert robust.active == [int(np.argmax(robust.depths))] or len(robust.active) > 1
 
 
-@pytest.mark.slow  # reads the search over the four grounds
+@pytest.mark.slow  # reads the four grounds' clairvoyant optima
 def test_a_clairvoyant_optimum_at_the_static_depth_says_why_it_cannot_rest(clairvoyant):
     """(issue 46's noticed case, on this file's clairvoyant landings): on the drag ground of
     stiffness 0.5 the optimum stops the foot at the static depth W/K = 2, the least depth at
