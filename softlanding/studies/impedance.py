@@ -292,10 +292,12 @@ def _along_boundary(evaluate, best: tuple[float, float, float], h: float, kp_ran
         # a feasible upper end per k_d: the incumbent's k_p raised until feasible
         hi, f_hi = np.full(cd.size, np.nan), np.full(cd.size, np.nan)
         for step in (0.0, h, 4 * h, 16 * h, 64 * h):
+            idx = np.flatnonzero(np.isnan(hi))  # (only the k_d without one yet)
+            if idx.size == 0:
+                break
             top = min(best[0] + step, kp_range[1])
-            f = _signed(*evaluate(np.full(cd.size, top), cd))
-            ok = np.isnan(hi) & (f > 0)
-            hi[ok], f_hi[ok] = top, f[ok]
+            f = _signed(*evaluate(np.full(idx.size, top), cd[idx]))
+            hi[idx[f > 0]], f_hi[idx[f > 0]] = top, f[f > 0]
         have = np.isfinite(hi)
         if have.any():
             lo = np.maximum(hi[have] - 4 * max(h, 1e-6), kp_range[0])

@@ -48,7 +48,7 @@ def test_single_ground_result_is_unchanged(paper_impedance_optimum):
     the same computation as the one-ground sequence's (``optimize_impedance(-3.0, R)``, the
     session's)."""
     o = paper_impedance_optimum(-3.0)  # (R is the paper's robot)
-    assert o.evaluations == 19448
+    assert o.evaluations == 18930
     assert (o.k_p, o.k_d) == pytest.approx((0.13598202294788067, 0.257741497), rel=1e-12)
     assert o.depth == pytest.approx(1.728112652512615, rel=1e-12)
     assert 0.0 <= o.stroke_min <= 1e-13  # on the stroke limit, feasible
