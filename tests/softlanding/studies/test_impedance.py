@@ -38,9 +38,40 @@ def test_refined_optimum_is_feasible_best_and_on_the_boundary(v0, request,
     assert r.depth == opt.depth
     assert opt.on_stroke_boundary and 0.0 <= r.stroke_min <= 1e-6
     assert opt.active_constraint.startswith("stroke lower limit")
-    # a slightly softer leg leaves the stroke: the limit is really binding
-    softer = simulate(R, Impact(v0), Impedance(opt.k_p - 1e-6, opt.k_d))
-    assert softer.stroke_min < 0.0
+    # a slightly softer leg leaves the stroke: the limit is really binding, and k_p is on it
+    # to the 1e-12 the search closes its bracket to
+    for dk in (1e-6, 2e-12):
+        softer = simulate(R, Impact(v0), Impedance(opt.k_p - dk, opt.k_d))
+        assert softer.stroke_min < 0.0, dk
+
+
+def test_a_bracket_the_root_finder_leaves_open_is_halved_to_the_same_boundary(monkeypatch):
+    """Where Chandrupatla's method (scipy's find_root) does not close a bracket, halving does:
+    the optimum is then on the stroke limit to 1e-12 all the same, and as deep."""
+    from types import SimpleNamespace
+
+    from scipy.optimize import elementwise
+
+    args = (-3.0, R)
+    kwargs = {"grid": 21}
+    found = optimize_impedance(*args, **kwargs)
+    calls = []
+
+    def gives_up(f, init, *, args=(), tolerances=None):
+        lo, hi = (np.asarray(a, dtype=float) for a in init)
+        calls.append(lo.size)
+        f_lo, f_hi = f(lo, *args), f(hi, *args)
+        return SimpleNamespace(success=np.zeros(lo.size, bool), bracket=(lo, hi),
+                               f_bracket=(f_lo, f_hi))
+
+    monkeypatch.setattr(elementwise, "find_root", gives_up)
+    halved = optimize_impedance(*args, **kwargs)
+    assert calls and halved.evaluations > found.evaluations
+    assert halved.depth == pytest.approx(found.depth, abs=1e-11)
+    for o in (found, halved):
+        assert 0.0 <= o.stroke_min <= 1e-10
+        softer = simulate(R, Impact(-3.0), Impedance(o.k_p - 2e-12, o.k_d))
+        assert softer.stroke_min < 0.0
 
 
 def test_lossless_cot_is_ground_loss_over_impact_energy(map_v1):
