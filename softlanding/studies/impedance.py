@@ -224,9 +224,9 @@ def _lowest_feasible_kp(evaluate, kd: np.ndarray, lo: np.ndarray, hi: np.ndarray
     ``lo`` and ``hi``). That point's bracket is then closed to 1e-12 by Chandrupatla's
     method (:func:`scipy.optimize.elementwise.find_root`, all ``k_d`` at once) on the signed
     stroke margin, which is smooth where it decides feasibility: 3 to 4 landings per ``k_d``
-    where halving took 17 to 32 (measured at v0 = -3 and -10, grid 41). Where the margin does not decide (no rest proven) the
-    method falls back to bisection steps of its own; should it not close a bracket, halving
-    does.
+    where halving took 17 to 32 (measured at v0 = -3 and -10, grid 41). Where the margin
+    does not decide (no rest proven) the method falls back to bisection steps of its own;
+    should it not close a bracket, halving does.
     """
     from scipy.optimize.elementwise import find_root
 
