@@ -22,7 +22,13 @@ import numpy as np
 
 from softlanding.control.loop_replay import replay
 from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
-from softlanding.control.robust import GroundLanding, robust_landing, two_stage_landing
+from softlanding.control.robust import (
+    GroundLanding,
+    RobustLanding,
+    robust_landing,
+    two_stage_landing,
+)
+from softlanding.errors import ParameterError, expect
 from softlanding.model.controllers import Impedance
 from softlanding.model.ground import Ground, linear_or_drag
 from softlanding.model.robot import PAPER_ROBOT, Impact, Robot
@@ -120,6 +126,7 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
                          stiffness: Sequence[float] = STUDY_STIFFNESS,
                          drag: Sequence[float] = STUDY_DRAG, robot: Robot = PAPER_ROBOT, *,
                          period: float = DEFAULT_PERIOD, impedance_grid: int = 41,
+                         plans: Sequence[RobustLanding] = (),
                          progress: bool | None = None) -> list[dict[str, Any]]:
     """Every case of the study (see :func:`unknown_ground_case`), velocity-major.
 
@@ -134,25 +141,65 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
     impedance_grid : int
         The starting grid per axis of the impedance tuned for the worst case over the grounds
         (every grid point is one landing per ground).
+    plans : sequence of RobustLanding
+        Robust plans already made over the study's grounds (:func:`robust_landing`, and
+        :func:`two_stage_landing` for a tree; a notebook's, say): each is used for its
+        impact velocity instead of planning again, its landing on each ground read by
+        ground. A velocity without one is planned here (the tree from its open-loop plan).
     progress : bool, optional
         A progress bar.
+
+    Raises
+    ------
+    ParameterError
+        A plan of another robot, of other grounds, of a velocity outside the study, or two
+        plans of one kind for one velocity.
     """
-    plans = {v: solve_landing(v, robot) for v in v0_values}
     grounds = [true_ground(k, c) for k, c in itertools.product(stiffness, drag)]
+    given = _given_plans(plans, v0_values, grounds, robot)
+    nominal = {v: solve_landing(v, robot) for v in v0_values}
     tuned, worst, robust, trees = {}, {}, {}, {}
     for v in v0_values:
         o = optimize_impedance(v, robot)
         tuned[v] = Impedance(o.k_p, o.k_d)
         w = optimize_impedance(v, robot, grounds, grid=impedance_grid)
         worst[v] = Impedance(w.k_p, w.k_d)
-        robust[v] = robust_landing(v, grounds, robot, nominal=plans[v])
-        trees[v] = two_stage_landing(robust[v])
-    cases = [(v, i) for v in v0_values for i in range(len(grounds))]
-    return [unknown_ground_case(v, grounds[i], robot, period=period, nominal=plans[v],
+        r = given.get((v, "open-loop"))
+        robust[v] = r if r is not None else robust_landing(v, grounds, robot, nominal=nominal[v])
+        t = given.get((v, "tree"))
+        trees[v] = t if t is not None else two_stage_landing(robust[v])
+    cases = [(v, g) for v in v0_values for g in grounds]
+    return [unknown_ground_case(v, g, robot, period=period, nominal=nominal[v],
                                 gains=tuned[v], worst_gains=worst[v],
-                                robust=robust[v].landings[i],
-                                tree=trees[v].landings[i])
-            for v, i in show_progress(cases, progress, desc="unknown ground", unit="case")]
+                                robust=_landing_on(robust[v], g), tree=_landing_on(trees[v], g))
+            for v, g in show_progress(cases, progress, desc="unknown ground", unit="case")]
+
+
+def _given_plans(plans: Sequence[RobustLanding], v0_values: Sequence[float],
+                 grounds: Sequence[Ground], robot: Robot
+                 ) -> dict[tuple[float, str], RobustLanding]:
+    """The plans given to :func:`unknown_ground_study`, by (velocity, kind), checked."""
+    given: dict[tuple[float, str], RobustLanding] = {}
+    for p in plans:
+        expect("plans", p, RobustLanding)
+        v = p.impact.v0
+        if v not in v0_values:
+            raise ParameterError("plans", f"a plan for v0 = {v:g}, not one of the study's "
+                                          "velocities")
+        if p.robot != robot:
+            raise ParameterError("plans", f"the plan for v0 = {v:g} is another robot's")
+        if set(p.grounds) != set(grounds) or len(p.grounds) != len(grounds):
+            raise ParameterError("plans", f"the plan for v0 = {v:g} is over other grounds "
+                                          "than the study's")
+        if (v, p.kind) in given:
+            raise ParameterError("plans", f"two {p.kind} plans for v0 = {v:g}")
+        given[(v, p.kind)] = p
+    return given
+
+
+def _landing_on(plan: RobustLanding, ground: Ground) -> GroundLanding:
+    """The plan's landing on ``ground`` (one of its grounds)."""
+    return plan.landings[plan.grounds.index(ground)]
 
 
 #: The realistic sensing of the controller study (issue 33), in the paper's units on its

@@ -19,3 +19,85 @@ def test_one_case_of_the_study():
 def test_true_ground_is_linear_without_drag():
     assert true_ground(1.5, 0.0).to_dict() == {"model": "linear", "stiffness": 1.5}
     assert true_ground(1.0, 0.2).to_dict() == {"model": "drag", "c_d": 0.2}
+
+
+# ------------------------------------------------------------------ plans given to the study
+GROUNDS = [true_ground(k, c) for k in (0.5, 2.0) for c in (0.0, 1.0)]
+REVERSED = tuple(reversed(GROUNDS))
+
+
+def _plan(kind, grounds=REVERSED, v0=-3.0, robot=None, first=0):
+    """A robust plan as the study reads it (its grounds, and one landing each, told apart by
+    depth): nothing is planned."""
+    from types import SimpleNamespace
+
+    from softlanding import PAPER_ROBOT, Impact
+    from softlanding.control.robust import RobustLanding
+
+    return RobustLanding(robot=robot or PAPER_ROBOT, impact=Impact(v0), grounds=tuple(grounds),
+                         kind=kind, schedule=None, nominal=[],
+                         landings=[SimpleNamespace(depth=first + i) for i in range(len(grounds))])
+
+
+@pytest.fixture
+def study(monkeypatch):
+    """unknown_ground_study with every solve replaced: what each case receives."""
+    from types import SimpleNamespace
+
+    import softlanding.studies.unknown_ground as ug
+
+    planned = []
+    monkeypatch.setattr(ug, "solve_landing", lambda *a, **k: "nominal")
+    monkeypatch.setattr(ug, "optimize_impedance", lambda *a, **k: SimpleNamespace(k_p=1, k_d=0))
+    monkeypatch.setattr(ug, "robust_landing", lambda v, g, *a, **k: planned.append("robust")
+                        or _plan("open-loop", g, v, first=100))
+    monkeypatch.setattr(ug, "two_stage_landing", lambda r: planned.append("tree")
+                        or _plan("tree", r.grounds, r.impact.v0, first=200))
+    monkeypatch.setattr(ug, "unknown_ground_case", lambda v, g, robot, **kw: {
+        "ground": g, "robust": kw["robust"].depth, "tree": kw["tree"].depth})
+
+    def run(plans):
+        rows = ug.unknown_ground_study([-3.0], (0.5, 2.0), (0.0, 1.0), plans=plans)
+        return rows, planned
+
+    return run
+
+
+def test_the_plans_given_are_read_by_ground_not_planned_again(study):
+    # the plans hold the study's grounds in another order: each case gets its own ground's
+    rows, planned = study([_plan("open-loop"), _plan("tree", first=10)])
+    assert planned == []
+    order = list(REVERSED)
+    assert [r["ground"] for r in rows] == GROUNDS
+    assert [r["robust"] for r in rows] == [order.index(g) for g in GROUNDS]
+    assert [r["tree"] for r in rows] == [10 + order.index(g) for g in GROUNDS]
+
+
+def test_a_velocity_without_a_tree_gets_one_from_its_plan(study):
+    rows, planned = study([_plan("open-loop")])
+    assert planned == ["tree"]
+    assert [r["tree"] for r in rows] == [200 + 3 - i for i in range(4)]  # from the given plan
+    rows, planned = study([])
+    assert planned == ["tree", "robust", "tree"]
+
+
+@pytest.mark.parametrize("plans, words", [
+    ([_plan("open-loop", v0=-1.0)], "v0 = -1, not one of the study's"),
+    ([_plan("open-loop", GROUNDS[:3])], "other grounds"),
+    ([_plan("open-loop", GROUNDS[:3] + [true_ground(1.0, 0.0)])], "other grounds"),
+    ([_plan("tree"), _plan("tree")], "two tree plans"),
+    (["plan"], "plans"),
+])
+def test_a_plan_that_is_not_the_studys_is_refused(study, plans, words):
+    from softlanding.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=words):
+        study(plans)
+
+
+def test_a_plan_of_another_robot_is_refused(study):
+    from softlanding import PAPER_ROBOT
+    from softlanding.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="another robot"):
+        study([_plan("open-loop", robot=PAPER_ROBOT.replace(s=5.0))])
