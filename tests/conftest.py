@@ -1,3 +1,4 @@
+import contextlib
 import os
 import subprocess
 import sys
@@ -102,9 +103,10 @@ def _no_compile_notice(request):
 # it (PYTHONDONTWRITEBYTECODE): each process a test starts (the CLI's, the documentation's
 # notebooks and commands, dozens) would otherwise compile the package's sources again, about
 # 0.3 s of CPU each (`python -m softlanding solve --v0 -3`: 1.75 s, 1.45 s with the bytecode).
-# Only the files this run wrote are removed at its end: nothing is left behind.
+# At the run's end the files it wrote are removed, and the __pycache__ folders it made if
+# they are empty (numba's cache may have moved in): nothing is left behind.
 PACKAGES = ("softlanding", "ocp")
-_WROTE: list[Path] = []
+WROTE = pytest.StashKey[tuple[list[Path], list[Path]]]()
 
 
 def pytest_sessionstart(session):
@@ -116,19 +118,24 @@ def pytest_sessionstart(session):
     import importlib.util
 
     root = Path(__file__).resolve().parents[1]
-    sources = [f for pkg in PACKAGES for f in (root / pkg).rglob("*.py")]
-    before = {f for f in sources if Path(importlib.util.cache_from_source(str(f))).exists()}
+    caches = [Path(importlib.util.cache_from_source(str(f)))
+              for pkg in PACKAGES for f in (root / pkg).rglob("*.py")]
+    # recorded before compiling: an interrupted compile is cleaned up too
+    files = [c for c in caches if not c.exists()]
+    folders = sorted({c.parent for c in files if not c.parent.exists()}, reverse=True)
+    session.config.stash[WROTE] = (files, folders)
     for pkg in PACKAGES:
-        compileall.compile_dir(root / pkg, quiet=2)
-    _WROTE.extend(Path(importlib.util.cache_from_source(str(f))) for f in sources
-                  if f not in before)
+        compileall.compile_dir(root / pkg, quiet=2)  # (a read-only tree: nothing written)
 
 
 def pytest_sessionfinish(session):
-    """The bytecode :func:`pytest_sessionstart` wrote, removed."""
-    for f in _WROTE:
+    """The bytecode :func:`pytest_sessionstart` wrote, and the folders it made, removed."""
+    files, folders = session.config.stash.get(WROTE, ([], []))
+    for f in files:
         f.unlink(missing_ok=True)
-    _WROTE.clear()
+    for d in folders:
+        with contextlib.suppress(OSError):  # not empty: another cache lives there now
+            d.rmdir()
 
 
 @pytest.hookimpl(hookwrapper=True)

@@ -23,6 +23,7 @@ import numpy as np
 from softlanding.control.loop_replay import replay
 from softlanding.control.mpc import DEFAULT_PERIOD, mpc_landing
 from softlanding.control.robust import (
+    DEFAULT_BRANCH_TIME,
     GroundLanding,
     RobustLanding,
     robust_landing,
@@ -126,7 +127,7 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
                          stiffness: Sequence[float] = STUDY_STIFFNESS,
                          drag: Sequence[float] = STUDY_DRAG, robot: Robot = PAPER_ROBOT, *,
                          period: float = DEFAULT_PERIOD, impedance_grid: int = 41,
-                         plans: Sequence[RobustLanding] = (),
+                         plans: Sequence[RobustLanding] | RobustLanding = (),
                          progress: bool | None = None) -> list[dict[str, Any]]:
     """Every case of the study (see :func:`unknown_ground_case`), velocity-major.
 
@@ -141,19 +142,23 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
     impedance_grid : int
         The starting grid per axis of the impedance tuned for the worst case over the grounds
         (every grid point is one landing per ground).
-    plans : sequence of RobustLanding
+    plans : sequence of RobustLanding, or one
         Robust plans already made over the study's grounds (:func:`robust_landing`, and
         :func:`two_stage_landing` for a tree; a notebook's, say): each is used for its
         impact velocity instead of planning again, its landing on each ground read by
-        ground. A velocity without one is planned here (the tree from its open-loop plan).
+        ground. A tree needs its open-loop plan given with it (and the study's branching
+        time); a velocity given an open-loop plan alone gets its tree from it, one given
+        nothing is planned here.
     progress : bool, optional
         A progress bar.
 
     Raises
     ------
     ParameterError
-        A plan of another robot, of other grounds, of a velocity outside the study, or two
-        plans of one kind for one velocity.
+        A plan of another robot, of other grounds, of a velocity outside the study, of a
+        kind other than ``"open-loop"`` or ``"tree"``, two plans of one kind for one
+        velocity, or a tree without its open-loop plan or at another branching time
+        (checked before anything is solved).
     """
     grounds = [true_ground(k, c) for k, c in itertools.product(stiffness, drag)]
     given = _given_plans(plans, v0_values, grounds, robot)
@@ -175,10 +180,15 @@ def unknown_ground_study(v0_values: Sequence[float] = STUDY_V0,
             for v, g in show_progress(cases, progress, desc="unknown ground", unit="case")]
 
 
-def _given_plans(plans: Sequence[RobustLanding], v0_values: Sequence[float],
+def _given_plans(plans: Sequence[RobustLanding] | RobustLanding, v0_values: Sequence[float],
                  grounds: Sequence[Ground], robot: Robot
                  ) -> dict[tuple[float, str], RobustLanding]:
-    """The plans given to :func:`unknown_ground_study`, by (velocity, kind), checked."""
+    """The plans given to :func:`unknown_ground_study`, by (velocity, kind), checked (one
+    plan alone is taken as a sequence of one)."""
+    if isinstance(plans, RobustLanding):
+        plans = (plans,)
+    if not isinstance(plans, Sequence):
+        raise ParameterError("plans", "must be a sequence of RobustLanding")
     given: dict[tuple[float, str], RobustLanding] = {}
     for p in plans:
         expect("plans", p, RobustLanding)
@@ -191,9 +201,25 @@ def _given_plans(plans: Sequence[RobustLanding], v0_values: Sequence[float],
         if set(p.grounds) != set(grounds) or len(p.grounds) != len(grounds):
             raise ParameterError("plans", f"the plan for v0 = {v:g} is over other grounds "
                                           "than the study's")
+        if p.kind not in ("open-loop", "tree"):
+            raise ParameterError("plans", f"the plan for v0 = {v:g} is of kind {p.kind!r}, "
+                                          "not 'open-loop' or 'tree'")
         if (v, p.kind) in given:
             raise ParameterError("plans", f"two {p.kind} plans for v0 = {v:g}")
         given[(v, p.kind)] = p
+    for (v, kind), t in given.items():
+        # the study's tree is its open-loop plan's, at the study's branching time: a tree
+        # alone (or another plan's) would pair rows of two plans
+        if kind != "tree":
+            continue
+        r = given.get((v, "open-loop"))
+        if r is None or t.schedule != r.schedule:
+            raise ParameterError("plans", f"the tree for v0 = {v:g} needs the open-loop plan "
+                                          "it was made from, given with it")
+        if t.branch_time != DEFAULT_BRANCH_TIME:
+            raise ParameterError("plans", f"the tree for v0 = {v:g} branches at "
+                                          f"{t.branch_time:g}, not at the study's "
+                                          f"{DEFAULT_BRANCH_TIME:g}")
     return given
 
 

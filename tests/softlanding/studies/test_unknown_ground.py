@@ -26,40 +26,51 @@ GROUNDS = [true_ground(k, c) for k in (0.5, 2.0) for c in (0.0, 1.0)]
 REVERSED = tuple(reversed(GROUNDS))
 
 
-def _plan(kind, grounds=REVERSED, v0=-3.0, robot=None, first=0):
+def _plan(kind, grounds=REVERSED, v0=-3.0, robot=None, first=0, schedule="robust",
+          branch_time=None):
     """A robust plan as the study reads it (its grounds, and one landing each, told apart by
     depth): nothing is planned."""
     from types import SimpleNamespace
 
     from softlanding import PAPER_ROBOT, Impact
-    from softlanding.control.robust import RobustLanding
+    from softlanding.control.robust import DEFAULT_BRANCH_TIME, RobustLanding
 
     return RobustLanding(robot=robot or PAPER_ROBOT, impact=Impact(v0), grounds=tuple(grounds),
-                         kind=kind, schedule=None, nominal=[],
-                         landings=[SimpleNamespace(depth=first + i) for i in range(len(grounds))])
+                         kind=kind, schedule=schedule, nominal=[],
+                         landings=[SimpleNamespace(depth=first + i) for i in range(len(grounds))],
+                         branch_time=branch_time if branch_time is not None or kind != "tree"
+                         else DEFAULT_BRANCH_TIME)
 
 
 @pytest.fixture
 def study(monkeypatch):
-    """unknown_ground_study with every solve replaced: what each case receives."""
+    """unknown_ground_study with every solve replaced: what each case receives, and the
+    solves run (each call's own)."""
     from types import SimpleNamespace
 
     import softlanding.studies.unknown_ground as ug
 
-    planned = []
-    monkeypatch.setattr(ug, "solve_landing", lambda *a, **k: "nominal")
-    monkeypatch.setattr(ug, "optimize_impedance", lambda *a, **k: SimpleNamespace(k_p=1, k_d=0))
-    monkeypatch.setattr(ug, "robust_landing", lambda v, g, *a, **k: planned.append("robust")
-                        or _plan("open-loop", g, v, first=100))
-    monkeypatch.setattr(ug, "two_stage_landing", lambda r: planned.append("tree")
-                        or _plan("tree", r.grounds, r.impact.v0, first=200))
+    solved = []
+
+    def solve(name, result):
+        return lambda *a, **k: solved.append(name) or result(*a)
+
+    monkeypatch.setattr(ug, "solve_landing", solve("nominal", lambda *a: "nominal"))
+    monkeypatch.setattr(ug, "optimize_impedance",
+                        solve("impedance", lambda *a: SimpleNamespace(k_p=1, k_d=0)))
+    monkeypatch.setattr(ug, "robust_landing", solve(
+        "robust", lambda v, g, *a: _plan("open-loop", g, v, first=100)))
+    monkeypatch.setattr(ug, "two_stage_landing", solve(
+        "tree", lambda r: _plan("tree", r.grounds, r.impact.v0, first=200)))
     monkeypatch.setattr(ug, "unknown_ground_case", lambda v, g, robot, **kw: {
         "ground": g, "robust": kw["robust"].depth, "tree": kw["tree"].depth})
 
     def run(plans):
+        solved.clear()
         rows = ug.unknown_ground_study([-3.0], (0.5, 2.0), (0.0, 1.0), plans=plans)
-        return rows, planned
+        return rows, [s for s in solved if s in ("robust", "tree")]
 
+    run.solved = solved
     return run
 
 
@@ -74,25 +85,32 @@ def test_the_plans_given_are_read_by_ground_not_planned_again(study):
 
 
 def test_a_velocity_without_a_tree_gets_one_from_its_plan(study):
-    rows, planned = study([_plan("open-loop")])
+    rows, planned = study(_plan("open-loop"))  # one plan alone: a sequence of one
     assert planned == ["tree"]
     assert [r["tree"] for r in rows] == [200 + 3 - i for i in range(4)]  # from the given plan
     rows, planned = study([])
-    assert planned == ["tree", "robust", "tree"]
+    assert planned == ["robust", "tree"]
 
 
 @pytest.mark.parametrize("plans, words", [
     ([_plan("open-loop", v0=-1.0)], "v0 = -1, not one of the study's"),
     ([_plan("open-loop", GROUNDS[:3])], "other grounds"),
     ([_plan("open-loop", GROUNDS[:3] + [true_ground(1.0, 0.0)])], "other grounds"),
-    ([_plan("tree"), _plan("tree")], "two tree plans"),
-    (["plan"], "plans"),
+    ([_plan("open-loop", GROUNDS + [GROUNDS[0]])], "other grounds"),  # one ground twice
+    ([_plan("closed-loop")], "kind 'closed-loop'"),
+    ([_plan("open-loop"), _plan("open-loop")], "two open-loop plans"),
+    ([_plan("tree")], "needs the open-loop plan it was made from"),
+    ([_plan("open-loop"), _plan("tree", schedule="another")], "needs the open-loop plan"),
+    ([_plan("open-loop"), _plan("tree", branch_time=0.1)], "branches at 0.1"),
+    (["plan"], "must be a RobustLanding"),
+    (42, "must be a sequence of RobustLanding"),
 ])
-def test_a_plan_that_is_not_the_studys_is_refused(study, plans, words):
+def test_a_plan_that_is_not_the_studys_is_refused_before_any_solve(study, plans, words):
     from softlanding.errors import ParameterError
 
     with pytest.raises(ParameterError, match=words):
         study(plans)
+    assert study.solved == []
 
 
 def test_a_plan_of_another_robot_is_refused(study):
