@@ -192,8 +192,8 @@ class Figures:
     H_scale : float
         ``max_t sum_i |lambda_i xdot_i|``, the size of the terms that must cancel.
     H_max_abs, H_var : float
-        ``max |H - H_expected|`` (or ``- mean H``) and ``max H - min H`` over the
-        judged samples, divided by ``H_scale``.
+        :func:`H_deviation` and ``max H - min H`` over the judged samples, divided by
+        ``H_scale``.
     agreement : dict of str to float
         Per control: fraction of the time (where sigma is clearly non-zero) the
         control sits at the bound (or vertex) that minimises H.
@@ -205,6 +205,8 @@ class Figures:
         Per control: the interpolated sign changes of its sigma.
     linear : bool
         H is linear in u (a control-affine problem).
+    T_side : int
+        T at its upper (+1) or lower (-1) bound, else 0 (the judgement's wording).
     """
 
     H: np.ndarray
@@ -217,13 +219,38 @@ class Figures:
     singular: list[tuple[float, float]]
     zeros: dict[str, np.ndarray]
     linear: bool = True
+    T_side: int = 0
+
+
+def H_deviation(H: np.ndarray, H_exp: float | None, T_side: int = 0) -> float:
+    """How far the Hamiltonian's samples are from what the free final time demands.
+
+    ``max |H - H_exp|``; with ``H_exp`` None (T fixed) ``max |H - mean H|``; with T at a
+    bound (``T_side`` +1 upper, -1 lower) ``H`` need only be constant and on the allowed
+    side of ``H_exp``: the larger of ``max |H - mean H|`` and the mean's excess
+    ``max(0, T_side (mean H - H_exp))``.
+
+    Parameters
+    ----------
+    H : ndarray
+        The judged samples (not empty).
+    H_exp : float or None
+        Free-T transversality's value of H.
+    T_side : int
+        See :func:`ocp.certificate.costates.final_time_condition`.
+    """
+    if H_exp is not None and not T_side:
+        return float(np.max(np.abs(H - H_exp)))
+    mean = float(np.mean(H))
+    excess = max(0.0, T_side * (mean - H_exp)) if H_exp is not None else 0.0
+    return max(float(np.max(np.abs(H - mean))), excess)
 
 
 def figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarray,
             u: np.ndarray, lam: np.ndarray, H_exp: float | None, skip: np.ndarray,
             switches: dict[str, list[float]], tol_sigma: float, sigma_floor: np.ndarray,
             u_tol: float, min_singular: float, interior_check: bool = False,
-            bounds: tuple[np.ndarray, np.ndarray] | None = None) -> Figures:
+            bounds: tuple[np.ndarray, np.ndarray] | None = None, T_side: int = 0) -> Figures:
     """Evaluate H and sigma and the sign, switch and singularity checks.
 
     ``skip`` marks samples not judged (constrained, or unresolved by the grid);
@@ -260,6 +287,9 @@ def figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarra
         Count a run as singular only where the control is inside its bounds.
     bounds : (ndarray, ndarray), optional
         Lower and upper control bounds at each sample, each (m, nu).
+    T_side : int
+        T at its upper (+1) or lower (-1) bound: H need only be constant and on that side
+        of ``H_exp`` (:func:`H_deviation`).
 
     Returns
     -------
@@ -283,8 +313,7 @@ def figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarra
     xdot = along(pr.dynamics_function(), x, u, pv)[0]
     H_scale = float(np.max(np.sum(np.abs(lam * xdot), axis=1), initial=0.0)) or 1.0
     judged = ~skip
-    ref_H = H_exp if H_exp is not None else float(np.mean(H[judged])) if judged.any() else 0.0
-    H_max_abs = float(np.max(np.abs(H[judged] - ref_H), initial=0.0)) / H_scale
+    H_max_abs = H_deviation(H[judged], H_exp, T_side) / H_scale if judged.any() else 0.0
     H_var = float(np.ptp(H[judged])) / H_scale if judged.any() else 0.0
     dt = np.gradient(t) if len(t) > 1 else np.ones(len(t))
     agreement, gap, zeros = {}, {}, {}
@@ -319,7 +348,7 @@ def figures(pr: OptimalControlProblem, params: dict, t: np.ndarray, x: np.ndarra
         gap[name] = max((switch_gap(t, s, zc, ts) for ts in switches.get(name, [])),
                         default=0.0)
     return Figures(H, sigma, H_scale, H_max_abs, H_var, agreement, gap, singular, zeros,
-                   fns.linear)
+                   fns.linear, T_side)
 
 
 def _coupled_figures(pr: OptimalControlProblem, pv: np.ndarray, t: np.ndarray, u: np.ndarray,
@@ -428,6 +457,9 @@ def judge(fig: Figures, tol: Tolerances, err: dict[str, float],
             definite.append(text)
 
     what = "its free-T value" if expected_H else "a constant"
+    if expected_H and fig.T_side:
+        what = (f"a constant on the side of its free-T value that T at its "
+                f"{'upper' if fig.T_side > 0 else 'lower'} bound allows")
     check(fig.H_max_abs, tol.H, err.get("H", 0.0),
           f"H deviates from {what} by {fig.H_max_abs:.2e} of its scale (> {tol.H:g})")
     for name, frac in fig.agreement.items():

@@ -22,6 +22,7 @@ at its upper bound where ``sigma_j < 0``, at its lower bound where
 
 from __future__ import annotations
 
+import math
 import weakref
 from dataclasses import dataclass, field
 from typing import Any
@@ -172,6 +173,47 @@ def terminal_costate(pr: OptimalControlProblem, xT: np.ndarray, T: float, pv: np
     return np.array(lamT, dtype=float).ravel(), -float(dT)
 
 
+def final_time_condition(pr: OptimalControlProblem, T: float, t0: float) -> tuple[bool, int]:
+    """Whether free-T transversality fixes H's value, and on which bound T sits.
+
+    With T free in its bounds, ``H(T) = -d(phi + nu^T G_T)/dT``. Where T sits at a bound the
+    bound's multiplier enters and the equality becomes an inequality: at the upper bound
+    ``H <= -d(...)/dT`` (a later end must not pay), at the lower ``H >= -d(...)/dT``. T
+    fixed by the initial time and a fixed duration, or moving only with a free initial time
+    (a fixed duration), leaves H's value free (an autonomous problem's H is then only
+    constant).
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+    T, t0 : float
+        The solution's final and initial times.
+
+    Returns
+    -------
+    pinned : bool
+        H is held to (or on one side of) its free-T value.
+    side : int
+        +1: T at its upper bound (``H <=`` that value); -1: at its lower (``>=``); 0: inside.
+    """
+    if not pr.time_free:
+        return False, 0
+    if pr.duration is not None and pr.duration[0] == pr.duration[1]:
+        return False, 0  # T moves only with t0 (or not at all)
+
+    def near(a: float, b: float) -> bool:
+        return math.isfinite(b) and abs(a - b) <= 1e-7 * max(1.0, abs(b))
+
+    lo, hi = pr.T_bounds
+    sides = {s for s, hit in ((1, near(T, hi)), (-1, near(T, lo))) if hit}
+    if pr.duration is not None:
+        dlo, dhi = pr.duration
+        sides |= {s for s, hit in ((1, near(T - t0, dhi)), (-1, near(T - t0, dlo))) if hit}
+    if len(sides) > 1:
+        return False, 0  # held from both sides: T cannot move at all
+    return True, sides.pop() if sides else 0
+
+
 # ------------------------------------------------------------- joint adjoint
 class _JointArc:
     """Joint state-costate dynamics of one (bang) arc mode: ``y = [x, lam]``."""
@@ -246,7 +288,8 @@ class AdjointSweep:
     interval : ndarray of int (m,)
         Which refined interval each sample belongs to.
     H_expected : float or None
-        The constant H must equal (None when T is fixed).
+        The constant H must equal (None when T is fixed), or, with ``T_side``, the side
+        of which it must lie.
     t_start : float
         Where the backward sweep stopped (0, or the end of the last constrained arc).
     error_lam : float
@@ -258,6 +301,8 @@ class AdjointSweep:
         RK8 steps per arc of the finer run (0 for exact arcs).
     coarse : AdjointSweep or None
         The coarser run the accuracy was measured against.
+    T_side : int
+        +1 or -1 when T sits at its upper or lower bound (:func:`final_time_condition`).
     """
 
     t: np.ndarray
@@ -271,6 +316,7 @@ class AdjointSweep:
     error_x: float = 0.0
     steps: list[int] = field(default_factory=list)
     coarse: AdjointSweep | None = field(default=None, repr=False)
+    T_side: int = 0
 
 
 def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> AdjointSweep:
@@ -306,9 +352,12 @@ def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> Adjoi
     parts.reverse()
     steps.reverse()
     cat = [np.concatenate([p[i] for p in parts]) for i in range(5)]
+    pinned, side = final_time_condition(pr, T, 0.0)  # (the refinement's time starts at 0)
+    if ref.terminal_costate is not None:
+        pinned, side = pr.time_free, 0  # a phase: its end is the multi-phase problem's
     return AdjointSweep(cat[0], cat[1], cat[2], cat[3], cat[4].astype(int),
-                        H_given if pr.time_free else None, float(edges[first]), 0.0, err_x,
-                        steps)
+                        H_given if pinned else None, float(edges[first]), 0.0, err_x,
+                        steps, T_side=side)
 
 
 def adjoint_sweep(ref: RefinedSwitching, t_start: float = 0.0, points: int = 2000) -> AdjointSweep:

@@ -248,7 +248,7 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
     eff = effective_bounds(pr, sw.x[keep], ref.pv) if mixed else None
     fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                   sw.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
-                  tol.singular, bounds=eff)
+                  tol.singular, bounds=eff, T_side=sw.T_side)
     base = (ref.integration_error or 0.0) + sw.error_x
     err = {"H": base, "sigma": 0.0, "switch": 0.0, "costate": sw.error_lam, "state": sw.error_x}
     if sw.coarse is not None:
@@ -256,7 +256,7 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
         cf = figures(pr, values, c.t[keep], c.x[keep], c.u[keep], c.lam[keep],
                      c.H_expected, np.zeros(int(keep.sum()), bool), *args, floor, 1e-9,
                      tol.singular, bounds=effective_bounds(pr, c.x[keep], ref.pv)
-                     if mixed else None)
+                     if mixed else None, T_side=c.T_side)
         err["H"] += float(np.max(np.abs(fig.H - cf.H), initial=0.0)) / fig.H_scale
         dsig = np.max(np.abs(fig.sigma - cf.sigma), axis=0, initial=0.0)
         # relative to the size of sigma's terms (sigma itself vanishes on interior arcs)
@@ -270,12 +270,13 @@ def certify_refined(sol: TranscribedSolution, ref: RefinedSwitching, tol: Tolera
         # samples inside the numerical error band of sigma are not judged
         fig = figures(pr, values, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep],
                       sw.H_expected, np.zeros(int(keep.sum()), bool), *args,
-                      ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff)
+                      ERROR_MARGIN * dsig, 1e-9, tol.singular, bounds=eff, T_side=sw.T_side)
     arcs = refined_table(ref, sw.t[keep], sw.x[keep], sw.u[keep], sw.lam[keep], tol.sigma,
                          max(err["H"], err["costate"], err["sigma"]))
     fig.singular = [r for r in fig.singular if not covered(arcs, r, margin=tol.singular)]
     definite, uncertain = judge(fig, tol, err, sw.H_expected is not None)
-    H_after = sw.H_expected if sw.H_expected is not None else float(np.median(fig.H))
+    H_after = sw.H_expected if sw.H_expected is not None and not sw.T_side else \
+        float(np.median(fig.H))
     arcs, left, start = constrained_rows(sol, ref, arcs, (sw.t[keep], sw.lam[keep]), H_after,
                                          tol, max(err["H"], err["costate"], err["sigma"]),
                                          active, last, n)

@@ -35,13 +35,14 @@ from .checks import (
     INCONCLUSIVE,
     NOT_BANG_BANG,
     Figures,
+    H_deviation,
     Tolerances,
     figures,
     intervals_of,
     judge,
     verdict_of,
 )
-from .costates import costates_from_multipliers, terminal_costate
+from .costates import costates_from_multipliers, final_time_condition, terminal_costate
 from .result import PMPCertificate, build_certificate
 
 
@@ -98,7 +99,8 @@ def _transcription_figures(sol: TranscribedSolution, tol: Tolerances
     pv = np.array([sol.params[k] for k in pr.param_names], dtype=float)
     t, x, u, lam = transcription_samples(sol)
     H_exp = None
-    if pr.time_free:
+    pinned, side = final_time_condition(pr, float(sol.T), float(sol.t0))
+    if pinned:
         nu = sol.multipliers.get("terminal", np.zeros(0))
         _, H_exp = terminal_costate(pr, sol.x[-1], sol.T, pv, nu)
     active = _constrained_transcription(sol)
@@ -111,7 +113,7 @@ def _transcription_figures(sol: TranscribedSolution, tol: Tolerances
         switches[name] = [a.end for a, b in zip(st.arcs[:-1], st.arcs[1:], strict=True)
                           if a.kind in ("max", "min") and b.kind in ("max", "min")]
     fig = figures(pr, known_values(sol), t, x, u, lam, H_exp, constrained, switches, tol.sigma,
-                  np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True)
+                  np.zeros(pr.nu), 1e-3, tol.singular, interior_check=True, T_side=side)
     if is_collocation(sol):
         _rescore_H(fig, ~constrained & ~_kinked_points(sol, switches), H_exp)
     return fig, H_exp, active, t
@@ -145,8 +147,7 @@ def _rescore_H(fig: Figures, keep: np.ndarray, H_exp: float | None) -> None:
     if not keep.any():
         return
     H = fig.H[keep]
-    ref = H_exp if H_exp is not None else float(np.mean(H))
-    fig.H_max_abs = float(np.max(np.abs(H - ref))) / fig.H_scale
+    fig.H_max_abs = H_deviation(H, H_exp, fig.T_side) / fig.H_scale
     fig.H_var = float(np.ptp(H)) / fig.H_scale
 
 

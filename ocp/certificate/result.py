@@ -34,9 +34,12 @@ class PMPCertificate:
     reasons : list of str
         Why (every failed, uncertain or unverifiable check).
     H_expected : float or None
-        The constant H must equal (None when T is fixed: any constant).
+        The constant H must equal (None when T is fixed: any constant). Where the free
+        final time sits at a bound, H need only be a constant on one side of it (below at
+        the upper bound, above at the lower: the bound's multiplier takes the rest).
     H_max_abs, H_variation : float
-        ``max |H - H_expected|`` (or ``max |H - mean H|`` when fixed T) and
+        ``max |H - H_expected|`` (or ``max |H - mean H|`` when fixed T; with T at a
+        bound, the larger of that and the constant's excess over the allowed side) and
         ``max H - min H``, both divided by ``H_scale``.
     H_scale : float
         ``max_t sum_i |lambda_i xdot_i|``, the size of the terms that must cancel.

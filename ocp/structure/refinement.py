@@ -64,8 +64,8 @@ from .intervals import (
 __all__ = ["DEFAULT_TOL", "KKT_DUAL", "KKT_MACHINE", "KKT_PRIMAL", "NEAR_CONVERGED",
            "REFINE_IPOPT", "ConstraintBlocks", "Modes", "SwitchingNLP", "arc_dynamics",
            "build_intervals", "cached_nlps", "check_control_set", "clear_cache",
-           "converged_status", "interval_flow", "kkt_converged", "required_substeps", "rk8_of",
-           "solved_nlp", "switching_nlp"]
+           "converged_status", "interval_flow", "kkt_converged", "refuse_shifted_time",
+           "required_substeps", "rk8_of", "solved_nlp", "switching_nlp"]
 
 REFINE_IPOPT: dict[str, Any] = {
     "tol": 1e-14, "acceptable_tol": 1e-12, "constr_viol_tol": 1e-13, "max_iter": 200,
@@ -117,6 +117,30 @@ def converged_status(res: dict[str, Any]) -> str:
     return f"Solve_Succeeded (KKT residual {r:.0e}; Ipopt said {res['status']})"
 
 
+def refuse_shifted_time(pr: OptimalControlProblem) -> None:
+    """Refuse a problem whose time does not start at 0 (the refinement's clock).
+
+    The switching-time NLP measures time from 0: its final time is the sum of the arcs'
+    durations. A free initial time, or one fixed elsewhere than 0, would be refined on
+    another horizon (a silent wrong optimum).
+
+    Parameters
+    ----------
+    pr : OptimalControlProblem
+
+    Raises
+    ------
+    ValueError
+        If the initial time is free or fixed at a value other than 0.
+    """
+    if pr.t0_mode == "free" or (pr.t0_mode == "fixed" and pr.t0_bounds[0] != 0.0):
+        what = ("free" if pr.t0_mode == "free" else f"fixed at {pr.t0_bounds[0]:g}")
+        raise ValueError(f"switching-time refinement: problem {pr.name!r} has its initial "
+                         f"time {what}; the refinement's time starts at 0 (pose the problem "
+                         "on [0, T], or as a phase of a multi-phase problem, which "
+                         "ocp.structure.phase_refinement.refine_phases refines)")
+
+
 class SwitchingNLP(ActiveSetResolve):
     """The switching-time NLP of one problem and interval structure, built once.
 
@@ -144,6 +168,7 @@ class SwitchingNLP(ActiveSetResolve):
 
     def __init__(self, problem: OptimalControlProblem, modes: Modes, substeps: tuple[int, ...],
                  samples: int = 16, ipopt_options: dict | None = None) -> None:
+        refuse_shifted_time(problem)
         t0 = time.perf_counter()
         self.problem, self.modes, self.substeps = problem, tuple(modes), tuple(substeps)
         self.samples = int(samples)
@@ -201,7 +226,9 @@ class SwitchingNLP(ActiveSetResolve):
                                ca.vertcat(pr.x, pr.T), ca.vertcat(xT, T))
             G.add("terminal", GT, ca.vertcat(*[c.lower for c in pr.terminal]),
                   ca.vertcat(*[c.upper for c in pr.terminal]), (K - 1, -1))
-        lo, hi = pr.T_bounds
+        # time runs from 0 here (refuse_shifted_time): T is the sum of the durations, and a
+        # duration's bounds (free_duration, fixed_duration) are T's
+        lo, hi = pr.duration if pr.duration is not None else pr.T_bounds
         G.add("final_time", T, lo, hi, (K - 1, -1))
         J = ca.substitute(ca.SX(pr.mayer), ca.vertcat(pr.x, pr.T), ca.vertcat(xT, T))
         if self.has_quad:

@@ -62,6 +62,7 @@ from .refinement import (
     arc_dynamics,
     check_control_set,
     clear_cache,
+    refuse_shifted_time,
     required_substeps,
     rk8_of,
     solved_nlp,
@@ -498,6 +499,7 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         raise ValueError("a multi-phase solution is refined phase by phase with "
                          "ocp.structure.phase_refinement.refine_phases(sol)")
     tsol = transcribed(sol)
+    refuse_shifted_time(tsol.problem)
     st = _as_structure(tsol, structure)
     params = dict(tsol.params if params is None else params)
     opts: dict[str, Any] = {"transcribed_objective": float(tsol.objective),

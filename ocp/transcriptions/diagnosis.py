@@ -141,9 +141,11 @@ def _summary(d: Diagnosis) -> str:
     if d.dependent:
         why = f" ({d.conserved} is conserved by the dynamics and fixed at both ends)" \
             if d.conserved else ""
+        advice = "drop one (solve(drop_dependent=True))" if d.conserved else (
+            "they fix one quantity twice: drop one if their values agree "
+            "(solve(drop_dependent=True)), else they contradict")
         return (f"end conditions {', '.join(d.dependent)} are dependent (rank "
-                f"{d.rank} of {d.n_equalities} after the dynamics){why}; drop one "
-                "(solve(drop_dependent=True))")
+                f"{d.rank} of {d.n_equalities} after the dynamics){why}; {advice}")
     if d.unreachable:
         return f"cannot be met together: {'; '.join(d.unreachable)}"
     if d.periodic:

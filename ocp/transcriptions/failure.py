@@ -19,7 +19,10 @@ and (on request) leave out a dependent end condition.
   warns (:class:`~ocp.DroppedConditionWarning`). Left out entirely, the row would leave
   its value free up to a branch (``x = +-sqrt(r^2 - y^2)``); the loose band keeps the
   branch (``-b`` lies outside it), and the row of largest weight is the one whose value
-  is largest, so the band is widest.
+  is largest, so the band is widest. A row the solution misses by more than the
+  transcription's ``verify_tol`` contradicts the others: :class:`~ocp.InfeasibleError`
+  with the status :data:`DROPPED_VIOLATED` (Ipopt solved the loosened NLP; the problem as
+  posed has no solution).
 """
 
 from __future__ import annotations
@@ -42,6 +45,9 @@ from .diagnosis import Diagnosis, dependent_ends, diagnose, periodic_states
 from .labels import row_labels
 
 INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
+DROPPED_VIOLATED = "Dropped_Condition_Violated"
+"""The status of the error when a left-out end condition is missed (its conditions
+contradict)."""
 
 
 def failure_error(tr: Any, sol: Any) -> SolveError:
@@ -123,6 +129,17 @@ def solve_dropping_dependent(tr: Any, params: Any, guess: Any, warm_start: Any) 
     bound = lbg[row] if math.isfinite(lbg[row]) else ubg[row]
     excess = max(lbg[row] - g, g - ubg[row], 0.0)
     sol.dropped_residual = excess / max(1.0, abs(bound))
+    tol = float(getattr(tr, "verify_tol", 1e-6))
+    if not sol.dropped_residual <= tol:  # (NaN included)
+        # a dependent condition is met anyway (to the discretisation's drift of what it
+        # fixes twice); one missed by more contradicts the others: no solution of the
+        # problem as posed, whatever Ipopt said of the loosened one
+        raise InfeasibleError(
+            DROPPED_VIOLATED, sol,
+            f"the end conditions contradict: with {labels[row]} left out, the solution "
+            f"misses it by {sol.dropped_residual:.3g} (relative, more than verify_tol "
+            f"{tol:g}); they cannot all hold (if a conserved quantity's drift is the cause, "
+            "a finer grid shrinks it)")
     warnings.warn(f"left out the dependent end condition {labels[row]}; the solution "
                   f"meets it to {sol.dropped_residual:.1e}", DroppedConditionWarning,
                   stacklevel=3)

@@ -35,7 +35,7 @@ from ..definition.errors import ProblemDefinitionError
 from ..definition.multiphase import MultiPhaseProblem, as_multiphase
 from ..definition.problem import OptimalControlProblem
 from ..definition.scaling import Scaling, check_scaling
-from ..definition.symbols import positive_int
+from ..definition.symbols import positive_int, relative_tolerance
 from .blas import default_blas_threads
 from .buffered import BufferedCall
 from .codegen import compiled_library
@@ -141,7 +141,9 @@ class Transcription(TranscriptionStart):
         self.ipopt_options = {**DEFAULT_IPOPT, **(ipopt_options or {})}
         self.expand = expand_mode(expand)
         self._uses = {False: 0, True: 0}  # solves by kind (cold, warm): expand="auto"
-        self.verify, self.verify_tol = verify, float(verify_tol)
+        self.verify = verify
+        # (NaN would pass every violation: a false "verified")
+        self.verify_tol = relative_tolerance(verify_tol, "verify_tol")
         self.verify_points = positive_int(verify_points, "verify_points")
         self.n_builds = 0
         self.dropped: dict[int, str] = {}  # rows of g left out of this solve (drop_dependent)
