@@ -188,17 +188,21 @@ def check(name: str, value: Any, rule: Rule | None = None) -> Any:
     """
     test, what = rule if rule is not None else FIELDS[name]
     if type(value) is float or type(value) is int:  # the common case, without numpy
-        x = float(value)
+        try:
+            x = float(value)
+        except OverflowError:  # an int beyond any float (10**400)
+            raise ParameterError(name, f"must be finite, got an integer of "
+                                       f"{len(str(abs(value)))} digits") from None
         if not math.isfinite(x):
             raise ParameterError(name, f"must be finite, got {plain(x)}")
         if not test(np.asarray(x)):
             raise ParameterError(name, f"{what}, got {plain(x)}")
         return x
-    scalar = np.ndim(value) == 0 and not isinstance(value, np.ndarray)
     try:
         arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError):  # (a ragged nesting included)
         raise ParameterError(name, f"must be a number, got {plain(value)}") from None
+    scalar = arr.ndim == 0 and not isinstance(value, np.ndarray)
     bad = ~np.isfinite(arr)
     if bad.any():
         raise ParameterError(name, f"must be finite, got {plain(arr[bad].flat[0])}")
@@ -208,8 +212,40 @@ def check(name: str, value: Any, rule: Rule | None = None) -> Any:
     return float(arr) if scalar else arr
 
 
+def check_number(name: str, value: Any, rule: Rule | None = None) -> float:
+    """:func:`check` of one number: a model's field is a scalar, never an array (which
+    :func:`check` passes through for batch inputs), a sequence, a string or a bool (``True``
+    would be read as 1 and ``"5"`` as 5, silently).
+
+    Parameters
+    ----------
+    name : str
+        The field's name.
+    value : float
+        What the user gave.
+    rule : (predicate, message), optional
+        As for :func:`check`.
+
+    Raises
+    ------
+    ParameterError
+        Naming the field.
+    """
+    if type(value) is float or type(value) is int:  # the common case
+        return check(name, value, rule)
+    if isinstance(value, bool | np.bool_ | str | bytes):
+        raise ParameterError(name, f"must be a number, got {value!r}")
+    shape = np.shape(value) if isinstance(value, np.ndarray) or hasattr(value, "shape") \
+        else None
+    if shape not in (None, ()):
+        raise ParameterError(name, f"must be one number, got an array of shape {shape}")
+    if isinstance(value, list | tuple | dict | set):
+        raise ParameterError(name, f"must be one number, got a {type(value).__name__}")
+    return float(check(name, value, rule))
+
+
 def check_optional(name: str, value: float | None) -> float | None:
-    """:func:`check` unless ``value`` is None (e.g. an unlimited force).
+    """:func:`check_number` unless ``value`` is None (e.g. an unlimited force).
 
     Parameters
     ----------
@@ -218,7 +254,7 @@ def check_optional(name: str, value: float | None) -> float | None:
     value : float or None
         What the user gave.
     """
-    return None if value is None else check(name, value)
+    return None if value is None else check_number(name, value)
 
 
 # (class, Protocol) pairs already checked, for the package's own frozen dataclasses only: a

@@ -259,10 +259,13 @@ def _print_curves(curves: Any, objective: str) -> None:
 def _cmd_sweep(a: argparse.Namespace) -> int:
     v0 = _v0_grid(a)
     if a.objective != "depth":
-        v0 = v0[v0 < 0]
-        if not v0.size:
+        if not (v0 < 0).any():
             raise ParameterError("v0-min", f"--objective {a.objective} divides by the impact "
                                            "energy: give velocities below 0")
+        if not (v0 < 0).all():
+            print(f"softlanding: v0 = 0 left out: --objective {a.objective} divides by the "
+                  "impact energy", file=sys.stderr)
+        v0 = v0[v0 < 0]
     robot = Robot(r_m=(a.rm or [PAPER_ROBOT.r_m])[0], s=(a.s or [PAPER_ROBOT.s])[0],
                   u_max=a.umax)
     for rm in a.rm or [robot.r_m]:  # every family, before the work
@@ -281,6 +284,9 @@ def _cmd_sweep(a: argparse.Namespace) -> int:
     curves = optimal_impedance_curves(v0, robot, ground, r_m=a.rm, s=a.s,
                                       objective=a.objective, grid=grid, scheduler=a.scheduler,
                                       progress=not a.json, dask_timeout=timeout)
+    if not curves.feasible.values.any():  # nothing to write or draw: a failure, not a result
+        raise InfeasibleLandingError("no gains in [0, 1]^2 keep the stroke at any velocity "
+                                     "(every landing leaves the stroke limits or never rests)")
     if out:
         with atomic(out) as tmp:
             save_dataset(curves, tmp)

@@ -57,7 +57,7 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     Parameters
     ----------
     impact : Impact or float
-        The impact velocity.
+        The impact velocity (``v0 <= -MIN_SPEED``).
     robot : Robot
         The robot (with a force limit).
     ground : Ground
@@ -107,7 +107,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
         ``controller="bangbang"``: plan for ``K - margin sigma_K``, ``c_d - margin
         sigma_c`` (the estimate less ``margin`` of its standard deviations) while the
         estimate is uncertain: a margin on the ground, not on the stroke (a plan whose
-        optimum touches a stroke limit still touches it). Refused with ``"replan"``.
+        optimum touches a stroke limit still touches it). Refused with ``"replan"`` and
+        with ``estimate=False``.
     estimator : str
         What the ground estimate regresses (:data:`ESTIMATORS`) from noisy measurements.
         ``"measured"``: the measured foot position, velocity, acceleration and force, as
@@ -131,6 +132,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     """
     t_start = time.perf_counter()
     impact = Impact.of(impact)
+    if impact.v0 > -MIN_SPEED:  # (slower, the loop's foot counts as stopped at the impact)
+        raise ParameterError("v0", f"{impact.v0:g}: the controller lands impacts of "
+                                   f"{MIN_SPEED:g} or faster (v0 <= {-MIN_SPEED:g})")
     expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
     check_model(model)
     check_choice("controller", controller, CONTROLLERS)
@@ -138,6 +142,9 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     margin = check("margin", margin, (lambda v: v >= 0, "must be >= 0"))
     if margin and controller != "bangbang":  # (the re-planning MPC plans for the estimate)
         raise ParameterError("margin", "applies to controller='bangbang' only")
+    if margin and not estimate:  # (no estimate, no standard deviation to plan a margin from)
+        raise ParameterError("margin", "applies to an estimated ground (not with "
+                                       "estimate=False)")
     check_choice("estimator", estimator, ESTIMATORS)
     max_samples = check_count("max_samples", max_samples, 1, 10**7)
     sensor = Sensor(noise, delay, seed)
@@ -164,6 +171,12 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     return _landing(loop.record, run, plant, model=model, period=period, sensor=sensor,
                     controller=controller, margin=margin, estimator=est.name,
                     prepare_s=run.prepared - t_start)
+
+
+MIN_SPEED = 1e-6
+"""The slowest impact the controllers land (``|v0|``): below about 1e-9 the loop's test of a
+stopped foot held the foot stopped at the impact, took no sample and reported the body
+merely held at its weight (twice the optimal depth) as a landing."""
 
 
 @lru_cache(maxsize=64)
@@ -242,5 +255,6 @@ def check_model(model: Any, name: str = "model") -> Ground:
 
 
 __all__ = ["ARREST_RESERVE", "ARREST_TIME", "CONTROLLERS", "DEFAULT_PERIOD", "ESTIMATORS",
-           "HOLD_GAINS", "MAX_NOISE", "MAX_PERIOD", "MIN_NOISE", "MIN_PERIOD", "MPCLanding",
+           "HOLD_GAINS", "MAX_NOISE", "MAX_PERIOD", "MIN_NOISE", "MIN_PERIOD", "MIN_SPEED",
+           "MPCLanding",
            "Sensor", "check_model", "check_period", "first_plan", "mpc_landing"]

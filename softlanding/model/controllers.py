@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from softlanding.errors import ParameterError, check, check_optional
+from softlanding.errors import FINITE, ParameterError, check, check_number, check_optional
 from softlanding.model.robot import VB, VF, Robot, Units
 
 EMPTY = np.zeros(0)
@@ -114,8 +114,8 @@ class Impedance:
     l0: float | None = None
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "k_p", check("k_p", self.k_p))
-        object.__setattr__(self, "k_d", check("k_d", self.k_d))
+        object.__setattr__(self, "k_p", check_number("k_p", self.k_p))
+        object.__setattr__(self, "k_d", check_number("k_d", self.k_d))
         object.__setattr__(self, "l0", check_optional("l0", self.l0))
 
     def rest_length(self, robot: Robot) -> float:
@@ -207,8 +207,8 @@ class ForceSchedule:
     values: tuple[float, ...]
 
     def __post_init__(self) -> None:
-        t = tuple(float(v) for v in check("times", np.asarray(self.times, float).ravel()))
-        u = tuple(float(v) for v in check("values", np.asarray(self.values, float).ravel()))
+        t = tuple(float(v) for v in np.ravel(check("times", self.times)))
+        u = tuple(float(v) for v in np.ravel(check("values", self.values)))
         if len(u) != len(t) + 1:
             raise ParameterError("values", f"needs exactly one more entry than times "
                                            f"({len(t)} times, {len(u)} values)")
@@ -228,7 +228,7 @@ class ForceSchedule:
         values : sequence of float
             Force on each arc; one more than ``durations``.
         """
-        d = check("durations", np.asarray(durations, float).ravel())
+        d = np.ravel(check("durations", durations))
         return cls(tuple(np.cumsum(d)), tuple(values))
 
     def kernel_arrays(self, mats: dict[str, Any],
@@ -300,12 +300,11 @@ class FeedbackSchedule:
     gains: tuple[tuple[float, ...], ...]
 
     def __post_init__(self) -> None:
-        t = tuple(float(v) for v in check("times", np.asarray(self.times, float).ravel()))
-        g = np.asarray(self.gains, dtype=float)
-        if g.ndim != 2 or g.shape != (len(t) + 1, 5):
+        t = tuple(float(v) for v in np.ravel(check("times", self.times)))
+        g = check("gains", self.gains, FINITE)
+        if np.ndim(g) != 2 or g.shape != (len(t) + 1, 5):
             raise ParameterError("gains", f"needs {len(t) + 1} rows of 5 (one more than "
-                                          f"times), got shape {g.shape}")
-        check("values", g)
+                                          f"times), got shape {np.shape(g)}")
         if any(b <= a for a, b in zip((0.0,) + t, t, strict=False)):
             raise ParameterError("times", "must be strictly increasing and > 0")
         object.__setattr__(self, "times", t)
@@ -315,7 +314,7 @@ class FeedbackSchedule:
     def from_arcs(cls, durations, gains) -> FeedbackSchedule:
         """Schedule from arc durations (> 0, as for :meth:`ForceSchedule.from_arcs`) and
         the law on each arc and after (``gains``: rows of 5, one more than ``durations``)."""
-        d = check("durations", np.asarray(durations, float).ravel())
+        d = np.ravel(check("durations", durations))
         return cls(tuple(np.cumsum(d)), tuple(tuple(r) for r in gains))
 
     def kernel_arrays(self, mats: dict[str, Any],

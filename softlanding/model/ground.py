@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
-from softlanding.errors import ParameterError, check
+from softlanding.errors import ParameterError, check, check_number
 
 
 @runtime_checkable
@@ -75,17 +75,6 @@ def _depth_power(depth: Any, n: float) -> Any:
     return depth**n if n != 1.0 else depth
 
 
-def _number(name: str, value: Any) -> float:
-    """One checked number (:func:`~softlanding.errors.check`): a ground's parameter is a
-    scalar, never an array (which :func:`check` would pass through for batch inputs)."""
-    shape = getattr(value, "shape", None)
-    if shape is not None and shape != ():
-        raise ParameterError(name, f"must be one number, got an array of shape {shape}")
-    if isinstance(value, list | tuple | dict | set):
-        raise ParameterError(name, f"must be one number, got a {type(value).__name__}")
-    return float(check(name, value))
-
-
 def _stiffness_entry(k: float) -> dict[str, float]:
     """The JSON entry of a stiffness factor: none for the paper's 1 (outputs unchanged)."""
     return {} if k == 1.0 else {"stiffness": k}
@@ -125,7 +114,7 @@ class LinearGround(_NoAddedMass):
     name: ClassVar[str] = "linear"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "stiffness", _number("stiffness", self.stiffness))
+        object.__setattr__(self, "stiffness", check_number("stiffness", self.stiffness))
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
         """``f_g = K d`` (independent of the foot's velocity).
@@ -177,8 +166,8 @@ class DragGround(_NoAddedMass):
     name: ClassVar[str] = "drag"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "c_d", _number("c_d", self.c_d))
-        object.__setattr__(self, "stiffness", _number("stiffness", self.stiffness))
+        object.__setattr__(self, "c_d", check_number("c_d", self.c_d))
+        object.__setattr__(self, "stiffness", check_number("stiffness", self.stiffness))
 
     def yield_force(self, depth: Any, v_f: Any) -> Any:
         """``f_g = K d + c_d v_f^2``.
@@ -259,7 +248,7 @@ class AddedMassGround:
 
     def __post_init__(self) -> None:
         for n in ("pi_a", "radius", "kappa", "c_d"):
-            object.__setattr__(self, n, _number(n, getattr(self, n)))
+            object.__setattr__(self, n, check_number(n, getattr(self, n)))
 
     @property
     def critical_depth(self) -> float:

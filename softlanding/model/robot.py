@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from softlanding.errors import ParameterError, check, check_optional
+from softlanding.errors import ParameterError, check, check_number, check_optional
 
 G_EARTH = 9.81
 """Gravity used by the paper, m/s^2."""
@@ -53,7 +53,7 @@ class Units:
 
     def __post_init__(self) -> None:
         for name in ("m_t", "k_g", "g"):
-            object.__setattr__(self, name, check(name, getattr(self, name)))
+            object.__setattr__(self, name, check_number(name, getattr(self, name)))
 
     @property
     def length(self) -> float:
@@ -127,8 +127,8 @@ class Robot:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "r_m", check("r_m", self.r_m))
-        set_(self, "s", check("s", self.s))
+        set_(self, "r_m", check_number("r_m", self.r_m))
+        set_(self, "s", check_number("s", self.s))
         set_(self, "u_max", check_optional("u_max", self.u_max))
         set_(self, "l0", check_optional("l0", self.l0))
         if self.l0 is not None and self.l0 > self.s:
@@ -226,7 +226,7 @@ class Impact:
         if np.ndim(self.v0) != 0:
             raise ParameterError("v0", f"must be one number, got an array of shape "
                                        f"{np.shape(self.v0)} (many impacts: simulate_batch)")
-        object.__setattr__(self, "v0", check("v0", self.v0))
+        object.__setattr__(self, "v0", check_number("v0", self.v0))
 
     @classmethod
     def of(cls, value: Impact | float) -> Impact:

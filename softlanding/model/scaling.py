@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Any, NamedTuple
 
-from softlanding.errors import ParameterError, check, check_optional
+from softlanding.errors import ParameterError, check_number, check_optional
 from softlanding.model.controllers import Controller, Impedance
 from softlanding.model.ground import LINEAR_GROUND, Ground
 from softlanding.model.robot import G_EARTH, PAPER_ROBOT, Impact, Robot, Units
@@ -73,8 +73,8 @@ class PhysicalParams:
     def __post_init__(self) -> None:
         set_ = object.__setattr__
         for name in ("m_b", "m_f", "k_g", "stroke", "g"):
-            set_(self, name, check(name, getattr(self, name)))
-        set_(self, "v0", check("v0", self.v0))
+            set_(self, name, check_number(name, getattr(self, name)))
+        set_(self, "v0", check_number("v0", self.v0))
         for name in ("u_max", "K_p", "K_d", "rest_length"):
             set_(self, name, check_optional(name, getattr(self, name)))
         if (self.K_p is None) != (self.K_d is None):

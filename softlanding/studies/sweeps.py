@@ -335,6 +335,9 @@ def optimal_impedance_curves(v0: Sequence[float], robot: Robot = PAPER_IMPEDANCE
 def paper_observations(curves: xr.Dataset, robot: Robot = PAPER_IMPEDANCE_ROBOT) -> dict:
     """Check the paper's Section IV claims on one curve; numbers, not adjectives.
 
+    A trend needs two feasible velocities and a minimum inside the range three: with fewer,
+    its claim is None (cannot tell), not a vacuous True.
+
     Parameters
     ----------
     curves : xarray.Dataset
@@ -352,16 +355,17 @@ def paper_observations(curves: xr.Dataset, robot: Robot = PAPER_IMPEDANCE_ROBOT)
     kd = c.k_d.values[order]
     dkp = np.diff(kp)
     i_min = int(np.argmin(kd))
+    n = len(speed)  # a trend needs two speeds, a minimum between two others three: else None
     return {
         "feasible_velocities": int(c.v0.size),
-        "kp_increasing_with_speed": bool(np.all(dkp >= -1e-9)),
+        "kp_increasing_with_speed": bool(np.all(dkp >= -1e-9)) if n >= 2 else None,
         "kp_decreases": [(float(speed[i]), float(speed[i + 1])) for i in
                          np.flatnonzero(dkp < -1e-9)],
         "kd_min_at_speed": float(speed[i_min]),
         "kd_first_decreasing_then_increasing": bool(
             0 < i_min < len(kd) - 1 and np.all(np.diff(kd[:i_min + 1]) <= 1e-9)
-            and np.all(np.diff(kd[i_min:]) >= -1e-9)),
-        "critical_speed_between_2_and_6": bool(2.0 <= speed[i_min] <= 6.0),
+            and np.all(np.diff(kd[i_min:]) >= -1e-9)) if n >= 3 else None,
+        "critical_speed_between_2_and_6": bool(2.0 <= speed[i_min] <= 6.0) if n >= 3 else None,
         "all_on_stroke_boundary": bool(np.all(c.on_stroke_boundary.values[speed > 0])),
         "u_peak_at_fastest": float(c.u_peak.values[order][-1]),
         "fastest_speed": float(speed[-1]),

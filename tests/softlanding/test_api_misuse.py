@@ -13,11 +13,12 @@ from softlanding import (
     solve_leg_extension,
     solve_two_phase,
 )
+from softlanding.control.mpc import mpc_landing
 from softlanding.control.robust import robust_landing
 from softlanding.errors import ParameterError
-from softlanding.model import Impedance, LinearGround, Rigid
+from softlanding.model import FeedbackSchedule, ForceSchedule, Impedance, LinearGround, Rigid
 from softlanding.model.ground import MAX_GROUNDS, AddedMassGround, CustomGround, DragGround
-from softlanding.model.robot import Impact
+from softlanding.model.robot import Impact, Robot
 from softlanding.optimal.hop_arcs import SETTINGS, ArcGuess, refine_arcs
 from softlanding.simulation.simulator import simulate_batch
 
@@ -54,6 +55,21 @@ CASES = [
     ("stiffness", lambda: LinearGround(np.array([1.0]))),
     ("kappa", lambda: AddedMassGround(1.0, 0.1, np.ones(2))),
     ("force", lambda: CustomGround("arrays", lambda d, v: np.array([d, d]))),
+    # an adversarial review: lists, strings and bools were taken as a model's numbers (a list
+    # failed later as numpy's or Python's error, "5" was read as 5 and True as 1)
+    ("r_m", lambda: Robot(r_m=[5], s=20)),
+    ("r_m", lambda: Robot(r_m=[], s=20)),
+    ("r_m", lambda: Robot(r_m="5", s=20)),
+    ("u_max", lambda: Robot(r_m=5, s=20, u_max=True)),
+    ("r_m", lambda: Robot(r_m=10**400, s=20)),
+    ("k_p", lambda: Impedance(k_p=[0.2, 0.3], k_d=0.18)),
+    ("k_d", lambda: Impedance(k_p=0.2, k_d=np.bool_(True))),
+    ("v0", lambda: Impact("-3")),
+    ("stiffness", lambda: LinearGround("1")),
+    ("times", lambda: ForceSchedule("ab", "cd")),
+    ("gains", lambda: FeedbackSchedule((1.0,), [[0, 0, 0, 0], [1, 1, 1, 1, 1]])),
+    ("v0", lambda: mpc_landing(-1e-9)),
+    ("margin", lambda: mpc_landing(-3, estimate=False, margin=2.0)),
 ]
 
 

@@ -18,6 +18,11 @@ FLAGS = [  # (arguments, the option the one-line refusal must name)
     (["hop", "--v0", "-3", "--eta", "1"], "--eta"),
     (["solve-sweep", "--v0-max", "5"], "--v0-max"),
     (["scale", "--to-si", "--rm", "0", "--kg", "4400"], "--rm"),
+    # an adversarial review: a landing slower than the loop's stopped foot took no sample
+    # and reported the body held at its weight (twice the optimal depth), exit 0; a margin
+    # without an estimate was ignored
+    (["mpc", "--v0", "-1e-9"], "--v0"),
+    (["mpc", "--v0", "-3", "--no-estimate", "--margin", "2"], "--margin"),
 ]
 
 
@@ -58,3 +63,23 @@ def test_a_budget_that_cannot_bind_is_the_problem_without_it(cli):
     assert b["peak"] == pytest.approx(a["peak"], abs=1e-9) and 1.1 < b["peak"] < 1.2
     assert b["depth"] == pytest.approx(a["depth"], abs=1e-9) and b["depth"] < 100
     assert any("does not bind" in n for n in b["notes"])
+
+
+def test_a_sweep_where_no_gains_keep_the_stroke_fails_and_writes_nothing(cli, tmp_path):
+    # (it wrote its dataset of NaN and exited 0; `impedance` and `map` refuse the limit)
+    code, out, err = cli("sweep", "--n", "2", "--v0-min", "-3", "--grid", "5", "--umax",
+                         "1e-3", "--out", tmp_path / "x.nc")
+    assert code == 1 and err.strip().startswith("softlanding: infeasible: no gains")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_sweeps_trends_are_not_claimed_from_one_velocity(cli):
+    code, out, err = cli("sweep", "--n", "2", "--v0-min", "-3", "--objective", "cot",
+                         "--grid", "5", "--json")
+    assert code == 0 and err == "softlanding: v0 = 0 left out: --objective cot divides by " \
+                                "the impact energy\n"
+    d = json.loads(out)
+    assert d["v0"] == [-3.0] and d["observations"]["feasible_velocities"] == 1
+    for claim in ("kp_increasing_with_speed", "kd_first_decreasing_then_increasing",
+                  "critical_speed_between_2_and_6"):
+        assert d["observations"][claim] is None  # (was True, from nothing to compare)
