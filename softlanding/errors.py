@@ -12,7 +12,7 @@ whole array, so value objects and batch entry points share one validator.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, overload
 
 import numpy as np
@@ -167,6 +167,8 @@ FIELDS: dict[str, Rule] = {
 def check(name: str, value: float, rule: Rule | None = None) -> float: ...
 @overload
 def check(name: str, value: np.ndarray, rule: Rule | None = None) -> np.ndarray: ...
+@overload
+def check(name: str, value: Sequence[Any], rule: Rule | None = None) -> np.ndarray: ...
 
 
 def check(name: str, value: Any, rule: Rule | None = None) -> Any:

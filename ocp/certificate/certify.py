@@ -68,6 +68,8 @@ from typing import Any
 
 import casadi as ca
 
+from ..definition.symbols import positive_int, positive_number
+
 # `name as name`: a re-export (ocp.certificate.certify keeps every public name it had before
 # the split)
 from ..structure.arcs import ArcStructure, SolutionLike, detect_structure, transcribed
@@ -83,6 +85,7 @@ from .checks import ERROR_MARGIN as ERROR_MARGIN
 from .checks import INCONCLUSIVE as INCONCLUSIVE
 from .checks import NOT_APPLICABLE as NOT_APPLICABLE
 from .checks import NOT_BANG_BANG as NOT_BANG_BANG
+from .checks import OTHER_CANDIDATE as OTHER_CANDIDATE
 from .checks import UNVERIFIED as UNVERIFIED
 from .checks import Tolerances
 from .checks import intervals_of as intervals_of
@@ -144,9 +147,11 @@ def certify(sol: SolutionLike, refined: Any = None, *,
       failed refinement; the reasons give Ipopt's status. ``"not applicable:
       the solution is not verified"`` (:data:`UNVERIFIED`): ``sol.verified`` is
       False (a path constraint violated between nodes) and there is no
-      ``refined`` (which would be the candidate then). Nothing is checked
-      then: a certificate of a point that is not a converged optimum would
-      mean nothing.
+      ``refined`` (which would be the candidate then). ``"not applicable: the
+      refinement is another candidate's"`` (:data:`OTHER_CANDIDATE`): ``refined``
+      refined another problem, other parameter values or another transcription.
+      Nothing is checked then: a certificate of a point that is not a converged
+      optimum would mean nothing.
 
     Parameters
     ----------
@@ -190,6 +195,11 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     -------
     PMPCertificate
     """
+    for name, v in (("tol_H", tol_H), ("tol_sigma", tol_sigma), ("tol_switch", tol_switch),
+                    ("min_singular", min_singular)):
+        if v is not None:  # (a tolerance of 0 or below, or NaN, decides nothing it should)
+            positive_number(v, f"certify({name})")
+    n = positive_int(n, "certify(n)", minimum=10)  # (0 samples checked nothing, certified)
     if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":
         from ..structure.phase_refinement import RefinedPhases
         from .phases import PhasesCertificate, certify_phases

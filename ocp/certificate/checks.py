@@ -35,6 +35,7 @@ INCONCLUSIVE = "inconclusive"
 CHATTERING = "chattering suspected"
 NOT_APPLICABLE = "not applicable: the solve did not converge"
 UNVERIFIED = "not applicable: the solution is not verified"
+OTHER_CANDIDATE = "not applicable: the refinement is another candidate's"
 ERROR_MARGIN = 10.0
 """A violation within this factor of the estimated numerical error is not a refutation."""
 

@@ -19,7 +19,15 @@ from ..structure.arcs import ArcStructure, SolutionLike
 from ..structure.costate_copies import copy_of
 from .arc_record import ArcCheck
 from .chattering import ChatteringResult
-from .checks import CERTIFIED, INCONCLUSIVE, NOT_APPLICABLE, NOT_BANG_BANG, UNVERIFIED, Figures
+from .checks import (
+    CERTIFIED,
+    INCONCLUSIVE,
+    NOT_APPLICABLE,
+    NOT_BANG_BANG,
+    OTHER_CANDIDATE,
+    UNVERIFIED,
+    Figures,
+)
 
 
 @dataclass
@@ -201,7 +209,7 @@ def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | N
             "checked"])
     other = _other_candidate(sol, refined)
     if other:
-        return not_applicable(NOT_APPLICABLE, [
+        return not_applicable(OTHER_CANDIDATE, [
             f"the refinement is not this solution's ({other}): a verdict would be about "
             "another candidate, nothing is checked"])
     if refined is None and sol is not None and getattr(sol, "verified", None) is False:
@@ -256,7 +264,7 @@ def not_applicable(verdict: str, reasons: list[str],
     Parameters
     ----------
     verdict : str
-        :data:`NOT_APPLICABLE` or :data:`UNVERIFIED`.
+        :data:`NOT_APPLICABLE`, :data:`UNVERIFIED` or :data:`OTHER_CANDIDATE`.
     reasons : list of str
     cls : type
         :class:`PMPCertificate` or a subclass whose extra fields have defaults.

@@ -148,6 +148,22 @@ def finite_number(value: object, what: str) -> float:
     return v
 
 
+def positive_number(value: object, what: str) -> float:
+    """``value`` as a finite float > 0, or a :class:`ProblemDefinitionError` naming ``what``.
+
+    Parameters
+    ----------
+    value : object
+        The value.
+    what : str
+        Named in the error.
+    """
+    v = finite_number(value, what)
+    if v <= 0.0:
+        raise ProblemDefinitionError(f"{what} must be > 0, got {v!r}")
+    return v
+
+
 def positive_int(value: object, what: str, minimum: int = 1) -> int:
     """``value`` as an int >= ``minimum``; rejects floats (even 2.0) and bools.
 

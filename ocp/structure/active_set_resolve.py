@@ -102,6 +102,8 @@ class ActiveSetResolve(SwitchingReport):
         b = self.bounds(pv)
         held = np.where(cside > 0, b["ubx"][cols], b["lbx"][cols])
         solver = self._compiled_newton(rows, side, cols)
+        if solver is None:
+            return None
         target = np.where(side > 0, b["ubg"][rows], b["lbg"][rows])
         for start in (w0, self.last["w"]):
             found = solver.solve(pv, start, held)
@@ -118,13 +120,18 @@ class ActiveSetResolve(SwitchingReport):
         return None
 
     def _compiled_newton(self, rows: np.ndarray, side: np.ndarray,
-                         cols: np.ndarray) -> ActiveSetNewton:
-        """The :class:`ActiveSetNewton` of an active set, built on first use."""
+                         cols: np.ndarray) -> ActiveSetNewton | None:
+        """The :class:`ActiveSetNewton` of an active set, built on first use; None when
+        CasADi refuses to build it (a structurally singular Jacobian of the active rows, as
+        a circle's end condition against its multiplier gives): Ipopt then re-solves."""
         cache = self.__dict__.setdefault("_newton_cache", {})
         key = (rows.tobytes(), side.tobytes(), cols.tobytes())
         if key not in cache:
-            cache[key] = ActiveSetNewton(self._nlp, self.bounds_fn, rows, side, cols,
-                                         self._report_fn())
+            try:
+                cache[key] = ActiveSetNewton(self._nlp, self.bounds_fn, rows, side, cols,
+                                             self._report_fn())
+            except RuntimeError:  # CasADi's "structurally rank-deficient" and the like
+                cache[key] = None
         return cache[key]
 
     def _newton_iterate(self, w: np.ndarray, pv: np.ndarray, rows: np.ndarray,

@@ -32,6 +32,7 @@ class TranscribedSolution(Protocol):
     x: np.ndarray
     u: np.ndarray
     T: float
+    t0: float
     N: int
     params: dict[str, float]
     variables: dict[str, float]

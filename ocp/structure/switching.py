@@ -33,8 +33,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..definition.errors import InfeasibleError, SolveError
+from ..definition.errors import InfeasibleError, ProblemDefinitionError, SolveError
 from ..definition.problem import OptimalControlProblem
+from ..definition.symbols import positive_int, relative_tolerance
 from ..definition.trajectory import Trajectory
 from ..transcriptions.gridview import grid_spacing
 from ..transcriptions.solution import along
@@ -296,7 +297,8 @@ class RefinedSwitching:
             out.append(z)
         return np.array(out)
 
-    def samples(self, n: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def samples(self, n: int = 1000, focus: tuple[int, int] | None = None
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Times, states, controls and interval index, sampled arc by arc (exact arcs exact).
 
         Junction times appear twice: the end of one interval and the start of the next.
@@ -305,15 +307,21 @@ class RefinedSwitching:
         ----------
         n : int
             About how many sample points (default 1000).
+        focus : (int, int), optional
+            Intervals ``first..last`` (inclusive) that get about ``n`` points between them,
+            whatever their share of the horizon (a short arc checked closely); the others
+            keep their share of ``n``.
         """
         pr = self.problem
         ts, xs, us, ks = [], [], [], []
         z = np.r_[self.x0, 0.0] if has_running_cost(pr) else self.x0.copy()
         start = 0.0
         T = float(np.sum(self.durations))
+        span = T if focus is None else float(np.sum(self.durations[focus[0]:focus[1] + 1]))
         for k, modes in enumerate(self.interval_modes):
             tau = float(self.durations[k])
-            pts = max(2, int(math.ceil(n * tau / max(T, 1e-300))))
+            share = tau / max(span if focus and focus[0] <= k <= focus[1] else T, 1e-300)
+            pts = max(2, int(math.ceil(n * share)))
             Z = self._flow(k, modes, z, tau, pts)
             U = along(arc_dynamics(pr, modes).u_fn, Z[:, :pr.nx], self.pv)[0]
             ts.append(start + np.linspace(0.0, tau, pts + 1))
@@ -430,8 +438,16 @@ def insert_extra_arcs(modes: list, durs: list, extra_arcs: int) -> None:
         Per interval, its duration; modified in place (the total is kept).
     extra_arcs : int
         How many arcs to insert.
+
+    Raises
+    ------
+    ValueError
+        If ``extra_arcs`` is not 0 and the structure has no bang arc.
     """
     flip = {"max": Mode("min"), "min": Mode("max")}
+    if extra_arcs and not any(m[0].kind in flip for m in modes):
+        raise ValueError(f"extra_arcs={extra_arcs}: the structure has no bang arc to insert "
+                         f"them beside (its arcs: {', '.join(m[0].kind for m in modes)})")
     for _ in range(extra_arcs // 2):
         bang = [k for k, m in enumerate(modes) if m[0].kind in flip]
         i = max(bang, key=lambda k: durs[k])
@@ -476,7 +492,8 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         Relative accuracy required of the non-affine (RK8) intervals' end states,
         verified by halving at the solution (more steps and a re-solve if not met).
     params : dict, optional
-        Parameter values (default: ``sol.params``).
+        Parameter values that differ from ``sol.params`` (the others are the solution's;
+        a name that is not a parameter is refused).
     fast : bool
         Try the Newton fast path first when the cached NLP was solved before
         with a square active set (falls back to Ipopt if a check fails).
@@ -500,8 +517,15 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
                          "ocp.structure.phase_refinement.refine_phases(sol)")
     tsol = transcribed(sol)
     refuse_shifted_time(tsol.problem)
+    tol = relative_tolerance(tol, "refine_switching(tol)")
+    interior_samples = positive_int(interior_samples, "refine_switching(interior_samples)")
+    extra_arcs = positive_int(extra_arcs, "refine_switching(extra_arcs)", minimum=0)
+    unknown = sorted(set(params or {}) - set(tsol.problem.param_names))
+    if unknown:  # (ignored, a misspelt name left its parameter at the solution's value)
+        raise ProblemDefinitionError(f"refine_switching(params): {unknown} are not parameters "
+                                     f"of the problem ({sorted(tsol.problem.param_names)})")
     st = _as_structure(tsol, structure)
-    params = dict(tsol.params if params is None else params)
+    params = {**tsol.params, **(params or {})}
     opts: dict[str, Any] = {"transcribed_objective": float(tsol.objective),
                             "interior_samples": interior_samples,
                             "ipopt_options": ipopt_options, "tol": tol, "fast": fast}
@@ -674,7 +698,16 @@ def refine_structure(problem: OptimalControlProblem, modes: tuple, durations: np
     out.success = bool(res["success"] and ok)
     if not res["success"]:
         cls = InfeasibleError if "Infeasible" in out.status else SolveError
-        raise cls(out.status, out, f"switching-time refinement failed: {out.status}")
+        why = ""
+        if out.status == "Not_Enough_Degrees_Of_Freedom":
+            b = nlp.bounds(pv)
+            why = (f": the structure's {len(modes)} interval(s) leave "
+                   f"{int(np.sum(b['lbx'] < b['ubx']))} unknowns (durations and free initial "
+                   f"states) to {int(np.sum(b['lbg'] == b['ubg']))} equality conditions, so "
+                   "its end conditions fix it with nothing left to refine (one arc from a "
+                   "start on a switching curve); the transcription's candidate stands, and "
+                   "certify(sol) checks it alone")
+        raise cls(out.status, out, f"switching-time refinement failed: {out.status}{why}")
     if not ok:
         raise SolveError("Integration_Accuracy_Not_Reached", out,
                          f"switching-time refinement: RK8 error {err:.1e} above tol {tol:g} "

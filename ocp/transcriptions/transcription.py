@@ -69,11 +69,11 @@ class MultipleShooting(NodeDoubling, Transcription):
     ipopt_options : dict, optional
         Overrides of :data:`DEFAULT_IPOPT`.
     expand : bool or "auto"
-        Expand the NLP to SX scalar graphs (RK4 only): building takes longer
-        (0.3-0.5 s instead of 0.05-0.1 s for the soft landing at N = 100) but every
-        iteration is 2-3x faster. ``"auto"`` (default) solves the first time
-        unexpanded and expands from the second solve of the same kind (from a guess,
-        or warm-started) on: a one-off solve does not pay the build, re-solves
+        Expand the NLP to SX scalar graphs (RK4 only; True with CVODES is refused):
+        building takes longer (0.3-0.5 s instead of 0.05-0.1 s for the soft landing at
+        N = 100) but every iteration is 2-3x faster. ``"auto"`` (default) solves the
+        first time unexpanded and expands from the second solve of the same kind (from a
+        guess, or warm-started) on: a one-off solve does not pay the build, re-solves
         (sweeps, continuation, multistart) get the faster graph.
     inner_constraints : bool
         Also impose path constraints and state bounds at the integrator's
@@ -115,6 +115,9 @@ class MultipleShooting(NodeDoubling, Transcription):
         self.substeps = positive_int(substeps, "substeps")
         self.inner_constraints = bool(inner_constraints)
         expand = expand_mode(expand)  # refused before the integrator can ignore it
+        if expand is True and integrator == "cvodes":  # ("auto", the default, is RK4's)
+            raise ProblemDefinitionError("expand=True applies to integrator='rk4' (CVODES is "
+                                         "called as a solver, never expanded to SX)")
         self.scaling_arg = scaling
         super().__init__(problem, ipopt_options, expand if integrator == "rk4" else False,
                          verify, verify_tol, verify_points, scaling, grid_free,
