@@ -378,6 +378,10 @@ class OptimalControlProblem(ProblemSymbols):
             raise ProblemDefinitionError(
                 f"fixed_final_time(T={Tv:g}): T must exceed the initial time "
                 f"{self.t0_bounds[0]:g} (set the initial time first if it is not 0)")
+        if self.t0_mode == "free" and Tv <= self.t0_bounds[0]:
+            raise ProblemDefinitionError(
+                f"fixed_final_time(T={Tv:g}): T must exceed the free initial time's lower "
+                f"bound {self.t0_bounds[0]:g}")
         self._T_set = True
         self.time_free = False
         self.T_bounds = (Tv, Tv)
@@ -403,6 +407,10 @@ class OptimalControlProblem(ProblemSymbols):
         if self.t0_mode != "free" and lo < self.t0_bounds[0]:
             raise ProblemDefinitionError(
                 f"free_final_time(lower={lo:g}): below the initial time {self.t0_bounds[0]:g}")
+        if self.t0_mode == "free" and hi <= self.t0_bounds[0]:
+            raise ProblemDefinitionError(
+                f"free_final_time(upper={hi:g}): not after the free initial time's lower "
+                f"bound {self.t0_bounds[0]:g}")
         g = min(max(1.0, lo), hi) if guess is None else finite_number(guess, "guess")
         if not lo <= g <= hi:
             raise ProblemDefinitionError(f"free_final_time(guess={g:g}) outside "
@@ -447,6 +455,11 @@ class OptimalControlProblem(ProblemSymbols):
         g = float(np.clip(0.0, lo, hi)) if guess is None else finite_number(guess, "guess")
         if not lo <= g <= hi:
             raise ProblemDefinitionError(f"free_initial_time(guess={g:g}) outside bounds")
+        if self._T_set and self.duration is None and lo >= self.T_bounds[1]:
+            # (a final time set first: the reverse order is refused by the final time's setter)
+            raise ProblemDefinitionError(
+                f"free_initial_time(lower={lo:g}): not before the final time's upper bound "
+                f"{self.T_bounds[1]:g}")
         self.t0_mode = "free"
         self.t0_bounds = (lo, hi)
         self.t0_guess = g

@@ -134,3 +134,17 @@ def test_a_verify_tolerance_that_checks_nothing_is_refused(tol):
     with pytest.raises(ProblemDefinitionError, match="verify_tol must be a relative "
                                                      "tolerance"):
         MultipleShooting(p, 10, verify_tol=tol)
+
+
+@pytest.mark.parametrize("times", [
+    lambda p: (p.fixed_final_time(3.0), p.free_initial_time(5.0, 6.0)),
+    lambda p: (p.free_final_time(1.0, 2.0), p.free_initial_time(5.0, 6.0)),
+    lambda p: (p.free_initial_time(5.0, 6.0), p.fixed_final_time(3.0)),
+    lambda p: (p.free_initial_time(5.0, 6.0), p.free_final_time(1.0, 2.0)),
+])
+def test_an_initial_time_after_every_final_time_is_refused_when_written(times):
+    # (in one order it was accepted, and only Ipopt found the horizon empty)
+    p = OptimalControlProblem("times")
+    p.state("x")
+    with pytest.raises(ProblemDefinitionError, match="initial time|final time"):
+        times(p)
