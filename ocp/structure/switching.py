@@ -74,8 +74,8 @@ from .variables import variables_as_states
 __all__ = [
     "Arc", "ArcStructure", "DEFAULT_TOL", "Interval", "Mode", "REFINE_IPOPT", "RefinedSwitching",
     "SwitchingNLP", "SwitchingStructure", "active_path_constraints", "clear_cache",
-    "control_bounds_at", "detect_arcs", "detect_structure", "path_activity", "refine_switching",
-    "refine_structure",
+    "control_bounds_at", "detect_arcs", "detect_structure", "note_above_transcription",
+    "path_activity", "refine_switching", "refine_structure",
 ]
 
 
@@ -561,13 +561,43 @@ def refine_switching(sol: SolutionLike, structure: SwitchingStructure | ArcStruc
         return out
 
     try:
-        return attempt(st)
+        out = attempt(st)
     except SolveError as err:
         if repair_length is None and not repair:
             raise
         # 2.5 shooting intervals, or mesh intervals of a collocation solution
         short = 2.5 * grid_spacing(tsol) if repair_length is None else repair_length
-        return _repair(st, attempt, err, short)
+        out = _repair(st, attempt, err, short)
+    if params == tsol.params:
+        note_above_transcription(out, float(tsol.objective))
+    return out
+
+
+ABOVE = 1e-3
+"""A refined objective above the transcription's by more than this (relative) is noted."""
+
+
+def note_above_transcription(out: RefinedSwitching, transcribed: float) -> None:
+    """Note on ``out`` a refined objective well above the transcription's it started from.
+
+    The exact arcs' objective is normally at or below the grid's (the grid holds the control
+    piecewise constant); well above it, the detected structure likely misses an arc the grid
+    resolves (an oscillator's short first arc: 7.4502 refined against 7.4102 transcribed),
+    and the refined candidate is not the better one: said, not hidden.
+
+    Parameters
+    ----------
+    out : RefinedSwitching
+        The refinement (its ``notes`` extended).
+    transcribed : float
+        The transcription's objective at the same parameters.
+    """
+    gap = float(out.objective) - transcribed
+    if math.isfinite(gap) and gap > ABOVE * max(1.0, abs(transcribed)):
+        out.notes.append(f"the refined objective {out.objective:.10g} is above the "
+                         f"transcription's {transcribed:.10g} (by {gap:.3g}): the detected "
+                         "structure may lack an arc the grid resolves (compare a finer grid, "
+                         "or extra_arcs)")
 
 
 def _without_arc(st: ArcStructure, j: int, i: int) -> ArcStructure:

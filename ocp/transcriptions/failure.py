@@ -63,6 +63,8 @@ def failure_error(tr: Any, sol: Any) -> SolveError:
     """
     cls = InfeasibleError if sol.status in INFEASIBLE_STATUSES else SolveError
     text = f"Ipopt failed: {sol.status} after {sol.iterations} iterations"
+    if cls is InfeasibleError:  # (Ipopt's restoration stops at a local minimum of violation)
+        text += " (a local verdict: from another guess a feasible problem may solve)"
     if getattr(sol, "scaling_fallback", None):
         text += f" ({sol.scaling_fallback})"
     pv = np.array(list(sol.params.values()), dtype=float)

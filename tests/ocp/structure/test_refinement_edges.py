@@ -10,9 +10,12 @@ point (a boundary arc of length ``1 - 6 l = 0``). Minimum time from (2, -2) to t
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 
 from ocp import (
+    InfeasibleError,
     MultipleShooting,
     OptimalControlProblem,
     ProblemDefinitionError,
@@ -21,6 +24,7 @@ from ocp import (
     refine_switching,
 )
 from ocp.certificate.checks import CERTIFIED, INCONCLUSIVE
+from ocp.structure.switching import note_above_transcription
 
 
 def _to_circle() -> OptimalControlProblem:
@@ -127,3 +131,31 @@ def test_extra_arcs_without_a_bang_arc_say_why():
     sol = MultipleShooting(p, 20).solve()
     with pytest.raises(ValueError, match="no bang arc to insert them beside"):
         refine_switching(sol, extra_arcs=2)
+
+
+def test_a_refinement_above_its_transcription_says_so():
+    # an oscillator's minimum time from (4.5, 0): the transcription's structure missed a
+    # short first arc and the refinement landed at 7.4502 above the grid's 7.4102, unnoted
+    out = SimpleNamespace(objective=7.4502451529302585, notes=[])
+    note_above_transcription(out, 7.410208323410161)
+    assert out.notes == ["the refined objective 7.450245153 is above the transcription's "
+                         "7.410208323 (by 0.04): the detected structure may lack an arc the "
+                         "grid resolves (compare a finer grid, or extra_arcs)"]
+    below = SimpleNamespace(objective=7.40, notes=[])
+    note_above_transcription(below, 7.41)  # the usual case: at or below the grid's
+    assert below.notes == []
+
+
+def test_an_infeasibility_verdict_says_it_is_local():
+    p = OptimalControlProblem("contradiction")
+    x = p.state("x")
+    u = p.control("u", -1, 1)
+    p.set_dynamics({"x": u})
+    p.initial_constraint(x, 0.0)
+    p.terminal_constraint(x, 0.0)
+    p.terminal_constraint(x, 1.0)
+    p.fixed_final_time(2.0)
+    p.minimize_integral(u**2)
+    with pytest.raises(InfeasibleError, match=r"a local verdict: from another guess a "
+                                              r"feasible problem may solve\): end conditions"):
+        MultipleShooting(p, 10).solve()
