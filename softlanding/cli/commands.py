@@ -666,6 +666,10 @@ def _run(args: argparse.Namespace) -> int:
     from softlanding.util.signals import handle_signals, report_interrupt
 
     try:  # SIGTERM cleans up like Ctrl-C; a failed run leaves none of its outputs
+        if getattr(args, "force", False) and not any(
+                getattr(args, k, None) for k in ("plot", "out")):
+            raise ParameterError("force", "overwrites an output file: give --plot or --out "
+                                          "too (nothing is written without)")
         with handle_signals(), output_run(force=bool(getattr(args, "force", False))):
             return int(args.func(args))
     except BrokenPipeError:

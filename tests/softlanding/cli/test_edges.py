@@ -23,6 +23,7 @@ FLAGS = [  # (arguments, the option the one-line refusal must name)
     # without an estimate was ignored
     (["mpc", "--v0", "-1e-9"], "--v0"),
     (["mpc", "--v0", "-3", "--no-estimate", "--margin", "2"], "--margin"),
+    (["solve", "--v0", "-3", "--force"], "--force"),  # (no output file: nothing to overwrite)
 ]
 
 
