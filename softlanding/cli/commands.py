@@ -160,6 +160,9 @@ def _v0_grid(a: argparse.Namespace) -> Any:
             raise ParameterError(name, str(err).partition(": ")[2]) from None
     if a.v0_min > a.v0_max:
         raise ParameterError("v0_min", f"must not exceed --v0-max ({a.v0_max:g})")
+    if a.v0_min == a.v0_max and n > 1:  # (it solved the one velocity n times)
+        raise ParameterError("n", f"{n} velocities over the one --v0-min = --v0-max = "
+                                  f"{a.v0_min:g}: give --n 1 or a range")
     return np.linspace(a.v0_max, a.v0_min, n)
 
 

@@ -511,7 +511,9 @@ def two_step_check(impact: Impact | float, robot: Robot = PAPER_ROBOT,
             raise_if_interrupted()  # CasADi turns Ctrl-C/SIGTERM into a failed solve
             starts.append({"start": name, "error": err.status})
             continue
-        durs = [float(p.T - p.t0) for p in sol.phases]
+        # (a collapsed phase can end at -1e-8: Ipopt relaxes bounds by that much; a duration
+        # is >= 0, and a printed -9.974e-09 read as a negative time)
+        durs = [max(0.0, float(p.T - p.t0)) for p in sol.phases]
         d = float(-sol.phases[-1].x[-1, 2])
         starts.append({"start": name, "depth": d, "durations": durs,
                        "first_stop_depth": float(-sol.phases[0].x[-1, 2]),

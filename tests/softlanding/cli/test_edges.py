@@ -24,6 +24,7 @@ FLAGS = [  # (arguments, the option the one-line refusal must name)
     (["mpc", "--v0", "-1e-9"], "--v0"),
     (["mpc", "--v0", "-3", "--no-estimate", "--margin", "2"], "--margin"),
     (["solve", "--v0", "-3", "--force"], "--force"),  # (no output file: nothing to overwrite)
+    (["solve-sweep", "--v0-min", "-2", "--v0-max", "-2", "--n", "3"], "--n"),  # (3 x the same)
 ]
 
 
