@@ -241,6 +241,8 @@ def check_number(name: str, value: Any, rule: Rule | None = None) -> float:
         else None
     if shape not in (None, ()):
         raise ParameterError(name, f"must be one number, got an array of shape {shape}")
+    if getattr(getattr(value, "dtype", None), "kind", "f") in "bUSO":  # (0-d bool or text)
+        raise ParameterError(name, f"must be a number, got {value!r}")
     if isinstance(value, list | tuple | dict | set):
         raise ParameterError(name, f"must be one number, got a {type(value).__name__}")
     return float(check(name, value, rule))

@@ -68,7 +68,8 @@ from typing import Any
 
 import casadi as ca
 
-from ..definition.symbols import positive_int, positive_number
+from ..definition.errors import ProblemDefinitionError
+from ..definition.symbols import finite_number, positive_int, positive_number
 
 # `name as name`: a re-export (ocp.certificate.certify keeps every public name it had before
 # the split)
@@ -195,10 +196,12 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     -------
     PMPCertificate
     """
-    for name, v in (("tol_H", tol_H), ("tol_sigma", tol_sigma), ("tol_switch", tol_switch),
-                    ("min_singular", min_singular)):
+    for name, v in (("tol_H", tol_H), ("tol_sigma", tol_sigma), ("tol_switch", tol_switch)):
         if v is not None:  # (a tolerance of 0 or below, or NaN, decides nothing it should)
             positive_number(v, f"certify({name})")
+    if min_singular is not None and not finite_number(min_singular,
+                                                      "certify(min_singular)") >= 0.0:
+        raise ProblemDefinitionError(f"certify(min_singular) must be >= 0, got {min_singular}")
     n = positive_int(n, "certify(n)", minimum=10)  # (0 samples checked nothing, certified)
     if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":
         from ..structure.phase_refinement import RefinedPhases

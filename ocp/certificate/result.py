@@ -78,6 +78,9 @@ class PMPCertificate:
         The per-arc table: each arc's kind, span, the residuals of its conditions,
         their tolerances and errors, its order (singular, state boundary) and status
         (:mod:`ocp.certificate.arc_record`).
+    final_time_at_bound : int
+        +1 or -1 when the free final time sits at its upper or lower bound: H is then held
+        to the side of ``H_expected`` the bound allows, not to its value; 0 otherwise.
     t, lam, H, sigma, u : arrays for plotting (``sigma``/``u`` 1-D for one control).
     """
 
@@ -104,6 +107,7 @@ class PMPCertificate:
     elapsed: float = 0.0
     chattering: ChatteringResult | None = None
     arcs: list[ArcCheck] = field(default_factory=list)
+    final_time_at_bound: int = 0
 
     @property
     def certified(self) -> bool:
@@ -135,7 +139,8 @@ class PMPCertificate:
                                 for c, d in self.per_control.items()},
                 "elapsed_s": float(self.elapsed),
                 "chattering": self.chattering.to_dict() if self.chattering else None,
-                "arcs": [a.to_dict() for a in self.arcs]}
+                "arcs": [a.to_dict() for a in self.arcs],
+                "final_time_at_bound": int(self.final_time_at_bound)}
 
 
 def build_certificate(verdict: str, reasons: list[str], H_exp: float | None, fig: Figures,
@@ -177,7 +182,7 @@ def build_certificate(verdict: str, reasons: list[str], H_exp: float | None, fig
         min(fig.agreement.values(), default=1.0), max(fig.gap.values(), default=0.0),
         fig.singular, active, gap_lam, source, t, lam, fig.H,
         fig.sigma[:, 0] if single else fig.sigma, u[:, 0] if single else u, err,
-        checked_from, per)
+        checked_from, per, final_time_at_bound=fig.T_side)
 
 
 def refusal(sol: SolutionLike | None, refined: Any = None) -> PMPCertificate | None:

@@ -433,6 +433,9 @@ class OptimalControlProblem(ProblemSymbols):
         if self._T_set and not self.time_free and v >= self.T_bounds[0]:
             raise ProblemDefinitionError(f"fixed_initial_time(t0={v:g}): not before the fixed "
                                          f"final time {self.T_bounds[0]:g}")
+        if self._T_set and self.time_free and self.duration is None and v >= self.T_bounds[1]:
+            raise ProblemDefinitionError(f"fixed_initial_time(t0={v:g}): not before the final "
+                                         f"time's upper bound {self.T_bounds[1]:g}")
         self.t0_mode = "fixed"
         self.t0_bounds = (v, v)
         self.t0_guess = v

@@ -97,10 +97,14 @@ class Trajectory:
         return self.control(name)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-able dict: ``t``, one list per state and control, ``mode``, ``phase``."""
+        """Plain JSON-able dict: ``t``, one list per state and control, ``mode``, ``phase``
+        (a value a phase does not have, NaN in the arrays, is None: strict JSON has no NaN)."""
+        def col(a: np.ndarray) -> list[float | None]:
+            return [float(v) if np.isfinite(v) else None for v in a]
+
         d: dict[str, Any] = {"t": self.t.tolist()}
-        d.update({n: self.x[:, i].tolist() for i, n in enumerate(self.state_names)})
-        d.update({n: self.u[:, i].tolist() for i, n in enumerate(self.control_names)})
+        d.update({n: col(self.x[:, i]) for i, n in enumerate(self.state_names)})
+        d.update({n: col(self.u[:, i]) for i, n in enumerate(self.control_names)})
         if self.mode is not None:
             d["mode"] = self.mode.tolist()
         if self.phase is not None:

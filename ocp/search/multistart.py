@@ -186,8 +186,9 @@ class MultistartResult:
     def message(self) -> str:
         """A one-line summary."""
         fails: dict[str, int] = {}
-        for s in self.failures:
-            fails[s.status] = fails.get(s.status, 0) + 1
+        for s in self.failures:  # (a converged start that is not verified says so)
+            key = s.status if not s.success else f"{s.status} but not verified"
+            fails[key] = fails.get(key, 0) + 1
         what = ", ".join(f"{k} x{v}" for k, v in sorted(fails.items())) or "none"
         if not self.optima:
             return f"no verified optimum from {len(self.starts)} starts (failures: {what})"

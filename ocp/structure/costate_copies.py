@@ -29,6 +29,7 @@ import numpy as np
 
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.gridview import collocation_costates, is_collocation
+from .derived_times import same_final_time
 
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -101,7 +102,8 @@ def costates_as_states(pr: OptimalControlProblem, runs: int) -> OptimalControlPr
 def _build(pr: OptimalControlProblem, runs: int) -> OptimalControlProblem:
     if pr.nv or pr.boundary or pr.integrals or not ca.SX(pr.boundary_cost).is_zero() or \
             ca.depends_on(ca.vertcat(pr.rhs, ca.SX(pr.lagrange)),
-                          ca.vertcat(pr.t, pr.t0, pr.T)) or pr.t0_mode != "default":
+                          ca.vertcat(pr.t, pr.t0, pr.T)) or pr.t0_mode == "free" or \
+            pr.t0_bounds[0] != 0.0:
         raise ValueError("a regular interior arc is refined with the costate as states: the "
                          "problem may not have decision variables, end-point costs or "
                          "constraints on both ends, integrals, time in its dynamics, or an "
@@ -135,10 +137,7 @@ def _build(pr: OptimalControlProblem, runs: int) -> OptimalControlProblem:
     if pr.has_running_cost():
         q.minimize_integral(sub(pr.lagrange))
     q.minimize_terminal(sub(pr.mayer))
-    if pr.time_free:
-        q.free_final_time(*pr.T_bounds, guess=pr.T_guess)
-    else:
-        q.fixed_final_time(pr.T_bounds[0])
+    same_final_time(q, pr)
     q.control_limits = {n: (sub(lo), sub(hi)) for n, (lo, hi) in pr.control_limits.items()}
     q.costate_copies = CopyLayout(pr, pr.nx, runs)  # type: ignore[attr-defined]
     return q

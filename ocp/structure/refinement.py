@@ -42,6 +42,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..definition.errors import ProblemDefinitionError
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.blas import default_blas_threads
 from ..transcriptions.solver_output import solver_output
@@ -130,15 +131,15 @@ def refuse_shifted_time(pr: OptimalControlProblem) -> None:
 
     Raises
     ------
-    ValueError
-        If the initial time is free or fixed at a value other than 0.
+    ProblemDefinitionError
+        If the initial time is free or fixed at a value other than 0 (a ``ValueError``).
     """
     if pr.t0_mode == "free" or (pr.t0_mode == "fixed" and pr.t0_bounds[0] != 0.0):
         what = ("free" if pr.t0_mode == "free" else f"fixed at {pr.t0_bounds[0]:g}")
-        raise ValueError(f"switching-time refinement: problem {pr.name!r} has its initial "
-                         f"time {what}; the refinement's time starts at 0 (pose the problem "
-                         "on [0, T], or as a phase of a multi-phase problem, which "
-                         "ocp.structure.phase_refinement.refine_phases refines)")
+        raise ProblemDefinitionError(
+            f"switching-time refinement: problem {pr.name!r} has its initial time {what}; "
+            "the refinement's time starts at 0 (pose the problem on [0, T], or as a phase of "
+            "a multi-phase problem, which ocp.structure.phase_refinement.refine_phases refines)")
 
 
 class SwitchingNLP(ActiveSetResolve):

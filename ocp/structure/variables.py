@@ -31,6 +31,7 @@ import casadi as ca
 
 from ..definition.problem import OptimalControlProblem
 from ..definition.symbols import INF, constant
+from .derived_times import same_final_time
 
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -147,9 +148,8 @@ def _limits(q: OptimalControlProblem, pr: OptimalControlProblem, sub: Any) -> No
 
 
 def _build(pr: OptimalControlProblem) -> OptimalControlProblem:
-    if pr.t0_mode != "default" or pr.duration is not None:
-        raise ValueError("refinement with decision variables: the initial time must be the "
-                         "default (0)")
+    if pr.t0_mode == "free" or pr.t0_bounds[0] != 0.0:
+        raise ValueError("refinement with decision variables: the initial time must be 0")
     if pr.integrals:
         raise ValueError("refinement with decision variables: integrals in boundary terms are "
                          "not supported (use minimize_integral)")
@@ -170,10 +170,7 @@ def _build(pr: OptimalControlProblem) -> OptimalControlProblem:
     if not ca.SX(pr.boundary_cost).is_zero():
         mayer = mayer + _at_T(pr, pr.boundary_cost, sub, "the end-point cost")
     q.minimize_terminal(mayer)
-    if pr.time_free:
-        q.free_final_time(*pr.T_bounds, guess=pr.T_guess)
-    else:
-        q.fixed_final_time(pr.T_bounds[0])
+    same_final_time(q, pr)
     _limits(q, pr, sub)
     return q
 

@@ -114,6 +114,7 @@ class Solution:
     mesh_error: float
     objective_error: float = math.nan  # refine()'s estimate of the objective's error
     mesh_converged: bool = False  # refine() met its tolerances (a single solve: False)
+    mesh_reason: str  # why a refinement within its tolerance is not converged (if it says)
     objective_scale: float
     expanded: bool
     scaling: Any
@@ -156,8 +157,13 @@ class Solution:
         e = self.objective_error
         if not history:
             return "not converged: one grid, no estimate of its error (refine() converges)"
+        if self.mesh_converged and not math.isfinite(e):  # (objective_tol=math.inf)
+            return "converged (mesh; the objective's error not estimated: objective_tol off)"
         if self.mesh_converged:
             return f"converged (mesh, estimated error {e:.2g})"
+        reason = self.__dict__.get("mesh_reason")
+        if reason:  # (a refinement that says which of its conditions is missing)
+            return f"not converged (mesh): {reason}, after {len(history)} solves"
         if not math.isfinite(e):
             return ("not converged (mesh): no estimate of the objective's error could be "
                     f"confirmed within the rounds and intervals allowed ({len(history)} solves)")
@@ -273,8 +279,20 @@ class Solution:
         ----------
         t : array_like
             Times within the phase.
+
+        Raises
+        ------
+        ValueError
+            For a time outside ``[t0, T]`` (it was extrapolated: shooting integrated on with
+            the last control, collocation's polynomial continued).
         """
-        return self.discretization.sample(self.data, np.atleast_1d(np.asarray(t, float)))
+        ts = np.atleast_1d(np.asarray(t, float))
+        slack = 1e-12 * max(1.0, abs(self.t0), abs(self.T))
+        bad = ts[~((ts >= self.t0 - slack) & (ts <= self.T + slack))]
+        if bad.size:
+            raise ValueError(f"at: t = {bad[0]:.12g} is outside the phase [{self.t0:.12g}, "
+                             f"{self.T:.12g}] (a solution is not extrapolated)")
+        return self.discretization.sample(self.data, ts)
 
     def resample(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """States and controls of a phase at the times ``t`` as the method represents them,
@@ -335,7 +353,11 @@ class Solution:
             "solve_time_s": self.solve_time, "objective": _clean(self.objective),
             "params": self.params, "variables": self.variables,
             "path_violation": _clean(self.path_violation), "verified": self.verified,
-            "unchecked": list(self.__dict__.get("unchecked", []))}
+            "unchecked": list(self.__dict__.get("unchecked", [])),
+            # (whether the discretisation converged: a refined solution's JSON lost it)
+            "mesh_converged": bool(self.mesh_converged),
+            "objective_error": _clean(float(self.objective_error)),
+            "convergence": self.convergence}
         if self.is_multiphase:
             d["phases"] = [{**_phase_dict(p), "name": p.problem.name} for p in self.phases]
             return d

@@ -380,7 +380,8 @@ def _mpc(sub: Any) -> argparse.ArgumentParser:
                                    "applies it for one period. Compared with the clairvoyant "
                                    "optimum (knows the ground) and the nominal open-loop plan "
                                    "replayed on the true ground.")
-    m.add_argument("--v0", type=float, required=True, help="impact velocity (< 0)")
+    m.add_argument("--v0", type=float, required=True,
+                   help="impact velocity (<= -1e-6: slower, the foot counts as stopped)")
     _model_args(m, PAPER_ROBOT.u_max, f"force limit (default {PAPER_ROBOT.u_max:g})")
     m.add_argument("--period", type=float, default=None,
                    help="sample period in sqrt(m_t/k_g) (default 0.01: 0.26 ms on the paper's "

@@ -301,7 +301,7 @@ class FeedbackSchedule:
 
     def __post_init__(self) -> None:
         t = tuple(float(v) for v in np.ravel(check("times", self.times)))
-        g = check("gains", self.gains, FINITE)
+        g = check("gains", self.gains, FINITE)  # (ragged rows: "must be a number")
         if np.ndim(g) != 2 or g.shape != (len(t) + 1, 5):
             raise ParameterError("gains", f"needs {len(t) + 1} rows of 5 (one more than "
                                           f"times), got shape {np.shape(g)}")

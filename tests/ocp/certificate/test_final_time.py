@@ -54,6 +54,8 @@ def test_a_free_final_time_at_its_bound_is_certified(method, lo, hi, cost, T, J)
     # H = -1 against -dphi/dT = -1/2 (upper) or -2 (lower): the equality would refute
     for cert in (certify(sol), certify(sol, ref)):
         assert cert.verdict == CERTIFIED, cert.reasons
+        assert cert.final_time_at_bound == (1 if T == hi else -1)  # (said, in its dict too)
+        assert cert.to_dict()["final_time_at_bound"] == cert.final_time_at_bound
 
 
 def test_the_bounds_side_decides():
@@ -141,6 +143,7 @@ def test_a_verify_tolerance_that_checks_nothing_is_refused(tol):
     lambda p: (p.free_final_time(1.0, 2.0), p.free_initial_time(5.0, 6.0)),
     lambda p: (p.free_initial_time(5.0, 6.0), p.fixed_final_time(3.0)),
     lambda p: (p.free_initial_time(5.0, 6.0), p.free_final_time(1.0, 2.0)),
+    lambda p: (p.free_final_time(1.0, 2.0), p.fixed_initial_time(5.0)),
 ])
 def test_an_initial_time_after_every_final_time_is_refused_when_written(times):
     # (in one order it was accepted, and only Ipopt found the horizon empty)

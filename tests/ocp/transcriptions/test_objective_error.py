@@ -103,3 +103,74 @@ def test_the_estimate_covers_a_much_finer_solve(name, intervals):
                        ipopt_options={"bound_relax_factor": 0.0}).solve(guess=sol)
     assert sol.mesh_converged
     assert abs(sol.objective - fine.objective) <= sol.objective_error
+
+
+def _tracking():
+    """``x' = u``, ``min int (x - sin(40 pi t) / 2)^2 + 1e-4 u^2`` on [0, 1], ``x(0) = 0``:
+    J* = 0.0759407 (scipy's ``solve_bvp`` on the costate equations, tol 1e-10, in the
+    adversarial review that found this; collocation's refine agrees to 2e-10)."""
+    import casadi as ca
+
+    from ocp import OptimalControlProblem
+
+    p = OptimalControlProblem("tracking")
+    x = p.state("x")
+    u = p.control("u")
+    p.set_dynamics({"x": u})
+    p.initial_constraint(x, 0.0)
+    p.fixed_final_time(1.0)
+    p.minimize_integral((x - 0.5 * ca.sin(40 * math.pi * p.t)) ** 2 + 1e-4 * u**2)
+    return p
+
+
+TRACKING_EXACT = 0.0759407
+
+
+def test_doubling_on_a_plateau_of_an_unresolved_grid_is_not_converged():
+    # 4, 8, 16 nodes: 0.12376, 0.12444, 0.12429 (a plausible ratio 0.22) for a true 0.0759:
+    # it said "converged (mesh, estimated error 0.00015)" at tol 1e-3, 40 % off
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loose = MultipleShooting(_tracking(), nodes=4).refine(tol=1e-2)
+        tight = MultipleShooting(_tracking(), nodes=4).refine(tol=1e-3)
+    assert loose.mesh_converged
+    assert abs(loose.objective - TRACKING_EXACT) <= loose.objective_error <= 1e-2
+    assert not tight.mesh_converged and tight.convergence.startswith("not converged (mesh)")
+    assert abs(tight.objective - TRACKING_EXACT) <= tight.objective_error  # (said, not claimed)
+
+
+def test_a_rate_is_confirmed_by_the_same_ratio_twice():
+    from ocp.transcriptions.refinement import rate_confirmed
+
+    assert not rate_confirmed([1.0, 0.5, 0.25], 0.0)  # three solves: one ratio only
+    assert rate_confirmed([1.0, 0.5, 0.25, 0.125], 0.0)  # 0.5 twice
+    assert not rate_confirmed([0.123755, 0.124445, 0.124293, 0.115386], 1e-9)  # 0.22 then 59
+    assert not rate_confirmed([1.0, 0.5, 0.49, 0.48], 0.0)  # 0.02 then 1: no rate
+    assert rate_confirmed([1.0, 0.5, 0.25, 0.25], 1e-12)  # at the solver's resolution
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"max_split": 1}, r"refine\(max_split\) must be >= 2"),  # (one mesh, re-solved 10 times)
+    ({"max_split": -3}, r"refine\(max_split\) must be >= 2"),  # (numpy's error)
+    ({"max_split": 2.5}, r"refine\(max_split\) must be an integer"),
+    ({"max_rounds": -1}, r"refine\(max_rounds\) must be >= 0"),
+])
+def test_refine_counts_that_cannot_work_are_refused(kwargs, message):
+    from ocp import ProblemDefinitionError
+
+    with pytest.raises(ProblemDefinitionError, match=message):
+        Collocation(lq(), intervals=4).refine(**kwargs)
+
+
+def test_a_refined_solution_says_in_its_dict_whether_it_converged():
+    import json
+
+    sol = Collocation(lq()).refine(objective_tol=math.inf)
+    # (with the objective criterion off there is no estimate: "estimated error inf" before)
+    assert sol.convergence == ("converged (mesh; the objective's error not estimated: "
+                               "objective_tol off)")
+    d = json.loads(json.dumps(sol.to_dict(), allow_nan=False))
+    assert d["mesh_converged"] is True and d["objective_error"] is None
+    assert d["convergence"] == sol.convergence
+    with pytest.raises(ValueError, match=r"t = 1.5 is outside the phase \[0, 1\]"):
+        sol.at(1.5)  # (extrapolated before: collocation's polynomial continued)
