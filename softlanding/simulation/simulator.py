@@ -82,7 +82,8 @@ class EnergyLedger:
     Parameters
     ----------
     E0, ET : float
-        Mechanical energy at impact and at rest.
+        Mechanical energy at impact and at the landing's end ``T``, the foot's stop (the
+        paper's horizon of the cost of transport; the body may still be moving then).
     ground, actuator : float
         Work done on the ground and taken out by the actuator.
     drag, grains : float
