@@ -25,6 +25,7 @@ from ocp import (
 )
 from ocp.certificate.checks import CERTIFIED, INCONCLUSIVE
 from ocp.structure.switching import note_above_transcription
+from tests.oracles.ocp_suite.problems import bryson_denham
 
 
 def _to_circle() -> OptimalControlProblem:
@@ -50,25 +51,11 @@ def test_a_second_refinement_with_a_circles_end_condition_re_solves():
         assert ref.objective == pytest.approx(8.0, rel=1e-13)
 
 
-def _bryson_denham(limit: float) -> OptimalControlProblem:
-    p = OptimalControlProblem("Bryson-Denham")
-    x, v = p.state("x", upper=limit), p.state("v")
-    u = p.control("u")
-    p.set_dynamics({"x": v, "v": u})
-    p.initial_constraint(x, 0.0)
-    p.initial_constraint(v, 1.0)
-    p.terminal_constraint(x, 0.0)
-    p.terminal_constraint(v, -1.0)
-    p.fixed_final_time(1.0)
-    p.minimize_integral(0.5 * u**2)
-    return p
-
-
 def test_a_touch_point_refined_as_a_tiny_boundary_arc_is_inconclusive_at_once():
     # the refinement keeps a 5e-6 boundary arc where the optimum touches x = 1/6 once; the
     # certificate sampled the horizon at 400 / 5e-6 points (minutes) and, sampled on the
     # arc only, would refute it by about its length: neither is a touch point's verdict
-    sol = MultipleShooting(_bryson_denham(1 / 6), 60).solve()
+    sol = MultipleShooting(bryson_denham(1 / 6), 60).solve()
     ref = refine_switching(sol)
     assert ref.objective == pytest.approx(8 / 3, rel=1e-12)
     cert = certify(sol, ref)
@@ -76,7 +63,7 @@ def test_a_touch_point_refined_as_a_tiny_boundary_arc_is_inconclusive_at_once():
     [arc] = [a for a in cert.arcs if a.kind == "state boundary"]
     assert arc.status == "uncertain" and "cannot be told from a touch point" in arc.notes[-1]
     # a longer arc is still held to a boundary arc's conditions, and certified
-    sol = MultipleShooting(_bryson_denham(0.166), 60).solve()
+    sol = MultipleShooting(bryson_denham(0.166), 60).solve()
     assert certify(sol, refine_switching(sol)).verdict.startswith("certified (")
 
 
