@@ -183,9 +183,10 @@ def integration_error(sol: Solution) -> tuple[float, float]:
     intervals) and the largest change of an interval's end state, relative to ``max(1,
     |x|)``. Both 0 for CVODES (adaptive, to its own tolerance).
 
-    A doubling sequence cannot see a running cost or dynamics the integrator does not
-    resolve (a cost tracking ``sin(40 pi t)`` on 4 to 16 nodes of 4 RK4 steps: 0.1238,
-    0.1244, 0.1243 for a true 0.0759); re-integrating on a finer step does.
+    Doubling the nodes halves the control's grid and the RK4 step together; this separates
+    the integrator's share, so that a solution whose continuity holds only for its own
+    coarse steps (fast dynamics, a running cost varying within a step) is not called
+    converged on the objective's change alone.
 
     Parameters
     ----------
