@@ -320,8 +320,9 @@ class RefinedSwitching:
         span = T if focus is None else float(np.sum(self.durations[focus[0]:focus[1] + 1]))
         for k, modes in enumerate(self.interval_modes):
             tau = float(self.durations[k])
-            share = tau / max(span if focus and focus[0] <= k <= focus[1] else T, 1e-300)
-            pts = max(2, int(math.ceil(n * share)))
+            whole = span if focus and focus[0] <= k <= focus[1] else T
+            pts = max(2, int(math.ceil(n * tau / max(whole, 1e-300))))  # (n * tau first: as
+            # before focus, to the last bit: a sample more or less moves a check's maximum)
             Z = self._flow(k, modes, z, tau, pts)
             U = along(arc_dynamics(pr, modes).u_fn, Z[:, :pr.nx], self.pv)[0]
             ts.append(start + np.linspace(0.0, tau, pts + 1))
