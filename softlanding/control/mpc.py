@@ -133,8 +133,8 @@ def mpc_landing(impact: Impact | float, robot: Robot = PAPER_ROBOT,
     t_start = time.perf_counter()
     impact = Impact.of(impact)
     if impact.v0 > -MIN_SPEED:  # (slower, the loop's foot counts as stopped at the impact)
-        raise ParameterError("v0", f"{impact.v0:g}: the controller lands impacts of "
-                                   f"{MIN_SPEED:g} or faster (v0 <= {-MIN_SPEED:g})")
+        raise ParameterError("v0", f"the controller lands impacts of {MIN_SPEED:g} or "
+                                   f"faster (v0 <= {-MIN_SPEED:g}), got {impact.v0:g}")
     expect("ground", ground, Ground, "ground model (softlanding.model.ground)")
     check_model(model)
     check_choice("controller", controller, CONTROLLERS)
