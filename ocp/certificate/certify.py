@@ -199,8 +199,7 @@ def certify(sol: SolutionLike, refined: Any = None, *,
     for name, v in (("tol_H", tol_H), ("tol_sigma", tol_sigma), ("tol_switch", tol_switch)):
         if v is not None:  # (a tolerance of 0 or below, or NaN, decides nothing it should)
             positive_number(v, f"certify({name})")
-    if min_singular is not None and not finite_number(min_singular,
-                                                      "certify(min_singular)") >= 0.0:
+    if min_singular is not None and finite_number(min_singular, "certify(min_singular)") < 0:
         raise ProblemDefinitionError(f"certify(min_singular) must be >= 0, got {min_singular}")
     n = positive_int(n, "certify(n)", minimum=10)  # (0 samples checked nothing, certified)
     if getattr(sol, "is_multiphase", False) or type(refined).__name__ == "RefinedPhases":

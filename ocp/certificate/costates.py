@@ -352,9 +352,9 @@ def _sweep(ref: RefinedSwitching, first: int, points: int, factor: int) -> Adjoi
     parts.reverse()
     steps.reverse()
     cat = [np.concatenate([p[i] for p in parts]) for i in range(5)]
-    pinned, side = final_time_condition(pr, T, 0.0)  # (the refinement's time starts at 0)
-    if ref.terminal_costate is not None:
-        pinned, side = pr.time_free, 0  # a phase: its end is the multi-phase problem's
+    # (a phase's end is the multi-phase problem's; the refinement's time starts at 0)
+    pinned, side = (pr.time_free, 0) if ref.terminal_costate is not None else \
+        final_time_condition(pr, T, 0.0)
     return AdjointSweep(cat[0], cat[1], cat[2], cat[3], cat[4].astype(int),
                         H_given if pinned else None, float(edges[first]), 0.0, err_x,
                         steps, T_side=side)

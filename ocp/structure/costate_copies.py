@@ -29,7 +29,7 @@ import numpy as np
 
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.gridview import collocation_costates, is_collocation
-from .derived_times import same_final_time
+from .derived_times import refuse_shifted_time, same_final_time
 
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -100,14 +100,13 @@ def costates_as_states(pr: OptimalControlProblem, runs: int) -> OptimalControlPr
 
 
 def _build(pr: OptimalControlProblem, runs: int) -> OptimalControlProblem:
+    refuse_shifted_time(pr)
     if pr.nv or pr.boundary or pr.integrals or not ca.SX(pr.boundary_cost).is_zero() or \
             ca.depends_on(ca.vertcat(pr.rhs, ca.SX(pr.lagrange)),
-                          ca.vertcat(pr.t, pr.t0, pr.T)) or pr.t0_mode == "free" or \
-            pr.t0_bounds[0] != 0.0:
+                          ca.vertcat(pr.t, pr.t0, pr.T)):
         raise ValueError("a regular interior arc is refined with the costate as states: the "
                          "problem may not have decision variables, end-point costs or "
-                         "constraints on both ends, integrals, time in its dynamics, or an "
-                         "initial time other than 0")
+                         "constraints on both ends, integrals, or time in its dynamics")
     q = OptimalControlProblem(f"{pr.name} (costates on {runs} interior run(s))")
     P = [q.parameter(n) for n in pr.param_names]
     X = [q.state(n) for n in pr.state_names]

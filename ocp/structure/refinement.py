@@ -42,11 +42,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..definition.errors import ProblemDefinitionError
 from ..definition.problem import OptimalControlProblem
 from ..transcriptions.blas import default_blas_threads
 from ..transcriptions.solver_output import solver_output
 from .active_set_resolve import KKT_PRIMAL, ActiveSetResolve
+from .derived_times import refuse_shifted_time
 from .flows import has_running_cost
 from .intervals import (
     DEFAULT_TOL,
@@ -116,30 +116,6 @@ def converged_status(res: dict[str, Any]) -> str:
     """
     r = max(float(res["primal"]), float(res["dual"]), float(res.get("complementarity", 0.0)))
     return f"Solve_Succeeded (KKT residual {r:.0e}; Ipopt said {res['status']})"
-
-
-def refuse_shifted_time(pr: OptimalControlProblem) -> None:
-    """Refuse a problem whose time does not start at 0 (the refinement's clock).
-
-    The switching-time NLP measures time from 0: its final time is the sum of the arcs'
-    durations. A free initial time, or one fixed elsewhere than 0, would be refined on
-    another horizon (a silent wrong optimum).
-
-    Parameters
-    ----------
-    pr : OptimalControlProblem
-
-    Raises
-    ------
-    ProblemDefinitionError
-        If the initial time is free or fixed at a value other than 0 (a ``ValueError``).
-    """
-    if pr.t0_mode == "free" or (pr.t0_mode == "fixed" and pr.t0_bounds[0] != 0.0):
-        what = ("free" if pr.t0_mode == "free" else f"fixed at {pr.t0_bounds[0]:g}")
-        raise ProblemDefinitionError(
-            f"switching-time refinement: problem {pr.name!r} has its initial time {what}; "
-            "the refinement's time starts at 0 (pose the problem on [0, T], or as a phase of "
-            "a multi-phase problem, which ocp.structure.phase_refinement.refine_phases refines)")
 
 
 class SwitchingNLP(ActiveSetResolve):

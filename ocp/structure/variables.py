@@ -31,7 +31,7 @@ import casadi as ca
 
 from ..definition.problem import OptimalControlProblem
 from ..definition.symbols import INF, constant
-from .derived_times import same_final_time
+from .derived_times import refuse_shifted_time, same_final_time
 
 _CACHE: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
@@ -148,8 +148,7 @@ def _limits(q: OptimalControlProblem, pr: OptimalControlProblem, sub: Any) -> No
 
 
 def _build(pr: OptimalControlProblem) -> OptimalControlProblem:
-    if pr.t0_mode == "free" or pr.t0_bounds[0] != 0.0:
-        raise ValueError("refinement with decision variables: the initial time must be 0")
+    refuse_shifted_time(pr)
     if pr.integrals:
         raise ValueError("refinement with decision variables: integrals in boundary terms are "
                          "not supported (use minimize_integral)")

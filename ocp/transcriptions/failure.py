@@ -54,11 +54,11 @@ from .labels import row_labels
 
 INFEASIBLE_STATUSES = {"Infeasible_Problem_Detected", "Restoration_Failed"}
 DROPPED_VIOLATED = "Dropped_Condition_Violated"
+"""The status of the error when a left-out end condition is missed (its conditions
+contradict)."""
 DRIFT = 1e-2
 """The largest miss of a left-out row fixing a conserved quantity that is taken for the
 discretisation's drift of it (relative); beyond, the end conditions contradict."""
-"""The status of the error when a left-out end condition is missed (its conditions
-contradict)."""
 
 
 def failure_error(tr: Any, sol: Any) -> SolveError:
